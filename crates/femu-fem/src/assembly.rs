@@ -1,0 +1,394 @@
+//! Parallel assembly of the global stiffness `K` and mass `M` on a pattern computed once.
+//!
+//! The pattern is the node graph (nodes sharing an element) expanded to the free DOFs; it is
+//! stored in compressed sparse column form with both triangles, rows sorted. Elements are
+//! coloured so that no two elements of a colour share a node; the elements of one colour are
+//! computed and scattered in parallel (rayon), each writing only to the columns of its own nodes,
+//! so the writes of a colour never overlap and the result does not depend on the thread count
+//! beyond round-off order.
+
+use crate::FemError;
+use crate::dof::DofMap;
+use crate::element::ElementKind;
+use crate::kernel::{self, BadJacobian};
+use crate::model::Model;
+use femu_sparse::SparseMatrix;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Which mass matrix to assemble.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum MassKind {
+    /// Consistent mass `int rho N^T N dV`, on the stiffness pattern.
+    #[default]
+    Consistent,
+    /// Lumped (diagonal) mass: row sums for linear elements, HRZ for quadratic ones.
+    Lumped,
+}
+
+/// Assembled system matrices on the free DOFs.
+#[derive(Debug, Clone)]
+pub struct SystemMatrices {
+    /// Stiffness `K` (N/m), symmetric, both triangles stored.
+    pub k: SparseMatrix,
+    /// Mass `M` (kg): on the stiffness pattern (consistent) or diagonal (lumped).
+    pub m: SparseMatrix,
+    /// The DOF map the matrices are numbered by.
+    pub dofs: DofMap,
+    /// Which mass `m` is.
+    pub mass_kind: MassKind,
+}
+
+/// The sparsity pattern and element colouring of a model, computed once and reused for every
+/// assembly with new values (updating iterations, parameter groups).
+#[derive(Debug, Clone)]
+pub struct Assembler {
+    dofs: DofMap,
+    nbr_ptr: Vec<usize>,
+    nbrs: Vec<usize>,
+    /// For neighbour slot `nbr_ptr[b] + k`, the number of rows in a column of node `b` before the
+    /// rows of node `nbrs[nbr_ptr[b] + k]`.
+    nbr_off: Vec<usize>,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    colors: Vec<Vec<usize>>,
+}
+
+fn bad_jacobian(id: u64) -> impl Fn(BadJacobian) -> FemError {
+    move |b| FemError::InvertedElement {
+        element: id,
+        det_j: b.det,
+        point: b.point,
+    }
+}
+
+impl Assembler {
+    /// Computes the pattern of `model`'s free DOFs and the element colouring.
+    ///
+    /// # Errors
+    /// [`FemError::NoFreeDofs`] when nothing is free.
+    pub fn new(model: &Model) -> Result<Self, FemError> {
+        let mesh = model.mesh();
+        let dofs = model.dof_map();
+        if dofs.free_count() == 0 {
+            return Err(FemError::NoFreeDofs);
+        }
+        let nn = mesh.node_count();
+        // node -> elements
+        let mut ne_ptr = vec![0usize; nn + 1];
+        for el in mesh.elements() {
+            for n in el.nodes {
+                ne_ptr[n + 1] += 1;
+            }
+        }
+        for i in 0..nn {
+            ne_ptr[i + 1] += ne_ptr[i];
+        }
+        let mut ne = vec![0usize; ne_ptr[nn]];
+        let mut fill = ne_ptr.clone();
+        for el in mesh.elements() {
+            for n in el.nodes {
+                ne[fill[*n]] = el.index;
+                fill[*n] += 1;
+            }
+        }
+        // node graph, sorted neighbour lists (each node is its own neighbour)
+        let lists: Vec<Vec<usize>> = (0..nn)
+            .into_par_iter()
+            .map(|b| {
+                let mut v: Vec<usize> = vec![b];
+                for e in &ne[ne_ptr[b]..ne_ptr[b + 1]] {
+                    v.extend_from_slice(mesh.element(*e).nodes);
+                }
+                v.sort_unstable();
+                v.dedup();
+                v
+            })
+            .collect();
+        let nfree: Vec<usize> = (0..nn)
+            .map(|n| dofs.node_dofs(n).iter().flatten().count())
+            .collect();
+        let mut nbr_ptr = Vec::with_capacity(nn + 1);
+        nbr_ptr.push(0);
+        let mut nbrs = Vec::with_capacity(lists.iter().map(Vec::len).sum());
+        let mut nbr_off = Vec::with_capacity(nbrs.capacity());
+        let mut col_ptr = Vec::with_capacity(dofs.free_count() + 1);
+        col_ptr.push(0);
+        let mut row_idx = Vec::new();
+        for (b, list) in lists.iter().enumerate() {
+            let mut off = 0;
+            for a in list {
+                nbrs.push(*a);
+                nbr_off.push(off);
+                off += nfree[*a];
+            }
+            nbr_ptr.push(nbrs.len());
+            for _ in 0..nfree[b] {
+                for a in list {
+                    row_idx.extend(dofs.node_dofs(*a).iter().flatten());
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        // greedy colouring: no two elements of a colour share a node
+        let mut color_of = vec![usize::MAX; mesh.element_count()];
+        let mut stamp: Vec<usize> = Vec::new();
+        let mut colors: Vec<Vec<usize>> = Vec::new();
+        for el in mesh.elements() {
+            for n in el.nodes {
+                for other in &ne[ne_ptr[*n]..ne_ptr[*n + 1]] {
+                    let c = color_of[*other];
+                    if c != usize::MAX {
+                        stamp[c] = el.index + 1;
+                    }
+                }
+            }
+            let c = (0..colors.len())
+                .find(|c| stamp[*c] != el.index + 1)
+                .unwrap_or_else(|| {
+                    colors.push(Vec::new());
+                    stamp.push(0);
+                    colors.len() - 1
+                });
+            color_of[el.index] = c;
+            colors[c].push(el.index);
+        }
+        Ok(Self {
+            dofs,
+            nbr_ptr,
+            nbrs,
+            nbr_off,
+            col_ptr,
+            row_idx,
+            colors,
+        })
+    }
+
+    /// The DOF map of the pattern.
+    pub fn dofs(&self) -> &DofMap {
+        &self.dofs
+    }
+
+    /// Number of stored entries of `K` (both triangles).
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    /// The element colours (lists of internal element indices); elements of one colour share no node.
+    pub fn colors(&self) -> &[Vec<usize>] {
+        &self.colors
+    }
+
+    /// Calls `add(position, value)` for every entry `alpha * ke[(3a+i), (3b+j)]` of an element
+    /// matrix whose row and column DOFs are free, with `position` the index into the values of
+    /// the stiffness pattern.
+    #[inline]
+    pub(crate) fn scatter(
+        &self,
+        nodes: &[usize],
+        ke: &[f64],
+        alpha: f64,
+        mut add: impl FnMut(usize, f64),
+    ) {
+        let nd = 3 * nodes.len();
+        for (lb, &nb) in nodes.iter().enumerate() {
+            let db = self.dofs.node_dofs(nb);
+            let (lo, hi) = (self.nbr_ptr[nb], self.nbr_ptr[nb + 1]);
+            for (la, &na) in nodes.iter().enumerate() {
+                let da = self.dofs.node_dofs(na);
+                let k = match self.nbrs[lo..hi].binary_search(&na) {
+                    Ok(k) => k,
+                    Err(_) => unreachable!("element nodes are neighbours in the pattern"),
+                };
+                let base = self.nbr_off[lo + k];
+                for (j, cj) in db.iter().enumerate() {
+                    let Some(c) = cj else { continue };
+                    let start = self.col_ptr[*c] + base;
+                    let mut rank = 0;
+                    for (i, ri) in da.iter().enumerate() {
+                        if ri.is_some() {
+                            add(start + rank, alpha * ke[(3 * la + i) * nd + 3 * lb + j]);
+                            rank += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// A matrix on the stiffness pattern with the given values.
+    pub(crate) fn pattern_matrix(&self, values: Vec<f64>) -> SparseMatrix {
+        let n = self.dofs.free_count();
+        SparseMatrix::new_csc((n, n), self.col_ptr.clone(), self.row_idx.clone(), values)
+    }
+
+    /// A diagonal matrix (the lumped mass) with the given diagonal.
+    pub(crate) fn diagonal_matrix(&self, diag: Vec<f64>) -> SparseMatrix {
+        let n = diag.len();
+        SparseMatrix::new_csc((n, n), (0..=n).collect(), (0..n).collect(), diag)
+    }
+
+    /// Assembles `K` and `M` for the model this pattern was built from (same mesh and constraints).
+    ///
+    /// # Errors
+    /// [`FemError::NoMaterial`] for an element without material, [`FemError::InvertedElement`] for
+    /// a non-positive Jacobian, [`FemError::LengthMismatch`] if the model does not match the pattern.
+    pub fn assemble(&self, model: &Model, mass: MassKind) -> Result<SystemMatrices, FemError> {
+        let mesh = model.mesh();
+        let n = self.dofs.free_count();
+        if model.dof_map() != self.dofs {
+            return Err(FemError::LengthMismatch {
+                what: "model DOFs against the assembler's",
+                expected: n,
+                got: model.dof_map().free_count(),
+            });
+        }
+        let materials: Vec<([[f64; 6]; 6], f64)> = (0..mesh.element_count())
+            .map(|e| {
+                model
+                    .material_of(e)
+                    .map(|m| (m.elasticity_matrix(), m.density))
+            })
+            .collect::<Result<_, _>>()?;
+        let mut kv = vec![0.0; self.nnz()];
+        let mut mv = vec![
+            0.0;
+            if mass == MassKind::Consistent {
+                self.nnz()
+            } else {
+                n
+            }
+        ];
+        for color in &self.colors {
+            let ks = shared::SharedSlice::new(&mut kv);
+            let ms = shared::SharedSlice::new(&mut mv);
+            color.par_iter().try_for_each_init(
+                ElementBuffers::default,
+                |buf, &e| -> Result<(), FemError> {
+                    let el = mesh.element(e);
+                    mesh.element_coords(e, &mut buf.x);
+                    let (d, rho) = &materials[e];
+                    let nd = 3 * el.kind.num_nodes();
+                    buf.ke.resize(nd * nd, 0.0);
+                    kernel::element_stiffness(el.kind, &buf.x, d, &mut buf.ke)
+                        .map_err(bad_jacobian(el.id))?;
+                    // SAFETY (see `shared`): elements of one colour share no node, and an element
+                    // writes only to the columns of its own nodes.
+                    self.scatter(el.nodes, &buf.ke, 1.0, |p, v| ks.add(p, v));
+                    match mass {
+                        MassKind::Consistent => {
+                            buf.me.resize(nd * nd, 0.0);
+                            kernel::element_mass(el.kind, &buf.x, *rho, &mut buf.me)
+                                .map_err(bad_jacobian(el.id))?;
+                            self.scatter(el.nodes, &buf.me, 1.0, |p, v| ms.add(p, v));
+                        }
+                        MassKind::Lumped => {
+                            buf.ml.resize(el.kind.num_nodes(), 0.0);
+                            kernel::lumped_mass(el.kind, &buf.x, *rho, &mut buf.ml)
+                                .map_err(bad_jacobian(el.id))?;
+                            for (a, node) in el.nodes.iter().enumerate() {
+                                for f in self.dofs.node_dofs(*node).iter().flatten() {
+                                    ms.add(*f, buf.ml[a]);
+                                }
+                            }
+                        }
+                    }
+                    Ok(())
+                },
+            )?;
+        }
+        let m = match mass {
+            MassKind::Consistent => self.pattern_matrix(mv),
+            MassKind::Lumped => self.diagonal_matrix(mv),
+        };
+        Ok(SystemMatrices {
+            k: self.pattern_matrix(kv),
+            m,
+            dofs: self.dofs.clone(),
+            mass_kind: mass,
+        })
+    }
+}
+
+/// Per-thread scratch for element matrices.
+#[derive(Default)]
+pub(crate) struct ElementBuffers {
+    pub(crate) x: Vec<[f64; 3]>,
+    pub(crate) ke: Vec<f64>,
+    pub(crate) me: Vec<f64>,
+    pub(crate) ml: Vec<f64>,
+}
+
+/// Element matrices of one element: `(K_e, M_e)` row-major, `M_e` diagonal when lumped.
+pub(crate) fn element_matrices(
+    model: &Model,
+    e: usize,
+    mass: MassKind,
+) -> Result<(Vec<f64>, Vec<f64>), FemError> {
+    let mesh = model.mesh();
+    let el = mesh.element(e);
+    let mat = model.material_of(e)?;
+    let mut x = Vec::new();
+    mesh.element_coords(e, &mut x);
+    let nn = el.kind.num_nodes();
+    let nd = 3 * nn;
+    let mut ke = vec![0.0; nd * nd];
+    let mut me = vec![0.0; nd * nd];
+    kernel::element_stiffness(el.kind, &x, &mat.elasticity_matrix(), &mut ke)
+        .map_err(bad_jacobian(el.id))?;
+    match mass {
+        MassKind::Consistent => {
+            kernel::element_mass(el.kind, &x, mat.density, &mut me).map_err(bad_jacobian(el.id))?
+        }
+        MassKind::Lumped => {
+            let mut ml = vec![0.0; nn];
+            kernel::lumped_mass(el.kind, &x, mat.density, &mut ml).map_err(bad_jacobian(el.id))?;
+            for a in 0..nn {
+                for i in 0..3 {
+                    me[(3 * a + i) * nd + 3 * a + i] = ml[a];
+                }
+            }
+        }
+    }
+    Ok((ke, me))
+}
+
+/// The number of nodes of the largest element kind, for buffers.
+pub const MAX_ELEMENT_NODES: usize = ElementKind::Hex20.num_nodes();
+
+#[allow(unsafe_code)]
+mod shared {
+    //! A slice written concurrently at indices that the caller guarantees to be disjoint between
+    //! threads: the element colouring makes the writes of one colour touch disjoint columns.
+    use std::marker::PhantomData;
+
+    pub(crate) struct SharedSlice<'a> {
+        ptr: *mut f64,
+        len: usize,
+        _borrow: PhantomData<&'a mut [f64]>,
+    }
+
+    // SAFETY: the slice is exclusively borrowed for 'a; concurrent `add`s target disjoint indices
+    // (element colouring), so no two threads access one element.
+    unsafe impl Send for SharedSlice<'_> {}
+    unsafe impl Sync for SharedSlice<'_> {}
+
+    impl<'a> SharedSlice<'a> {
+        pub(crate) fn new(s: &'a mut [f64]) -> Self {
+            Self {
+                ptr: s.as_mut_ptr(),
+                len: s.len(),
+                _borrow: PhantomData,
+            }
+        }
+
+        /// `s[i] += v`. Bounds are always checked; disjointness between threads is the caller's
+        /// contract (the colouring).
+        #[inline]
+        pub(crate) fn add(&self, i: usize, v: f64) {
+            assert!(i < self.len, "index {i} out of bounds {}", self.len);
+            // SAFETY: in bounds (checked above); no other thread writes index i concurrently.
+            unsafe { *self.ptr.add(i) += v }
+        }
+    }
+}

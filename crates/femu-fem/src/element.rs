@@ -1,0 +1,588 @@
+//! The isoparametric solid elements and their reference data.
+//!
+//! Node ordering is Abaqus/CalculiX's (files with other conventions are converted at input):
+//!
+//! | kind | nodes | ordering |
+//! |---|---|---|
+//! | [`Tet4`](ElementKind::Tet4) (C3D4) | 4 | 1-2-3 base, counter-clockwise seen from 4 |
+//! | [`Tet10`](ElementKind::Tet10) (C3D10) | 10 | corners, then mid-edges 1-2, 2-3, 3-1, 1-4, 2-4, 3-4 |
+//! | [`Hex8`](ElementKind::Hex8) (C3D8) | 8 | bottom face 1-2-3-4 (`zeta = -1`), then top 5-6-7-8 |
+//! | [`Hex20`](ElementKind::Hex20) (C3D20) | 20 | corners, mid-edges 1-2, 2-3, 3-4, 4-1, 5-6, 6-7, 7-8, 8-5, 1-5, 2-6, 3-7, 4-8 |
+//! | [`Penta6`](ElementKind::Penta6) (C3D6) | 6 | bottom triangle 1-2-3, top 4-5-6 |
+//! | [`Penta15`](ElementKind::Penta15) (C3D15) | 15 | corners, mid-edges 1-2, 2-3, 3-1, 4-5, 5-6, 6-4, 1-4, 2-5, 3-6 |
+//!
+//! Integration (the rules are exact for the undistorted element wherever noted):
+//!
+//! | kind | stiffness | consistent mass |
+//! |---|---|---|
+//! | tet4 | 1 point (exact) | 4 points, degree 2 (exact) |
+//! | tet10 | 4 points, degree 2 (exact; as C3D10) | conical product, degree 4 (exact) |
+//! | hex8 | 2x2x2 Gauss (as C3D8) | 2x2x2 (exact; as C3D8) |
+//! | hex20 | 3x3x3 Gauss (as C3D20) | 3x3x3 (exact; as C3D20) |
+//! | penta6 | 3-point triangle x 2 Gauss, degree 2 (exact) | same (exact) |
+//! | penta15 | 6-point triangle x 3 Gauss, degree 4 (exact) | same (exact) |
+//!
+//! CalculiX 2.20 under-integrates the mass of C3D4, C3D10, C3D6 and C3D15 into singular matrices;
+//! femu integrates every consistent mass exactly, so every element mass matrix is positive definite.
+
+use crate::quadrature::{self, QuadratureRule};
+use serde::{Deserialize, Serialize};
+use std::sync::OnceLock;
+
+/// The six solid element types.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum ElementKind {
+    /// 4-node linear tetrahedron (C3D4).
+    Tet4,
+    /// 10-node quadratic tetrahedron (C3D10).
+    Tet10,
+    /// 8-node trilinear hexahedron (C3D8).
+    Hex8,
+    /// 20-node serendipity hexahedron (C3D20).
+    Hex20,
+    /// 6-node linear wedge / pentahedron (C3D6).
+    Penta6,
+    /// 15-node quadratic wedge (C3D15).
+    Penta15,
+}
+
+/// Every element kind, for loops in tests and tools.
+pub const ALL_KINDS: [ElementKind; 6] = [
+    ElementKind::Tet4,
+    ElementKind::Tet10,
+    ElementKind::Hex8,
+    ElementKind::Hex20,
+    ElementKind::Penta6,
+    ElementKind::Penta15,
+];
+
+const HEX_CORNERS: [[f64; 3]; 8] = [
+    [-1.0, -1.0, -1.0],
+    [1.0, -1.0, -1.0],
+    [1.0, 1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+    [1.0, -1.0, 1.0],
+    [1.0, 1.0, 1.0],
+    [-1.0, 1.0, 1.0],
+];
+const HEX_EDGES: [[usize; 2]; 12] = [
+    [0, 1],
+    [1, 2],
+    [2, 3],
+    [3, 0],
+    [4, 5],
+    [5, 6],
+    [6, 7],
+    [7, 4],
+    [0, 4],
+    [1, 5],
+    [2, 6],
+    [3, 7],
+];
+const TET_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]];
+const WEDGE_EDGES: [[usize; 2]; 9] = [
+    [0, 1],
+    [1, 2],
+    [2, 0],
+    [3, 4],
+    [4, 5],
+    [5, 3],
+    [0, 3],
+    [1, 4],
+    [2, 5],
+];
+
+const HEX_FACES: [&[usize]; 6] = [
+    &[0, 1, 2, 3],
+    &[4, 7, 6, 5],
+    &[0, 4, 5, 1],
+    &[1, 5, 6, 2],
+    &[2, 6, 7, 3],
+    &[3, 7, 4, 0],
+];
+const TET_FACES: [&[usize]; 4] = [&[0, 1, 2], &[0, 3, 1], &[1, 3, 2], &[2, 3, 0]];
+const WEDGE_FACES: [&[usize]; 5] = [
+    &[0, 1, 2],
+    &[3, 5, 4],
+    &[0, 3, 4, 1],
+    &[1, 4, 5, 2],
+    &[2, 5, 3, 0],
+];
+
+impl ElementKind {
+    /// Number of nodes.
+    pub const fn num_nodes(self) -> usize {
+        match self {
+            Self::Tet4 => 4,
+            Self::Tet10 => 10,
+            Self::Hex8 => 8,
+            Self::Hex20 => 20,
+            Self::Penta6 => 6,
+            Self::Penta15 => 15,
+        }
+    }
+
+    /// Number of corner (vertex) nodes; they come first in the ordering.
+    pub const fn num_corners(self) -> usize {
+        match self {
+            Self::Tet4 | Self::Tet10 => 4,
+            Self::Hex8 | Self::Hex20 => 8,
+            Self::Penta6 | Self::Penta15 => 6,
+        }
+    }
+
+    /// Whether the element has mid-edge nodes.
+    pub const fn is_quadratic(self) -> bool {
+        matches!(self, Self::Tet10 | Self::Hex20 | Self::Penta15)
+    }
+
+    /// The linear element with the same corners.
+    pub const fn linear(self) -> Self {
+        match self {
+            Self::Tet4 | Self::Tet10 => Self::Tet4,
+            Self::Hex8 | Self::Hex20 => Self::Hex8,
+            Self::Penta6 | Self::Penta15 => Self::Penta6,
+        }
+    }
+
+    /// The quadratic element with the same corners.
+    pub const fn quadratic(self) -> Self {
+        match self {
+            Self::Tet4 | Self::Tet10 => Self::Tet10,
+            Self::Hex8 | Self::Hex20 => Self::Hex20,
+            Self::Penta6 | Self::Penta15 => Self::Penta15,
+        }
+    }
+
+    /// The Abaqus/CalculiX name of the fully integrated element.
+    pub const fn abaqus_name(self) -> &'static str {
+        match self {
+            Self::Tet4 => "C3D4",
+            Self::Tet10 => "C3D10",
+            Self::Hex8 => "C3D8",
+            Self::Hex20 => "C3D20",
+            Self::Penta6 => "C3D6",
+            Self::Penta15 => "C3D15",
+        }
+    }
+
+    /// Edges as pairs of corner indices; for a quadratic element, edge `e` carries the mid-edge node
+    /// `num_corners() + e`.
+    pub const fn edges(self) -> &'static [[usize; 2]] {
+        match self {
+            Self::Tet4 | Self::Tet10 => &TET_EDGES,
+            Self::Hex8 | Self::Hex20 => &HEX_EDGES,
+            Self::Penta6 | Self::Penta15 => &WEDGE_EDGES,
+        }
+    }
+
+    /// Faces as cycles of corner indices (Abaqus face order S1, S2, ...).
+    pub const fn faces(self) -> &'static [&'static [usize]] {
+        match self {
+            Self::Tet4 | Self::Tet10 => &TET_FACES,
+            Self::Hex8 | Self::Hex20 => &HEX_FACES,
+            Self::Penta6 | Self::Penta15 => &WEDGE_FACES,
+        }
+    }
+
+    /// All local node indices of face `f`: its corners, then (quadratic elements) its mid-edge nodes.
+    pub fn face_nodes(self, f: usize) -> Vec<usize> {
+        let corners = self.faces()[f];
+        let mut nodes = corners.to_vec();
+        if self.is_quadratic() {
+            for i in 0..corners.len() {
+                let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
+                let e = self
+                    .edges()
+                    .iter()
+                    .position(|e| (e[0] == a && e[1] == b) || (e[0] == b && e[1] == a))
+                    .expect("every face edge is an element edge");
+                nodes.push(self.num_corners() + e);
+            }
+        }
+        nodes
+    }
+
+    /// Reference coordinates of the nodes.
+    pub fn reference_nodes(self) -> Vec<[f64; 3]> {
+        let corners: Vec<[f64; 3]> = match self {
+            Self::Tet4 | Self::Tet10 => vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            Self::Hex8 | Self::Hex20 => HEX_CORNERS.to_vec(),
+            Self::Penta6 | Self::Penta15 => vec![
+                [0.0, 0.0, -1.0],
+                [1.0, 0.0, -1.0],
+                [0.0, 1.0, -1.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 0.0, 1.0],
+                [0.0, 1.0, 1.0],
+            ],
+        };
+        let mut nodes = corners.clone();
+        if self.is_quadratic() {
+            for e in self.edges() {
+                let (a, b) = (corners[e[0]], corners[e[1]]);
+                nodes.push([
+                    0.5 * (a[0] + b[0]),
+                    0.5 * (a[1] + b[1]),
+                    0.5 * (a[2] + b[2]),
+                ]);
+            }
+        }
+        nodes
+    }
+
+    /// Volume of the reference cell.
+    pub const fn reference_volume(self) -> f64 {
+        match self {
+            Self::Tet4 | Self::Tet10 => 1.0 / 6.0,
+            Self::Hex8 | Self::Hex20 => 8.0,
+            Self::Penta6 | Self::Penta15 => 1.0,
+        }
+    }
+
+    /// Shape functions `N_a(xi)` into `n` (length `num_nodes()`).
+    pub fn shape(self, xi: [f64; 3], n: &mut [f64]) {
+        let [x, y, z] = xi;
+        match self {
+            Self::Tet4 => {
+                n[0] = 1.0 - x - y - z;
+                n[1] = x;
+                n[2] = y;
+                n[3] = z;
+            }
+            Self::Tet10 => {
+                let l = [1.0 - x - y - z, x, y, z];
+                for a in 0..4 {
+                    n[a] = l[a] * (2.0 * l[a] - 1.0);
+                }
+                for (e, [a, b]) in TET_EDGES.iter().enumerate() {
+                    n[4 + e] = 4.0 * l[*a] * l[*b];
+                }
+            }
+            Self::Hex8 => {
+                for (a, c) in HEX_CORNERS.iter().enumerate() {
+                    n[a] = 0.125 * (1.0 + c[0] * x) * (1.0 + c[1] * y) * (1.0 + c[2] * z);
+                }
+            }
+            Self::Hex20 => {
+                let r = Self::Hex20.reference_nodes();
+                for (a, c) in r.iter().enumerate() {
+                    let (fx, fy, fz) = (1.0 + c[0] * x, 1.0 + c[1] * y, 1.0 + c[2] * z);
+                    n[a] = if a < 8 {
+                        0.125 * fx * fy * fz * (c[0] * x + c[1] * y + c[2] * z - 2.0)
+                    } else if c[0] == 0.0 {
+                        0.25 * (1.0 - x * x) * fy * fz
+                    } else if c[1] == 0.0 {
+                        0.25 * fx * (1.0 - y * y) * fz
+                    } else {
+                        0.25 * fx * fy * (1.0 - z * z)
+                    };
+                }
+            }
+            Self::Penta6 => {
+                let l = [1.0 - x - y, x, y];
+                for a in 0..3 {
+                    n[a] = 0.5 * l[a] * (1.0 - z);
+                    n[a + 3] = 0.5 * l[a] * (1.0 + z);
+                }
+            }
+            Self::Penta15 => {
+                let l = [1.0 - x - y, x, y];
+                let b = 1.0 - z * z;
+                for a in 0..3 {
+                    n[a] = 0.5 * l[a] * (2.0 * l[a] - 1.0) * (1.0 - z) - 0.5 * l[a] * b;
+                    n[a + 3] = 0.5 * l[a] * (2.0 * l[a] - 1.0) * (1.0 + z) - 0.5 * l[a] * b;
+                    let (i, j) = (a, (a + 1) % 3);
+                    n[6 + a] = 2.0 * l[i] * l[j] * (1.0 - z);
+                    n[9 + a] = 2.0 * l[i] * l[j] * (1.0 + z);
+                    n[12 + a] = l[a] * b;
+                }
+            }
+        }
+    }
+
+    /// Shape function gradients in reference coordinates, `dn[3 a + k] = dN_a / dxi_k`.
+    pub fn shape_gradients(self, xi: [f64; 3], dn: &mut [f64]) {
+        let [x, y, z] = xi;
+        match self {
+            Self::Tet4 => {
+                dn[..12].copy_from_slice(&[
+                    -1.0, -1.0, -1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0,
+                ]);
+            }
+            Self::Tet10 => {
+                let l = [1.0 - x - y - z, x, y, z];
+                // dL_a / dxi
+                let dl = [
+                    [-1.0, -1.0, -1.0],
+                    [1.0, 0.0, 0.0],
+                    [0.0, 1.0, 0.0],
+                    [0.0, 0.0, 1.0],
+                ];
+                for a in 0..4 {
+                    for k in 0..3 {
+                        dn[3 * a + k] = (4.0 * l[a] - 1.0) * dl[a][k];
+                    }
+                }
+                for (e, [a, b]) in TET_EDGES.iter().enumerate() {
+                    for k in 0..3 {
+                        dn[3 * (4 + e) + k] = 4.0 * (dl[*a][k] * l[*b] + l[*a] * dl[*b][k]);
+                    }
+                }
+            }
+            Self::Hex8 => {
+                for (a, c) in HEX_CORNERS.iter().enumerate() {
+                    let (fx, fy, fz) = (1.0 + c[0] * x, 1.0 + c[1] * y, 1.0 + c[2] * z);
+                    dn[3 * a] = 0.125 * c[0] * fy * fz;
+                    dn[3 * a + 1] = 0.125 * fx * c[1] * fz;
+                    dn[3 * a + 2] = 0.125 * fx * fy * c[2];
+                }
+            }
+            Self::Hex20 => {
+                let r = Self::Hex20.reference_nodes();
+                for (a, c) in r.iter().enumerate() {
+                    let (fx, fy, fz) = (1.0 + c[0] * x, 1.0 + c[1] * y, 1.0 + c[2] * z);
+                    let g = if a < 8 {
+                        let s = c[0] * x + c[1] * y + c[2] * z - 2.0;
+                        [
+                            0.125 * c[0] * fy * fz * (s + fx),
+                            0.125 * c[1] * fx * fz * (s + fy),
+                            0.125 * c[2] * fx * fy * (s + fz),
+                        ]
+                    } else if c[0] == 0.0 {
+                        [
+                            -0.5 * x * fy * fz,
+                            0.25 * (1.0 - x * x) * c[1] * fz,
+                            0.25 * (1.0 - x * x) * fy * c[2],
+                        ]
+                    } else if c[1] == 0.0 {
+                        [
+                            0.25 * c[0] * (1.0 - y * y) * fz,
+                            -0.5 * y * fx * fz,
+                            0.25 * fx * (1.0 - y * y) * c[2],
+                        ]
+                    } else {
+                        [
+                            0.25 * c[0] * fy * (1.0 - z * z),
+                            0.25 * fx * c[1] * (1.0 - z * z),
+                            -0.5 * z * fx * fy,
+                        ]
+                    };
+                    dn[3 * a..3 * a + 3].copy_from_slice(&g);
+                }
+            }
+            Self::Penta6 => {
+                let l = [1.0 - x - y, x, y];
+                let dl = [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
+                for a in 0..3 {
+                    dn[3 * a..3 * a + 3].copy_from_slice(&[
+                        0.5 * dl[a][0] * (1.0 - z),
+                        0.5 * dl[a][1] * (1.0 - z),
+                        -0.5 * l[a],
+                    ]);
+                    dn[3 * (a + 3)..3 * (a + 3) + 3].copy_from_slice(&[
+                        0.5 * dl[a][0] * (1.0 + z),
+                        0.5 * dl[a][1] * (1.0 + z),
+                        0.5 * l[a],
+                    ]);
+                }
+            }
+            Self::Penta15 => {
+                let l = [1.0 - x - y, x, y];
+                let dl = [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
+                let b = 1.0 - z * z;
+                for a in 0..3 {
+                    let q = l[a] * (2.0 * l[a] - 1.0);
+                    let dq = 4.0 * l[a] - 1.0; // dq/dL
+                    for (off, s) in [(0usize, -1.0), (3, 1.0)] {
+                        let zf = 1.0 + s * z;
+                        let row = 3 * (a + off);
+                        for k in 0..2 {
+                            dn[row + k] = 0.5 * dq * dl[a][k] * zf - 0.5 * dl[a][k] * b;
+                        }
+                        dn[row + 2] = 0.5 * q * s + l[a] * z;
+                    }
+                    let (i, j) = (a, (a + 1) % 3);
+                    for (off, s) in [(6usize, -1.0), (9, 1.0)] {
+                        let zf = 1.0 + s * z;
+                        let row = 3 * (off + a);
+                        for k in 0..2 {
+                            dn[row + k] = 2.0 * (dl[i][k] * l[j] + l[i] * dl[j][k]) * zf;
+                        }
+                        dn[row + 2] = 2.0 * l[i] * l[j] * s;
+                    }
+                    let row = 3 * (12 + a);
+                    dn[row] = dl[a][0] * b;
+                    dn[row + 1] = dl[a][1] * b;
+                    dn[row + 2] = -2.0 * l[a] * z;
+                }
+            }
+        }
+    }
+
+    /// The stiffness quadrature rule (table in the module docs).
+    pub fn stiffness_rule(self) -> QuadratureRule {
+        match self {
+            Self::Tet4 => quadrature::tet_1(),
+            Self::Tet10 => quadrature::tet_4(),
+            Self::Hex8 => quadrature::hex_gauss(2),
+            Self::Hex20 => quadrature::hex_gauss(3),
+            Self::Penta6 => quadrature::wedge(2),
+            Self::Penta15 => quadrature::wedge(4),
+        }
+    }
+
+    /// The consistent-mass quadrature rule, exact for the undistorted element.
+    pub fn mass_rule(self) -> QuadratureRule {
+        match self {
+            Self::Tet4 => quadrature::tet_4(),
+            Self::Tet10 => quadrature::tet_conical(4),
+            Self::Hex8 => quadrature::hex_gauss(2),
+            Self::Hex20 => quadrature::hex_gauss(3),
+            Self::Penta6 => quadrature::wedge(2),
+            Self::Penta15 => quadrature::wedge(4),
+        }
+    }
+
+    /// Shape functions and gradients tabulated at the stiffness and mass rules' points, computed once.
+    pub fn reference(self) -> &'static ReferenceData {
+        static CACHE: [OnceLock<ReferenceData>; 6] = [
+            OnceLock::new(),
+            OnceLock::new(),
+            OnceLock::new(),
+            OnceLock::new(),
+            OnceLock::new(),
+            OnceLock::new(),
+        ];
+        let i = ALL_KINDS
+            .iter()
+            .position(|k| *k == self)
+            .expect("kind listed in ALL_KINDS");
+        CACHE[i].get_or_init(|| ReferenceData {
+            stiffness: Tabulated::new(self, self.stiffness_rule()),
+            mass: Tabulated::new(self, self.mass_rule()),
+        })
+    }
+}
+
+impl std::fmt::Display for ElementKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let s = match self {
+            Self::Tet4 => "tet4",
+            Self::Tet10 => "tet10",
+            Self::Hex8 => "hex8",
+            Self::Hex20 => "hex20",
+            Self::Penta6 => "penta6",
+            Self::Penta15 => "penta15",
+        };
+        f.write_str(s)
+    }
+}
+
+/// A rule with the shape functions and reference gradients at its points.
+#[derive(Debug, Clone)]
+pub struct Tabulated {
+    /// The quadrature rule.
+    pub rule: QuadratureRule,
+    /// `n[q * nn + a] = N_a(xi_q)`.
+    pub n: Vec<f64>,
+    /// `dn[(q * nn + a) * 3 + k] = dN_a / dxi_k (xi_q)`.
+    pub dn: Vec<f64>,
+}
+
+impl Tabulated {
+    fn new(kind: ElementKind, rule: QuadratureRule) -> Self {
+        let nn = kind.num_nodes();
+        let mut n = vec![0.0; rule.len() * nn];
+        let mut dn = vec![0.0; rule.len() * nn * 3];
+        for (q, p) in rule.points.iter().enumerate() {
+            kind.shape(*p, &mut n[q * nn..(q + 1) * nn]);
+            kind.shape_gradients(*p, &mut dn[q * nn * 3..(q + 1) * nn * 3]);
+        }
+        Self { rule, n, dn }
+    }
+}
+
+/// Tabulated reference data of one element kind.
+#[derive(Debug, Clone)]
+pub struct ReferenceData {
+    /// At the stiffness rule.
+    pub stiffness: Tabulated,
+    /// At the consistent-mass rule.
+    pub mass: Tabulated,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shape_functions_are_nodal_and_partition_unity() {
+        for kind in ALL_KINDS {
+            let nn = kind.num_nodes();
+            let mut n = vec![0.0; nn];
+            for (a, p) in kind.reference_nodes().iter().enumerate() {
+                kind.shape(*p, &mut n);
+                for b in 0..nn {
+                    let expect = if a == b { 1.0 } else { 0.0 };
+                    assert!(
+                        (n[b] - expect).abs() < 1e-14,
+                        "{kind}: N_{b} at node {a} = {}",
+                        n[b]
+                    );
+                }
+            }
+            kind.shape([0.21, 0.17, 0.13], &mut n);
+            assert!((n.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+        }
+    }
+
+    /// Gradients against central differences of the shape functions (an independent derivation).
+    #[test]
+    fn gradients_match_finite_differences() {
+        let h = 1e-6;
+        for kind in ALL_KINDS {
+            let nn = kind.num_nodes();
+            let xi = [0.23, 0.19, 0.31];
+            let mut dn = vec![0.0; 3 * nn];
+            kind.shape_gradients(xi, &mut dn);
+            let (mut np, mut nm) = (vec![0.0; nn], vec![0.0; nn]);
+            for k in 0..3 {
+                let (mut p, mut m) = (xi, xi);
+                p[k] += h;
+                m[k] -= h;
+                kind.shape(p, &mut np);
+                kind.shape(m, &mut nm);
+                for a in 0..nn {
+                    let fd = (np[a] - nm[a]) / (2.0 * h);
+                    assert!(
+                        (fd - dn[3 * a + k]).abs() < 1e-8,
+                        "{kind}: dN_{a}/dxi_{k}: {fd} vs {}",
+                        dn[3 * a + k]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn face_nodes_of_quadratic_faces() {
+        // hex20 bottom face: corners 0 1 2 3 and mid-edges 8 9 10 11
+        assert_eq!(
+            ElementKind::Hex20.face_nodes(0),
+            vec![0, 1, 2, 3, 8, 9, 10, 11]
+        );
+        // tet10 face S2 (1-4-2): mid-edges 1-4 (node 8 -> index 7), 4-2 (index 8), 2-1 (index 4)
+        assert_eq!(ElementKind::Tet10.face_nodes(1), vec![0, 3, 1, 7, 8, 4]);
+        assert_eq!(
+            ElementKind::Penta15.face_nodes(2),
+            vec![0, 3, 4, 1, 12, 9, 13, 6]
+        );
+    }
+}

@@ -1,0 +1,413 @@
+//! Mesh generators: boxes of any element kind and the mixed plate of the paper's study.
+//!
+//! Every generated mesh is conforming ([`Mesh::check_conformity`]): tetrahedra use the Kuhn
+//! (six-tet) split, or the five-tet split with alternating orientation, both of which match across
+//! cells; wedges split each hexahedron along a face diagonal chosen to match the Kuhn
+//! triangulation, so wedges, tetrahedra and hexahedra can meet in one mesh.
+//!
+//! Node sets: `xmin`, `xmax`, `ymin`, `ymax`, `zmin`, `zmax` (the box faces) and `all`. Element
+//! sets: `all`, and for the plate `hex`, `penta`, `tet`. Node and element ids start at 1.
+
+use crate::FemError;
+use crate::element::ElementKind;
+use crate::mesh::Mesh;
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+
+/// How a box is meshed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum BoxCells {
+    /// One hexahedron per cell (hex8 or hex20 by `quadratic`).
+    Hex,
+    /// Two wedges per cell, triangles normal to z.
+    Wedge,
+    /// Five tetrahedra per cell, alternating orientation between neighbours.
+    Tet5,
+    /// Six tetrahedra per cell (Kuhn split along the cell's main diagonal).
+    Tet6,
+}
+
+/// A box `[0, lx] x [0, ly] x [0, lz]` (m) divided into `nx x ny x nz` cells.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BoxSpec {
+    /// Edge lengths in m.
+    pub lengths: [f64; 3],
+    /// Cells along each axis.
+    pub divisions: [usize; 3],
+    /// Cell splitting.
+    pub cells: BoxCells,
+    /// Quadratic elements (hex20, penta15, tet10) instead of linear ones.
+    pub quadratic: bool,
+}
+
+impl BoxSpec {
+    /// A box spec.
+    pub fn new(lengths: [f64; 3], divisions: [usize; 3], cells: BoxCells, quadratic: bool) -> Self {
+        Self {
+            lengths,
+            divisions,
+            cells,
+            quadratic,
+        }
+    }
+}
+
+/// The structured grid of corner nodes shared by the generators.
+struct Grid {
+    n: [usize; 3],
+}
+
+impl Grid {
+    fn node(&self, i: usize, j: usize, k: usize) -> usize {
+        i + (self.n[0] + 1) * (j + (self.n[1] + 1) * k)
+    }
+}
+
+fn check_spec(lengths: [f64; 3], divisions: [usize; 3]) -> Result<(), FemError> {
+    if lengths.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
+        return Err(FemError::InvalidGenerator {
+            reason: format!("lengths must be positive, got {lengths:?}"),
+        });
+    }
+    if divisions.contains(&0) {
+        return Err(FemError::InvalidGenerator {
+            reason: format!("divisions must be at least 1, got {divisions:?}"),
+        });
+    }
+    Ok(())
+}
+
+fn grid_mesh(lengths: [f64; 3], divisions: [usize; 3]) -> (Mesh, Grid) {
+    let g = Grid { n: divisions };
+    let mut mesh = Mesh::new();
+    let [nx, ny, nz] = divisions;
+    let mut faces: [Vec<usize>; 6] = Default::default();
+    for k in 0..=nz {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let x = [
+                    lengths[0] * i as f64 / nx as f64,
+                    lengths[1] * j as f64 / ny as f64,
+                    lengths[2] * k as f64 / nz as f64,
+                ];
+                let idx = mesh
+                    .add_node(g.node(i, j, k) as u64 + 1, x)
+                    .expect("generated ids are unique");
+                for (f, on) in [i == 0, i == nx, j == 0, j == ny, k == 0, k == nz]
+                    .iter()
+                    .enumerate()
+                {
+                    if *on {
+                        faces[f].push(idx);
+                    }
+                }
+            }
+        }
+    }
+    for (name, set) in ["xmin", "xmax", "ymin", "ymax", "zmin", "zmax"]
+        .iter()
+        .zip(faces)
+    {
+        mesh.add_node_set_indices(*name, set);
+    }
+    mesh.add_node_set_indices("all", (0..mesh.node_count()).collect());
+    (mesh, g)
+}
+
+/// Corner `c` (bits x, y, z) of cell `(i, j, k)`.
+fn corner(g: &Grid, (i, j, k): (usize, usize, usize), c: [usize; 3]) -> usize {
+    g.node(i + c[0], j + c[1], k + c[2])
+}
+
+fn orient(mesh: &Mesh, nodes: &mut [usize]) {
+    let x = mesh.coords();
+    let (a, b, c, d) = (x[nodes[0]], x[nodes[1]], x[nodes[2]], x[nodes[3]]);
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let w = [d[0] - a[0], d[1] - a[1], d[2] - a[2]];
+    let det = u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0])
+        + u[2] * (v[0] * w[1] - v[1] * w[0]);
+    if det < 0.0 {
+        nodes.swap(1, 2);
+    }
+}
+
+/// Adds the elements of one cell: hexahedron, two wedges with axis `axis` (0 = x, 1 = y, 2 = z),
+/// or tetrahedra.
+fn add_cell(
+    mesh: &mut Mesh,
+    g: &Grid,
+    cell: (usize, usize, usize),
+    cells: BoxCells,
+    axis: usize,
+    next_id: &mut u64,
+) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut push = |mesh: &mut Mesh, kind: ElementKind, nodes: &[usize]| {
+        out.push(mesh.push_element(*next_id, kind, nodes));
+        *next_id += 1;
+    };
+    match cells {
+        BoxCells::Hex => {
+            let n: Vec<usize> = [
+                [0, 0, 0],
+                [1, 0, 0],
+                [1, 1, 0],
+                [0, 1, 0],
+                [0, 0, 1],
+                [1, 0, 1],
+                [1, 1, 1],
+                [0, 1, 1],
+            ]
+            .iter()
+            .map(|c| corner(g, cell, *c))
+            .collect();
+            push(mesh, ElementKind::Hex8, &n);
+        }
+        BoxCells::Wedge => {
+            // (u, v, w) is a cyclic permutation of (x, y, z) with w along the axis, so the frame
+            // stays right-handed; the u-v diagonal (0,0)-(1,1) matches the Kuhn split's faces.
+            let perm = match axis {
+                0 => [1, 2, 0],
+                1 => [2, 0, 1],
+                _ => [0, 1, 2],
+            };
+            let to_xyz = |uvw: [usize; 3]| -> [usize; 3] {
+                let mut c = [0; 3];
+                for (d, p) in perm.iter().enumerate() {
+                    c[*p] = uvw[d];
+                }
+                c
+            };
+            for w in [
+                [
+                    [0, 0, 0],
+                    [1, 0, 0],
+                    [1, 1, 0],
+                    [0, 0, 1],
+                    [1, 0, 1],
+                    [1, 1, 1],
+                ],
+                [
+                    [0, 0, 0],
+                    [1, 1, 0],
+                    [0, 1, 0],
+                    [0, 0, 1],
+                    [1, 1, 1],
+                    [0, 1, 1],
+                ],
+            ] {
+                let n: Vec<usize> = w.iter().map(|c| corner(g, cell, to_xyz(*c))).collect();
+                push(mesh, ElementKind::Penta6, &n);
+            }
+        }
+        BoxCells::Tet6 => {
+            for perm in [
+                [0, 1, 2],
+                [0, 2, 1],
+                [1, 0, 2],
+                [1, 2, 0],
+                [2, 0, 1],
+                [2, 1, 0],
+            ] {
+                let mut c = [0usize; 3];
+                let mut n = vec![corner(g, cell, c)];
+                for p in perm {
+                    c[p] = 1;
+                    n.push(corner(g, cell, c));
+                }
+                orient(mesh, &mut n);
+                push(mesh, ElementKind::Tet4, &n);
+            }
+        }
+        BoxCells::Tet5 => {
+            let even = (cell.0 + cell.1 + cell.2) % 2 == 0;
+            let flip = |c: [usize; 3]| if even { c } else { [1 - c[0], c[1], c[2]] };
+            let tets = [
+                [[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]],
+                [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+                [[1, 1, 0], [1, 0, 0], [0, 1, 0], [1, 1, 1]],
+                [[1, 0, 1], [1, 0, 0], [0, 0, 1], [1, 1, 1]],
+                [[0, 1, 1], [0, 1, 0], [0, 0, 1], [1, 1, 1]],
+            ];
+            for t in tets {
+                let mut n: Vec<usize> = t.iter().map(|c| corner(g, cell, flip(*c))).collect();
+                orient(mesh, &mut n);
+                push(mesh, ElementKind::Tet4, &n);
+            }
+        }
+    }
+    out
+}
+
+/// A structured box mesh of one element kind.
+///
+/// ```
+/// use femu_fem::generate::{box_mesh, BoxCells, BoxSpec};
+/// let mesh = box_mesh(&BoxSpec::new([1.0, 0.5, 0.25], [4, 2, 1], BoxCells::Tet6, true)).unwrap();
+/// assert_eq!(mesh.element_count(), 4 * 2 * 6);
+/// assert!(mesh.check_conformity().is_conforming());
+/// ```
+///
+/// # Errors
+/// [`FemError::InvalidGenerator`] for non-positive lengths or zero divisions.
+pub fn box_mesh(spec: &BoxSpec) -> Result<Mesh, FemError> {
+    check_spec(spec.lengths, spec.divisions)?;
+    let (mut mesh, g) = grid_mesh(spec.lengths, spec.divisions);
+    let [nx, ny, nz] = spec.divisions;
+    let mut id = 1;
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                add_cell(&mut mesh, &g, (i, j, k), spec.cells, 2, &mut id);
+            }
+        }
+    }
+    mesh.add_element_set_indices("all", (0..mesh.element_count()).collect());
+    Ok(if spec.quadratic {
+        to_quadratic(&mesh)
+    } else {
+        mesh
+    })
+}
+
+/// The mixed plate: hexahedra, wedges and tetrahedra in one conforming mesh.
+///
+/// The plate `[0, lx] x [0, ly] x [0, lz]` is divided into `nx x ny x nz` cells. The cells with
+/// `i >= nx - tet_block[0]` and `j >= ny - tet_block[1]` (a corner block through the thickness)
+/// are split into six tetrahedra each; the strips that separate that block from the hexahedra are
+/// wedges whose triangular faces meet the tetrahedra (axis x for the strip along x, axis y for the
+/// strip along y); every other cell is a hexahedron.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlateSpec {
+    /// Plate dimensions in m.
+    pub lengths: [f64; 3],
+    /// Cells along x, y and through the thickness.
+    pub divisions: [usize; 3],
+    /// Cells of the tetrahedral corner block along x and y.
+    pub tet_block: [usize; 2],
+    /// Quadratic elements.
+    pub quadratic: bool,
+}
+
+impl Default for PlateSpec {
+    /// Sized like the paper's plate: 1,845 nodes (5,535 DOFs) and 1,360 elements (912 hex8,
+    /// 400 penta6, 48 tet4) on a 0.2 x 0.07 x 0.01 m steel-sized plate with 5 mm cells.
+    fn default() -> Self {
+        Self {
+            lengths: [0.2, 0.07, 0.01],
+            divisions: [40, 14, 2],
+            tet_block: [2, 2],
+            quadratic: false,
+        }
+    }
+}
+
+/// Generates the mixed plate of [`PlateSpec`].
+///
+/// ```
+/// use femu_fem::generate::{mixed_plate, PlateSpec};
+/// let mesh = mixed_plate(&PlateSpec::default()).unwrap();
+/// assert_eq!((mesh.node_count(), mesh.element_count()), (1845, 1360));
+/// assert!(mesh.check_conformity().is_conforming());
+/// ```
+///
+/// # Errors
+/// [`FemError::InvalidGenerator`] for bad sizes or a tetrahedral block that does not fit.
+pub fn mixed_plate(spec: &PlateSpec) -> Result<Mesh, FemError> {
+    check_spec(spec.lengths, spec.divisions)?;
+    let [nx, ny, nz] = spec.divisions;
+    let [tx, ty] = spec.tet_block;
+    if tx == 0 || ty == 0 || tx >= nx || ty >= ny {
+        return Err(FemError::InvalidGenerator {
+            reason: format!(
+                "tet block {tx} x {ty} must be at least 1 x 1 and smaller than the plate's {nx} x {ny} cells"
+            ),
+        });
+    }
+    let (mut mesh, g) = grid_mesh(spec.lengths, spec.divisions);
+    let (ix, iy) = (nx - tx, ny - ty);
+    let mut sets: [Vec<usize>; 3] = Default::default();
+    let mut id = 1;
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let (cells, axis, set) = match (i >= ix, j >= iy) {
+                    (true, true) => (BoxCells::Tet6, 2, 2),
+                    (false, true) => (BoxCells::Wedge, 0, 1),
+                    (true, false) => (BoxCells::Wedge, 1, 1),
+                    (false, false) => (BoxCells::Hex, 2, 0),
+                };
+                let added = add_cell(&mut mesh, &g, (i, j, k), cells, axis, &mut id);
+                sets[set].extend(added);
+            }
+        }
+    }
+    for (name, set) in ["hex", "penta", "tet"].iter().zip(sets) {
+        mesh.add_element_set_indices(*name, set);
+    }
+    mesh.add_element_set_indices("all", (0..mesh.element_count()).collect());
+    Ok(if spec.quadratic {
+        to_quadratic(&mesh)
+    } else {
+        mesh
+    })
+}
+
+/// The quadratic version of a mesh: every linear element gets straight-edge mid-edge nodes shared
+/// with its neighbours (new ids follow the largest existing one). Quadratic elements are kept as
+/// they are. A mid-edge node joins a node set when both ends of its edge are in the set, so face
+/// sets keep covering their faces.
+pub fn to_quadratic(mesh: &Mesh) -> Mesh {
+    let mut out = Mesh::new();
+    for i in 0..mesh.node_count() {
+        out.add_node(mesh.node_id(i), mesh.coords()[i])
+            .expect("ids copied from a valid mesh");
+    }
+    let mut next = (0..mesh.node_count())
+        .map(|i| mesh.node_id(i))
+        .max()
+        .unwrap_or(0)
+        + 1;
+    let mut mid: HashMap<(usize, usize), usize> = HashMap::new();
+    for el in mesh.elements() {
+        let mut nodes = el.nodes.to_vec();
+        if !el.kind.is_quadratic() {
+            for e in el.kind.edges() {
+                let (a, b) = (el.nodes[e[0]], el.nodes[e[1]]);
+                let key = (a.min(b), a.max(b));
+                let idx = *mid.entry(key).or_insert_with(|| {
+                    let (p, q) = (mesh.coords()[a], mesh.coords()[b]);
+                    let x = [
+                        0.5 * (p[0] + q[0]),
+                        0.5 * (p[1] + q[1]),
+                        0.5 * (p[2] + q[2]),
+                    ];
+                    let i = out.add_node(next, x).expect("fresh id");
+                    next += 1;
+                    i
+                });
+                nodes.push(idx);
+            }
+        }
+        out.push_element(el.id, el.kind.quadratic(), &nodes);
+    }
+    let mut edges: Vec<_> = mid.into_iter().collect();
+    edges.sort_unstable();
+    for (name, set) in mesh.node_sets() {
+        let mut members = vec![false; mesh.node_count()];
+        set.iter().for_each(|n| members[*n] = true);
+        let mut nodes = set.clone();
+        nodes.extend(
+            edges
+                .iter()
+                .filter(|((a, b), _)| members[*a] && members[*b])
+                .map(|(_, m)| *m),
+        );
+        out.add_node_set_indices(name.clone(), nodes);
+    }
+    for (name, set) in mesh.element_sets() {
+        out.add_element_set_indices(name.clone(), set.clone());
+    }
+    out
+}

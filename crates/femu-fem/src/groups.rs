@@ -1,0 +1,361 @@
+//! Parameter groups: `K(p) = K_0 + sum_g p_g K_g`, `M(q) = M_0 + sum_g q_g M_g` (MATH.md,
+//! "Updating").
+//!
+//! A group is a set of elements (an element set, or one element on its own); `K_g`, `M_g` are its
+//! assembled element matrices. `p_g = -0.2` means 20 % less stiffness in group `g`. The element
+//! matrices are computed once; `K(p)` is written into the values of the fixed pattern, and
+//! `K_g x` is formed element by element (SB-EBE's sensitivity columns need nothing more).
+
+use crate::FemError;
+use crate::assembly::{Assembler, MassKind, SystemMatrices, element_matrices};
+use crate::model::Model;
+use femu_sparse::SparseMatrix;
+use rayon::prelude::*;
+
+/// A named set of elements (internal indices) whose stiffness and mass are scaled together.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ParameterGroup {
+    /// Name: the element set's name, or `"E<id>"` for a single element.
+    pub name: String,
+    /// Internal element indices.
+    pub elements: Vec<usize>,
+}
+
+/// Parameter groups with their element matrices, on a model's pattern.
+#[derive(Debug, Clone)]
+pub struct ParameterGroups {
+    groups: Vec<ParameterGroup>,
+    mass_kind: MassKind,
+    /// slot of each mesh element, `usize::MAX` if in no group
+    slot: Vec<usize>,
+    slot_element: Vec<usize>,
+    slot_offset: Vec<usize>,
+    ke: Vec<f64>,
+    me: Vec<f64>,
+}
+
+impl ParameterGroups {
+    /// Groups given explicitly. Element matrices are computed in parallel for every element in
+    /// some group; `mass_kind` must match the system mass they will be added to.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidGroup`] for an empty group or an element index out of range, and the
+    /// errors of element computation.
+    pub fn new(
+        model: &Model,
+        groups: Vec<ParameterGroup>,
+        mass_kind: MassKind,
+    ) -> Result<Self, FemError> {
+        let ne = model.mesh().element_count();
+        let mut slot = vec![usize::MAX; ne];
+        let mut slot_element = Vec::new();
+        for g in &groups {
+            if g.elements.is_empty() {
+                return Err(FemError::InvalidGroup {
+                    name: g.name.clone(),
+                    reason: "no elements".into(),
+                });
+            }
+            for &e in &g.elements {
+                if e >= ne {
+                    return Err(FemError::InvalidGroup {
+                        name: g.name.clone(),
+                        reason: format!("element index {e} out of range"),
+                    });
+                }
+                if slot[e] == usize::MAX {
+                    slot[e] = slot_element.len();
+                    slot_element.push(e);
+                }
+            }
+        }
+        let mats: Vec<(Vec<f64>, Vec<f64>)> = slot_element
+            .par_iter()
+            .map(|e| element_matrices(model, *e, mass_kind))
+            .collect::<Result<_, _>>()?;
+        let mut slot_offset = Vec::with_capacity(mats.len() + 1);
+        slot_offset.push(0);
+        let (mut ke, mut me) = (Vec::new(), Vec::new());
+        for (k, m) in mats {
+            ke.extend_from_slice(&k);
+            me.extend_from_slice(&m);
+            slot_offset.push(ke.len());
+        }
+        Ok(Self {
+            groups,
+            mass_kind,
+            slot,
+            slot_element,
+            slot_offset,
+            ke,
+            me,
+        })
+    }
+
+    /// One group per element, named `"E<element id>"` (element-by-element updating).
+    ///
+    /// # Errors
+    /// As [`ParameterGroups::new`].
+    pub fn elementwise(model: &Model, mass_kind: MassKind) -> Result<Self, FemError> {
+        let groups = model
+            .mesh()
+            .elements()
+            .map(|el| ParameterGroup {
+                name: format!("E{}", el.id),
+                elements: vec![el.index],
+            })
+            .collect();
+        Self::new(model, groups, mass_kind)
+    }
+
+    /// One group per named element set.
+    ///
+    /// # Errors
+    /// [`FemError::UnknownElementSet`], and as [`ParameterGroups::new`].
+    pub fn from_element_sets(
+        model: &Model,
+        sets: &[&str],
+        mass_kind: MassKind,
+    ) -> Result<Self, FemError> {
+        let groups = sets
+            .iter()
+            .map(|s| {
+                Ok(ParameterGroup {
+                    name: (*s).into(),
+                    elements: model.mesh().element_set(s)?.to_vec(),
+                })
+            })
+            .collect::<Result<_, FemError>>()?;
+        Self::new(model, groups, mass_kind)
+    }
+
+    /// Number of groups.
+    pub fn len(&self) -> usize {
+        self.groups.len()
+    }
+
+    /// Whether there are no groups.
+    pub fn is_empty(&self) -> bool {
+        self.groups.is_empty()
+    }
+
+    /// The groups.
+    pub fn groups(&self) -> &[ParameterGroup] {
+        &self.groups
+    }
+
+    fn element_slices(&self, e: usize) -> (&[f64], &[f64]) {
+        let s = self.slot[e];
+        let r = self.slot_offset[s]..self.slot_offset[s + 1];
+        (&self.ke[r.clone()], &self.me[r])
+    }
+
+    fn check_group(&self, g: usize) -> Result<&ParameterGroup, FemError> {
+        self.groups.get(g).ok_or_else(|| FemError::InvalidGroup {
+            name: format!("#{g}"),
+            reason: format!("only {} groups", self.len()),
+        })
+    }
+
+    /// `y += alpha K_g x` (stiffness) or `y += alpha M_g x` (mass), on free-DOF vectors.
+    fn product(
+        &self,
+        model: &Model,
+        asm: &Assembler,
+        g: usize,
+        mass: bool,
+        alpha: f64,
+        x: &[f64],
+        y: &mut [f64],
+    ) -> Result<(), FemError> {
+        let n = asm.dofs().free_count();
+        for (what, len) in [("x in K_g x", x.len()), ("y in K_g x", y.len())] {
+            if len != n {
+                return Err(FemError::LengthMismatch {
+                    what,
+                    expected: n,
+                    got: len,
+                });
+            }
+        }
+        let group = self.check_group(g)?;
+        let mesh = model.mesh();
+        let mut dofs = Vec::with_capacity(60);
+        for &e in &group.elements {
+            let nodes = mesh.element(e).nodes;
+            dofs.clear();
+            dofs.extend(nodes.iter().flat_map(|nd| asm.dofs().node_dofs(*nd)));
+            let (ke, me) = self.element_slices(e);
+            let a = if mass { me } else { ke };
+            let nd = dofs.len();
+            for (r, dr) in dofs.iter().enumerate() {
+                let Some(dr) = dr else { continue };
+                let row = &a[r * nd..(r + 1) * nd];
+                let s: f64 = row
+                    .iter()
+                    .zip(&dofs)
+                    .filter_map(|(v, dc)| dc.map(|c| v * x[c]))
+                    .sum();
+                y[*dr] += alpha * s;
+            }
+        }
+        Ok(())
+    }
+
+    /// `y += K_g x` for group `g` (free-DOF vectors): the SB-EBE sensitivity column of MATH.md.
+    ///
+    /// # Errors
+    /// [`FemError::LengthMismatch`] or [`FemError::InvalidGroup`].
+    pub fn stiffness_product(
+        &self,
+        model: &Model,
+        asm: &Assembler,
+        g: usize,
+        x: &[f64],
+        y: &mut [f64],
+    ) -> Result<(), FemError> {
+        self.product(model, asm, g, false, 1.0, x, y)
+    }
+
+    /// `y += M_g x` for group `g`.
+    ///
+    /// # Errors
+    /// [`FemError::LengthMismatch`] or [`FemError::InvalidGroup`].
+    pub fn mass_product(
+        &self,
+        model: &Model,
+        asm: &Assembler,
+        g: usize,
+        x: &[f64],
+        y: &mut [f64],
+    ) -> Result<(), FemError> {
+        self.product(model, asm, g, true, 1.0, x, y)
+    }
+
+    /// Writes `K(p) = K_0 + sum_g p_g K_g` and `M(q) = M_0 + sum_g q_g M_g` into `out`, whose
+    /// matrices must have `base`'s pattern (a clone of `base` the first time, then reused: no
+    /// allocation, no new pattern).
+    ///
+    /// # Errors
+    /// [`FemError::LengthMismatch`] for `p`, `q` or a pattern that is not the assembler's.
+    pub fn write_parameterized(
+        &self,
+        model: &Model,
+        asm: &Assembler,
+        base: &SystemMatrices,
+        p: &[f64],
+        q: &[f64],
+        out: &mut SystemMatrices,
+    ) -> Result<(), FemError> {
+        for (what, len) in [
+            ("stiffness parameters p", p.len()),
+            ("mass parameters q", q.len()),
+        ] {
+            if len != self.len() {
+                return Err(FemError::LengthMismatch {
+                    what,
+                    expected: self.len(),
+                    got: len,
+                });
+            }
+        }
+        for (what, a, b) in [
+            ("K pattern", &base.k, &out.k),
+            ("M pattern", &base.m, &out.m),
+        ] {
+            if a.nnz() != b.nnz() || a.indptr().raw_storage() != b.indptr().raw_storage() {
+                return Err(FemError::LengthMismatch {
+                    what,
+                    expected: a.nnz(),
+                    got: b.nnz(),
+                });
+            }
+        }
+        if base.k.nnz() != asm.nnz() || base.mass_kind != self.mass_kind {
+            return Err(FemError::LengthMismatch {
+                what: "base matrices against the assembler",
+                expected: asm.nnz(),
+                got: base.k.nnz(),
+            });
+        }
+        out.k.data_mut().copy_from_slice(base.k.data());
+        out.m.data_mut().copy_from_slice(base.m.data());
+        let mesh = model.mesh();
+        for (g, group) in self.groups.iter().enumerate() {
+            for &e in &group.elements {
+                let nodes = mesh.element(e).nodes;
+                let (ke, me) = self.element_slices(e);
+                if p[g] != 0.0 {
+                    let kd = out.k.data_mut();
+                    asm.scatter(nodes, ke, p[g], |i, v| kd[i] += v);
+                }
+                if q[g] != 0.0 {
+                    match self.mass_kind {
+                        MassKind::Consistent => {
+                            let md = out.m.data_mut();
+                            asm.scatter(nodes, me, q[g], |i, v| md[i] += v);
+                        }
+                        MassKind::Lumped => {
+                            let nd = 3 * nodes.len();
+                            let md = out.m.data_mut();
+                            for (a, node) in nodes.iter().enumerate() {
+                                for (i, f) in asm.dofs().node_dofs(*node).iter().enumerate() {
+                                    if let Some(f) = f {
+                                        md[*f] += q[g] * me[(3 * a + i) * nd + 3 * a + i];
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `K(p)` and `M(q)` as new matrices on `base`'s pattern; see
+    /// [`ParameterGroups::write_parameterized`] to reuse storage in a loop.
+    ///
+    /// # Errors
+    /// As [`ParameterGroups::write_parameterized`].
+    pub fn parameterized(
+        &self,
+        model: &Model,
+        asm: &Assembler,
+        base: &SystemMatrices,
+        p: &[f64],
+        q: &[f64],
+    ) -> Result<SystemMatrices, FemError> {
+        let mut out = base.clone();
+        self.write_parameterized(model, asm, base, p, q, &mut out)?;
+        Ok(out)
+    }
+
+    /// The assembled `K_g` of one group alone, on the stiffness pattern (for inspection and tests).
+    ///
+    /// # Errors
+    /// [`FemError::InvalidGroup`].
+    pub fn group_stiffness(
+        &self,
+        model: &Model,
+        asm: &Assembler,
+        g: usize,
+    ) -> Result<SparseMatrix, FemError> {
+        let group = self.check_group(g)?;
+        let mut v = vec![0.0; asm.nnz()];
+        for &e in &group.elements {
+            asm.scatter(
+                model.mesh().element(e).nodes,
+                self.element_slices(e).0,
+                1.0,
+                |i, x| v[i] += x,
+            );
+        }
+        Ok(asm.pattern_matrix(v))
+    }
+
+    /// Internal element indices that carry matrices, in slot order.
+    pub fn elements_with_matrices(&self) -> &[usize] {
+        &self.slot_element
+    }
+}

@@ -1,0 +1,345 @@
+//! Element matrices of the isoparametric solids.
+//!
+//! - Stiffness: `K_e = int_e B^T D B dV`, the weak form of linear elasticity
+//!   `a(u, v) = int eps(v)^T D eps(u) dV`, with the rules of [`crate::element`].
+//! - Consistent mass: `M_e = int_e rho N^T N dV` (each 3x3 block `rho int N_a N_b dV I_3`).
+//! - Lumped mass: row sums of the consistent mass for linear elements; HRZ (the consistent
+//!   diagonal scaled to conserve the element mass) for quadratic ones, whose row sums are zero or
+//!   negative at corners.
+//!
+//! Element DOFs are node-major: DOF `3 a + i` is component `i` of node `a`. Matrices are dense
+//! row-major `(3 n) x (3 n)` slices.
+
+use crate::element::{ElementKind, Tabulated};
+
+/// A non-positive or non-finite Jacobian determinant found at an integration point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BadJacobian {
+    /// Reference coordinates of the integration point.
+    pub point: [f64; 3],
+    /// The determinant found.
+    pub det: f64,
+}
+
+/// Jacobian `J[i][k] = dx_i / dxi_k` at a tabulated point from the reference gradients `dn`
+/// (`3 * nn` values) and the node coordinates.
+#[inline]
+fn jacobian(coords: &[[f64; 3]], dn: &[f64]) -> [[f64; 3]; 3] {
+    let mut j = [[0.0; 3]; 3];
+    for (a, x) in coords.iter().enumerate() {
+        let g = &dn[3 * a..3 * a + 3];
+        for i in 0..3 {
+            for k in 0..3 {
+                j[i][k] += x[i] * g[k];
+            }
+        }
+    }
+    j
+}
+
+#[inline]
+fn det3(j: &[[f64; 3]; 3]) -> f64 {
+    j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1])
+        - j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0])
+        + j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0])
+}
+
+/// Physical gradients `g[3 a + i] = dN_a / dx_i` at one point; returns `det J`.
+#[inline]
+fn physical_gradients(coords: &[[f64; 3]], dn: &[f64], g: &mut [f64]) -> f64 {
+    let j = jacobian(coords, dn);
+    let det = det3(&j);
+    let inv = 1.0 / det;
+    // (J^-1)[k][i] = cofactor(i, k) / det
+    let c = [
+        [
+            j[1][1] * j[2][2] - j[1][2] * j[2][1],
+            j[0][2] * j[2][1] - j[0][1] * j[2][2],
+            j[0][1] * j[1][2] - j[0][2] * j[1][1],
+        ],
+        [
+            j[1][2] * j[2][0] - j[1][0] * j[2][2],
+            j[0][0] * j[2][2] - j[0][2] * j[2][0],
+            j[0][2] * j[1][0] - j[0][0] * j[1][2],
+        ],
+        [
+            j[1][0] * j[2][1] - j[1][1] * j[2][0],
+            j[0][1] * j[2][0] - j[0][0] * j[2][1],
+            j[0][0] * j[1][1] - j[0][1] * j[1][0],
+        ],
+    ];
+    for a in 0..coords.len() {
+        let d = &dn[3 * a..3 * a + 3];
+        for i in 0..3 {
+            // dN/dx_i = sum_k dN/dxi_k (J^-1)[k][i]
+            g[3 * a + i] = (d[0] * c[0][i] + d[1] * c[1][i] + d[2] * c[2][i]) * inv;
+        }
+    }
+    det
+}
+
+fn check_det(tab: &Tabulated, q: usize, det: f64) -> Result<(), BadJacobian> {
+    if det.is_finite() && det > 0.0 {
+        Ok(())
+    } else {
+        Err(BadJacobian {
+            point: tab.rule.points[q],
+            det,
+        })
+    }
+}
+
+/// The smallest Jacobian determinant over the stiffness and mass integration points and the
+/// element's nodes (a cell is valid when it is positive everywhere), with where it occurs.
+pub fn min_jacobian(kind: ElementKind, coords: &[[f64; 3]]) -> BadJacobian {
+    let r = kind.reference();
+    let mut worst = BadJacobian {
+        point: [0.0; 3],
+        det: f64::INFINITY,
+    };
+    let mut dn = vec![0.0; 3 * kind.num_nodes()];
+    let nodes = kind.reference_nodes();
+    let tabs = [&r.stiffness, &r.mass];
+    let tab_points = tabs.iter().flat_map(|t| {
+        (0..t.rule.len()).map(move |q| {
+            (
+                t.rule.points[q],
+                Some(&t.dn[3 * q * kind.num_nodes()..3 * (q + 1) * kind.num_nodes()]),
+            )
+        })
+    });
+    let node_points = nodes.iter().map(|p| (*p, None));
+    for (p, tab) in tab_points.chain(node_points) {
+        let g = match tab {
+            Some(g) => g,
+            None => {
+                kind.shape_gradients(p, &mut dn);
+                &dn[..]
+            }
+        };
+        let det = det3(&jacobian(coords, g));
+        if !(det >= worst.det) {
+            worst = BadJacobian { point: p, det };
+        }
+    }
+    worst
+}
+
+/// Element volume `int_e dV` (with the mass rule, exact for undistorted elements).
+///
+/// # Errors
+/// [`BadJacobian`] at the first integration point with `det J <= 0`.
+pub fn element_volume(kind: ElementKind, coords: &[[f64; 3]]) -> Result<f64, BadJacobian> {
+    let tab = &kind.reference().mass;
+    let nn = kind.num_nodes();
+    let mut v = 0.0;
+    for q in 0..tab.rule.len() {
+        let det = det3(&jacobian(coords, &tab.dn[3 * q * nn..3 * (q + 1) * nn]));
+        check_det(tab, q, det)?;
+        v += tab.rule.weights[q] * det;
+    }
+    Ok(v)
+}
+
+/// Element stiffness `K_e = int B^T D B dV` into `out` (row-major, `(3 nn)^2`, overwritten).
+/// `d` is the 6x6 elasticity matrix in Voigt order `(11, 22, 33, 12, 13, 23)`.
+///
+/// # Errors
+/// [`BadJacobian`] at the first integration point with `det J <= 0`.
+pub fn element_stiffness(
+    kind: ElementKind,
+    coords: &[[f64; 3]],
+    d: &[[f64; 6]; 6],
+    out: &mut [f64],
+) -> Result<(), BadJacobian> {
+    let nn = kind.num_nodes();
+    let nd = 3 * nn;
+    debug_assert_eq!(coords.len(), nn);
+    debug_assert_eq!(out.len(), nd * nd);
+    out.iter_mut().for_each(|v| *v = 0.0);
+    let tab = &kind.reference().stiffness;
+    let mut g = [0.0; 60];
+    let mut db = [[0.0; 18]; 20];
+    for q in 0..tab.rule.len() {
+        let det = physical_gradients(coords, &tab.dn[3 * q * nn..3 * (q + 1) * nn], &mut g[..nd]);
+        check_det(tab, q, det)?;
+        let w = tab.rule.weights[q] * det;
+        // D B_b for every node b (6x3, row-major), B in the Voigt order above.
+        for b in 0..nn {
+            let (gx, gy, gz) = (g[3 * b], g[3 * b + 1], g[3 * b + 2]);
+            let m = &mut db[b];
+            for r in 0..6 {
+                let dr = &d[r];
+                m[3 * r] = (dr[0] * gx + dr[3] * gy + dr[4] * gz) * w;
+                m[3 * r + 1] = (dr[1] * gy + dr[3] * gx + dr[5] * gz) * w;
+                m[3 * r + 2] = (dr[2] * gz + dr[4] * gx + dr[5] * gy) * w;
+            }
+        }
+        for a in 0..nn {
+            let (gx, gy, gz) = (g[3 * a], g[3 * a + 1], g[3 * a + 2]);
+            for b in a..nn {
+                let m = &db[b];
+                for j in 0..3 {
+                    let k0 = gx * m[j] + gy * m[9 + j] + gz * m[12 + j];
+                    let k1 = gy * m[3 + j] + gx * m[9 + j] + gz * m[15 + j];
+                    let k2 = gz * m[6 + j] + gx * m[12 + j] + gy * m[15 + j];
+                    out[(3 * a) * nd + 3 * b + j] += k0;
+                    out[(3 * a + 1) * nd + 3 * b + j] += k1;
+                    out[(3 * a + 2) * nd + 3 * b + j] += k2;
+                }
+            }
+        }
+    }
+    // Mirror the upper node-block triangle.
+    for a in 0..nn {
+        for b in a + 1..nn {
+            for i in 0..3 {
+                for j in 0..3 {
+                    out[(3 * b + j) * nd + 3 * a + i] = out[(3 * a + i) * nd + 3 * b + j];
+                }
+            }
+        }
+        // Diagonal blocks are symmetric in exact arithmetic; symmetrise round-off.
+        for i in 0..3 {
+            for j in i + 1..3 {
+                let s =
+                    0.5 * (out[(3 * a + i) * nd + 3 * a + j] + out[(3 * a + j) * nd + 3 * a + i]);
+                out[(3 * a + i) * nd + 3 * a + j] = s;
+                out[(3 * a + j) * nd + 3 * a + i] = s;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Scalar consistent mass `m_ab = rho int N_a N_b dV` into `out` (`nn x nn`, row-major).
+///
+/// # Errors
+/// [`BadJacobian`] at the first integration point with `det J <= 0`.
+pub fn scalar_mass(
+    kind: ElementKind,
+    coords: &[[f64; 3]],
+    rho: f64,
+    out: &mut [f64],
+) -> Result<(), BadJacobian> {
+    let nn = kind.num_nodes();
+    out.iter_mut().for_each(|v| *v = 0.0);
+    let tab = &kind.reference().mass;
+    for q in 0..tab.rule.len() {
+        let det = det3(&jacobian(coords, &tab.dn[3 * q * nn..3 * (q + 1) * nn]));
+        check_det(tab, q, det)?;
+        let w = tab.rule.weights[q] * det * rho;
+        let n = &tab.n[q * nn..(q + 1) * nn];
+        for a in 0..nn {
+            let wa = w * n[a];
+            for b in a..nn {
+                out[a * nn + b] += wa * n[b];
+            }
+        }
+    }
+    for a in 0..nn {
+        for b in a + 1..nn {
+            out[b * nn + a] = out[a * nn + b];
+        }
+    }
+    Ok(())
+}
+
+/// Consistent element mass `M_e` (row-major `(3 nn)^2`): `M_e[3a+i][3b+j] = m_ab delta_ij`.
+///
+/// # Errors
+/// [`BadJacobian`] at the first integration point with `det J <= 0`.
+pub fn element_mass(
+    kind: ElementKind,
+    coords: &[[f64; 3]],
+    rho: f64,
+    out: &mut [f64],
+) -> Result<(), BadJacobian> {
+    let nn = kind.num_nodes();
+    let nd = 3 * nn;
+    let mut m = [0.0; 400];
+    scalar_mass(kind, coords, rho, &mut m[..nn * nn])?;
+    out.iter_mut().for_each(|v| *v = 0.0);
+    for a in 0..nn {
+        for b in 0..nn {
+            for i in 0..3 {
+                out[(3 * a + i) * nd + 3 * b + i] = m[a * nn + b];
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Lumped nodal masses (kg, one per node, the same for its three DOFs) into `out` (`nn`):
+/// row sums for linear elements, HRZ for quadratic ones. Both conserve `rho * volume`.
+///
+/// # Errors
+/// [`BadJacobian`] at the first integration point with `det J <= 0`.
+pub fn lumped_mass(
+    kind: ElementKind,
+    coords: &[[f64; 3]],
+    rho: f64,
+    out: &mut [f64],
+) -> Result<(), BadJacobian> {
+    let nn = kind.num_nodes();
+    let mut m = [0.0; 400];
+    scalar_mass(kind, coords, rho, &mut m[..nn * nn])?;
+    if kind.is_quadratic() {
+        let total: f64 = m[..nn * nn].iter().sum();
+        let diag: f64 = (0..nn).map(|a| m[a * nn + a]).sum();
+        for a in 0..nn {
+            out[a] = m[a * nn + a] * total / diag;
+        }
+    } else {
+        for a in 0..nn {
+            out[a] = m[a * nn..(a + 1) * nn].iter().sum();
+        }
+    }
+    Ok(())
+}
+
+/// Strain (Voigt, engineering shear) at reference point `xi` for nodal displacements `u`
+/// (`3 nn`, node-major).
+///
+/// # Errors
+/// [`BadJacobian`] if `det J <= 0` at `xi`.
+pub fn strain_at(
+    kind: ElementKind,
+    coords: &[[f64; 3]],
+    u: &[f64],
+    xi: [f64; 3],
+) -> Result<[f64; 6], BadJacobian> {
+    let nn = kind.num_nodes();
+    let mut dn = vec![0.0; 3 * nn];
+    let mut g = vec![0.0; 3 * nn];
+    kind.shape_gradients(xi, &mut dn);
+    let det = physical_gradients(coords, &dn, &mut g);
+    if !(det.is_finite() && det > 0.0) {
+        return Err(BadJacobian { point: xi, det });
+    }
+    let mut e = [0.0; 6];
+    for a in 0..nn {
+        let (gx, gy, gz) = (g[3 * a], g[3 * a + 1], g[3 * a + 2]);
+        let (ux, uy, uz) = (u[3 * a], u[3 * a + 1], u[3 * a + 2]);
+        e[0] += gx * ux;
+        e[1] += gy * uy;
+        e[2] += gz * uz;
+        e[3] += gy * ux + gx * uy;
+        e[4] += gz * ux + gx * uz;
+        e[5] += gz * uy + gy * uz;
+    }
+    Ok(e)
+}
+
+/// Physical coordinates of reference point `xi` in the element.
+pub fn map_point(kind: ElementKind, coords: &[[f64; 3]], xi: [f64; 3]) -> [f64; 3] {
+    let mut n = vec![0.0; kind.num_nodes()];
+    kind.shape(xi, &mut n);
+    let mut x = [0.0; 3];
+    for (a, c) in coords.iter().enumerate() {
+        for i in 0..3 {
+            x[i] += n[a] * c[i];
+        }
+    }
+    x
+}

@@ -1,0 +1,52 @@
+//! # femu-fem
+//!
+//! The finite element core of femu: meshes of mixed 3D solid elements with the user's ids,
+//! isoparametric elements (tet4, tet10, hex8, hex20, penta6, penta15), linear elastic materials,
+//! DOF maps with fixed DOFs, and parallel assembly of the sparse stiffness `K` and mass `M` on a
+//! pattern computed once, with parameter groups `K(p) = K_0 + sum_g p_g K_g` for updating
+//! (MATH.md, "Updating").
+//!
+//! ```
+//! use femu_fem::prelude::*;
+//!
+//! // A steel cantilever, 0.1 x 0.02 x 0.02 m, hex20, clamped at x = 0.
+//! let mesh = box_mesh(&BoxSpec::new([0.1, 0.02, 0.02], [5, 1, 1], BoxCells::Hex, true)).unwrap();
+//! let mut model = Model::new(mesh).unwrap();
+//! model.set_material(None, Material::steel()).unwrap();
+//! model.fix_set("xmin", &[0, 1, 2]).unwrap();
+//! let sys = model.assemble(MassKind::Consistent).unwrap();
+//! assert_eq!(sys.k.rows(), sys.dofs.free_count());
+//! // A rigid translation along x of the free DOFs carries the whole mass: u^T M u = rho V.
+//! let u: Vec<f64> = (0..sys.dofs.free_count()).map(|f| if sys.dofs.full_of_free(f) % 3 == 0 { 1.0 } else { 0.0 }).collect();
+//! let mut mu = vec![0.0; u.len()];
+//! femu_sparse::csc::mul_vec(&sys.m, &u, &mut mu).unwrap();
+//! let fixed_share = 1.0; // the clamped face's nodes are absent, so the sum is below rho V
+//! assert!(u.iter().zip(&mu).map(|(a, b)| a * b).sum::<f64>() < 7850.0 * 0.1 * 0.02 * 0.02 * fixed_share);
+//! ```
+
+pub mod assembly;
+pub mod dof;
+pub mod element;
+mod error;
+pub mod generate;
+pub mod groups;
+pub mod kernel;
+pub mod material;
+pub mod mesh;
+pub mod model;
+pub mod quadrature;
+
+pub use error::FemError;
+
+/// The types most programs need.
+pub mod prelude {
+    pub use crate::FemError;
+    pub use crate::assembly::{Assembler, MassKind, SystemMatrices};
+    pub use crate::dof::DofMap;
+    pub use crate::element::ElementKind;
+    pub use crate::generate::{BoxCells, BoxSpec, PlateSpec, box_mesh, mixed_plate};
+    pub use crate::groups::{ParameterGroup, ParameterGroups};
+    pub use crate::material::Material;
+    pub use crate::mesh::Mesh;
+    pub use crate::model::Model;
+}

@@ -1,0 +1,158 @@
+//! Helpers on [`SparseMatrix`](crate::SparseMatrix): products, symmetry checks, conversion to dense.
+
+use crate::{SparseError, SparseMatrix};
+use faer::Mat;
+
+/// `y = A x` for a CSC or CSR matrix.
+///
+/// # Errors
+/// [`SparseError::DimensionMismatch`] if `x` or `y` do not match `A`.
+pub fn mul_vec(a: &SparseMatrix, x: &[f64], y: &mut [f64]) -> Result<(), SparseError> {
+    if x.len() != a.cols() {
+        return Err(SparseError::DimensionMismatch {
+            what: "x in A x",
+            expected: a.cols(),
+            got: x.len(),
+        });
+    }
+    if y.len() != a.rows() {
+        return Err(SparseError::DimensionMismatch {
+            what: "y in y = A x",
+            expected: a.rows(),
+            got: y.len(),
+        });
+    }
+    y.iter_mut().for_each(|v| *v = 0.0);
+    for (v, (r, c)) in a.iter() {
+        y[r] += v * x[c];
+    }
+    Ok(())
+}
+
+/// `x^T A y` (for `A = M`, the mass inner product of MATH.md).
+///
+/// # Errors
+/// [`SparseError::DimensionMismatch`] if the vectors do not match `A`.
+pub fn bilinear(a: &SparseMatrix, x: &[f64], y: &[f64]) -> Result<f64, SparseError> {
+    if x.len() != a.rows() || y.len() != a.cols() {
+        return Err(SparseError::DimensionMismatch {
+            what: "x^T A y",
+            expected: a.rows(),
+            got: x.len().min(y.len()),
+        });
+    }
+    Ok(a.iter().map(|(v, (r, c))| x[r] * v * y[c]).sum())
+}
+
+/// The largest relative asymmetry `max |a_ij - a_ji| / max |a_ij|` and where it occurs.
+/// Returns `(0.0, 0, 0)` for a symmetric (or empty) matrix.
+pub fn symmetry_defect(a: &SparseMatrix) -> (f64, usize, usize) {
+    let scale = a.data().iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if scale == 0.0 {
+        return (0.0, 0, 0);
+    }
+    let mut worst = (0.0, 0, 0);
+    for (v, (r, c)) in a.iter() {
+        let t = a.get(c, r).copied().unwrap_or(0.0);
+        let d = (v - t).abs() / scale;
+        if d > worst.0 {
+            worst = (d, r, c);
+        }
+    }
+    worst
+}
+
+/// Checks that `A` is square, finite and symmetric to `tol` (relative to its largest entry).
+///
+/// # Errors
+/// [`SparseError::DimensionMismatch`], [`SparseError::NonFinite`] or [`SparseError::NotSymmetric`].
+pub fn check_symmetric(a: &SparseMatrix, name: &'static str, tol: f64) -> Result<(), SparseError> {
+    if a.rows() != a.cols() {
+        return Err(SparseError::DimensionMismatch {
+            what: "square matrix",
+            expected: a.rows(),
+            got: a.cols(),
+        });
+    }
+    if let Some((_, (r, c))) = a.iter().find(|(v, _)| !v.is_finite()) {
+        return Err(SparseError::NonFinite {
+            matrix: name,
+            row: r,
+            col: c,
+        });
+    }
+    let (defect, row, col) = symmetry_defect(a);
+    if defect > tol {
+        return Err(SparseError::NotSymmetric {
+            matrix: name,
+            row,
+            col,
+            defect,
+        });
+    }
+    Ok(())
+}
+
+/// A dense copy of a sparse matrix, for small problems and cross-checks.
+pub fn to_dense(a: &SparseMatrix) -> Mat<f64> {
+    let mut d = Mat::zeros(a.rows(), a.cols());
+    for (v, (r, c)) in a.iter() {
+        d[(r, c)] += *v;
+    }
+    d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sprs::TriMat;
+
+    fn sample() -> SparseMatrix {
+        let mut t = TriMat::new((3, 3));
+        t.add_triplet(0, 0, 4.0);
+        t.add_triplet(1, 0, 1.0);
+        t.add_triplet(0, 1, 1.0);
+        t.add_triplet(2, 2, 2.0);
+        t.to_csc()
+    }
+
+    #[test]
+    fn products_match_hand_computation() {
+        let a = sample();
+        let mut y = [0.0; 3];
+        mul_vec(&a, &[1.0, 2.0, 3.0], &mut y).unwrap();
+        assert_eq!(y, [6.0, 1.0, 6.0]);
+        // x^T A x = 4 + 2*1*2 + 2*9 = 26
+        assert_eq!(
+            bilinear(&a, &[1.0, 2.0, 3.0], &[1.0, 2.0, 3.0]).unwrap(),
+            4.0 + 4.0 + 18.0
+        );
+        assert!(mul_vec(&a, &[1.0], &mut y).is_err());
+    }
+
+    #[test]
+    fn symmetry_checks_find_the_offending_entry() {
+        let a = sample();
+        assert_eq!(symmetry_defect(&a).0, 0.0);
+        let mut t = TriMat::new((3, 3));
+        t.add_triplet(0, 0, 4.0);
+        t.add_triplet(2, 1, 1.0);
+        let b: SparseMatrix = t.to_csc();
+        match check_symmetric(&b, "K", 1e-12) {
+            Err(SparseError::NotSymmetric {
+                row: 2,
+                col: 1,
+                defect,
+                ..
+            }) => assert_eq!(defect, 0.25),
+            other => panic!("unexpected {other:?}"),
+        }
+        let mut t = TriMat::new((2, 2));
+        t.add_triplet(1, 1, f64::NAN);
+        let c: SparseMatrix = t.to_csc();
+        assert!(matches!(
+            check_symmetric(&c, "M", 1e-12),
+            Err(SparseError::NonFinite { row: 1, col: 1, .. })
+        ));
+    }
+}

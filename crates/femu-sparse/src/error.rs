@@ -1,0 +1,55 @@
+use thiserror::Error;
+
+/// Errors of the sparse-solver core. Each variant names where the problem was found.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum SparseError {
+    /// Two operands do not have compatible shapes.
+    #[error("dimension mismatch: {what} (expected {expected}, got {got})")]
+    DimensionMismatch {
+        /// Which operand or relation.
+        what: &'static str,
+        /// The size required.
+        expected: usize,
+        /// The size given.
+        got: usize,
+    },
+    /// A matrix that must be symmetric is not.
+    #[error(
+        "{matrix} is not symmetric: entry ({row}, {col}) differs from its transpose by {defect:e}"
+    )]
+    NotSymmetric {
+        /// Which matrix (`"K"`, `"M"`, ...).
+        matrix: &'static str,
+        /// Row of the worst entry.
+        row: usize,
+        /// Column of the worst entry.
+        col: usize,
+        /// Relative difference `|a_ij - a_ji| / max|a|`.
+        defect: f64,
+    },
+    /// A matrix that must be positive definite has a non-positive pivot.
+    #[error("{matrix} is not positive definite: non-positive pivot at index {index}")]
+    NotPositiveDefinite {
+        /// Which matrix.
+        matrix: &'static str,
+        /// Index (in the factorization's order) of the first non-positive pivot.
+        index: usize,
+    },
+    /// A NaN or infinity in an input.
+    #[error("{matrix} has a non-finite entry at ({row}, {col})")]
+    NonFinite {
+        /// Which matrix.
+        matrix: &'static str,
+        /// Row of the entry.
+        row: usize,
+        /// Column of the entry.
+        col: usize,
+    },
+    /// An iterative or dense eigensolver did not converge.
+    #[error("eigensolver did not converge: {reason}")]
+    NoConvergence {
+        /// What failed.
+        reason: String,
+    },
+}

@@ -1,0 +1,30 @@
+//! # femu
+//!
+//! Finite element model updating and test-analysis correlation in structural dynamics, after
+//! F. Hemez, "Can model updating tell the truth?". This crate is the facade: it re-exports the
+//! member crates without their prefix and gathers their preludes.
+//!
+//! | module | crate | what |
+//! |---|---|---|
+//! | [`sparse`] | `femu-sparse` | sparse matrix type, factorizations, eigensolvers |
+//! | [`fem`] | `femu-fem` | meshes, solid elements, materials, assembly of `K` and `M` |
+//!
+//! ```
+//! use femu::prelude::*;
+//!
+//! let mesh = mixed_plate(&PlateSpec::default())?;
+//! let mut model = Model::new(mesh)?;
+//! model.set_material(None, Material::steel())?;
+//! let sys = model.assemble(MassKind::Consistent)?;
+//! assert_eq!(sys.k.rows(), 5535); // free-free: 1,845 nodes x 3
+//! # Ok::<(), femu::fem::FemError>(())
+//! ```
+
+pub use femu_fem as fem;
+pub use femu_sparse as sparse;
+
+/// Everything most programs need, from every member crate.
+pub mod prelude {
+    pub use femu_fem::prelude::*;
+    pub use femu_sparse::SparseMatrix;
+}
