@@ -221,7 +221,7 @@ fn add_cell(
             }
         }
         BoxCells::Tet5 => {
-            let even = (cell.0 + cell.1 + cell.2) % 2 == 0;
+            let even = (cell.0 + cell.1 + cell.2).is_multiple_of(2);
             let flip = |c: [usize; 3]| if even { c } else { [1 - c[0], c[1], c[2]] };
             let tets = [
                 [[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]],

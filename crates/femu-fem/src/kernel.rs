@@ -118,7 +118,7 @@ pub fn min_jacobian(kind: ElementKind, coords: &[[f64; 3]]) -> BadJacobian {
             }
         };
         let det = det3(&jacobian(coords, g));
-        if !(det >= worst.det) {
+        if det.is_nan() || det < worst.det {
             worst = BadJacobian { point: p, det };
         }
     }

@@ -19,7 +19,7 @@ pub enum Elasticity {
     },
     /// A general symmetric positive definite 6x6 elasticity matrix (Pa) in Voigt order
     /// `(11, 22, 33, 12, 13, 23)`: orthotropic and anisotropic materials.
-    Anisotropic([[f64; 6]; 6]),
+    Anisotropic(Box<[[f64; 6]; 6]>),
 }
 
 /// A material: elasticity and density.
@@ -66,7 +66,7 @@ impl Material {
     ) -> Result<Self, FemError> {
         let m = Self {
             name: name.into(),
-            elasticity: Elasticity::Anisotropic(d),
+            elasticity: Elasticity::Anisotropic(Box::new(d)),
             density,
         };
         m.validate()?;
@@ -187,7 +187,7 @@ impl Material {
                 }
                 d
             }
-            Elasticity::Anisotropic(d) => *d,
+            Elasticity::Anisotropic(d) => **d,
         }
     }
 }

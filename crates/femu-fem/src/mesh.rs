@@ -54,10 +54,12 @@ impl Mesh {
         if x.iter().any(|v| !v.is_finite()) {
             return Err(FemError::NonFiniteCoordinate { node: id });
         }
-        let index = self.coords.len();
-        if self.node_lookup.insert(id, index).is_some() {
+        // Check before inserting: a rejected node must leave the mesh unchanged.
+        if self.node_lookup.contains_key(&id) {
             return Err(FemError::DuplicateNodeId { id });
         }
+        let index = self.coords.len();
+        self.node_lookup.insert(id, index);
         self.coords.push(x);
         self.node_ids.push(id);
         Ok(index)
@@ -311,7 +313,9 @@ impl Mesh {
     /// boundary face lies on another boundary face (a hanging face: a quadrilateral against two
     /// triangles, a refined neighbour, or coincident nodes with different ids).
     pub fn check_conformity(&self) -> ConformityReport {
-        let mut faces: HashMap<Vec<usize>, Vec<(usize, usize, Vec<usize>)>> = HashMap::new();
+        // sorted corner nodes -> (element, local face, sorted nodes of the face)
+        type Owners = Vec<(usize, usize, Vec<usize>)>;
+        let mut faces: HashMap<Vec<usize>, Owners> = HashMap::new();
         for el in self.elements() {
             for f in 0..el.kind.faces().len() {
                 let mut corners: Vec<usize> =

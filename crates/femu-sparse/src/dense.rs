@@ -39,20 +39,37 @@ fn check_square_finite(
     Ok(())
 }
 
-/// Solves `K x = lambda M x` densely: `M = L L^T` (Cholesky), the standard symmetric problem
-/// `L^-1 K L^-T y = lambda y`, then `x = L^-T y`, which is M-normalised because `y` is
-/// orthonormal. Only the lower triangles of `K` and `M` are read.
+/// All eigenpairs of a dense symmetric matrix (lower triangle read), eigenvalues ascending.
 ///
-/// Cost `O(n^3)`: meant for `n` up to a few thousand.
+/// Uses nalgebra's Householder tridiagonalisation and implicit QR. faer 0.24's
+/// `self_adjoint_eigen` (eigenvectors requested, with either its divide and conquer or its QR
+/// path) lost about eight digits on assembled FE pencils: on a free-free plate with
+/// `lambda_max = 3.5e13` it returned rigid-body eigenvalues of -3.5e6 where the eigenvalues-only
+/// path and nalgebra return 1e-3, and the first elastic eigenvalue 5e-10 off.
 ///
 /// # Errors
-/// [`SparseError::NotPositiveDefinite`] if `M` is not positive definite (with the pivot index),
-/// [`SparseError::NonFinite`] for a NaN or infinity, [`SparseError::DimensionMismatch`] for shapes,
-/// [`SparseError::NoConvergence`] if the symmetric eigensolver fails.
-pub fn generalized_symmetric_eigen(
+/// [`SparseError::NoConvergence`] if the QR iteration fails.
+pub fn symmetric_eigen(a: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), SparseError> {
+    let n = a.nrows();
+    let m =
+        nalgebra::DMatrix::<f64>::from_fn(n, n, |i, j| if i >= j { a[(i, j)] } else { a[(j, i)] });
+    let eig = nalgebra::SymmetricEigen::try_new(m, f64::EPSILON, 0).ok_or_else(|| {
+        SparseError::NoConvergence {
+            reason: "dense symmetric QR iteration".into(),
+        }
+    })?;
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|i, j| eig.eigenvalues[*i].total_cmp(&eig.eigenvalues[*j]));
+    let values = order.iter().map(|i| eig.eigenvalues[*i]).collect();
+    let vectors = Mat::from_fn(n, n, |i, j| eig.eigenvectors[(i, order[j])]);
+    Ok((values, vectors))
+}
+
+/// `C = L^-1 K L^-T` with `M = L L^T`, and the Cholesky factor.
+fn reduce_to_standard(
     k: MatRef<'_, f64>,
     m: MatRef<'_, f64>,
-) -> Result<GeneralizedEigen, SparseError> {
+) -> Result<(Mat<f64>, faer::linalg::solvers::Llt<f64>), SparseError> {
     let n = k.nrows();
     check_square_finite(k, "K", n)?;
     check_square_finite(m, "M", n)?;
@@ -69,16 +86,47 @@ pub fn generalized_symmetric_eigen(
     l.solve_lower_triangular_in_place(ct.as_mut());
     // Symmetrise against round-off before the symmetric eigensolver.
     let c = Mat::from_fn(n, n, |i, j| 0.5 * (ct[(i, j)] + ct[(j, i)]));
-    let evd = c
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| SparseError::NoConvergence {
-            reason: format!("dense symmetric eigensolver: {e:?}"),
-        })?;
-    let values: Vec<f64> = (0..n).map(|i| evd.S()[i]).collect();
-    let mut vectors = evd.U().to_owned();
+    Ok((c, llt))
+}
+
+/// Solves `K x = lambda M x` densely: `M = L L^T` (Cholesky), the standard symmetric problem
+/// `L^-1 K L^-T y = lambda y`, then `x = L^-T y`, which is M-normalised because `y` is
+/// orthonormal. Only the lower triangles of `K` and `M` are read.
+///
+/// Cost `O(n^3)`: meant for `n` up to a few thousand.
+///
+/// # Errors
+/// [`SparseError::NotPositiveDefinite`] if `M` is not positive definite (with the pivot index),
+/// [`SparseError::NonFinite`] for a NaN or infinity, [`SparseError::DimensionMismatch`] for shapes,
+/// [`SparseError::NoConvergence`] if the symmetric eigensolver fails.
+pub fn generalized_symmetric_eigen(
+    k: MatRef<'_, f64>,
+    m: MatRef<'_, f64>,
+) -> Result<GeneralizedEigen, SparseError> {
+    let (c, llt) = reduce_to_standard(k, m)?;
+    let l = llt.L();
+    let (values, mut vectors) = symmetric_eigen(c.as_ref())?;
     l.transpose()
         .solve_upper_triangular_in_place(vectors.as_mut());
     Ok(GeneralizedEigen { values, vectors })
+}
+
+/// The eigenvalues only of `K x = lambda M x`, ascending: the same reduction as
+/// [`generalized_symmetric_eigen`], then faer's eigenvalues-only tridiagonal QR, which is accurate
+/// (agrees with nalgebra to 2e-13 relative on assembled FE pencils) and about five times faster
+/// than computing eigenvectors.
+///
+/// # Errors
+/// As [`generalized_symmetric_eigen`].
+pub fn generalized_symmetric_eigenvalues(
+    k: MatRef<'_, f64>,
+    m: MatRef<'_, f64>,
+) -> Result<Vec<f64>, SparseError> {
+    let c = reduce_to_standard(k, m)?.0;
+    c.self_adjoint_eigenvalues(Side::Lower)
+        .map_err(|e| SparseError::NoConvergence {
+            reason: format!("dense symmetric eigenvalues: {e:?}"),
+        })
 }
 
 #[cfg(test)]

@@ -1,0 +1,9 @@
+//! Evidence for the finite element core, gathered in one test binary.
+
+mod fem {
+    mod assembly;
+    pub mod common;
+    mod convergence;
+    mod elements;
+    mod mesh;
+}

@@ -1,0 +1,332 @@
+//! Assembly evidence: against a dense sum of element matrices, symmetry, definiteness, mass,
+//! rigid-body modes of a free-free model, parameter groups, thread-count independence.
+
+use femu_fem::assembly::{Assembler, MassKind};
+use femu_fem::generate::{BoxCells, BoxSpec, PlateSpec, box_mesh, mixed_plate};
+use femu_fem::groups::ParameterGroups;
+use femu_fem::kernel;
+use femu_fem::material::Material;
+use femu_fem::model::Model;
+use femu_sparse::csc::{bilinear, mul_vec, symmetry_defect, to_dense};
+use femu_sparse::dense::{generalized_symmetric_eigen, generalized_symmetric_eigenvalues};
+
+fn small_plate(quadratic: bool) -> Model {
+    let spec = PlateSpec {
+        lengths: [0.06, 0.04, 0.01],
+        divisions: [6, 4, 2],
+        tet_block: [2, 2],
+        quadratic,
+    };
+    let mut model = Model::new(mixed_plate(&spec).unwrap()).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    model
+        .set_material(
+            Some("tet"),
+            Material::isotropic("al", 70e9, 0.33, 2700.0).unwrap(),
+        )
+        .unwrap();
+    model
+}
+
+/// The assembled K and M equal a plain dense sum of element matrices (written here without the
+/// pattern, colouring or parallelism), with fixed DOFs removed.
+#[test]
+fn assembly_equals_dense_sum_of_element_matrices() {
+    for quadratic in [false, true] {
+        let mut model = small_plate(quadratic);
+        model.fix_set("xmin", &[0, 1, 2]).unwrap();
+        model.fix_set("ymin", &[2]).unwrap();
+        let sys = model.assemble(MassKind::Consistent).unwrap();
+        let n = sys.dofs.free_count();
+        let mesh = model.mesh();
+        let (mut kd, mut md) = (faer::Mat::<f64>::zeros(n, n), faer::Mat::<f64>::zeros(n, n));
+        let mut x = Vec::new();
+        for el in mesh.elements() {
+            mesh.element_coords(el.index, &mut x);
+            let mat = model.material_of(el.index).unwrap();
+            let nd = 3 * el.kind.num_nodes();
+            let (mut ke, mut me) = (vec![0.0; nd * nd], vec![0.0; nd * nd]);
+            kernel::element_stiffness(el.kind, &x, &mat.elasticity_matrix(), &mut ke).unwrap();
+            kernel::element_mass(el.kind, &x, mat.density, &mut me).unwrap();
+            let dofs: Vec<Option<usize>> = el
+                .nodes
+                .iter()
+                .flat_map(|n| sys.dofs.node_dofs(*n))
+                .collect();
+            for (r, dr) in dofs.iter().enumerate() {
+                for (c, dc) in dofs.iter().enumerate() {
+                    if let (Some(i), Some(j)) = (dr, dc) {
+                        kd[(*i, *j)] += ke[r * nd + c];
+                        md[(*i, *j)] += me[r * nd + c];
+                    }
+                }
+            }
+        }
+        let (ks, ms) = (to_dense(&sys.k), to_dense(&sys.m));
+        let kmax = (0..n).map(|i| kd[(i, i)]).fold(0.0, f64::max);
+        let mmax = (0..n).map(|i| md[(i, i)]).fold(0.0, f64::max);
+        for j in 0..n {
+            for i in 0..n {
+                assert!(
+                    (ks[(i, j)] - kd[(i, j)]).abs() <= 1e-13 * kmax,
+                    "K({i},{j})"
+                );
+                assert!(
+                    (ms[(i, j)] - md[(i, j)]).abs() <= 1e-13 * mmax,
+                    "M({i},{j})"
+                );
+            }
+        }
+        assert_eq!(symmetry_defect(&sys.k).0, 0.0);
+        assert_eq!(symmetry_defect(&sys.m).0, 0.0);
+        // The pattern is the node graph: every stored column is sorted and K has no empty column.
+        assert!(sys.k.indptr().raw_storage().windows(2).all(|w| w[1] > w[0]));
+        // M positive definite and K positive definite once constrained (dense eigensolver).
+        let e = generalized_symmetric_eigen(ks.as_ref(), ms.as_ref()).unwrap();
+        assert!(
+            e.values[0] > 0.0,
+            "constrained K not definite: {}",
+            e.values[0]
+        );
+    }
+}
+
+/// Colouring: no two elements of a colour share a node; the result does not depend on the
+/// number of threads (to round-off of the summation order, which the colouring fixes exactly).
+#[test]
+fn colouring_is_valid_and_thread_count_does_not_change_the_result() {
+    let model = small_plate(true);
+    let asm = Assembler::new(&model).unwrap();
+    let mut seen = vec![usize::MAX; model.mesh().node_count()];
+    for (c, color) in asm.colors().iter().enumerate() {
+        for e in color {
+            for n in model.mesh().element(*e).nodes {
+                assert_ne!(seen[*n], c, "two elements of colour {c} share node {n}");
+                seen[*n] = c;
+            }
+        }
+    }
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| asm.assemble(&model, MassKind::Consistent).unwrap())
+    };
+    let (a, b) = (run(1), run(2));
+    assert_eq!(a.k.data(), b.k.data());
+    assert_eq!(a.m.data(), b.m.data());
+}
+
+/// u^T M u for a unit rigid translation equals rho * V summed over materials, consistent and
+/// lumped, for every generated mesh kind; the lumped mass is diagonal and positive.
+#[test]
+fn generated_meshes_carry_their_mass() {
+    let rho = 7850.0;
+    for cells in [
+        BoxCells::Hex,
+        BoxCells::Wedge,
+        BoxCells::Tet5,
+        BoxCells::Tet6,
+    ] {
+        for quadratic in [false, true] {
+            let mesh =
+                box_mesh(&BoxSpec::new([0.3, 0.2, 0.1], [3, 2, 2], cells, quadratic)).unwrap();
+            let mut model = Model::new(mesh).unwrap();
+            model.set_material(None, Material::steel()).unwrap();
+            for mass in [MassKind::Consistent, MassKind::Lumped] {
+                let sys = model.assemble(mass).unwrap();
+                for i in 0..3 {
+                    let u: Vec<f64> = (0..sys.dofs.free_count())
+                        .map(|f| {
+                            if sys.dofs.full_of_free(f) % 3 == i {
+                                1.0
+                            } else {
+                                0.0
+                            }
+                        })
+                        .collect();
+                    let m = bilinear(&sys.m, &u, &u).unwrap();
+                    assert!(
+                        (m / (rho * 0.006) - 1.0).abs() < 1e-12,
+                        "{cells:?} q={quadratic} {mass:?}: {m}"
+                    );
+                }
+                if mass == MassKind::Lumped {
+                    assert_eq!(sys.m.nnz(), sys.dofs.free_count());
+                    assert!(sys.m.data().iter().all(|v| *v > 0.0));
+                }
+            }
+        }
+    }
+    // Mixed materials: total mass of the plate with an aluminium tet block.
+    let model = small_plate(false);
+    let sys = model.assemble(MassKind::Lumped).unwrap();
+    let u: Vec<f64> = (0..sys.dofs.free_count())
+        .map(|f| {
+            if sys.dofs.full_of_free(f) % 3 == 2 {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let tet_volume = 0.02 * 0.02 * 0.01;
+    let expect = 7850.0 * (0.06 * 0.04 * 0.01 - tet_volume) + 2700.0 * tet_volume;
+    assert!((bilinear(&sys.m, &u, &u).unwrap() / expect - 1.0).abs() < 1e-12);
+    assert!((model.total_mass().unwrap() / expect - 1.0).abs() < 1e-12);
+}
+
+/// A free-free model (no constraint) has exactly six zero eigenvalues: the six rigid-body modes,
+/// no mechanism anywhere in the mixed mesh.
+#[test]
+fn free_free_plate_has_exactly_six_rigid_body_modes() {
+    for quadratic in [false, true] {
+        let model = small_plate(quadratic);
+        let sys = model.assemble(MassKind::Consistent).unwrap();
+        let e = generalized_symmetric_eigen(to_dense(&sys.k).as_ref(), to_dense(&sys.m).as_ref())
+            .unwrap();
+        let first_elastic = e.values[6];
+        assert!(first_elastic > 0.0);
+        assert!(
+            e.values[..6].iter().all(|l| l.abs() < 1e-8 * first_elastic),
+            "quadratic={quadratic}: {:?}",
+            &e.values[..8]
+        );
+        // The two dense paths (nalgebra eigenpairs, faer eigenvalues only) agree.
+        let values =
+            generalized_symmetric_eigenvalues(to_dense(&sys.k).as_ref(), to_dense(&sys.m).as_ref())
+                .unwrap();
+        for i in 6..20 {
+            assert!(
+                (values[i] / e.values[i] - 1.0).abs() < 1e-10,
+                "mode {i}: {} vs {}",
+                values[i],
+                e.values[i]
+            );
+        }
+        // ...and the six are the rigid motions: K annihilates them exactly.
+        let x = model.mesh().coords();
+        let n = sys.dofs.free_count();
+        let knorm = sys.k.data().iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        for i in 0..6 {
+            let r: Vec<f64> = (0..n)
+                .map(|f| {
+                    let d = sys.dofs.full_of_free(f);
+                    let (p, c) = (x[d / 3], d % 3);
+                    if i < 3 {
+                        if c == i { 1.0 } else { 0.0 }
+                    } else {
+                        let w: [f64; 3] =
+                            std::array::from_fn(|k| if k == i - 3 { 1.0 } else { 0.0 });
+                        [
+                            w[1] * p[2] - w[2] * p[1],
+                            w[2] * p[0] - w[0] * p[2],
+                            w[0] * p[1] - w[1] * p[0],
+                        ][c]
+                    }
+                })
+                .collect();
+            let mut kr = vec![0.0; n];
+            mul_vec(&sys.k, &r, &mut kr).unwrap();
+            assert!(
+                kr.iter().all(|v| v.abs() < 1e-12 * knorm),
+                "rigid motion {i} is not in the null space of K"
+            );
+        }
+    }
+}
+
+/// Parameter groups: K(p) equals re-assembly with the group's Young's modulus scaled by (1 + p)
+/// (K is linear in E); M(q) equals re-assembly with the density scaled by (1 + q); K_g x from
+/// element matrices equals the assembled K_g times x; and the element-by-element groups sum to K.
+#[test]
+fn parameter_groups_match_reassembly() {
+    for mass in [MassKind::Consistent, MassKind::Lumped] {
+        let mut model = small_plate(false);
+        model.fix_set("xmin", &[0, 1, 2]).unwrap();
+        let asm = Assembler::new(&model).unwrap();
+        let base = asm.assemble(&model, mass).unwrap();
+        let groups = ParameterGroups::from_element_sets(&model, &["penta", "tet"], mass).unwrap();
+        let (p, q) = ([-0.3, 0.25], [0.1, -0.2]);
+        let updated = groups.parameterized(&model, &asm, &base, &p, &q).unwrap();
+
+        let mut truth = model.clone();
+        truth
+            .set_material(
+                Some("penta"),
+                Material::isotropic("s", 210e9 * 0.7, 0.3, 7850.0 * 1.1).unwrap(),
+            )
+            .unwrap();
+        truth
+            .set_material(
+                Some("tet"),
+                Material::isotropic("a", 70e9 * 1.25, 0.33, 2700.0 * 0.8).unwrap(),
+            )
+            .unwrap();
+        let reference = asm.assemble(&truth, mass).unwrap();
+        let close = |a: &[f64], b: &[f64]| {
+            let s = b.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-13 * s)
+        };
+        assert!(
+            close(updated.k.data(), reference.k.data()),
+            "{mass:?}: K(p) differs"
+        );
+        assert!(
+            close(updated.m.data(), reference.m.data()),
+            "{mass:?}: M(q) differs"
+        );
+
+        // K_g x element by element against the assembled K_g.
+        let n = base.dofs.free_count();
+        let x: Vec<f64> = (0..n)
+            .map(|i| ((i * 7919) % 101) as f64 / 50.0 - 1.0)
+            .collect();
+        let kg = groups.group_stiffness(&model, &asm, 1).unwrap();
+        let (mut y1, mut y2) = (vec![0.0; n], vec![0.0; n]);
+        groups
+            .stiffness_product(&model, &asm, 1, &x, &mut y1)
+            .unwrap();
+        mul_vec(&kg, &x, &mut y2).unwrap();
+        assert!(close(&y1, &y2));
+        assert!(
+            groups
+                .stiffness_product(&model, &asm, 2, &x, &mut y1)
+                .is_err()
+        );
+        assert!(
+            groups
+                .parameterized(&model, &asm, &base, &[0.0], &q)
+                .is_err()
+        );
+    }
+    // Element by element: sum of all K_g x equals K x.
+    let model = small_plate(true);
+    let asm = Assembler::new(&model).unwrap();
+    let base = asm.assemble(&model, MassKind::Consistent).unwrap();
+    let groups = ParameterGroups::elementwise(&model, MassKind::Consistent).unwrap();
+    assert_eq!(groups.len(), model.mesh().element_count());
+    let n = base.dofs.free_count();
+    let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+    let mut y = vec![0.0; n];
+    let mut ym = vec![0.0; n];
+    for g in 0..groups.len() {
+        groups
+            .stiffness_product(&model, &asm, g, &x, &mut y)
+            .unwrap();
+        groups.mass_product(&model, &asm, g, &x, &mut ym).unwrap();
+    }
+    let (mut kx, mut mx) = (vec![0.0; n], vec![0.0; n]);
+    mul_vec(&base.k, &x, &mut kx).unwrap();
+    mul_vec(&base.m, &x, &mut mx).unwrap();
+    let err = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| (p - q).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            / b.iter().map(|q| q * q).sum::<f64>().sqrt()
+    };
+    assert!(err(&y, &kx) < 1e-13 && err(&ym, &mx) < 1e-13);
+}

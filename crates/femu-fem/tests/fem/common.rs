@@ -1,0 +1,101 @@
+//! Shared helpers: distorted elements, dense copies, simple random numbers.
+
+use femu_fem::element::ElementKind;
+
+/// A small deterministic generator (SplitMix64) so tests need no RNG crate.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_f64(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Uniform in [-1, 1].
+    pub fn sym(&mut self) -> f64 {
+        2.0 * self.next_f64() - 1.0
+    }
+}
+
+/// The affine map used for "undistorted" elements: a general (sheared, rotated, scaled) map with
+/// positive determinant.
+pub const AFFINE: [[f64; 3]; 3] = [[0.9, 0.2, 0.1], [-0.15, 1.1, 0.25], [0.05, -0.1, 0.8]];
+pub const SHIFT: [f64; 3] = [0.3, -0.2, 1.1];
+
+pub fn det3(a: &[[f64; 3]; 3]) -> f64 {
+    a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+        - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+        + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+}
+
+pub fn affine(p: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|i| SHIFT[i] + (0..3).map(|k| AFFINE[i][k] * p[k]).sum::<f64>())
+}
+
+/// Node coordinates of an affinely mapped element, with corners perturbed by `distortion`
+/// (relative to the reference size) and, when `curved`, mid-edge nodes moved off the edge.
+pub fn element_coords(
+    kind: ElementKind,
+    distortion: f64,
+    curved: bool,
+    rng: &mut Rng,
+) -> Vec<[f64; 3]> {
+    let r = kind.reference_nodes();
+    let mut x: Vec<[f64; 3]> = r.iter().map(|p| affine(*p)).collect();
+    let nc = kind.num_corners();
+    for a in 0..nc {
+        for i in 0..3 {
+            x[a][i] += distortion * rng.sym();
+        }
+    }
+    for (e, [a, b]) in kind.edges().iter().enumerate() {
+        if kind.is_quadratic() {
+            let m = nc + e;
+            for i in 0..3 {
+                x[m][i] = 0.5 * (x[*a][i] + x[*b][i])
+                    + if curved {
+                        0.5 * distortion * rng.sym()
+                    } else {
+                        0.0
+                    };
+            }
+        }
+    }
+    x
+}
+
+/// Dense square matrix from a row-major slice.
+pub fn dense(a: &[f64], n: usize) -> faer::Mat<f64> {
+    faer::Mat::from_fn(n, n, |i, j| a[i * n + j])
+}
+
+/// Rigid-body motions of a point set: 3 translations, 3 rotations (node-major vectors).
+pub fn rigid_modes(x: &[[f64; 3]]) -> Vec<Vec<f64>> {
+    let mut modes = Vec::new();
+    for i in 0..3 {
+        modes.push(
+            x.iter()
+                .flat_map(|_| (0..3).map(move |k| if k == i { 1.0 } else { 0.0 }))
+                .collect(),
+        );
+    }
+    // rotation about axis i: u = e_i x p
+    for i in 0..3 {
+        modes.push(
+            x.iter()
+                .flat_map(|p| {
+                    let w: [f64; 3] = std::array::from_fn(|k| if k == i { 1.0 } else { 0.0 });
+                    [
+                        w[1] * p[2] - w[2] * p[1],
+                        w[2] * p[0] - w[0] * p[2],
+                        w[0] * p[1] - w[1] * p[0],
+                    ]
+                })
+                .collect(),
+        );
+    }
+    modes
+}

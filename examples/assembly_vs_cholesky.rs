@@ -1,0 +1,64 @@
+//! Times the assembly of K and M of a clamped hex8 box against one sparse Cholesky factorization
+//! of its K (faer, AMD ordering, symbolic + numeric), and prints the ratio.
+//!
+//! `cargo run --release --example assembly_vs_cholesky -- [CELLS_PER_SIDE]` (default 40: 206k DOF).
+
+use faer::Side;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use femu::prelude::*;
+use std::time::Instant;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let n: usize = std::env::args()
+        .nth(1)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(40);
+    let mut model = Model::new(box_mesh(&BoxSpec::new(
+        [1.0; 3],
+        [n; 3],
+        BoxCells::Hex,
+        false,
+    ))?)?;
+    model.set_material(None, Material::steel())?;
+    model.fix_set("xmin", &[0, 1, 2])?;
+    let t = Instant::now();
+    let asm = Assembler::new(&model)?;
+    let t_pattern = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let sys = asm.assemble(&model, MassKind::Consistent)?;
+    let t_assembly = t.elapsed().as_secs_f64();
+    println!(
+        "hex8 {n}^3: {} elements, {} DOF, nnz(K) = {}",
+        model.mesh().element_count(),
+        sys.dofs.free_count(),
+        sys.k.nnz()
+    );
+    let k = &sys.k;
+    let indptr = k.indptr();
+    let symbolic = SymbolicSparseColMatRef::new_checked(
+        k.rows(),
+        k.cols(),
+        indptr.raw_storage(),
+        None,
+        k.indices(),
+    );
+    let a = SparseColMatRef::new(symbolic, k.data());
+    let t = Instant::now();
+    let sym = SymbolicLlt::try_new(symbolic, Side::Lower)?;
+    let t_symbolic = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let _llt = Llt::try_new_with_symbolic(sym, a, Side::Lower)?;
+    let t_numeric = t.elapsed().as_secs_f64();
+    println!("pattern + colouring   {t_pattern:8.3} s");
+    println!("assembly of K and M   {t_assembly:8.3} s");
+    println!("Cholesky symbolic     {t_symbolic:8.3} s (AMD)");
+    println!("Cholesky numeric      {t_numeric:8.3} s");
+    println!(
+        "assembly / Cholesky = {:.4} (pattern included: {:.4})",
+        t_assembly / (t_symbolic + t_numeric),
+        (t_pattern + t_assembly) / (t_symbolic + t_numeric)
+    );
+    Ok(())
+}
