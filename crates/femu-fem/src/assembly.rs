@@ -179,17 +179,11 @@ impl Assembler {
         &self.colors
     }
 
-    /// Calls `add(position, value)` for every entry `alpha * ke[(3a+i), (3b+j)]` of an element
-    /// matrix whose row and column DOFs are free, with `position` the index into the values of
-    /// the stiffness pattern.
+    /// Calls `add(position, local)` for every entry `(3a+i, 3b+j)` of an element matrix whose row
+    /// and column DOFs are free: `position` indexes the values of the stiffness pattern, `local`
+    /// the row-major element matrix. One walk serves `K_e` and `M_e` together.
     #[inline]
-    pub(crate) fn scatter(
-        &self,
-        nodes: &[usize],
-        ke: &[f64],
-        alpha: f64,
-        mut add: impl FnMut(usize, f64),
-    ) {
+    pub(crate) fn scatter(&self, nodes: &[usize], mut add: impl FnMut(usize, usize)) {
         let nd = 3 * nodes.len();
         for (lb, &nb) in nodes.iter().enumerate() {
             let db = self.dofs.node_dofs(nb);
@@ -207,7 +201,7 @@ impl Assembler {
                     let mut rank = 0;
                     for (i, ri) in da.iter().enumerate() {
                         if ri.is_some() {
-                            add(start + rank, alpha * ke[(3 * la + i) * nd + 3 * lb + j]);
+                            add(start + rank, (3 * la + i) * nd + 3 * lb + j);
                             rank += 1;
                         }
                     }
@@ -234,13 +228,47 @@ impl Assembler {
     /// [`FemError::NoMaterial`] for an element without material, [`FemError::InvertedElement`] for
     /// a non-positive Jacobian, [`FemError::LengthMismatch`] if the model does not match the pattern.
     pub fn assemble(&self, model: &Model, mass: MassKind) -> Result<SystemMatrices, FemError> {
+        let n = self.dofs.free_count();
+        let m = match mass {
+            MassKind::Consistent => self.pattern_matrix(vec![0.0; self.nnz()]),
+            MassKind::Lumped => self.diagonal_matrix(vec![0.0; n]),
+        };
+        let mut sys = SystemMatrices {
+            k: self.pattern_matrix(vec![0.0; self.nnz()]),
+            m,
+            dofs: self.dofs.clone(),
+            mass_kind: mass,
+        };
+        self.assemble_into(model, &mut sys)?;
+        Ok(sys)
+    }
+
+    /// Re-assembles into existing matrices of this pattern (new material values, same mesh and
+    /// constraints): no allocation, no new pattern. `sys.mass_kind` selects the mass.
+    ///
+    /// # Errors
+    /// As [`Assembler::assemble`], and [`FemError::LengthMismatch`] if `sys` is not on this pattern.
+    pub fn assemble_into(&self, model: &Model, sys: &mut SystemMatrices) -> Result<(), FemError> {
         let mesh = model.mesh();
         let n = self.dofs.free_count();
-        if model.dof_map() != self.dofs {
+        if model.dof_map() != self.dofs || sys.dofs != self.dofs {
             return Err(FemError::LengthMismatch {
                 what: "model DOFs against the assembler's",
                 expected: n,
                 got: model.dof_map().free_count(),
+            });
+        }
+        let mass = sys.mass_kind;
+        let m_len = if mass == MassKind::Consistent {
+            self.nnz()
+        } else {
+            n
+        };
+        if sys.k.nnz() != self.nnz() || sys.m.nnz() != m_len {
+            return Err(FemError::LengthMismatch {
+                what: "matrix storage against the pattern",
+                expected: self.nnz(),
+                got: sys.k.nnz(),
             });
         }
         let materials: Vec<([[f64; 6]; 6], f64)> = (0..mesh.element_count())
@@ -250,18 +278,13 @@ impl Assembler {
                     .map(|m| (m.elasticity_matrix(), m.density))
             })
             .collect::<Result<_, _>>()?;
-        let mut kv = vec![0.0; self.nnz()];
-        let mut mv = vec![
-            0.0;
-            if mass == MassKind::Consistent {
-                self.nnz()
-            } else {
-                n
-            }
-        ];
+        let kv = sys.k.data_mut();
+        kv.iter_mut().for_each(|v| *v = 0.0);
+        let ks = shared::SharedSlice::new(kv);
+        let mv = sys.m.data_mut();
+        mv.iter_mut().for_each(|v| *v = 0.0);
+        let ms = shared::SharedSlice::new(mv);
         for color in &self.colors {
-            let ks = shared::SharedSlice::new(&mut kv);
-            let ms = shared::SharedSlice::new(&mut mv);
             color.par_iter().try_for_each_init(
                 ElementBuffers::default,
                 |buf, &e| -> Result<(), FemError> {
@@ -272,17 +295,20 @@ impl Assembler {
                     buf.ke.resize(nd * nd, 0.0);
                     kernel::element_stiffness(el.kind, &buf.x, d, &mut buf.ke)
                         .map_err(bad_jacobian(el.id))?;
-                    // SAFETY (see `shared`): elements of one colour share no node, and an element
-                    // writes only to the columns of its own nodes.
-                    self.scatter(el.nodes, &buf.ke, 1.0, |p, v| ks.add(p, v));
+                    // SAFETY of the shared writes (see `shared`): elements of one colour share no
+                    // node, and an element writes only to the columns of its own nodes.
                     match mass {
                         MassKind::Consistent => {
                             buf.me.resize(nd * nd, 0.0);
                             kernel::element_mass(el.kind, &buf.x, *rho, &mut buf.me)
                                 .map_err(bad_jacobian(el.id))?;
-                            self.scatter(el.nodes, &buf.me, 1.0, |p, v| ms.add(p, v));
+                            self.scatter(el.nodes, |p, l| {
+                                ks.add(p, buf.ke[l]);
+                                ms.add(p, buf.me[l]);
+                            });
                         }
                         MassKind::Lumped => {
+                            self.scatter(el.nodes, |p, l| ks.add(p, buf.ke[l]));
                             buf.ml.resize(el.kind.num_nodes(), 0.0);
                             kernel::lumped_mass(el.kind, &buf.x, *rho, &mut buf.ml)
                                 .map_err(bad_jacobian(el.id))?;
@@ -297,16 +323,7 @@ impl Assembler {
                 },
             )?;
         }
-        let m = match mass {
-            MassKind::Consistent => self.pattern_matrix(mv),
-            MassKind::Lumped => self.diagonal_matrix(mv),
-        };
-        Ok(SystemMatrices {
-            k: self.pattern_matrix(kv),
-            m,
-            dofs: self.dofs.clone(),
-            mass_kind: mass,
-        })
+        Ok(())
     }
 }
 

@@ -287,13 +287,13 @@ impl ParameterGroups {
                 let (ke, me) = self.element_slices(e);
                 if p[g] != 0.0 {
                     let kd = out.k.data_mut();
-                    asm.scatter(nodes, ke, p[g], |i, v| kd[i] += v);
+                    asm.scatter(nodes, |i, l| kd[i] += p[g] * ke[l]);
                 }
                 if q[g] != 0.0 {
                     match self.mass_kind {
                         MassKind::Consistent => {
                             let md = out.m.data_mut();
-                            asm.scatter(nodes, me, q[g], |i, v| md[i] += v);
+                            asm.scatter(nodes, |i, l| md[i] += q[g] * me[l]);
                         }
                         MassKind::Lumped => {
                             let nd = 3 * nodes.len();
@@ -344,12 +344,8 @@ impl ParameterGroups {
         let group = self.check_group(g)?;
         let mut v = vec![0.0; asm.nnz()];
         for &e in &group.elements {
-            asm.scatter(
-                model.mesh().element(e).nodes,
-                self.element_slices(e).0,
-                1.0,
-                |i, x| v[i] += x,
-            );
+            let ke = self.element_slices(e).0;
+            asm.scatter(model.mesh().element(e).nodes, |i, l| v[i] += ke[l]);
         }
         Ok(asm.pattern_matrix(v))
     }

@@ -330,3 +330,21 @@ fn parameter_groups_match_reassembly() {
     };
     assert!(err(&y, &kx) < 1e-13 && err(&ym, &mx) < 1e-13);
 }
+
+/// Re-assembly into existing storage (updating loops) equals a fresh assembly, and storage of
+/// another pattern is refused rather than written.
+#[test]
+fn assemble_into_reuses_storage() {
+    let mut model = small_plate(true);
+    let asm = Assembler::new(&model).unwrap();
+    let mut sys = asm.assemble(&model, MassKind::Consistent).unwrap();
+    model.set_material(Some("hex"), Material::isotropic("soft", 150e9, 0.28, 7000.0).unwrap()).unwrap();
+    asm.assemble_into(&model, &mut sys).unwrap();
+    let fresh = Assembler::new(&model).unwrap().assemble(&model, MassKind::Consistent).unwrap();
+    assert_eq!(sys.k.data(), fresh.k.data());
+    assert_eq!(sys.m.data(), fresh.m.data());
+    let other = small_plate(false);
+    let mut foreign = other.assemble(MassKind::Consistent).unwrap();
+    assert!(asm.assemble_into(&model, &mut foreign).is_err());
+    assert!(Assembler::new(&other).unwrap().assemble_into(&other, &mut sys).is_err());
+}
