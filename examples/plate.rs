@@ -37,7 +37,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         t.elapsed().as_secs_f64() * 1e3
     );
     let n = consistent.dofs.free_count();
-    let ux: Vec<f64> = (0..n).map(|f| if consistent.dofs.full_of_free(f) % 3 == 0 { 1.0 } else { 0.0 }).collect();
+    let ux: Vec<f64> = (0..n)
+        .map(|f| {
+            if consistent.dofs.full_of_free(f) % 3 == 0 {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
     println!(
         "mass: rho V = {:.6} kg, u^T M u (rigid x) consistent {:.6} kg, lumped {:.6} kg",
         model.total_mass()?,
@@ -45,8 +53,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         bilinear(&lumped.m, &ux, &ux)?
     );
     let t = Instant::now();
-    println!("dense eigenvalues of the {n}-DOF pencil (reference path; the sparse eigensolver is femu-sparse's next step)...");
-    let values = generalized_symmetric_eigenvalues(to_dense(&consistent.k).as_ref(), to_dense(&consistent.m).as_ref())?;
+    println!(
+        "dense eigenvalues of the {n}-DOF pencil (reference path; the sparse eigensolver is femu-sparse's next step)..."
+    );
+    let values = generalized_symmetric_eigenvalues(
+        to_dense(&consistent.k).as_ref(),
+        to_dense(&consistent.m).as_ref(),
+    )?;
     println!("{:.1} s", t.elapsed().as_secs_f64());
     println!("\n mode | eigenvalue (s^-2) | frequency (Hz)");
     for (i, l) in values.iter().take(12).enumerate() {

@@ -46,6 +46,20 @@ pub enum SparseError {
         /// Column of the entry.
         col: usize,
     },
+    /// A zero pivot in an `LDL^T`: the matrix is singular (a shift on an eigenvalue).
+    #[error("{matrix} is singular: zero pivot at index {index}")]
+    Singular {
+        /// Which matrix.
+        matrix: &'static str,
+        /// Original index of the zero pivot.
+        index: usize,
+    },
+    /// A factorization or ordering failed for another reason.
+    #[error("factorization failed: {reason}")]
+    Factorization {
+        /// What failed.
+        reason: String,
+    },
     /// An iterative or dense eigensolver did not converge.
     #[error("eigensolver did not converge: {reason}")]
     NoConvergence {

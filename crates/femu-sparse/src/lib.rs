@@ -19,9 +19,12 @@
 //! assert!((2.0 * phi0[0] * phi0[0] + 2.0 * phi0[1] * phi0[1] - 1.0).abs() < 1e-14);
 //! ```
 
+pub mod cholesky;
 pub mod csc;
 pub mod dense;
+pub mod eigen;
 mod error;
+pub mod ordering;
 
 pub use error::SparseError;
 

@@ -338,13 +338,26 @@ fn assemble_into_reuses_storage() {
     let mut model = small_plate(true);
     let asm = Assembler::new(&model).unwrap();
     let mut sys = asm.assemble(&model, MassKind::Consistent).unwrap();
-    model.set_material(Some("hex"), Material::isotropic("soft", 150e9, 0.28, 7000.0).unwrap()).unwrap();
+    model
+        .set_material(
+            Some("hex"),
+            Material::isotropic("soft", 150e9, 0.28, 7000.0).unwrap(),
+        )
+        .unwrap();
     asm.assemble_into(&model, &mut sys).unwrap();
-    let fresh = Assembler::new(&model).unwrap().assemble(&model, MassKind::Consistent).unwrap();
+    let fresh = Assembler::new(&model)
+        .unwrap()
+        .assemble(&model, MassKind::Consistent)
+        .unwrap();
     assert_eq!(sys.k.data(), fresh.k.data());
     assert_eq!(sys.m.data(), fresh.m.data());
     let other = small_plate(false);
     let mut foreign = other.assemble(MassKind::Consistent).unwrap();
     assert!(asm.assemble_into(&model, &mut foreign).is_err());
-    assert!(Assembler::new(&other).unwrap().assemble_into(&other, &mut sys).is_err());
+    assert!(
+        Assembler::new(&other)
+            .unwrap()
+            .assemble_into(&other, &mut sys)
+            .is_err()
+    );
 }

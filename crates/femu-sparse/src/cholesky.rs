@@ -1,0 +1,336 @@
+//! Sparse Cholesky `LL^T` and `LDL^T` factorizations (faer), with the symbolic analysis done once
+//! per sparsity pattern and reused for new values and new shifts, and the inertia of `LDL^T`.
+//!
+//! By Sylvester's law of inertia, `K - sigma M = L D L^T` has as many negative pivots in `D` as
+//! the pencil `(K, M)` has eigenvalues below `sigma` (M positive definite): the Sturm count that
+//! proves an eigensolver skipped no mode.
+
+use crate::ordering::{Ordering, fill_reducing_ordering};
+use crate::{SparseError, SparseMatrix};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering, factorize_symbolic_cholesky, simplicial::SimplicialLdltRef,
+    supernodal::SupernodalLdltRef,
+};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Side};
+use std::sync::Arc;
+
+/// A faer view of a [`SparseMatrix`] (CSC, `usize` indices): no copy.
+///
+/// # Errors
+/// [`SparseError::DimensionMismatch`] if `a` is not square or not in CSC storage.
+pub fn faer_view(a: &SparseMatrix) -> Result<SparseColMatRef<'_, usize, f64>, SparseError> {
+    if !a.is_csc() {
+        return Err(SparseError::DimensionMismatch {
+            what: "CSC storage (got CSR)",
+            expected: 0,
+            got: 1,
+        });
+    }
+    if a.rows() != a.cols() {
+        return Err(SparseError::DimensionMismatch {
+            what: "square matrix",
+            expected: a.rows(),
+            got: a.cols(),
+        });
+    }
+    let sym = SymbolicSparseColMatRef::new_checked(
+        a.rows(),
+        a.cols(),
+        a.indptr().into_raw_storage(),
+        None,
+        a.indices(),
+    );
+    Ok(SparseColMatRef::new(sym, a.data()))
+}
+
+/// The symbolic analysis of a symmetric sparsity pattern: fill-reducing ordering and elimination
+/// structure. Shared (cheaply cloned) by every numeric factorization on the same pattern.
+#[derive(Debug, Clone)]
+pub struct SymbolicFactor {
+    inner: Arc<SymbolicCholesky<usize>>,
+    n: usize,
+    nnz: usize,
+    ordering: Ordering,
+}
+
+/// The inertia of a symmetric matrix: numbers of negative, zero and positive eigenvalues.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Inertia {
+    /// Negative pivots of `D`: eigenvalues below the shift (Sturm count).
+    pub negative: usize,
+    /// Exactly zero pivots (the factorization fails on these, so normally 0).
+    pub zero: usize,
+    /// Positive pivots.
+    pub positive: usize,
+}
+
+impl SymbolicFactor {
+    /// Analyses the pattern of the symmetric matrix `a` (both triangles stored; the lower one is
+    /// read) with the given fill-reducing ordering.
+    ///
+    /// # Errors
+    /// [`SparseError::DimensionMismatch`] for a non-square or CSR matrix,
+    /// [`SparseError::Factorization`] if the analysis fails (out of memory).
+    pub fn new(a: &SparseMatrix, ordering: Ordering) -> Result<Self, SparseError> {
+        let view = faer_view(a)?;
+        let perm = fill_reducing_ordering(a, ordering)?;
+        let sym_ordering = match &perm {
+            Some((fwd, inv)) => {
+                SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, inv, a.rows()))
+            }
+            None => SymmetricOrdering::Amd,
+        };
+        let inner = factorize_symbolic_cholesky(
+            view.symbolic(),
+            Side::Lower,
+            sym_ordering,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| SparseError::Factorization {
+            reason: format!("symbolic analysis: {e:?}"),
+        })?;
+        Ok(Self {
+            inner: Arc::new(inner),
+            n: a.rows(),
+            nnz: a.nnz(),
+            ordering,
+        })
+    }
+
+    /// Matrix dimension.
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// Number of stored values of the factor `L` (a measure of fill).
+    pub fn factor_len(&self) -> usize {
+        self.inner.len_val()
+    }
+
+    /// Whether faer chose its supernodal (blocked) factorization for this pattern.
+    pub fn is_supernodal(&self) -> bool {
+        matches!(self.inner.raw(), SymbolicCholeskyRaw::Supernodal(_))
+    }
+
+    /// The ordering used.
+    pub fn ordering(&self) -> Ordering {
+        self.ordering
+    }
+
+    fn check(&self, a: &SparseMatrix) -> Result<(), SparseError> {
+        if a.rows() != self.n || a.nnz() != self.nnz {
+            return Err(SparseError::DimensionMismatch {
+                what: "matrix against its symbolic analysis (n, nnz)",
+                expected: self.n,
+                got: a.rows(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Original (unpermuted) index of the failing pivot that faer reports as `k`: its simplicial
+    /// path reports `k + 1` (one-based), its supernodal path `k`.
+    fn original_index(&self, k: usize) -> usize {
+        let k = match self.inner.raw() {
+            SymbolicCholeskyRaw::Simplicial(_) => k.saturating_sub(1),
+            SymbolicCholeskyRaw::Supernodal(_) => k,
+        };
+        match self.inner.perm() {
+            Some(p) => p.arrays().0[k],
+            None => k,
+        }
+    }
+
+    /// Numeric `LL^T` of a symmetric positive definite matrix with this pattern.
+    ///
+    /// # Errors
+    /// [`SparseError::NotPositiveDefinite`] with the original index of the failing pivot.
+    pub fn llt(&self, a: &SparseMatrix, name: &'static str) -> Result<Llt, SparseError> {
+        self.check(a)?;
+        let view = faer_view(a)?;
+        let par = faer::get_global_parallelism();
+        let mut values = vec![0.0; self.inner.len_val()];
+        let mut mem = MemBuffer::new(
+            self.inner
+                .factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+        );
+        self.inner
+            .factorize_numeric_llt(
+                &mut values,
+                view,
+                Side::Lower,
+                LltRegularization::default(),
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .map_err(|e| match e {
+                faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
+                    SparseError::NotPositiveDefinite {
+                        matrix: name,
+                        index: self.original_index(index),
+                    }
+                }
+            })?;
+        Ok(Llt {
+            symbolic: self.clone(),
+            values,
+        })
+    }
+
+    /// Numeric `LDL^T` (no pivoting) of a symmetric matrix with this pattern, for example
+    /// `K - sigma M`, with its [`Inertia`].
+    ///
+    /// # Errors
+    /// [`SparseError::Singular`] on an exactly zero pivot (shift on an eigenvalue), with its
+    /// original index.
+    pub fn ldlt(&self, a: &SparseMatrix, name: &'static str) -> Result<Ldlt, SparseError> {
+        self.check(a)?;
+        let view = faer_view(a)?;
+        let par = faer::get_global_parallelism();
+        let mut values = vec![0.0; self.inner.len_val()];
+        let mut mem = MemBuffer::new(
+            self.inner
+                .factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
+        );
+        self.inner
+            .factorize_numeric_ldlt(
+                &mut values,
+                view,
+                Side::Lower,
+                LdltRegularization::default(),
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .map_err(|e| match e {
+                faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } => {
+                    SparseError::Singular {
+                        matrix: name,
+                        index: self.original_index(index),
+                    }
+                }
+            })?;
+        let inertia = inertia_of(&self.inner, &values);
+        Ok(Ldlt {
+            symbolic: self.clone(),
+            values,
+            inertia,
+        })
+    }
+}
+
+/// Signs of the pivots `D` of an `LDL^T` factor.
+fn inertia_of(symbolic: &SymbolicCholesky<usize>, values: &[f64]) -> Inertia {
+    let mut inertia = Inertia {
+        negative: 0,
+        zero: 0,
+        positive: 0,
+    };
+    let mut count = |d: f64| {
+        if d < 0.0 {
+            inertia.negative += 1;
+        } else if d == 0.0 || d.is_nan() {
+            inertia.zero += 1;
+        } else {
+            inertia.positive += 1;
+        }
+    };
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            let l = SimplicialLdltRef::new(s, values);
+            let col_ptr = s.col_ptr();
+            let vals = l.values();
+            // The diagonal is the first stored entry of each column of L.
+            for j in 0..s.nrows() {
+                count(vals[col_ptr[j]]);
+            }
+        }
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let l = SupernodalLdltRef::new(s, values);
+            for k in 0..s.n_supernodes() {
+                let v = l.supernode(k).val();
+                for j in 0..v.ncols() {
+                    count(v[(j, j)]);
+                }
+            }
+        }
+    }
+    inertia
+}
+
+/// A numeric factorization that solves `A x = b`.
+pub trait Factorization {
+    /// Matrix dimension.
+    fn dim(&self) -> usize;
+    /// Overwrites the columns of `rhs` with `A^-1 rhs`.
+    fn solve_in_place(&self, rhs: MatMut<'_, f64>);
+    /// `A^-1 b` for one vector.
+    fn solve(&self, b: &mut [f64]) {
+        let n = b.len();
+        self.solve_in_place(faer::MatMut::from_column_major_slice_mut(b, n, 1));
+    }
+}
+
+/// A numeric `LL^T` factorization.
+#[derive(Debug, Clone)]
+pub struct Llt {
+    symbolic: SymbolicFactor,
+    values: Vec<f64>,
+}
+
+/// A numeric `LDL^T` factorization and its inertia.
+#[derive(Debug, Clone)]
+pub struct Ldlt {
+    symbolic: SymbolicFactor,
+    values: Vec<f64>,
+    inertia: Inertia,
+}
+
+impl Ldlt {
+    /// The inertia: `negative` is the number of eigenvalues of the factored pencil below the shift.
+    pub fn inertia(&self) -> Inertia {
+        self.inertia
+    }
+}
+
+fn scratch_solve(symbolic: &SymbolicCholesky<usize>, ncols: usize) -> MemBuffer {
+    MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(ncols, faer::get_global_parallelism()))
+}
+
+impl Factorization for Llt {
+    fn dim(&self) -> usize {
+        self.symbolic.n
+    }
+    fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        let inner = &self.symbolic.inner;
+        let mut mem = scratch_solve(inner, rhs.ncols());
+        LltRef::new(inner, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            rhs,
+            faer::get_global_parallelism(),
+            MemStack::new(&mut mem),
+        );
+    }
+}
+
+impl Factorization for Ldlt {
+    fn dim(&self) -> usize {
+        self.symbolic.n
+    }
+    fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        let inner = &self.symbolic.inner;
+        let mut mem = scratch_solve(inner, rhs.ncols());
+        LdltRef::new(inner, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            rhs,
+            faer::get_global_parallelism(),
+            MemStack::new(&mut mem),
+        );
+    }
+}

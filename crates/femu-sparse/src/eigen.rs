@@ -1,0 +1,946 @@
+//! The verified generalized eigensolver for `K x = lambda M x` (`K` symmetric positive
+//! semi-definite, `M` symmetric positive definite, consistent or lumped).
+//!
+//! Shift-invert block Lanczos in the `M` inner product: the operator `OP = (K - sigma M)^-1 M` is
+//! self-adjoint in `<x, y>_M = x^T M y`, its eigenvalues `theta = 1 / (lambda - sigma)` are
+//! largest for the `lambda` nearest `sigma`. The Krylov basis is kept `M`-orthonormal by two
+//! passes of Gram-Schmidt (full reorthogonalisation); converged Ritz pairs are locked and every
+//! later vector is deflated against them; the iteration restarts from the best unconverged Ritz
+//! vectors. Block solves (`block_size` right-hand sides at once) are cheaper per vector than single
+//! ones.
+//!
+//! Evidence carried by every result: the relative residual of each mode, and a Sturm check: the
+//! inertia of `K - s M = L D L^T` at a shift `s` in a gap above the returned modes counts the
+//! eigenvalues below `s` (Sylvester), which must equal the number returned. A Krylov method can
+//! miss copies of repeated eigenvalues; when the count says so, the solver restarts from random
+//! vectors deflated against everything found, until the count agrees.
+
+use crate::cholesky::{Factorization, Ldlt, SymbolicFactor};
+use crate::ordering::Ordering;
+use crate::{SparseError, SparseMatrix};
+use faer::Mat;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Which eigenpairs to compute.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Which {
+    /// The `k` lowest eigenvalues (extended to complete a cluster of equal eigenvalues at the top).
+    Lowest(usize),
+    /// The `count` eigenvalues nearest `shift` (s^-2).
+    Nearest {
+        /// The shift `sigma` in s^-2.
+        shift: f64,
+        /// How many.
+        count: usize,
+    },
+    /// Every eigenvalue in `[lo, hi]` (s^-2).
+    Band {
+        /// Lower end in s^-2.
+        lo: f64,
+        /// Upper end in s^-2.
+        hi: f64,
+    },
+}
+
+/// Settings of the eigensolver.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EigenParams {
+    /// Convergence tolerance on the shifted relative residual
+    /// `||K x - lambda M x|| / ||(K - sigma M) x||`.
+    pub tol: f64,
+    /// Right-hand sides solved together.
+    pub block_size: usize,
+    /// Largest Krylov basis before a restart (0: automatic, `max(2 want, want + 4 block, 24)`).
+    pub max_basis: usize,
+    /// Restarts allowed before giving up.
+    pub max_restarts: usize,
+    /// Fill-reducing ordering of the factorizations.
+    pub ordering: Ordering,
+    /// Seed of the random start vectors (results are deterministic for a seed).
+    pub seed: u64,
+}
+
+impl Default for EigenParams {
+    fn default() -> Self {
+        Self {
+            tol: 1e-10,
+            block_size: 4,
+            max_basis: 0,
+            max_restarts: 60,
+            ordering: Ordering::NestedDissection,
+            seed: 0x5EED,
+        }
+    }
+}
+
+/// The Sturm check of a result.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SturmCheck {
+    /// Lower end of the checked interval (`None`: from minus infinity).
+    pub lower: Option<f64>,
+    /// Upper end of the checked interval (s^-2), in a gap of the spectrum.
+    pub upper: f64,
+    /// Eigenvalues of the pencil in the interval, by inertia.
+    pub count: usize,
+    /// Eigenvalues returned in the interval.
+    pub returned: usize,
+}
+
+impl SturmCheck {
+    /// Whether no eigenvalue in the interval was missed.
+    pub fn verified(&self) -> bool {
+        self.count == self.returned
+    }
+}
+
+/// Where the time went and how much work was done.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct EigenStats {
+    /// Symbolic analyses (ordering included), seconds.
+    pub symbolic_seconds: f64,
+    /// Numeric factorizations, seconds.
+    pub factor_seconds: f64,
+    /// Triangular solves, seconds.
+    pub solve_seconds: f64,
+    /// Orthogonalisation and `M` products, seconds.
+    pub orthogonalization_seconds: f64,
+    /// Numeric factorizations done (the solve shift and the Sturm checks).
+    pub factorizations: usize,
+    /// Vectors solved with `K - sigma M`.
+    pub solved_vectors: usize,
+    /// Restarts of the Lanczos iteration.
+    pub restarts: usize,
+}
+
+/// Computed modes with their evidence.
+#[derive(Debug, Clone)]
+pub struct Modes {
+    /// Eigenvalues `lambda_j = omega_j^2` in s^-2, ascending.
+    pub values: Vec<f64>,
+    /// Mode shapes in the columns, M-normalised (`phi_i^T M phi_j = delta_ij`).
+    pub vectors: Mat<f64>,
+    /// `||K x - lambda M x|| / ||K x||` per mode (the classical relative residual; meaningless for
+    /// rigid-body modes, where `K x` is round-off: see `shifted_residuals`).
+    pub residuals: Vec<f64>,
+    /// `||K x - lambda M x|| / ||(K - sigma M) x||` per mode, the converged quantity.
+    pub shifted_residuals: Vec<f64>,
+    /// The shift `sigma` used (s^-2).
+    pub shift: f64,
+    /// The Sturm check.
+    pub sturm: SturmCheck,
+    /// Work and time.
+    pub stats: EigenStats,
+}
+
+impl Modes {
+    /// Frequencies in Hz, `f = sqrt(max(lambda, 0)) / (2 pi)`.
+    pub fn frequencies_hz(&self) -> Vec<f64> {
+        self.values
+            .iter()
+            .map(|l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI))
+            .collect()
+    }
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// A pencil `(K, M)` with the symbolic analysis of `K`'s pattern, reused for every shift.
+#[derive(Debug, Clone)]
+pub struct Pencil<'a> {
+    k: &'a SparseMatrix,
+    m: &'a SparseMatrix,
+    symbolic: SymbolicFactor,
+    /// position in K's values of each stored entry of M
+    m_in_k: Vec<usize>,
+    symbolic_seconds: f64,
+    k_norm: f64,
+    m_norm: f64,
+}
+
+impl<'a> Pencil<'a> {
+    /// Checks the pencil (square, same size, finite, `M`'s pattern inside `K`'s) and analyses the
+    /// pattern of `K` once.
+    ///
+    /// # Errors
+    /// [`SparseError::DimensionMismatch`], [`SparseError::NonFinite`], [`SparseError::NotSymmetric`]
+    /// (relative asymmetry above 1e-10), or a failed analysis.
+    pub fn new(
+        k: &'a SparseMatrix,
+        m: &'a SparseMatrix,
+        ordering: Ordering,
+    ) -> Result<Self, SparseError> {
+        crate::csc::check_symmetric(k, "K", 1e-10)?;
+        crate::csc::check_symmetric(m, "M", 1e-10)?;
+        if k.rows() != m.rows() {
+            return Err(SparseError::DimensionMismatch {
+                what: "M against K",
+                expected: k.rows(),
+                got: m.rows(),
+            });
+        }
+        let (kp, mp) = (k.indptr(), m.indptr());
+        let (kp, mp) = (kp.raw_storage(), mp.raw_storage());
+        let mut m_in_k = Vec::with_capacity(m.nnz());
+        for c in 0..k.cols() {
+            let krows = &k.indices()[kp[c]..kp[c + 1]];
+            for &r in &m.indices()[mp[c]..mp[c + 1]] {
+                let pos = krows
+                    .binary_search(&r)
+                    .map_err(|_| SparseError::DimensionMismatch {
+                        what: "pattern of M inside the pattern of K (entry of M missing from K)",
+                        expected: c,
+                        got: r,
+                    })?;
+                m_in_k.push(kp[c] + pos);
+            }
+        }
+        let t = Instant::now();
+        let symbolic = SymbolicFactor::new(k, ordering)?;
+        let one_norm = |a: &SparseMatrix| -> f64 {
+            let p = a.indptr();
+            let p = p.raw_storage();
+            (0..a.cols())
+                .map(|c| {
+                    a.data()[p[c]..p[c + 1]]
+                        .iter()
+                        .map(|v| v.abs())
+                        .sum::<f64>()
+                })
+                .fold(0.0, f64::max)
+        };
+        Ok(Self {
+            k,
+            m,
+            symbolic,
+            m_in_k,
+            symbolic_seconds: t.elapsed().as_secs_f64(),
+            k_norm: one_norm(k),
+            m_norm: one_norm(m),
+        })
+    }
+
+    /// Dimension.
+    pub fn dim(&self) -> usize {
+        self.k.rows()
+    }
+
+    /// The symbolic analysis (ordering and fill).
+    pub fn symbolic(&self) -> &SymbolicFactor {
+        &self.symbolic
+    }
+
+    /// `LDL^T` of `K - sigma M`, on the shared symbolic analysis.
+    ///
+    /// # Errors
+    /// [`SparseError::Singular`] when `sigma` is (numerically exactly) an eigenvalue.
+    pub fn factor_shifted(&self, sigma: f64) -> Result<Ldlt, SparseError> {
+        let mut a = self.k.clone();
+        let data = a.data_mut();
+        for (pm, pk) in self.m_in_k.iter().enumerate() {
+            data[*pk] -= sigma * self.m.data()[pm];
+        }
+        self.symbolic.ldlt(&a, "K - sigma M")
+    }
+
+    /// The number of eigenvalues below `sigma` (Sturm count by inertia).
+    ///
+    /// # Errors
+    /// As [`Pencil::factor_shifted`].
+    pub fn count_below(&self, sigma: f64) -> Result<usize, SparseError> {
+        Ok(self.factor_shifted(sigma)?.inertia().negative)
+    }
+
+    /// A negative shift for the lowest modes: `-1e-10 mean(K_ii / M_ii)`, far below the first
+    /// elastic eigenvalue of any practical structure yet well away from the rigid-body zeros.
+    fn lowest_shift(&self) -> f64 {
+        let diag = |a: &SparseMatrix| -> Vec<f64> {
+            (0..a.rows())
+                .map(|i| a.get(i, i).copied().unwrap_or(0.0))
+                .collect()
+        };
+        let (kd, md) = (diag(self.k), diag(self.m));
+        let ratio: f64 = kd
+            .iter()
+            .zip(&md)
+            .filter(|(_, m)| **m > 0.0)
+            .map(|(k, m)| k.abs() / m)
+            .sum::<f64>()
+            / kd.len().max(1) as f64;
+        -(1e-10 * ratio).max(f64::MIN_POSITIVE)
+    }
+
+    /// Computes the requested modes; see the module documentation.
+    ///
+    /// # Errors
+    /// [`SparseError::NoConvergence`] (with the number converged) after `max_restarts`,
+    /// [`SparseError::NotPositiveDefinite`]-like errors from the factorizations, and
+    /// [`SparseError::Singular`] when a shift falls exactly on an eigenvalue.
+    pub fn solve(&self, which: Which, params: &EigenParams) -> Result<Modes, SparseError> {
+        let n = self.dim();
+        let mut stats = EigenStats {
+            symbolic_seconds: self.symbolic_seconds,
+            ..Default::default()
+        };
+        let (sigma, mut want, band) = match which {
+            Which::Lowest(k) => (self.lowest_shift(), k, None),
+            Which::Nearest { shift, count } => (shift, count, None),
+            Which::Band { lo, hi } => {
+                if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                    return Err(SparseError::DimensionMismatch {
+                        what: "band with lo < hi",
+                        expected: 0,
+                        got: 0,
+                    });
+                }
+                let t = Instant::now();
+                let (nl, nh) = (self.count_below(lo)?, self.count_below(hi)?);
+                stats.factor_seconds += t.elapsed().as_secs_f64();
+                stats.factorizations += 2;
+                (0.5 * (lo + hi), nh - nl, Some((lo, hi, nh - nl)))
+            }
+        };
+        if want > n {
+            return Err(SparseError::DimensionMismatch {
+                what: "requested modes against dimension",
+                expected: n,
+                got: want,
+            });
+        }
+        let t = Instant::now();
+        let mut op = self.factor_shifted(sigma)?;
+        stats.factor_seconds += t.elapsed().as_secs_f64();
+        stats.factorizations += 1;
+        let mut sigma = sigma;
+        if matches!(which, Which::Lowest(_)) {
+            if op.inertia().negative > 0 {
+                return Err(SparseError::NotPositiveDefinite {
+                    matrix: "K (eigenvalues below the negative lowest-mode shift)",
+                    index: op.inertia().negative,
+                });
+            }
+            // Place the shift at half the first clearly nonzero eigenvalue, estimated by one cycle
+            // at the tiny shift: K - sigma M is then well conditioned even for a free-free model
+            // (condition lambda_max / |sigma| instead of lambda_max / 1e-10 mean(K_ii / M_ii)),
+            // and rigid-body and elastic modes stay well separated.
+            let guess = {
+                let mut probe = Lanczos::new(self, &op, sigma, params, n);
+                probe.estimate(want + 3, &mut stats)
+            };
+            let top = guess.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            if let Some(first) = guess.iter().copied().find(|v| *v > 1e-4 * top) {
+                let better = -0.5 * first;
+                if better < sigma {
+                    let t = Instant::now();
+                    let candidate = self.factor_shifted(better)?;
+                    stats.factor_seconds += t.elapsed().as_secs_f64();
+                    stats.factorizations += 1;
+                    if candidate.inertia().negative == 0 {
+                        op = candidate;
+                        sigma = better;
+                    }
+                }
+            }
+        }
+        if want == 0 {
+            return Ok(Modes {
+                values: vec![],
+                vectors: Mat::zeros(n, 0),
+                residuals: vec![],
+                shifted_residuals: vec![],
+                shift: sigma,
+                sturm: SturmCheck {
+                    lower: band.map(|b| b.0),
+                    upper: band.map_or(sigma, |b| b.1),
+                    count: 0,
+                    returned: 0,
+                },
+                stats,
+            });
+        }
+        let guard = if band.is_some() { 0 } else { 3.min(n - want) };
+        let mut lanczos = Lanczos::new(self, &op, sigma, params, n);
+        let mut attempts = 0;
+        loop {
+            lanczos.run(want + guard, &mut stats)?;
+            // Sort what was locked by distance to the shift, keep the wanted ones.
+            let locked = lanczos.sorted_locked();
+            let (sel, check) = match which {
+                Which::Band { .. } => {
+                    let (lo, hi, count) = band.expect("band");
+                    let sel: Vec<usize> = locked
+                        .iter()
+                        .copied()
+                        .filter(|i| lanczos.values[*i] >= lo && lanczos.values[*i] <= hi)
+                        .collect();
+                    let returned = sel.len();
+                    (
+                        sel,
+                        SturmCheck {
+                            lower: Some(lo),
+                            upper: hi,
+                            count,
+                            returned,
+                        },
+                    )
+                }
+                _ => {
+                    let mut sel: Vec<usize> = locked[..want.min(locked.len())].to_vec();
+                    // Extend to a gap: the check shift must not split a cluster.
+                    let mut values: Vec<f64> = sel.iter().map(|i| lanczos.values[*i]).collect();
+                    let mut rest: Vec<usize> = locked[sel.len()..].to_vec();
+                    rest.sort_by(|a, b| lanczos.values[*a].total_cmp(&lanczos.values[*b]));
+                    values.sort_by(f64::total_cmp);
+                    let scale = values.iter().fold(sigma.abs(), |m, v| m.max(v.abs()));
+                    let top = *values.last().expect("want > 0");
+                    let above: Vec<usize> = rest
+                        .iter()
+                        .copied()
+                        .filter(|i| lanczos.values[*i] > top)
+                        .collect();
+                    let mut next = None;
+                    for i in above {
+                        let v = lanczos.values[i];
+                        if v - top <= 1e-8 * scale.max(v.abs()) {
+                            sel.push(i);
+                        } else {
+                            next = Some(v);
+                            break;
+                        }
+                    }
+                    let top = sel
+                        .iter()
+                        .map(|i| lanczos.values[*i])
+                        .fold(f64::NEG_INFINITY, f64::max);
+                    let upper = match next {
+                        Some(v) => 0.5 * (top + v),
+                        None => top + 1e-6 * scale.max(top.abs()),
+                    };
+                    let lower = match which {
+                        Which::Nearest { .. } => {
+                            let bottom = sel
+                                .iter()
+                                .map(|i| lanczos.values[*i])
+                                .fold(f64::INFINITY, f64::min);
+                            let below = rest
+                                .iter()
+                                .map(|i| lanczos.values[*i])
+                                .filter(|v| *v < bottom)
+                                .fold(f64::NEG_INFINITY, f64::max);
+                            Some(if below.is_finite() {
+                                0.5 * (bottom + below)
+                            } else {
+                                bottom - 1e-6 * scale.max(bottom.abs())
+                            })
+                        }
+                        _ => None,
+                    };
+                    let t = Instant::now();
+                    let count = self.count_below(upper)?
+                        - lower.map(|l| self.count_below(l)).transpose()?.unwrap_or(0);
+                    stats.factor_seconds += t.elapsed().as_secs_f64();
+                    stats.factorizations += 1 + usize::from(lower.is_some());
+                    let returned = sel.len();
+                    (
+                        sel,
+                        SturmCheck {
+                            lower,
+                            upper,
+                            count,
+                            returned,
+                        },
+                    )
+                }
+            };
+            if check.verified() {
+                return Ok(lanczos.finish(sel, sigma, check, stats));
+            }
+            attempts += 1;
+            if check.count < check.returned || attempts > 8 {
+                return Err(SparseError::NoConvergence {
+                    reason: format!(
+                        "Sturm check failed: {} eigenvalues in ({:?}, {:e}] by inertia, {} found ({} locked)",
+                        check.count,
+                        check.lower,
+                        check.upper,
+                        check.returned,
+                        lanczos.values.len()
+                    ),
+                });
+            }
+            // Missed modes (repeated eigenvalues): ask for more, restarting from random vectors
+            // deflated against everything found.
+            want = lanczos.values.len() + (check.count - check.returned);
+            lanczos.force_random_start = true;
+        }
+    }
+}
+
+/// Computes modes of `(K, M)`: a one-call front end of [`Pencil`].
+///
+/// ```
+/// use femu_sparse::eigen::{eigs, EigenParams, Which};
+/// use femu_sparse::SparseMatrix;
+/// // A spring chain fixed at one end: K tridiagonal (2, -1), M = I.
+/// let n = 50;
+/// let mut t = sprs::TriMat::new((n, n));
+/// for i in 0..n {
+///     t.add_triplet(i, i, if i + 1 < n { 2.0 } else { 1.0 });
+///     if i + 1 < n { t.add_triplet(i, i + 1, -1.0); t.add_triplet(i + 1, i, -1.0); }
+/// }
+/// let k: SparseMatrix = t.to_csc();
+/// let m = SparseMatrix::eye(n);
+/// let modes = eigs(&k, &m, Which::Lowest(3), &EigenParams::default()).unwrap();
+/// // lambda_j = 4 sin^2((2j - 1) pi / (2 (2n + 1)))
+/// for (j, l) in modes.values.iter().enumerate() {
+///     let x = ((2 * j + 1) as f64 * std::f64::consts::PI / (2.0 * (2 * n + 1) as f64)).sin();
+///     assert!((l / (4.0 * x * x) - 1.0).abs() < 1e-10);
+/// }
+/// assert!(modes.sturm.verified());
+/// ```
+///
+/// # Errors
+/// As [`Pencil::new`] and [`Pencil::solve`].
+pub fn eigs(
+    k: &SparseMatrix,
+    m: &SparseMatrix,
+    which: Which,
+    params: &EigenParams,
+) -> Result<Modes, SparseError> {
+    Pencil::new(k, m, params.ordering)?.solve(which, params)
+}
+
+/// Ritz values and vectors of the symmetrised projection, ordered by decreasing `|theta|`.
+fn rayleigh_ritz(
+    h: &[Vec<f64>],
+    m: usize,
+) -> (nalgebra::SymmetricEigen<f64, nalgebra::Dyn>, Vec<usize>) {
+    let hs = nalgebra::DMatrix::<f64>::from_fn(m, m, |i, j| {
+        let a = h[j].get(i).copied().unwrap_or(0.0);
+        let b = h[i].get(j).copied().unwrap_or(0.0);
+        0.5 * (a + b)
+    });
+    let eig = nalgebra::SymmetricEigen::new(hs);
+    let mut order: Vec<usize> = (0..m).collect();
+    order.sort_by(|a, b| {
+        eig.eigenvalues[*b]
+            .abs()
+            .total_cmp(&eig.eigenvalues[*a].abs())
+    });
+    (eig, order)
+}
+
+struct Lanczos<'p, 'a> {
+    pencil: &'p Pencil<'a>,
+    op: &'p Ldlt,
+    sigma: f64,
+    params: EigenParams,
+    n: usize,
+    /// locked eigenvectors, their M images and eigenvalues
+    x: Vec<Vec<f64>>,
+    mx: Vec<Vec<f64>>,
+    values: Vec<f64>,
+    shifted_res: Vec<f64>,
+    force_random_start: bool,
+    rng: u64,
+}
+
+impl<'p, 'a> Lanczos<'p, 'a> {
+    fn new(
+        pencil: &'p Pencil<'a>,
+        op: &'p Ldlt,
+        sigma: f64,
+        params: &EigenParams,
+        n: usize,
+    ) -> Self {
+        Self {
+            pencil,
+            op,
+            sigma,
+            params: params.clone(),
+            n,
+            x: vec![],
+            mx: vec![],
+            values: vec![],
+            shifted_res: vec![],
+            force_random_start: false,
+            rng: params.seed,
+        }
+    }
+
+    fn random_vector(&mut self) -> Vec<f64> {
+        (0..self.n)
+            .map(|_| {
+                self.rng = self.rng.wrapping_add(0x9E37_79B9_7F4A_7C15);
+                let mut z = self.rng;
+                z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+                z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+                z ^= z >> 31;
+                (z >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect()
+    }
+
+    fn m_times(&self, v: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; self.n];
+        crate::csc::mul_vec(self.pencil.m, v, &mut out).expect("sizes checked");
+        out
+    }
+
+    /// Two passes of Gram-Schmidt of `w` against the locked vectors and `basis` (M inner
+    /// products through the stored M images); returns the coefficients on `basis`.
+    fn orthogonalize(&self, w: &mut [f64], basis: &[Vec<f64>], mbasis: &[Vec<f64>]) -> Vec<f64> {
+        let mut coef = vec![0.0; basis.len()];
+        for _ in 0..2 {
+            for (xl, mxl) in self.x.iter().zip(&self.mx) {
+                let c: f64 = mxl.iter().zip(w.iter()).map(|(a, b)| a * b).sum();
+                w.iter_mut().zip(xl).for_each(|(wi, xi)| *wi -= c * xi);
+            }
+            let cs: Vec<f64> = mbasis
+                .par_iter()
+                .map(|mv| mv.iter().zip(w.iter()).map(|(a, b)| a * b).sum())
+                .collect();
+            for ((v, c), acc) in basis.iter().zip(&cs).zip(coef.iter_mut()) {
+                w.iter_mut().zip(v).for_each(|(wi, vi)| *wi -= c * vi);
+                *acc += c;
+            }
+        }
+        coef
+    }
+
+    /// Appends `w` to the basis after orthogonalisation; returns (coefficients, norm before the
+    /// final normalisation). A vector that vanishes (invariant subspace found) is replaced by a
+    /// random one, with zero coefficient.
+    fn append(
+        &mut self,
+        mut w: Vec<f64>,
+        basis: &mut Vec<Vec<f64>>,
+        mbasis: &mut Vec<Vec<f64>>,
+    ) -> (Vec<f64>, f64) {
+        // Breakdown is judged on the Euclidean norm: no extra M product per vector.
+        let before = norm(&w);
+        let coef = self.orthogonalize(&mut w, basis, mbasis);
+        let mut h_valid = norm(&w) > 1e-10 * before;
+        let mut tries = 0;
+        while !h_valid && tries < 5 {
+            // Breakdown: the Krylov space is invariant; continue with a fresh direction.
+            w = self.random_vector();
+            let b = norm(&w);
+            let _ = self.orthogonalize(&mut w, basis, mbasis);
+            h_valid = norm(&w) > 1e-10 * b;
+            tries += 1;
+        }
+        let mut mw = self.m_times(&w);
+        let nrm = mw
+            .iter()
+            .zip(&w)
+            .map(|(a, b)| a * b)
+            .sum::<f64>()
+            .max(0.0)
+            .sqrt();
+        let h = if tries == 0 { nrm } else { 0.0 };
+        w.iter_mut().for_each(|v| *v /= nrm);
+        mw.iter_mut().for_each(|v| *v /= nrm);
+        basis.push(w);
+        mbasis.push(mw);
+        (coef, h)
+    }
+
+    /// Applies `OP` to the basis vectors `applied..` block by block until `max_basis` columns have
+    /// their image, extending the basis; returns the new `applied`.
+    fn expand(
+        &mut self,
+        basis: &mut Vec<Vec<f64>>,
+        mbasis: &mut Vec<Vec<f64>>,
+        h: &mut Vec<Vec<f64>>,
+        mut applied: usize,
+        max_basis: usize,
+        stats: &mut EigenStats,
+    ) -> usize {
+        let p = self.params.block_size.max(1);
+        let cap = self.n - self.values.len();
+        // Expand: apply OP block by block.
+        while applied < basis.len() && applied < max_basis {
+            let hi = (applied + p).min(basis.len()).min(max_basis);
+            let block = hi - applied;
+            let t = Instant::now();
+            let mut w = Mat::<f64>::from_fn(self.n, block, |i, j| mbasis[applied + j][i]);
+            self.op.solve_in_place(w.as_mut());
+            stats.solve_seconds += t.elapsed().as_secs_f64();
+            stats.solved_vectors += block;
+            let t = Instant::now();
+            for j in 0..block {
+                let col: Vec<f64> = (0..self.n).map(|i| w[(i, j)]).collect();
+                let len_before = basis.len();
+                if len_before >= cap {
+                    let mut c = col;
+                    h.push(self.orthogonalize(&mut c, basis, mbasis));
+                    continue;
+                }
+                let (mut coef, nrm) = self.append(col, basis, mbasis);
+                coef.resize(len_before + 1, 0.0);
+                coef[len_before] = nrm;
+                h.push(coef);
+            }
+            applied = hi;
+            stats.orthogonalization_seconds += t.elapsed().as_secs_f64();
+        }
+        applied
+    }
+
+    /// One Lanczos cycle from random vectors, no locking: rough estimates of the `count`
+    /// eigenvalues nearest the shift (to place a better shift).
+    fn estimate(&mut self, count: usize, stats: &mut EigenStats) -> Vec<f64> {
+        let p = self.params.block_size.max(1);
+        let (mut basis, mut mbasis, mut h) = (Vec::new(), Vec::new(), Vec::new());
+        for _ in 0..p.min(self.n) {
+            let r = self.random_vector();
+            self.append(r, &mut basis, &mut mbasis);
+        }
+        let max_basis = (2 * count + 2 * p).max(24).min(self.n);
+        let m = self.expand(&mut basis, &mut mbasis, &mut h, 0, max_basis, stats);
+        let (eig, order) = rayleigh_ritz(&h, m);
+        let mut v: Vec<f64> = order
+            .iter()
+            .take(count)
+            .filter(|r| eig.eigenvalues[**r] != 0.0)
+            .map(|r| self.sigma + 1.0 / eig.eigenvalues[*r])
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v
+    }
+
+    /// Converged when the shifted relative residual is below `tol`, or when the backward error
+    /// `||r|| / ((||K|| + |lambda| ||M||) ||x||)` is at round-off level (1e-13): rigid-body modes,
+    /// with `K x` pure round-off, can only meet the latter.
+    fn converged(&self, x: &[f64], lambda: f64) -> bool {
+        let (rho, eta) = self.residuals(x, lambda);
+        rho < self.params.tol || eta < 1e-13
+    }
+
+    /// Runs thick-restarted block Lanczos until `want` pairs are locked.
+    ///
+    /// Basis `V` (M-orthonormal, deflated against the locked vectors) and the projection
+    /// `h[col][row] = v_row^T M OP v_col` for the columns where `OP` was applied. At a restart the
+    /// best Ritz vectors `Y = V S` are kept with `OP Y = Y Theta + V_extra H_extra S` (thick
+    /// restart), so no solve is repeated and no Krylov information is lost.
+    fn run(&mut self, want: usize, stats: &mut EigenStats) -> Result<(), SparseError> {
+        let p = self.params.block_size.max(1);
+        let mut basis: Vec<Vec<f64>> = Vec::new();
+        let mut mbasis: Vec<Vec<f64>> = Vec::new();
+        let mut h: Vec<Vec<f64>> = Vec::new();
+        let mut applied = 0;
+        let mut restarts = 0;
+        loop {
+            let need = want.saturating_sub(self.values.len());
+            if need == 0 {
+                return Ok(());
+            }
+            let cap = self.n - self.values.len();
+            let max_basis = if self.params.max_basis > 0 {
+                self.params.max_basis
+            } else {
+                (2 * need + 2 * p).max(need + 4 * p).max(24)
+            }
+            .min(cap);
+            let t = Instant::now();
+            if self.force_random_start {
+                // Missed modes: discard the basis and start afresh, deflated against the locked.
+                basis.clear();
+                mbasis.clear();
+                h.clear();
+                applied = 0;
+                self.force_random_start = false;
+            }
+            while basis.len() < applied + p.min(cap - applied.min(cap)) && basis.len() < cap {
+                let r = self.random_vector();
+                self.append(r, &mut basis, &mut mbasis);
+            }
+            stats.orthogonalization_seconds += t.elapsed().as_secs_f64();
+            applied = self.expand(&mut basis, &mut mbasis, &mut h, applied, max_basis, stats);
+            // Rayleigh-Ritz on the square part.
+            let m = applied;
+            let (eig, order) = rayleigh_ritz(&h, m);
+            let extra = basis.len() - m;
+            // coupling[e][r] = (H_extra S)[e, r]: the residual of Ritz pair r on extra vector e
+            let coupling: Vec<Vec<f64>> = (0..extra)
+                .map(|e| {
+                    (0..m)
+                        .map(|r| {
+                            (0..m)
+                                .map(|j| {
+                                    h[j].get(m + e).copied().unwrap_or(0.0)
+                                        * eig.eigenvectors[(j, r)]
+                                })
+                                .sum()
+                        })
+                        .collect()
+                })
+                .collect();
+            let n = self.n;
+            let ritz = |r: usize, src: &[Vec<f64>]| -> Vec<f64> {
+                let mut y = vec![0.0; n];
+                for j in 0..m {
+                    let sj = eig.eigenvectors[(j, r)];
+                    if sj != 0.0 {
+                        y.iter_mut()
+                            .zip(&src[j])
+                            .for_each(|(yi, vi)| *yi += sj * vi);
+                    }
+                }
+                y
+            };
+            let mut keep: Vec<usize> = Vec::new();
+            for &r in &order {
+                let theta = eig.eigenvalues[r];
+                let est = (0..extra)
+                    .map(|e| coupling[e][r] * coupling[e][r])
+                    .sum::<f64>()
+                    .sqrt()
+                    / theta.abs().max(f64::MIN_POSITIVE);
+                let wanted = keep.len() + self.values.len() < want;
+                // `est` only screens candidates; the true residual decides.
+                if wanted && theta != 0.0 && est < 1e-4 {
+                    let y = ritz(r, &basis);
+                    let lambda = self.sigma + 1.0 / theta;
+                    if self.converged(&y, lambda) && self.lock(y) {
+                        continue;
+                    }
+                }
+                keep.push(r);
+            }
+            if self.values.len() >= want {
+                return Ok(());
+            }
+            restarts += 1;
+            stats.restarts += 1;
+            if restarts > self.params.max_restarts {
+                return Err(SparseError::NoConvergence {
+                    reason: format!(
+                        "{} of {} eigenpairs converged after {} restarts",
+                        self.values.len(),
+                        want,
+                        restarts - 1
+                    ),
+                });
+            }
+            // Thick restart: keep the best unlocked Ritz vectors and the extra (residual) vectors.
+            let kk = keep
+                .len()
+                .min(((need + p).max(m / 2)).min(m.saturating_sub(p).max(1)));
+            let keep = &keep[..kk];
+            let t = Instant::now();
+            let mut nb: Vec<Vec<f64>> = keep.iter().map(|r| ritz(*r, &basis)).collect();
+            let mut nmb: Vec<Vec<f64>> = keep.iter().map(|r| ritz(*r, &mbasis)).collect();
+            let mut nh: Vec<Vec<f64>> = Vec::with_capacity(kk);
+            for (i, r) in keep.iter().enumerate() {
+                let mut col = vec![0.0; kk + extra];
+                col[i] = eig.eigenvalues[*r];
+                for e in 0..extra {
+                    col[kk + e] = coupling[e][*r];
+                }
+                nh.push(col);
+            }
+            nb.extend(basis.drain(m..));
+            nmb.extend(mbasis.drain(m..));
+            basis = nb;
+            mbasis = nmb;
+            h = nh;
+            applied = kk;
+            stats.orthogonalization_seconds += t.elapsed().as_secs_f64();
+        }
+    }
+
+    /// Locks a converged Ritz vector: M-orthonormalised against the locked set, eigenvalue from
+    /// its Rayleigh quotient. Returns false if it was not independent of the locked vectors.
+    fn lock(&mut self, mut y: Vec<f64>) -> bool {
+        let _ = self.orthogonalize(&mut y, &[], &[]);
+        let my = self.m_times(&y);
+        let nrm = my
+            .iter()
+            .zip(&y)
+            .map(|(a, b)| a * b)
+            .sum::<f64>()
+            .max(0.0)
+            .sqrt();
+        if nrm.is_nan() || nrm <= 0.5 {
+            return false;
+        }
+        let x: Vec<f64> = y.iter().map(|v| v / nrm).collect();
+        let mx: Vec<f64> = my.iter().map(|v| v / nrm).collect();
+        let mut kx = vec![0.0; self.n];
+        crate::csc::mul_vec(self.pencil.k, &x, &mut kx).expect("sizes checked");
+        let lambda = kx.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>();
+        let rho = self.residuals(&x, lambda).0;
+        self.x.push(x);
+        self.mx.push(mx);
+        self.values.push(lambda);
+        self.shifted_res.push(rho);
+        true
+    }
+
+    /// `(||K x - lambda M x|| / ||(K - sigma M) x||, backward error)`.
+    fn residuals(&self, x: &[f64], lambda: f64) -> (f64, f64) {
+        let mut kx = vec![0.0; self.n];
+        crate::csc::mul_vec(self.pencil.k, x, &mut kx).expect("sizes checked");
+        let mx = self.m_times(x);
+        let r: Vec<f64> = kx.iter().zip(&mx).map(|(k, m)| k - lambda * m).collect();
+        let s: Vec<f64> = kx
+            .iter()
+            .zip(&mx)
+            .map(|(k, m)| k - self.sigma * m)
+            .collect();
+        let rn = norm(&r);
+        let eta = rn
+            / ((self.pencil.k_norm + lambda.abs() * self.pencil.m_norm) * norm(x))
+                .max(f64::MIN_POSITIVE);
+        (rn / norm(&s).max(f64::MIN_POSITIVE), eta)
+    }
+
+    /// Locked indices ordered by distance to the shift.
+    fn sorted_locked(&self) -> Vec<usize> {
+        let mut idx: Vec<usize> = (0..self.values.len()).collect();
+        idx.sort_by(|a, b| {
+            (self.values[*a] - self.sigma)
+                .abs()
+                .total_cmp(&(self.values[*b] - self.sigma).abs())
+        });
+        idx
+    }
+
+    fn finish(
+        &self,
+        mut sel: Vec<usize>,
+        sigma: f64,
+        sturm: SturmCheck,
+        stats: EigenStats,
+    ) -> Modes {
+        sel.sort_by(|a, b| self.values[*a].total_cmp(&self.values[*b]));
+        let vectors = Mat::from_fn(self.n, sel.len(), |i, j| self.x[sel[j]][i]);
+        let residuals = sel
+            .iter()
+            .map(|&s| {
+                let x = &self.x[s];
+                let mut kx = vec![0.0; self.n];
+                crate::csc::mul_vec(self.pencil.k, x, &mut kx).expect("sizes checked");
+                let r: Vec<f64> = kx
+                    .iter()
+                    .zip(&self.mx[s])
+                    .map(|(k, m)| k - self.values[s] * m)
+                    .collect();
+                norm(&r) / norm(&kx).max(f64::MIN_POSITIVE)
+            })
+            .collect();
+        Modes {
+            values: sel.iter().map(|s| self.values[*s]).collect(),
+            vectors,
+            residuals,
+            shifted_residuals: sel.iter().map(|s| self.shifted_res[*s]).collect(),
+            shift: sigma,
+            sturm,
+            stats,
+        }
+    }
+}

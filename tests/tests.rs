@@ -1,0 +1,5 @@
+//! End-to-end tests through the `femu` facade, gathered in one binary (ripgrep's layout).
+
+mod e2e {
+    mod modes;
+}
