@@ -28,3 +28,8 @@ pub mod prelude {
     pub use femu_fem::prelude::*;
     pub use femu_sparse::SparseMatrix;
 }
+
+/// The README's code, compiled and run as a doctest so that it cannot drift from the API.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
