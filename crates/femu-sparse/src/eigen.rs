@@ -321,8 +321,8 @@ impl<'a> Pencil<'a> {
                     index: op.inertia().negative,
                 });
             }
-            // Place the shift at half the first clearly nonzero eigenvalue, estimated by one cycle
-            // at the tiny shift: K - sigma M is then well conditioned even for a free-free model
+            // With near-zero (rigid-body) eigenvalues, place the shift at half the first clearly
+            // nonzero eigenvalue, estimated by a short probe cycle at the tiny shift: K - sigma M is then well conditioned even for a free-free model
             // (condition lambda_max / |sigma| instead of lambda_max / 1e-10 mean(K_ii / M_ii)),
             // and rigid-body and elastic modes stay well separated.
             let guess = {
@@ -330,7 +330,14 @@ impl<'a> Pencil<'a> {
                 probe.estimate(want + 3, &mut stats)
             };
             let top = guess.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-            if let Some(first) = guess.iter().copied().find(|v| *v > 1e-4 * top) {
+            let near_zero = guess.iter().any(|v| v.abs() <= 1e-4 * top);
+            // Without near-zero eigenvalues K is well separated from singular: keep the shift.
+            if let Some(first) = guess
+                .iter()
+                .copied()
+                .find(|v| *v > 1e-4 * top)
+                .filter(|_| near_zero)
+            {
                 let better = -0.5 * first;
                 if better < sigma {
                     let t = Instant::now();
@@ -699,12 +706,14 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             let r = self.random_vector();
             self.append(r, &mut basis, &mut mbasis);
         }
-        let max_basis = (2 * count + 2 * p).max(24).min(self.n);
+        let max_basis = (3 * p).max(12).max(count.min(24)).min(self.n);
         let m = self.expand(&mut basis, &mut mbasis, &mut h, 0, max_basis, stats);
         let (eig, order) = rayleigh_ritz(&h, m);
+        // Only the better-converged half: the trailing Ritz values of a short cycle overestimate
+        // their eigenvalues by orders of magnitude.
         let mut v: Vec<f64> = order
             .iter()
-            .take(count)
+            .take(count.min(m / 2).max(1))
             .filter(|r| eig.eigenvalues[**r] != 0.0)
             .map(|r| self.sigma + 1.0 / eig.eigenvalues[*r])
             .collect();

@@ -60,6 +60,24 @@ pub enum SparseError {
         /// What failed.
         reason: String,
     },
+    /// A file could not be read or written.
+    #[error("{file}: {reason}")]
+    Io {
+        /// The file.
+        file: String,
+        /// The system's message.
+        reason: String,
+    },
+    /// A malformed file.
+    #[error("{file}:{line}: {reason}")]
+    Parse {
+        /// The file.
+        file: String,
+        /// One-based line number (0 when the whole file is concerned).
+        line: usize,
+        /// What is wrong.
+        reason: String,
+    },
     /// An iterative or dense eigensolver did not converge.
     #[error("eigensolver did not converge: {reason}")]
     NoConvergence {
