@@ -12,14 +12,21 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 EXE = os.path.join(ROOT, "target", "release", "examples", "peer_modes")
 
 
-def timed(cmd, cwd, timeout=3600):
-    p = subprocess.run(["/usr/bin/time", "-v"] + cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout)
-    err = p.stderr
-    wall = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (\S+)", err).group(1)
-    parts = [float(x) for x in wall.split(":")]
-    seconds = sum(v * 60 ** i for i, v in enumerate(reversed(parts)))
-    rss_kb = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", err).group(1))
-    return p.returncode, p.stdout, seconds, rss_kb / 1024.0
+def timed(cmd, cwd, timeout):
+    """Runs cmd under /usr/bin/time -v; a run past `timeout` seconds is killed and reported with
+    code None and its wall time as a lower bound."""
+    p = subprocess.Popen(["/usr/bin/time", "-v"] + cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        out, err = p.communicate(timeout=timeout)
+        code = p.returncode
+    except subprocess.TimeoutExpired:
+        subprocess.run(["pkill", "-TERM", "-P", str(p.pid)])
+        out, err = p.communicate()
+        code = None
+    wall = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (\S+)", err)
+    seconds = sum(float(v) * 60 ** i for i, v in enumerate(reversed(wall.group(1).split(":")))) if wall else float(timeout)
+    rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", err)
+    return code, out, seconds, int(rss.group(1)) / 1024.0 if rss else float("nan")
 
 
 def ccx_frequencies(dat):
@@ -38,26 +45,33 @@ def ccx_frequencies(dat):
 def main():
     kind, n = sys.argv[1], int(sys.argv[2])
     count = int(sys.argv[3]) if len(sys.argv) > 3 else 20
+    limit = float(os.environ.get("PEER_TIMEOUT", "3600"))
     d = tempfile.mkdtemp(prefix=f"femu-peers-{kind}-{n}-")
     info = json.loads(subprocess.run([EXE, "export", kind, str(n), str(count), d], capture_output=True, text=True, check=True).stdout)
-    rows = {}
-    code, out, wall, rss = timed([EXE, "solve", kind, str(n), str(count)], d)
+    dofs = info["dofs"]
+    code, out, femu_wall, rss = timed([EXE, "solve", kind, str(n), str(count)], d, limit)
     femu = json.loads(out)
-    rows["femu"] = {"wall_s": wall, "rss_mb": rss, **femu}
-    code, out, wall, rss = timed(["ccx", "model"], d)
-    rows["calculix"] = {"wall_s": wall, "rss_mb": rss, "ok": code == 0, "frequencies_hz": ccx_frequencies(os.path.join(d, "model.dat")) if code == 0 else []}
-    code, out, wall, rss = timed([sys.executable, os.path.join(ROOT, "benches", "peers", "scipy_eigsh.py"), d, str(count)], d)
-    rows["scipy"] = {"wall_s": wall, "rss_mb": rss, "ok": code == 0, **(json.loads(out) if code == 0 else {})}
-    ref = femu["frequencies_hz"]
-    print(json.dumps({"kind": kind, "n": n, "dofs": info["dofs"], "elements": info["elements"], **{k: {a: b for a, b in v.items() if a != "frequencies_hz"} for k, v in rows.items()}}))
-    for tool in ("calculix", "scipy"):
-        f = rows[tool].get("frequencies_hz", [])
-        diff = max((abs(a - b) / b for a, b in zip(f, ref)), default=float("nan"))
-        print(f"{kind} {info['dofs']} DOF: {tool:8s} wall {rows[tool]['wall_s']:8.2f} s, peak {rows[tool]['rss_mb']:8.0f} MB, "
-              f"femu is {rows[tool]['wall_s'] / rows['femu']['wall_s']:5.2f}x faster, max rel. freq. difference {diff:.2e}")
-    print(f"{kind} {info['dofs']} DOF: femu     wall {rows['femu']['wall_s']:8.2f} s, peak {rows['femu']['rss_mb']:8.0f} MB "
+    print(json.dumps({"kind": kind, "dofs": dofs, "tool": "femu", "wall_s": femu_wall, "rss_mb": rss, **femu}), flush=True)
+    print(f"{kind} {dofs} DOF: femu     wall {femu_wall:8.2f} s, peak {rss:8.0f} MB "
           f"(assembly {femu['assembly_s']} s, ordering+symbolic {femu['symbolic_s']} s, factor {femu['factor_s']} s x{femu['factorizations']}, "
-          f"solves {femu['solve_s']} s, orthogonalisation {femu['orth_s']} s), Sturm verified {femu['sturm_verified']}")
+          f"solves {femu['solve_s']} s for {femu['solved_vectors']} vectors, orthogonalisation {femu['orth_s']} s), "
+          f"Sturm verified {femu['sturm_verified']}", flush=True)
+    ref = femu["frequencies_hz"]
+    peers = [("calculix", ["ccx", "model"]), ("scipy", [sys.executable, os.path.join(ROOT, "benches", "peers", "scipy_eigsh.py"), d, str(count)])]
+    for tool, cmd in peers:
+        code, out, wall, rss = timed(cmd, d, limit)
+        if code is None:
+            print(f"{kind} {dofs} DOF: {tool:8s} stopped after {wall:.0f} s at {rss:.0f} MB without finishing: "
+                  f"femu is more than {wall / femu_wall:.2f}x faster", flush=True)
+            continue
+        if tool == "calculix":
+            f = ccx_frequencies(os.path.join(d, "model.dat")) if code == 0 else []
+        else:
+            f = json.loads(out)["frequencies_hz"] if code == 0 else []
+        diff = max((abs(a - b) / b for a, b in zip(f, ref)), default=float("nan"))
+        print(json.dumps({"kind": kind, "dofs": dofs, "tool": tool, "wall_s": wall, "rss_mb": rss, "ok": code == 0}), flush=True)
+        print(f"{kind} {dofs} DOF: {tool:8s} wall {wall:8.2f} s, peak {rss:8.0f} MB, femu is {wall / femu_wall:.2f}x faster, "
+              f"max rel. freq. difference to femu {diff:.2e}", flush=True)
 
 
 if __name__ == "__main__":
