@@ -120,9 +120,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 s.factorizations,
                 s.solved_vectors,
                 s.restarts,
-                femu::sparse::eigen::Pencil::new(&sys.k, &sys.m, Default::default())
-                    .map(|p| p.symbolic().factor_len())
-                    .unwrap_or(0),
+                s.factor_len,
                 modes.sturm.verified(),
                 f.join(", ")
             );

@@ -111,6 +111,8 @@ pub struct EigenStats {
     pub solved_vectors: usize,
     /// Restarts of the Lanczos iteration.
     pub restarts: usize,
+    /// Values stored in each factor `L` (fill).
+    pub factor_len: usize,
 }
 
 /// Computed modes with their evidence.
@@ -141,6 +143,27 @@ impl Modes {
             .map(|l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI))
             .collect()
     }
+}
+
+/// `w += sum_i c_i v_i`, row chunks in parallel: each chunk of `w` stays in cache while the
+/// vectors stream past once.
+fn add_combination(w: &mut [f64], vs: &[&[f64]], cs: &[f64]) {
+    const CHUNK: usize = 4096;
+    w.par_chunks_mut(CHUNK).enumerate().for_each(|(k, wc)| {
+        let off = k * CHUNK;
+        let len = wc.len();
+        for (v, c) in vs.iter().zip(cs) {
+            if *c != 0.0 {
+                wc.iter_mut()
+                    .zip(&v[off..off + len])
+                    .for_each(|(wi, vi)| *wi += c * vi);
+            }
+        }
+    });
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 fn norm(v: &[f64]) -> f64 {
@@ -282,6 +305,7 @@ impl<'a> Pencil<'a> {
         let n = self.dim();
         let mut stats = EigenStats {
             symbolic_seconds: self.symbolic_seconds,
+            factor_len: self.symbolic.factor_len(),
             ..Default::default()
         };
         let (sigma, mut want, band) = match which {
@@ -596,23 +620,18 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         out
     }
 
-    /// Two passes of Gram-Schmidt of `w` against the locked vectors and `basis` (M inner
-    /// products through the stored M images); returns the coefficients on `basis`.
+    /// Two passes of classical Gram-Schmidt (CGS2) of `w` against the locked vectors and
+    /// `basis`, M inner products through the stored M images; returns the coefficients on `basis`.
     fn orthogonalize(&self, w: &mut [f64], basis: &[Vec<f64>], mbasis: &[Vec<f64>]) -> Vec<f64> {
+        let nl = self.x.len();
+        let vs: Vec<&[f64]> = self.x.iter().chain(basis).map(|v| v.as_slice()).collect();
+        let mvs: Vec<&[f64]> = self.mx.iter().chain(mbasis).map(|v| v.as_slice()).collect();
         let mut coef = vec![0.0; basis.len()];
         for _ in 0..2 {
-            for (xl, mxl) in self.x.iter().zip(&self.mx) {
-                let c: f64 = mxl.iter().zip(w.iter()).map(|(a, b)| a * b).sum();
-                w.iter_mut().zip(xl).for_each(|(wi, xi)| *wi -= c * xi);
-            }
-            let cs: Vec<f64> = mbasis
-                .par_iter()
-                .map(|mv| mv.iter().zip(w.iter()).map(|(a, b)| a * b).sum())
-                .collect();
-            for ((v, c), acc) in basis.iter().zip(&cs).zip(coef.iter_mut()) {
-                w.iter_mut().zip(v).for_each(|(wi, vi)| *wi -= c * vi);
-                *acc += c;
-            }
+            let cs: Vec<f64> = mvs.par_iter().map(|mv| dot(mv, w)).collect();
+            let neg: Vec<f64> = cs.iter().map(|c| -c).collect();
+            add_combination(w, &vs, &neg);
+            coef.iter_mut().zip(&cs[nl..]).for_each(|(a, c)| *a += c);
         }
         coef
     }
@@ -640,13 +659,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             tries += 1;
         }
         let mut mw = self.m_times(&w);
-        let nrm = mw
-            .iter()
-            .zip(&w)
-            .map(|(a, b)| a * b)
-            .sum::<f64>()
-            .max(0.0)
-            .sqrt();
+        let nrm = dot(&mw, &w).max(0.0).sqrt();
         let h = if tries == 0 { nrm } else { 0.0 };
         w.iter_mut().for_each(|v| *v /= nrm);
         mw.iter_mut().for_each(|v| *v /= nrm);
@@ -790,15 +803,10 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                 .collect();
             let n = self.n;
             let ritz = |r: usize, src: &[Vec<f64>]| -> Vec<f64> {
+                let vs: Vec<&[f64]> = src[..m].iter().map(|v| v.as_slice()).collect();
+                let cs: Vec<f64> = (0..m).map(|j| eig.eigenvectors[(j, r)]).collect();
                 let mut y = vec![0.0; n];
-                for j in 0..m {
-                    let sj = eig.eigenvectors[(j, r)];
-                    if sj != 0.0 {
-                        y.iter_mut()
-                            .zip(&src[j])
-                            .for_each(|(yi, vi)| *yi += sj * vi);
-                    }
-                }
+                add_combination(&mut y, &vs, &cs);
                 y
             };
             let mut keep: Vec<usize> = Vec::new();
@@ -867,13 +875,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
     fn lock(&mut self, mut y: Vec<f64>) -> bool {
         let _ = self.orthogonalize(&mut y, &[], &[]);
         let my = self.m_times(&y);
-        let nrm = my
-            .iter()
-            .zip(&y)
-            .map(|(a, b)| a * b)
-            .sum::<f64>()
-            .max(0.0)
-            .sqrt();
+        let nrm = dot(&my, &y).max(0.0).sqrt();
         if nrm.is_nan() || nrm <= 0.5 {
             return false;
         }
@@ -881,7 +883,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         let mx: Vec<f64> = my.iter().map(|v| v / nrm).collect();
         let mut kx = vec![0.0; self.n];
         crate::csc::mul_vec(self.pencil.k, &x, &mut kx).expect("sizes checked");
-        let lambda = kx.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>();
+        let lambda = dot(&kx, &x);
         let rho = self.residuals(&x, lambda).0;
         self.x.push(x);
         self.mx.push(mx);
