@@ -96,6 +96,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             {
                 params.block_size = b; // for tuning runs
             }
+            if let Some(m) = std::env::var("FEMU_MAX_BASIS")
+                .ok()
+                .and_then(|v| v.parse().ok())
+            {
+                params.max_basis = m; // for tuning runs
+            }
             let modes = eigs(&sys.k, &sys.m, Which::Lowest(count), &params)?;
             let t_eigen = t.elapsed().as_secs_f64();
             let s = &modes.stats;
