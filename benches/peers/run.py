@@ -4,7 +4,9 @@
     python3 benches/peers/run.py KIND N [COUNT]     (KIND: hex8 | hex20 | tet10)
 
 Prints a JSON line per tool and a summary with the ratios and the largest relative frequency
-difference against femu. `run.sh` installs the peers first.
+difference against femu. `run.sh` installs the peers first. Environment: PEER_TIMEOUT (seconds,
+default 3600) stops a peer and reports a lower bound; PEERS selects peers (default
+"calculix,scipy").
 """
 import json, os, re, subprocess, sys, tempfile
 
@@ -58,7 +60,10 @@ def main():
           f"Sturm verified {femu['sturm_verified']}", flush=True)
     ref = femu["frequencies_hz"]
     peers = [("calculix", ["ccx", "model"]), ("scipy", [sys.executable, os.path.join(ROOT, "benches", "peers", "scipy_eigsh.py"), d, str(count)])]
+    wanted = os.environ.get("PEERS", "calculix,scipy").split(",")
     for tool, cmd in peers:
+        if tool not in wanted:
+            continue
         code, out, wall, rss = timed(cmd, d, limit)
         if code is None:
             print(f"{kind} {dofs} DOF: {tool:8s} stopped after {wall:.0f} s at {rss:.0f} MB without finishing: "
