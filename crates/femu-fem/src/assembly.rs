@@ -9,7 +9,6 @@
 
 use crate::FemError;
 use crate::dof::DofMap;
-use crate::element::ElementKind;
 use crate::kernel::{self, BadJacobian};
 use crate::model::Model;
 use femu_sparse::SparseMatrix;
@@ -369,9 +368,6 @@ pub(crate) fn element_matrices(
     }
     Ok((ke, me))
 }
-
-/// The number of nodes of the largest element kind, for buffers.
-pub const MAX_ELEMENT_NODES: usize = ElementKind::Hex20.num_nodes();
 
 #[allow(unsafe_code)]
 mod shared {
