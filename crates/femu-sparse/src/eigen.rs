@@ -326,6 +326,13 @@ impl<'a> Pencil<'a> {
                 (0.5 * (lo + hi), nh - nl, Some((lo, hi, nh - nl)))
             }
         };
+        if !sigma.is_finite() {
+            return Err(SparseError::NonFinite {
+                matrix: "shift",
+                row: 0,
+                col: 0,
+            });
+        }
         if want > n {
             return Err(SparseError::DimensionMismatch {
                 what: "requested modes against dimension",
