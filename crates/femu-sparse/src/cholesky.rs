@@ -190,8 +190,30 @@ impl SymbolicFactor {
     /// [`SparseError::Singular`] on an exactly zero pivot (shift on an eigenvalue), with its
     /// original index.
     pub fn ldlt(&self, a: &SparseMatrix, name: &'static str) -> Result<Ldlt, SparseError> {
-        self.check(a)?;
-        let view = faer_view(a)?;
+        self.ldlt_values(a, a.data(), name)
+    }
+
+    /// [`SymbolicFactor::ldlt`] of the matrix with `pattern`'s structure and the given values
+    /// (for example `K - sigma M` on `K`'s pattern): no copy of the structure per shift.
+    ///
+    /// # Errors
+    /// As [`SymbolicFactor::ldlt`], and [`SparseError::DimensionMismatch`] if `values` does not
+    /// match the pattern.
+    pub fn ldlt_values(
+        &self,
+        pattern: &SparseMatrix,
+        values: &[f64],
+        name: &'static str,
+    ) -> Result<Ldlt, SparseError> {
+        self.check(pattern)?;
+        if values.len() != pattern.nnz() {
+            return Err(SparseError::DimensionMismatch {
+                what: "values against the pattern",
+                expected: pattern.nnz(),
+                got: values.len(),
+            });
+        }
+        let view = SparseColMatRef::new(faer_view(pattern)?.symbolic(), values);
         let par = faer::get_global_parallelism();
         let mut values = vec![0.0; self.inner.len_val()];
         let mut mem = MemBuffer::new(

@@ -260,12 +260,11 @@ impl<'a> Pencil<'a> {
     /// # Errors
     /// [`SparseError::Singular`] when `sigma` is (numerically exactly) an eigenvalue.
     pub fn factor_shifted(&self, sigma: f64) -> Result<Ldlt, SparseError> {
-        let mut a = self.k.clone();
-        let data = a.data_mut();
+        let mut values = self.k.data().to_vec();
         for (pm, pk) in self.m_in_k.iter().enumerate() {
-            data[*pk] -= sigma * self.m.data()[pm];
+            values[*pk] -= sigma * self.m.data()[pm];
         }
-        self.symbolic.ldlt(&a, "K - sigma M")
+        self.symbolic.ldlt_values(self.k, &values, "K - sigma M")
     }
 
     /// The number of eigenvalues below `sigma` (Sturm count by inertia).
