@@ -66,6 +66,29 @@ const HEX_CORNERS: [[f64; 3]; 8] = [
     [1.0, 1.0, 1.0],
     [-1.0, 1.0, 1.0],
 ];
+/// Hex20 reference nodes: the corners, then the mid-edges in [`HEX_EDGES`] order.
+const HEX20_NODES: [[f64; 3]; 20] = [
+    [-1.0, -1.0, -1.0],
+    [1.0, -1.0, -1.0],
+    [1.0, 1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+    [1.0, -1.0, 1.0],
+    [1.0, 1.0, 1.0],
+    [-1.0, 1.0, 1.0],
+    [0.0, -1.0, -1.0],
+    [1.0, 0.0, -1.0],
+    [0.0, 1.0, -1.0],
+    [-1.0, 0.0, -1.0],
+    [0.0, -1.0, 1.0],
+    [1.0, 0.0, 1.0],
+    [0.0, 1.0, 1.0],
+    [-1.0, 0.0, 1.0],
+    [-1.0, -1.0, 0.0],
+    [1.0, -1.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [-1.0, 1.0, 0.0],
+];
 const HEX_EDGES: [[usize; 2]; 12] = [
     [0, 1],
     [1, 2],
@@ -271,8 +294,7 @@ impl ElementKind {
                 }
             }
             Self::Hex20 => {
-                let r = Self::Hex20.reference_nodes();
-                for (a, c) in r.iter().enumerate() {
+                for (a, c) in HEX20_NODES.iter().enumerate() {
                     let (fx, fy, fz) = (1.0 + c[0] * x, 1.0 + c[1] * y, 1.0 + c[2] * z);
                     n[a] = if a < 8 {
                         0.125 * fx * fy * fz * (c[0] * x + c[1] * y + c[2] * z - 2.0)
@@ -345,8 +367,7 @@ impl ElementKind {
                 }
             }
             Self::Hex20 => {
-                let r = Self::Hex20.reference_nodes();
-                for (a, c) in r.iter().enumerate() {
+                for (a, c) in HEX20_NODES.iter().enumerate() {
                     let (fx, fy, fz) = (1.0 + c[0] * x, 1.0 + c[1] * y, 1.0 + c[2] * z);
                     let g = if a < 8 {
                         let s = c[0] * x + c[1] * y + c[2] * z - 2.0;
@@ -569,6 +590,11 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn hex20_node_table_equals_the_corner_and_edge_construction() {
+        assert_eq!(ElementKind::Hex20.reference_nodes(), HEX20_NODES.to_vec());
     }
 
     #[test]

@@ -28,7 +28,6 @@ pub struct ParameterGroups {
     mass_kind: MassKind,
     /// slot of each mesh element, `usize::MAX` if in no group
     slot: Vec<usize>,
-    slot_element: Vec<usize>,
     slot_offset: Vec<usize>,
     ke: Vec<f64>,
     me: Vec<f64>,
@@ -85,7 +84,6 @@ impl ParameterGroups {
             groups,
             mass_kind,
             slot,
-            slot_element,
             slot_offset,
             ke,
             me,
@@ -348,10 +346,5 @@ impl ParameterGroups {
             asm.scatter(model.mesh().element(e).nodes, |i, l| v[i] += ke[l]);
         }
         Ok(asm.pattern_matrix(v))
-    }
-
-    /// Internal element indices that carry matrices, in slot order.
-    pub fn elements_with_matrices(&self) -> &[usize] {
-        &self.slot_element
     }
 }

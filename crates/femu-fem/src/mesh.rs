@@ -367,7 +367,7 @@ impl Mesh {
             return;
         }
         let pts = |f: &Vec<usize>| -> Vec<[f64; 3]> { f.iter().map(|n| self.coords[*n]).collect() };
-        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        let mut lo = [f64::INFINITY; 3];
         let mut size = 0.0_f64;
         for (_, f) in boundary {
             let p = pts(f);
@@ -375,7 +375,6 @@ impl Mesh {
             for q in &p {
                 for i in 0..3 {
                     lo[i] = lo[i].min(q[i]);
-                    hi[i] = hi[i].max(q[i]);
                 }
             }
         }
@@ -402,7 +401,6 @@ impl Mesh {
                 }
             }
         }
-        let _ = hi;
         let mut reported = std::collections::HashSet::new();
         for (k, (e, f)) in boundary.iter().enumerate() {
             let p = pts(f);

@@ -356,7 +356,7 @@ impl<'a> Pencil<'a> {
             // (condition lambda_max / |sigma| instead of lambda_max / 1e-10 mean(K_ii / M_ii)),
             // and rigid-body and elastic modes stay well separated.
             let guess = {
-                let mut probe = Lanczos::new(self, &op, sigma, params, n);
+                let mut probe = Lanczos::new(self, &op, sigma, params);
                 probe.estimate(want + 3, &mut stats)
             };
             let top = guess.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
@@ -398,7 +398,7 @@ impl<'a> Pencil<'a> {
             });
         }
         let guard = if band.is_some() { 0 } else { 3.min(n - want) };
-        let mut lanczos = Lanczos::new(self, &op, sigma, params, n);
+        let mut lanczos = Lanczos::new(self, &op, sigma, params);
         let mut attempts = 0;
         loop {
             lanczos.run(want + guard, &mut stats)?;
@@ -585,19 +585,13 @@ struct Lanczos<'p, 'a> {
 }
 
 impl<'p, 'a> Lanczos<'p, 'a> {
-    fn new(
-        pencil: &'p Pencil<'a>,
-        op: &'p Ldlt,
-        sigma: f64,
-        params: &EigenParams,
-        n: usize,
-    ) -> Self {
+    fn new(pencil: &'p Pencil<'a>, op: &'p Ldlt, sigma: f64, params: &EigenParams) -> Self {
         Self {
             pencil,
             op,
             sigma,
             params: params.clone(),
-            n,
+            n: pencil.dim(),
             x: vec![],
             mx: vec![],
             values: vec![],
