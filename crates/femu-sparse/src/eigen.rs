@@ -355,17 +355,28 @@ impl<'a> Pencil<'a> {
             // nonzero eigenvalue, estimated by a short probe cycle at the tiny shift: K - sigma M is then well conditioned even for a free-free model
             // (condition lambda_max / |sigma| instead of lambda_max / 1e-10 mean(K_ii / M_ii)),
             // and rigid-body and elastic modes stay well separated.
-            let guess = {
+            // "Near zero" is relative to the tiny shift itself (1e-10 mean(K_ii / M_ii)): rigid-body
+            // eigenvalues come out at round-off (about 1e-16 lambda_max), elastic ones far above
+            // 1e3 |sigma|. A probe that sees only near-zero values (as many rigid-body modes as
+            // its better half holds) is repeated with a larger basis.
+            let zero_like = 1e3 * sigma.abs();
+            let mut guess = Vec::new();
+            let first_size = (3 * params.block_size.max(1))
+                .max(12)
+                .max((want + 3).min(24));
+            for size in [first_size, 2 * first_size, 4 * first_size] {
                 let mut probe = Lanczos::new(self, &op, sigma, params);
-                probe.estimate(want + 3, &mut stats)
-            };
-            let top = guess.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-            let near_zero = guess.iter().any(|v| v.abs() <= 1e-4 * top);
-            // Without near-zero eigenvalues K is well separated from singular: keep the shift.
+                guess = probe.estimate((want + 3).max(size / 2), size, &mut stats);
+                let zeros = guess.iter().filter(|v| v.abs() <= zero_like).count();
+                if zeros == 0 || zeros < guess.len() || guess.len() >= n {
+                    break;
+                }
+            }
+            let near_zero = guess.iter().any(|v| v.abs() <= zero_like);
             if let Some(first) = guess
                 .iter()
                 .copied()
-                .find(|v| *v > 1e-4 * top)
+                .find(|v| *v > zero_like)
                 .filter(|_| near_zero)
             {
                 let better = -0.5 * first;
@@ -711,15 +722,15 @@ impl<'p, 'a> Lanczos<'p, 'a> {
     }
 
     /// One Lanczos cycle from random vectors, no locking: rough estimates of the `count`
-    /// eigenvalues nearest the shift (to place a better shift).
-    fn estimate(&mut self, count: usize, stats: &mut EigenStats) -> Vec<f64> {
+    /// eigenvalues nearest the shift (to place a better shift), from a basis of `size` vectors.
+    fn estimate(&mut self, count: usize, size: usize, stats: &mut EigenStats) -> Vec<f64> {
         let p = self.params.block_size.max(1);
         let (mut basis, mut mbasis, mut h) = (Vec::new(), Vec::new(), Vec::new());
         for _ in 0..p.min(self.n) {
             let r = self.random_vector();
             self.append(r, &mut basis, &mut mbasis);
         }
-        let max_basis = (3 * p).max(12).max(count.min(24)).min(self.n);
+        let max_basis = size.min(self.n);
         let m = self.expand(&mut basis, &mut mbasis, &mut h, 0, max_basis, stats);
         let (eig, order) = rayleigh_ritz(&h, m);
         // Only the better-converged half: the trailing Ritz values of a short cycle overestimate
@@ -820,6 +831,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                     .sqrt()
                     / theta.abs().max(f64::MIN_POSITIVE);
                 let wanted = keep.len() + self.values.len() < want;
+
                 // `est` only screens candidates; the true residual decides.
                 if wanted && theta != 0.0 && est < 1e-4 {
                     let y = ritz(r, &basis);
