@@ -102,6 +102,54 @@ pub fn to_dense(a: &SparseMatrix) -> Mat<f64> {
     d
 }
 
+/// `Y = A X` for a symmetric `A` stored in CSC with both triangles (as femu's `K` and `M` are),
+/// for a block of vectors `X` (`n x k`), in parallel over rows.
+///
+/// Symmetry lets column `i` of the CSC storage serve as row `i`, so every output entry is an
+/// independent dot product: no scatter, no atomics, and one pass over `A` for all `k` vectors.
+///
+/// # Errors
+/// [`SparseError::DimensionMismatch`] if `A` is not square or `X` does not match it.
+pub fn sym_mul_mat(a: &SparseMatrix, x: faer::MatRef<'_, f64>) -> Result<Mat<f64>, SparseError> {
+    use rayon::prelude::*;
+    let n = a.rows();
+    if a.cols() != n || x.nrows() != n {
+        return Err(SparseError::DimensionMismatch {
+            what: "X in A X (A square, X with A's rows)",
+            expected: n,
+            got: if a.cols() != n { a.cols() } else { x.nrows() },
+        });
+    }
+    let k = x.ncols();
+    if k == 0 || n == 0 {
+        return Ok(Mat::zeros(n, k));
+    }
+    // Row-major copies keep the k values of one row together in cache.
+    let mut xt = vec![0.0; n * k];
+    for j in 0..k {
+        for (i, v) in x.col(j).iter().enumerate() {
+            xt[i * k + j] = *v;
+        }
+    }
+    let (ptr, idx, val) = (a.indptr(), a.indices(), a.data());
+    let ptr = ptr.raw_storage();
+    let mut yt = vec![0.0; n * k];
+    let body = |(i, row): (usize, &mut [f64])| {
+        for p in ptr[i]..ptr[i + 1] {
+            let (c, v) = (idx[p], val[p]);
+            let xr = &xt[c * k..(c + 1) * k];
+            for j in 0..k {
+                row[j] += v * xr[j];
+            }
+        }
+    };
+    yt.par_chunks_mut(k)
+        .enumerate()
+        .with_min_len(512)
+        .for_each(body);
+    Ok(Mat::from_fn(n, k, |i, j| yt[i * k + j]))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
