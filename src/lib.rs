@@ -8,6 +8,7 @@
 //! |---|---|---|
 //! | [`sparse`] | `femu-sparse` | sparse matrix type, factorizations, eigensolvers |
 //! | [`fem`] | `femu-fem` | meshes, solid elements, materials, assembly of `K` and `M` |
+//! | [`correlate`] | `femu-correlate` | residues, MAC/MSD, pairing, the a priori estimators |
 //!
 //! ```
 //! use femu::prelude::*;
@@ -20,11 +21,13 @@
 //! # Ok::<(), femu::fem::FemError>(())
 //! ```
 
+pub use femu_correlate as correlate;
 pub use femu_fem as fem;
 pub use femu_sparse as sparse;
 
 /// Everything most programs need, from every member crate.
 pub mod prelude {
+    pub use femu_correlate::prelude::*;
     pub use femu_fem::prelude::*;
     pub use femu_sparse::SparseMatrix;
 }

@@ -1,0 +1,288 @@
+//! Test-analysis correlation measures (MATH.md, "Correlation"; the paper's (16)-(17), Table 1).
+//!
+//! Mass-weighted measures need full-length vectors (every free DOF); the test engineer's measures
+//! work on the sensors. Matrices of measures have one row per test mode and one column per model
+//! mode.
+
+use crate::CorrelateError;
+use faer::{Mat, MatMut, MatRef};
+use femu_sparse::SparseMatrix;
+use femu_sparse::csc::sym_mul_mat;
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn col(m: MatRef<'_, f64>, j: usize) -> Vec<f64> {
+    m.col(j).iter().copied().collect()
+}
+
+fn same_len(what: &'static str, a: usize, b: usize) -> Result<(), CorrelateError> {
+    if a == b {
+        Ok(())
+    } else {
+        Err(CorrelateError::DimensionMismatch {
+            what,
+            expected: a,
+            got: b,
+        })
+    }
+}
+
+fn nonzero(what: &'static str, index: usize, norm2: f64) -> Result<(), CorrelateError> {
+    if norm2 > 0.0 && norm2.is_finite() {
+        Ok(())
+    } else {
+        Err(CorrelateError::ZeroVector { what, index })
+    }
+}
+
+/// `M x` for one vector.
+fn m_times(m: &SparseMatrix, x: &[f64]) -> Result<Vec<f64>, CorrelateError> {
+    let mut y = vec![0.0; m.rows()];
+    femu_sparse::csc::mul_vec(m, x, &mut y)?;
+    Ok(y)
+}
+
+/// Mass-weighted MAC (16): `MAC_M(x, phi) = (x^T M phi)^2 / ((x^T M x)(phi^T M phi)) = cos^2 theta`.
+///
+/// # Errors
+/// Mismatched lengths or a zero vector.
+pub fn mac_m(m: &SparseMatrix, x: &[f64], phi: &[f64]) -> Result<f64, CorrelateError> {
+    same_len("x against M", m.rows(), x.len())?;
+    same_len("phi against M", m.rows(), phi.len())?;
+    let (mx, mphi) = (m_times(m, x)?, m_times(m, phi)?);
+    let (xx, pp, xp) = (dot(x, &mx), dot(phi, &mphi), dot(x, &mphi));
+    nonzero("test vector", 0, xx)?;
+    nonzero("model vector", 0, pp)?;
+    Ok(xp * xp / (xx * pp))
+}
+
+/// The test engineer's MAC on measured DOFs: `(x_a^T phi_a)^2 / ((x_a^T x_a)(phi_a^T phi_a))`.
+///
+/// # Errors
+/// Mismatched lengths or a zero vector.
+pub fn mac(xa: &[f64], phia: &[f64]) -> Result<f64, CorrelateError> {
+    same_len("phi_a against x_a", xa.len(), phia.len())?;
+    let (xx, pp, xp) = (dot(xa, xa), dot(phia, phia), dot(xa, phia));
+    nonzero("test vector", 0, xx)?;
+    nonzero("model vector", 0, pp)?;
+    Ok(xp * xp / (xx * pp))
+}
+
+fn mac_from_products(
+    xx: &[f64],
+    pp: &[f64],
+    xp: MatRef<'_, f64>,
+) -> Result<Mat<f64>, CorrelateError> {
+    for (i, v) in xx.iter().enumerate() {
+        nonzero("test vector", i, *v)?;
+    }
+    for (j, v) in pp.iter().enumerate() {
+        nonzero("model vector", j, *v)?;
+    }
+    Ok(Mat::from_fn(xx.len(), pp.len(), |i, j| {
+        xp[(i, j)] * xp[(i, j)] / (xx[i] * pp[j])
+    }))
+}
+
+/// Full `MAC_M` matrix between the columns of `X` (test, rows) and `Phi` (model, columns).
+///
+/// # Errors
+/// Mismatched sizes or a zero vector.
+pub fn mac_m_matrix(
+    m: &SparseMatrix,
+    x: MatRef<'_, f64>,
+    phi: MatRef<'_, f64>,
+) -> Result<Mat<f64>, CorrelateError> {
+    same_len("test vectors against M", m.rows(), x.nrows())?;
+    same_len("model vectors against M", m.rows(), phi.nrows())?;
+    let (mx, mphi) = (sym_mul_mat(m, x)?, sym_mul_mat(m, phi)?);
+    let xx: Vec<f64> = (0..x.ncols())
+        .map(|i| dot(&col(x, i), &col(mx.as_ref(), i)))
+        .collect();
+    let pp: Vec<f64> = (0..phi.ncols())
+        .map(|j| dot(&col(phi, j), &col(mphi.as_ref(), j)))
+        .collect();
+    let xp = x.transpose() * &mphi;
+    mac_from_products(&xx, &pp, xp.as_ref())
+}
+
+/// Full MAC matrix on sensors between the columns of `X_a` (test) and `Phi_a` (model at the same
+/// sensors).
+///
+/// # Errors
+/// Mismatched sizes or a zero vector.
+pub fn mac_matrix(xa: MatRef<'_, f64>, phia: MatRef<'_, f64>) -> Result<Mat<f64>, CorrelateError> {
+    same_len(
+        "model vectors against test vectors (sensors)",
+        xa.nrows(),
+        phia.nrows(),
+    )?;
+    let xx: Vec<f64> = (0..xa.ncols())
+        .map(|i| xa.col(i).squared_norm_l2())
+        .collect();
+    let pp: Vec<f64> = (0..phia.ncols())
+        .map(|j| phia.col(j).squared_norm_l2())
+        .collect();
+    let xp = xa.transpose() * phia;
+    mac_from_products(&xx, &pp, xp.as_ref())
+}
+
+/// AutoMAC of a set of vectors on sensors (`MAC(phi_i, phi_j)`): off-diagonal values near 1 mean
+/// the sensors cannot tell those modes apart.
+///
+/// # Errors
+/// A zero vector.
+pub fn auto_mac(phia: MatRef<'_, f64>) -> Result<Mat<f64>, CorrelateError> {
+    mac_matrix(phia, phia)
+}
+
+/// Mass-weighted AutoMAC (the identity for M-orthogonal modes).
+///
+/// # Errors
+/// Mismatched sizes or a zero vector.
+pub fn auto_mac_m(m: &SparseMatrix, phi: MatRef<'_, f64>) -> Result<Mat<f64>, CorrelateError> {
+    mac_m_matrix(m, phi, phi)
+}
+
+/// Modal scale factor: the `alpha` minimising `||x - alpha phi||_2`, `alpha = phi^T x / phi^T phi`.
+///
+/// # Errors
+/// Mismatched lengths or a zero `phi`.
+pub fn modal_scale_factor(x: &[f64], phi: &[f64]) -> Result<f64, CorrelateError> {
+    same_len("phi against x", x.len(), phi.len())?;
+    let pp = dot(phi, phi);
+    nonzero("model vector", 0, pp)?;
+    Ok(dot(phi, x) / pp)
+}
+
+/// Mode shape difference (17), femu's default: `x` and `phi` M-normalised and sign-aligned
+/// (`x^T M phi >= 0`), `MSD_M = ||x - phi||_M`, so `MSD_M^2 = 2 (1 - cos theta)`.
+///
+/// # Errors
+/// Mismatched lengths or a zero vector.
+pub fn msd_m(m: &SparseMatrix, x: &[f64], phi: &[f64]) -> Result<f64, CorrelateError> {
+    let cos2 = mac_m(m, x, phi)?;
+    Ok((2.0 * (1.0 - cos2.min(1.0).sqrt())).max(0.0).sqrt())
+}
+
+/// Mode shape difference (17) in the Euclidean norm after the modal scale factor: the model vector
+/// takes the test vector's normalisation, `MSD_2 = ||x - alpha phi||_2 / ||x||_2` with
+/// `alpha = modal_scale_factor(x, phi)`, which equals `sin theta_2` (the Euclidean angle).
+///
+/// This is the normalisation under which the paper's Theorems 3 and 4 hold when `M = I`: with
+/// both vectors at unit norm instead, `MSD = 2 sin(theta / 2) > sin theta` and Theorem 4 fails for
+/// `x = cos t phi_k + sin t phi_{k+1}`, `lambda_id = lambda_k` (a named regression test).
+///
+/// # Errors
+/// Mismatched lengths or a zero vector.
+pub fn msd(x: &[f64], phi: &[f64]) -> Result<f64, CorrelateError> {
+    let alpha = modal_scale_factor(x, phi)?;
+    let xx = dot(x, x);
+    nonzero("test vector", 0, xx)?;
+    let r2: f64 = x
+        .iter()
+        .zip(phi)
+        .map(|(a, b)| (a - alpha * b) * (a - alpha * b))
+        .sum();
+    Ok((r2 / xx).sqrt())
+}
+
+/// Coordinate MAC per sensor over paired modes (Lieven and Ewins):
+/// `COMAC_i = (sum_p |x_ip phi_ip|)^2 / (sum_p x_ip^2 sum_p phi_ip^2)`, after scaling each model
+/// vector to its test partner by the modal scale factor. Low values point at sensors where the
+/// model and the test disagree. `pairs` holds `(test column, model column)`.
+///
+/// # Errors
+/// Mismatched sizes, an index out of range, no pairs, or a zero vector.
+pub fn comac(
+    xa: MatRef<'_, f64>,
+    phia: MatRef<'_, f64>,
+    pairs: &[(usize, usize)],
+) -> Result<Vec<f64>, CorrelateError> {
+    same_len(
+        "model vectors against test vectors (sensors)",
+        xa.nrows(),
+        phia.nrows(),
+    )?;
+    if pairs.is_empty() {
+        return Err(CorrelateError::Invalid {
+            what: "COMAC pairs",
+            reason: "no paired modes".into(),
+        });
+    }
+    let s = xa.nrows();
+    let (mut num, mut sx, mut sp) = (vec![0.0; s], vec![0.0; s], vec![0.0; s]);
+    for &(t, k) in pairs {
+        if t >= xa.ncols() || k >= phia.ncols() {
+            return Err(CorrelateError::Invalid {
+                what: "COMAC pair",
+                reason: format!("({t}, {k}) is out of range"),
+            });
+        }
+        let (x, p) = (col(xa, t), col(phia, k));
+        let alpha = modal_scale_factor(&x, &p)?;
+        for i in 0..s {
+            let q = alpha * p[i];
+            num[i] += (x[i] * q).abs();
+            sx[i] += x[i] * x[i];
+            sp[i] += q * q;
+        }
+    }
+    Ok((0..s)
+        .map(|i| {
+            let d = sx[i] * sp[i];
+            if d > 0.0 { num[i] * num[i] / d } else { 0.0 }
+        })
+        .collect())
+}
+
+/// Cross-orthogonality `X^T M Phi` (rows: test, columns: model). With both sets M-normalised,
+/// paired entries near +-1 and the rest near 0 mean good correlation; each entry is `c_j` of
+/// MATH.md, the modal coordinate of the test vector on the model mode.
+///
+/// # Errors
+/// Mismatched sizes.
+pub fn cross_orthogonality(
+    m: &SparseMatrix,
+    x: MatRef<'_, f64>,
+    phi: MatRef<'_, f64>,
+) -> Result<Mat<f64>, CorrelateError> {
+    same_len("test vectors against M", m.rows(), x.nrows())?;
+    same_len("model vectors against M", m.rows(), phi.nrows())?;
+    let mphi = sym_mul_mat(m, phi)?;
+    Ok(x.transpose() * &mphi)
+}
+
+/// Scales every column of `x` to `x^T M x = 1`.
+///
+/// # Errors
+/// Mismatched sizes or a zero column.
+pub fn mass_normalise(m: &SparseMatrix, mut x: MatMut<'_, f64>) -> Result<(), CorrelateError> {
+    same_len("vectors against M", m.rows(), x.nrows())?;
+    let mx = sym_mul_mat(m, x.as_ref())?;
+    for j in 0..x.ncols() {
+        let q: f64 = x
+            .as_ref()
+            .col(j)
+            .iter()
+            .zip(mx.col(j).iter())
+            .map(|(a, b)| a * b)
+            .sum();
+        nonzero("vector", j, q)?;
+        let s = 1.0 / q.sqrt();
+        x.as_mut().col_mut(j).iter_mut().for_each(|v| *v *= s);
+    }
+    Ok(())
+}
+
+/// Relative frequency error `(f_model - f_test) / f_test` (Table 1).
+pub fn frequency_error(f_test: f64, f_model: f64) -> f64 {
+    (f_model - f_test) / f_test
+}
+
+/// Eigenvalue gap `|lambda_id - lambda_j|` in s^-2 from two frequencies in Hz (Table 2).
+pub fn eigenvalue_gap_hz(f_test: f64, f_model: f64) -> f64 {
+    (crate::modes::eigenvalue_of_hz(f_test) - crate::modes::eigenvalue_of_hz(f_model)).abs()
+}

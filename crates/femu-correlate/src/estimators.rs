@@ -1,0 +1,468 @@
+//! The a priori error estimators (MATH.md, "The spectral identity (25)" and "The estimators";
+//! the paper's Theorems 1-4, (26)-(29)).
+//!
+//! From a test pair `(lambda_id, x)` and the model's `K`, `M` alone, [`Estimator`] computes
+//! `rho_M = ||R_F||_{M^-1} / ||x||_M` (the rigorous form) and `rho_2 = ||R_F||_2 / ||x||_2` (the
+//! paper's form), without extracting any eigenpair. By (25), `rho_M` is a weighted RMS of the gaps
+//! `|lambda_id - lambda_j|`, weighted by `MAC_M(x, phi_j)` (which sum to one), so some model
+//! eigenvalue lies within `rho_M` of `lambda_id` (Theorem 2). The paper's Euclidean statements are
+//! theorems only when `M = I`; [`assess`] reports both forms, each bound next to the quantity it
+//! bounds when the model's eigenpairs are at hand, and whether it held.
+
+use crate::CorrelateError;
+use crate::correlation::{mac_m, msd, msd_m};
+use crate::mass::{MassSolver, SolveReport};
+use faer::{Mat, MatRef};
+use femu_sparse::SparseMatrix;
+use femu_sparse::csc::sym_mul_mat;
+use serde::{Deserialize, Serialize};
+
+/// Norms of the force residual of one test pair.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ResidualNorms {
+    /// `lambda_id`, s^-2.
+    pub lambda_id: f64,
+    /// `rho_M = ||R_F||_{M^-1} / ||x||_M`, s^-2 (rigorous form).
+    pub rho_m: f64,
+    /// `rho_2 = ||R_F||_2 / ||x||_2` (the paper's form; N/(kg m) units only when `M` is in kg).
+    pub rho_2: f64,
+    /// Rayleigh quotient `lambda_R = x^T K x / x^T M x`, s^-2.
+    pub rayleigh: f64,
+    /// `||(K - lambda_R M) x||_{M^-1} / ||x||_M`, s^-2: the residual at the Rayleigh quotient,
+    /// the smallest over all shifts; `rho_R^2 = rho_M^2 - (lambda_id - lambda_R)^2`.
+    pub rho_rayleigh: f64,
+    /// `||x||_M`.
+    pub x_norm_m: f64,
+    /// `||x||_2`.
+    pub x_norm_2: f64,
+}
+
+impl ResidualNorms {
+    /// `[lambda_id - rho_M, lambda_id + rho_M]` (s^-2): by Theorem 2 (27) in its rigorous form,
+    /// it holds at least one eigenvalue of the model.
+    pub fn eigenvalue_interval(&self) -> (f64, f64) {
+        (self.lambda_id - self.rho_m, self.lambda_id + self.rho_m)
+    }
+
+    /// The same interval in Hz (lower end clipped at 0).
+    pub fn frequency_interval_hz(&self) -> (f64, f64) {
+        let (lo, hi) = self.eigenvalue_interval();
+        (
+            crate::modes::hz_of_eigenvalue(lo),
+            crate::modes::hz_of_eigenvalue(hi),
+        )
+    }
+}
+
+/// Computes residual norms for test pairs on a model: one product with `K` and `M`, one
+/// `M^-1` solve for all modes at once.
+#[derive(Debug, Clone)]
+pub struct Estimator<'a> {
+    k: &'a SparseMatrix,
+    m: &'a SparseMatrix,
+    mass: MassSolver,
+}
+
+impl<'a> Estimator<'a> {
+    /// An estimator with [`MassSolver::new`] (diagonal for a lumped `M`, Jacobi PCG otherwise).
+    ///
+    /// # Errors
+    /// `K` and `M` of different sizes; `M` with a non-positive diagonal or a non-finite entry.
+    pub fn new(k: &'a SparseMatrix, m: &'a SparseMatrix) -> Result<Self, CorrelateError> {
+        Self::with_mass_solver(k, m, MassSolver::new(m)?)
+    }
+
+    /// An estimator with a given `M^-1` solver.
+    ///
+    /// # Errors
+    /// `K`, `M` and the solver of different sizes.
+    pub fn with_mass_solver(
+        k: &'a SparseMatrix,
+        m: &'a SparseMatrix,
+        mass: MassSolver,
+    ) -> Result<Self, CorrelateError> {
+        for (what, got) in [
+            ("M against K", m.rows()),
+            ("M^-1 solver against K", mass.dim()),
+        ] {
+            if got != k.rows() || k.cols() != k.rows() {
+                return Err(CorrelateError::DimensionMismatch {
+                    what,
+                    expected: k.rows(),
+                    got,
+                });
+            }
+        }
+        Ok(Self { k, m, mass })
+    }
+
+    /// The `M^-1` solver.
+    pub fn mass_solver(&self) -> &MassSolver {
+        &self.mass
+    }
+
+    /// Residual norms of the pairs `(lambdas[i], x[:, i])`, full-length `x` (every free DOF).
+    ///
+    /// # Errors
+    /// Sizes, non-finite input, a zero shape, a failed `M^-1` solve.
+    pub fn residual_norms(
+        &self,
+        lambdas: &[f64],
+        x: MatRef<'_, f64>,
+    ) -> Result<(Vec<ResidualNorms>, SolveReport), CorrelateError> {
+        let r = crate::residues::force_residuals(self.k, self.m, lambdas, x)?;
+        let (kx, mx) = (sym_mul_mat(self.k, x)?, sym_mul_mat(self.m, x)?);
+        let (z, report) = self.mass.solve(r.as_ref())?;
+        let dot = |a: MatRef<'_, f64>, b: MatRef<'_, f64>, j: usize| -> f64 {
+            a.col(j)
+                .iter()
+                .zip(b.col(j).iter())
+                .map(|(u, v)| u * v)
+                .sum()
+        };
+        let mut out = Vec::with_capacity(lambdas.len());
+        for (j, &lambda_id) in lambdas.iter().enumerate() {
+            let xmx = dot(x, mx.as_ref(), j);
+            let x2 = x.col(j).squared_norm_l2();
+            if !(xmx > 0.0 && x2 > 0.0) {
+                return Err(CorrelateError::ZeroVector {
+                    what: "identified shape",
+                    index: j,
+                });
+            }
+            let rr = dot(r.as_ref(), z.as_ref(), j).max(0.0);
+            let rayleigh = dot(x, kx.as_ref(), j) / xmx;
+            // r_R = R_F + (lambda_id - lambda_R) M x, so M^-1 r_R = z + (lambda_id - lambda_R) x:
+            // no second solve and no cancellation of rho_M^2 - (lambda_id - lambda_R)^2.
+            let d = lambda_id - rayleigh;
+            let rr_r: f64 = (0..x.nrows())
+                .map(|i| (r[(i, j)] + d * mx[(i, j)]) * (z[(i, j)] + d * x[(i, j)]))
+                .sum();
+            out.push(ResidualNorms {
+                lambda_id,
+                rho_m: (rr / xmx).sqrt(),
+                rho_2: (r.col(j).squared_norm_l2() / x2).sqrt(),
+                rayleigh,
+                rho_rayleigh: (rr_r.max(0.0) / xmx).sqrt(),
+                x_norm_m: xmx.sqrt(),
+                x_norm_2: x2.sqrt(),
+            });
+        }
+        Ok((out, report))
+    }
+}
+
+/// Which norm a bound is stated in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Form {
+    /// The paper's Euclidean statement (`rho_2`, Euclidean MSD): a theorem only when `M = I`.
+    Paper,
+    /// The mass-weighted statement (`rho_M`, `sin theta_M`): a theorem for every model.
+    Rigorous,
+}
+
+/// The statement a [`Bound`] instantiates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum BoundKind {
+    /// Theorem 1 (26): `max_j |lambda_id - lambda_j| >= rho`.
+    T1,
+    /// Theorem 2 (27): `min_j |lambda_id - lambda_j| <= rho`.
+    T2,
+    /// Theorem 3 (28): `|lambda_id - lambda_k| + s_k spread_k >= rho`.
+    T3,
+    /// Theorem 4 (29): `s_k <= (|lambda_id - lambda_k| + rho) / gap_k`.
+    T4,
+    /// A priori MAC: `MAC_M(x, phi_k) >= 1 - T4^2`.
+    Mac,
+    /// A priori MSD: `MSD_M <= sqrt(2) T4`.
+    Msd,
+    /// Kato-Temple lower bound: `lambda_k >= lambda_R - rho_R^2 / (b - lambda_R)`.
+    KatoTempleLower,
+    /// Kato-Temple upper bound: `lambda_k <= lambda_R + rho_R^2 / (lambda_R - a)`.
+    KatoTempleUpper,
+    /// The paper's ratio made rigorous: `min_j |lambda_id - lambda_j| <= rho_2 / mu_min(M)`.
+    EuclideanScaled,
+}
+
+/// How the quantity relates to the bound.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Relation {
+    /// `quantity <= bound`.
+    AtMost,
+    /// `quantity >= bound`.
+    AtLeast,
+}
+
+/// One instance of a theorem: the bound (computable a priori, or from eigenvalues only), the
+/// quantity it bounds (needs the model's eigenpairs), and whether it held.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Bound {
+    /// Which statement.
+    pub kind: BoundKind,
+    /// Paper (Euclidean) or rigorous (mass-weighted) form.
+    pub form: Form,
+    /// The bound's value.
+    pub bound: f64,
+    /// `quantity <= bound` or `quantity >= bound`.
+    pub relation: Relation,
+    /// The bounded quantity when the needed eigenpairs are known.
+    pub quantity: Option<f64>,
+    /// Whether the statement is a theorem for this model (always for the rigorous form; for the
+    /// paper's form only when `M = I`).
+    pub theorem: bool,
+}
+
+impl Bound {
+    /// Whether the bound held (`None` when the quantity is unknown). A relative slack of `1e-10`
+    /// absorbs round-off in cases of equality.
+    pub fn holds(&self) -> Option<bool> {
+        let q = self.quantity?;
+        let slack = 1e-10 * q.abs().max(self.bound.abs());
+        Some(match self.relation {
+            Relation::AtMost => q <= self.bound + slack,
+            Relation::AtLeast => q >= self.bound - slack,
+        })
+    }
+}
+
+/// What is known of the model's spectrum.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModelSpectrum {
+    /// The lowest eigenvalues (s^-2), ascending, none skipped (as the Sturm-verified eigensolver
+    /// returns them).
+    pub values: Vec<f64>,
+    /// Whether `values` is the whole spectrum (a dense solution).
+    pub complete: bool,
+    /// `lambda_max` when `complete`, otherwise an upper bound of it (see
+    /// [`element_bounds`](crate::element_bounds)).
+    pub lambda_max: f64,
+    /// A lower bound of the smallest eigenvalue of `M`, for [`BoundKind::EuclideanScaled`].
+    pub mu_min: Option<f64>,
+    /// `M = I`: the paper's Euclidean forms are then theorems.
+    pub identity_mass: bool,
+}
+
+/// The model mode paired with a test mode, for Theorems 3-4 and the derived bounds.
+#[derive(Debug, Clone, Copy)]
+pub struct PairedModel<'a> {
+    /// Index of the mode in [`ModelSpectrum::values`].
+    pub index: usize,
+    /// Its shape (full length, any scaling), when extracted.
+    pub shape: Option<&'a [f64]>,
+}
+
+/// All bounds for one test pair.
+///
+/// `x` is the full-length test vector (needed only for the quantities that compare it with a
+/// model shape), `norms` its [`ResidualNorms`].
+///
+/// # Errors
+/// A paired index outside the known spectrum, or sizes that do not match `M`.
+pub fn assess(
+    m: &SparseMatrix,
+    x: &[f64],
+    norms: &ResidualNorms,
+    spectrum: &ModelSpectrum,
+    paired: Option<PairedModel<'_>>,
+) -> Result<Vec<Bound>, CorrelateError> {
+    let lam = norms.lambda_id;
+    let vals = &spectrum.values;
+    let mut bounds = Vec::new();
+    let gaps: Vec<f64> = vals.iter().map(|l| (lam - l).abs()).collect();
+    // min_j |lambda_id - lambda_j| is exact once the known values reach past lambda_id: any
+    // unknown eigenvalue lies above the last known one, farther from lambda_id.
+    let min_gap = match vals.last() {
+        Some(last) if spectrum.complete || *last >= lam => {
+            Some(gaps.iter().copied().fold(f64::INFINITY, f64::min))
+        }
+        _ => None,
+    };
+    let max_gap = if spectrum.complete && !vals.is_empty() {
+        Some((lam - vals[0]).abs().max((spectrum.lambda_max - lam).abs()))
+    } else {
+        None
+    };
+    for (form, rho, theorem) in [
+        (Form::Rigorous, norms.rho_m, true),
+        (Form::Paper, norms.rho_2, spectrum.identity_mass),
+    ] {
+        bounds.push(Bound {
+            kind: BoundKind::T1,
+            form,
+            bound: rho,
+            relation: Relation::AtLeast,
+            quantity: max_gap,
+            theorem,
+        });
+        bounds.push(Bound {
+            kind: BoundKind::T2,
+            form,
+            bound: rho,
+            relation: Relation::AtMost,
+            quantity: min_gap,
+            theorem,
+        });
+    }
+    if let Some(mu) = spectrum.mu_min {
+        bounds.push(Bound {
+            kind: BoundKind::EuclideanScaled,
+            form: Form::Rigorous,
+            bound: norms.rho_2 / mu,
+            relation: Relation::AtMost,
+            quantity: min_gap,
+            theorem: true,
+        });
+    }
+    let Some(p) = paired else {
+        return Ok(bounds);
+    };
+    let k = p.index;
+    let Some(&lk) = vals.get(k) else {
+        return Err(CorrelateError::Invalid {
+            what: "paired model mode",
+            reason: format!("index {k} is beyond the {} known eigenvalues", vals.len()),
+        });
+    };
+    let dk = (lam - lk).abs();
+    let lower_neighbour = k.checked_sub(1).map(|i| vals[i]);
+    let upper_neighbour = vals.get(k + 1).copied();
+    let spread = (lk - vals[0]).max(spectrum.lambda_max - lk);
+    // gap_k needs both neighbours (or the end of a complete spectrum).
+    let gap = match (lower_neighbour, upper_neighbour) {
+        (Some(a), Some(b)) => Some((lk - a).min(b - lk)),
+        (None, Some(b)) => Some(b - lk),
+        (Some(a), None) if spectrum.complete => Some(lk - a),
+        _ => None,
+    };
+    let (sin_m, msd_2, msd_mm) = match p.shape {
+        Some(phi) => {
+            let c2 = mac_m(m, x, phi)?;
+            (
+                Some((1.0 - c2).max(0.0).sqrt()),
+                Some(msd(x, phi)?),
+                Some(msd_m(m, x, phi)?),
+            )
+        }
+        None => (None, None, None),
+    };
+    let mac = sin_m.map(|s| 1.0 - s * s);
+    for (form, rho, s, theorem) in [
+        (Form::Rigorous, norms.rho_m, sin_m, true),
+        (Form::Paper, norms.rho_2, msd_2, spectrum.identity_mass),
+    ] {
+        bounds.push(Bound {
+            kind: BoundKind::T3,
+            form,
+            bound: rho,
+            relation: Relation::AtLeast,
+            quantity: s.map(|s| dk + s * spread),
+            theorem,
+        });
+        if let Some(g) = gap.filter(|g| *g > 0.0) {
+            let t4 = (dk + rho) / g;
+            bounds.push(Bound {
+                kind: BoundKind::T4,
+                form,
+                bound: t4,
+                relation: Relation::AtMost,
+                quantity: s,
+                theorem,
+            });
+            if form == Form::Rigorous {
+                bounds.push(Bound {
+                    kind: BoundKind::Mac,
+                    form,
+                    bound: 1.0 - t4 * t4,
+                    relation: Relation::AtLeast,
+                    quantity: mac,
+                    theorem,
+                });
+                bounds.push(Bound {
+                    kind: BoundKind::Msd,
+                    form,
+                    bound: std::f64::consts::SQRT_2 * t4,
+                    relation: Relation::AtMost,
+                    quantity: msd_mm,
+                    theorem,
+                });
+            }
+        }
+    }
+    // Kato-Temple on (a, b) = (lambda_{k-1}, lambda_{k+1}), which holds lambda_k alone.
+    let lr = norms.rayleigh;
+    let rr2 = norms.rho_rayleigh * norms.rho_rayleigh;
+    let a = lower_neighbour.unwrap_or(f64::NEG_INFINITY);
+    let b = upper_neighbour.unwrap_or(if spectrum.complete {
+        f64::INFINITY
+    } else {
+        f64::NAN
+    });
+    if a < lr && lr < b {
+        bounds.push(Bound {
+            kind: BoundKind::KatoTempleLower,
+            form: Form::Rigorous,
+            bound: if b.is_finite() {
+                lr - rr2 / (b - lr)
+            } else {
+                f64::NEG_INFINITY
+            },
+            relation: Relation::AtLeast,
+            quantity: Some(lk),
+            theorem: true,
+        });
+        bounds.push(Bound {
+            kind: BoundKind::KatoTempleUpper,
+            form: Form::Rigorous,
+            bound: if a.is_finite() {
+                lr + rr2 / (lr - a)
+            } else {
+                lr
+            },
+            relation: Relation::AtMost,
+            quantity: Some(lk),
+            theorem: true,
+        });
+    }
+    Ok(bounds)
+}
+
+/// `rho_M` for each column as a plain vector (convenience for studies and plots).
+///
+/// # Errors
+/// As [`Estimator::residual_norms`].
+pub fn rho_m(
+    k: &SparseMatrix,
+    m: &SparseMatrix,
+    lambdas: &[f64],
+    x: MatRef<'_, f64>,
+) -> Result<Vec<f64>, CorrelateError> {
+    let (norms, _) = Estimator::new(k, m)?.residual_norms(lambdas, x)?;
+    Ok(norms.iter().map(|n| n.rho_m).collect())
+}
+
+/// The terms of the spectral identity (25), `(lambda_id - lambda_j)^2 MAC_M(x, phi_j)`, one per
+/// given model mode. Over a complete eigenbasis they sum to `rho_M^2`; over a partial one they
+/// show which model modes the residual comes from.
+///
+/// # Errors
+/// Mismatched sizes or zero vectors.
+pub fn spectral_terms(
+    m: &SparseMatrix,
+    lambda_id: f64,
+    x: &[f64],
+    values: &[f64],
+    phi: MatRef<'_, f64>,
+) -> Result<Vec<f64>, CorrelateError> {
+    if values.len() != phi.ncols() {
+        return Err(CorrelateError::DimensionMismatch {
+            what: "model eigenvalues against shapes",
+            expected: phi.ncols(),
+            got: values.len(),
+        });
+    }
+    let xm = MatRef::from_column_major_slice(x, x.len(), 1);
+    let mac: Mat<f64> = crate::correlation::mac_m_matrix(m, xm, phi)?;
+    Ok((0..values.len())
+        .map(|j| (lambda_id - values[j]).powi(2) * mac[(0, j)])
+        .collect())
+}

@@ -1,0 +1,209 @@
+//! The two mode sets correlation works on: the model's (eigenvalues in s^-2, full shapes) and the
+//! test's (frequencies in Hz, shapes at the sensors).
+
+use crate::CorrelateError;
+use faer::{Mat, MatRef};
+use femu_sparse::SparseMatrix;
+use femu_sparse::eigen::Modes;
+use std::f64::consts::PI;
+
+/// `lambda = (2 pi f)^2` in s^-2 from a frequency in Hz.
+pub fn eigenvalue_of_hz(f: f64) -> f64 {
+    let w = 2.0 * PI * f;
+    w * w
+}
+
+/// `f = sqrt(max(lambda, 0)) / (2 pi)` in Hz from an eigenvalue in s^-2.
+pub fn hz_of_eigenvalue(lambda: f64) -> f64 {
+    lambda.max(0.0).sqrt() / (2.0 * PI)
+}
+
+fn check_finite(what: &'static str, values: &[f64]) -> Result<(), CorrelateError> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(CorrelateError::NonFinite { what, index }),
+        None => Ok(()),
+    }
+}
+
+fn check_shapes(what: &'static str, shapes: MatRef<'_, f64>) -> Result<(), CorrelateError> {
+    for j in 0..shapes.ncols() {
+        let col = shapes.col(j);
+        if let Some(i) = col.iter().position(|v| !v.is_finite()) {
+            return Err(CorrelateError::NonFinite {
+                what,
+                index: j * shapes.nrows() + i,
+            });
+        }
+        if col.iter().all(|v| *v == 0.0) {
+            return Err(CorrelateError::ZeroVector { what, index: j });
+        }
+    }
+    Ok(())
+}
+
+/// Model modes: eigenvalues `lambda_j = omega_j^2` (s^-2) and shapes on the free DOFs.
+#[derive(Debug, Clone)]
+pub struct ModeSet {
+    /// Eigenvalues in s^-2, ascending.
+    pub values: Vec<f64>,
+    /// Shapes in the columns (`n x m`).
+    pub shapes: Mat<f64>,
+    /// Whether `phi_i^T M phi_j = delta_ij` holds (recorded, not assumed).
+    pub mass_normalised: bool,
+}
+
+impl ModeSet {
+    /// A mode set from values and shapes.
+    ///
+    /// # Errors
+    /// Mismatched counts, non-finite values, zero shapes, or values not ascending.
+    pub fn new(
+        values: Vec<f64>,
+        shapes: Mat<f64>,
+        mass_normalised: bool,
+    ) -> Result<Self, CorrelateError> {
+        if values.len() != shapes.ncols() {
+            return Err(CorrelateError::DimensionMismatch {
+                what: "model eigenvalues against mode shapes",
+                expected: shapes.ncols(),
+                got: values.len(),
+            });
+        }
+        check_finite("model eigenvalue", &values)?;
+        check_shapes("model mode shape", shapes.as_ref())?;
+        if let Some(i) = values.windows(2).position(|w| w[1] < w[0]) {
+            return Err(CorrelateError::Invalid {
+                what: "model eigenvalues",
+                reason: format!("not ascending at mode {}", i + 1),
+            });
+        }
+        Ok(Self {
+            values,
+            shapes,
+            mass_normalised,
+        })
+    }
+
+    /// The modes of the sparse eigensolver (M-normalised by construction).
+    pub fn from_modes(modes: &Modes) -> Self {
+        Self {
+            values: modes.values.clone(),
+            shapes: modes.vectors.clone(),
+            mass_normalised: true,
+        }
+    }
+
+    /// Scales every shape to `phi^T M phi = 1` and records it.
+    ///
+    /// # Errors
+    /// A dimension mismatch with `M`.
+    pub fn mass_normalise(&mut self, m: &SparseMatrix) -> Result<(), CorrelateError> {
+        crate::correlation::mass_normalise(m, self.shapes.as_mut())?;
+        self.mass_normalised = true;
+        Ok(())
+    }
+
+    /// Number of modes.
+    pub fn len(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Whether the set is empty.
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+
+    /// Number of DOFs of the shapes.
+    pub fn dim(&self) -> usize {
+        self.shapes.nrows()
+    }
+
+    /// Frequencies in Hz.
+    pub fn frequencies_hz(&self) -> Vec<f64> {
+        self.values.iter().map(|l| hz_of_eigenvalue(*l)).collect()
+    }
+}
+
+/// Identified test modes: frequencies (Hz), optional damping ratios, shapes at the sensors (one
+/// row per sensor of a [`SensorLayout`](crate::SensorLayout), one column per mode).
+#[derive(Debug, Clone)]
+pub struct TestModes {
+    /// Identified natural frequencies in Hz.
+    pub frequencies_hz: Vec<f64>,
+    /// Modal damping ratios (fraction of critical), when identified.
+    pub damping_ratios: Option<Vec<f64>>,
+    /// Shapes at the sensors (`s x m`), real.
+    pub shapes: Mat<f64>,
+}
+
+impl TestModes {
+    /// Test modes from frequencies and shapes.
+    ///
+    /// # Errors
+    /// Mismatched counts, a frequency that is not finite and positive, a damping ratio outside
+    /// `[0, 1)`, non-finite or zero shapes.
+    pub fn new(
+        frequencies_hz: Vec<f64>,
+        damping_ratios: Option<Vec<f64>>,
+        shapes: Mat<f64>,
+    ) -> Result<Self, CorrelateError> {
+        if frequencies_hz.len() != shapes.ncols() {
+            return Err(CorrelateError::DimensionMismatch {
+                what: "test frequencies against test shapes",
+                expected: shapes.ncols(),
+                got: frequencies_hz.len(),
+            });
+        }
+        check_finite("test frequency", &frequencies_hz)?;
+        if let Some(i) = frequencies_hz.iter().position(|f| *f <= 0.0) {
+            return Err(CorrelateError::Invalid {
+                what: "test frequency",
+                reason: format!(
+                    "mode {} has f = {} Hz; must be positive",
+                    i + 1,
+                    frequencies_hz[i]
+                ),
+            });
+        }
+        if let Some(z) = &damping_ratios {
+            if z.len() != frequencies_hz.len() {
+                return Err(CorrelateError::DimensionMismatch {
+                    what: "damping ratios against test frequencies",
+                    expected: frequencies_hz.len(),
+                    got: z.len(),
+                });
+            }
+            check_finite("damping ratio", z)?;
+            if let Some(i) = z.iter().position(|v| !(0.0..1.0).contains(v)) {
+                return Err(CorrelateError::Invalid {
+                    what: "damping ratio",
+                    reason: format!("mode {} has zeta = {}; must be in [0, 1)", i + 1, z[i]),
+                });
+            }
+        }
+        check_shapes("test mode shape", shapes.as_ref())?;
+        Ok(Self {
+            frequencies_hz,
+            damping_ratios,
+            shapes,
+        })
+    }
+
+    /// Number of modes.
+    pub fn len(&self) -> usize {
+        self.frequencies_hz.len()
+    }
+
+    /// Whether there are no modes.
+    pub fn is_empty(&self) -> bool {
+        self.frequencies_hz.is_empty()
+    }
+
+    /// Identified eigenvalues `lambda_id = (2 pi f)^2` in s^-2.
+    pub fn eigenvalues(&self) -> Vec<f64> {
+        self.frequencies_hz
+            .iter()
+            .map(|f| eigenvalue_of_hz(*f))
+            .collect()
+    }
+}

@@ -1,0 +1,263 @@
+//! Mode pairing by optimal assignment (MATH.md, "Pairing").
+//!
+//! Each test mode is paired with at most one model mode and each model mode with at most one test
+//! mode, maximising the total MAC over admissible pairs (MAC at or above the threshold): the
+//! Hungarian algorithm, not a greedy choice, so two modes whose order swapped between model and
+//! test are both paired correctly. A test mode with no admissible partner is reported unpaired,
+//! never forced onto a poor match.
+
+use crate::CorrelateError;
+use crate::correlation::{eigenvalue_gap_hz, frequency_error};
+use faer::MatRef;
+use serde::{Deserialize, Serialize};
+
+/// Pairing settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PairingOptions {
+    /// Smallest MAC accepted for a pair (default 0.8, the paper's "80 %, typically").
+    pub mac_threshold: f64,
+}
+
+impl Default for PairingOptions {
+    fn default() -> Self {
+        Self { mac_threshold: 0.8 }
+    }
+}
+
+/// A test mode paired with a model mode.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Pair {
+    /// Test mode (0-based column).
+    pub test: usize,
+    /// Model mode (0-based column).
+    pub model: usize,
+    /// The MAC that paired them.
+    pub mac: f64,
+    /// Test frequency, Hz.
+    pub f_test: f64,
+    /// Model frequency, Hz.
+    pub f_model: f64,
+    /// `(f_model - f_test) / f_test` (Table 1).
+    pub frequency_error: f64,
+    /// `|lambda_id - lambda_j|`, s^-2 (Table 2).
+    pub eigenvalue_gap: f64,
+}
+
+/// The result of pairing.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Pairing {
+    /// Pairs, in test mode order.
+    pub pairs: Vec<Pair>,
+    /// Test modes with no model mode at or above the threshold.
+    pub unpaired_test: Vec<usize>,
+    /// The threshold used.
+    pub mac_threshold: f64,
+}
+
+impl Pairing {
+    /// The pair of a test mode, if it was paired.
+    pub fn of_test(&self, test: usize) -> Option<&Pair> {
+        self.pairs.iter().find(|p| p.test == test)
+    }
+
+    /// `(test, model)` index pairs.
+    pub fn index_pairs(&self) -> Vec<(usize, usize)> {
+        self.pairs.iter().map(|p| (p.test, p.model)).collect()
+    }
+}
+
+/// Pairs test modes (rows of `mac`) with model modes (columns).
+///
+/// # Errors
+/// Sizes that do not match the frequency lists, a MAC outside `[0, 1]` (beyond round-off) or
+/// not finite, a threshold outside `(0, 1]`.
+pub fn pair_modes(
+    mac: MatRef<'_, f64>,
+    f_test: &[f64],
+    f_model: &[f64],
+    options: &PairingOptions,
+) -> Result<Pairing, CorrelateError> {
+    let (t, m) = (mac.nrows(), mac.ncols());
+    if f_test.len() != t || f_model.len() != m {
+        return Err(CorrelateError::DimensionMismatch {
+            what: "MAC matrix against the frequency lists (test rows, model columns)",
+            expected: t * m,
+            got: f_test.len() * f_model.len(),
+        });
+    }
+    let thr = options.mac_threshold;
+    if !(thr > 0.0 && thr <= 1.0) {
+        return Err(CorrelateError::Invalid {
+            what: "MAC threshold",
+            reason: format!("{thr} is not in (0, 1]"),
+        });
+    }
+    for i in 0..t {
+        for j in 0..m {
+            let v = mac[(i, j)];
+            if !(v.is_finite() && (-1e-12..=1.0 + 1e-12).contains(&v)) {
+                return Err(CorrelateError::Invalid {
+                    what: "MAC value",
+                    reason: format!("MAC({i}, {j}) = {v} is not in [0, 1]"),
+                });
+            }
+        }
+    }
+    let weight = |i: usize, j: usize| -> f64 {
+        let v = mac[(i, j)];
+        if v >= thr { v } else { 0.0 }
+    };
+    // The Hungarian algorithm needs rows <= columns; transpose otherwise.
+    let assignment: Vec<Option<usize>> = if t <= m {
+        hungarian_max(t, m, weight)
+    } else {
+        let cols = hungarian_max(m, t, |j, i| weight(i, j));
+        let mut rows = vec![None; t];
+        for (j, i) in cols.iter().enumerate() {
+            if let Some(i) = i {
+                rows[*i] = Some(j);
+            }
+        }
+        rows
+    };
+    let mut pairs = Vec::new();
+    let mut unpaired_test = Vec::new();
+    for (i, a) in assignment.iter().enumerate() {
+        match a {
+            Some(j) if mac[(i, *j)] >= thr => pairs.push(Pair {
+                test: i,
+                model: *j,
+                mac: mac[(i, *j)],
+                f_test: f_test[i],
+                f_model: f_model[*j],
+                frequency_error: frequency_error(f_test[i], f_model[*j]),
+                eigenvalue_gap: eigenvalue_gap_hz(f_test[i], f_model[*j]),
+            }),
+            _ => unpaired_test.push(i),
+        }
+    }
+    Ok(Pairing {
+        pairs,
+        unpaired_test,
+        mac_threshold: thr,
+    })
+}
+
+/// Maximum-weight assignment of `n` rows to `m >= n` columns (Kuhn-Munkres with potentials,
+/// O(n^2 m)). Returns the column of each row.
+fn hungarian_max(n: usize, m: usize, weight: impl Fn(usize, usize) -> f64) -> Vec<Option<usize>> {
+    if n == 0 {
+        return Vec::new();
+    }
+    // Minimise cost = -weight. 1-based arrays with a virtual column 0, as in the classic form.
+    let cost = |i: usize, j: usize| -weight(i - 1, j - 1);
+    let inf = f64::INFINITY;
+    let (mut u, mut v) = (vec![0.0; n + 1], vec![0.0; m + 1]);
+    let (mut p, mut way) = (vec![0usize; m + 1], vec![0usize; m + 1]);
+    for i in 1..=n {
+        p[0] = i;
+        let mut j0 = 0;
+        let mut minv = vec![inf; m + 1];
+        let mut used = vec![false; m + 1];
+        loop {
+            used[j0] = true;
+            let i0 = p[j0];
+            let mut delta = inf;
+            let mut j1 = 0;
+            for j in 1..=m {
+                if !used[j] {
+                    let cur = cost(i0, j) - u[i0] - v[j];
+                    if cur < minv[j] {
+                        minv[j] = cur;
+                        way[j] = j0;
+                    }
+                    if minv[j] < delta {
+                        delta = minv[j];
+                        j1 = j;
+                    }
+                }
+            }
+            for j in 0..=m {
+                if used[j] {
+                    u[p[j]] += delta;
+                    v[j] -= delta;
+                } else {
+                    minv[j] -= delta;
+                }
+            }
+            j0 = j1;
+            if p[j0] == 0 {
+                break;
+            }
+        }
+        loop {
+            let j1 = way[j0];
+            p[j0] = p[j1];
+            j0 = j1;
+            if j0 == 0 {
+                break;
+            }
+        }
+    }
+    let mut rows = vec![None; n];
+    for j in 1..=m {
+        if p[j] != 0 {
+            rows[p[j] - 1] = Some(j - 1);
+        }
+    }
+    rows
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Exhaustive search over all injective maps rows -> columns (small sizes only).
+    fn brute(n: usize, m: usize, w: &dyn Fn(usize, usize) -> f64) -> f64 {
+        fn go(
+            i: usize,
+            n: usize,
+            m: usize,
+            used: &mut Vec<bool>,
+            w: &dyn Fn(usize, usize) -> f64,
+        ) -> f64 {
+            if i == n {
+                return 0.0;
+            }
+            let mut best = f64::NEG_INFINITY;
+            for j in 0..m {
+                if !used[j] {
+                    used[j] = true;
+                    best = best.max(w(i, j) + go(i + 1, n, m, used, w));
+                    used[j] = false;
+                }
+            }
+            best
+        }
+        go(0, n, m, &mut vec![false; m], w)
+    }
+
+    #[test]
+    fn hungarian_equals_exhaustive_search() {
+        let mut state = 12345u64;
+        let mut rnd = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for (n, m) in [(1, 1), (2, 3), (3, 3), (4, 6), (5, 5), (3, 7)] {
+            for _ in 0..20 {
+                let w: Vec<f64> = (0..n * m).map(|_| rnd()).collect();
+                let f = |i: usize, j: usize| w[i * m + j];
+                let a = hungarian_max(n, m, f);
+                let total: f64 = a.iter().enumerate().map(|(i, j)| f(i, j.unwrap())).sum();
+                let mut cols: Vec<usize> = a.iter().map(|j| j.unwrap()).collect();
+                cols.sort();
+                cols.dedup();
+                assert_eq!(cols.len(), n, "each column used once");
+                assert!((total - brute(n, m, &f)).abs() < 1e-12);
+            }
+        }
+    }
+}

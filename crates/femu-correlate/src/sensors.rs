@@ -1,0 +1,241 @@
+//! Sensor layouts: where the test measured, mapped onto the model's free DOFs.
+//!
+//! A sensor is a node and a unit direction (any direction, not only the axes). Its reading of a
+//! model displacement `u` is `d . u(node)`; stacked over sensors this is the observation matrix
+//! `C` (`s x n`, one row per sensor, at most three entries per row), so the model mode shapes at
+//! the sensors are `C Phi`. Measured DOFs `a` of MATH.md are the sensors of an axis-aligned layout.
+
+use crate::CorrelateError;
+use faer::{Mat, MatRef};
+use femu_fem::dof::DofMap;
+use femu_fem::mesh::Mesh;
+use femu_sparse::SparseMatrix;
+use serde::{Deserialize, Serialize};
+
+/// One sensor: a node (the user's id) and a direction (normalised when the layout is built).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Sensor {
+    /// Node id, as in the mesh file.
+    pub node: u64,
+    /// Measuring direction (global axes); need not be unit length.
+    pub direction: [f64; 3],
+}
+
+impl Sensor {
+    /// A sensor along a global axis (`0 = x, 1 = y, 2 = z`).
+    pub fn axis(node: u64, component: usize) -> Self {
+        let mut direction = [0.0; 3];
+        direction[component.min(2)] = 1.0;
+        Self { node, direction }
+    }
+}
+
+/// Sensors mapped to free DOFs: the observation matrix `C`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SensorLayout {
+    sensors: Vec<Sensor>,
+    /// Per sensor: (free DOF, weight) pairs, weights the unit direction's components.
+    rows: Vec<Vec<(usize, f64)>>,
+    dim: usize,
+}
+
+/// Direction components below this (relative to 1) are treated as zero.
+const COMPONENT_EPS: f64 = 1e-12;
+
+impl SensorLayout {
+    /// Maps `sensors` onto the free DOFs of `dofs` (numbered as the assembled `K` and `M`).
+    ///
+    /// # Errors
+    /// [`CorrelateError::SensorOnMissingNode`], [`CorrelateError::BadDirection`] (zero or not
+    /// finite), [`CorrelateError::SensorOnConstrainedDof`] (a direction component along a fixed
+    /// DOF), [`CorrelateError::DuplicateSensor`] (same node, parallel directions).
+    pub fn new(mesh: &Mesh, dofs: &DofMap, sensors: Vec<Sensor>) -> Result<Self, CorrelateError> {
+        let mut rows = Vec::with_capacity(sensors.len());
+        let mut normalised = Vec::with_capacity(sensors.len());
+        for (s, sensor) in sensors.iter().enumerate() {
+            let node = mesh
+                .node_index(sensor.node)
+                .ok_or(CorrelateError::SensorOnMissingNode {
+                    sensor: s,
+                    node: sensor.node,
+                })?;
+            let d = sensor.direction;
+            let norm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            if !(norm.is_finite() && norm > 0.0) {
+                return Err(CorrelateError::BadDirection {
+                    sensor: s,
+                    node: sensor.node,
+                    direction: d,
+                });
+            }
+            let unit = [d[0] / norm, d[1] / norm, d[2] / norm];
+            let node_dofs = dofs.node_dofs(node);
+            let mut row = Vec::with_capacity(3);
+            for c in 0..3 {
+                if unit[c].abs() <= COMPONENT_EPS {
+                    continue;
+                }
+                match node_dofs[c] {
+                    Some(f) => row.push((f, unit[c])),
+                    None => {
+                        return Err(CorrelateError::SensorOnConstrainedDof {
+                            sensor: s,
+                            node: sensor.node,
+                            component: c,
+                        });
+                    }
+                }
+            }
+            for (t, (earlier, prev)) in normalised.iter().zip(&sensors).enumerate() {
+                let e: &[f64; 3] = earlier;
+                let cos = e[0] * unit[0] + e[1] * unit[1] + e[2] * unit[2];
+                if prev.node == sensor.node && (cos.abs() - 1.0).abs() < 1e-9 {
+                    return Err(CorrelateError::DuplicateSensor {
+                        first: t,
+                        second: s,
+                        node: sensor.node,
+                    });
+                }
+            }
+            normalised.push(unit);
+            rows.push(row);
+        }
+        let sensors = sensors
+            .into_iter()
+            .zip(normalised)
+            .map(|(s, d)| Sensor {
+                node: s.node,
+                direction: d,
+            })
+            .collect();
+        Ok(Self {
+            sensors,
+            rows,
+            dim: dofs.free_count(),
+        })
+    }
+
+    /// Three axis sensors (x, y, z) at each listed node, skipping constrained components.
+    ///
+    /// # Errors
+    /// As [`SensorLayout::new`].
+    pub fn triaxial(mesh: &Mesh, dofs: &DofMap, nodes: &[u64]) -> Result<Self, CorrelateError> {
+        let mut sensors = Vec::with_capacity(3 * nodes.len());
+        for (s, &id) in nodes.iter().enumerate() {
+            let n = mesh
+                .node_index(id)
+                .ok_or(CorrelateError::SensorOnMissingNode {
+                    sensor: 3 * s,
+                    node: id,
+                })?;
+            let free = dofs.node_dofs(n);
+            for c in 0..3 {
+                if free[c].is_some() {
+                    sensors.push(Sensor::axis(id, c));
+                }
+            }
+        }
+        Self::new(mesh, dofs, sensors)
+    }
+
+    /// Every free DOF measured, in the order of the free DOFs: the paper's full measurement set.
+    pub fn full(mesh: &Mesh, dofs: &DofMap) -> Self {
+        let n = dofs.free_count();
+        let mut sensors = Vec::with_capacity(n);
+        let mut rows = Vec::with_capacity(n);
+        for f in 0..n {
+            let full = dofs.full_of_free(f);
+            sensors.push(Sensor::axis(mesh.node_id(full / 3), full % 3));
+            rows.push(vec![(f, 1.0)]);
+        }
+        Self {
+            sensors,
+            rows,
+            dim: n,
+        }
+    }
+
+    /// Number of sensors `s`.
+    pub fn len(&self) -> usize {
+        self.sensors.len()
+    }
+
+    /// Whether there are no sensors.
+    pub fn is_empty(&self) -> bool {
+        self.sensors.is_empty()
+    }
+
+    /// Number of model DOFs `n` (columns of `C`).
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// The sensors, directions normalised.
+    pub fn sensors(&self) -> &[Sensor] {
+        &self.sensors
+    }
+
+    /// The free DOFs and weights a sensor reads.
+    pub fn row(&self, s: usize) -> &[(usize, f64)] {
+        &self.rows[s]
+    }
+
+    /// The measured DOF of each sensor when every sensor is along an axis (`None` otherwise):
+    /// the set `a` of MATH.md's expansion formulas.
+    pub fn measured_dofs(&self) -> Option<Vec<usize>> {
+        self.rows
+            .iter()
+            .map(|r| match r.as_slice() {
+                [(f, w)] if (*w - 1.0).abs() < 1e-15 => Some(*f),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// Readings `C u` of one model vector.
+    ///
+    /// # Errors
+    /// [`CorrelateError::DimensionMismatch`] if `u` is not of the model's size.
+    pub fn measure(&self, u: &[f64]) -> Result<Vec<f64>, CorrelateError> {
+        if u.len() != self.dim {
+            return Err(CorrelateError::DimensionMismatch {
+                what: "model vector read by the sensors",
+                expected: self.dim,
+                got: u.len(),
+            });
+        }
+        Ok(self
+            .rows
+            .iter()
+            .map(|r| r.iter().map(|(f, w)| w * u[*f]).sum())
+            .collect())
+    }
+
+    /// Readings `C U` of the columns of `U` (`s x m`).
+    ///
+    /// # Errors
+    /// As [`SensorLayout::measure`].
+    pub fn measure_all(&self, u: MatRef<'_, f64>) -> Result<Mat<f64>, CorrelateError> {
+        if u.nrows() != self.dim {
+            return Err(CorrelateError::DimensionMismatch {
+                what: "model vectors read by the sensors",
+                expected: self.dim,
+                got: u.nrows(),
+            });
+        }
+        Ok(Mat::from_fn(self.len(), u.ncols(), |s, j| {
+            self.rows[s].iter().map(|(f, w)| w * u[(*f, j)]).sum()
+        }))
+    }
+
+    /// The observation matrix `C` (`s x n`, CSR).
+    pub fn matrix(&self) -> SparseMatrix {
+        let mut tri = sprs::TriMat::new((self.len(), self.dim));
+        for (s, r) in self.rows.iter().enumerate() {
+            for (f, w) in r {
+                tri.add_triplet(s, *f, *w);
+            }
+        }
+        tri.to_csr()
+    }
+}

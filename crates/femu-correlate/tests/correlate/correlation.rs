@@ -1,0 +1,195 @@
+//! Correlation measures against hand computations, Table 2 of the paper, and pairing.
+
+use super::common::*;
+use faer::Mat;
+use femu_correlate::correlation::*;
+use femu_correlate::{PairingOptions, pair_modes};
+use femu_fem::prelude::*;
+
+/// Table 2: the eigenvalue gaps from Table 1's frequencies are 24.65e5, 1.34e5, 8.68e5 and
+/// 152.78e5 s^-2 (to the paper's printed digits), and Table 1's relative errors 1.8, 0.0, 0.1,
+/// 1.6 %.
+#[test]
+fn paper_table_2_gaps_from_table_1() {
+    let test = [1311.2, 2421.9, 2968.9, 3414.9];
+    let model = [1334.8, 2421.2, 2972.6, 3471.1];
+    let gaps = [24.65e5, 1.34e5, 8.68e5, 152.78e5];
+    let printed_errors = [1.8, 0.0, 0.1, 1.6];
+    for i in 0..4 {
+        let g = eigenvalue_gap_hz(test[i], model[i]);
+        // printed to 0.01e5: agreement to half a unit of the last digit
+        assert!(
+            (g - gaps[i]).abs() <= 0.5 * 0.01e5,
+            "mode {}: {g:e} vs {:e}",
+            i + 1,
+            gaps[i]
+        );
+        let e = 100.0 * frequency_error(test[i], model[i]).abs();
+        assert!((e - printed_errors[i]).abs() <= 0.05, "mode {}: {e}", i + 1);
+    }
+}
+
+/// MAC, MSD and the modal scale factor by hand on 3-vectors.
+#[test]
+fn measures_by_hand() {
+    let x = [1.0, 2.0, 2.0]; // |x| = 3
+    let phi = [2.0, 0.0, 0.0];
+    // x.phi = 2, |phi| = 2: MAC = 4 / (9 * 4) = 1/9
+    assert!((mac(&x, &phi).unwrap() - 1.0 / 9.0).abs() < 1e-15);
+    // MSF = 2 / 4 = 0.5; x - 0.5 phi = (0, 2, 2): MSD = sqrt(8) / 3 = sin theta
+    assert!((modal_scale_factor(&x, &phi).unwrap() - 0.5).abs() < 1e-15);
+    assert!((msd(&x, &phi).unwrap() - 8f64.sqrt() / 3.0).abs() < 1e-15);
+    // With M = diag(1, 4, 1): x^T M x = 1 + 16 + 4 = 21, phi^T M phi = 4, x^T M phi = 2:
+    // MAC_M = 4 / 84; MSD_M^2 = 2 (1 - cos) with cos = 2 / sqrt(84)
+    let m = sparse(&Mat::from_fn(3, 3, |i, j| {
+        if i == j { [1.0, 4.0, 1.0][i] } else { 0.0 }
+    }));
+    assert!((mac_m(&m, &x, &phi).unwrap() - 4.0 / 84.0).abs() < 1e-15);
+    let cos = 2.0 / 84f64.sqrt();
+    assert!((msd_m(&m, &x, &phi).unwrap() - (2.0 * (1.0 - cos)).sqrt()).abs() < 1e-15);
+    // scale and sign invariance
+    let xs: Vec<f64> = x.iter().map(|v| -7.5 * v).collect();
+    assert!((mac_m(&m, &xs, &phi).unwrap() - 4.0 / 84.0).abs() < 1e-15);
+    assert!((msd_m(&m, &xs, &phi).unwrap() - msd_m(&m, &x, &phi).unwrap()).abs() < 1e-15);
+    // MSD_M = ||x_hat - phi_hat||_M with explicit normalisation and sign alignment
+    let nx = 21f64.sqrt();
+    let d: Vec<f64> = (0..3).map(|i| x[i] / nx - phi[i] / 2.0).collect();
+    let dm = [1.0, 4.0, 1.0];
+    let direct: f64 = (0..3).map(|i| dm[i] * d[i] * d[i]).sum::<f64>().sqrt();
+    assert!((msd_m(&m, &x, &phi).unwrap() - direct).abs() < 1e-15);
+    // zero vectors are errors
+    assert!(mac(&[0.0; 3], &phi).is_err());
+    assert!(msd(&x, &[0.0; 3]).is_err());
+}
+
+/// Model modes against themselves: MAC_M matrix and cross-orthogonality are the identity, the
+/// AutoMAC on sensors is symmetric with unit diagonal; COMAC of a mode set against itself is 1.
+#[test]
+fn matrices_on_model_modes() {
+    let model = bar([8, 2, 1], true);
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let modes = femu_sparse::eigen::eigs(
+        &sys.k,
+        &sys.m,
+        femu_sparse::eigen::Which::Lowest(5),
+        &Default::default(),
+    )
+    .unwrap();
+    let phi = modes.vectors.as_ref();
+    let mm = mac_m_matrix(&sys.m, phi, phi).unwrap();
+    let xo = cross_orthogonality(&sys.m, phi, phi).unwrap();
+    for i in 0..5 {
+        for j in 0..5 {
+            let d = if i == j { 1.0 } else { 0.0 };
+            assert!((mm[(i, j)] - d).abs() < 1e-9);
+            assert!((xo[(i, j)] - d).abs() < 1e-9);
+        }
+    }
+    let tips: Vec<u64> = model
+        .mesh()
+        .node_set("xmax")
+        .unwrap()
+        .iter()
+        .map(|&n| model.mesh().node_id(n))
+        .collect();
+    let layout = femu_correlate::SensorLayout::triaxial(model.mesh(), &sys.dofs, &tips).unwrap();
+    let pa = layout.measure_all(phi).unwrap();
+    let am = auto_mac(pa.as_ref()).unwrap();
+    for i in 0..5 {
+        assert!((am[(i, i)] - 1.0).abs() < 1e-14);
+        for j in 0..5 {
+            assert!((am[(i, j)] - am[(j, i)]).abs() < 1e-14);
+        }
+    }
+    let scaled = Mat::from_fn(pa.nrows(), 5, |i, j| {
+        pa[(i, j)] * (j as f64 + 2.0) * if j % 2 == 0 { 1.0 } else { -1.0 }
+    });
+    let co = comac(
+        scaled.as_ref(),
+        pa.as_ref(),
+        &[(0, 0), (1, 1), (2, 2), (3, 3), (4, 4)],
+    )
+    .unwrap();
+    assert!(co.iter().all(|c| (c - 1.0).abs() < 1e-12));
+    // mass_normalise
+    let mut v = Mat::from_fn(phi.nrows(), 2, |i, j| phi[(i, j)] * 3.0);
+    mass_normalise(&sys.m, v.as_mut()).unwrap();
+    assert!((mac_m_matrix(&sys.m, v.as_ref(), phi).unwrap()[(0, 0)] - 1.0).abs() < 1e-12);
+    let xo = cross_orthogonality(&sys.m, v.as_ref(), phi).unwrap();
+    assert!((xo[(0, 0)] - 1.0).abs() < 1e-9 && (xo[(1, 1)] - 1.0).abs() < 1e-9);
+}
+
+/// COMAC by hand: two modes, two sensors, one sensor disagreeing in sign pattern.
+#[test]
+fn comac_by_hand() {
+    // test modes (columns) and model modes at two sensors
+    let x = Mat::from_fn(2, 2, |i, j| [[1.0, 1.0], [1.0, -1.0]][i][j]);
+    let p = Mat::from_fn(2, 2, |i, j| [[1.0, 1.0], [1.0, 1.0]][i][j]);
+    // pair 0: MSF = 1; pair 1: MSF = (1 - 1)/2 = 0 -> scaled model vector 0
+    let c = comac(x.as_ref(), p.as_ref(), &[(0, 0), (1, 1)]).unwrap();
+    // sensor i: num = |1*1| + |x_i1 * 0| = 1; sum x^2 = 2; sum q^2 = 1 -> 1/2
+    assert!((c[0] - 0.5).abs() < 1e-15 && (c[1] - 0.5).abs() < 1e-15);
+}
+
+/// Pairing: swapped modes are both paired by assignment; a mode with no partner above the
+/// threshold stays unpaired; a case where greedy pairing would lose a pair.
+#[test]
+fn pairing_swapped_missing_and_greedy_trap() {
+    let ft = [100.0, 200.0, 300.0];
+    let fm = [101.0, 198.0, 330.0];
+    // test 0 <-> model 1, test 1 <-> model 0 (swapped), test 2 has no partner
+    let mac = Mat::from_fn(3, 3, |i, j| {
+        [[0.05, 0.95, 0.0], [0.97, 0.02, 0.1], [0.1, 0.3, 0.5]][i][j]
+    });
+    let p = pair_modes(mac.as_ref(), &ft, &fm, &PairingOptions::default()).unwrap();
+    assert_eq!(p.index_pairs(), vec![(0, 1), (1, 0)]);
+    assert_eq!(p.unpaired_test, vec![2]);
+    let pair = p.of_test(0).unwrap();
+    assert!((pair.frequency_error - (198.0 - 100.0) / 100.0).abs() < 1e-15);
+    assert!(
+        (pair.eigenvalue_gap
+            - (4.0 * std::f64::consts::PI.powi(2) * (198.0f64.powi(2) - 100.0f64.powi(2))))
+        .abs()
+            < 1e-6
+    );
+    // Greedy picks (0,0) = 0.9 and leaves test 1 with 0.1 (unpaired); assignment pairs both.
+    let trap = Mat::from_fn(2, 2, |i, j| [[0.9, 0.85], [0.88, 0.1]][i][j]);
+    let p = pair_modes(
+        trap.as_ref(),
+        &ft[..2],
+        &fm[..2],
+        &PairingOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(p.index_pairs(), vec![(0, 1), (1, 0)]);
+    assert!(p.unpaired_test.is_empty());
+    // More test modes than model modes.
+    let tall = Mat::from_fn(3, 1, |i, _| [0.3, 0.9, 0.85][i]);
+    let p = pair_modes(tall.as_ref(), &ft, &fm[..1], &PairingOptions::default()).unwrap();
+    assert_eq!(p.index_pairs(), vec![(1, 0)]);
+    assert_eq!(p.unpaired_test, vec![0, 2]);
+    // A stricter threshold unpairs.
+    let p = pair_modes(
+        trap.as_ref(),
+        &ft[..2],
+        &fm[..2],
+        &PairingOptions {
+            mac_threshold: 0.89,
+        },
+    )
+    .unwrap();
+    assert_eq!(p.index_pairs(), vec![(0, 0)]);
+    // Bad input
+    let nan = Mat::from_fn(1, 1, |_, _| f64::NAN);
+    assert!(pair_modes(nan.as_ref(), &ft[..1], &fm[..1], &PairingOptions::default()).is_err());
+    assert!(
+        pair_modes(
+            trap.as_ref(),
+            &ft[..2],
+            &fm[..2],
+            &PairingOptions { mac_threshold: 0.0 }
+        )
+        .is_err()
+    );
+    assert!(pair_modes(trap.as_ref(), &ft, &fm[..2], &PairingOptions::default()).is_err());
+}
