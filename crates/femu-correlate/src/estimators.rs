@@ -60,7 +60,7 @@ impl ResidualNorms {
 pub struct Estimator<'a> {
     k: &'a SparseMatrix,
     m: &'a SparseMatrix,
-    mass: MassSolver,
+    mass: MassSolver<'a>,
 }
 
 impl<'a> Estimator<'a> {
@@ -79,7 +79,7 @@ impl<'a> Estimator<'a> {
     pub fn with_mass_solver(
         k: &'a SparseMatrix,
         m: &'a SparseMatrix,
-        mass: MassSolver,
+        mass: MassSolver<'a>,
     ) -> Result<Self, CorrelateError> {
         for (what, got) in [
             ("M against K", m.rows()),
@@ -97,7 +97,7 @@ impl<'a> Estimator<'a> {
     }
 
     /// The `M^-1` solver.
-    pub fn mass_solver(&self) -> &MassSolver {
+    pub fn mass_solver(&self) -> &MassSolver<'a> {
         &self.mass
     }
 
@@ -110,8 +110,12 @@ impl<'a> Estimator<'a> {
         lambdas: &[f64],
         x: MatRef<'_, f64>,
     ) -> Result<(Vec<ResidualNorms>, SolveReport), CorrelateError> {
-        let r = crate::residues::force_residuals(self.k, self.m, lambdas, x)?;
+        crate::residues::check_lambdas(lambdas, x, self.k.rows())?;
         let (kx, mx) = (sym_mul_mat(self.k, x)?, sym_mul_mat(self.m, x)?);
+        // R_F (3) from the same products
+        let r = Mat::from_fn(x.nrows(), x.ncols(), |i, j| {
+            kx[(i, j)] - lambdas[j] * mx[(i, j)]
+        });
         let (z, report) = self.mass.solve(r.as_ref())?;
         let dot = |a: MatRef<'_, f64>, b: MatRef<'_, f64>, j: usize| -> f64 {
             a.col(j)

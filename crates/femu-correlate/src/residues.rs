@@ -18,7 +18,11 @@ use femu_sparse::eigen::{EigenParams, Pencil, Which};
 use femu_sparse::ordering::Ordering;
 use femu_sparse::{SparseError, SparseMatrix};
 
-fn check_lambdas(lambdas: &[f64], x: MatRef<'_, f64>, n: usize) -> Result<(), CorrelateError> {
+pub(crate) fn check_lambdas(
+    lambdas: &[f64],
+    x: MatRef<'_, f64>,
+    n: usize,
+) -> Result<(), CorrelateError> {
     if x.nrows() != n {
         return Err(CorrelateError::DimensionMismatch {
             what: "identified shapes against K (full-length vectors needed)",
@@ -104,7 +108,7 @@ pub fn forced_residual(
 /// `lambda_id = 0` (the inertia law is empty), mismatched sizes, a failed `M^-1` solve.
 pub fn eil_residuals(
     k: &SparseMatrix,
-    mass: &MassSolver,
+    mass: &MassSolver<'_>,
     lambdas: &[f64],
     x: MatRef<'_, f64>,
 ) -> Result<(Mat<f64>, Mat<f64>), CorrelateError> {

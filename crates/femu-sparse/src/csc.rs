@@ -111,7 +111,6 @@ pub fn to_dense(a: &SparseMatrix) -> Mat<f64> {
 /// # Errors
 /// [`SparseError::DimensionMismatch`] if `A` is not square or `X` does not match it.
 pub fn sym_mul_mat(a: &SparseMatrix, x: faer::MatRef<'_, f64>) -> Result<Mat<f64>, SparseError> {
-    use rayon::prelude::*;
     let n = a.rows();
     if a.cols() != n || x.nrows() != n {
         return Err(SparseError::DimensionMismatch {
@@ -131,23 +130,55 @@ pub fn sym_mul_mat(a: &SparseMatrix, x: faer::MatRef<'_, f64>) -> Result<Mat<f64
             xt[i * k + j] = *v;
         }
     }
+    let mut yt = vec![0.0; n * k];
+    sym_mul_rows(a, &xt, k, &mut yt)?;
+    Ok(Mat::from_fn(n, k, |i, j| yt[i * k + j]))
+}
+
+/// `Y = A X` for a symmetric `A` (CSC, both triangles) and `k` vectors stored row-major
+/// (`x[i * k + j]` is entry `i` of vector `j`), in parallel over rows: the kernel of
+/// [`sym_mul_mat`] for iterative solvers that keep their vectors row-major.
+///
+/// # Errors
+/// [`SparseError::DimensionMismatch`] if `A` is not square or the buffers are not `n k` long.
+pub fn sym_mul_rows(
+    a: &SparseMatrix,
+    x: &[f64],
+    k: usize,
+    y: &mut [f64],
+) -> Result<(), SparseError> {
+    use rayon::prelude::*;
+    let n = a.rows();
+    if a.cols() != n || x.len() != n * k || y.len() != n * k {
+        return Err(SparseError::DimensionMismatch {
+            what: "row-major block in A X (A square, n k values)",
+            expected: n * k,
+            got: if a.cols() != n {
+                a.cols() * k
+            } else {
+                x.len().min(y.len())
+            },
+        });
+    }
+    if k == 0 {
+        return Ok(());
+    }
     let (ptr, idx, val) = (a.indptr(), a.indices(), a.data());
     let ptr = ptr.raw_storage();
-    let mut yt = vec![0.0; n * k];
-    let body = |(i, row): (usize, &mut [f64])| {
-        for p in ptr[i]..ptr[i + 1] {
-            let (c, v) = (idx[p], val[p]);
-            let xr = &xt[c * k..(c + 1) * k];
-            for j in 0..k {
-                row[j] += v * xr[j];
-            }
-        }
-    };
-    yt.par_chunks_mut(k)
+    y.par_chunks_mut(k)
         .enumerate()
         .with_min_len(512)
-        .for_each(body);
-    Ok(Mat::from_fn(n, k, |i, j| yt[i * k + j]))
+        .for_each(|(i, row)| {
+            row.fill(0.0);
+            for p in ptr[i]..ptr[i + 1] {
+                let (c, v) = (idx[p], val[p]);
+                let xr = &x[c * k..(c + 1) * k];
+                for (r, xv) in row.iter_mut().zip(xr) {
+                    *r += v * xv;
+                }
+            }
+        });
+    Ok(())
 }
 
 #[cfg(test)]
