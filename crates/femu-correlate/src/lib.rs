@@ -12,6 +12,7 @@
 //! - [`estimators`]: `rho_M` and `rho_2`, Theorems 1-4 (26)-(29) in the paper's and the rigorous
 //!   form, a priori MAC and MSD bounds, Kato-Temple; [`bounds`]: `lambda_max` and `mu_min(M)`
 //!   bounds from element matrices; [`mass`]: the cheap `M^-1` products they need.
+//! - [`report`]: one-call correlation and estimation with serialisable, printable results.
 //!
 //! ```
 //! use femu_correlate::prelude::*;
@@ -48,6 +49,7 @@ pub mod estimators;
 pub mod mass;
 pub mod modes;
 pub mod pairing;
+pub mod report;
 pub mod residues;
 pub mod sensors;
 
@@ -59,6 +61,7 @@ pub use estimators::{
 pub use mass::MassSolver;
 pub use modes::{ModeSet, TestModes};
 pub use pairing::{Pair, Pairing, PairingOptions, pair_modes};
+pub use report::{Assessment, CorrelationReport, correlate, estimate};
 pub use residues::StiffnessSolver;
 pub use sensors::{Sensor, SensorLayout};
 
@@ -68,6 +71,6 @@ pub mod prelude {
     pub use crate::{
         Bound, BoundKind, CorrelateError, ElementBounds, Estimator, Form, MassSolver, ModeSet,
         ModelSpectrum, PairedModel, Pairing, PairingOptions, Sensor, SensorLayout, StiffnessSolver,
-        TestModes, assess, element_bounds, pair_modes,
+        TestModes, assess, correlate, element_bounds, estimate, pair_modes,
     };
 }

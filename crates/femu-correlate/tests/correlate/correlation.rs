@@ -193,3 +193,104 @@ fn pairing_swapped_missing_and_greedy_trap() {
     );
     assert!(pair_modes(trap.as_ref(), &ft, &fm[..2], &PairingOptions::default()).is_err());
 }
+
+/// The one-call workflow: test modes of a "real" structure (20 % softer near the clamp) measured
+/// by triaxial sensors at the free end and the middle, listed out of order; `correlate` pairs them
+/// back, its MAC entries equal the direct computation, and `estimate` on full-length vectors gives
+/// intervals that each hold a model eigenvalue (dense reference).
+#[test]
+fn correlate_and_estimate_reports() {
+    use femu_correlate::modes::eigenvalue_of_hz;
+    use femu_correlate::{ModeSet, ModelSpectrum, SensorLayout, TestModes, correlate, estimate};
+    let model = bar([8, 2, 1], true);
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let eig = full_eigen(&sys);
+    let modes = ModeSet::new(
+        eig.values[..6].to_vec(),
+        eig.vectors.as_ref().subcols(0, 6).to_owned(),
+        true,
+    )
+    .unwrap();
+    let mesh = model.mesh();
+    let nodes: Vec<u64> = mesh
+        .node_set("xmax")
+        .unwrap()
+        .iter()
+        .chain(
+            mesh.node_set("ymin")
+                .unwrap()
+                .iter()
+                .filter(|&&n| (mesh.coords()[n][0] - 0.1).abs() < 1e-9),
+        )
+        .map(|&n| mesh.node_id(n))
+        .collect();
+    let layout = SensorLayout::triaxial(mesh, &sys.dofs, &nodes).unwrap();
+    // truth modes 0..4, listed as test modes in the order 0, 2, 1, 3
+    let order = [0, 2, 1, 3];
+    let truth: Vec<(f64, Vec<f64>)> = order
+        .iter()
+        .map(|&j| perturbed_mode(&model, 0.05, 0.8, j))
+        .collect();
+    let n = sys.dofs.free_count();
+    let full = Mat::from_fn(n, 4, |i, j| truth[j].1[i]);
+    let at_sensors = layout.measure_all(full.as_ref()).unwrap();
+    let f_test: Vec<f64> = truth
+        .iter()
+        .map(|(l, _)| femu_correlate::modes::hz_of_eigenvalue(*l))
+        .collect();
+    let test = TestModes::new(f_test.clone(), None, at_sensors.clone()).unwrap();
+    let report = correlate(&modes, &test, &layout, &PairingOptions::default()).unwrap();
+    assert_eq!(
+        report.pairing.index_pairs(),
+        vec![(0, 0), (1, 2), (2, 1), (3, 3)]
+    );
+    let phia = layout.measure_all(modes.shapes.as_ref()).unwrap();
+    for p in &report.pairing.pairs {
+        let direct = mac(
+            &at_sensors.col(p.test).iter().copied().collect::<Vec<_>>(),
+            &phia.col(p.model).iter().copied().collect::<Vec<_>>(),
+        )
+        .unwrap();
+        assert!((report.mac[p.test][p.model] - direct).abs() < 1e-15);
+        assert!(p.mac > 0.9);
+        // the real structure is softer: every model frequency is above the test one
+        assert!(p.frequency_error > 0.0);
+    }
+    assert_eq!(report.comac.len(), layout.len());
+    let table = report.to_string();
+    assert!(
+        table.starts_with("| test | f test (Hz)") && table.lines().count() == 6,
+        "{table}"
+    );
+    // estimate: every interval holds a model eigenvalue; the rigorous T2 holds.
+    let spectrum = ModelSpectrum {
+        values: eig.values.clone(),
+        complete: true,
+        lambda_max: *eig.values.last().unwrap(),
+        mu_min: None,
+        identity_mass: false,
+    };
+    let lambdas: Vec<f64> = f_test.iter().map(|f| eigenvalue_of_hz(*f)).collect();
+    let paired: Vec<Option<usize>> = (0..4)
+        .map(|t| report.pairing.of_test(t).map(|p| p.model))
+        .collect();
+    let assessments = estimate(
+        &sys.k,
+        &sys.m,
+        &lambdas,
+        full.as_ref(),
+        &spectrum,
+        Some(&modes),
+        &paired,
+    )
+    .unwrap();
+    for a in &assessments {
+        let (lo, hi) = a.norms.eigenvalue_interval();
+        assert!(eig.values.iter().any(|l| *l >= lo && *l <= hi));
+        for b in a.bounds.iter().filter(|b| b.theorem) {
+            assert_eq!(b.holds(), Some(true), "test {}: {b:?}", a.test);
+        }
+        let (flo, fhi) = a.frequency_interval_hz;
+        assert!(flo <= f_test[a.test] && f_test[a.test] <= fhi);
+    }
+}
