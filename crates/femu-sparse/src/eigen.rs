@@ -365,8 +365,9 @@ impl<'a> Pencil<'a> {
                 .max(12)
                 .max((want + 3).min(24));
             for size in [first_size, 2 * first_size, 4 * first_size] {
-                let mut probe = Lanczos::new(self, &op, sigma, params);
+                let mut probe = Lanczos::new(self, op, sigma, params);
                 guess = probe.estimate((want + 3).max(size / 2), size, &mut stats);
+                op = probe.op.take().expect("the probe keeps its factor");
                 let zeros = guess.iter().filter(|v| v.abs() <= zero_like).count();
                 if zeros == 0 || zeros < guess.len() || guess.len() >= n {
                     break;
@@ -381,14 +382,21 @@ impl<'a> Pencil<'a> {
             {
                 let better = -0.5 * first;
                 if better < sigma {
+                    // Release the old factor first (peak memory: one factor); refactor it in the
+                    // rare case the better shift is not below the spectrum.
+                    drop(op);
                     let t = Instant::now();
                     let candidate = self.factor_shifted(better)?;
-                    stats.factor_seconds += t.elapsed().as_secs_f64();
                     stats.factorizations += 1;
-                    if candidate.inertia().negative == 0 {
-                        op = candidate;
+                    op = if candidate.inertia().negative == 0 {
                         sigma = better;
-                    }
+                        candidate
+                    } else {
+                        drop(candidate);
+                        stats.factorizations += 1;
+                        self.factor_shifted(sigma)?
+                    };
+                    stats.factor_seconds += t.elapsed().as_secs_f64();
                 }
             }
         }
@@ -409,9 +417,16 @@ impl<'a> Pencil<'a> {
             });
         }
         let guard = if band.is_some() { 0 } else { 3.min(n - want) };
-        let mut lanczos = Lanczos::new(self, &op, sigma, params);
+        let mut lanczos = Lanczos::new(self, op, sigma, params);
         let mut attempts = 0;
         loop {
+            if lanczos.op.is_none() {
+                // released for a Sturm check that found missed modes: factor the shift again
+                let t = Instant::now();
+                lanczos.op = Some(self.factor_shifted(sigma)?);
+                stats.factor_seconds += t.elapsed().as_secs_f64();
+                stats.factorizations += 1;
+            }
             lanczos.run(want + guard, &mut stats)?;
             // Sort what was locked by distance to the shift, keep the wanted ones.
             let locked = lanczos.sorted_locked();
@@ -485,6 +500,8 @@ impl<'a> Pencil<'a> {
                         }
                         _ => None,
                     };
+                    // one factor alive at a time: release the iteration's before the check's
+                    lanczos.op = None;
                     let t = Instant::now();
                     let count = self.count_below(upper)?
                         - lower.map(|l| self.count_below(l)).transpose()?.unwrap_or(0);
@@ -582,7 +599,9 @@ fn rayleigh_ritz(
 
 struct Lanczos<'p, 'a> {
     pencil: &'p Pencil<'a>,
-    op: &'p Ldlt,
+    /// `LDL^T` of `K - sigma M`, owned so that it can be released while the Sturm check factors
+    /// another shift: two factors alive at once set femu's peak memory (about 2x CalculiX's).
+    op: Option<Ldlt>,
     sigma: f64,
     params: EigenParams,
     n: usize,
@@ -596,10 +615,10 @@ struct Lanczos<'p, 'a> {
 }
 
 impl<'p, 'a> Lanczos<'p, 'a> {
-    fn new(pencil: &'p Pencil<'a>, op: &'p Ldlt, sigma: f64, params: &EigenParams) -> Self {
+    fn new(pencil: &'p Pencil<'a>, op: Ldlt, sigma: f64, params: &EigenParams) -> Self {
         Self {
             pencil,
-            op,
+            op: Some(op),
             sigma,
             params: params.clone(),
             n: pencil.dim(),
@@ -698,7 +717,10 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             let block = hi - applied;
             let t = Instant::now();
             let mut w = Mat::<f64>::from_fn(self.n, block, |i, j| mbasis[applied + j][i]);
-            self.op.solve_in_place(w.as_mut());
+            self.op
+                .as_ref()
+                .expect("the factor is present while iterating")
+                .solve_in_place(w.as_mut());
             stats.solve_seconds += t.elapsed().as_secs_f64();
             stats.solved_vectors += block;
             let t = Instant::now();
