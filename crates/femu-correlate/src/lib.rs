@@ -46,9 +46,11 @@ pub mod bounds;
 pub mod correlation;
 mod error;
 pub mod estimators;
+pub mod expansion;
 pub mod mass;
 pub mod modes;
 pub mod pairing;
+pub mod placement;
 pub mod report;
 pub mod residues;
 pub mod sensors;
@@ -58,6 +60,7 @@ pub use error::CorrelateError;
 pub use estimators::{
     Bound, BoundKind, Estimator, Form, ModelSpectrum, PairedModel, Relation, ResidualNorms, assess,
 };
+pub use expansion::{Expander, Partition};
 pub use mass::MassSolver;
 pub use modes::{ModeSet, TestModes};
 pub use pairing::{Pair, Pairing, PairingOptions, pair_modes};

@@ -4,6 +4,8 @@ mod correlate {
     mod bounds;
     pub mod common;
     mod correlation;
+    mod expansion;
     mod identities;
     mod inputs;
+    mod placement;
 }

@@ -1,0 +1,624 @@
+//! Modal expansion: test shapes known on the measured DOFs `a` filled in on the omitted DOFs `o`
+//! (MATH.md, "Incomplete instrumentation: modal expansion"), with sparse factorizations only.
+//!
+//! | method | omitted part |
+//! |---|---|
+//! | static (Guyan) | `x_o = -K_oo^-1 K_oa x_a` |
+//! | dynamic | `x_o = -Z_oo^-1 Z_oa x_a`, `Z = K - lambda_id M` (residual zero on `o`) |
+//! | SEREP | `x = Phi_m (Phi_{m,a})^+ x_a` with `m <=` sensors model modes |
+//!
+//! The partition comes from an axis-aligned [`SensorLayout`]. `K_oo` and `M_oo` are extracted once
+//! on `K_oo`'s pattern with its symbolic analysis; every identified eigenvalue then costs one
+//! numeric factorization of `Z_oo`, shared by the modes that have the same eigenvalue.
+
+use crate::{CorrelateError, SensorLayout};
+use faer::{Mat, MatRef};
+use femu_sparse::cholesky::{Factorization, SymbolicFactor};
+use femu_sparse::csc::sym_mul_mat;
+use femu_sparse::ordering::Ordering;
+use femu_sparse::{SparseError, SparseMatrix};
+
+/// Measured and omitted free DOFs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Partition {
+    measured: Vec<usize>,
+    omitted: Vec<usize>,
+    /// for each free DOF, its position in `omitted` (usize::MAX when measured)
+    omitted_pos: Vec<usize>,
+}
+
+impl Partition {
+    /// A partition of `n` DOFs with the given measured ones (any order, no repeats).
+    ///
+    /// # Errors
+    /// A DOF out of range or repeated, or no omitted DOF left.
+    pub fn new(n: usize, measured: &[usize]) -> Result<Self, CorrelateError> {
+        let mut is_measured = vec![false; n];
+        for &d in measured {
+            if d >= n || is_measured[d] {
+                return Err(CorrelateError::Invalid {
+                    what: "measured DOFs",
+                    reason: format!("DOF {d} is out of range (n = {n}) or repeated"),
+                });
+            }
+            is_measured[d] = true;
+        }
+        let omitted: Vec<usize> = (0..n).filter(|d| !is_measured[*d]).collect();
+        let mut omitted_pos = vec![usize::MAX; n];
+        for (i, d) in omitted.iter().enumerate() {
+            omitted_pos[*d] = i;
+        }
+        Ok(Self {
+            measured: measured.to_vec(),
+            omitted,
+            omitted_pos,
+        })
+    }
+
+    /// The measured DOFs, in sensor order.
+    pub fn measured(&self) -> &[usize] {
+        &self.measured
+    }
+
+    /// The omitted DOFs, ascending.
+    pub fn omitted(&self) -> &[usize] {
+        &self.omitted
+    }
+}
+
+/// Expansion of measured shapes on one model and one sensor set.
+#[derive(Debug, Clone)]
+pub struct Expander<'a> {
+    k: &'a SparseMatrix,
+    m: &'a SparseMatrix,
+    part: Partition,
+    /// `K_oo` (CSC, both triangles) and `M_oo`'s values on its pattern
+    k_oo: SparseMatrix,
+    m_oo: Vec<f64>,
+    symbolic: SymbolicFactor,
+}
+
+impl<'a> Expander<'a> {
+    /// Prepares expansion for the sensors of `layout` (every sensor along a global axis).
+    ///
+    /// # Errors
+    /// An oblique sensor (expansion needs measured DOFs), `K` and `M` of other sizes than the
+    /// layout's model, every DOF measured, or an entry of `M` outside `K`'s pattern.
+    pub fn new(
+        k: &'a SparseMatrix,
+        m: &'a SparseMatrix,
+        layout: &SensorLayout,
+    ) -> Result<Self, CorrelateError> {
+        let measured = layout.measured_dofs().ok_or(CorrelateError::Invalid {
+            what: "sensor layout",
+            reason: "expansion needs every sensor along a global axis (measured DOFs)".into(),
+        })?;
+        Self::with_measured_dofs(k, m, &measured)
+    }
+
+    /// As [`Expander::new`] with the measured free DOFs given directly.
+    ///
+    /// # Errors
+    /// As [`Expander::new`].
+    pub fn with_measured_dofs(
+        k: &'a SparseMatrix,
+        m: &'a SparseMatrix,
+        measured: &[usize],
+    ) -> Result<Self, CorrelateError> {
+        let n = k.rows();
+        if m.rows() != n || k.cols() != n || m.cols() != n {
+            return Err(CorrelateError::DimensionMismatch {
+                what: "M against K (square, same size)",
+                expected: n,
+                got: m.rows(),
+            });
+        }
+        let part = Partition::new(n, measured)?;
+        if part.omitted.is_empty() {
+            return Err(CorrelateError::Invalid {
+                what: "sensor layout",
+                reason: "every DOF is measured: nothing to expand".into(),
+            });
+        }
+        let (kp, mp) = (k.indptr(), m.indptr());
+        let (kp, mp) = (kp.raw_storage(), mp.raw_storage());
+        let no = part.omitted.len();
+        let mut ptr = Vec::with_capacity(no + 1);
+        let mut idx = Vec::new();
+        let mut kv = Vec::new();
+        let mut mv = Vec::new();
+        ptr.push(0);
+        for &c in &part.omitted {
+            let mrows = &m.indices()[mp[c]..mp[c + 1]];
+            let mvals = &m.data()[mp[c]..mp[c + 1]];
+            let mut hits = 0;
+            for p in kp[c]..kp[c + 1] {
+                let r = k.indices()[p];
+                let o = part.omitted_pos[r];
+                let mval = match mrows.binary_search(&r) {
+                    Ok(q) => {
+                        hits += 1;
+                        mvals[q]
+                    }
+                    Err(_) => 0.0,
+                };
+                if o != usize::MAX {
+                    idx.push(o);
+                    kv.push(k.data()[p]);
+                    mv.push(mval);
+                }
+            }
+            if hits != mrows.len() {
+                return Err(SparseError::DimensionMismatch {
+                    what: "pattern of M inside the pattern of K (entry of M missing from K)",
+                    expected: mrows.len(),
+                    got: hits,
+                }
+                .into());
+            }
+            ptr.push(idx.len());
+        }
+        let k_oo = SparseMatrix::new_csc((no, no), ptr, idx, kv);
+        let symbolic = SymbolicFactor::new(&k_oo, Ordering::NestedDissection)?;
+        Ok(Self {
+            k,
+            m,
+            part,
+            k_oo,
+            m_oo: mv,
+            symbolic,
+        })
+    }
+
+    /// The partition.
+    pub fn partition(&self) -> &Partition {
+        &self.part
+    }
+
+    fn check_measured(&self, ya: MatRef<'_, f64>) -> Result<(), CorrelateError> {
+        if ya.nrows() != self.part.measured.len() {
+            return Err(CorrelateError::DimensionMismatch {
+                what: "measured shapes against the measured DOFs",
+                expected: self.part.measured.len(),
+                got: ya.nrows(),
+            });
+        }
+        for j in 0..ya.ncols() {
+            if let Some(i) = ya.col(j).iter().position(|v| !v.is_finite()) {
+                return Err(CorrelateError::NonFinite {
+                    what: "measured shape",
+                    index: j * ya.nrows() + i,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Full-length vectors with `ya` on the measured DOFs and zero elsewhere.
+    fn scatter_measured(&self, ya: MatRef<'_, f64>) -> Mat<f64> {
+        let mut x = Mat::zeros(self.k.rows(), ya.ncols());
+        for j in 0..ya.ncols() {
+            for (s, &d) in self.part.measured.iter().enumerate() {
+                x[(d, j)] = ya[(s, j)];
+            }
+        }
+        x
+    }
+
+    /// `(Z x)_o` for full vectors `x` and `Z = K - lambda M` (one lambda per column).
+    fn z_times_on_o(
+        &self,
+        lambdas: &[f64],
+        x: MatRef<'_, f64>,
+    ) -> Result<Mat<f64>, CorrelateError> {
+        let (kx, mx) = (sym_mul_mat(self.k, x)?, sym_mul_mat(self.m, x)?);
+        Ok(Mat::from_fn(self.part.omitted.len(), x.ncols(), |i, j| {
+            let d = self.part.omitted[i];
+            kx[(d, j)] - lambdas[j] * mx[(d, j)]
+        }))
+    }
+
+    /// Dynamic expansion at each mode's identified eigenvalue: `x_o = -Z_oo^-1 Z_oa x_a` with
+    /// `Z = K - lambda_id M`; `lambda_id = 0` is the static (Guyan) expansion. Returns full-length
+    /// vectors (measured values kept).
+    ///
+    /// # Errors
+    /// [`CorrelateError::Invalid`] when `Z_oo` is singular (`lambda_id` is an eigenvalue of the
+    /// structure with its measured DOFs held: no unique expansion) or, for the static case, when
+    /// `K_oo` is singular (the measured DOFs do not restrain rigid-body motion); size or NaN errors.
+    pub fn dynamic(
+        &self,
+        lambdas: &[f64],
+        ya: MatRef<'_, f64>,
+    ) -> Result<Mat<f64>, CorrelateError> {
+        self.check_measured(ya)?;
+        if lambdas.len() != ya.ncols() {
+            return Err(CorrelateError::DimensionMismatch {
+                what: "eigenvalues against measured shapes",
+                expected: ya.ncols(),
+                got: lambdas.len(),
+            });
+        }
+        if let Some(index) = lambdas.iter().position(|l| !l.is_finite()) {
+            return Err(CorrelateError::NonFinite {
+                what: "expansion eigenvalue",
+                index,
+            });
+        }
+        let mut x = self.scatter_measured(ya);
+        let rhs = self.z_times_on_o(lambdas, x.as_ref())?;
+        let mut done = vec![false; lambdas.len()];
+        for j in 0..lambdas.len() {
+            if done[j] {
+                continue;
+            }
+            let lambda = lambdas[j];
+            let group: Vec<usize> = (j..lambdas.len())
+                .filter(|&i| !done[i] && lambdas[i] == lambda)
+                .collect();
+            let singular = |index: usize| CorrelateError::Invalid {
+                what: "expansion",
+                reason: if lambda == 0.0 {
+                    format!(
+                        "K_oo is singular (mode {}, omitted DOF {index}): the measured DOFs do not restrain every rigid-body motion",
+                        j + 1
+                    )
+                } else {
+                    format!(
+                        "Z_oo = K_oo - lambda M_oo is singular at lambda = {lambda:e} s^-2 (mode {}; pivot at omitted DOF {index}): lambda is an eigenvalue of the structure with its measured DOFs held, so the expansion is not unique",
+                        j + 1
+                    )
+                },
+            };
+            let mut b = Mat::from_fn(rhs.nrows(), group.len(), |i, g| -rhs[(i, group[g])]);
+            if lambda == 0.0 {
+                let llt = self.symbolic.llt(&self.k_oo, "K_oo").map_err(|e| match e {
+                    SparseError::NotPositiveDefinite { index, .. } => singular(index),
+                    other => other.into(),
+                })?;
+                llt.solve_in_place(b.as_mut());
+            } else {
+                let values: Vec<f64> = self
+                    .k_oo
+                    .data()
+                    .iter()
+                    .zip(&self.m_oo)
+                    .map(|(k, m)| k - lambda * m)
+                    .collect();
+                let ldlt = self
+                    .symbolic
+                    .ldlt_values(&self.k_oo, &values, "Z_oo")
+                    .map_err(|e| match e {
+                        SparseError::Singular { index, .. } => singular(index),
+                        other => other.into(),
+                    })?;
+                ldlt.solve_in_place(b.as_mut());
+            }
+            for (g, &c) in group.iter().enumerate() {
+                for (i, &d) in self.part.omitted.iter().enumerate() {
+                    x[(d, c)] = b[(i, g)];
+                }
+                done[c] = true;
+            }
+            // A nearly singular Z_oo gives a solution that does not solve its system: check the
+            // residual on o (zero by construction of the dynamic expansion).
+            let cols = Mat::from_fn(x.nrows(), group.len(), |i, g| x[(i, group[g])]);
+            let lam: Vec<f64> = vec![lambda; group.len()];
+            let r = self.z_times_on_o(&lam, cols.as_ref())?;
+            for (g, &c) in group.iter().enumerate() {
+                let rn = r.col(g).norm_l2();
+                let bn = rhs.col(c).norm_l2();
+                let solved = rn.is_finite() && rn <= 1e-6 * bn.max(f64::MIN_POSITIVE);
+                if !(solved || (bn == 0.0 && rn == 0.0)) {
+                    return Err(singular(usize::MAX));
+                }
+            }
+        }
+        Ok(x)
+    }
+
+    /// Static (Guyan) expansion `x_o = -K_oo^-1 K_oa x_a`.
+    ///
+    /// # Errors
+    /// As [`Expander::dynamic`].
+    pub fn static_(&self, ya: MatRef<'_, f64>) -> Result<Mat<f64>, CorrelateError> {
+        self.dynamic(&vec![0.0; ya.ncols()], ya)
+    }
+
+    /// SEREP: `x = Phi_m (Phi_{m,a})^+ x_a` with the model modes `phi` (`n x m`, `m <=` number of
+    /// measured DOFs), by a thin SVD of `Phi_{m,a}`. The measured part is smoothed too: it becomes
+    /// the least-squares fit of `x_a` by the model modes.
+    ///
+    /// # Errors
+    /// More modes than measured DOFs, modes that the sensors cannot tell apart (condition of
+    /// `Phi_{m,a}` above 1e10), sizes, NaN.
+    pub fn serep(
+        &self,
+        phi: MatRef<'_, f64>,
+        ya: MatRef<'_, f64>,
+    ) -> Result<Mat<f64>, CorrelateError> {
+        self.check_measured(ya)?;
+        let s = self.part.measured.len();
+        if phi.nrows() != self.k.rows() {
+            return Err(CorrelateError::DimensionMismatch {
+                what: "SEREP modes against K",
+                expected: self.k.rows(),
+                got: phi.nrows(),
+            });
+        }
+        let nm = phi.ncols();
+        if nm == 0 || nm > s {
+            return Err(CorrelateError::Invalid {
+                what: "SEREP",
+                reason: format!(
+                    "{nm} model modes for {s} measured DOFs: need 1 <= modes <= measured DOFs"
+                ),
+            });
+        }
+        let phi_a = Mat::from_fn(s, nm, |i, j| phi[(self.part.measured[i], j)]);
+        let svd = phi_a.thin_svd().map_err(|e| SparseError::NoConvergence {
+            reason: format!("SVD of the modes at the sensors: {e:?}"),
+        })?;
+        let sv: Vec<f64> = (0..nm).map(|i| svd.S()[i]).collect();
+        let (smax, smin) = sv
+            .iter()
+            .fold((0.0_f64, f64::INFINITY), |(a, b), v| (a.max(*v), b.min(*v)));
+        if !(smin > 1e-10 * smax) {
+            return Err(CorrelateError::Invalid {
+                what: "SEREP",
+                reason: format!(
+                    "the {nm} model modes are linearly dependent at the sensors (singular values {smax:e} .. {smin:e}); use fewer modes or more sensors"
+                ),
+            });
+        }
+        // c = V diag(1/s) U^T y
+        let uty = svd.U().transpose() * ya;
+        let scaled = Mat::from_fn(nm, ya.ncols(), |i, j| uty[(i, j)] / sv[i]);
+        let c = svd.V() * &scaled;
+        Ok(phi * &c)
+    }
+}
+
+/// A symmetric quasi-definite saddle-point system `[[A, B], [B^T, -C - delta I]]`, factored by
+/// `LDL^T` without pivoting (quasi-definite matrices factor stably in any symmetric order), then
+/// solved for `delta = 0` by iterative refinement with the exact matrix.
+struct Kkt {
+    /// the regularised matrix
+    a: SparseMatrix,
+    /// size of the first block
+    n1: usize,
+    delta: f64,
+}
+
+impl Kkt {
+    fn from_triplets(n: usize, n1: usize, delta: f64, mut t: sprs::TriMat<f64>) -> Self {
+        for i in n1..n {
+            t.add_triplet(i, i, -delta);
+        }
+        Self {
+            a: t.to_csc(),
+            n1,
+            delta,
+        }
+    }
+
+    /// Solves `A_0 z = b` for the columns of `b`; `what` names the system in errors.
+    fn solve(&self, b: MatRef<'_, f64>, what: &'static str) -> Result<Mat<f64>, CorrelateError> {
+        let symbolic = SymbolicFactor::new(&self.a, Ordering::NestedDissection)?;
+        let ldlt = symbolic.ldlt(&self.a, what)?;
+        let n = self.a.rows();
+        let mut z = b.to_owned();
+        ldlt.solve_in_place(z.as_mut());
+        let bn: Vec<f64> = (0..b.ncols()).map(|j| b.col(j).norm_l2()).collect();
+        // normwise backward error ||r|| / (||A|| ||z|| + ||b||): the refinement stops at round-off
+        // (1e-14) or when it stagnates at a level that is still round-off for this matrix (1e-11)
+        let a_norm = (0..n)
+            .map(|c| {
+                self.a
+                    .outer_view(c)
+                    .map_or(0.0, |v| v.iter().map(|(_, x)| x.abs()).sum::<f64>())
+            })
+            .fold(0.0, f64::max);
+        let mut last = f64::INFINITY;
+        for _ in 0..100 {
+            // r = b - A_0 z, A_0 z = A_delta z + delta z_2
+            let az = sym_mul_mat(&self.a, z.as_ref())?;
+            let mut r = Mat::from_fn(n, b.ncols(), |i, j| {
+                let a0 = az[(i, j)]
+                    + if i >= self.n1 {
+                        self.delta * z[(i, j)]
+                    } else {
+                        0.0
+                    };
+                b[(i, j)] - a0
+            });
+            let eta = (0..b.ncols())
+                .map(|j| {
+                    r.col(j).norm_l2()
+                        / (a_norm * z.col(j).norm_l2() + bn[j]).max(f64::MIN_POSITIVE)
+                })
+                .fold(0.0, f64::max);
+            if eta <= 1e-14 || (eta <= 1e-11 && eta > 0.5 * last) {
+                return Ok(z);
+            }
+            last = eta;
+            ldlt.solve_in_place(r.as_mut());
+            if (0..r.ncols()).any(|j| r.col(j).iter().any(|v| !v.is_finite())) {
+                break;
+            }
+            z += &r;
+        }
+        Err(CorrelateError::Invalid {
+            what,
+            reason: "the regularised saddle-point system did not refine to a backward error of 1e-11: the problem is singular or nearly so (an expansion eigenvalue on an eigenvalue of the constrained structure, or too few sensors)".into(),
+        })
+    }
+}
+
+impl Expander<'_> {
+    /// `M(r, c)` for an entry of `K`'s pattern (0 when `M` does not store it).
+    fn m_at(&self, r: usize, c: usize) -> f64 {
+        let mp = self.m.indptr();
+        let mp = mp.raw_storage();
+        let rows = &self.m.indices()[mp[c]..mp[c + 1]];
+        rows.binary_search(&r)
+            .map_or(0.0, |q| self.m.data()[mp[c] + q])
+    }
+
+    fn check_lambdas(&self, lambdas: &[f64], ya: MatRef<'_, f64>) -> Result<(), CorrelateError> {
+        self.check_measured(ya)?;
+        if lambdas.len() != ya.ncols() {
+            return Err(CorrelateError::DimensionMismatch {
+                what: "eigenvalues against measured shapes",
+                expected: ya.ncols(),
+                got: lambdas.len(),
+            });
+        }
+        match lambdas.iter().position(|l| !l.is_finite()) {
+            Some(index) => Err(CorrelateError::NonFinite {
+                what: "expansion eigenvalue",
+                index,
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// Minimum-residual expansion: `x_o = argmin ||Z_{:,o} x_o + Z_{:,a} x_a||_{M^-1}` with
+    /// `Z = K - lambda_id M` (MATH.md, `W = M^-1`). Solved without `M^-1` as the saddle-point
+    /// system `M mu - Z_{:,o} x_o = Z_{:,a} x_a`, `-Z_{:,o}^T mu = 0` (`mu = M^-1 r`), regularised by
+    /// `-delta I` (delta = 1e-8 max_j sum_r Z_rj^2 / M_rr) and refined to the exact solution.
+    ///
+    /// # Errors
+    /// A singular problem (the refinement does not converge), sizes, NaN.
+    pub fn minimum_residual(
+        &self,
+        lambdas: &[f64],
+        ya: MatRef<'_, f64>,
+    ) -> Result<Mat<f64>, CorrelateError> {
+        self.check_lambdas(lambdas, ya)?;
+        let n = self.k.rows();
+        let no = self.part.omitted.len();
+        let mut x = self.scatter_measured(ya);
+        let mut mdiag = vec![0.0; n];
+        for (v, (r, c)) in self.m.iter() {
+            if r == c {
+                mdiag[r] = *v;
+            }
+        }
+        for j in 0..lambdas.len() {
+            let lambda = lambdas[j];
+            let mut t = sprs::TriMat::new((n + no, n + no));
+            for (v, (r, c)) in self.m.iter() {
+                t.add_triplet(r, c, *v);
+            }
+            let kp = self.k.indptr();
+            let kp = kp.raw_storage();
+            let mut scale = 0.0_f64;
+            for (jo, &c) in self.part.omitted.iter().enumerate() {
+                let mut s = 0.0;
+                for p in kp[c]..kp[c + 1] {
+                    let r = self.k.indices()[p];
+                    let z = self.k.data()[p] - lambda * self.m_at(r, c);
+                    t.add_triplet(r, n + jo, -z);
+                    t.add_triplet(n + jo, r, -z);
+                    s += z * z / mdiag[r];
+                }
+                scale = scale.max(s);
+            }
+            let kkt = Kkt::from_triplets(n + no, n, 1e-8 * scale, t);
+            let xj = x.as_ref().subcols(j, 1).to_owned();
+            let za = {
+                let (kx, mx) = (
+                    sym_mul_mat(self.k, xj.as_ref())?,
+                    sym_mul_mat(self.m, xj.as_ref())?,
+                );
+                Mat::from_fn(n + no, 1, |i, _| {
+                    if i < n {
+                        kx[(i, 0)] - lambda * mx[(i, 0)]
+                    } else {
+                        0.0
+                    }
+                })
+            };
+            let z = kkt.solve(za.as_ref(), "minimum-residual expansion")?;
+            for (i, &d) in self.part.omitted.iter().enumerate() {
+                x[(d, j)] = z[(n + i, 0)];
+            }
+        }
+        Ok(x)
+    }
+
+    /// Minimum dynamic residual expansion with test error (MDRE-WE):
+    /// `x = argmin R^T K_s^-1 R + gamma ||C x - x_a||^2`, `R = (K - lambda_id M) x`, over the full
+    /// `x` (the measured values are not imposed: `gamma` weighs trust in the test against trust in
+    /// the model). `K_s = K + stiffness_shift M`: pass 0 for a restrained model; a free-free model
+    /// needs a positive shift (its `K` is singular and the energy norm undefined on rigid-body
+    /// motion), for example `1e-3 lambda_id`, which changes the weight of an elastic mode `j` by
+    /// `lambda_j / (lambda_j + shift)`. Solved as the saddle-point system
+    /// `K_s u - Z x = 0`, `-Z u - gamma C^T C x = -gamma C^T x_a`, regularised and refined.
+    ///
+    /// # Errors
+    /// `gamma` not positive, a negative shift, a singular problem, sizes, NaN.
+    pub fn mdre(
+        &self,
+        lambdas: &[f64],
+        ya: MatRef<'_, f64>,
+        gamma: f64,
+        stiffness_shift: f64,
+    ) -> Result<Mat<f64>, CorrelateError> {
+        self.check_lambdas(lambdas, ya)?;
+        let valid = gamma > 0.0
+            && gamma.is_finite()
+            && stiffness_shift >= 0.0
+            && stiffness_shift.is_finite();
+        if !valid {
+            return Err(CorrelateError::Invalid {
+                what: "MDRE-WE weights",
+                reason: format!(
+                    "gamma = {gamma} must be positive, stiffness shift = {stiffness_shift} non-negative"
+                ),
+            });
+        }
+        let n = self.k.rows();
+        let mut out = Mat::zeros(n, lambdas.len());
+        for j in 0..lambdas.len() {
+            let lambda = lambdas[j];
+            let mut t = sprs::TriMat::new((2 * n, 2 * n));
+            let kp = self.k.indptr();
+            let kp = kp.raw_storage();
+            let mut kdiag = vec![0.0; n];
+            let mut zcols = vec![0.0_f64; n];
+            for c in 0..n {
+                for p in kp[c]..kp[c + 1] {
+                    let r = self.k.indices()[p];
+                    let m = self.m_at(r, c);
+                    let ks = self.k.data()[p] + stiffness_shift * m;
+                    let z = self.k.data()[p] - lambda * m;
+                    t.add_triplet(r, c, ks);
+                    t.add_triplet(r, n + c, -z);
+                    t.add_triplet(n + r, c, -z);
+                    if r == c {
+                        kdiag[r] = ks;
+                    }
+                    zcols[c] += z * z;
+                }
+            }
+            for d in &self.part.measured {
+                t.add_triplet(n + d, n + d, -gamma);
+            }
+            let scale = (0..n)
+                .map(|c| zcols[c] / kdiag[c].abs().max(f64::MIN_POSITIVE))
+                .fold(gamma, f64::max);
+            let kkt = Kkt::from_triplets(2 * n, n, 1e-8 * scale, t);
+            let mut b = Mat::zeros(2 * n, 1);
+            for (s, d) in self.part.measured.iter().enumerate() {
+                b[(n + d, 0)] = -gamma * ya[(s, j)];
+            }
+            let z = kkt.solve(b.as_ref(), "MDRE-WE expansion")?;
+            for i in 0..n {
+                out[(i, j)] = z[(n + i, 0)];
+            }
+        }
+        Ok(out)
+    }
+}

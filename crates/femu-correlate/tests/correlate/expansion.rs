@@ -1,0 +1,259 @@
+//! Modal expansion against dense implementations of MATH.md's formulas, exactness properties and
+//! bad input.
+
+use super::common::*;
+use faer::Mat;
+use faer::linalg::solvers::Solve;
+use femu_correlate::{Expander, Sensor, SensorLayout};
+use femu_fem::prelude::*;
+use femu_sparse::dense::generalized_symmetric_eigen;
+
+struct Case {
+    model: Model,
+    sys: SystemMatrices,
+    layout: SensorLayout,
+    a: Vec<usize>,
+    o: Vec<usize>,
+}
+
+/// A clamped bar measured triaxially on its top face at every other station.
+fn case() -> Case {
+    let model = bar([8, 2, 2], true);
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let mesh = model.mesh();
+    let nodes: Vec<u64> = mesh
+        .node_set("zmax")
+        .unwrap()
+        .iter()
+        .filter(|&&n| {
+            let x = mesh.coords()[n][0];
+            x > 1e-9 && ((x / 0.025).round() as i64) % 2 == 0
+        })
+        .map(|&n| mesh.node_id(n))
+        .collect();
+    let layout = SensorLayout::triaxial(mesh, &sys.dofs, &nodes).unwrap();
+    let a = layout.measured_dofs().unwrap();
+    let o: Vec<usize> = (0..sys.k.rows()).filter(|d| !a.contains(d)).collect();
+    Case {
+        model,
+        sys,
+        layout,
+        a,
+        o,
+    }
+}
+
+fn sub(a: &Mat<f64>, rows: &[usize], cols: &[usize]) -> Mat<f64> {
+    Mat::from_fn(rows.len(), cols.len(), |i, j| a[(rows[i], cols[j])])
+}
+
+/// Dense `x_o = -Z_oo^-1 Z_oa x_a` (LU with partial pivoting).
+fn dense_dynamic(c: &Case, lambda: f64, xa: &[f64]) -> Vec<f64> {
+    let z = dense(&c.sys.k) - dense(&c.sys.m) * faer::Scale(lambda);
+    let zoo = sub(&z, &c.o, &c.o);
+    let zoa = sub(&z, &c.o, &c.a);
+    let xa = Mat::from_fn(xa.len(), 1, |i, _| xa[i]);
+    let rhs = -(&zoa * &xa);
+    let xo = zoo.partial_piv_lu().solve(&rhs);
+    let mut x = vec![0.0; c.sys.k.rows()];
+    for (i, d) in c.a.iter().enumerate() {
+        x[*d] = xa[(i, 0)];
+    }
+    for (i, d) in c.o.iter().enumerate() {
+        x[*d] = xo[(i, 0)];
+    }
+    x
+}
+
+#[test]
+fn static_dynamic_and_serep_equal_dense_formulas() {
+    let c = case();
+    let eig = full_eigen(&c.sys);
+    let exp = Expander::new(&c.sys.k, &c.sys.m, &c.layout).unwrap();
+    assert_eq!(exp.partition().measured(), &c.a[..]);
+    // a "test" shape from the real structure (softened root), at the sensors
+    let (lt, xt) = perturbed_mode(&c.model, 0.05, 0.8, 1);
+    let xa: Vec<f64> = c.a.iter().map(|d| xt[*d]).collect();
+    let ya = Mat::from_fn(xa.len(), 2, |i, _| xa[i]);
+    let got = exp.dynamic(&[lt, 0.0], ya.as_ref()).unwrap();
+    let reference_dyn = dense_dynamic(&c, lt, &xa);
+    let reference_static = dense_dynamic(&c, 0.0, &xa);
+    assert!(
+        rel(&col(&got, 0), &reference_dyn) < 1e-10,
+        "dynamic {:e}",
+        rel(&col(&got, 0), &reference_dyn)
+    );
+    assert!(rel(&col(&got, 1), &reference_static) < 1e-10);
+    let st = exp.static_(ya.as_ref()).unwrap();
+    assert!(rel(&col(&st, 0), &reference_static) < 1e-10);
+    // SEREP with 5 model modes: dense pseudo-inverse by normal equations
+    let phi = eig.vectors.as_ref().subcols(0, 5).to_owned();
+    let phia = sub(&phi, &c.a, &(0..5).collect::<Vec<_>>());
+    let ya1 = Mat::from_fn(xa.len(), 1, |i, _| xa[i]);
+    let normal = phia.transpose() * &phia;
+    let coef = normal.partial_piv_lu().solve(&(phia.transpose() * &ya1));
+    let reference_serep = &phi * &coef;
+    let serep = exp.serep(phi.as_ref(), ya1.as_ref()).unwrap();
+    assert!(rel(&col(&serep, 0), &col(&reference_serep, 0)) < 1e-9);
+}
+
+/// An exact model mode at the sensors, expanded at its own eigenvalue, is recovered exactly by the
+/// dynamic expansion; SEREP is exact when the mode is in its basis; Guyan is exact for a static
+/// deflection under loads at the measured DOFs.
+#[test]
+fn exact_recoveries() {
+    let c = case();
+    let eig = full_eigen(&c.sys);
+    let exp = Expander::new(&c.sys.k, &c.sys.m, &c.layout).unwrap();
+    for j in [0, 2, 4] {
+        let phi = col(&eig.vectors, j);
+        let ya = Mat::from_fn(c.a.len(), 1, |i, _| phi[c.a[i]]);
+        let x = exp.dynamic(&[eig.values[j]], ya.as_ref()).unwrap();
+        assert!(
+            rel(&col(&x, 0), &phi) < 1e-8,
+            "mode {j}: {:e}",
+            rel(&col(&x, 0), &phi)
+        );
+        let basis = eig.vectors.as_ref().subcols(0, 6);
+        let s = exp.serep(basis, ya.as_ref()).unwrap();
+        assert!(rel(&col(&s, 0), &phi) < 1e-10);
+    }
+    // static deflection under forces on the measured DOFs
+    let mut f = vec![0.0; c.sys.k.rows()];
+    for (i, d) in c.a.iter().enumerate() {
+        f[*d] = ((i * 7) % 5) as f64 - 2.0;
+    }
+    let kd = dense(&c.sys.k);
+    let u = kd
+        .partial_piv_lu()
+        .solve(&Mat::from_fn(f.len(), 1, |i, _| f[i]));
+    let u = col(&u, 0);
+    let ya = Mat::from_fn(c.a.len(), 1, |i, _| u[c.a[i]]);
+    let x = exp.static_(ya.as_ref()).unwrap();
+    assert!(rel(&col(&x, 0), &u) < 1e-10);
+}
+
+#[test]
+fn bad_expansion_input() {
+    let c = case();
+    let exp = Expander::new(&c.sys.k, &c.sys.m, &c.layout).unwrap();
+    let s = c.a.len();
+    let eig = full_eigen(&c.sys);
+    let ya = Mat::from_fn(s, 1, |i, _| (i as f64).sin() + 1.0);
+    // more SEREP modes than sensors
+    let too_many = eig.vectors.as_ref().subcols(0, s + 1);
+    assert!(exp.serep(too_many, ya.as_ref()).is_err());
+    // an expansion frequency on an eigenvalue of the structure with its sensors held: an error,
+    // not a NaN
+    let kd = dense(&c.sys.k);
+    let md = dense(&c.sys.m);
+    let held =
+        generalized_symmetric_eigen(sub(&kd, &c.o, &c.o).as_ref(), sub(&md, &c.o, &c.o).as_ref())
+            .unwrap();
+    let err = exp.dynamic(&[held.values[0]], ya.as_ref()).unwrap_err();
+    assert!(err.to_string().contains("singular"), "{err}");
+    // sizes and NaN
+    assert!(exp.dynamic(&[1.0, 2.0], ya.as_ref()).is_err());
+    let short = Mat::from_fn(s - 1, 1, |_, _| 1.0);
+    assert!(exp.static_(short.as_ref()).is_err());
+    let mut nan = ya.clone();
+    nan[(3, 0)] = f64::NAN;
+    assert!(exp.static_(nan.as_ref()).is_err());
+    assert!(exp.dynamic(&[f64::INFINITY], ya.as_ref()).is_err());
+    // an oblique sensor has no measured DOF
+    let tip = c
+        .model
+        .mesh()
+        .node_id(c.model.mesh().node_set("xmax").unwrap()[0]);
+    let oblique = SensorLayout::new(
+        c.model.mesh(),
+        &c.sys.dofs,
+        vec![Sensor {
+            node: tip,
+            direction: [1.0, 1.0, 0.0],
+        }],
+    )
+    .unwrap();
+    assert!(Expander::new(&c.sys.k, &c.sys.m, &oblique).is_err());
+    // every DOF measured
+    let full = SensorLayout::full(c.model.mesh(), &c.sys.dofs);
+    assert!(Expander::new(&c.sys.k, &c.sys.m, &full).is_err());
+    // a free-free model with one measured node cannot be expanded statically (rigid rotation
+    // about that node is free)
+    let ff = bar([4, 1, 1], false);
+    let sff = ff.assemble(MassKind::Consistent).unwrap();
+    let one = SensorLayout::triaxial(ff.mesh(), &sff.dofs, &[ff.mesh().node_id(0)]).unwrap();
+    let e = Expander::new(&sff.k, &sff.m, &one).unwrap();
+    let y = Mat::from_fn(3, 1, |i, _| i as f64);
+    let err = e.static_(y.as_ref()).unwrap_err();
+    assert!(err.to_string().contains("rigid"), "{err}");
+}
+
+/// Minimum-residual and MDRE-WE expansions against dense solutions of their normal equations,
+/// and exact recovery of a model mode at its own eigenvalue.
+#[test]
+fn minimum_residual_and_mdre_equal_dense_formulas() {
+    let c = case();
+    let exp = Expander::new(&c.sys.k, &c.sys.m, &c.layout).unwrap();
+    let (kd, md) = (dense(&c.sys.k), dense(&c.sys.m));
+    let (lt, xt) = perturbed_mode(&c.model, 0.05, 0.8, 1);
+    let xa: Vec<f64> = c.a.iter().map(|d| xt[*d]).collect();
+    let ya = Mat::from_fn(xa.len(), 1, |i, _| xa[i]);
+    let z = &kd - &md * faer::Scale(lt);
+    // minimum residual: (Z_o^T M^-1 Z_o) x_o = -Z_o^T M^-1 Z_a y
+    let zo = sub(&z, &(0..z.nrows()).collect::<Vec<_>>(), &c.o);
+    let za = sub(&z, &(0..z.nrows()).collect::<Vec<_>>(), &c.a);
+    let mlu = md.partial_piv_lu();
+    let minv_zo = mlu.solve(&zo);
+    let normal = zo.transpose() * &minv_zo;
+    let rhs = -(minv_zo.transpose() * (&za * &ya));
+    let xo = normal.partial_piv_lu().solve(&rhs);
+    let mut reference = vec![0.0; z.nrows()];
+    for (i, d) in c.a.iter().enumerate() {
+        reference[*d] = xa[i];
+    }
+    for (i, d) in c.o.iter().enumerate() {
+        reference[*d] = xo[(i, 0)];
+    }
+    let got = exp.minimum_residual(&[lt], ya.as_ref()).unwrap();
+    assert!(
+        rel(&col(&got, 0), &reference) < 1e-7,
+        "min-res {:e}",
+        rel(&col(&got, 0), &reference)
+    );
+    // MDRE-WE: (Z K^-1 Z + gamma C^T C) x = gamma C^T y
+    let gamma = 1e12;
+    let kinv_z = kd.partial_piv_lu().solve(&z);
+    let mut lhs = &z * &kinv_z;
+    let mut r = Mat::zeros(z.nrows(), 1);
+    for (i, d) in c.a.iter().enumerate() {
+        lhs[(*d, *d)] += gamma;
+        r[(*d, 0)] = gamma * xa[i];
+    }
+    let reference = lhs.partial_piv_lu().solve(&r);
+    let got = exp.mdre(&[lt], ya.as_ref(), gamma, 0.0).unwrap();
+    assert!(
+        rel(&col(&got, 0), &col(&reference, 0)) < 1e-7,
+        "MDRE {:e}",
+        rel(&col(&got, 0), &col(&reference, 0))
+    );
+    // exact mode at its own eigenvalue: both recover it
+    let eig = full_eigen(&c.sys);
+    let phi = col(&eig.vectors, 2);
+    let ya = Mat::from_fn(c.a.len(), 1, |i, _| phi[c.a[i]]);
+    let x = exp.minimum_residual(&[eig.values[2]], ya.as_ref()).unwrap();
+    assert!(
+        rel(&col(&x, 0), &phi) < 1e-7,
+        "{:e}",
+        rel(&col(&x, 0), &phi)
+    );
+    let x = exp.mdre(&[eig.values[2]], ya.as_ref(), gamma, 0.0).unwrap();
+    assert!(
+        rel(&col(&x, 0), &phi) < 1e-7,
+        "{:e}",
+        rel(&col(&x, 0), &phi)
+    );
+    // bad weights
+    assert!(exp.mdre(&[lt], ya.as_ref(), 0.0, 0.0).is_err());
+    assert!(exp.mdre(&[lt], ya.as_ref(), 1.0, -1.0).is_err());
+}
