@@ -54,6 +54,7 @@ pub mod placement;
 pub mod report;
 pub mod residues;
 pub mod sensors;
+pub mod study;
 
 pub use bounds::{ElementBounds, element_bounds};
 pub use error::CorrelateError;

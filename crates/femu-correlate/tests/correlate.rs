@@ -8,4 +8,5 @@ mod correlate {
     mod identities;
     mod inputs;
     mod placement;
+    mod study;
 }
