@@ -9,6 +9,7 @@
 //! | [`sparse`] | `femu-sparse` | sparse matrix type, factorizations, eigensolvers |
 //! | [`fem`] | `femu-fem` | meshes, solid elements, materials, assembly of `K` and `M` |
 //! | [`correlate`] | `femu-correlate` | residues, MAC/MSD, pairing, the a priori estimators |
+//! | [`io`] | `femu-io` | file formats: Abaqus/CalculiX `.inp` (read and write) |
 //!
 //! ```
 //! use femu::prelude::*;
@@ -23,6 +24,7 @@
 
 pub use femu_correlate as correlate;
 pub use femu_fem as fem;
+pub use femu_io as io;
 pub use femu_sparse as sparse;
 
 /// Everything most programs need, from every member crate.

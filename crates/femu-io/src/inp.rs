@@ -1,0 +1,920 @@
+//! Abaqus/CalculiX input decks (`.inp`): read a model (mesh, sets, materials, sections,
+//! boundary conditions, the `*FREQUENCY` step) and write one that CalculiX runs.
+//!
+//! Supported keywords: `*HEADING`, `*NODE`, `*ELEMENT` (C3D4, C3D10, C3D8, C3D20, C3D6, C3D15; the
+//! reduced-integration C3D8R and C3D20R are read as full integration, with a warning), `*NSET`,
+//! `*ELSET` (lists of ids or set names, or `GENERATE`), `*MATERIAL`, `*ELASTIC` (isotropic),
+//! `*DENSITY`, `*SOLID SECTION`, `*BOUNDARY` (DOFs 1-3, zero values), `*INCLUDE`, `*STEP`,
+//! `*FREQUENCY`, `*END STEP`. Any other keyword is skipped with a warning. Names are
+//! case-insensitive (stored upper case); comments (`**`) and blank lines are ignored; numbers may
+//! use Fortran `D` exponents. Node ordering is femu's (which is Abaqus's).
+
+use crate::{IoError, Warning};
+use femu_fem::element::ElementKind;
+use femu_fem::material::{Elasticity, Material};
+use femu_fem::mesh::Mesh;
+use femu_fem::model::Model;
+use std::collections::{BTreeMap, HashMap};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The `*FREQUENCY` step: how many modes, and the shift (s^-2) when given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrequencyStep {
+    /// Number of eigenvalues requested.
+    pub count: usize,
+    /// Shift point in (cycles/time)^2 as Abaqus writes it, when given.
+    pub shift_cycles2: Option<f64>,
+}
+
+/// A constraint target: one node or a node set.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Target {
+    /// A node id.
+    Node(u64),
+    /// A node set name (upper case).
+    Set(String),
+}
+
+/// A `*BOUNDARY` line: DOFs `first..=last` (1-based, 1-3) of the target fixed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Boundary {
+    /// What is fixed.
+    pub target: Target,
+    /// First DOF (1 = x).
+    pub first: usize,
+    /// Last DOF.
+    pub last: usize,
+    /// Where it was defined.
+    pub line: Location,
+}
+
+/// A `*SOLID SECTION`: the material of an element set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Section {
+    /// Element set (upper case).
+    pub elset: String,
+    /// Material name (upper case).
+    pub material: String,
+    /// Where it was defined.
+    pub line: Location,
+}
+
+/// A file and 1-based line.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Location {
+    /// The file.
+    pub path: PathBuf,
+    /// The line.
+    pub line: usize,
+}
+
+/// A parsed deck.
+#[derive(Debug, Clone)]
+pub struct InpDeck {
+    /// Nodes, elements and sets.
+    pub mesh: Mesh,
+    /// Materials by upper-case name.
+    pub materials: BTreeMap<String, Material>,
+    /// Solid sections in file order.
+    pub sections: Vec<Section>,
+    /// Boundary conditions in file order.
+    pub boundaries: Vec<Boundary>,
+    /// The frequency step, if any.
+    pub frequency: Option<FrequencyStep>,
+    /// Non-fatal findings.
+    pub warnings: Vec<Warning>,
+    /// where each element was defined (for errors found later)
+    element_lines: HashMap<u64, Location>,
+}
+
+struct Line {
+    path: PathBuf,
+    number: usize,
+    text: String,
+}
+
+fn io_err(path: &Path, e: std::io::Error) -> IoError {
+    IoError::Io {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    }
+}
+
+/// Reads the lines of `path` with its `*INCLUDE`s expanded in place (depth limited to 16).
+fn load(path: &Path, depth: usize, out: &mut Vec<Line>) -> Result<(), IoError> {
+    let text = std::fs::read(path).map_err(|e| io_err(path, e))?;
+    let text = String::from_utf8_lossy(&text);
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    for (i, raw) in text.lines().enumerate() {
+        let t = raw.trim_end_matches('\r');
+        let upper = t.trim_start().to_ascii_uppercase();
+        if upper.starts_with("*INCLUDE") {
+            let (_, params) = keyword(t);
+            let Some(file) = params.get("INPUT") else {
+                return Err(IoError::Parse {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    reason: "*INCLUDE without INPUT=".into(),
+                });
+            };
+            if depth >= 16 {
+                return Err(IoError::Parse {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    reason: "*INCLUDE nested more than 16 deep (a cycle?)".into(),
+                });
+            }
+            let inc = dir.join(file.trim_matches('"'));
+            load(&inc, depth + 1, out)?;
+            continue;
+        }
+        out.push(Line {
+            path: path.to_path_buf(),
+            number: i + 1,
+            text: t.to_string(),
+        });
+    }
+    Ok(())
+}
+
+/// `*KEYWORD, A=b, FLAG` -> ("KEYWORD", {A: b, FLAG: ""}); keys upper case, values as written.
+fn keyword(line: &str) -> (String, HashMap<String, String>) {
+    let mut parts = line.trim().trim_start_matches('*').split(',');
+    let name = parts
+        .next()
+        .unwrap_or("")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
+        .to_ascii_uppercase();
+    let mut params = HashMap::new();
+    for p in parts {
+        let p = p.trim();
+        if p.is_empty() {
+            continue;
+        }
+        match p.split_once('=') {
+            Some((k, v)) => params.insert(k.trim().to_ascii_uppercase(), v.trim().to_string()),
+            None => params.insert(p.to_ascii_uppercase(), String::new()),
+        };
+    }
+    (name, params)
+}
+
+fn fields(line: &str) -> Vec<&str> {
+    let mut f: Vec<&str> = line.split(',').map(str::trim).collect();
+    while f.last().is_some_and(|s| s.is_empty()) {
+        f.pop();
+    }
+    f
+}
+
+fn parse_f64(s: &str) -> Option<f64> {
+    s.parse::<f64>()
+        .ok()
+        .or_else(|| s.replace(['D', 'd'], "E").parse().ok())
+        .filter(|v: &f64| v.is_finite())
+}
+
+/// The element kind of an Abaqus type name, and whether it was read as an approximation.
+fn element_kind(name: &str) -> Option<(ElementKind, bool)> {
+    Some(match name.to_ascii_uppercase().as_str() {
+        "C3D4" => (ElementKind::Tet4, false),
+        "C3D10" => (ElementKind::Tet10, false),
+        "C3D8" => (ElementKind::Hex8, false),
+        "C3D20" => (ElementKind::Hex20, false),
+        "C3D6" => (ElementKind::Penta6, false),
+        "C3D15" => (ElementKind::Penta15, false),
+        "C3D8R" => (ElementKind::Hex8, true),
+        "C3D20R" => (ElementKind::Hex20, true),
+        _ => return None,
+    })
+}
+
+#[derive(Default)]
+struct PendingMaterial {
+    name: String,
+    young: Option<(f64, f64)>,
+    density: Option<f64>,
+    line: usize,
+    path: PathBuf,
+}
+
+/// Reads a deck from a file (with its includes).
+///
+/// # Errors
+/// [`IoError::Io`] for unreadable files, [`IoError::Parse`] with file and line for malformed
+/// content, [`IoError::Model`] for a valid deck that does not make a valid mesh.
+pub fn read_inp(path: impl AsRef<Path>) -> Result<InpDeck, IoError> {
+    let mut lines = Vec::new();
+    load(path.as_ref(), 0, &mut lines)?;
+    parse(&lines)
+}
+
+/// Parses a deck held in memory (`path` names it in messages; `*INCLUDE` is resolved against the
+/// file system relative to `path`).
+///
+/// # Errors
+/// As [`read_inp`].
+pub fn parse_inp(text: &str, path: impl AsRef<Path>) -> Result<InpDeck, IoError> {
+    let path = path.as_ref();
+    let mut lines = Vec::new();
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    for (i, raw) in text.lines().enumerate() {
+        let t = raw.trim_end_matches('\r');
+        if t.trim_start().to_ascii_uppercase().starts_with("*INCLUDE") {
+            let (_, params) = keyword(t);
+            let file = params.get("INPUT").ok_or_else(|| IoError::Parse {
+                path: path.to_path_buf(),
+                line: i + 1,
+                reason: "*INCLUDE without INPUT=".into(),
+            })?;
+            load(&dir.join(file.trim_matches('"')), 1, &mut lines)?;
+            continue;
+        }
+        lines.push(Line {
+            path: path.to_path_buf(),
+            number: i + 1,
+            text: t.to_string(),
+        });
+    }
+    parse(&lines)
+}
+
+#[allow(clippy::type_complexity)]
+fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
+    let err = |l: &Line, reason: String| IoError::Parse {
+        path: l.path.clone(),
+        line: l.number,
+        reason,
+    };
+    let mut warnings = Vec::new();
+    let warn = |w: &mut Vec<Warning>, l: &Line, message: String| {
+        w.push(Warning {
+            path: l.path.clone(),
+            line: l.number,
+            message,
+        })
+    };
+    // raw records first: elements may refer to nodes defined later in the file
+    let mut nodes: Vec<(u64, [f64; 3], usize)> = Vec::new();
+    let mut elements: Vec<(u64, ElementKind, Vec<u64>, usize)> = Vec::new();
+    // set name -> (is_node_set, tokens, line index)
+    let mut sets: Vec<(String, bool, Vec<String>, bool, usize)> = Vec::new();
+    let mut node_set_of_block: Vec<(String, Vec<u64>)> = Vec::new();
+    let mut elem_set_of_block: Vec<(String, Vec<u64>)> = Vec::new();
+    let mut materials = BTreeMap::new();
+    let mut pending: Option<PendingMaterial> = None;
+    let mut sections = Vec::new();
+    let mut boundaries = Vec::new();
+    let mut frequency = None;
+    let mut block = String::new();
+    let mut block_params: HashMap<String, String> = HashMap::new();
+    let mut element_kind_now: Option<(ElementKind, usize)> = None;
+    let mut element_buffer: Vec<String> = Vec::new();
+    let mut element_start = 0usize;
+    let finish_material = |p: Option<PendingMaterial>,
+                           materials: &mut BTreeMap<String, Material>|
+     -> Result<(), IoError> {
+        if let Some(p) = p {
+            let (e, nu) = p.young.ok_or_else(|| IoError::Parse {
+                path: p.path.clone(),
+                line: p.line,
+                reason: format!("material {} has no *ELASTIC", p.name),
+            })?;
+            let rho = p.density.ok_or_else(|| IoError::Parse {
+                path: p.path.clone(),
+                line: p.line,
+                reason: format!(
+                    "material {} has no *DENSITY (a frequency analysis needs it)",
+                    p.name
+                ),
+            })?;
+            let m = Material::isotropic(p.name.clone(), e, nu, rho).map_err(|source| {
+                IoError::Model {
+                    path: p.path.clone(),
+                    line: p.line,
+                    source,
+                }
+            })?;
+            materials.insert(p.name, m);
+        }
+        Ok(())
+    };
+    for (li, l) in lines.iter().enumerate() {
+        let t = l.text.trim();
+        if t.is_empty() || t.starts_with("**") {
+            continue;
+        }
+        if t.starts_with('*') {
+            if !element_buffer.is_empty() {
+                return Err(err(
+                    &lines[element_start],
+                    "element definition cut short by a keyword".into(),
+                ));
+            }
+            let (name, params) = keyword(t);
+            let material_keyword = matches!(name.as_str(), "ELASTIC" | "DENSITY");
+            if !material_keyword && name != "MATERIAL" {
+                finish_material(pending.take(), &mut materials)?;
+            }
+            block = name.clone();
+            block_params = params.clone();
+            element_kind_now = None;
+            match name.as_str() {
+                "HEADING" | "END STEP" | "STEP" => {}
+                "NODE" => {
+                    if let Some(s) = params.get("NSET") {
+                        node_set_of_block.push((s.to_ascii_uppercase(), Vec::new()));
+                    }
+                }
+                "ELEMENT" => {
+                    let ty = params
+                        .get("TYPE")
+                        .ok_or_else(|| err(l, "*ELEMENT without TYPE=".into()))?;
+                    let (kind, approx) = element_kind(ty).ok_or_else(|| {
+                        err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D20, C3D6, C3D15, C3D8R, C3D20R)"))
+                    })?;
+                    if approx {
+                        warn(
+                            &mut warnings,
+                            l,
+                            format!("{ty} read as {} with full integration", kind.abaqus_name()),
+                        );
+                    }
+                    element_kind_now = Some((kind, kind.num_nodes()));
+                    if let Some(s) = params.get("ELSET") {
+                        elem_set_of_block.push((s.to_ascii_uppercase(), Vec::new()));
+                    }
+                }
+                "NSET" | "ELSET" => {
+                    let key = if name == "NSET" { "NSET" } else { "ELSET" };
+                    let set = params
+                        .get(key)
+                        .ok_or_else(|| err(l, format!("*{name} without {key}=")))?;
+                    sets.push((
+                        set.to_ascii_uppercase(),
+                        name == "NSET",
+                        Vec::new(),
+                        params.contains_key("GENERATE"),
+                        li,
+                    ));
+                }
+                "MATERIAL" => {
+                    finish_material(pending.take(), &mut materials)?;
+                    let mname = params
+                        .get("NAME")
+                        .ok_or_else(|| err(l, "*MATERIAL without NAME=".into()))?;
+                    pending = Some(PendingMaterial {
+                        name: mname.to_ascii_uppercase(),
+                        line: l.number,
+                        path: l.path.clone(),
+                        ..Default::default()
+                    });
+                }
+                "ELASTIC" | "DENSITY" => {
+                    if pending.is_none() {
+                        return Err(err(l, format!("*{name} outside a *MATERIAL")));
+                    }
+                    let unsupported = params.get("TYPE").filter(|ty| {
+                        !ty.eq_ignore_ascii_case("ISOTROPIC") && !ty.eq_ignore_ascii_case("ISO")
+                    });
+                    if let (true, Some(ty)) = (name == "ELASTIC", unsupported) {
+                        return Err(err(
+                            l,
+                            format!("*ELASTIC, TYPE={ty} is not supported yet (isotropic only)"),
+                        ));
+                    }
+                }
+                "SOLID SECTION" => {
+                    let elset = params
+                        .get("ELSET")
+                        .ok_or_else(|| err(l, "*SOLID SECTION without ELSET=".into()))?;
+                    let material = params
+                        .get("MATERIAL")
+                        .ok_or_else(|| err(l, "*SOLID SECTION without MATERIAL=".into()))?;
+                    sections.push(Section {
+                        elset: elset.to_ascii_uppercase(),
+                        material: material.to_ascii_uppercase(),
+                        line: Location {
+                            path: l.path.clone(),
+                            line: l.number,
+                        },
+                    });
+                }
+                "BOUNDARY" => {
+                    if params.contains_key("TYPE") || params.contains_key("AMPLITUDE") {
+                        warn(
+                            &mut warnings,
+                            l,
+                            "*BOUNDARY options ignored (homogeneous constraints only)".into(),
+                        );
+                    }
+                }
+                "FREQUENCY" => {}
+                other => warn(&mut warnings, l, format!("keyword *{other} ignored")),
+            }
+            continue;
+        }
+        // data line of the current block
+        let f = fields(t);
+        match block.as_str() {
+            "NODE" => {
+                if f.len() < 3 {
+                    return Err(err(
+                        l,
+                        format!("a node needs an id and coordinates, got {t:?}"),
+                    ));
+                }
+                let id = f[0]
+                    .parse::<u64>()
+                    .map_err(|_| err(l, format!("node id {:?} is not a positive integer", f[0])))?;
+                let mut x = [0.0; 3];
+                for (c, s) in f[1..f.len().min(4)].iter().enumerate() {
+                    x[c] = parse_f64(s).ok_or_else(|| {
+                        err(
+                            l,
+                            format!("coordinate {s:?} of node {id} is not a finite number"),
+                        )
+                    })?;
+                }
+                nodes.push((id, x, li));
+                if let Some(last) = node_set_of_block
+                    .last_mut()
+                    .filter(|_| block_params.contains_key("NSET"))
+                {
+                    last.1.push(id);
+                }
+            }
+            "ELEMENT" => {
+                let (kind, nn) = element_kind_now.expect("set with the keyword");
+                if element_buffer.is_empty() {
+                    element_start = li;
+                }
+                element_buffer.extend(f.iter().map(|s| s.to_string()));
+                if element_buffer.len() < nn + 1 {
+                    continue; // continued on the next line
+                }
+                let start = &lines[element_start];
+                if element_buffer.len() > nn + 1 {
+                    return Err(err(
+                        start,
+                        format!(
+                            "{} needs {nn} nodes, got {}",
+                            kind.abaqus_name(),
+                            element_buffer.len() - 1
+                        ),
+                    ));
+                }
+                let ids: Result<Vec<u64>, _> =
+                    element_buffer.iter().map(|s| s.parse::<u64>()).collect();
+                let ids = ids.map_err(|_| {
+                    err(
+                        start,
+                        format!("element line has a non-integer entry: {element_buffer:?}"),
+                    )
+                })?;
+                elements.push((ids[0], kind, ids[1..].to_vec(), element_start));
+                if let Some(last) = elem_set_of_block
+                    .last_mut()
+                    .filter(|_| block_params.contains_key("ELSET"))
+                {
+                    last.1.push(ids[0]);
+                }
+                element_buffer.clear();
+            }
+            "NSET" | "ELSET" => {
+                let last = sets.last_mut().expect("set with the keyword");
+                last.2.extend(f.iter().map(|s| s.to_string()));
+            }
+            "ELASTIC" => {
+                let p = pending.as_mut().expect("checked at the keyword");
+                if f.len() < 2 {
+                    return Err(err(l, "*ELASTIC needs E and nu".into()));
+                }
+                let e = parse_f64(f[0])
+                    .ok_or_else(|| err(l, format!("E = {:?} is not a number", f[0])))?;
+                let nu = parse_f64(f[1])
+                    .ok_or_else(|| err(l, format!("nu = {:?} is not a number", f[1])))?;
+                if f.len() > 2 {
+                    warn(
+                        &mut warnings,
+                        l,
+                        "temperature-dependent elasticity: the first line is used".into(),
+                    );
+                }
+                if p.young.is_none() {
+                    p.young = Some((e, nu));
+                }
+            }
+            "DENSITY" => {
+                let p = pending.as_mut().expect("checked at the keyword");
+                let rho = f
+                    .first()
+                    .and_then(|s| parse_f64(s))
+                    .ok_or_else(|| err(l, format!("density {t:?} is not a number")))?;
+                if p.density.is_none() {
+                    p.density = Some(rho);
+                }
+            }
+            "BOUNDARY" => {
+                if f.len() < 2 {
+                    return Err(err(
+                        l,
+                        format!("*BOUNDARY needs a node or set and a DOF, got {t:?}"),
+                    ));
+                }
+                let target = match f[0].parse::<u64>() {
+                    Ok(id) => Target::Node(id),
+                    Err(_) => Target::Set(f[0].to_ascii_uppercase()),
+                };
+                let first = f[1]
+                    .parse::<usize>()
+                    .map_err(|_| err(l, format!("DOF {:?} is not an integer", f[1])))?;
+                let last = match f.get(2) {
+                    Some(s) if !s.is_empty() => s
+                        .parse::<usize>()
+                        .map_err(|_| err(l, format!("DOF {s:?} is not an integer")))?,
+                    _ => first,
+                };
+                if let Some(v) = f.get(3).and_then(|s| parse_f64(s)).filter(|v| *v != 0.0) {
+                    {
+                        warn(
+                            &mut warnings,
+                            l,
+                            format!(
+                                "prescribed value {v} read as 0 (femu's constraints are homogeneous)"
+                            ),
+                        );
+                    }
+                }
+                if first == 0 || last < first {
+                    return Err(err(l, format!("DOF range {first}..{last} is invalid")));
+                }
+                if last > 3 {
+                    warn(&mut warnings, l, "DOFs above 3 (rotations, temperature) do not exist on solid elements: ignored".into());
+                }
+                if first <= 3 {
+                    boundaries.push(Boundary {
+                        target,
+                        first,
+                        last: last.min(3),
+                        line: Location {
+                            path: l.path.clone(),
+                            line: l.number,
+                        },
+                    });
+                }
+            }
+            "FREQUENCY" if frequency.is_none() => {
+                let count = f
+                    .first()
+                    .and_then(|s| s.parse::<usize>().ok())
+                    .filter(|c| *c > 0)
+                    .ok_or_else(|| {
+                        err(
+                            l,
+                            format!("*FREQUENCY needs a positive number of eigenvalues, got {t:?}"),
+                        )
+                    })?;
+                let shift_cycles2 = f.get(2).and_then(|s| parse_f64(s));
+                frequency = Some(FrequencyStep {
+                    count,
+                    shift_cycles2,
+                });
+            }
+            "HEADING" | "SOLID SECTION" | "STEP" | "END STEP" => {}
+            _ => {} // data of an ignored keyword
+        }
+    }
+    if !element_buffer.is_empty() {
+        return Err(err(
+            &lines[element_start],
+            "element definition cut short at the end of the file".into(),
+        ));
+    }
+    finish_material(pending.take(), &mut materials)?;
+    // build the mesh
+    let model_err = |li: usize, source| IoError::Model {
+        path: lines[li].path.clone(),
+        line: lines[li].number,
+        source,
+    };
+    let mut mesh = Mesh::new();
+    for (id, x, li) in &nodes {
+        mesh.add_node(*id, *x).map_err(|e| model_err(*li, e))?;
+    }
+    let mut element_lines = HashMap::new();
+    for (id, kind, ids, li) in &elements {
+        mesh.add_element(*id, *kind, ids)
+            .map_err(|e| model_err(*li, e))?;
+        element_lines.insert(
+            *id,
+            Location {
+                path: lines[*li].path.clone(),
+                line: lines[*li].number,
+            },
+        );
+    }
+    let mut node_sets: BTreeMap<String, Vec<u64>> = BTreeMap::new();
+    let mut elem_sets: BTreeMap<String, Vec<u64>> = BTreeMap::new();
+    for (name, ids) in node_set_of_block {
+        node_sets.entry(name).or_default().extend(ids);
+    }
+    for (name, ids) in elem_set_of_block {
+        elem_sets.entry(name).or_default().extend(ids);
+    }
+    for (name, is_node, tokens, generate, li) in sets {
+        let l = &lines[li];
+        let mut ids = Vec::new();
+        if generate {
+            let nums: Result<Vec<u64>, _> = tokens.iter().map(|s| s.parse::<u64>()).collect();
+            let nums =
+                nums.map_err(|_| err(l, format!("GENERATE needs integers, got {tokens:?}")))?;
+            if nums.len() % 3 != 0 && nums.len() != 2 {
+                return Err(err(
+                    l,
+                    format!("GENERATE needs first, last[, increment], got {tokens:?}"),
+                ));
+            }
+            for chunk in nums.chunks(3) {
+                let (a, b, inc) = (chunk[0], chunk[1], chunk.get(2).copied().unwrap_or(1));
+                if inc == 0 || b < a {
+                    return Err(err(l, format!("GENERATE range {a}, {b}, {inc} is invalid")));
+                }
+                ids.extend((a..=b).step_by(inc as usize));
+            }
+        } else {
+            for tok in &tokens {
+                match tok.parse::<u64>() {
+                    Ok(id) => ids.push(id),
+                    Err(_) => {
+                        let key = tok.to_ascii_uppercase();
+                        let src = if is_node { &node_sets } else { &elem_sets };
+                        let members = src
+                            .get(&key)
+                            .ok_or_else(|| err(l, format!("unknown set {tok}")))?;
+                        ids.extend(members.iter().copied());
+                    }
+                }
+            }
+        }
+        if is_node {
+            &mut node_sets
+        } else {
+            &mut elem_sets
+        }
+        .entry(name)
+        .or_default()
+        .extend(ids);
+    }
+    for (name, ids) in &node_sets {
+        mesh.add_node_set(name.clone(), ids)
+            .map_err(|e| IoError::Parse {
+                path: lines.first().map(|l| l.path.clone()).unwrap_or_default(),
+                line: 0,
+                reason: format!("node set {name}: {e}"),
+            })?;
+    }
+    for (name, ids) in &elem_sets {
+        mesh.add_element_set(name.clone(), ids)
+            .map_err(|e| IoError::Parse {
+                path: lines.first().map(|l| l.path.clone()).unwrap_or_default(),
+                line: 0,
+                reason: format!("element set {name}: {e}"),
+            })?;
+    }
+    Ok(InpDeck {
+        mesh,
+        materials,
+        sections,
+        boundaries,
+        frequency,
+        warnings,
+        element_lines,
+    })
+}
+
+impl InpDeck {
+    /// The model: mesh (validated), materials by section, fixed DOFs.
+    ///
+    /// # Errors
+    /// [`IoError::Model`] naming the line of an invalid element (inverted, degenerate), a section
+    /// on an unknown set or material, a boundary on an unknown node or set; elements without a
+    /// section.
+    pub fn to_model(&self) -> Result<Model, IoError> {
+        let mut model = Model::new(self.mesh.clone()).map_err(|source| {
+            let loc = element_of(&source).and_then(|id| self.element_lines.get(&id));
+            IoError::Model {
+                path: loc.map(|l| l.path.clone()).unwrap_or_default(),
+                line: loc.map_or(0, |l| l.line),
+                source,
+            }
+        })?;
+        for s in &self.sections {
+            let material = self
+                .materials
+                .get(&s.material)
+                .ok_or_else(|| IoError::Parse {
+                    path: s.line.path.clone(),
+                    line: s.line.line,
+                    reason: format!("unknown material {}", s.material),
+                })?;
+            model
+                .set_material(Some(&s.elset), material.clone())
+                .map_err(|source| IoError::Model {
+                    path: s.line.path.clone(),
+                    line: s.line.line,
+                    source,
+                })?;
+        }
+        for b in &self.boundaries {
+            let comps: Vec<usize> = (b.first - 1..b.last).collect();
+            let r = match &b.target {
+                Target::Node(id) => model.fix_nodes(&[*id], &comps),
+                Target::Set(s) => model.fix_set(s, &comps),
+            };
+            r.map_err(|source| IoError::Model {
+                path: b.line.path.clone(),
+                line: b.line.line,
+                source,
+            })?;
+        }
+        // every element needs a material
+        for e in 0..model.mesh().element_count() {
+            if let Err(source) = model.material_of(e) {
+                let id = model.mesh().element(e).id;
+                let loc = self.element_lines.get(&id);
+                return Err(IoError::Model {
+                    path: loc.map(|l| l.path.clone()).unwrap_or_default(),
+                    line: loc.map_or(0, |l| l.line),
+                    source,
+                });
+            }
+        }
+        Ok(model)
+    }
+}
+
+fn element_of(e: &femu_fem::FemError) -> Option<u64> {
+    use femu_fem::FemError as E;
+    match e {
+        E::InvertedElement { element, .. } | E::DegenerateElement { element, .. } => Some(*element),
+        _ => None,
+    }
+}
+
+/// A CalculiX deck for `model` (nodes, elements grouped by kind, the mesh's sets, one material and
+/// section per distinct material, fixed DOFs, and a `*FREQUENCY` step when `step` is given).
+/// Sets named `NALL`, `EALL` and `FEMU_MAT*` are the writer's own and are regenerated, so writing
+/// a deck that was read gives the same deck.
+///
+/// # Errors
+/// An element without material; an anisotropic material (not written yet).
+pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String, IoError> {
+    let mesh = model.mesh();
+    let unwritable = |reason: String| IoError::Parse {
+        path: PathBuf::from("<model>"),
+        line: 0,
+        reason,
+    };
+    let mut s = String::from("*HEADING\nwritten by femu\n*NODE, NSET=NALL\n");
+    for i in 0..mesh.node_count() {
+        let x = mesh.coords()[i];
+        // shortest round-trip representation: exact, and within CalculiX's 20-character fields
+        let _ = writeln!(s, "{}, {:?}, {:?}, {:?}", mesh.node_id(i), x[0], x[1], x[2]);
+    }
+    for kind in femu_fem::element::ALL_KINDS {
+        let els: Vec<_> = mesh.elements().filter(|e| e.kind == kind).collect();
+        if els.is_empty() {
+            continue;
+        }
+        let _ = writeln!(s, "*ELEMENT, TYPE={}, ELSET=EALL", kind.abaqus_name());
+        for el in els {
+            let ids: Vec<String> = std::iter::once(el.id)
+                .chain(el.nodes.iter().map(|n| mesh.node_id(*n)))
+                .map(|v| v.to_string())
+                .collect();
+            // at most 16 entries per line; a trailing comma continues the definition
+            for (c, chunk) in ids.chunks(16).enumerate() {
+                let last = (c + 1) * 16 >= ids.len();
+                let _ = writeln!(s, "{}{}", chunk.join(", "), if last { "" } else { "," });
+            }
+        }
+    }
+    let write_ids = |s: &mut String, ids: Vec<u64>| {
+        for chunk in ids.chunks(16) {
+            let t: Vec<String> = chunk.iter().map(|v| v.to_string()).collect();
+            let _ = writeln!(s, "{}", t.join(", "));
+        }
+    };
+    // the sets this writer generates itself are not copied (a read deck has them)
+    let generated = |name: &str| {
+        let u = name.to_ascii_uppercase();
+        u == "NALL" || u == "EALL" || u.starts_with("FEMU_MAT")
+    };
+    for (name, nodes) in mesh.node_sets().iter().filter(|(n, _)| !generated(n)) {
+        let _ = writeln!(s, "*NSET, NSET={name}");
+        write_ids(&mut s, nodes.iter().map(|n| mesh.node_id(*n)).collect());
+    }
+    for (name, els) in mesh.element_sets().iter().filter(|(n, _)| !generated(n)) {
+        let _ = writeln!(s, "*ELSET, ELSET={name}");
+        write_ids(&mut s, els.iter().map(|e| mesh.element(*e).id).collect());
+    }
+    // distinct materials, in order of first use in the written element order (so that a deck read
+    // back and written again is the same text)
+    let mut distinct: Vec<(Material, Vec<u64>)> = Vec::new();
+    let written_order = femu_fem::element::ALL_KINDS
+        .iter()
+        .flat_map(|k| {
+            mesh.elements()
+                .filter(move |e| e.kind == *k)
+                .map(|e| e.index)
+        })
+        .collect::<Vec<_>>();
+    for e in written_order {
+        let m = model
+            .material_of(e)
+            .map_err(|e| unwritable(e.to_string()))?;
+        let id = mesh.element(e).id;
+        match distinct.iter_mut().find(|(d, _)| d == m) {
+            Some(d) => d.1.push(id),
+            None => distinct.push((m.clone(), vec![id])),
+        }
+    }
+    for (i, (m, ids)) in distinct.iter().enumerate() {
+        let Elasticity::Isotropic { e, nu } = &m.elasticity else {
+            return Err(unwritable(format!(
+                "material {} is anisotropic: not written yet",
+                m.name
+            )));
+        };
+        // the material's own name when it is a valid Abaqus name not used before
+        let clean: String = m
+            .name
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        let taken = distinct[..i]
+            .iter()
+            .any(|(d, _)| d.name.eq_ignore_ascii_case(&m.name));
+        let valid = clean.starts_with(|c: char| c.is_ascii_alphabetic()) && clean.len() <= 80;
+        let name = if valid && !taken {
+            clean
+        } else {
+            format!("FEMU_MAT{}", i + 1)
+        };
+        let _ = writeln!(s, "*ELSET, ELSET=FEMU_MAT{}", i + 1);
+        write_ids(&mut s, ids.clone());
+        let _ = writeln!(
+            s,
+            "*MATERIAL, NAME={name}\n*ELASTIC\n{e:?}, {nu:?}\n*DENSITY\n{:?}",
+            m.density
+        );
+        let _ = writeln!(
+            s,
+            "*SOLID SECTION, ELSET=FEMU_MAT{}, MATERIAL={name}",
+            i + 1
+        );
+    }
+    let fixed: Vec<(usize, usize)> = model.fixed_dofs().collect();
+    if !fixed.is_empty() {
+        s.push_str("*BOUNDARY\n");
+        for (n, c) in fixed {
+            let _ = writeln!(s, "{}, {}, {}", mesh.node_id(n), c + 1, c + 1);
+        }
+    }
+    if let Some(step) = step {
+        s.push_str("*STEP\n*FREQUENCY\n");
+        match step.shift_cycles2 {
+            Some(shift) => {
+                let _ = writeln!(s, "{}, , {shift:?}", step.count);
+            }
+            None => {
+                let _ = writeln!(s, "{}", step.count);
+            }
+        }
+        s.push_str("*NODE FILE\nU\n*END STEP\n");
+    }
+    Ok(s)
+}
+
+/// Writes [`inp_string`] to `path`.
+///
+/// # Errors
+/// As [`inp_string`], or [`IoError::Io`].
+pub fn write_inp(
+    model: &Model,
+    step: Option<&FrequencyStep>,
+    path: impl AsRef<Path>,
+) -> Result<(), IoError> {
+    let text = inp_string(model, step)?;
+    std::fs::write(path.as_ref(), text).map_err(|e| io_err(path.as_ref(), e))
+}

@@ -1,0 +1,12 @@
+//! # femu-io
+//!
+//! The files engineers have. This release reads and writes Abaqus/CalculiX input decks
+//! ([`inp`]); Gmsh, Universal File Format, VTK and CSV/JSON test data follow.
+//!
+//! Every parse error names the file and the line; unknown keywords become warnings, never
+//! failures.
+
+mod error;
+pub mod inp;
+
+pub use error::{IoError, Warning};
