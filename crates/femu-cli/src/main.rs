@@ -1,0 +1,205 @@
+//! The `femu` command. See `femu --help`.
+
+use clap::{Parser, Subcommand};
+use femu_fem::assembly::MassKind;
+use femu_sparse::eigen::{EigenParams, Which, eigs};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+/// femu: finite element model updating and test-analysis correlation.
+#[derive(Parser)]
+#[command(version, about, long_about = None)]
+struct Cli {
+    /// No progress and no table on stdout (errors still go to stderr).
+    #[arg(long, global = true)]
+    quiet: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Lowest modes of a model, verified by a Sturm count.
+    ///
+    /// Examples:
+    ///   femu modes plate.inp --count 20
+    ///   femu modes plate.inp --shift 1500 --count 6 --json modes.json
+    ///   femu modes plate.inp --band 1000 3000
+    #[command(verbatim_doc_comment)]
+    Modes {
+        /// The model: an Abaqus/CalculiX `.inp` deck (materials and constraints inside).
+        model: PathBuf,
+        /// How many modes (lowest, or nearest the shift). Default: the deck's *FREQUENCY count, or 10.
+        #[arg(long)]
+        count: Option<usize>,
+        /// Modes nearest this frequency (Hz).
+        #[arg(long, conflicts_with = "band")]
+        shift: Option<f64>,
+        /// Every mode between two frequencies (Hz).
+        #[arg(long, num_args = 2, value_names = ["LO", "HI"])]
+        band: Option<Vec<f64>>,
+        /// Lumped (diagonal) mass instead of consistent.
+        #[arg(long)]
+        lumped: bool,
+        /// Write the result as JSON to this file.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+}
+
+/// What `femu modes --json` writes.
+#[derive(Serialize)]
+struct ModesJson {
+    model: String,
+    dofs: usize,
+    mass: &'static str,
+    frequencies_hz: Vec<f64>,
+    eigenvalues: Vec<f64>,
+    residuals: Vec<f64>,
+    sturm_verified: bool,
+    sturm_count: usize,
+    sturm_upper: f64,
+    seconds: f64,
+}
+
+fn spinner(quiet: bool, msg: &str) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new_spinner();
+    pb.set_style(
+        ProgressStyle::with_template("{spinner} {msg} ({elapsed})").expect("valid template"),
+    );
+    pb.set_message(msg.to_string());
+    pb.enable_steady_tick(Duration::from_millis(200));
+    pb
+}
+
+fn to_rad2(hz: f64) -> f64 {
+    let w = 2.0 * std::f64::consts::PI * hz;
+    w * w
+}
+
+fn modes(
+    model_path: &Path,
+    count: Option<usize>,
+    shift: Option<f64>,
+    band: Option<Vec<f64>>,
+    lumped: bool,
+    json: Option<PathBuf>,
+    quiet: bool,
+) -> Result<(), String> {
+    let start = std::time::Instant::now();
+    let deck = femu_io::inp::read_inp(model_path).map_err(|e| e.to_string())?;
+    for w in &deck.warnings {
+        if !quiet {
+            eprintln!("{w}");
+        }
+    }
+    let model = deck.to_model().map_err(|e| e.to_string())?;
+    let pb = spinner(quiet, "assembling K and M");
+    let mass = if lumped {
+        MassKind::Lumped
+    } else {
+        MassKind::Consistent
+    };
+    let sys = model.assemble(mass).map_err(|e| e.to_string())?;
+    pb.set_message(format!("solving ({} DOF)", sys.k.rows()));
+    let count = count.or(deck.frequency.map(|f| f.count)).unwrap_or(10);
+    if count == 0 {
+        return Err("--count must be at least 1".into());
+    }
+    let which = match (shift, band) {
+        (Some(hz), _) => {
+            if !(hz.is_finite() && hz >= 0.0) {
+                return Err(format!("--shift {hz} Hz must be a non-negative frequency"));
+            }
+            Which::Nearest {
+                shift: to_rad2(hz),
+                count,
+            }
+        }
+        (None, Some(b)) => {
+            if !(b[0].is_finite() && b[1].is_finite() && 0.0 <= b[0] && b[0] < b[1]) {
+                return Err(format!("--band {} {}: need 0 <= LO < HI (Hz)", b[0], b[1]));
+            }
+            Which::Band {
+                lo: to_rad2(b[0]),
+                hi: to_rad2(b[1]),
+            }
+        }
+        (None, None) => Which::Lowest(count),
+    };
+    let result = eigs(&sys.k, &sys.m, which, &EigenParams::default()).map_err(|e| e.to_string())?;
+    pb.finish_and_clear();
+    let f = result.frequencies_hz();
+    if !quiet {
+        println!(
+            "{} DOF, {} mass, {} modes",
+            sys.k.rows(),
+            if lumped { "lumped" } else { "consistent" },
+            f.len()
+        );
+        println!("| mode | f (Hz) | lambda (s^-2) | residual |");
+        println!("|---|---|---|---|");
+        for (j, (fj, (l, r))) in f
+            .iter()
+            .zip(result.values.iter().zip(&result.residuals))
+            .enumerate()
+        {
+            println!("| {} | {:.6} | {:.6e} | {:.1e} |", j + 1, fj, l, r);
+        }
+        println!(
+            "Sturm check: {} eigenvalues below {:.6e} s^-2, {} returned: {}",
+            result.sturm.count,
+            result.sturm.upper,
+            result.sturm.returned,
+            if result.sturm.verified() {
+                "verified"
+            } else {
+                "FAILED"
+            }
+        );
+    }
+    if let Some(path) = json {
+        let out = ModesJson {
+            model: model_path.display().to_string(),
+            dofs: sys.k.rows(),
+            mass: if lumped { "lumped" } else { "consistent" },
+            frequencies_hz: f,
+            eigenvalues: result.values.clone(),
+            residuals: result.residuals.clone(),
+            sturm_verified: result.sturm.verified(),
+            sturm_count: result.sturm.count,
+            sturm_upper: result.sturm.upper,
+            seconds: start.elapsed().as_secs_f64(),
+        };
+        let text = serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?;
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Modes {
+            model,
+            count,
+            shift,
+            band,
+            lumped,
+            json,
+        } => modes(&model, count, shift, band, lumped, json, cli.quiet),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

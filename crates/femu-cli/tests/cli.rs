@@ -1,0 +1,152 @@
+//! The `femu` command end to end: happy paths against the library's dense reference, bad input.
+
+use assert_cmd::Command;
+use std::path::PathBuf;
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/inp")
+        .join(name)
+}
+
+fn femu() -> Command {
+    Command::cargo_bin("femu").unwrap()
+}
+
+/// `femu modes` on the hand-made deck: the JSON frequencies equal a dense solution of the same
+/// model, the Sturm check passes, the table lists the modes.
+#[test]
+fn modes_json_matches_dense_reference() {
+    let dir = std::env::temp_dir().join(format!("femu-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("modes.json");
+    let out = femu()
+        .args([
+            "modes",
+            fixture("two_hex.inp").to_str().unwrap(),
+            "--json",
+            json.to_str().unwrap(),
+        ])
+        .assert()
+        .success();
+    let stdout = String::from_utf8(out.get_output().stdout.clone()).unwrap();
+    assert!(
+        stdout.contains("| 4 |") && stdout.contains("verified"),
+        "{stdout}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["dofs"], 24);
+    assert_eq!(v["sturm_verified"], true);
+    let f: Vec<f64> = v["frequencies_hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(f.len(), 4); // the deck's *FREQUENCY count
+    // dense reference through the libraries
+    let model = femu_io::inp::read_inp(fixture("two_hex.inp"))
+        .unwrap()
+        .to_model()
+        .unwrap();
+    let sys = model
+        .assemble(femu_fem::assembly::MassKind::Consistent)
+        .unwrap();
+    let eig = femu_sparse::dense::generalized_symmetric_eigen(
+        femu_sparse::csc::to_dense(&sys.k).as_ref(),
+        femu_sparse::csc::to_dense(&sys.m).as_ref(),
+    )
+    .unwrap();
+    for (j, fj) in f.iter().enumerate() {
+        let reference = eig.values[j].sqrt() / (2.0 * std::f64::consts::PI);
+        assert!(
+            (fj / reference - 1.0).abs() < 1e-10,
+            "mode {j}: {fj} vs {reference}"
+        );
+    }
+    for key in ["eigenvalues", "residuals"] {
+        assert_eq!(v[key].as_array().unwrap().len(), 4);
+    }
+    // a band from just above the first mode to just above the fourth, quiet: nothing on stdout;
+    // the count of modes in it comes from the dense reference
+    let lo = f[0] * 1.001;
+    let hi = f[3] * 1.001;
+    let hz: Vec<f64> = eig
+        .values
+        .iter()
+        .map(|l| l.sqrt() / (2.0 * std::f64::consts::PI))
+        .collect();
+    let expected = hz.iter().filter(|x| **x >= lo && **x <= hi).count();
+    assert!(expected >= 2);
+    let out = femu()
+        .args([
+            "--quiet",
+            "modes",
+            fixture("two_hex.inp").to_str().unwrap(),
+            "--band",
+            &lo.to_string(),
+            &hi.to_string(),
+            "--json",
+            json.to_str().unwrap(),
+        ])
+        .assert()
+        .success();
+    assert!(out.get_output().stdout.is_empty());
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["frequencies_hz"].as_array().unwrap().len(), expected);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_input_fails_with_a_message() {
+    // missing file: names it
+    let err = stderr_of_failure(&["modes", "/nonexistent/model.inp"]);
+    assert!(err.contains("/nonexistent/model.inp"), "{err}");
+    // a malformed deck: names the line
+    let dir = std::env::temp_dir().join(format!("femu-cli-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.inp");
+    std::fs::write(&bad, "*NODE\n1, 0, zero, 0\n").unwrap();
+    let err = stderr_of_failure(&["modes", bad.to_str().unwrap()]);
+    assert!(
+        err.contains("bad.inp:2:") && err.starts_with("error:"),
+        "{err}"
+    );
+    // bad options
+    let deck = fixture("two_hex.inp");
+    femu()
+        .args(["modes", deck.to_str().unwrap(), "--count", "0"])
+        .assert()
+        .failure();
+    femu()
+        .args(["modes", deck.to_str().unwrap(), "--band", "300", "100"])
+        .assert()
+        .failure();
+    femu()
+        .args(["modes", deck.to_str().unwrap(), "--shift", "-5"])
+        .assert()
+        .failure();
+    femu()
+        .args([
+            "modes",
+            deck.to_str().unwrap(),
+            "--shift",
+            "5",
+            "--band",
+            "1",
+            "2",
+        ])
+        .assert()
+        .failure()
+        .code(2);
+    femu().args(["frobnicate"]).assert().failure().code(2);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Runs `femu args`, expects exit code 1, returns stderr.
+fn stderr_of_failure(args: &[&str]) -> String {
+    let out = femu().args(args).assert().failure().code(1);
+    String::from_utf8_lossy(&out.get_output().stderr).into_owned()
+}
