@@ -27,7 +27,7 @@ enum Command {
     /// Examples:
     ///   femu modes plate.inp --count 20
     ///   femu modes plate.inp --shift 1500 --count 6 --json modes.json
-    ///   femu modes plate.inp --band 1000 3000
+    ///   femu modes plate.inp --band 1000 3000 --vtu modes.vtu
     #[command(verbatim_doc_comment)]
     Modes {
         /// The model: an Abaqus/CalculiX `.inp` deck (materials and constraints inside).
@@ -47,6 +47,9 @@ enum Command {
         /// Write the result as JSON to this file.
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Write the mesh and the mode shapes (point vectors, mass-normalised) for ParaView.
+        #[arg(long)]
+        vtu: Option<PathBuf>,
     },
 }
 
@@ -90,6 +93,7 @@ fn modes(
     band: Option<Vec<f64>>,
     lumped: bool,
     json: Option<PathBuf>,
+    vtu: Option<PathBuf>,
     quiet: bool,
 ) -> Result<(), String> {
     let start = std::time::Instant::now();
@@ -164,6 +168,28 @@ fn modes(
             }
         );
     }
+    if let Some(path) = vtu {
+        let mut shapes = Vec::with_capacity(f.len());
+        for j in 0..f.len() {
+            let col: Vec<f64> = result.vectors.col(j).iter().copied().collect();
+            shapes.push(sys.dofs.expand(&col).map_err(|e| e.to_string())?);
+        }
+        let names: Vec<String> = f
+            .iter()
+            .enumerate()
+            .map(|(j, fj)| format!("mode {} ({fj:.3} Hz)", j + 1))
+            .collect();
+        let fields: Vec<femu_io::vtk::PointField<'_>> = shapes
+            .iter()
+            .zip(&names)
+            .map(|(v, n)| femu_io::vtk::PointField {
+                name: n,
+                components: 3,
+                values: v,
+            })
+            .collect();
+        femu_io::vtk::write_vtu(model.mesh(), &fields, &[], &path).map_err(|e| e.to_string())?;
+    }
     if let Some(path) = json {
         let out = ModesJson {
             model: model_path.display().to_string(),
@@ -193,7 +219,8 @@ fn main() -> ExitCode {
             band,
             lumped,
             json,
-        } => modes(&model, count, shift, band, lumped, json, cli.quiet),
+            vtu,
+        } => modes(&model, count, shift, band, lumped, json, vtu, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -20,12 +20,15 @@ fn modes_json_matches_dense_reference() {
     let dir = std::env::temp_dir().join(format!("femu-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let json = dir.join("modes.json");
+    let vtu = dir.join("modes.vtu");
     let out = femu()
         .args([
             "modes",
             fixture("two_hex.inp").to_str().unwrap(),
             "--json",
             json.to_str().unwrap(),
+            "--vtu",
+            vtu.to_str().unwrap(),
         ])
         .assert()
         .success();
@@ -37,6 +40,9 @@ fn modes_json_matches_dense_reference() {
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(v["dofs"], 24);
+    let vtu_text = std::fs::read_to_string(&vtu).unwrap();
+    assert_eq!(vtu_text.matches("Name=\"mode ").count(), 4);
+    assert!(vtu_text.contains("NumberOfPoints=\"12\" NumberOfCells=\"2\""));
     assert_eq!(v["sturm_verified"], true);
     let f: Vec<f64> = v["frequencies_hz"]
         .as_array()
