@@ -22,6 +22,31 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Pair test modes (CSV: mode,frequency_hz,node,direction,value) with the model's modes:
+    /// MAC on the sensors, frequency errors, MSD, COMAC.
+    ///
+    /// Examples:
+    ///   femu correlate plate.inp test.csv
+    ///   femu correlate plate.inp test.csv --mac-threshold 0.7 --json correlation.json
+    #[command(verbatim_doc_comment)]
+    Correlate {
+        /// The model (`.inp`).
+        model: PathBuf,
+        /// The test modes (`.csv`).
+        test: PathBuf,
+        /// Model modes to compute (default: twice the test modes plus 4).
+        #[arg(long)]
+        count: Option<usize>,
+        /// Smallest MAC accepted for a pair.
+        #[arg(long, default_value_t = 0.8)]
+        mac_threshold: f64,
+        /// Lumped (diagonal) mass instead of consistent.
+        #[arg(long)]
+        lumped: bool,
+        /// Write the correlation (MAC matrix, pairs, MSD, COMAC) as JSON.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// Lowest modes of a model, verified by a Sturm count.
     ///
     /// Examples:
@@ -51,6 +76,65 @@ enum Command {
         #[arg(long)]
         vtu: Option<PathBuf>,
     },
+}
+
+/// Test modes from CSV (see `femu_io::csv`), correlated with the model's lowest modes.
+fn correlate_cmd(
+    model_path: &Path,
+    test_path: &Path,
+    count: Option<usize>,
+    mac_threshold: f64,
+    lumped: bool,
+    json: Option<PathBuf>,
+    quiet: bool,
+) -> Result<(), String> {
+    let deck = femu_io::inp::read_inp(model_path).map_err(|e| e.to_string())?;
+    if !quiet {
+        deck.warnings.iter().for_each(|w| eprintln!("{w}"));
+    }
+    let model = deck.to_model().map_err(|e| e.to_string())?;
+    let test = femu_io::csv::read_test_csv(test_path).map_err(|e| e.to_string())?;
+    let pb = spinner(quiet, "assembling K and M");
+    let mass = if lumped {
+        MassKind::Lumped
+    } else {
+        MassKind::Consistent
+    };
+    let sys = model.assemble(mass).map_err(|e| e.to_string())?;
+    let layout = femu_correlate::SensorLayout::new(model.mesh(), &sys.dofs, test.sensors.clone())
+        .map_err(|e| format!("{}: {e}", test_path.display()))?;
+    let count = count.unwrap_or(2 * test.modes.len() + 4).min(sys.k.rows());
+    pb.set_message(format!("solving {count} modes ({} DOF)", sys.k.rows()));
+    let modes = eigs(
+        &sys.k,
+        &sys.m,
+        Which::Lowest(count),
+        &EigenParams::default(),
+    )
+    .map_err(|e| e.to_string())?;
+    pb.finish_and_clear();
+    let options = femu_correlate::PairingOptions { mac_threshold };
+    let report = femu_correlate::correlate(
+        &femu_correlate::ModeSet::from_modes(&modes),
+        &test.modes,
+        &layout,
+        &options,
+    )
+    .map_err(|e| e.to_string())?;
+    if !quiet {
+        println!(
+            "{} test modes at {} sensors against {} model modes (MAC threshold {mac_threshold})",
+            test.modes.len(),
+            layout.len(),
+            modes.values.len()
+        );
+        print!("{report}");
+    }
+    if let Some(path) = json {
+        let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    Ok(())
 }
 
 /// What `femu modes --json` writes.
@@ -212,6 +296,14 @@ fn modes(
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Correlate {
+            model,
+            test,
+            count,
+            mac_threshold,
+            lumped,
+            json,
+        } => correlate_cmd(&model, &test, count, mac_threshold, lumped, json, cli.quiet),
         Command::Modes {
             model,
             count,

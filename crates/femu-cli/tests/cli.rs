@@ -156,3 +156,72 @@ fn stderr_of_failure(args: &[&str]) -> String {
     let out = femu().args(args).assert().failure().code(1);
     String::from_utf8_lossy(&out.get_output().stderr).into_owned()
 }
+
+/// `femu correlate`: a CSV "test" made of the model's own modes 1-3 (listed 2, 1, 3, frequencies
+/// 1 % low) measured at the free end pairs back onto them with MAC 1 and -1 % error (the test's
+/// frequency is 1 % below the model's: error +1/0.99 - 1).
+#[test]
+fn correlate_pairs_the_model_with_itself() {
+    use femu_correlate::{Sensor, SensorLayout, TestModes};
+    let deck = fixture("two_hex.inp");
+    let model = femu_io::inp::read_inp(&deck).unwrap().to_model().unwrap();
+    let sys = model
+        .assemble(femu_fem::assembly::MassKind::Consistent)
+        .unwrap();
+    let modes = femu_sparse::eigen::eigs(
+        &sys.k,
+        &sys.m,
+        femu_sparse::eigen::Which::Lowest(4),
+        &Default::default(),
+    )
+    .unwrap();
+    let sensors: Vec<Sensor> = [3u64, 6, 9, 12]
+        .iter()
+        .flat_map(|n| (0..3).map(move |c| Sensor::axis(*n, c)))
+        .collect();
+    let layout = SensorLayout::new(model.mesh(), &sys.dofs, sensors.clone()).unwrap();
+    let at = layout.measure_all(modes.vectors.as_ref()).unwrap();
+    let order = [1usize, 0, 2];
+    let f = modes.frequencies_hz();
+    let shapes = femu_sparse::faer::Mat::from_fn(at.nrows(), 3, |i, j| at[(i, order[j])]);
+    let test = TestModes::new(order.iter().map(|j| 0.99 * f[*j]).collect(), None, shapes).unwrap();
+    let dir = std::env::temp_dir().join(format!("femu-cli-corr-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("test.csv");
+    std::fs::write(&csv, femu_io::csv::test_csv_string(&sensors, &test)).unwrap();
+    let json = dir.join("corr.json");
+    let out = femu()
+        .args([
+            "correlate",
+            deck.to_str().unwrap(),
+            csv.to_str().unwrap(),
+            "--json",
+            json.to_str().unwrap(),
+        ])
+        .assert()
+        .success();
+    let stdout = String::from_utf8_lossy(&out.get_output().stdout).into_owned();
+    assert!(stdout.contains("| test | f test (Hz)"), "{stdout}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let pairs = v["pairing"]["pairs"].as_array().unwrap();
+    // modes 1 and 2 are a repeated pair (square section): each test mode pairs with a copy
+    assert_eq!(pairs.len(), 3);
+    for p in pairs {
+        assert!(
+            (p["mac"].as_f64().unwrap() - 1.0).abs() < 1e-9 || p["test"].as_u64().unwrap() < 2,
+            "{p}"
+        );
+        let e = p["frequency_error"].as_f64().unwrap();
+        assert!((e - (1.0 / 0.99 - 1.0)).abs() < 1e-9, "{p}");
+    }
+    // a sensor on a missing node is an error naming the file and the node
+    std::fs::write(
+        &csv,
+        "mode,frequency_hz,node,direction,value\n1,100,999,z,1\n",
+    )
+    .unwrap();
+    let err = stderr_of_failure(&["correlate", deck.to_str().unwrap(), csv.to_str().unwrap()]);
+    assert!(err.contains("test.csv") && err.contains("999"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

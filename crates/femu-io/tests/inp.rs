@@ -259,3 +259,73 @@ fn malformed_decks_name_the_line() {
         Err(IoError::Io { .. })
     ));
 }
+
+/// CSV test modes: parsed exactly (signed and oblique directions, damping), written and read
+/// back identically, malformed files named by line.
+#[test]
+fn csv_test_modes() {
+    use femu_io::csv::{parse_test_csv, test_csv_string};
+    let text = "# two modes at two sensors\nmode,frequency_hz,node,direction,value,damping\n1,100.5,7,z,0.5,0.01\n1,100.5,9,0.6 0.8 0,-1.5,\n2,230,9,0.6 0.8 0,2.0,0.02\n2,230,7,-z,0.25,\n";
+    let d = parse_test_csv(text, "t.csv").unwrap();
+    assert_eq!(d.sensors.len(), 2);
+    assert_eq!(
+        (d.sensors[0].node, d.sensors[0].direction),
+        (7, [0.0, 0.0, 1.0])
+    );
+    assert_eq!(d.modes.frequencies_hz, vec![100.5, 230.0]);
+    // each mode gives its damping on one of its rows
+    assert_eq!(d.modes.damping_ratios, Some(vec![0.01, 0.02]));
+    let m = &d.modes.shapes;
+    // -z flips the sign of the reading on the +z sensor
+    assert_eq!(
+        (m[(0, 0)], m[(1, 0)], m[(0, 1)], m[(1, 1)]),
+        (0.5, -1.5, -0.25, 2.0)
+    );
+    let again = parse_test_csv(&test_csv_string(&d.sensors, &d.modes), "t2.csv").unwrap();
+    assert_eq!(again.modes.shapes, d.modes.shapes);
+    assert_eq!(again.sensors, d.sensors);
+    for (text, line, needle) in [
+        ("mode,freq\n", 1, "header"),
+        (
+            "mode,frequency_hz,node,direction,value\n1,abc,7,z,1\n",
+            2,
+            "frequency",
+        ),
+        (
+            "mode,frequency_hz,node,direction,value\n1,100,7,w,1\n",
+            2,
+            "direction",
+        ),
+        (
+            "mode,frequency_hz,node,direction,value\n1,100,7,z,nan\n",
+            2,
+            "value",
+        ),
+        (
+            "mode,frequency_hz,node,direction,value\n1,100,7,z,1\n1,101,8,z,1\n",
+            3,
+            "frequency 101",
+        ),
+        (
+            "mode,frequency_hz,node,direction,value\n1,100,7,z,1\n1,100,7,z,2\n",
+            3,
+            "second value",
+        ),
+        (
+            "mode,frequency_hz,node,direction,value\n1,100,7,z,1\n2,200,8,z,1\n",
+            2,
+            "no value for sensor 2",
+        ),
+        (
+            "mode,frequency_hz,node,direction,value\n",
+            1,
+            "no test modes",
+        ),
+    ] {
+        let e = parse_test_csv(text, "bad.csv").unwrap_err().to_string();
+        assert!(
+            e.starts_with(&format!("bad.csv:{line}:")) && e.contains(needle),
+            "{text:?}: {e}"
+        );
+    }
+}

@@ -1,0 +1,258 @@
+//! Test modes as CSV, for people without Universal Files: one row per mode and sensor.
+//!
+//! ```text
+//! # comments and blank lines are ignored; the header is required
+//! mode,frequency_hz,node,direction,value
+//! 1,1311.2,101,z,0.0123
+//! 1,1311.2,102,x,-0.0020
+//! 2,2421.9,101,z,-0.0031
+//! 2,2421.9,102,x,0.0150
+//! ```
+//!
+//! `direction` is `x`, `y`, `z` (optionally signed, `-y`) or three numbers separated by spaces
+//! (`0.707 0.707 0`). An optional sixth column `damping` gives the modal damping ratio. Sensors are
+//! the distinct (node, direction) pairs in order of first appearance; every mode must give a value
+//! for every sensor, and one frequency.
+
+use crate::IoError;
+use femu_correlate::{Sensor, TestModes};
+use femu_sparse::faer::Mat;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Test modes and the sensors they were measured with.
+#[derive(Debug, Clone)]
+pub struct TestData {
+    /// The sensors, in the order of the shape rows.
+    pub sensors: Vec<Sensor>,
+    /// The modes.
+    pub modes: TestModes,
+}
+
+/// One mode's rows: frequency, damping, first line, values by sensor.
+type ModeRows = (f64, Option<f64>, usize, BTreeMap<usize, f64>);
+
+fn direction(s: &str) -> Option<[f64; 3]> {
+    let t = s.trim().to_ascii_lowercase();
+    let (sign, axis) = match t.strip_prefix('-') {
+        Some(rest) => (-1.0, rest.to_string()),
+        None => (1.0, t.trim_start_matches('+').to_string()),
+    };
+    let unit = |c: usize| {
+        let mut d = [0.0; 3];
+        d[c] = sign;
+        Some(d)
+    };
+    match axis.as_str() {
+        "x" => unit(0),
+        "y" => unit(1),
+        "z" => unit(2),
+        _ => {
+            let v: Vec<f64> = t
+                .split_whitespace()
+                .filter_map(|x| x.parse().ok())
+                .collect();
+            (v.len() == 3 && t.split_whitespace().count() == 3).then(|| [v[0], v[1], v[2]])
+        }
+    }
+}
+
+/// Parses CSV test modes (`path` names the file in messages).
+///
+/// # Errors
+/// [`IoError::Parse`] with the line: a missing header, a malformed number, node or direction, two
+/// frequencies for one mode, a mode without a value for some sensor (reported at the mode's first
+/// line), two values for one sensor and mode; invalid test modes (NaN, zero shapes).
+pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, IoError> {
+    let path = path.as_ref();
+    let err = |line: usize, reason: String| IoError::Parse {
+        path: path.to_path_buf(),
+        line,
+        reason,
+    };
+    let mut header_seen = false;
+    let mut damping_column = false;
+    let mut sensors: Vec<Sensor> = Vec::new();
+    let mut modes: BTreeMap<u64, ModeRows> = BTreeMap::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let t = raw.trim_end_matches('\r').trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        let f: Vec<&str> = t.split(',').map(str::trim).collect();
+        if !header_seen {
+            let h: Vec<String> = f.iter().map(|s| s.to_ascii_lowercase()).collect();
+            if h.len() < 5 || h[..5] != ["mode", "frequency_hz", "node", "direction", "value"] {
+                return Err(err(
+                    line,
+                    format!(
+                        "expected the header mode,frequency_hz,node,direction,value[,damping], got {t:?}"
+                    ),
+                ));
+            }
+            damping_column = h.get(5).is_some_and(|c| c == "damping");
+            header_seen = true;
+            continue;
+        }
+        if f.len() < 5 {
+            return Err(err(line, format!("expected 5 fields, got {}", f.len())));
+        }
+        let mode = f[0]
+            .parse::<u64>()
+            .ok()
+            .filter(|m| *m > 0)
+            .ok_or_else(|| err(line, format!("mode {:?} is not a positive integer", f[0])))?;
+        let freq = f[1]
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .ok_or_else(|| {
+                err(
+                    line,
+                    format!("frequency {:?} is not a positive number", f[1]),
+                )
+            })?;
+        let node = f[2]
+            .parse::<u64>()
+            .map_err(|_| err(line, format!("node {:?} is not an integer id", f[2])))?;
+        let dir = direction(f[3]).ok_or_else(|| {
+            err(
+                line,
+                format!("direction {:?} is not x, y, z or three numbers", f[3]),
+            )
+        })?;
+        let value = f[4]
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| err(line, format!("value {:?} is not a finite number", f[4])))?;
+        let damping = match (damping_column, f.get(5)) {
+            (true, Some(s)) if !s.is_empty() => Some(
+                s.parse::<f64>()
+                    .map_err(|_| err(line, format!("damping {s:?} is not a number")))?,
+            ),
+            _ => None,
+        };
+        // same sensor: same node and parallel direction (signs flip the reading)
+        let norm = |d: [f64; 3]| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let nd = norm(dir);
+        if !(nd > 0.0) {
+            return Err(err(line, "direction is the zero vector".into()));
+        }
+        let mut sign = 1.0;
+        let s = match sensors.iter().position(|s| {
+            let c = (s.direction[0] * dir[0] + s.direction[1] * dir[1] + s.direction[2] * dir[2])
+                / (norm(s.direction) * nd);
+            if s.node == node && (c.abs() - 1.0).abs() < 1e-9 {
+                sign = c.signum();
+                true
+            } else {
+                false
+            }
+        }) {
+            Some(s) => s,
+            None => {
+                sensors.push(Sensor {
+                    node,
+                    direction: dir,
+                });
+                sensors.len() - 1
+            }
+        };
+        let entry = modes
+            .entry(mode)
+            .or_insert((freq, damping, line, BTreeMap::new()));
+        if entry.0 != freq {
+            return Err(err(
+                line,
+                format!(
+                    "mode {mode} has frequency {freq} here and {} at line {}",
+                    entry.0, entry.2
+                ),
+            ));
+        }
+        if entry.1.is_none() {
+            entry.1 = damping;
+        }
+        if entry.3.insert(s, sign * value).is_some() {
+            return Err(err(
+                line,
+                format!(
+                    "mode {mode} has a second value for node {node} direction {:?}",
+                    f[3]
+                ),
+            ));
+        }
+    }
+    if !header_seen || modes.is_empty() {
+        return Err(err(1, "no test modes in the file".into()));
+    }
+    let ns = sensors.len();
+    let mut shapes = Mat::<f64>::zeros(ns, modes.len());
+    let mut freqs = Vec::with_capacity(modes.len());
+    let mut damping = Vec::with_capacity(modes.len());
+    for (j, (mode, (f, z, first, values))) in modes.iter().enumerate() {
+        if values.len() != ns {
+            let missing = (0..ns).find(|s| !values.contains_key(s)).unwrap_or(0);
+            return Err(err(
+                *first,
+                format!(
+                    "mode {mode} has no value for sensor {} (node {})",
+                    missing + 1,
+                    sensors[missing].node
+                ),
+            ));
+        }
+        for (s, v) in values {
+            shapes[(*s, j)] = *v;
+        }
+        freqs.push(*f);
+        damping.push(*z);
+    }
+    let damping = if damping.iter().all(Option::is_some) {
+        Some(damping.into_iter().flatten().collect())
+    } else {
+        None
+    };
+    let modes = TestModes::new(freqs, damping, shapes).map_err(|e| err(1, e.to_string()))?;
+    Ok(TestData { sensors, modes })
+}
+
+/// Reads CSV test modes from a file.
+///
+/// # Errors
+/// As [`parse_test_csv`], or [`IoError::Io`].
+pub fn read_test_csv(path: impl AsRef<Path>) -> Result<TestData, IoError> {
+    let p = path.as_ref();
+    let text = std::fs::read_to_string(p).map_err(|e| IoError::Io {
+        path: p.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    parse_test_csv(&text, p)
+}
+
+/// Writes test modes as CSV (the format read by [`parse_test_csv`]).
+pub fn test_csv_string(sensors: &[Sensor], modes: &TestModes) -> String {
+    let mut s = String::from("mode,frequency_hz,node,direction,value\n");
+    for j in 0..modes.len() {
+        for (i, sensor) in sensors.iter().enumerate() {
+            let d = sensor.direction;
+            let dir = match d {
+                [1.0, 0.0, 0.0] => "x".to_string(),
+                [0.0, 1.0, 0.0] => "y".to_string(),
+                [0.0, 0.0, 1.0] => "z".to_string(),
+                _ => format!("{:?} {:?} {:?}", d[0], d[1], d[2]),
+            };
+            s.push_str(&format!(
+                "{},{:?},{},{},{:?}\n",
+                j + 1,
+                modes.frequencies_hz[j],
+                sensor.node,
+                dir,
+                modes.shapes[(i, j)]
+            ));
+        }
+    }
+    s
+}
