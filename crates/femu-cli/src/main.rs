@@ -22,6 +22,31 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// The a priori estimators of the paper for CSV test modes: rho_M, rho_2, the frequency
+    /// interval that holds a model mode, and every bound, after expanding the test shapes.
+    ///
+    /// Examples:
+    ///   femu estimate plate.inp test.csv
+    ///   femu estimate plate.inp test.csv --expansion static --json estimate.json
+    #[command(verbatim_doc_comment)]
+    Estimate {
+        /// The model (`.inp`).
+        model: PathBuf,
+        /// The test modes (`.csv`).
+        test: PathBuf,
+        /// Expansion of the test shapes: static, dynamic or min-residual.
+        #[arg(long, default_value = "dynamic")]
+        expansion: String,
+        /// Model modes computed for the comparison (default: twice the test modes plus 4).
+        #[arg(long)]
+        count: Option<usize>,
+        /// Lumped (diagonal) mass instead of consistent.
+        #[arg(long)]
+        lumped: bool,
+        /// Write the assessments (norms, interval, bounds with what they bound) as JSON.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// Pair test modes (CSV: mode,frequency_hz,node,direction,value) with the model's modes:
     /// MAC on the sensors, frequency errors, MSD, COMAC.
     ///
@@ -132,6 +157,129 @@ fn correlate_cmd(
     }
     if let Some(path) = json {
         let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// The a priori estimators for CSV test modes, expanded to the model's DOFs.
+fn estimate_cmd(
+    model_path: &Path,
+    test_path: &Path,
+    expansion: &str,
+    count: Option<usize>,
+    lumped: bool,
+    json: Option<PathBuf>,
+    quiet: bool,
+) -> Result<(), String> {
+    use femu_correlate::expansion::Expander;
+    let deck = femu_io::inp::read_inp(model_path).map_err(|e| e.to_string())?;
+    if !quiet {
+        deck.warnings.iter().for_each(|w| eprintln!("{w}"));
+    }
+    let model = deck.to_model().map_err(|e| e.to_string())?;
+    let test = femu_io::csv::read_test_csv(test_path).map_err(|e| e.to_string())?;
+    let pb = spinner(quiet, "assembling K and M");
+    let mass = if lumped {
+        MassKind::Lumped
+    } else {
+        MassKind::Consistent
+    };
+    let sys = model.assemble(mass).map_err(|e| e.to_string())?;
+    let layout = femu_correlate::SensorLayout::new(model.mesh(), &sys.dofs, test.sensors.clone())
+        .map_err(|e| format!("{}: {e}", test_path.display()))?;
+    let lambdas = test.modes.eigenvalues();
+    pb.set_message(format!(
+        "expanding {} test modes ({expansion})",
+        lambdas.len()
+    ));
+    let ya = test.modes.shapes.as_ref();
+    let x = if layout.len() == sys.dofs.free_count() && layout.measured_dofs().is_some() {
+        // every DOF measured: reorder the readings onto the DOFs
+        let dofs = layout.measured_dofs().expect("checked");
+        let mut x = femu_sparse::faer::Mat::zeros(sys.k.rows(), ya.ncols());
+        for (s, d) in dofs.iter().enumerate() {
+            for j in 0..ya.ncols() {
+                x[(*d, j)] = ya[(s, j)];
+            }
+        }
+        x
+    } else {
+        let exp = Expander::new(&sys.k, &sys.m, &layout).map_err(|e| e.to_string())?;
+        match expansion {
+            "static" => exp.static_(ya),
+            "dynamic" => exp.dynamic(&lambdas, ya),
+            "min-residual" => exp.minimum_residual(&lambdas, ya),
+            other => {
+                return Err(format!(
+                    "--expansion {other}: use static, dynamic or min-residual"
+                ));
+            }
+        }
+        .map_err(|e| e.to_string())?
+    };
+    let count = count.unwrap_or(2 * test.modes.len() + 4).min(sys.k.rows());
+    pb.set_message(format!("solving {count} modes for the comparison"));
+    let modes = eigs(
+        &sys.k,
+        &sys.m,
+        Which::Lowest(count),
+        &EigenParams::default(),
+    )
+    .map_err(|e| e.to_string())?;
+    let set = femu_correlate::ModeSet::from_modes(&modes);
+    let report = femu_correlate::correlate(&set, &test.modes, &layout, &Default::default())
+        .map_err(|e| e.to_string())?;
+    let eb = femu_correlate::element_bounds(&model, mass).map_err(|e| e.to_string())?;
+    let spectrum = femu_correlate::ModelSpectrum {
+        values: modes.values.clone(),
+        complete: false,
+        lambda_max: eb.lambda_max_upper,
+        mu_min: Some(eb.mu_min_lower),
+        identity_mass: false,
+    };
+    let paired: Vec<Option<usize>> = (0..test.modes.len())
+        .map(|t| report.pairing.of_test(t).map(|p| p.model))
+        .collect();
+    let out = femu_correlate::estimate(
+        &sys.k,
+        &sys.m,
+        &lambdas,
+        x.as_ref(),
+        &spectrum,
+        Some(&set),
+        &paired,
+    )
+    .map_err(|e| e.to_string())?;
+    pb.finish_and_clear();
+    if !quiet {
+        println!(
+            "{} test modes, {} sensors, {expansion} expansion to {} DOF",
+            lambdas.len(),
+            layout.len(),
+            sys.k.rows()
+        );
+        println!(
+            "| test | f test (Hz) | rho_M (s^-2) | rho_2 | a model mode lies in (Hz) | paired model (Hz) |"
+        );
+        println!("|---|---|---|---|---|---|");
+        for a in &out {
+            let pm = a.paired_model.map_or("-".to_string(), |j| {
+                format!("{} ({:.1})", j + 1, set.frequencies_hz()[j])
+            });
+            println!(
+                "| {} | {:.1} | {:.4e} | {:.4e} | {:.1} .. {:.1} | {pm} |",
+                a.test + 1,
+                test.modes.frequencies_hz[a.test],
+                a.norms.rho_m,
+                a.norms.rho_2,
+                a.frequency_interval_hz.0,
+                a.frequency_interval_hz.1
+            );
+        }
+    }
+    if let Some(path) = json {
+        let text = serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?;
         std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     Ok(())
@@ -296,6 +444,14 @@ fn modes(
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Estimate {
+            model,
+            test,
+            expansion,
+            count,
+            lumped,
+            json,
+        } => estimate_cmd(&model, &test, &expansion, count, lumped, json, cli.quiet),
         Command::Correlate {
             model,
             test,

@@ -215,6 +215,49 @@ fn correlate_pairs_the_model_with_itself() {
         let e = p["frequency_error"].as_f64().unwrap();
         assert!((e - (1.0 / 0.99 - 1.0)).abs() < 1e-9, "{p}");
     }
+    // estimate: every theorem-labelled bound holds, each interval holds a model frequency
+    let json = dir.join("est.json");
+    femu()
+        .args([
+            "estimate",
+            deck.to_str().unwrap(),
+            csv.to_str().unwrap(),
+            "--json",
+            json.to_str().unwrap(),
+        ])
+        .assert()
+        .success();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let list = v.as_array().unwrap();
+    assert_eq!(list.len(), 3);
+    for a in list {
+        let lo = a["frequency_interval_hz"][0].as_f64().unwrap();
+        let hi = a["frequency_interval_hz"][1].as_f64().unwrap();
+        assert!(f.iter().any(|x| *x >= lo && *x <= hi), "{a}");
+        for b in a["bounds"].as_array().unwrap() {
+            if b["theorem"] == true && !b["quantity"].is_null() {
+                let (q, bd) = (
+                    b["quantity"].as_f64().unwrap(),
+                    b["bound"].as_f64().unwrap(),
+                );
+                let ok = if b["relation"] == "AtMost" {
+                    q <= bd * (1.0 + 1e-9) + 1e-12
+                } else {
+                    q >= bd * (1.0 - 1e-9) - 1e-12
+                };
+                assert!(ok, "{b}");
+            }
+        }
+    }
+    let err = stderr_of_failure(&[
+        "estimate",
+        deck.to_str().unwrap(),
+        csv.to_str().unwrap(),
+        "--expansion",
+        "guess",
+    ]);
+    assert!(err.contains("guess"), "{err}");
     // a sensor on a missing node is an error naming the file and the node
     std::fs::write(
         &csv,
