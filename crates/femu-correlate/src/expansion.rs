@@ -403,9 +403,18 @@ impl Kkt {
     }
 
     /// Solves `A_0 z = b` for the columns of `b`; `what` names the system in errors.
-    fn solve(&self, b: MatRef<'_, f64>, what: &'static str) -> Result<Mat<f64>, CorrelateError> {
-        let symbolic = SymbolicFactor::new(&self.a, Ordering::NestedDissection)?;
-        let ldlt = symbolic.ldlt(&self.a, what)?;
+    /// `symbolic` is the analysis of an earlier system with the same pattern (computed and kept on
+    /// first use): the pattern does not depend on `lambda_id`, so one ordering serves every mode.
+    fn solve(
+        &self,
+        symbolic: &mut Option<SymbolicFactor>,
+        b: MatRef<'_, f64>,
+        what: &'static str,
+    ) -> Result<Mat<f64>, CorrelateError> {
+        if symbolic.is_none() {
+            *symbolic = Some(SymbolicFactor::new(&self.a, Ordering::NestedDissection)?);
+        }
+        let ldlt = symbolic.as_ref().expect("just set").ldlt(&self.a, what)?;
         let n = self.a.rows();
         let mut z = b.to_owned();
         ldlt.solve_in_place(z.as_mut());
@@ -505,6 +514,7 @@ impl Expander<'_> {
                 mdiag[r] = *v;
             }
         }
+        let mut symbolic = None;
         for j in 0..lambdas.len() {
             let lambda = lambdas[j];
             let mut t = sprs::TriMat::new((n + no, n + no));
@@ -540,7 +550,7 @@ impl Expander<'_> {
                     }
                 })
             };
-            let z = kkt.solve(za.as_ref(), "minimum-residual expansion")?;
+            let z = kkt.solve(&mut symbolic, za.as_ref(), "minimum-residual expansion")?;
             for (i, &d) in self.part.omitted.iter().enumerate() {
                 x[(d, j)] = z[(n + i, 0)];
             }
@@ -581,6 +591,7 @@ impl Expander<'_> {
         }
         let n = self.k.rows();
         let mut out = Mat::zeros(n, lambdas.len());
+        let mut symbolic = None;
         for j in 0..lambdas.len() {
             let lambda = lambdas[j];
             let mut t = sprs::TriMat::new((2 * n, 2 * n));
@@ -614,7 +625,7 @@ impl Expander<'_> {
             for (s, d) in self.part.measured.iter().enumerate() {
                 b[(n + d, 0)] = -gamma * ya[(s, j)];
             }
-            let z = kkt.solve(b.as_ref(), "MDRE-WE expansion")?;
+            let z = kkt.solve(&mut symbolic, b.as_ref(), "MDRE-WE expansion")?;
             for i in 0..n {
                 out[(i, j)] = z[(n + i, 0)];
             }

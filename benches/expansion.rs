@@ -1,0 +1,98 @@
+//! Modal expansion of 4 test modes from 30 sensors (10 triaxial nodes on the top face) against one
+//! sparse factorization of the model's `K` (ordering, symbolic analysis and numeric Cholesky),
+//! side by side in one run. Each expansion includes its own setup (`Expander::new`: extraction of
+//! `K_oo`, `M_oo` and their symbolic analysis).
+//!
+//! Size: `FEMU_BENCH_CELLS=nx,ny,nz` (default `16,16,16`, 14,688 DOF; `40,40,40` gives 201,720
+//! DOF). Run: `cargo bench --bench expansion`.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use femu::correlate::{Expander, SensorLayout};
+use femu::prelude::*;
+use femu::sparse::cholesky::SymbolicFactor;
+use femu::sparse::faer::Mat;
+use femu::sparse::ordering::Ordering;
+use std::time::Duration;
+
+fn cells() -> [usize; 3] {
+    std::env::var("FEMU_BENCH_CELLS")
+        .ok()
+        .and_then(|s| {
+            let v: Vec<usize> = s.split(',').filter_map(|t| t.trim().parse().ok()).collect();
+            (v.len() == 3).then(|| [v[0], v[1], v[2]])
+        })
+        .unwrap_or([16, 16, 16])
+}
+
+fn bench(c: &mut Criterion) {
+    let n = cells();
+    let spec = BoxSpec::new([1.0, 1.0, 1.0], n, BoxCells::Hex, false);
+    let mut model = Model::new(box_mesh(&spec).unwrap()).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let mesh = model.mesh();
+    // 10 nodes spread over the top face, away from the clamped edge
+    let top: Vec<usize> = mesh
+        .node_set("zmax")
+        .unwrap()
+        .iter()
+        .copied()
+        .filter(|n| mesh.coords()[*n][0] > 1e-9)
+        .collect();
+    let nodes: Vec<u64> = (0..10)
+        .map(|i| mesh.node_id(top[(i * top.len()) / 10 + top.len() / 20]))
+        .collect();
+    let layout = SensorLayout::triaxial(mesh, &sys.dofs, &nodes).unwrap();
+    assert_eq!(layout.len(), 30);
+    let ya = Mat::from_fn(30, 4, |i, j| ((i * (j + 1)) as f64 * 0.37).sin());
+    let lambdas = [4.0e6, 1.1e7, 2.3e7, 3.7e7];
+    let dofs = sys.k.rows();
+    let mut group = c.benchmark_group(format!("expansion/{dofs}dof"));
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(5));
+    group.bench_function("factor_k", |b| {
+        b.iter(|| {
+            let s = SymbolicFactor::new(&sys.k, Ordering::NestedDissection).unwrap();
+            s.llt(&sys.k, "K").unwrap();
+        })
+    });
+    group.bench_function("static", |b| {
+        b.iter(|| {
+            Expander::new(&sys.k, &sys.m, &layout)
+                .unwrap()
+                .static_(ya.as_ref())
+                .unwrap()
+        })
+    });
+    group.bench_function("dynamic", |b| {
+        b.iter(|| {
+            Expander::new(&sys.k, &sys.m, &layout)
+                .unwrap()
+                .dynamic(&lambdas, ya.as_ref())
+                .unwrap()
+        })
+    });
+    group.bench_function("minimum_residual", |b| {
+        b.iter(|| {
+            Expander::new(&sys.k, &sys.m, &layout)
+                .unwrap()
+                .minimum_residual(&lambdas, ya.as_ref())
+                .unwrap()
+        })
+    });
+    group.bench_function("mdre_we", |b| {
+        b.iter(|| {
+            Expander::new(&sys.k, &sys.m, &layout)
+                .unwrap()
+                .mdre(&lambdas, ya.as_ref(), 1e12, 0.0)
+                .unwrap()
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
