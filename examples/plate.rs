@@ -3,8 +3,15 @@
 //! conformity), assembled with consistent and lumped mass, and its lowest free-free modes from the
 //! shift-invert eigensolver, with residuals and the Sturm check that proves no mode was skipped.
 //!
+//! Then the paper's question on it: a "real" plate, 20 % less stiff in its first 4 cm, is "tested"
+//! (its first four elastic modes, measured at 15 nodes of the upper surface in y and z: 30
+//! measurements, as in the paper), correlated with the model (Table 1: pairs, frequency errors,
+//! MAC), and the a priori estimator is computed with every DOF measured (Table 2: the eigenvalue
+//! gap against `rho_M` and the paper's `rho_2`), without any eigen extraction of the model.
+//!
 //! `cargo run --release --example plate`
 
+use femu::correlate::modes::hz_of_eigenvalue;
 use femu::prelude::*;
 use femu::sparse::csc::bilinear;
 use femu::sparse::eigen::{EigenParams, Which, eigs};
@@ -93,5 +100,111 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             fl[i]
         );
     }
+
+    // The "real" plate: 20 % less stiff where x < 4 cm.
+    let mesh = model.mesh();
+    let mut soft = Vec::new();
+    let mut xy = Vec::new();
+    for e in 0..mesh.element_count() {
+        mesh.element_coords(e, &mut xy);
+        if xy.iter().map(|p| p[0]).sum::<f64>() / (xy.len() as f64) < 0.04 {
+            soft.push(mesh.element(e).id);
+        }
+    }
+    let mut real_mesh = mesh.clone();
+    real_mesh.add_element_set("damaged", &soft)?;
+    let mut real = Model::new(real_mesh)?;
+    real.set_material(None, Material::steel())?;
+    let steel = Material::steel();
+    let e = match steel.elasticity {
+        femu::fem::material::Elasticity::Isotropic { e, .. } => e,
+        _ => unreachable!("steel is isotropic"),
+    };
+    real.set_material(
+        Some("damaged"),
+        Material::isotropic("damaged steel", 0.8 * e, 0.3, steel.density)?,
+    )?;
+    let real_sys = real.assemble(MassKind::Consistent)?;
+    let truth = eigs(
+        &real_sys.k,
+        &real_sys.m,
+        Which::Lowest(10),
+        &EigenParams::default(),
+    )?;
+    // test: elastic modes 7-10 of the real plate, at 15 upper-surface nodes (a 5 x 3 grid), y and z
+    let top = mesh.node_set("zmax")?;
+    let pick = |tx: f64, ty: f64| -> u64 {
+        let target = [tx * spec.lengths[0], ty * spec.lengths[1]];
+        let best = top
+            .iter()
+            .min_by(|a, b| {
+                let d = |n: usize| {
+                    let p = mesh.coords()[n];
+                    (p[0] - target[0]).powi(2) + (p[1] - target[1]).powi(2)
+                };
+                d(**a).total_cmp(&d(**b))
+            })
+            .expect("the top face has nodes");
+        mesh.node_id(*best)
+    };
+    let mut sensors = Vec::new();
+    for i in 0..5 {
+        for j in 0..3 {
+            let node = pick(0.1 + 0.2 * i as f64, 1.0 / 6.0 + j as f64 / 3.0);
+            sensors.push(Sensor::axis(node, 1));
+            sensors.push(Sensor::axis(node, 2));
+        }
+    }
+    let layout = SensorLayout::new(mesh, &consistent.dofs, sensors)?;
+    let x = truth.vectors.as_ref().subcols(6, 4).to_owned();
+    let f_test: Vec<f64> = truth.values[6..10]
+        .iter()
+        .map(|l| hz_of_eigenvalue(*l))
+        .collect();
+    let test = TestModes::new(f_test.clone(), None, layout.measure_all(x.as_ref())?)?;
+    let report = correlate(
+        &ModeSet::from_modes(c),
+        &test,
+        &layout,
+        &PairingOptions::default(),
+    )?;
+    println!(
+        "\nTable 1 (the plate 20 % softer over its first 4 cm, {} sensors):",
+        layout.len()
+    );
+    print!("{report}");
+    // Table 2: full measurement set, the estimator from K, M and the test pair only
+    let est = Estimator::new(&consistent.k, &consistent.m)?;
+    let lambdas: Vec<f64> = truth.values[6..10].to_vec();
+    let (norms, report_m) = est.residual_norms(&lambdas, x.as_ref())?;
+    println!(
+        "\nTable 2 (every DOF measured; M^-1 by Jacobi CG, {} iterations):",
+        report_m.iterations
+    );
+    println!(
+        "| test | |lambda_id - lambda_j| (s^-2) | rho_M (rigorous) | rho_2 (paper, M != I) | a model mode lies in (Hz) |"
+    );
+    println!("|---|---|---|---|---|");
+    for (t, n) in norms.iter().enumerate() {
+        let gap = report
+            .pairing
+            .of_test(t)
+            .map_or("unpaired".to_string(), |p| {
+                format!("{:.3e}", p.eigenvalue_gap)
+            });
+        let (lo, hi) = n.frequency_interval_hz();
+        println!(
+            "| {} | {gap} | {:.3e} | {:.3e} | {lo:.1} .. {hi:.1} |",
+            t + 1,
+            n.rho_m,
+            n.rho_2
+        );
+    }
+    println!(
+        "rho_M bounds the gap from above for every mode (Theorem 2, rigorous); rho_2 is the paper's\n\
+         Euclidean ratio, not a bound when M != I (here it falls below the gap of mode 1, like the\n\
+         paper's Table 2). rho_M is large because x has small components on the model's\n\
+         high-frequency modes, weighted by (lambda_id - lambda_j)^2 in (25)."
+    );
     Ok(())
 }
