@@ -201,7 +201,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     println!(
-        "rho_M bounds the gap from above for every mode (Theorem 2, rigorous); rho_2 is the paper's\n\
+        "rho_M is at least the smallest gap |lambda_id - lambda_j| (Theorem 2, rigorous); rho_2 is the paper's\n\
          Euclidean ratio, not a bound when M != I (here it falls below the gap of mode 1, like the\n\
          paper's Table 2). rho_M is large because x has small components on the model's\n\
          high-frequency modes, weighted by (lambda_id - lambda_j)^2 in (25)."
