@@ -176,3 +176,151 @@ pub fn study_csv(points: &[StudyPoint]) -> String {
     }
     s
 }
+
+/// The study as an SVG line chart in the manner of the paper's Figure 1: `rho_M` (log scale)
+/// against the number of measured nodes, one line per (method, test mode). Self-contained SVG
+/// (no fonts or libraries needed to view it).
+pub fn study_svg(points: &[StudyPoint]) -> String {
+    let (w, h, left, right, top, bottom) = (760.0, 480.0, 80.0, 200.0, 30.0, 50.0);
+    let (pw, ph) = (w - left - right, h - top - bottom);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"12\">"
+    );
+    let _ = writeln!(s, "<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>");
+    let finite: Vec<&StudyPoint> = points
+        .iter()
+        .filter(|p| p.rho_m > 0.0 && p.rho_m.is_finite())
+        .collect();
+    if finite.is_empty() {
+        let _ = writeln!(
+            s,
+            "<text x=\"{}\" y=\"{}\">no data</text>\n</svg>",
+            w / 2.0,
+            h / 2.0
+        );
+        return s;
+    }
+    let xmin = finite.iter().map(|p| p.nodes).min().unwrap_or(0) as f64;
+    let xmax = (finite.iter().map(|p| p.nodes).max().unwrap_or(1) as f64).max(xmin + 1.0);
+    let ymin = finite
+        .iter()
+        .map(|p| p.rho_m.log10())
+        .fold(f64::INFINITY, f64::min)
+        .floor();
+    let ymax = finite
+        .iter()
+        .map(|p| p.rho_m.log10())
+        .fold(f64::NEG_INFINITY, f64::max)
+        .ceil()
+        .max(ymin + 1.0);
+    let px = |x: f64| left + (x - xmin) / (xmax - xmin) * pw;
+    let py = |y: f64| top + (ymax - y) / (ymax - ymin) * ph;
+    // axes, decade grid and labels
+    let _ = writeln!(
+        s,
+        "<rect x=\"{left}\" y=\"{top}\" width=\"{pw}\" height=\"{ph}\" fill=\"none\" stroke=\"black\"/>"
+    );
+    let mut d = ymin;
+    while d <= ymax + 1e-9 {
+        let y = py(d);
+        let _ = writeln!(
+            s,
+            "<line x1=\"{left}\" y1=\"{y:.1}\" x2=\"{:.1}\" y2=\"{y:.1}\" stroke=\"#ddd\"/>",
+            left + pw
+        );
+        let _ = writeln!(
+            s,
+            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">1e{}</text>",
+            left - 6.0,
+            y + 4.0,
+            d as i64
+        );
+        d += 1.0;
+    }
+    for k in 0..=5 {
+        let xv = xmin + (xmax - xmin) * k as f64 / 5.0;
+        let _ = writeln!(
+            s,
+            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{:.0}</text>",
+            px(xv),
+            top + ph + 18.0,
+            xv
+        );
+    }
+    let _ = writeln!(
+        s,
+        "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">measured nodes</text>",
+        left + pw / 2.0,
+        h - 10.0
+    );
+    let _ = writeln!(
+        s,
+        "<text x=\"16\" y=\"{:.1}\" transform=\"rotate(-90 16 {:.1})\" text-anchor=\"middle\">rho_M (s^-2)</text>",
+        top + ph / 2.0,
+        top + ph / 2.0
+    );
+    // one polyline per (method, mode), in first-appearance order
+    let colors = [
+        "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf",
+    ];
+    let mut series: Vec<(String, usize)> = Vec::new();
+    for p in &finite {
+        if !series.iter().any(|(m, k)| *m == p.method && *k == p.mode) {
+            series.push((p.method.clone(), p.mode));
+        }
+    }
+    let mut methods: Vec<&str> = Vec::new();
+    for (m, _) in &series {
+        if !methods.contains(&m.as_str()) {
+            methods.push(m);
+        }
+    }
+    for (i, (method, mode)) in series.iter().enumerate() {
+        let mut pts: Vec<(f64, f64)> = finite
+            .iter()
+            .filter(|p| p.method == *method && p.mode == *mode)
+            .map(|p| (px(p.nodes as f64), py(p.rho_m.log10())))
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // colour by test mode, dash pattern by method
+        let color = colors[*mode % colors.len()];
+        let method_index = methods.iter().position(|m| m == method).unwrap_or(0);
+        let dash = [
+            "",
+            " stroke-dasharray=\"6 3\"",
+            " stroke-dasharray=\"2 3\"",
+            " stroke-dasharray=\"8 3 2 3\"",
+        ][method_index % 4];
+        let coords: Vec<String> = pts.iter().map(|(x, y)| format!("{x:.1},{y:.1}")).collect();
+        let _ = writeln!(
+            s,
+            "<polyline fill=\"none\" stroke=\"{color}\" stroke-width=\"1.5\"{dash} points=\"{}\"/>",
+            coords.join(" ")
+        );
+        for (x, y) in &pts {
+            let _ = writeln!(
+                s,
+                "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"2.5\" fill=\"{color}\"/>"
+            );
+        }
+        let ly = top + 14.0 * i as f64 + 8.0;
+        let _ = writeln!(
+            s,
+            "<line x1=\"{:.1}\" y1=\"{ly:.1}\" x2=\"{:.1}\" y2=\"{ly:.1}\" stroke=\"{color}\" stroke-width=\"1.5\"{dash}/>",
+            left + pw + 10.0,
+            left + pw + 34.0
+        );
+        let _ = writeln!(
+            s,
+            "<text x=\"{:.1}\" y=\"{:.1}\">mode {} {}</text>",
+            left + pw + 40.0,
+            ly + 4.0,
+            mode + 1,
+            method
+        );
+    }
+    s.push_str("</svg>\n");
+    s
+}

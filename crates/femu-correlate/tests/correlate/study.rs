@@ -79,6 +79,13 @@ fn removal_study_points_equal_direct_computations() {
         .count();
     assert_eq!(sets.len(), expected);
     assert_eq!(points.len(), 2 + (expected - 1) * methods.len() * 2);
+    // the SVG chart: one polyline per (method, mode), one marker per point
+    let svg = femu_correlate::study::study_svg(&points);
+    let series: std::collections::BTreeSet<(String, usize)> =
+        points.iter().map(|p| (p.method.clone(), p.mode)).collect();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert_eq!(svg.matches("<polyline").count(), series.len());
+    assert_eq!(svg.matches("<circle").count(), points.len());
     let csv = study_csv(&points);
     assert!(csv.starts_with("nodes,sensors,method,mode,rho_m,rho_2\n"));
     assert_eq!(csv.lines().count(), points.len() + 1);
