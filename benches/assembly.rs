@@ -8,12 +8,7 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use femu::prelude::*;
 use std::time::Duration;
 
-fn model(spec: BoxSpec) -> Model {
-    let mut model = Model::new(box_mesh(&spec).unwrap()).unwrap();
-    model.set_material(None, Material::steel()).unwrap();
-    model.fix_set("xmin", &[0, 1, 2]).unwrap();
-    model
-}
+mod common;
 
 fn assembly(c: &mut Criterion) {
     let cases = [
@@ -48,7 +43,7 @@ fn assembly(c: &mut Criterion) {
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(20));
     for (name, spec) in cases {
-        let model = model(spec);
+        let model = common::clamped(spec);
         let asm = Assembler::new(&model).unwrap();
         let ne = model.mesh().element_count() as u64;
         group.throughput(Throughput::Elements(ne));

@@ -10,6 +10,8 @@ use femu::prelude::*;
 use femu::sparse::eigen::{EigenParams, Which, eigs};
 use std::time::Duration;
 
+mod common;
+
 fn cases() -> Vec<(String, usize)> {
     let spec = std::env::var("FEMU_BENCH_EIGEN").unwrap_or_else(|_| "hex8:20,tet10:10".into());
     spec.split(',')
@@ -34,9 +36,7 @@ fn bench(c: &mut Criterion) {
             other => panic!("FEMU_BENCH_EIGEN: unknown kind {other}"),
         };
         let spec = BoxSpec::new([2.0, 1.0, 1.0], [2 * n, n, n], cells, quadratic);
-        let mut model = Model::new(box_mesh(&spec).unwrap()).unwrap();
-        model.set_material(None, Material::steel()).unwrap();
-        model.fix_set("xmin", &[0, 1, 2]).unwrap();
+        let model = common::clamped(spec);
         let sys = model.assemble(MassKind::Consistent).unwrap();
         let id = BenchmarkId::new(kind.clone(), format!("{}dof", sys.k.rows()));
         group.bench_function(id, |b| {

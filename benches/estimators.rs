@@ -20,15 +20,7 @@ use femu::sparse::eigen::{EigenParams, Pencil, Which};
 use femu::sparse::ordering::Ordering;
 use std::time::Duration;
 
-fn cells() -> [usize; 3] {
-    std::env::var("FEMU_BENCH_CELLS")
-        .ok()
-        .and_then(|s| {
-            let v: Vec<usize> = s.split(',').filter_map(|t| t.trim().parse().ok()).collect();
-            (v.len() == 3).then(|| [v[0], v[1], v[2]])
-        })
-        .unwrap_or([24, 24, 24])
-}
+mod common;
 
 /// Smooth full-length "test" shapes: products of sines of the coordinates, one direction each.
 fn test_shapes(model: &Model, dofs: &DofMap) -> Mat<f64> {
@@ -46,11 +38,9 @@ fn test_shapes(model: &Model, dofs: &DofMap) -> Mat<f64> {
 }
 
 fn bench(c: &mut Criterion) {
-    let n = cells();
+    let n = common::cells([24, 24, 24]);
     let spec = BoxSpec::new([1.0, 1.0, 1.0], n, BoxCells::Hex, false);
-    let mut model = Model::new(box_mesh(&spec).unwrap()).unwrap();
-    model.set_material(None, Material::steel()).unwrap();
-    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+    let model = common::clamped(spec);
     let cons = model.assemble(MassKind::Consistent).unwrap();
     let lump = model.assemble(MassKind::Lumped).unwrap();
     let dofs = cons.dofs.free_count();

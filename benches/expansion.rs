@@ -14,22 +14,12 @@ use femu::sparse::faer::Mat;
 use femu::sparse::ordering::Ordering;
 use std::time::Duration;
 
-fn cells() -> [usize; 3] {
-    std::env::var("FEMU_BENCH_CELLS")
-        .ok()
-        .and_then(|s| {
-            let v: Vec<usize> = s.split(',').filter_map(|t| t.trim().parse().ok()).collect();
-            (v.len() == 3).then(|| [v[0], v[1], v[2]])
-        })
-        .unwrap_or([16, 16, 16])
-}
+mod common;
 
 fn bench(c: &mut Criterion) {
-    let n = cells();
+    let n = common::cells([16, 16, 16]);
     let spec = BoxSpec::new([1.0, 1.0, 1.0], n, BoxCells::Hex, false);
-    let mut model = Model::new(box_mesh(&spec).unwrap()).unwrap();
-    model.set_material(None, Material::steel()).unwrap();
-    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+    let model = common::clamped(spec);
     let sys = model.assemble(MassKind::Consistent).unwrap();
     let mesh = model.mesh();
     // 10 nodes spread over the top face, away from the clamped edge

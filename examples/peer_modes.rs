@@ -6,9 +6,9 @@
 //! - `peer_modes solve KIND N COUNT`: assembles and solves with femu, prints one JSON line with
 //!   the frequencies, the Sturm check and where the time went.
 
+use femu::io::inp::{FrequencyStep, write_inp};
 use femu::prelude::*;
 use femu::sparse::eigen::{EigenParams, Which, eigs};
-use std::fmt::Write as _;
 use std::time::Instant;
 
 fn model(kind: &str, n: usize) -> Result<Model, Box<dyn std::error::Error>> {
@@ -29,40 +29,6 @@ fn model(kind: &str, n: usize) -> Result<Model, Box<dyn std::error::Error>> {
     Ok(model)
 }
 
-/// A minimal CalculiX deck for the benchmark (the full `.inp` writer is femu-io's).
-fn write_inp(model: &Model, count: usize, path: &std::path::Path) -> std::io::Result<()> {
-    let mesh = model.mesh();
-    let mut s = String::from("*HEADING\nfemu eigensolver benchmark\n*NODE, NSET=NALL\n");
-    for i in 0..mesh.node_count() {
-        let x = mesh.coords()[i];
-        // shortest round-trip form: CalculiX rejects fields over 20 characters
-        let _ = writeln!(s, "{}, {}, {}, {}", mesh.node_id(i), x[0], x[1], x[2]);
-    }
-    let kind = mesh.element(0).kind;
-    let _ = writeln!(s, "*ELEMENT, TYPE={}, ELSET=EALL", kind.abaqus_name());
-    for el in mesh.elements() {
-        let ids: Vec<String> = std::iter::once(el.id)
-            .chain(el.nodes.iter().map(|n| mesh.node_id(*n)))
-            .map(|v| v.to_string())
-            .collect();
-        // at most 16 entries per line; a trailing comma continues the line
-        for (c, chunk) in ids.chunks(16).enumerate() {
-            let last = (c + 1) * 16 >= ids.len();
-            let _ = writeln!(s, "{}{}", chunk.join(", "), if last { "" } else { "," });
-        }
-    }
-    s.push_str("*NSET, NSET=FIX\n");
-    for chunk in mesh.node_set("xmin").expect("generated set").chunks(16) {
-        let ids: Vec<String> = chunk.iter().map(|n| mesh.node_id(*n).to_string()).collect();
-        let _ = writeln!(s, "{}", ids.join(", "));
-    }
-    let _ = write!(
-        s,
-        "*BOUNDARY\nFIX, 1, 3\n*MATERIAL, NAME=STEEL\n*ELASTIC\n210e9, 0.3\n*DENSITY\n7850.\n*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n*STEP\n*FREQUENCY\n{count}\n*END STEP\n"
-    );
-    std::fs::write(path, s)
-}
-
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let usage = "usage: peer_modes (export KIND N COUNT DIR | solve KIND N COUNT)";
@@ -78,7 +44,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "export" => {
             let dir = std::path::Path::new(args.get(5).ok_or(usage)?);
             std::fs::create_dir_all(dir)?;
-            write_inp(&model, count, &dir.join("model.inp"))?;
+            let step = FrequencyStep {
+                count,
+                shift_cycles2: None,
+            };
+            write_inp(&model, Some(&step), dir.join("model.inp"))?;
             femu::sparse::mtx::write_matrix_market(dir.join("K.mtx"), &sys.k, true)?;
             femu::sparse::mtx::write_matrix_market(dir.join("M.mtx"), &sys.m, true)?;
             println!(

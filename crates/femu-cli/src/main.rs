@@ -103,6 +103,80 @@ enum Command {
     },
 }
 
+/// A deck read, checked and assembled.
+struct Loaded {
+    model: femu_fem::model::Model,
+    sys: femu_fem::assembly::SystemMatrices,
+    mass: MassKind,
+    /// The deck's `*FREQUENCY` step, if any.
+    frequency: Option<femu_io::inp::FrequencyStep>,
+}
+
+/// Reads `path` (warnings to stderr unless quiet), builds the model and assembles `K` and `M`.
+fn load(path: &Path, lumped: bool, quiet: bool, pb: &ProgressBar) -> Result<Loaded, String> {
+    let deck = femu_io::inp::read_inp(path).map_err(|e| e.to_string())?;
+    if !quiet {
+        deck.warnings.iter().for_each(|w| eprintln!("{w}"));
+    }
+    let model = deck.to_model().map_err(|e| e.to_string())?;
+    pb.set_message("assembling K and M");
+    let mass = if lumped {
+        MassKind::Lumped
+    } else {
+        MassKind::Consistent
+    };
+    let sys = model.assemble(mass).map_err(|e| e.to_string())?;
+    Ok(Loaded {
+        model,
+        sys,
+        mass,
+        frequency: deck.frequency,
+    })
+}
+
+/// Reads CSV test modes and maps their sensors onto the model (errors name the test file).
+fn load_test(
+    path: &Path,
+    loaded: &Loaded,
+) -> Result<(femu_io::csv::TestData, femu_correlate::SensorLayout), String> {
+    let test = femu_io::csv::read_test_csv(path).map_err(|e| e.to_string())?;
+    let layout = femu_correlate::SensorLayout::new(
+        loaded.model.mesh(),
+        &loaded.sys.dofs,
+        test.sensors.clone(),
+    )
+    .map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok((test, layout))
+}
+
+/// The lowest `count` modes (default: twice the test modes plus 4, at most the DOFs).
+fn lowest_for_test(
+    loaded: &Loaded,
+    count: Option<usize>,
+    test_modes: usize,
+    pb: &ProgressBar,
+) -> Result<femu_sparse::eigen::Modes, String> {
+    let sys = &loaded.sys;
+    let count = count.unwrap_or(2 * test_modes + 4).min(sys.k.rows());
+    pb.set_message(format!("solving {count} modes ({} DOF)", sys.k.rows()));
+    eigs(
+        &sys.k,
+        &sys.m,
+        Which::Lowest(count),
+        &EigenParams::default(),
+    )
+    .map_err(|e| e.to_string())
+}
+
+/// Writes `value` as pretty JSON when a path is given.
+fn write_json<T: Serialize>(path: Option<PathBuf>, value: &T) -> Result<(), String> {
+    if let Some(path) = path {
+        let text = serde_json::to_string_pretty(value).map_err(|e| e.to_string())?;
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    Ok(())
+}
+
 /// Test modes from CSV (see `femu_io::csv`), correlated with the model's lowest modes.
 fn correlate_cmd(
     model_path: &Path,
@@ -113,30 +187,10 @@ fn correlate_cmd(
     json: Option<PathBuf>,
     quiet: bool,
 ) -> Result<(), String> {
-    let deck = femu_io::inp::read_inp(model_path).map_err(|e| e.to_string())?;
-    if !quiet {
-        deck.warnings.iter().for_each(|w| eprintln!("{w}"));
-    }
-    let model = deck.to_model().map_err(|e| e.to_string())?;
-    let test = femu_io::csv::read_test_csv(test_path).map_err(|e| e.to_string())?;
-    let pb = spinner(quiet, "assembling K and M");
-    let mass = if lumped {
-        MassKind::Lumped
-    } else {
-        MassKind::Consistent
-    };
-    let sys = model.assemble(mass).map_err(|e| e.to_string())?;
-    let layout = femu_correlate::SensorLayout::new(model.mesh(), &sys.dofs, test.sensors.clone())
-        .map_err(|e| format!("{}: {e}", test_path.display()))?;
-    let count = count.unwrap_or(2 * test.modes.len() + 4).min(sys.k.rows());
-    pb.set_message(format!("solving {count} modes ({} DOF)", sys.k.rows()));
-    let modes = eigs(
-        &sys.k,
-        &sys.m,
-        Which::Lowest(count),
-        &EigenParams::default(),
-    )
-    .map_err(|e| e.to_string())?;
+    let pb = spinner(quiet, "reading the model");
+    let loaded = load(model_path, lumped, quiet, &pb)?;
+    let (test, layout) = load_test(test_path, &loaded)?;
+    let modes = lowest_for_test(&loaded, count, test.modes.len(), &pb)?;
     pb.finish_and_clear();
     let options = femu_correlate::PairingOptions { mac_threshold };
     let report = femu_correlate::correlate(
@@ -155,11 +209,7 @@ fn correlate_cmd(
         );
         print!("{report}");
     }
-    if let Some(path) = json {
-        let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
-        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
-    }
-    Ok(())
+    write_json(json, &report)
 }
 
 /// The a priori estimators for CSV test modes, expanded to the model's DOFs.
@@ -172,65 +222,43 @@ fn estimate_cmd(
     json: Option<PathBuf>,
     quiet: bool,
 ) -> Result<(), String> {
-    use femu_correlate::expansion::Expander;
-    let deck = femu_io::inp::read_inp(model_path).map_err(|e| e.to_string())?;
-    if !quiet {
-        deck.warnings.iter().for_each(|w| eprintln!("{w}"));
-    }
-    let model = deck.to_model().map_err(|e| e.to_string())?;
-    let test = femu_io::csv::read_test_csv(test_path).map_err(|e| e.to_string())?;
-    let pb = spinner(quiet, "assembling K and M");
-    let mass = if lumped {
-        MassKind::Lumped
-    } else {
-        MassKind::Consistent
-    };
-    let sys = model.assemble(mass).map_err(|e| e.to_string())?;
-    let layout = femu_correlate::SensorLayout::new(model.mesh(), &sys.dofs, test.sensors.clone())
-        .map_err(|e| format!("{}: {e}", test_path.display()))?;
+    use femu_correlate::expansion::{Expander, place_measured};
+    let pb = spinner(quiet, "reading the model");
+    let loaded = load(model_path, lumped, quiet, &pb)?;
+    let (test, layout) = load_test(test_path, &loaded)?;
+    let sys = &loaded.sys;
     let lambdas = test.modes.eigenvalues();
     pb.set_message(format!(
         "expanding {} test modes ({expansion})",
         lambdas.len()
     ));
     let ya = test.modes.shapes.as_ref();
-    let x = if layout.len() == sys.dofs.free_count() && layout.measured_dofs().is_some() {
-        // every DOF measured: reorder the readings onto the DOFs
-        let dofs = layout.measured_dofs().expect("checked");
-        let mut x = femu_sparse::faer::Mat::zeros(sys.k.rows(), ya.ncols());
-        for (s, d) in dofs.iter().enumerate() {
-            for j in 0..ya.ncols() {
-                x[(*d, j)] = ya[(s, j)];
-            }
+    let x = match layout.measured_dofs() {
+        // every DOF measured: the readings placed on their DOFs, nothing to expand
+        Some(dofs) if dofs.len() == sys.dofs.free_count() => {
+            place_measured(sys.k.rows(), &dofs, ya).map_err(|e| e.to_string())?
         }
-        x
-    } else {
-        let exp = Expander::new(&sys.k, &sys.m, &layout).map_err(|e| e.to_string())?;
-        match expansion {
-            "static" => exp.static_(ya),
-            "dynamic" => exp.dynamic(&lambdas, ya),
-            "min-residual" => exp.minimum_residual(&lambdas, ya),
-            other => {
-                return Err(format!(
-                    "--expansion {other}: use static, dynamic or min-residual"
-                ));
+        _ => {
+            let exp = Expander::new(&sys.k, &sys.m, &layout).map_err(|e| e.to_string())?;
+            match expansion {
+                "static" => exp.static_(ya),
+                "dynamic" => exp.dynamic(&lambdas, ya),
+                "min-residual" => exp.minimum_residual(&lambdas, ya),
+                other => {
+                    return Err(format!(
+                        "--expansion {other}: use static, dynamic or min-residual"
+                    ));
+                }
             }
+            .map_err(|e| e.to_string())?
         }
-        .map_err(|e| e.to_string())?
     };
-    let count = count.unwrap_or(2 * test.modes.len() + 4).min(sys.k.rows());
-    pb.set_message(format!("solving {count} modes for the comparison"));
-    let modes = eigs(
-        &sys.k,
-        &sys.m,
-        Which::Lowest(count),
-        &EigenParams::default(),
-    )
-    .map_err(|e| e.to_string())?;
+    let modes = lowest_for_test(&loaded, count, test.modes.len(), &pb)?;
     let set = femu_correlate::ModeSet::from_modes(&modes);
     let report = femu_correlate::correlate(&set, &test.modes, &layout, &Default::default())
         .map_err(|e| e.to_string())?;
-    let eb = femu_correlate::element_bounds(&model, mass).map_err(|e| e.to_string())?;
+    let eb =
+        femu_correlate::element_bounds(&loaded.model, loaded.mass).map_err(|e| e.to_string())?;
     let spectrum = femu_correlate::ModelSpectrum {
         values: modes.values.clone(),
         complete: false,
@@ -263,9 +291,10 @@ fn estimate_cmd(
             "| test | f test (Hz) | rho_M (s^-2) | rho_2 | a model mode lies in (Hz) | paired model (Hz) |"
         );
         println!("|---|---|---|---|---|---|");
+        let f_model = set.frequencies_hz();
         for a in &out {
             let pm = a.paired_model.map_or("-".to_string(), |j| {
-                format!("{} ({:.1})", j + 1, set.frequencies_hz()[j])
+                format!("{} ({:.1})", j + 1, f_model[j])
             });
             println!(
                 "| {} | {:.1} | {:.4e} | {:.4e} | {:.1} .. {:.1} | {pm} |",
@@ -278,11 +307,7 @@ fn estimate_cmd(
             );
         }
     }
-    if let Some(path) = json {
-        let text = serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?;
-        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
-    }
-    Ok(())
+    write_json(json, &out)
 }
 
 /// What `femu modes --json` writes.
@@ -313,11 +338,6 @@ fn spinner(quiet: bool, msg: &str) -> ProgressBar {
     pb
 }
 
-fn to_rad2(hz: f64) -> f64 {
-    let w = 2.0 * std::f64::consts::PI * hz;
-    w * w
-}
-
 fn modes(
     model_path: &Path,
     count: Option<usize>,
@@ -328,23 +348,13 @@ fn modes(
     vtu: Option<PathBuf>,
     quiet: bool,
 ) -> Result<(), String> {
+    use femu_correlate::modes::eigenvalue_of_hz;
     let start = std::time::Instant::now();
-    let deck = femu_io::inp::read_inp(model_path).map_err(|e| e.to_string())?;
-    for w in &deck.warnings {
-        if !quiet {
-            eprintln!("{w}");
-        }
-    }
-    let model = deck.to_model().map_err(|e| e.to_string())?;
-    let pb = spinner(quiet, "assembling K and M");
-    let mass = if lumped {
-        MassKind::Lumped
-    } else {
-        MassKind::Consistent
-    };
-    let sys = model.assemble(mass).map_err(|e| e.to_string())?;
+    let pb = spinner(quiet, "reading the model");
+    let loaded = load(model_path, lumped, quiet, &pb)?;
+    let (model, sys) = (&loaded.model, &loaded.sys);
     pb.set_message(format!("solving ({} DOF)", sys.k.rows()));
-    let count = count.or(deck.frequency.map(|f| f.count)).unwrap_or(10);
+    let count = count.or(loaded.frequency.map(|f| f.count)).unwrap_or(10);
     if count == 0 {
         return Err("--count must be at least 1".into());
     }
@@ -354,7 +364,7 @@ fn modes(
                 return Err(format!("--shift {hz} Hz must be a non-negative frequency"));
             }
             Which::Nearest {
-                shift: to_rad2(hz),
+                shift: eigenvalue_of_hz(hz),
                 count,
             }
         }
@@ -363,8 +373,8 @@ fn modes(
                 return Err(format!("--band {} {}: need 0 <= LO < HI (Hz)", b[0], b[1]));
             }
             Which::Band {
-                lo: to_rad2(b[0]),
-                hi: to_rad2(b[1]),
+                lo: eigenvalue_of_hz(b[0]),
+                hi: eigenvalue_of_hz(b[1]),
             }
         }
         (None, None) => Which::Lowest(count),
@@ -372,13 +382,9 @@ fn modes(
     let result = eigs(&sys.k, &sys.m, which, &EigenParams::default()).map_err(|e| e.to_string())?;
     pb.finish_and_clear();
     let f = result.frequencies_hz();
+    let mass_name = if lumped { "lumped" } else { "consistent" };
     if !quiet {
-        println!(
-            "{} DOF, {} mass, {} modes",
-            sys.k.rows(),
-            if lumped { "lumped" } else { "consistent" },
-            f.len()
-        );
+        println!("{} DOF, {mass_name} mass, {} modes", sys.k.rows(), f.len());
         println!("| mode | f (Hz) | lambda (s^-2) | residual |");
         println!("|---|---|---|---|");
         for (j, (fj, (l, r))) in f
@@ -422,11 +428,12 @@ fn modes(
             .collect();
         femu_io::vtk::write_vtu(model.mesh(), &fields, &[], &path).map_err(|e| e.to_string())?;
     }
-    if let Some(path) = json {
-        let out = ModesJson {
+    write_json(
+        json,
+        &ModesJson {
             model: model_path.display().to_string(),
             dofs: sys.k.rows(),
-            mass: if lumped { "lumped" } else { "consistent" },
+            mass: mass_name,
             frequencies_hz: f,
             eigenvalues: result.values.clone(),
             residuals: result.residuals.clone(),
@@ -434,11 +441,8 @@ fn modes(
             sturm_count: result.sturm.count,
             sturm_upper: result.sturm.upper,
             seconds: start.elapsed().as_secs_f64(),
-        };
-        let text = serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?;
-        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
-    }
-    Ok(())
+        },
+    )
 }
 
 fn main() -> ExitCode {

@@ -66,12 +66,46 @@ impl Partition {
     }
 }
 
+/// Full-length vectors (`n` rows) with the rows of `ya` on the `measured` DOFs and zero elsewhere:
+/// the test shapes themselves when every DOF is measured (no expansion needed).
+///
+/// # Errors
+/// `ya` with another row count than `measured`, a DOF out of range or repeated.
+pub fn place_measured(
+    n: usize,
+    measured: &[usize],
+    ya: MatRef<'_, f64>,
+) -> Result<Mat<f64>, CorrelateError> {
+    Partition::new(n, measured)?;
+    if ya.nrows() != measured.len() {
+        return Err(CorrelateError::DimensionMismatch {
+            what: "measured shapes against the measured DOFs",
+            expected: measured.len(),
+            got: ya.nrows(),
+        });
+    }
+    Ok(place(n, measured, ya))
+}
+
+fn place(n: usize, measured: &[usize], ya: MatRef<'_, f64>) -> Mat<f64> {
+    let mut x = Mat::zeros(n, ya.ncols());
+    for j in 0..ya.ncols() {
+        for (s, &d) in measured.iter().enumerate() {
+            x[(d, j)] = ya[(s, j)];
+        }
+    }
+    x
+}
+
 /// Expansion of measured shapes on one model and one sensor set.
 #[derive(Debug, Clone)]
 pub struct Expander<'a> {
     k: &'a SparseMatrix,
     m: &'a SparseMatrix,
     part: Partition,
+    /// `M`'s values on `K`'s pattern (0 where `M` stores nothing), found once: every expansion
+    /// forms `Z = K - lambda M` entry by entry on that pattern
+    m_on_k: Vec<f64>,
     /// `K_oo` (CSC, both triangles) and `M_oo`'s values on its pattern
     k_oo: SparseMatrix,
     m_oo: Vec<f64>,
@@ -122,6 +156,21 @@ impl<'a> Expander<'a> {
         }
         let (kp, mp) = (k.indptr(), m.indptr());
         let (kp, mp) = (kp.raw_storage(), mp.raw_storage());
+        let mut m_on_k = vec![0.0; k.nnz()];
+        for c in 0..n {
+            let mrows = &m.indices()[mp[c]..mp[c + 1]];
+            let krows = &k.indices()[kp[c]..kp[c + 1]];
+            for (q, r) in mrows.iter().enumerate() {
+                let pos = krows
+                    .binary_search(r)
+                    .map_err(|_| SparseError::DimensionMismatch {
+                        what: "pattern of M inside the pattern of K (entry of M missing from K)",
+                        expected: c,
+                        got: *r,
+                    })?;
+                m_on_k[kp[c] + pos] = m.data()[mp[c] + q];
+            }
+        }
         let no = part.omitted.len();
         let mut ptr = Vec::with_capacity(no + 1);
         let mut idx = Vec::new();
@@ -129,32 +178,13 @@ impl<'a> Expander<'a> {
         let mut mv = Vec::new();
         ptr.push(0);
         for &c in &part.omitted {
-            let mrows = &m.indices()[mp[c]..mp[c + 1]];
-            let mvals = &m.data()[mp[c]..mp[c + 1]];
-            let mut hits = 0;
             for p in kp[c]..kp[c + 1] {
-                let r = k.indices()[p];
-                let o = part.omitted_pos[r];
-                let mval = match mrows.binary_search(&r) {
-                    Ok(q) => {
-                        hits += 1;
-                        mvals[q]
-                    }
-                    Err(_) => 0.0,
-                };
+                let o = part.omitted_pos[k.indices()[p]];
                 if o != usize::MAX {
                     idx.push(o);
                     kv.push(k.data()[p]);
-                    mv.push(mval);
+                    mv.push(m_on_k[p]);
                 }
-            }
-            if hits != mrows.len() {
-                return Err(SparseError::DimensionMismatch {
-                    what: "pattern of M inside the pattern of K (entry of M missing from K)",
-                    expected: mrows.len(),
-                    got: hits,
-                }
-                .into());
             }
             ptr.push(idx.len());
         }
@@ -164,6 +194,7 @@ impl<'a> Expander<'a> {
             k,
             m,
             part,
+            m_on_k,
             k_oo,
             m_oo: mv,
             symbolic,
@@ -196,13 +227,7 @@ impl<'a> Expander<'a> {
 
     /// Full-length vectors with `ya` on the measured DOFs and zero elsewhere.
     fn scatter_measured(&self, ya: MatRef<'_, f64>) -> Mat<f64> {
-        let mut x = Mat::zeros(self.k.rows(), ya.ncols());
-        for j in 0..ya.ncols() {
-            for (s, &d) in self.part.measured.iter().enumerate() {
-                x[(d, j)] = ya[(s, j)];
-            }
-        }
-        x
+        place(self.k.rows(), &self.part.measured, ya)
     }
 
     /// `(Z x)_o` for full vectors `x` and `Z = K - lambda M` (one lambda per column).
@@ -231,20 +256,7 @@ impl<'a> Expander<'a> {
         lambdas: &[f64],
         ya: MatRef<'_, f64>,
     ) -> Result<Mat<f64>, CorrelateError> {
-        self.check_measured(ya)?;
-        if lambdas.len() != ya.ncols() {
-            return Err(CorrelateError::DimensionMismatch {
-                what: "eigenvalues against measured shapes",
-                expected: ya.ncols(),
-                got: lambdas.len(),
-            });
-        }
-        if let Some(index) = lambdas.iter().position(|l| !l.is_finite()) {
-            return Err(CorrelateError::NonFinite {
-                what: "expansion eigenvalue",
-                index,
-            });
-        }
+        self.check_lambdas(lambdas, ya)?;
         let mut x = self.scatter_measured(ya);
         let rhs = self.z_times_on_o(lambdas, x.as_ref())?;
         let mut done = vec![false; lambdas.len()];
@@ -465,15 +477,6 @@ impl Kkt {
 }
 
 impl Expander<'_> {
-    /// `M(r, c)` for an entry of `K`'s pattern (0 when `M` does not store it).
-    fn m_at(&self, r: usize, c: usize) -> f64 {
-        let mp = self.m.indptr();
-        let mp = mp.raw_storage();
-        let rows = &self.m.indices()[mp[c]..mp[c + 1]];
-        rows.binary_search(&r)
-            .map_or(0.0, |q| self.m.data()[mp[c] + q])
-    }
-
     fn check_lambdas(&self, lambdas: &[f64], ya: MatRef<'_, f64>) -> Result<(), CorrelateError> {
         self.check_measured(ya)?;
         if lambdas.len() != ya.ncols() {
@@ -528,7 +531,7 @@ impl Expander<'_> {
                 let mut s = 0.0;
                 for p in kp[c]..kp[c + 1] {
                     let r = self.k.indices()[p];
-                    let z = self.k.data()[p] - lambda * self.m_at(r, c);
+                    let z = self.k.data()[p] - lambda * self.m_on_k[p];
                     t.add_triplet(r, n + jo, -z);
                     t.add_triplet(n + jo, r, -z);
                     s += z * z / mdiag[r];
@@ -602,7 +605,7 @@ impl Expander<'_> {
             for c in 0..n {
                 for p in kp[c]..kp[c + 1] {
                     let r = self.k.indices()[p];
-                    let m = self.m_at(r, c);
+                    let m = self.m_on_k[p];
                     let ks = self.k.data()[p] + stiffness_shift * m;
                     let z = self.k.data()[p] - lambda * m;
                     t.add_triplet(r, c, ks);

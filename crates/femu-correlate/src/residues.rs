@@ -12,7 +12,7 @@
 
 use crate::{CorrelateError, MassSolver};
 use faer::{Mat, MatRef};
-use femu_sparse::cholesky::{Factorization, Ldlt, Llt, SymbolicFactor};
+use femu_sparse::cholesky::{Factorization, Ldlt, Llt};
 use femu_sparse::csc::sym_mul_mat;
 use femu_sparse::eigen::{EigenParams, Pencil, Which};
 use femu_sparse::ordering::Ordering;
@@ -155,17 +155,8 @@ pub struct StiffnessSolver<'a> {
 
 /// `1e-11 mean(K_ii / M_ii)`: far above round-off zeros of rigid-body modes (about
 /// `1e-16 lambda_max`) and far below the first elastic eigenvalue of practical structures.
-fn zero_threshold(k: &SparseMatrix, m: &SparseMatrix) -> f64 {
-    let n = k.rows().max(1);
-    let ratio: f64 = (0..k.rows())
-        .map(|i| {
-            let kd = k.get(i, i).copied().unwrap_or(0.0).abs();
-            let md = m.get(i, i).copied().unwrap_or(0.0);
-            if md > 0.0 { kd / md } else { 0.0 }
-        })
-        .sum::<f64>()
-        / n as f64;
-    1e-11 * ratio
+fn zero_threshold(pencil: &Pencil<'_>) -> f64 {
+    1e-11 * pencil.diagonal_ratio()
 }
 
 impl<'a> StiffnessSolver<'a> {
@@ -185,8 +176,10 @@ impl<'a> StiffnessSolver<'a> {
             }
             .into());
         }
-        let symbolic = SymbolicFactor::new(k, Ordering::NestedDissection)?;
-        match symbolic.llt(k, "K") {
+        // one ordering and symbolic analysis of K's pattern serves the Cholesky attempt and, for
+        // a singular K, the Sturm counts, the null-space eigensolve and the shifted factor
+        let pencil = Pencil::new(k, m, Ordering::NestedDissection)?;
+        match pencil.symbolic().llt(k, "K") {
             Ok(llt) => {
                 return Ok(Self {
                     k,
@@ -197,8 +190,7 @@ impl<'a> StiffnessSolver<'a> {
             Err(SparseError::NotPositiveDefinite { .. }) => {}
             Err(e) => return Err(e.into()),
         }
-        let pencil = Pencil::new(k, m, Ordering::NestedDissection)?;
-        let thr = zero_threshold(k, m);
+        let thr = zero_threshold(&pencil);
         let negative = pencil.count_below(-thr)?;
         if negative > 0 {
             return Err(CorrelateError::Invalid {
@@ -243,17 +235,20 @@ impl<'a> StiffnessSolver<'a> {
                 got: basis.nrows(),
             });
         }
+        let pencil = Pencil::new(k, m, Ordering::NestedDissection)?;
         let mut q = basis.to_owned();
+        // unit M-norm first, so that "dependent" below is relative
         crate::correlation::mass_normalise(m, q.as_mut())?;
-        // Two passes of modified Gram-Schmidt in the M inner product.
+        // Two passes of modified Gram-Schmidt in the M inner product; `M q_i` is formed once per
+        // column when it is final for the pass.
         for _ in 0..2 {
+            let mut mq: Vec<Mat<f64>> = Vec::with_capacity(q.ncols());
             for j in 0..q.ncols() {
-                let mq = sym_mul_mat(m, q.as_ref())?;
-                for i in 0..j {
+                for (i, mqi) in mq.iter().enumerate() {
                     let c: f64 = q
                         .col(j)
                         .iter()
-                        .zip(mq.col(i).iter())
+                        .zip(mqi.col(0).iter())
                         .map(|(a, b)| a * b)
                         .sum();
                     for r in 0..n {
@@ -261,7 +256,7 @@ impl<'a> StiffnessSolver<'a> {
                         q[(r, j)] -= c * v;
                     }
                 }
-                let mqj = sym_mul_mat(m, q.as_ref().subcols(j, 1))?;
+                let mut mqj = sym_mul_mat(m, q.as_ref().subcols(j, 1))?;
                 let nrm: f64 = q
                     .col(j)
                     .iter()
@@ -274,15 +269,13 @@ impl<'a> StiffnessSolver<'a> {
                         reason: format!("vector {j} depends on the others"),
                     });
                 }
-                q.col_mut(j).iter_mut().for_each(|v| *v /= nrm.sqrt());
+                let s = 1.0 / nrm.sqrt();
+                q.col_mut(j).iter_mut().for_each(|v| *v *= s);
+                mqj.col_mut(0).iter_mut().for_each(|v| *v *= s);
+                mq.push(mqj);
             }
         }
-        let knorm = (0..n)
-            .map(|c| {
-                k.outer_view(c)
-                    .map_or(0.0, |v| v.iter().map(|(_, x)| x.abs()).sum())
-            })
-            .fold(0.0, f64::max);
+        let knorm = pencil.norms().0;
         let kq = sym_mul_mat(k, q.as_ref())?;
         for j in 0..q.ncols() {
             let r = kq.col(j).norm_l2();
@@ -296,8 +289,7 @@ impl<'a> StiffnessSolver<'a> {
                 });
             }
         }
-        let pencil = Pencil::new(k, m, Ordering::NestedDissection)?;
-        let thr = zero_threshold(k, m);
+        let thr = zero_threshold(&pencil);
         Self::singular(k, m, q, &pencil, thr)
     }
 

@@ -104,12 +104,15 @@ fn io_err(path: &Path, e: std::io::Error) -> IoError {
 /// Reads the lines of `path` with its `*INCLUDE`s expanded in place (depth limited to 16).
 fn load(path: &Path, depth: usize, out: &mut Vec<Line>) -> Result<(), IoError> {
     let text = std::fs::read(path).map_err(|e| io_err(path, e))?;
-    let text = String::from_utf8_lossy(&text);
+    push_lines(&String::from_utf8_lossy(&text), path, depth, out)
+}
+
+/// Appends the lines of `text` (from `path`) to `out`, expanding `*INCLUDE`s relative to `path`.
+fn push_lines(text: &str, path: &Path, depth: usize, out: &mut Vec<Line>) -> Result<(), IoError> {
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     for (i, raw) in text.lines().enumerate() {
         let t = raw.trim_end_matches('\r');
-        let upper = t.trim_start().to_ascii_uppercase();
-        if upper.starts_with("*INCLUDE") {
+        if t.trim_start().to_ascii_uppercase().starts_with("*INCLUDE") {
             let (_, params) = keyword(t);
             let Some(file) = params.get("INPUT") else {
                 return Err(IoError::Parse {
@@ -125,8 +128,7 @@ fn load(path: &Path, depth: usize, out: &mut Vec<Line>) -> Result<(), IoError> {
                     reason: "*INCLUDE nested more than 16 deep (a cycle?)".into(),
                 });
             }
-            let inc = dir.join(file.trim_matches('"'));
-            load(&inc, depth + 1, out)?;
+            load(&dir.join(file.trim_matches('"')), depth + 1, out)?;
             continue;
         }
         out.push(Line {
@@ -218,27 +220,8 @@ pub fn read_inp(path: impl AsRef<Path>) -> Result<InpDeck, IoError> {
 /// # Errors
 /// As [`read_inp`].
 pub fn parse_inp(text: &str, path: impl AsRef<Path>) -> Result<InpDeck, IoError> {
-    let path = path.as_ref();
     let mut lines = Vec::new();
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    for (i, raw) in text.lines().enumerate() {
-        let t = raw.trim_end_matches('\r');
-        if t.trim_start().to_ascii_uppercase().starts_with("*INCLUDE") {
-            let (_, params) = keyword(t);
-            let file = params.get("INPUT").ok_or_else(|| IoError::Parse {
-                path: path.to_path_buf(),
-                line: i + 1,
-                reason: "*INCLUDE without INPUT=".into(),
-            })?;
-            load(&dir.join(file.trim_matches('"')), 1, &mut lines)?;
-            continue;
-        }
-        lines.push(Line {
-            path: path.to_path_buf(),
-            number: i + 1,
-            text: t.to_string(),
-        });
-    }
+    push_lines(text, path.as_ref(), 0, &mut lines)?;
     parse(&lines)
 }
 
@@ -765,6 +748,18 @@ fn element_of(e: &femu_fem::FemError) -> Option<u64> {
     }
 }
 
+/// A number for a deck field: the shortest representation that reads back exactly, or, when that
+/// is longer than CalculiX's 20-character fields (17 digits with a sign or an exponent), 14
+/// significant digits (relative error at most 5e-14).
+fn number_field(v: f64) -> String {
+    let exact = format!("{v:?}");
+    if exact.len() <= 20 {
+        exact
+    } else {
+        format!("{v:.13e}")
+    }
+}
+
 /// A CalculiX deck for `model` (nodes, elements grouped by kind, the mesh's sets, one material and
 /// section per distinct material, fixed DOFs, and a `*FREQUENCY` step when `step` is given).
 /// Sets named `NALL`, `EALL` and `FEMU_MAT*` are the writer's own and are regenerated, so writing
@@ -782,8 +777,14 @@ pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String,
     let mut s = String::from("*HEADING\nwritten by femu\n*NODE, NSET=NALL\n");
     for i in 0..mesh.node_count() {
         let x = mesh.coords()[i];
-        // shortest round-trip representation: exact, and within CalculiX's 20-character fields
-        let _ = writeln!(s, "{}, {:?}, {:?}, {:?}", mesh.node_id(i), x[0], x[1], x[2]);
+        let _ = writeln!(
+            s,
+            "{}, {}, {}, {}",
+            mesh.node_id(i),
+            number_field(x[0]),
+            number_field(x[1]),
+            number_field(x[2])
+        );
     }
     for kind in femu_fem::element::ALL_KINDS {
         let els: Vec<_> = mesh.elements().filter(|e| e.kind == kind).collect();
@@ -875,8 +876,10 @@ pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String,
         write_ids(&mut s, ids.clone());
         let _ = writeln!(
             s,
-            "*MATERIAL, NAME={name}\n*ELASTIC\n{e:?}, {nu:?}\n*DENSITY\n{:?}",
-            m.density
+            "*MATERIAL, NAME={name}\n*ELASTIC\n{}, {}\n*DENSITY\n{}",
+            number_field(*e),
+            number_field(*nu),
+            number_field(m.density)
         );
         let _ = writeln!(
             s,
@@ -895,7 +898,7 @@ pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String,
         s.push_str("*STEP\n*FREQUENCY\n");
         match step.shift_cycles2 {
             Some(shift) => {
-                let _ = writeln!(s, "{}, , {shift:?}", step.count);
+                let _ = writeln!(s, "{}, , {}", step.count, number_field(shift));
             }
             None => {
                 let _ = writeln!(s, "{}", step.count);

@@ -329,3 +329,37 @@ fn csv_test_modes() {
         );
     }
 }
+
+/// Numbers whose exact form is longer than CalculiX's 20-character fields are written with 14
+/// significant digits; everything else exactly.
+#[test]
+fn long_numbers_fit_calculix_fields() {
+    let mut mesh = Mesh::new();
+    let odd = [-0.049999999999999996, 1.2345678901234567e-5, -1.0 / 3.0];
+    let corners = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    for (i, c) in corners.iter().enumerate() {
+        mesh.add_node(i as u64 + 1, *c).unwrap();
+        mesh.add_node(i as u64 + 5, [c[0], c[1], 1.0]).unwrap();
+    }
+    mesh.add_node(9, odd).unwrap();
+    mesh.add_element(1, ElementKind::Hex8, &[1, 2, 3, 4, 5, 6, 7, 8])
+        .unwrap();
+    let mut model = Model::new(mesh).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    let text = inp_string(&model, None).unwrap();
+    for line in text.lines().filter(|l| l.starts_with("9,")) {
+        assert!(line.split(',').all(|f| f.trim().len() <= 20), "{line}");
+    }
+    let back = parse_inp(&text, "long.inp").unwrap();
+    let x = back.mesh.coords()[back.mesh.node_index(9).unwrap()];
+    for (a, b) in x.iter().zip(odd) {
+        assert!((a - b).abs() <= 5e-14 * b.abs(), "{a} vs {b}");
+    }
+    // the exact (short) ones are unchanged
+    assert_eq!(x[2], -1.0 / 3.0);
+}

@@ -275,23 +275,29 @@ impl<'a> Pencil<'a> {
         Ok(self.factor_shifted(sigma)?.inertia().negative)
     }
 
+    /// `mean_i |K_ii| / M_ii` (terms with `M_ii <= 0` count as zero): the pencil's typical
+    /// eigenvalue scale in s^-2, from which thresholds for "zero" eigenvalues are set.
+    pub fn diagonal_ratio(&self) -> f64 {
+        let n = self.k.rows();
+        (0..n)
+            .map(|i| {
+                let kd = self.k.get(i, i).copied().unwrap_or(0.0).abs();
+                let md = self.m.get(i, i).copied().unwrap_or(0.0);
+                if md > 0.0 { kd / md } else { 0.0 }
+            })
+            .sum::<f64>()
+            / n.max(1) as f64
+    }
+
+    /// `(||K||_1, ||M||_1)`, the largest absolute column sums.
+    pub fn norms(&self) -> (f64, f64) {
+        (self.k_norm, self.m_norm)
+    }
+
     /// A negative shift for the lowest modes: `-1e-10 mean(K_ii / M_ii)`, far below the first
     /// elastic eigenvalue of any practical structure yet well away from the rigid-body zeros.
     fn lowest_shift(&self) -> f64 {
-        let diag = |a: &SparseMatrix| -> Vec<f64> {
-            (0..a.rows())
-                .map(|i| a.get(i, i).copied().unwrap_or(0.0))
-                .collect()
-        };
-        let (kd, md) = (diag(self.k), diag(self.m));
-        let ratio: f64 = kd
-            .iter()
-            .zip(&md)
-            .filter(|(_, m)| **m > 0.0)
-            .map(|(k, m)| k.abs() / m)
-            .sum::<f64>()
-            / kd.len().max(1) as f64;
-        -(1e-10 * ratio).max(f64::MIN_POSITIVE)
+        -(1e-10 * self.diagonal_ratio()).max(f64::MIN_POSITIVE)
     }
 
     /// Computes the requested modes; see the module documentation.

@@ -1,0 +1,24 @@
+//! Shared by the benchmarks: the clamped steel block they time, and its size from the
+//! environment.
+
+use femu::prelude::*;
+
+/// A steel box meshed by `spec`, clamped on its `x = 0` face.
+pub fn clamped(spec: BoxSpec) -> Model {
+    let mut model = Model::new(box_mesh(&spec).unwrap()).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+    model
+}
+
+/// Cells along x, y, z from `FEMU_BENCH_CELLS=nx,ny,nz`, or `default`.
+#[allow(dead_code)] // not every benchmark reads the size from the environment
+pub fn cells(default: [usize; 3]) -> [usize; 3] {
+    std::env::var("FEMU_BENCH_CELLS")
+        .ok()
+        .and_then(|s| {
+            let v: Vec<usize> = s.split(',').filter_map(|t| t.trim().parse().ok()).collect();
+            (v.len() == 3).then(|| [v[0], v[1], v[2]])
+        })
+        .unwrap_or(default)
+}
