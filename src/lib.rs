@@ -26,12 +26,14 @@ pub use femu_correlate as correlate;
 pub use femu_fem as fem;
 pub use femu_io as io;
 pub use femu_sparse as sparse;
+pub use femu_update as update;
 
 /// Everything most programs need, from every member crate.
 pub mod prelude {
     pub use femu_correlate::prelude::*;
     pub use femu_fem::prelude::*;
     pub use femu_sparse::SparseMatrix;
+    pub use femu_update::prelude::*;
 }
 
 /// The README's code, compiled and run as a doctest so that it cannot drift from the API.

@@ -61,7 +61,7 @@ pub use error::CorrelateError;
 pub use estimators::{
     Bound, BoundKind, Estimator, Form, ModelSpectrum, PairedModel, Relation, ResidualNorms, assess,
 };
-pub use expansion::{Expander, Partition};
+pub use expansion::{Expander, Partition, TestErrorExpansion};
 pub use mass::MassSolver;
 pub use modes::{ModeSet, TestModes};
 pub use pairing::{Pair, Pairing, PairingOptions, pair_modes};

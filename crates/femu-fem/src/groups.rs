@@ -329,6 +329,54 @@ impl ParameterGroups {
         Ok(out)
     }
 
+    /// The mass of group `g` in kg (the sum of the translational x-x entries of its element masses,
+    /// `rho V` for consistent and lumped mass alike): the weights of SB-EBE's total-mass guard.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidGroup`].
+    pub fn group_mass(&self, model: &Model, g: usize) -> Result<f64, FemError> {
+        let group = self.check_group(g)?;
+        let mut total = 0.0;
+        for &e in &group.elements {
+            let nn = model.mesh().element(e).nodes.len();
+            let nd = 3 * nn;
+            let me = self.element_slices(e).1;
+            for a in 0..nn {
+                for b in 0..nn {
+                    total += me[3 * a * nd + 3 * b];
+                }
+            }
+        }
+        Ok(total)
+    }
+
+    /// The free DOFs touched by group `g`, sorted: where `K_g x` and `M_g x` can be non-zero.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidGroup`].
+    pub fn group_dofs(
+        &self,
+        model: &Model,
+        asm: &Assembler,
+        g: usize,
+    ) -> Result<Vec<usize>, FemError> {
+        let group = self.check_group(g)?;
+        let mut dofs: Vec<usize> = group
+            .elements
+            .iter()
+            .flat_map(|&e| model.mesh().element(e).nodes.iter())
+            .flat_map(|nd| asm.dofs().node_dofs(*nd).into_iter().flatten())
+            .collect();
+        dofs.sort_unstable();
+        dofs.dedup();
+        Ok(dofs)
+    }
+
+    /// The mass kind the element matrices were computed for.
+    pub fn mass_kind(&self) -> MassKind {
+        self.mass_kind
+    }
+
     /// The assembled `K_g` of one group alone, on the stiffness pattern (for inspection and tests).
     ///
     /// # Errors

@@ -195,6 +195,35 @@ impl<'a> Pencil<'a> {
         m: &'a SparseMatrix,
         ordering: Ordering,
     ) -> Result<Self, SparseError> {
+        Self::build(k, m, Err(ordering))
+    }
+
+    /// As [`Pencil::new`] with the symbolic analysis of an earlier pencil on the same pattern
+    /// (updating iterations change values, not the pattern): no new ordering, no new analysis.
+    ///
+    /// # Errors
+    /// As [`Pencil::new`], and [`SparseError::DimensionMismatch`] when the analysis is for another
+    /// dimension.
+    pub fn with_symbolic(
+        k: &'a SparseMatrix,
+        m: &'a SparseMatrix,
+        symbolic: SymbolicFactor,
+    ) -> Result<Self, SparseError> {
+        if symbolic.dim() != k.rows() {
+            return Err(SparseError::DimensionMismatch {
+                what: "symbolic analysis against K",
+                expected: k.rows(),
+                got: symbolic.dim(),
+            });
+        }
+        Self::build(k, m, Ok(symbolic))
+    }
+
+    fn build(
+        k: &'a SparseMatrix,
+        m: &'a SparseMatrix,
+        symbolic: Result<SymbolicFactor, Ordering>,
+    ) -> Result<Self, SparseError> {
         crate::csc::check_symmetric(k, "K", 1e-10)?;
         crate::csc::check_symmetric(m, "M", 1e-10)?;
         if k.rows() != m.rows() {
@@ -221,7 +250,10 @@ impl<'a> Pencil<'a> {
             }
         }
         let t = Instant::now();
-        let symbolic = SymbolicFactor::new(k, ordering)?;
+        let symbolic = match symbolic {
+            Ok(s) => s,
+            Err(ordering) => SymbolicFactor::new(k, ordering)?,
+        };
         let one_norm = |a: &SparseMatrix| -> f64 {
             let p = a.indptr();
             let p = p.raw_storage();

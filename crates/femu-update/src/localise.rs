@@ -1,0 +1,398 @@
+//! Error localisation: element (group) indicators from the residues (MATH.md, "Updating").
+//!
+//! For test pairs `(lambda_i, x_i)` with full-length (measured or expanded) shapes, scaled to
+//! `||x_i||_M = 1`, and the force residual (3) `R_F,i = (K - lambda_i M) x_i`:
+//! - the **strain energy of the displacement residual** (5) in group `g`:
+//!   `e_g = sum_i R_D,i^T K_g R_D,i` with `K R_D,i = R_F,i` (free-free: the representative of
+//!   MATH.md, M-orthogonal to the rigid-body modes);
+//! - the **residual force** on the group's DOFs: `f_g = sum_i sum_{d in g} R_F,i[d]^2 / M_dd`.
+//!
+//! Why both: if the truth is `K_0 + p_d K_d` and `x_i` its exact mode, `R_F,i = -p_d K_d x_i` lives
+//! on group `d`'s DOFs only, so `f_g` is sharp (only `d` and its neighbours sharing nodes light up);
+//! `R_D` spreads that force through the structure, but its energy is largest where the force acts
+//! and it is insensitive to the local mesh size. Groups of different sizes are compared by their
+//! indicator share divided by their mass share (`1` = the average group).
+//!
+//! With few sensors the shapes are expanded, and the minimum-residual expansion leaves a residual
+//! that is `W`-orthogonal to what the omitted DOFs can absorb: it gathers near the sensors, and
+//! both indicators above then point at the sensors' neighbourhood as much as at the error. The
+//! third indicator accounts for that: the **explained residual** of group `g` is the fraction of
+//! the expanded objective `J = sum_i ||R_i||_W^2` that the group's stiffness factor alone removes,
+//! `(sum_i b_gi^T W R_i)^2 / (J sum_i b_gi^T W b_gi)`, with `b_gi = P K_g x_i` the sensitivity
+//! column projected as in SB-EBE (so the expansion's re-adjustment is accounted for). It is the
+//! default of [`localise_expanded`].
+
+use crate::UpdateError;
+use crate::problem::UpdateModel;
+use faer::{Mat, MatRef};
+use femu_correlate::StiffnessSolver;
+use serde::{Deserialize, Serialize};
+
+/// Which indicator ranks the groups.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Indicator {
+    /// Residual force on the group's DOFs (sharp for exact or well-expanded shapes).
+    ResidualForce,
+    /// Strain energy of the displacement residual in the group.
+    StrainEnergy,
+    /// Fraction of the residual objective the group's stiffness factor alone removes (default:
+    /// reliable with expanded shapes, see the module docs).
+    #[default]
+    ExplainedResidual,
+}
+
+/// The rule that selects the suspicious groups from the ranking.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SelectionRule {
+    /// The ranking indicator.
+    pub indicator: Indicator,
+    /// A group is selected when its density is at least this fraction of the largest (default 0.5).
+    pub fraction: f64,
+    /// At most this many groups (default 3).
+    pub max_groups: usize,
+}
+
+impl Default for SelectionRule {
+    fn default() -> Self {
+        Self {
+            indicator: Indicator::ExplainedResidual,
+            fraction: 0.5,
+            max_groups: 3,
+        }
+    }
+}
+
+/// Indicators of one group.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GroupIndicator {
+    /// Group name.
+    pub name: String,
+    /// Group index.
+    pub group: usize,
+    /// `e_g`, the strain energy of the displacement residual (J for unit-M-norm shapes).
+    pub strain_energy: f64,
+    /// `f_g`, the squared residual force in the `diag(M)^-1` norm.
+    pub residual_force: f64,
+    /// Fraction of the objective the group's stiffness factor alone removes, in `[0, 1]`.
+    pub explained: f64,
+    /// Share of the ranking indicator divided by the group's share of the mass (1 = average).
+    pub density: f64,
+}
+
+/// The localisation: every group's indicators, ranked, and the selected groups.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Localisation {
+    /// Groups in decreasing order of `density`.
+    pub ranking: Vec<GroupIndicator>,
+    /// Indices (into the model's groups) of the selected groups, most suspicious first.
+    pub selected: Vec<usize>,
+    /// The rule used.
+    pub rule: SelectionRule,
+}
+
+impl Localisation {
+    /// The density of each group in group order (for VTK cell data and plots).
+    pub fn density_by_group(&self, groups: usize) -> Vec<f64> {
+        let mut d = vec![0.0; groups];
+        for r in &self.ranking {
+            d[r.group] = r.density;
+        }
+        d
+    }
+
+    /// The density of each element (0 for elements in no group), for VTK cell data.
+    pub fn density_by_element(&self, up: &UpdateModel<'_>) -> Vec<f64> {
+        let mut d = vec![0.0; up.model().mesh().element_count()];
+        for r in &self.ranking {
+            for &e in &up.groups()[r.group].elements {
+                d[e] = r.density;
+            }
+        }
+        d
+    }
+}
+
+impl std::fmt::Display for Localisation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "| rank | group | residual force | strain energy | explained | density | selected |"
+        )?;
+        writeln!(f, "|---|---|---|---|---|---|---|")?;
+        for (r, g) in self.ranking.iter().enumerate().take(10) {
+            writeln!(
+                f,
+                "| {} | {} | {:.3e} | {:.3e} | {:.3} | {:.2} | {} |",
+                r + 1,
+                g.name,
+                g.residual_force,
+                g.strain_energy,
+                g.explained,
+                g.density,
+                if self.selected.contains(&g.group) {
+                    "yes"
+                } else {
+                    ""
+                }
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Computes the indicators of every group of `up` at its current parameters from full-length
+/// shapes `x` (columns; measured or expanded) and identified eigenvalues `lambdas` (s^-2).
+///
+/// # Errors
+/// Sizes, NaN, zero shapes, a bad rule, and the stiffness solver's errors.
+pub fn localise(
+    up: &UpdateModel<'_>,
+    x: MatRef<'_, f64>,
+    lambdas: &[f64],
+    rule: &SelectionRule,
+) -> Result<Localisation, UpdateError> {
+    let sys = up.matrices();
+    let n = sys.dofs.free_count();
+    if x.nrows() != n || x.ncols() != lambdas.len() || lambdas.is_empty() {
+        return Err(UpdateError::Invalid {
+            what: "localisation data",
+            reason: format!(
+                "{} x {} shapes and {} eigenvalues for a model with {n} free DOFs",
+                x.nrows(),
+                x.ncols(),
+                lambdas.len()
+            ),
+        });
+    }
+    check_rule(rule)?;
+    let xs = normalise(&sys.m, x)?;
+    let r_f = femu_correlate::residues::force_residuals(&sys.k, &sys.m, lambdas, xs.as_ref())?;
+    let solver = StiffnessSolver::new(&sys.k, &sys.m)?;
+    let r_d = solver.displacement_residuals(r_f.as_ref())?;
+    let mut mdiag = vec![0.0; n];
+    for (v, (r, c)) in sys.m.iter() {
+        if r == c {
+            mdiag[r] = *v;
+        }
+    }
+    let w: Vec<f64> = mdiag.iter().map(|m| 1.0 / m).collect();
+    let ones = vec![1.0; n];
+    let groups = up.groups();
+    let mut energy = vec![0.0; groups.len()];
+    let mut force = vec![0.0; groups.len()];
+    let mut num = vec![0.0; groups.len()];
+    let mut den = vec![0.0; groups.len()];
+    let mut objective = 0.0;
+    for i in 0..lambdas.len() {
+        let ri: Vec<f64> = r_f.col(i).iter().copied().collect();
+        objective += ri.iter().zip(&w).map(|(r, w)| r * r * w).sum::<f64>();
+        let xi: Vec<f64> = xs.col(i).iter().copied().collect();
+        for (g, c) in up.group_stiffness_columns(&xi)?.iter().enumerate() {
+            num[g] += c.weighted_dot_full(&ri, &w);
+            den[g] += c.weighted_dot(c, &w);
+        }
+        let rd: Vec<f64> = r_d.col(i).iter().copied().collect();
+        let kg_rd = up.group_stiffness_columns(&rd)?;
+        for g in 0..groups.len() {
+            energy[g] += kg_rd[g].weighted_dot_full(&rd, &ones);
+            force[g] += up
+                .group_dofs(g)
+                .iter()
+                .map(|&d| r_f[(d, i)] * r_f[(d, i)] * w[d])
+                .sum::<f64>();
+        }
+    }
+    let explained: Vec<f64> = (0..groups.len())
+        .map(|g| explained_fraction(num[g], den[g], objective))
+        .collect();
+    Ok(rank(up, energy, force, explained, rule))
+}
+
+fn explained_fraction(num: f64, den: f64, objective: f64) -> f64 {
+    if den > 0.0 && objective > 0.0 {
+        (num * num / (den * objective)).clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}
+
+fn check_rule(rule: &SelectionRule) -> Result<(), UpdateError> {
+    if !(rule.fraction > 0.0 && rule.fraction <= 1.0) || rule.max_groups == 0 {
+        return Err(UpdateError::Invalid {
+            what: "selection rule",
+            reason: format!(
+                "fraction {} must be in (0, 1], max_groups {} at least 1",
+                rule.fraction, rule.max_groups
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Localisation from test modes measured on `layout` (few sensors): the shapes are expanded by
+/// the minimum-residual expansion in the `diag(M)^-1` metric at the current parameters, and the
+/// three indicators computed on the expansion, the explained residual with projected columns
+/// (see the module docs). Use [`SelectionRule`] with [`Indicator::ExplainedResidual`] (the
+/// recommended ranking here).
+///
+/// # Errors
+/// Oblique sensors, sizes, expansion and solver errors, a bad rule.
+pub fn localise_expanded(
+    up: &UpdateModel<'_>,
+    layout: &femu_correlate::SensorLayout,
+    test: &femu_correlate::TestModes,
+    rule: &SelectionRule,
+) -> Result<Localisation, UpdateError> {
+    check_rule(rule)?;
+    let measured = layout.measured_dofs().ok_or(UpdateError::Invalid {
+        what: "sensor layout",
+        reason: "localisation expands the test shapes: every sensor must lie along a global axis"
+            .into(),
+    })?;
+    let sys = up.matrices();
+    let n = sys.dofs.free_count();
+    let mut w_inv = vec![0.0; n];
+    for (v, (r, c)) in sys.m.iter() {
+        if r == c {
+            w_inv[r] = *v;
+        }
+    }
+    let w: Vec<f64> = w_inv.iter().map(|v| 1.0 / v).collect();
+    let lambdas = test.eigenvalues();
+    let groups = up.groups().len();
+    let exp = femu_correlate::Expander::with_measured_dofs(&sys.k, &sys.m, &measured)?;
+    let (x, projected) = exp.minimum_residual_projected(
+        &lambdas,
+        test.shapes.as_ref(),
+        &w_inv,
+        |_, xj| -> Result<Mat<f64>, UpdateError> {
+            let cols = up.group_stiffness_columns(xj)?;
+            let mut a = Mat::zeros(n, groups);
+            for (g, c) in cols.iter().enumerate() {
+                for (&d, &v) in c.dofs.iter().zip(&c.values) {
+                    a[(d, g)] = v;
+                }
+            }
+            Ok(a)
+        },
+    )?;
+    // scale every mode to unit M-norm (the projection is linear in x)
+    let xs = normalise(&sys.m, x.as_ref())?;
+    let scale: Vec<f64> = (0..x.ncols())
+        .map(|j| {
+            let i = (0..n)
+                .max_by(|a, b| x[(*a, j)].abs().total_cmp(&x[(*b, j)].abs()))
+                .unwrap_or(0);
+            if x[(i, j)] != 0.0 {
+                xs[(i, j)] / x[(i, j)]
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let r_f = femu_correlate::residues::force_residuals(&sys.k, &sys.m, &lambdas, xs.as_ref())?;
+    let solver = StiffnessSolver::new(&sys.k, &sys.m)?;
+    let r_d = solver.displacement_residuals(r_f.as_ref())?;
+    let ones = vec![1.0; n];
+    let (mut energy, mut force) = (vec![0.0; groups], vec![0.0; groups]);
+    let (mut num, mut den, mut objective) = (vec![0.0; groups], vec![0.0; groups], 0.0);
+    for i in 0..lambdas.len() {
+        let ri: Vec<f64> = r_f.col(i).iter().copied().collect();
+        objective += ri.iter().zip(&w).map(|(r, w)| r * r * w).sum::<f64>();
+        let b = &projected[i];
+        for g in 0..groups {
+            let (mut bn, mut bb) = (0.0, 0.0);
+            for d in 0..n {
+                let v = scale[i] * b[(d, g)];
+                bn += v * ri[d] * w[d];
+                bb += v * v * w[d];
+            }
+            num[g] += bn;
+            den[g] += bb;
+            force[g] += up
+                .group_dofs(g)
+                .iter()
+                .map(|&d| ri[d] * ri[d] * w[d])
+                .sum::<f64>();
+        }
+        let rd: Vec<f64> = r_d.col(i).iter().copied().collect();
+        for (g, c) in up.group_stiffness_columns(&rd)?.iter().enumerate() {
+            energy[g] += c.weighted_dot_full(&rd, &ones);
+        }
+    }
+    let explained = (0..groups)
+        .map(|g| explained_fraction(num[g], den[g], objective))
+        .collect();
+    Ok(rank(up, energy, force, explained, rule))
+}
+
+fn rank(
+    up: &UpdateModel<'_>,
+    energy: Vec<f64>,
+    force: Vec<f64>,
+    explained: Vec<f64>,
+    rule: &SelectionRule,
+) -> Localisation {
+    let groups = up.groups();
+    let total_mass: f64 = up.group_masses().iter().sum();
+    let key = match rule.indicator {
+        Indicator::ResidualForce => &force,
+        Indicator::StrainEnergy => &energy,
+        Indicator::ExplainedResidual => &explained,
+    };
+    // the explained fraction is already per parameter: no mass normalisation
+    let per_mass = rule.indicator != Indicator::ExplainedResidual;
+    let total_key: f64 = key.iter().sum();
+    let mut ranking: Vec<GroupIndicator> = (0..groups.len())
+        .map(|g| GroupIndicator {
+            name: groups[g].name.clone(),
+            group: g,
+            strain_energy: energy[g],
+            residual_force: force[g],
+            explained: explained[g],
+            density: if total_key <= 0.0 {
+                0.0
+            } else if per_mass {
+                (key[g] / total_key) / (up.group_masses()[g] / total_mass)
+            } else {
+                key[g] / total_key * groups.len() as f64
+            },
+        })
+        .collect();
+    ranking.sort_by(|a, b| b.density.total_cmp(&a.density));
+    let top = ranking.first().map_or(0.0, |r| r.density);
+    let selected = ranking
+        .iter()
+        .take(rule.max_groups)
+        .filter(|r| top > 0.0 && r.density >= rule.fraction * top)
+        .map(|r| r.group)
+        .collect();
+    Localisation {
+        ranking,
+        selected,
+        rule: rule.clone(),
+    }
+}
+
+/// Shapes scaled to `||x||_M = 1`.
+pub(crate) fn normalise(
+    m: &femu_sparse::SparseMatrix,
+    x: MatRef<'_, f64>,
+) -> Result<Mat<f64>, UpdateError> {
+    let mx = femu_sparse::csc::sym_mul_mat(m, x)?;
+    let mut out = x.to_owned();
+    for j in 0..x.ncols() {
+        let s: f64 = (0..x.nrows()).map(|i| x[(i, j)] * mx[(i, j)]).sum();
+        if !(s.is_finite() && s > 0.0) {
+            return Err(UpdateError::Invalid {
+                what: "shape",
+                reason: format!("shape {} has M-norm^2 {s} (zero or not finite)", j + 1),
+            });
+        }
+        let s = 1.0 / s.sqrt();
+        for i in 0..x.nrows() {
+            out[(i, j)] *= s;
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,424 @@
+//! The parameterised model `K(p) = K_0 + sum_g p_g K_g`, `M(q) = M_0 + sum_g q_g M_g` (MATH.md,
+//! "Updating") with its parameters, bounds and the element-by-element sensitivity columns.
+
+use crate::UpdateError;
+use femu_fem::assembly::{Assembler, MassKind, SystemMatrices};
+use femu_fem::groups::{ParameterGroup, ParameterGroups};
+use femu_fem::model::Model;
+use femu_sparse::cholesky::SymbolicFactor;
+use femu_sparse::ordering::Ordering;
+use serde::{Deserialize, Serialize};
+
+/// Which corrections are estimated per group.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Corrections {
+    /// Stiffness factors `p_g` only (the usual case: stiffness is what models get wrong).
+    #[default]
+    Stiffness,
+    /// Mass factors `q_g` only.
+    Mass,
+    /// Both; the trivial solution `p = q = -1` (all of `K` and `M` scaled to zero together) is
+    /// excluded by the total-mass guard of the updating options.
+    StiffnessAndMass,
+}
+
+/// One updating parameter: a stiffness or mass factor of a group.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Parameter {
+    /// `"k:<group>"` or `"m:<group>"`.
+    pub name: String,
+    /// Group index.
+    pub group: usize,
+    /// `true` for a mass factor `q_g`, `false` for a stiffness factor `p_g`.
+    pub mass: bool,
+    /// Lower bound (default -0.9: a group keeps at least 10 % of its stiffness or mass).
+    pub lower: f64,
+    /// Upper bound (default 2: at most three times the nominal value).
+    pub upper: f64,
+}
+
+/// A sensitivity column restricted to the DOFs where it can be non-zero.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SparseColumn {
+    /// Free DOFs (sorted), shared with the group.
+    pub dofs: std::sync::Arc<[usize]>,
+    /// Values on those DOFs.
+    pub values: Vec<f64>,
+}
+
+impl SparseColumn {
+    /// `sum_d a_d b_d w_d` over the common DOFs of two columns of the same group set, with
+    /// weights `w` indexed by DOF.
+    pub fn weighted_dot(&self, other: &SparseColumn, w: &[f64]) -> f64 {
+        let (mut i, mut j, mut s) = (0, 0, 0.0);
+        while i < self.dofs.len() && j < other.dofs.len() {
+            match self.dofs[i].cmp(&other.dofs[j]) {
+                std::cmp::Ordering::Less => i += 1,
+                std::cmp::Ordering::Greater => j += 1,
+                std::cmp::Ordering::Equal => {
+                    s += self.values[i] * other.values[j] * w[self.dofs[i]];
+                    i += 1;
+                    j += 1;
+                }
+            }
+        }
+        s
+    }
+
+    /// `sum_d a_d v_d w_d` with a full vector `v`.
+    pub fn weighted_dot_full(&self, v: &[f64], w: &[f64]) -> f64 {
+        self.dofs
+            .iter()
+            .zip(&self.values)
+            .map(|(&d, a)| a * v[d] * w[d])
+            .sum()
+    }
+}
+
+/// A model with updating parameters: the nominal matrices, the groups' element matrices, the
+/// current parameter values and `K(p)`, `M(q)` on the fixed pattern (no new pattern, no new
+/// symbolic analysis when the parameters change).
+#[derive(Debug, Clone)]
+pub struct UpdateModel<'m> {
+    model: &'m Model,
+    asm: Assembler,
+    base: SystemMatrices,
+    groups: ParameterGroups,
+    group_dofs: Vec<std::sync::Arc<[usize]>>,
+    group_mass: Vec<f64>,
+    params: Vec<Parameter>,
+    p: Vec<f64>,
+    q: Vec<f64>,
+    current: SystemMatrices,
+    symbolic: Option<SymbolicFactor>,
+    nominal_mass: f64,
+}
+
+impl<'m> UpdateModel<'m> {
+    /// Assembles the nominal model and the groups' element matrices.
+    ///
+    /// # Errors
+    /// Assembly errors (missing material, inverted element), empty or out-of-range groups, no
+    /// group.
+    pub fn new(
+        model: &'m Model,
+        groups: Vec<ParameterGroup>,
+        mass: MassKind,
+        corrections: Corrections,
+    ) -> Result<Self, UpdateError> {
+        if groups.is_empty() {
+            return Err(UpdateError::Invalid {
+                what: "parameter groups",
+                reason: "no group to update".into(),
+            });
+        }
+        let asm = Assembler::new(model)?;
+        let base = asm.assemble(model, mass)?;
+        let groups = ParameterGroups::new(model, groups, mass)?;
+        let mut group_dofs = Vec::with_capacity(groups.len());
+        let mut group_mass = Vec::with_capacity(groups.len());
+        for g in 0..groups.len() {
+            group_dofs.push(groups.group_dofs(model, &asm, g)?.into());
+            group_mass.push(groups.group_mass(model, g)?);
+        }
+        let mut params = Vec::new();
+        for (g, group) in groups.groups().iter().enumerate() {
+            for (flag, prefix) in [(false, "k"), (true, "m")] {
+                let wanted = match corrections {
+                    Corrections::Stiffness => !flag,
+                    Corrections::Mass => flag,
+                    Corrections::StiffnessAndMass => true,
+                };
+                if wanted {
+                    params.push(Parameter {
+                        name: format!("{prefix}:{}", group.name),
+                        group: g,
+                        mass: flag,
+                        lower: -0.9,
+                        upper: 2.0,
+                    });
+                }
+            }
+        }
+        let n_groups = groups.len();
+        Ok(Self {
+            model,
+            asm,
+            current: base.clone(),
+            base,
+            groups,
+            group_dofs,
+            group_mass,
+            params,
+            p: vec![0.0; n_groups],
+            q: vec![0.0; n_groups],
+            symbolic: None,
+            nominal_mass: model.total_mass()?,
+        })
+    }
+
+    /// One group per named element set.
+    ///
+    /// # Errors
+    /// An unknown set, and as [`UpdateModel::new`].
+    pub fn from_element_sets(
+        model: &'m Model,
+        sets: &[&str],
+        mass: MassKind,
+        corrections: Corrections,
+    ) -> Result<Self, UpdateError> {
+        let groups = sets
+            .iter()
+            .map(|s| {
+                Ok(ParameterGroup {
+                    name: (*s).to_string(),
+                    elements: model.mesh().element_set(s)?.to_vec(),
+                })
+            })
+            .collect::<Result<Vec<_>, UpdateError>>()?;
+        Self::new(model, groups, mass, corrections)
+    }
+
+    /// One group per element (element-by-element updating).
+    ///
+    /// # Errors
+    /// As [`UpdateModel::new`].
+    pub fn elementwise(
+        model: &'m Model,
+        mass: MassKind,
+        corrections: Corrections,
+    ) -> Result<Self, UpdateError> {
+        let groups = model
+            .mesh()
+            .elements()
+            .map(|el| ParameterGroup {
+                name: format!("E{}", el.id),
+                elements: vec![el.index],
+            })
+            .collect();
+        Self::new(model, groups, mass, corrections)
+    }
+
+    /// The finite element model.
+    pub fn model(&self) -> &'m Model {
+        self.model
+    }
+
+    /// The assembler (pattern and DOF map).
+    pub fn assembler(&self) -> &Assembler {
+        &self.asm
+    }
+
+    /// The groups.
+    pub fn groups(&self) -> &[ParameterGroup] {
+        self.groups.groups()
+    }
+
+    /// The nominal model's total mass `rho V`, kg.
+    pub fn nominal_mass(&self) -> f64 {
+        self.nominal_mass
+    }
+
+    /// Each group's mass, kg.
+    pub fn group_masses(&self) -> &[f64] {
+        &self.group_mass
+    }
+
+    /// The free DOFs each group touches.
+    pub fn group_dofs(&self, g: usize) -> &[usize] {
+        &self.group_dofs[g]
+    }
+
+    /// The parameters (in the order of [`UpdateModel::theta`]).
+    pub fn parameters(&self) -> &[Parameter] {
+        &self.params
+    }
+
+    /// Sets every parameter's bounds.
+    ///
+    /// # Errors
+    /// `lower > upper`, `lower <= -1` (a group with no stiffness or negative mass), non-finite.
+    pub fn set_bounds(&mut self, lower: f64, upper: f64) -> Result<(), UpdateError> {
+        if !(lower > -1.0 && lower <= upper && upper.is_finite()) {
+            return Err(UpdateError::Invalid {
+                what: "parameter bounds",
+                reason: format!("[{lower}, {upper}]: need -1 < lower <= upper < infinity"),
+            });
+        }
+        for p in &mut self.params {
+            p.lower = lower;
+            p.upper = upper;
+        }
+        Ok(())
+    }
+
+    /// The nominal matrices `K_0`, `M_0`.
+    pub fn nominal(&self) -> &SystemMatrices {
+        &self.base
+    }
+
+    /// The current `K(p)`, `M(q)`.
+    pub fn matrices(&self) -> &SystemMatrices {
+        &self.current
+    }
+
+    /// Stiffness factors `p_g` per group.
+    pub fn stiffness_factors(&self) -> &[f64] {
+        &self.p
+    }
+
+    /// Mass factors `q_g` per group.
+    pub fn mass_factors(&self) -> &[f64] {
+        &self.q
+    }
+
+    /// The current parameter vector, one entry per [`Parameter`].
+    pub fn theta(&self) -> Vec<f64> {
+        self.params
+            .iter()
+            .map(|p| {
+                if p.mass {
+                    self.q[p.group]
+                } else {
+                    self.p[p.group]
+                }
+            })
+            .collect()
+    }
+
+    /// Sets the parameters and rewrites `K(p)`, `M(q)` in place.
+    ///
+    /// # Errors
+    /// A wrong length, a non-finite value, or a value outside the parameter's bounds (name).
+    pub fn set_theta(&mut self, theta: &[f64]) -> Result<(), UpdateError> {
+        if theta.len() != self.params.len() {
+            return Err(UpdateError::Invalid {
+                what: "parameter vector",
+                reason: format!(
+                    "{} values for {} parameters",
+                    theta.len(),
+                    self.params.len()
+                ),
+            });
+        }
+        for (par, &v) in self.params.iter().zip(theta) {
+            if !(v >= par.lower - 1e-12 && v <= par.upper + 1e-12) {
+                return Err(UpdateError::Invalid {
+                    what: "parameter value",
+                    reason: format!("{} = {v} outside [{}, {}]", par.name, par.lower, par.upper),
+                });
+            }
+        }
+        for (par, &v) in self.params.iter().zip(theta) {
+            if par.mass {
+                self.q[par.group] = v;
+            } else {
+                self.p[par.group] = v;
+            }
+        }
+        self.groups.write_parameterized(
+            self.model,
+            &self.asm,
+            &self.base,
+            &self.p,
+            &self.q,
+            &mut self.current,
+        )?;
+        Ok(())
+    }
+
+    /// The symbolic analysis of `K`'s pattern, computed on first use and reused by every
+    /// eigen solve of the updating iterations.
+    ///
+    /// # Errors
+    /// A failed analysis.
+    pub fn symbolic(&mut self) -> Result<SymbolicFactor, UpdateError> {
+        if self.symbolic.is_none() {
+            self.symbolic = Some(SymbolicFactor::new(
+                &self.base.k,
+                Ordering::NestedDissection,
+            )?);
+        }
+        Ok(self.symbolic.clone().expect("just computed"))
+    }
+
+    /// The sensitivity columns of every parameter for one vector `x` at eigenvalue `lambda`:
+    /// `K_g x` for a stiffness factor, `-lambda M_g x` for a mass factor (the derivative of
+    /// `R = (K(p) - lambda M(q)) x`), formed element by element (SB-EBE: no eigenvector
+    /// derivative, no assembled `K_g`).
+    ///
+    /// # Errors
+    /// A wrong length of `x`.
+    pub fn columns(&self, x: &[f64], lambda: f64) -> Result<Vec<SparseColumn>, UpdateError> {
+        let n = self.base.dofs.free_count();
+        let mut y = vec![0.0; n];
+        self.params
+            .iter()
+            .map(|par| {
+                let s = if par.mass { -lambda } else { 1.0 };
+                self.group_column(par.group, par.mass, s, x, &mut y)
+            })
+            .collect()
+    }
+
+    /// `K_g v` for every group, whatever the corrections (the localisation's strain energies).
+    ///
+    /// # Errors
+    /// A wrong length of `v`.
+    pub fn group_stiffness_columns(&self, v: &[f64]) -> Result<Vec<SparseColumn>, UpdateError> {
+        let mut y = vec![0.0; self.base.dofs.free_count()];
+        (0..self.groups.len())
+            .map(|g| self.group_column(g, false, 1.0, v, &mut y))
+            .collect()
+    }
+
+    /// `s K_g x` or `s M_g x` on the group's DOFs; `y` is zero on entry and on return.
+    fn group_column(
+        &self,
+        g: usize,
+        mass: bool,
+        s: f64,
+        x: &[f64],
+        y: &mut [f64],
+    ) -> Result<SparseColumn, UpdateError> {
+        if mass {
+            self.groups.mass_product(self.model, &self.asm, g, x, y)?;
+        } else {
+            self.groups
+                .stiffness_product(self.model, &self.asm, g, x, y)?;
+        }
+        let dofs = &self.group_dofs[g];
+        let values = dofs
+            .iter()
+            .map(|&d| {
+                let v = s * y[d];
+                y[d] = 0.0;
+                v
+            })
+            .collect();
+        Ok(SparseColumn {
+            dofs: dofs.clone(),
+            values,
+        })
+    }
+
+    /// The total-mass constraint row: `c^T theta` is the mass added by the mass factors
+    /// (`c_i = m_g` for a mass factor of group `g`, 0 for a stiffness factor).
+    pub fn mass_row(&self) -> Vec<f64> {
+        self.params
+            .iter()
+            .map(|p| {
+                if p.mass {
+                    self.group_mass[p.group]
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+
+    /// Whether any parameter is a mass factor.
+    pub fn has_mass_parameters(&self) -> bool {
+        self.params.iter().any(|p| p.mass)
+    }
+}
