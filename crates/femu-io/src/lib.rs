@@ -10,6 +10,7 @@
 pub mod csv;
 mod error;
 pub mod inp;
+pub mod uff;
 pub mod vtk;
 
 pub use error::{IoError, Warning};

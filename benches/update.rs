@@ -1,0 +1,149 @@
+//! One updating iteration of SB-EBE and of inverse eigensensitivity, side by side, on a clamped
+//! steel plate in 10 stiffness regions (default 48 x 16 x 6 hex8 cells, 50,421 nodes... see the
+//! printed size), with the test simulated from the plate with region 3 30 % softer: its 4 lowest
+//! modes at 30 sensors (15 top-surface nodes, y and z).
+//!
+//! A run with `max_iterations = 1` contains, for SB-EBE, the weighting expansion, the starting
+//! expansion with projected columns and one trial (3 factorizations of the saddle-point system per
+//! mode); for inverse eigensensitivity, the starting eigen solve and one trial (2 Sturm-checked
+//! solves of 14 modes on the reused symbolic analysis).
+//!
+//! `cargo bench --bench update` (`FEMU_BENCH_CELLS=nx,ny,nz` to change the size)
+
+mod common;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use femu::prelude::*;
+use std::time::Duration;
+
+fn setup() -> (Model, SensorLayout, TestModes, Vec<String>) {
+    let [nx, ny, nz] = common::cells([48, 16, 6]);
+    let mut model = common::clamped(BoxSpec::new(
+        [0.48, 0.16, 0.06],
+        [nx, ny, nz],
+        BoxCells::Hex,
+        false,
+    ));
+    let mut mesh = model.mesh().clone();
+    let mut sets = vec![Vec::new(); 10];
+    let mut xy = Vec::new();
+    for e in 0..mesh.element_count() {
+        mesh.element_coords(e, &mut xy);
+        let cx = xy.iter().map(|p| p[0]).sum::<f64>() / xy.len() as f64;
+        sets[((cx / 0.048) as usize).min(9)].push(mesh.element(e).id);
+    }
+    let names: Vec<String> = (0..10).map(|r| format!("r{r}")).collect();
+    for (r, ids) in sets.iter().enumerate() {
+        mesh.add_element_set(names[r].clone(), ids).unwrap();
+    }
+    let mut m2 = Model::new(mesh).unwrap();
+    m2.set_material(None, Material::steel()).unwrap();
+    m2.fix_set("xmin", &[0, 1, 2]).unwrap();
+    model = m2;
+    let set_refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+    let mut truth = UpdateModel::from_element_sets(
+        &model,
+        &set_refs,
+        MassKind::Consistent,
+        Corrections::Stiffness,
+    )
+    .unwrap();
+    let mut th = vec![0.0; 10];
+    th[3] = -0.3;
+    truth.set_theta(&th).unwrap();
+    let modes = model_modes(&mut truth, 4, &Default::default()).unwrap();
+    let mesh = model.mesh();
+    let top = mesh.node_set("zmax").unwrap();
+    let mut sensors = Vec::new();
+    for i in 0..5 {
+        for j in 0..3 {
+            let target = [
+                0.48 * (0.1 + 0.2 * i as f64),
+                0.16 * (1.0 / 6.0 + j as f64 / 3.0),
+            ];
+            let best = top
+                .iter()
+                .min_by(|a, b| {
+                    let d = |n: usize| {
+                        let p = mesh.coords()[n];
+                        (p[0] - target[0]).powi(2) + (p[1] - target[1]).powi(2)
+                    };
+                    d(**a).total_cmp(&d(**b))
+                })
+                .unwrap();
+            sensors.push(Sensor::axis(mesh.node_id(*best), 1));
+            sensors.push(Sensor::axis(mesh.node_id(*best), 2));
+        }
+    }
+    let layout = SensorLayout::new(mesh, &truth.matrices().dofs, sensors).unwrap();
+    let y = layout.measure_all(modes.shapes.as_ref()).unwrap();
+    let test = TestModes::new(modes.frequencies_hz(), None, y).unwrap();
+    println!(
+        "update benchmark: {} DOF, 10 stiffness regions, 4 test modes at 30 sensors",
+        truth.matrices().dofs.free_count()
+    );
+    (model, layout, test, names)
+}
+
+fn bench(c: &mut Criterion) {
+    let (model, layout, test, names) = setup();
+    let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+    let one = UpdateOptions {
+        max_iterations: 1,
+        ..Default::default()
+    };
+    let mut g = c.benchmark_group("update");
+    g.sample_size(10)
+        .measurement_time(Duration::from_secs(1))
+        .warm_up_time(Duration::from_millis(1));
+    g.bench_function("sb-ebe one iteration", |b| {
+        b.iter(|| {
+            let mut up = UpdateModel::from_element_sets(
+                &model,
+                &sets,
+                MassKind::Consistent,
+                Corrections::Stiffness,
+            )
+            .unwrap();
+            let opts = SbebeOptions {
+                update: one.clone(),
+                ..Default::default()
+            };
+            sb_ebe(&mut up, &layout, &test, &opts, |_| {}).unwrap()
+        })
+    });
+    g.bench_function("inverse eigensensitivity one iteration", |b| {
+        b.iter(|| {
+            let mut up = UpdateModel::from_element_sets(
+                &model,
+                &sets,
+                MassKind::Consistent,
+                Corrections::Stiffness,
+            )
+            .unwrap();
+            let opts = SensitivityOptions {
+                update: UpdateOptions {
+                    tikhonov: 1e-3,
+                    ..one.clone()
+                },
+                ..Default::default()
+            };
+            inverse_eigensensitivity(&mut up, &layout, &test, &opts, |_| {}).unwrap()
+        })
+    });
+    g.bench_function("setup: assemble and group element matrices", |b| {
+        b.iter(|| {
+            UpdateModel::from_element_sets(
+                &model,
+                &sets,
+                MassKind::Consistent,
+                Corrections::Stiffness,
+            )
+            .unwrap()
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

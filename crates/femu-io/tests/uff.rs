@@ -1,0 +1,102 @@
+//! Universal File Format: round trips, Fortran and Windows spellings, complex modes, malformed
+//! files (each error names its line).
+
+use femu_io::IoError;
+use femu_io::uff::{UffMode, UffNode, UffUnits, Universal, parse_uff, uff_string};
+use std::path::Path;
+
+fn sample() -> Universal {
+    Universal {
+        units: Some(UffUnits {
+            code: 1,
+            description: "SI".into(),
+            factors: [1.0, 1.0, 1.0],
+        }),
+        nodes: vec![
+            UffNode {
+                id: 1,
+                x: [0.0, 0.0, 0.01],
+            },
+            UffNode {
+                id: 7,
+                x: [0.123456789, -0.07, 0.01],
+            },
+        ],
+        modes: vec![UffMode {
+            number: 1,
+            frequency_hz: 1538.8612345,
+            damping: 0.002,
+            modal_mass: 1.0,
+            values: vec![(1, [0.0, 1.25e-3, -0.987654321]), (7, [0.0, -2.5e-12, 0.5])],
+            complex: false,
+        }],
+        warnings: vec![],
+    }
+}
+
+#[test]
+fn round_trip_is_exact_on_the_text_and_to_six_digits_on_values() {
+    let u = sample();
+    let text = uff_string(&u);
+    let back = parse_uff(&text, Path::new("t.unv")).unwrap();
+    assert_eq!(uff_string(&back), text);
+    assert_eq!(back.nodes.len(), 2);
+    assert_eq!(back.units.as_ref().unwrap().code, 1);
+    let rel = |a: f64, b: f64| (a - b).abs() <= 5e-6 * b.abs();
+    assert!(rel(back.modes[0].frequency_hz, 1538.8612345));
+    assert!(rel(back.nodes[1].x[0], 0.123456789));
+    assert!(rel(back.modes[0].values[0].1[2], -0.987654321));
+    assert!(rel(back.modes[0].values[1].1[1], -2.5e-12));
+    // sensors: only the directions with a non-zero value (x is all zeros here)
+    let td = back.test_data(Path::new("t.unv")).unwrap();
+    assert_eq!(td.sensors.len(), 4);
+    assert_eq!(td.modes.frequencies_hz.len(), 1);
+}
+
+#[test]
+fn fortran_exponents_crlf_complex_modes_and_unknown_datasets() {
+    let text = "    -1\r\n    55\r\nid1\r\nid2\r\nid3\r\nid4\r\nid5\r\n         1         3         2         8         5         3\r\n         2         6         1         4\r\n -6.28318D+00  6.28318D+03  0.0D+00  0.0D+00  0.0D+00  0.0D+00\r\n         3\r\n  0.0D+00  0.0D+00  1.0D+00  1.0D+00  0.0D+00  0.0D+00\r\n    -1\r\n    -1\r\n    58\r\nsomething\r\n    -1\r\n";
+    let u = parse_uff(text, Path::new("c.unv")).unwrap();
+    let m = &u.modes[0];
+    assert!(m.complex && m.number == 4);
+    // lambda = -2 pi + 2 pi 1000 i: f = |lambda| / 2 pi, zeta = -Re / |lambda|
+    let w = 6.28318f64.hypot(6283.18);
+    assert!((m.frequency_hz - w / (2.0 * std::f64::consts::PI)).abs() < 1e-9);
+    assert!((m.damping - 6.28318 / w).abs() < 1e-12);
+    // (1 + i, 0) rotated by its phase: sqrt(2) real
+    assert!((m.values[0].1[1] - 2f64.sqrt()).abs() < 1e-12 && m.values[0].1[0] == 0.0);
+    assert_eq!(u.warnings.len(), 1);
+    assert!(
+        u.warnings[0].message.contains("58") && u.warnings[0].line == 15,
+        "{:?}",
+        u.warnings
+    );
+}
+
+#[test]
+fn malformed_files_name_the_line() {
+    let good = uff_string(&sample());
+    let cases: Vec<(String, usize)> = vec![
+        (good.replacen("   164", "   abc", 1), 2),
+        (good.replace("1.53886E+03", "1.5388xE+03"), 21),
+        (good.trim_end().trim_end_matches("-1").to_string(), 12),
+        (good.replacen("    -1\n", "  junk\n", 1), 1),
+        (
+            good.replace(
+                "         1         2         2         8         2         3",
+                "         1         2         7         8         2         3",
+            ),
+            19,
+        ),
+        (good.replace("         7\n", "        -7\n"), 24),
+        (good.replace("1.53886E+03", "-1.53886E+03"), 21),
+    ];
+    for (k, (text, line)) in cases.iter().enumerate() {
+        match parse_uff(text, Path::new("bad.unv")) {
+            Err(IoError::Parse {
+                line: l, reason, ..
+            }) => assert_eq!(l, *line, "case {k}: {reason}"),
+            other => panic!("case {k}: {other:?}"),
+        }
+    }
+}
