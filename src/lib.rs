@@ -28,6 +28,8 @@ pub use femu_io as io;
 pub use femu_sparse as sparse;
 pub use femu_update as update;
 
+pub mod demo;
+
 /// Everything most programs need, from every member crate.
 pub mod prelude {
     pub use femu_correlate::prelude::*;

@@ -268,3 +268,90 @@ fn correlate_pairs_the_model_with_itself() {
     assert!(err.contains("test.csv") && err.contains("999"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `femu demo --quick` writes the report, and `femu update` on the files it wrote (the plate as
+/// `.inp`, the test as `.unv`) localises region r3 and recovers its +30 % from noise-free data.
+#[test]
+fn demo_then_update_from_its_files() {
+    let dir = std::env::temp_dir().join(format!("femu-cli-demo-{}", std::process::id()));
+    let out = femu()
+        .args([
+            "demo",
+            "--quick",
+            "--shape-noise",
+            "0",
+            "--frequency-noise",
+            "0",
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        .assert()
+        .success();
+    let stdout = String::from_utf8(out.get_output().stdout.clone()).unwrap();
+    assert!(
+        stdout.contains("Does the updated model tell the truth? yes"),
+        "{stdout}"
+    );
+    for f in [
+        "report.md",
+        "report.json",
+        "figure1.svg",
+        "error_map.svg",
+        "plate.vtu",
+        "plate.inp",
+        "test.unv",
+    ] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+    let json = dir.join("update.json");
+    femu()
+        .args([
+            "update",
+            dir.join("plate.inp").to_str().unwrap(),
+            dir.join("test.unv").to_str().unwrap(),
+            "--sets",
+            "r0,r1,r2,r3,r4,r5,r6,r7,r8,r9",
+            "--tuned",
+            "4",
+            "--json",
+            json.to_str().unwrap(),
+            "--quiet",
+        ])
+        .assert()
+        .success();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["result"]["names"][0], "k:R3");
+    let p = v["result"]["theta"][0].as_f64().unwrap();
+    assert!((p - 0.3).abs() < 2e-3, "{p}");
+    // bad input: an unknown set, an unknown method, noise out of range
+    let bad = femu()
+        .args([
+            "update",
+            dir.join("plate.inp").to_str().unwrap(),
+            dir.join("test.unv").to_str().unwrap(),
+            "--sets",
+            "nope",
+        ])
+        .assert()
+        .failure();
+    let stderr = String::from_utf8(bad.get_output().stderr.clone()).unwrap();
+    assert!(stderr.contains("no element set nope"), "{stderr}");
+    femu()
+        .args([
+            "update",
+            dir.join("plate.inp").to_str().unwrap(),
+            dir.join("test.unv").to_str().unwrap(),
+            "--sets",
+            "r1",
+            "--method",
+            "magic",
+        ])
+        .assert()
+        .failure();
+    femu()
+        .args(["demo", "--shape-noise", "2", "--out", dir.to_str().unwrap()])
+        .assert()
+        .failure();
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -28,6 +28,9 @@ use faer::{Mat, MatRef};
 use femu_correlate::StiffnessSolver;
 use serde::{Deserialize, Serialize};
 
+/// Projected sensitivity columns of one mode: `W` part and sensor part.
+type Projected = (Mat<f64>, Mat<f64>);
+
 /// Which indicator ranks the groups.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum Indicator {
@@ -50,6 +53,10 @@ pub struct SelectionRule {
     pub fraction: f64,
     /// At most this many groups (default 3).
     pub max_groups: usize,
+    /// For [`localise_expanded`]: `None` imposes the measured values in the expansion; `Some(g)`
+    /// expands with test error (as `SbebeOptions::test_error`), which keeps measurement noise
+    /// from dominating the residual (default `Some(1e-3)`).
+    pub test_error: Option<f64>,
 }
 
 impl Default for SelectionRule {
@@ -58,6 +65,7 @@ impl Default for SelectionRule {
             indicator: Indicator::ExplainedResidual,
             fraction: 0.5,
             max_groups: 3,
+            test_error: Some(1e-3),
         }
     }
 }
@@ -261,21 +269,40 @@ pub fn localise_expanded(
     let lambdas = test.eigenvalues();
     let groups = up.groups().len();
     let exp = femu_correlate::Expander::with_measured_dofs(&sys.k, &sys.m, &measured)?;
-    let (x, projected) = exp.minimum_residual_projected(
-        &lambdas,
-        test.shapes.as_ref(),
-        &w_inv,
-        |_, xj| -> Result<Mat<f64>, UpdateError> {
-            let cols = up.group_stiffness_columns(xj)?;
-            let mut a = Mat::zeros(n, groups);
-            for (g, c) in cols.iter().enumerate() {
-                for (&d, &v) in c.dofs.iter().zip(&c.values) {
-                    a[(d, g)] = v;
-                }
+    let dense = |xj: &[f64]| -> Result<Mat<f64>, UpdateError> {
+        let cols = up.group_stiffness_columns(xj)?;
+        let mut a = Mat::zeros(n, groups);
+        for (g, c) in cols.iter().enumerate() {
+            for (&d, &v) in c.dofs.iter().zip(&c.values) {
+                a[(d, g)] = v;
             }
-            Ok(a)
-        },
-    )?;
+        }
+        Ok(a)
+    };
+    // x, projected columns (W part, sensor part), sensor residuals sqrt(gamma) (C x - y)
+    let (x, projected, r2): (Mat<f64>, Vec<Projected>, Mat<f64>) = match rule.test_error {
+        Some(gamma) => {
+            let e = exp.test_error_projected(
+                &lambdas,
+                test.shapes.as_ref(),
+                &w_inv,
+                gamma,
+                |_, xj| dense(xj),
+            )?;
+            let r2 = Mat::from_fn(e.misfit.nrows(), e.misfit.ncols(), |s, j| {
+                e.gammas[j].sqrt() * e.misfit[(s, j)]
+            });
+            (e.x, e.projected, r2)
+        }
+        None => {
+            let (x, b) =
+                exp.minimum_residual_projected(&lambdas, test.shapes.as_ref(), &w_inv, |_, xj| {
+                    dense(xj)
+                })?;
+            let b = b.into_iter().map(|b| (b, Mat::zeros(0, groups))).collect();
+            (x, b, Mat::zeros(0, lambdas.len()))
+        }
+    };
     // scale every mode to unit M-norm (the projection is linear in x)
     let xs = normalise(&sys.m, x.as_ref())?;
     let scale: Vec<f64> = (0..x.ncols())
@@ -299,13 +326,19 @@ pub fn localise_expanded(
     for i in 0..lambdas.len() {
         let ri: Vec<f64> = r_f.col(i).iter().copied().collect();
         objective += ri.iter().zip(&w).map(|(r, w)| r * r * w).sum::<f64>();
-        let b = &projected[i];
+        let (b, b2) = &projected[i];
+        objective += scale[i] * scale[i] * r2.col(i).iter().map(|v| v * v).sum::<f64>();
         for g in 0..groups {
             let (mut bn, mut bb) = (0.0, 0.0);
             for d in 0..n {
                 let v = scale[i] * b[(d, g)];
                 bn += v * ri[d] * w[d];
                 bb += v * v * w[d];
+            }
+            for s in 0..b2.nrows() {
+                let v = scale[i] * b2[(s, g)];
+                bn += v * scale[i] * r2[(s, i)];
+                bb += v * v;
             }
             num[g] += bn;
             den[g] += bb;
