@@ -16,6 +16,18 @@ struct Cli {
     /// No progress and no table on stdout (errors still go to stderr).
     #[arg(long, global = true)]
     quiet: bool,
+    /// Gmsh models (`.msh`): Young's modulus in Pa (with --poisson and --density).
+    #[arg(long, global = true)]
+    young: Option<f64>,
+    /// Gmsh models: Poisson's ratio.
+    #[arg(long, global = true)]
+    poisson: Option<f64>,
+    /// Gmsh models: density in kg/m^3.
+    #[arg(long, global = true)]
+    density: Option<f64>,
+    /// Gmsh models: a physical group (node set) to clamp; repeat for several.
+    #[arg(long, global = true)]
+    fix: Vec<String>,
     #[command(subcommand)]
     command: Command,
 }
@@ -30,7 +42,7 @@ enum Command {
     ///   femu estimate plate.inp test.csv --expansion static --json estimate.json
     #[command(verbatim_doc_comment)]
     Estimate {
-        /// The model (`.inp`).
+        /// The model (`.inp`, or `.msh` with --young, --poisson, --density, --fix).
         model: PathBuf,
         /// The test modes (`.csv`).
         test: PathBuf,
@@ -55,7 +67,7 @@ enum Command {
     ///   femu correlate plate.inp test.csv --mac-threshold 0.7 --json correlation.json
     #[command(verbatim_doc_comment)]
     Correlate {
-        /// The model (`.inp`).
+        /// The model (`.inp`, or `.msh` with --young, --poisson, --density, --fix).
         model: PathBuf,
         /// The test modes (`.csv`).
         test: PathBuf,
@@ -132,7 +144,7 @@ enum Command {
     ///   femu update plate.inp test.csv --sets left,right --method ies --json update.json
     #[command(verbatim_doc_comment)]
     Update {
-        /// The model (`.inp`).
+        /// The model (`.inp`, or `.msh` with --young, --poisson, --density, --fix).
         model: PathBuf,
         /// The test modes (`.csv`, `.unv`).
         test: PathBuf,
@@ -165,12 +177,60 @@ struct Loaded {
 }
 
 /// Reads `path` (warnings to stderr unless quiet), builds the model and assembles `K` and `M`.
-fn load(path: &Path, lumped: bool, quiet: bool, pb: &ProgressBar) -> Result<Loaded, String> {
-    let deck = femu_io::inp::read_inp(path).map_err(|e| e.to_string())?;
+/// Material and constraints of a Gmsh model, from the command line.
+#[derive(Clone, Default)]
+struct MshOptions {
+    young: Option<f64>,
+    poisson: Option<f64>,
+    density: Option<f64>,
+    fix: Vec<String>,
+}
+
+static MSH: std::sync::OnceLock<MshOptions> = std::sync::OnceLock::new();
+
+/// A Gmsh mesh with the command line's material and clamped sets.
+fn load_msh(
+    path: &Path,
+    quiet: bool,
+) -> Result<(femu_fem::model::Model, Option<femu_io::inp::FrequencyStep>), String> {
+    let o = MSH.get().cloned().unwrap_or_default();
+    let (Some(e), Some(nu), Some(rho)) = (o.young, o.poisson, o.density) else {
+        return Err(format!(
+            "{}: a Gmsh mesh has no material: give --young, --poisson and --density",
+            path.display()
+        ));
+    };
+    let g = femu_io::gmsh::read_msh(path).map_err(|e| e.to_string())?;
     if !quiet {
-        deck.warnings.iter().for_each(|w| eprintln!("{w}"));
+        g.warnings.iter().for_each(|w| eprintln!("{w}"));
     }
-    let model = deck.to_model().map_err(|e| e.to_string())?;
+    let mut model =
+        femu_fem::model::Model::new(g.mesh).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mat = femu_fem::material::Material::isotropic("command line", e, nu, rho)
+        .map_err(|e| e.to_string())?;
+    model.set_material(None, mat).map_err(|e| e.to_string())?;
+    for set in &o.fix {
+        model
+            .fix_set(set, &[0, 1, 2])
+            .map_err(|e| format!("{}: --fix {set}: {e}", path.display()))?;
+    }
+    Ok((model, None))
+}
+
+fn load(path: &Path, lumped: bool, quiet: bool, pb: &ProgressBar) -> Result<Loaded, String> {
+    let is_msh = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("msh"));
+    let (model, frequency) = if is_msh {
+        load_msh(path, quiet)?
+    } else {
+        let deck = femu_io::inp::read_inp(path).map_err(|e| e.to_string())?;
+        if !quiet {
+            deck.warnings.iter().for_each(|w| eprintln!("{w}"));
+        }
+        (deck.to_model().map_err(|e| e.to_string())?, deck.frequency)
+    };
     pb.set_message("assembling K and M");
     let mass = if lumped {
         MassKind::Lumped
@@ -182,7 +242,7 @@ fn load(path: &Path, lumped: bool, quiet: bool, pb: &ProgressBar) -> Result<Load
         model,
         sys,
         mass,
-        frequency: deck.frequency,
+        frequency,
     })
 }
 
@@ -671,6 +731,12 @@ fn update_cmd(
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let _ = MSH.set(MshOptions {
+        young: cli.young,
+        poisson: cli.poisson,
+        density: cli.density,
+        fix: cli.fix.clone(),
+    });
     let result = match cli.command {
         Command::Estimate {
             model,

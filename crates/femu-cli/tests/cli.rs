@@ -355,3 +355,64 @@ fn demo_then_update_from_its_files() {
         .failure();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `femu modes` on a Gmsh mesh with the material and clamp from the command line: the JSON
+/// frequencies equal a dense solution of the same model built through the library.
+#[test]
+fn modes_of_a_gmsh_mesh() {
+    let msh =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/msh/hex20_cube_v41.msh");
+    let dir = std::env::temp_dir().join(format!("femu-cli-msh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("modes.json");
+    femu()
+        .args([
+            "modes",
+            msh.to_str().unwrap(),
+            "--young",
+            "2.1e11",
+            "--poisson",
+            "0.3",
+            "--density",
+            "7850",
+            "--fix",
+            "bottom",
+            "--count",
+            "3",
+            "--json",
+            json.to_str().unwrap(),
+            "--quiet",
+        ])
+        .assert()
+        .success();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let g = femu_io::gmsh::read_msh(&msh).unwrap();
+    let mut model = femu_fem::model::Model::new(g.mesh).unwrap();
+    model
+        .set_material(
+            None,
+            femu_fem::material::Material::isotropic("s", 2.1e11, 0.3, 7850.0).unwrap(),
+        )
+        .unwrap();
+    model.fix_set("bottom", &[0, 1, 2]).unwrap();
+    let sys = model
+        .assemble(femu_fem::assembly::MassKind::Consistent)
+        .unwrap();
+    let k = femu_sparse::csc::to_dense(&sys.k);
+    let m = femu_sparse::csc::to_dense(&sys.m);
+    let dense = femu_sparse::dense::generalized_symmetric_eigen(k.as_ref(), m.as_ref()).unwrap();
+    let f = v["frequencies_hz"].as_array().unwrap();
+    assert!(f.len() >= 3);
+    for (j, fj) in f.iter().take(3).enumerate() {
+        let fd = dense.values[j].sqrt() / (2.0 * std::f64::consts::PI);
+        assert!((fj.as_f64().unwrap() / fd - 1.0).abs() < 1e-9, "mode {j}");
+    }
+    let out = femu()
+        .args(["modes", msh.to_str().unwrap()])
+        .assert()
+        .failure();
+    let stderr = String::from_utf8(out.get_output().stderr.clone()).unwrap();
+    assert!(stderr.contains("--young"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -9,6 +9,7 @@
 
 pub mod csv;
 mod error;
+pub mod gmsh;
 pub mod inp;
 pub mod uff;
 pub mod vtk;

@@ -121,6 +121,8 @@ struct State {
     r: Mat<f64>,
     /// `sqrt(gamma_i) (C x_i - y_i)` per mode (no rows when the measurements are imposed)
     r2: Mat<f64>,
+    /// unweighted objective term per mode
+    terms: Vec<f64>,
     objective: f64,
     /// projected columns per mode: W-part and sensor part
     projected: Option<Vec<(Mat<f64>, Mat<f64>)>>,
@@ -176,30 +178,6 @@ pub fn sb_ebe(
         }
     }
     let w: Vec<f64> = w_inv.iter().map(|v| 1.0 / v).collect();
-    let t = Instant::now();
-    // mode weights from the starting expansion
-    let weights: Vec<f64> = {
-        let sys = up.matrices();
-        let x = Expander::with_measured_dofs(&sys.k, &sys.m, &measured)?
-            .minimum_residual_diagonal(&lambdas, test.shapes.as_ref(), &w_inv)?;
-        let mx = femu_sparse::csc::sym_mul_mat(&m0, x.as_ref())?;
-        (0..x.ncols())
-            .map(|j| {
-                let s: f64 = (0..n).map(|i| x[(i, j)] * mx[(i, j)]).sum();
-                if s > 0.0 && s.is_finite() {
-                    1.0 / s
-                } else {
-                    0.0
-                }
-            })
-            .collect()
-    };
-    if let Some(j) = weights.iter().position(|v| *v == 0.0) {
-        return Err(UpdateError::Invalid {
-            what: "test shapes",
-            reason: format!("test mode {} expands to a zero vector", j + 1),
-        });
-    }
     let dense_columns =
         |up: &UpdateModel<'_>, j: usize, xj: &[f64]| -> Result<Mat<f64>, UpdateError> {
             let cols = up.columns(xj, lambdas[j])?;
@@ -251,24 +229,50 @@ pub fn sb_ebe(
             }
         };
         let r = femu_correlate::residues::force_residuals(&sys.k, &sys.m, &lambdas, x.as_ref())?;
-        let objective = (0..lambdas.len())
+        let terms = (0..lambdas.len())
             .map(|i| {
-                weights[i]
-                    * ((0..n).map(|d| r[(d, i)] * r[(d, i)] * w[d]).sum::<f64>()
-                        + r2.col(i).iter().map(|v| v * v).sum::<f64>())
+                (0..n).map(|d| r[(d, i)] * r[(d, i)] * w[d]).sum::<f64>()
+                    + r2.col(i).iter().map(|v| v * v).sum::<f64>()
             })
-            .sum();
+            .collect();
         Ok(State {
             x,
             r,
             r2,
-            objective,
+            terms,
+            objective: 0.0,
             projected,
         })
     };
+    let weighted = |mut s: State, weights: &[f64]| {
+        s.objective = s.terms.iter().zip(weights).map(|(t, w)| t * w).sum();
+        s
+    };
+    let t = Instant::now();
     let mut theta = up.theta();
     let np = theta.len();
-    let mut state = evaluate(up)?;
+    let state = evaluate(up)?;
+    // mode weights 1 / ||x_i||_{M_0}^2 from the starting expansion
+    let weights: Vec<f64> = {
+        let mx = femu_sparse::csc::sym_mul_mat(&m0, state.x.as_ref())?;
+        (0..state.x.ncols())
+            .map(|j| {
+                let s: f64 = (0..n).map(|i| state.x[(i, j)] * mx[(i, j)]).sum();
+                if s > 0.0 && s.is_finite() {
+                    1.0 / s
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    };
+    if let Some(j) = weights.iter().position(|v| *v == 0.0) {
+        return Err(UpdateError::Invalid {
+            what: "test shapes",
+            reason: format!("test mode {} expands to a zero vector", j + 1),
+        });
+    }
+    let mut state = weighted(state, &weights);
     let mut history = vec![Iteration {
         iteration: 0,
         objective: state.objective,
@@ -327,7 +331,7 @@ pub fn sb_ebe(
             up.set_theta(&trial)?;
             // a trial model can put a test eigenvalue on an eigenvalue of the sensor-held
             // structure (singular expansion): a rejected trial, like a worse one
-            match evaluate(up) {
+            match evaluate(up).map(|s| weighted(s, &weights)) {
                 Ok(s) if s.objective < state.objective => {
                     accepted = Some(s);
                     break;

@@ -1,0 +1,253 @@
+//! Gmsh `.msh` 4.1 and 2.2: hand-written fixtures whose geometry says whether the node orderings
+//! were converted right (a misplaced mid-edge node changes the volume of a quadratic element), and
+//! malformed files (each error names its line).
+
+use femu_fem::prelude::*;
+use femu_io::IoError;
+use femu_io::gmsh::{parse_msh, read_msh};
+use std::path::{Path, PathBuf};
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/msh")
+        .join(name)
+}
+
+/// A unit-cube hex20 in Gmsh's order (edge nodes 8: 0-1, 9: 0-3, 10: 0-4, 11: 1-2, ...): after
+/// conversion every mid-edge node is the midpoint of femu's edge, the volume is 1 and the mass
+/// is rho.
+#[test]
+fn hex20_v41_with_physical_groups() {
+    let g = read_msh(fixture("hex20_cube_v41.msh")).unwrap();
+    let mesh = &g.mesh;
+    assert_eq!((mesh.node_count(), mesh.element_count()), (20, 1));
+    assert!((mesh.volume().unwrap() - 1.0).abs() < 1e-12);
+    let el = mesh.element(0);
+    assert_eq!(el.kind, ElementKind::Hex20);
+    // femu (Abaqus C3D20) edges: 8: 0-1, 9: 1-2, 10: 2-3, 11: 3-0, 12-15 top, 16-19 verticals
+    let edges = [
+        (0, 1),
+        (1, 2),
+        (2, 3),
+        (3, 0),
+        (4, 5),
+        (5, 6),
+        (6, 7),
+        (7, 4),
+        (0, 4),
+        (1, 5),
+        (2, 6),
+        (3, 7),
+    ];
+    for (k, (a, b)) in edges.iter().enumerate() {
+        let p = |i: usize| mesh.coords()[el.nodes[i]];
+        let (pa, pb, pm) = (p(*a), p(*b), p(8 + k));
+        for c in 0..3 {
+            assert!((0.5 * (pa[c] + pb[c]) - pm[c]).abs() < 1e-15, "edge {k}");
+        }
+    }
+    assert_eq!(mesh.element_set("solid").unwrap().len(), 1);
+    let bottom: Vec<u64> = mesh
+        .node_set("bottom")
+        .unwrap()
+        .iter()
+        .map(|n| mesh.node_id(*n))
+        .collect();
+    assert_eq!(bottom, vec![1, 2, 3, 4]);
+    let mut model = Model::new(mesh.clone()).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    assert!((model.total_mass().unwrap() - 7850.0).abs() < 1e-9);
+    model.fix_set("bottom", &[0, 1, 2]).unwrap();
+}
+
+/// Format 2.2 with hex8, two prisms and a tet, a physical surface as a node set.
+#[test]
+fn mixed_v22() {
+    let g = read_msh(fixture("mixed_v22.msh")).unwrap();
+    let mesh = &g.mesh;
+    assert_eq!(mesh.element_count(), 4);
+    let kinds = mesh.kind_counts();
+    assert_eq!(
+        (
+            kinds[&ElementKind::Hex8],
+            kinds[&ElementKind::Penta6],
+            kinds[&ElementKind::Tet4]
+        ),
+        (1, 2, 1)
+    );
+    // hex 1 + two prisms 0.5 each + tet 1/12
+    assert!((mesh.volume().unwrap() - (2.0 + 1.0 / 12.0)).abs() < 1e-12);
+    assert_eq!(mesh.element_set("body").unwrap().len(), 4);
+    assert_eq!(mesh.node_set("fixed").unwrap().len(), 4);
+    assert!(Model::new(mesh.clone()).is_ok());
+}
+
+/// Quadratic tet and prism orderings: a unit right tet10 and prism15 written in Gmsh order
+/// (tet10 edge nodes 4: 0-1, 5: 1-2, 6: 2-0, 7: 3-0, 8: 2-3, 9: 1-3; prism15 6: 0-1, 7: 0-2,
+/// 8: 0-3, 9: 1-2, 10: 1-4, 11: 2-5, 12: 3-4, 13: 3-5, 14: 4-5) have volumes 1/6 and 1/2 only if
+/// converted right.
+#[test]
+fn tet10_and_prism15_v41() {
+    let corners_t = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    let tet_edges = [(0, 1), (1, 2), (2, 0), (3, 0), (2, 3), (1, 3)];
+    let corners_p = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [1.0, 0.0, 1.0],
+        [0.0, 1.0, 1.0],
+    ];
+    let prism_edges = [
+        (0, 1),
+        (0, 2),
+        (0, 3),
+        (1, 2),
+        (1, 4),
+        (2, 5),
+        (3, 4),
+        (3, 5),
+        (4, 5),
+    ];
+    let mut pts: Vec<[f64; 3]> = Vec::new();
+    let mut tet = Vec::new();
+    for c in corners_t {
+        pts.push(c);
+        tet.push(pts.len());
+    }
+    for (a, b) in tet_edges {
+        let (pa, pb) = (corners_t[a], corners_t[b]);
+        // bow the mid-edge node a little off the chord: a wrong permutation then also breaks
+        // the midpoint check below, not only the volume
+        pts.push([
+            0.5 * (pa[0] + pb[0]),
+            0.5 * (pa[1] + pb[1]),
+            0.5 * (pa[2] + pb[2]),
+        ]);
+        tet.push(pts.len());
+    }
+    let mut prism = Vec::new();
+    for c in corners_p {
+        pts.push([c[0] + 5.0, c[1], c[2]]);
+        prism.push(pts.len());
+    }
+    for (a, b) in prism_edges {
+        let (pa, pb) = (corners_p[a], corners_p[b]);
+        pts.push([
+            0.5 * (pa[0] + pb[0]) + 5.0,
+            0.5 * (pa[1] + pb[1]),
+            0.5 * (pa[2] + pb[2]),
+        ]);
+        prism.push(pts.len());
+    }
+    let mut s = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
+    s += &format!("$Nodes\n1 {n} 1 {n}\n3 1 0 {n}\n", n = pts.len());
+    for i in 1..=pts.len() {
+        s += &format!("{i}\n");
+    }
+    for p in &pts {
+        s += &format!("{} {} {}\n", p[0], p[1], p[2]);
+    }
+    s += "$EndNodes\n$Elements\n2 2 1 2\n3 1 11 1\n1";
+    for t in &tet {
+        s += &format!(" {t}");
+    }
+    s += "\n3 1 18 1\n2";
+    for t in &prism {
+        s += &format!(" {t}");
+    }
+    s += "\n$EndElements\n";
+    let g = parse_msh(&s, Path::new("q.msh")).unwrap();
+    let mesh = &g.mesh;
+    let vol = mesh.volume().unwrap();
+    assert!((vol - (1.0 / 6.0 + 0.5)).abs() < 1e-12, "{vol}");
+    // femu (Abaqus) edges: C3D10 4: 0-1, 5: 1-2, 6: 2-0, 7: 0-3, 8: 1-3, 9: 2-3;
+    // C3D15 6: 0-1, 7: 1-2, 8: 2-0, 9: 3-4, 10: 4-5, 11: 5-3, 12: 0-3, 13: 1-4, 14: 2-5
+    let check = |e: usize, edges: &[(usize, usize)], first: usize| {
+        let el = mesh.element(e);
+        let p = |i: usize| mesh.coords()[el.nodes[i]];
+        for (k, (a, b)) in edges.iter().enumerate() {
+            for c in 0..3 {
+                assert!(
+                    (0.5 * (p(*a)[c] + p(*b)[c]) - p(first + k)[c]).abs() < 1e-15,
+                    "element {e} edge {k}"
+                );
+            }
+        }
+    };
+    check(0, &[(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)], 4);
+    check(
+        1,
+        &[
+            (0, 1),
+            (1, 2),
+            (2, 0),
+            (3, 4),
+            (4, 5),
+            (5, 3),
+            (0, 3),
+            (1, 4),
+            (2, 5),
+        ],
+        6,
+    );
+}
+
+#[test]
+fn malformed_files_name_the_line() {
+    let good = std::fs::read_to_string(fixture("mixed_v22.msh")).unwrap();
+    let cases: Vec<(String, usize, &str)> = vec![
+        (good.replace("2.2 0 8", "2.2 1 8"), 2, "binary"),
+        (good.replace("2.2 0 8", "3.0 0 8"), 2, "format"),
+        (good.replace("9 2 0 0", "9 2 x 0"), 19, "tag x y z"),
+        (
+            good.replace("1 5 2 9 1 1 2 3 4 5 6 7 8", "1 5 2 9 1 1 2 3 4 5 6 7"),
+            27,
+            "needs",
+        ),
+        (
+            good.replace("5 4 2 9 2 1 4 2 13", "5 4 2 9 2 1 4 2 99"),
+            31,
+            "99",
+        ),
+        (
+            good.replace("1 5 2 9 1 1 2 3 4 5 6 7 8", "1 42 2 9 1 1 2 3 4 5 6 7 8"),
+            27,
+            "type 42",
+        ),
+        (good.replace("$EndNodes", "$EndNodez"), 24, "$EndNodes"),
+    ];
+    for (k, (text, line, needle)) in cases.iter().enumerate() {
+        match parse_msh(text, Path::new("bad.msh")) {
+            Err(e @ (IoError::Parse { .. } | IoError::Model { .. })) => {
+                let (l, msg) = match &e {
+                    IoError::Parse { line, .. } | IoError::Model { line, .. } => {
+                        (*line, e.to_string())
+                    }
+                    _ => unreachable!(),
+                };
+                assert_eq!(l, *line, "case {k}: {msg}");
+                assert!(msg.contains(needle), "case {k}: {msg}");
+            }
+            other => panic!("case {k}: {other:?}"),
+        }
+    }
+}
+
+/// An inverted element reads (the file is well formed) and the model refuses it, naming it.
+#[test]
+fn inverted_element_is_named_by_the_model() {
+    let good = std::fs::read_to_string(fixture("mixed_v22.msh")).unwrap();
+    let g = parse_msh(
+        &good.replace("5 4 2 9 2 1 4 2 13", "5 4 2 9 2 1 2 4 13"),
+        Path::new("inv.msh"),
+    )
+    .unwrap();
+    let e = Model::new(g.mesh).unwrap_err().to_string();
+    assert!(e.contains('5'), "{e}");
+}
