@@ -1,7 +1,7 @@
 //! One updating iteration of SB-EBE and of inverse eigensensitivity, side by side, on a clamped
-//! steel plate in 10 stiffness regions (default 48 x 16 x 6 hex8 cells, 50,421 nodes... see the
-//! printed size), with the test simulated from the plate with region 3 30 % softer: its 4 lowest
-//! modes at 30 sensors (15 top-surface nodes, y and z).
+//! steel block in 10 stiffness regions (default 64 x 20 x 12 hex8 cells: 52,416 DOF), with the
+//! test simulated from the block with region 3 30 % softer: its 4 lowest modes at 30 sensors (15
+//! top-surface nodes, y and z).
 //!
 //! A run with `max_iterations = 1` contains, for SB-EBE, the weighting expansion, the starting
 //! expansion with projected columns and one trial (3 factorizations of the saddle-point system per
@@ -17,7 +17,7 @@ use femu::prelude::*;
 use std::time::Duration;
 
 fn setup() -> (Model, SensorLayout, TestModes, Vec<String>) {
-    let [nx, ny, nz] = common::cells([48, 16, 6]);
+    let [nx, ny, nz] = common::cells([64, 20, 12]);
     let mut model = common::clamped(BoxSpec::new(
         [0.48, 0.16, 0.06],
         [nx, ny, nz],

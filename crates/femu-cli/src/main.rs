@@ -113,6 +113,35 @@ enum Command {
         #[arg(long)]
         vtu: Option<PathBuf>,
     },
+    /// Expand test shapes (CSV, JSON or UFF) to every model DOF: rho_M and rho_2 of the expanded
+    /// shapes, a VTK file of them, and optionally the sensor-removal study (the paper's Figure 1)
+    /// over the test's nodes, removed in Effective Independence order.
+    ///
+    /// Examples:
+    ///   femu expand plate.inp test.unv --method dynamic --vtu expanded.vtu
+    ///   femu expand plate.inp test.csv --method min-residual --study figure1
+    #[command(verbatim_doc_comment)]
+    Expand {
+        /// The model (`.inp`, or `.msh` with --young, --poisson, --density, --fix).
+        model: PathBuf,
+        /// The test modes (`.csv`, `.json`, `.unv`).
+        test: PathBuf,
+        /// static, dynamic, min-residual or mdre.
+        #[arg(long, default_value = "dynamic")]
+        method: String,
+        /// Lumped (diagonal) mass instead of consistent.
+        #[arg(long)]
+        lumped: bool,
+        /// Write the expanded shapes for ParaView.
+        #[arg(long)]
+        vtu: Option<PathBuf>,
+        /// Run the sensor-removal study and write study.csv and study.svg into this folder.
+        #[arg(long)]
+        study: Option<PathBuf>,
+        /// Write rho_M, rho_2 and the study's points as JSON.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// The paper's plate study end to end: a plate with a modelling error is "tested" (UFF),
     /// correlated (Table 1), estimated (Table 2), studied under sensor removal (Figure 1),
     /// localised, updated by SB-EBE and checked on held-out modes. About 45 s on 2 cores.
@@ -255,10 +284,16 @@ fn load_test(
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "unv" | "uff"));
+    let is_json = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
     let test = if is_uff {
         femu_io::uff::read_uff(path)
             .and_then(|u| u.test_data(path))
             .map_err(|e| e.to_string())?
+    } else if is_json {
+        femu_io::json::read_test_json(path).map_err(|e| e.to_string())?
     } else {
         femu_io::csv::read_test_csv(path).map_err(|e| e.to_string())?
     };
@@ -335,6 +370,178 @@ fn correlate_cmd(
 }
 
 /// The a priori estimators for CSV test modes, expanded to the model's DOFs.
+/// Expands measured shapes `ya` by `method` (the readings placed as they are when every DOF is
+/// measured).
+fn expand_test(
+    sys: &femu_fem::assembly::SystemMatrices,
+    layout: &femu_correlate::SensorLayout,
+    lambdas: &[f64],
+    ya: femu_sparse::faer::MatRef<'_, f64>,
+    method: &str,
+) -> Result<femu_sparse::faer::Mat<f64>, String> {
+    use femu_correlate::expansion::{Expander, place_measured};
+    Ok(match layout.measured_dofs() {
+        // every DOF measured: the readings placed on their DOFs, nothing to expand
+        Some(dofs) if dofs.len() == sys.dofs.free_count() => {
+            place_measured(sys.k.rows(), &dofs, ya).map_err(|e| e.to_string())?
+        }
+        _ => {
+            let exp = Expander::new(&sys.k, &sys.m, layout).map_err(|e| e.to_string())?;
+            match method {
+                "static" => exp.static_(ya),
+                "dynamic" => exp.dynamic(lambdas, ya),
+                "min-residual" => exp.minimum_residual(lambdas, ya),
+                "mdre" => {
+                    // free-free models need the shift (MATH.md); harmless when restrained
+                    let shift = 1e-3 * lambdas.iter().copied().fold(0.0, f64::max);
+                    exp.mdre(lambdas, ya, 1.0, shift)
+                }
+                other => {
+                    return Err(format!(
+                        "expansion {other}: use static, dynamic, min-residual or mdre"
+                    ));
+                }
+            }
+            .map_err(|e| e.to_string())?
+        }
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn expand_cmd(
+    model_path: &Path,
+    test_path: &Path,
+    method: &str,
+    lumped: bool,
+    vtu: Option<PathBuf>,
+    study: Option<PathBuf>,
+    json: Option<PathBuf>,
+    quiet: bool,
+) -> Result<(), String> {
+    let pb = spinner(quiet, "reading the model");
+    let loaded = load(model_path, lumped, quiet, &pb)?;
+    let (test, layout) = load_test(test_path, &loaded)?;
+    let sys = &loaded.sys;
+    let lambdas = test.modes.eigenvalues();
+    pb.set_message(format!("expanding {} test modes ({method})", lambdas.len()));
+    let x = expand_test(sys, &layout, &lambdas, test.modes.shapes.as_ref(), method)?;
+    let est = femu_correlate::Estimator::new(&sys.k, &sys.m).map_err(|e| e.to_string())?;
+    let (norms, _) = est
+        .residual_norms(&lambdas, x.as_ref())
+        .map_err(|e| e.to_string())?;
+    if let Some(path) = &vtu {
+        let nn = loaded.model.mesh().node_count();
+        let fields: Vec<(String, Vec<f64>)> = (0..x.ncols())
+            .map(|j| {
+                let mut v = vec![0.0; 3 * nn];
+                for f in 0..x.nrows() {
+                    v[sys.dofs.full_of_free(f)] = x[(f, j)];
+                }
+                (
+                    format!(
+                        "test mode {} expanded ({:.2} Hz)",
+                        j + 1,
+                        test.modes.frequencies_hz[j]
+                    ),
+                    v,
+                )
+            })
+            .collect();
+        let points: Vec<femu_io::vtk::PointField<'_>> = fields
+            .iter()
+            .map(|(name, v)| femu_io::vtk::PointField {
+                name,
+                components: 3,
+                values: v,
+            })
+            .collect();
+        femu_io::vtk::write_vtu(loaded.model.mesh(), &points, &[], path)
+            .map_err(|e| e.to_string())?;
+    }
+    let mut points = Vec::new();
+    if let Some(dir) = &study {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let mut nodes: Vec<u64> = layout.sensors().iter().map(|s| s.node).collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        if nodes.len() < 3 {
+            return Err("--study needs sensors on at least 3 nodes".into());
+        }
+        let tri = femu_correlate::SensorLayout::triaxial(loaded.model.mesh(), &sys.dofs, &nodes)
+            .map_err(|e| e.to_string())?;
+        let order = femu_correlate::placement::efi_removal_order(&tri, x.as_ref())
+            .map_err(|e| e.to_string())?;
+        let removal: Vec<u64> = order.into_iter().take(nodes.len() - 2).collect();
+        pb.set_message(format!("sensor-removal study over {} nodes", nodes.len()));
+        use femu_correlate::study::Method;
+        points = femu_correlate::study::sensor_removal_study(
+            &sys.k,
+            &sys.m,
+            loaded.model.mesh(),
+            &sys.dofs,
+            &lambdas,
+            x.as_ref(),
+            &nodes,
+            &removal,
+            &[Method::Static, Method::Dynamic, Method::MinimumResidual],
+            None,
+            1,
+        )
+        .map_err(|e| e.to_string())?;
+        for (name, text) in [
+            ("study.csv", femu_correlate::study::study_csv(&points)),
+            ("study.svg", femu_correlate::study::study_svg(&points)),
+        ] {
+            let p = dir.join(name);
+            std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))?;
+        }
+    }
+    pb.finish_and_clear();
+    if !quiet {
+        println!(
+            "{} test modes at {} sensors, {method} expansion to {} DOF",
+            lambdas.len(),
+            layout.len(),
+            sys.k.rows()
+        );
+        println!("| test | f (Hz) | rho_M (s^-2) | rho_2 | a model frequency within (Hz) |");
+        println!("|---|---|---|---|---|");
+        for (j, n) in norms.iter().enumerate() {
+            let (lo, hi) = n.frequency_interval_hz();
+            println!(
+                "| {} | {:.2} | {:.4e} | {:.4e} | {lo:.1} .. {hi:.1} |",
+                j + 1,
+                test.modes.frequencies_hz[j],
+                n.rho_m,
+                n.rho_2
+            );
+        }
+        if let Some(dir) = &study {
+            println!(
+                "sensor-removal study: {} points in {}",
+                points.len(),
+                dir.display()
+            );
+        }
+    }
+    #[derive(Serialize)]
+    struct Out<'a> {
+        method: &'a str,
+        rho_m: Vec<f64>,
+        rho_2: Vec<f64>,
+        study: &'a [femu_correlate::study::StudyPoint],
+    }
+    write_json(
+        json,
+        &Out {
+            method,
+            rho_m: norms.iter().map(|n| n.rho_m).collect(),
+            rho_2: norms.iter().map(|n| n.rho_2).collect(),
+            study: &points,
+        },
+    )
+}
+
 fn estimate_cmd(
     model_path: &Path,
     test_path: &Path,
@@ -344,7 +551,6 @@ fn estimate_cmd(
     json: Option<PathBuf>,
     quiet: bool,
 ) -> Result<(), String> {
-    use femu_correlate::expansion::{Expander, place_measured};
     let pb = spinner(quiet, "reading the model");
     let loaded = load(model_path, lumped, quiet, &pb)?;
     let (test, layout) = load_test(test_path, &loaded)?;
@@ -354,27 +560,13 @@ fn estimate_cmd(
         "expanding {} test modes ({expansion})",
         lambdas.len()
     ));
-    let ya = test.modes.shapes.as_ref();
-    let x = match layout.measured_dofs() {
-        // every DOF measured: the readings placed on their DOFs, nothing to expand
-        Some(dofs) if dofs.len() == sys.dofs.free_count() => {
-            place_measured(sys.k.rows(), &dofs, ya).map_err(|e| e.to_string())?
-        }
-        _ => {
-            let exp = Expander::new(&sys.k, &sys.m, &layout).map_err(|e| e.to_string())?;
-            match expansion {
-                "static" => exp.static_(ya),
-                "dynamic" => exp.dynamic(&lambdas, ya),
-                "min-residual" => exp.minimum_residual(&lambdas, ya),
-                other => {
-                    return Err(format!(
-                        "--expansion {other}: use static, dynamic or min-residual"
-                    ));
-                }
-            }
-            .map_err(|e| e.to_string())?
-        }
-    };
+    let x = expand_test(
+        sys,
+        &layout,
+        &lambdas,
+        test.modes.shapes.as_ref(),
+        expansion,
+    )?;
     let modes = lowest_for_test(&loaded, count, test.modes.len(), &pb)?;
     let set = femu_correlate::ModeSet::from_modes(&modes);
     let report = femu_correlate::correlate(&set, &test.modes, &layout, &Default::default())
@@ -763,6 +955,15 @@ fn main() -> ExitCode {
             json,
             vtu,
         } => modes(&model, count, shift, band, lumped, json, vtu, cli.quiet),
+        Command::Expand {
+            model,
+            test,
+            method,
+            lumped,
+            vtu,
+            study,
+            json,
+        } => expand_cmd(&model, &test, &method, lumped, vtu, study, json, cli.quiet),
         Command::Demo {
             out,
             shape_noise,

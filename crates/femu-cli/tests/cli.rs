@@ -416,3 +416,70 @@ fn modes_of_a_gmsh_mesh() {
     assert!(stderr.contains("--young"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `femu expand`: an exact model mode, measured at the free nodes of the fixture and expanded at its
+/// own frequency, comes back exact (rho_M = 0 to round-off); the study and VTK files are written.
+#[test]
+fn expand_recovers_a_model_mode() {
+    use femu_correlate::{Sensor, SensorLayout, TestModes};
+    let deck = fixture("two_hex.inp");
+    let model = femu_io::inp::read_inp(&deck).unwrap().to_model().unwrap();
+    let sys = model
+        .assemble(femu_fem::assembly::MassKind::Consistent)
+        .unwrap();
+    let modes = femu_sparse::eigen::eigs(
+        &sys.k,
+        &sys.m,
+        femu_sparse::eigen::Which::Lowest(3),
+        &Default::default(),
+    )
+    .unwrap();
+    let sensors: Vec<Sensor> = [3u64, 6, 9, 12]
+        .iter()
+        .flat_map(|n| (0..3).map(move |c| Sensor::axis(*n, c)))
+        .collect();
+    let layout = SensorLayout::new(model.mesh(), &sys.dofs, sensors.clone()).unwrap();
+    let at = layout
+        .measure_all(modes.vectors.as_ref().subcols(2, 1))
+        .unwrap();
+    let test = TestModes::new(vec![modes.frequencies_hz()[2]], None, at).unwrap();
+    let dir = std::env::temp_dir().join(format!("femu-cli-expand-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("test.csv");
+    std::fs::write(&csv, femu_io::csv::test_csv_string(&sensors, &test)).unwrap();
+    let (json, vtu, study) = (dir.join("e.json"), dir.join("e.vtu"), dir.join("study"));
+    femu()
+        .args([
+            "expand",
+            deck.to_str().unwrap(),
+            csv.to_str().unwrap(),
+            "--method",
+            "dynamic",
+            "--json",
+            json.to_str().unwrap(),
+            "--vtu",
+            vtu.to_str().unwrap(),
+            "--study",
+            study.to_str().unwrap(),
+            "--quiet",
+        ])
+        .assert()
+        .success();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rho = v["rho_m"][0].as_f64().unwrap();
+    assert!(rho < 1e-6 * modes.values[2], "{rho}");
+    assert!(vtu.exists() && study.join("study.csv").exists() && study.join("study.svg").exists());
+    assert!(!v["study"].as_array().unwrap().is_empty());
+    femu()
+        .args([
+            "expand",
+            deck.to_str().unwrap(),
+            csv.to_str().unwrap(),
+            "--method",
+            "guess",
+        ])
+        .assert()
+        .failure();
+    let _ = std::fs::remove_dir_all(&dir);
+}

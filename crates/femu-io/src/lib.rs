@@ -11,6 +11,7 @@ pub mod csv;
 mod error;
 pub mod gmsh;
 pub mod inp;
+pub mod json;
 pub mod uff;
 pub mod vtk;
 

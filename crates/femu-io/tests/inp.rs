@@ -363,3 +363,42 @@ fn long_numbers_fit_calculix_fields() {
     // the exact (short) ones are unchanged
     assert_eq!(x[2], -1.0 / 3.0);
 }
+
+/// JSON test modes equal the CSV fixture they transcribe; malformed JSON names line or row.
+#[test]
+fn json_test_modes() {
+    let csv = femu_io::csv::read_test_csv(
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../fixtures/csv/two_modes.csv"),
+    )
+    .unwrap();
+    let json = r#"{"rows": [
+        {"mode": 1, "frequency_hz": 1520.5, "node": 1, "direction": "y", "value": 0.012, "damping": 0.002},
+        {"mode": 1, "frequency_hz": 1520.5, "node": 1, "direction": "z", "value": -0.98, "damping": 0.002},
+        {"mode": 1, "frequency_hz": 1520.5, "node": 7, "direction": [-1, 0, 0], "value": 0.25, "damping": 0.002},
+        {"mode": 2, "frequency_hz": 2210.25, "node": 1, "direction": "y", "value": 0.5, "damping": 0.003},
+        {"mode": 2, "frequency_hz": 2210.25, "node": 1, "direction": "z", "value": 0.1, "damping": 0.003},
+        {"mode": 2, "frequency_hz": 2210.25, "node": 7, "direction": "-x", "value": -0.75, "damping": 0.003}
+    ]}"#;
+    let j = femu_io::json::parse_test_json(json, "t.json").unwrap();
+    assert_eq!(j.sensors, csv.sensors);
+    assert_eq!(j.modes.frequencies_hz, csv.modes.frequencies_hz);
+    assert_eq!(j.modes.damping_ratios, csv.modes.damping_ratios);
+    assert_eq!(j.modes.shapes, csv.modes.shapes);
+    // syntax: the JSON line
+    match femu_io::json::parse_test_json("[\n{\"mode\": 1,\n \"frequency_hz\": x}]", "bad.json") {
+        Err(femu_io::IoError::Parse { line, .. }) => assert_eq!(line, 3),
+        other => panic!("{other:?}"),
+    }
+    // content: the row
+    let bad = json.replace("\"value\": 0.5,", "\"value\": 0.5, \"extra\": 1,");
+    assert!(femu_io::json::parse_test_json(&bad, "bad.json").is_err());
+    let bad = json.replace(
+        "2210.25, \"node\": 1, \"direction\": \"z\"",
+        "2211.0, \"node\": 1, \"direction\": \"z\"",
+    );
+    let e = femu_io::json::parse_test_json(&bad, "bad.json")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("row 5"), "{e}");
+}

@@ -1,0 +1,106 @@
+//! insta snapshots of every parsed fixture: a readable summary of what each reader made of the
+//! file (counts, sets, first and last entries, warnings), so a change in parsing shows up as a
+//! reviewed diff.
+
+use femu_fem::mesh::Mesh;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+fn fixture(dir: &str, name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures")
+        .join(dir)
+        .join(name)
+}
+
+fn mesh_summary(mesh: &Mesh) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "nodes: {}", mesh.node_count());
+    let _ = writeln!(s, "elements: {:?}", mesh.kind_counts());
+    for (i, p) in mesh.coords().iter().enumerate().take(3) {
+        let _ = writeln!(s, "node {}: {:?}", mesh.node_id(i), p);
+    }
+    for el in mesh.elements().take(3) {
+        let ids: Vec<u64> = el.nodes.iter().map(|n| mesh.node_id(*n)).collect();
+        let _ = writeln!(s, "element {} {:?}: {:?}", el.id, el.kind, ids);
+    }
+    for (name, set) in mesh.node_sets() {
+        let _ = writeln!(s, "node set {name}: {} nodes", set.len());
+    }
+    for (name, set) in mesh.element_sets() {
+        let _ = writeln!(s, "element set {name}: {} elements", set.len());
+    }
+    s
+}
+
+#[test]
+fn inp_two_hex() {
+    let deck = femu_io::inp::read_inp(fixture("inp", "two_hex.inp")).unwrap();
+    let mut s = mesh_summary(&deck.mesh);
+    for (name, m) in &deck.materials {
+        let _ = writeln!(s, "material {name}: {:?}", m);
+    }
+    let _ = writeln!(s, "sections: {}", deck.sections.len());
+    let _ = writeln!(s, "boundaries: {:?}", deck.boundaries);
+    let _ = writeln!(s, "frequency: {:?}", deck.frequency);
+    for w in &deck.warnings {
+        let _ = writeln!(s, "warning line {}: {}", w.line, w.message);
+    }
+    insta::assert_snapshot!(s);
+}
+
+#[test]
+fn msh_fixtures() {
+    for name in ["hex20_cube_v41.msh", "mixed_v22.msh"] {
+        let g = femu_io::gmsh::read_msh(fixture("msh", name)).unwrap();
+        let mut s = mesh_summary(&g.mesh);
+        for w in &g.warnings {
+            let _ = writeln!(s, "warning line {}: {}", w.line, w.message);
+        }
+        insta::assert_snapshot!(name, s);
+    }
+}
+
+#[test]
+fn uff_plate_test() {
+    let path = fixture("uff", "plate_test.unv");
+    let u = femu_io::uff::read_uff(&path).unwrap();
+    let mut s = String::new();
+    let _ = writeln!(s, "units: {:?}", u.units);
+    let _ = writeln!(s, "nodes: {} (first {:?})", u.nodes.len(), u.nodes.first());
+    for m in &u.modes {
+        let _ = writeln!(
+            s,
+            "mode {}: {} Hz, damping {}, {} nodes, first {:?}",
+            m.number,
+            m.frequency_hz,
+            m.damping,
+            m.values.len(),
+            m.values.first()
+        );
+    }
+    let td = u.test_data(&path).unwrap();
+    let _ = writeln!(
+        s,
+        "sensors: {} (first {:?})",
+        td.sensors.len(),
+        td.sensors.first()
+    );
+    insta::assert_snapshot!(s);
+}
+
+#[test]
+fn csv_two_modes() {
+    let td = femu_io::csv::read_test_csv(fixture("csv", "two_modes.csv")).unwrap();
+    let mut s = String::new();
+    for sensor in &td.sensors {
+        let _ = writeln!(s, "sensor: {sensor:?}");
+    }
+    let _ = writeln!(s, "frequencies: {:?}", td.modes.frequencies_hz);
+    let _ = writeln!(s, "damping: {:?}", td.modes.damping_ratios);
+    for j in 0..td.modes.shapes.ncols() {
+        let col: Vec<f64> = td.modes.shapes.col(j).iter().copied().collect();
+        let _ = writeln!(s, "shape {}: {col:?}", j + 1);
+    }
+    insta::assert_snapshot!(s);
+}
