@@ -142,6 +142,33 @@ enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Run a whole study described in a TOML file: correlation, estimation, expansion with the
+    /// sensor-removal study, and updating, with every result written to the output folder.
+    /// Paths in the file are relative to the file.
+    ///
+    /// Example study.toml:
+    ///   model = "plate.inp"            # or a .msh with [material] and fix
+    ///   test = "test.unv"              # .unv, .csv or .json
+    ///   [pairing]
+    ///   mac_threshold = 0.8
+    ///   [expansion]
+    ///   method = "dynamic"             # static, dynamic, min-residual, mdre
+    ///   study = true                   # the sensor-removal study (Figure 1)
+    ///   [update]
+    ///   sets = ["r0", "r1", "r2", "r3"]
+    ///   tuned = 4
+    ///   method = "sbebe"               # or "ies"
+    ///
+    /// Examples:
+    ///   femu run study.toml --out results
+    #[command(verbatim_doc_comment)]
+    Run {
+        /// The study file.
+        study: PathBuf,
+        /// Output folder.
+        #[arg(long, default_value = "femu-study")]
+        out: PathBuf,
+    },
     /// The paper's plate study end to end: a plate with a modelling error is "tested" (UFF),
     /// correlated (Table 1), estimated (Table 2), studied under sensor removal (Figure 1),
     /// localised, updated by SB-EBE and checked on held-out modes. About 45 s on 2 cores.
@@ -921,14 +948,162 @@ fn update_cmd(
     )
 }
 
+/// A study file (`femu run`).
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StudyFile {
+    model: PathBuf,
+    test: PathBuf,
+    #[serde(default)]
+    material: Option<StudyMaterial>,
+    #[serde(default)]
+    fix: Vec<String>,
+    #[serde(default)]
+    lumped: bool,
+    #[serde(default)]
+    pairing: Option<StudyPairing>,
+    #[serde(default)]
+    expansion: Option<StudyExpansion>,
+    #[serde(default)]
+    update: Option<StudyUpdate>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StudyMaterial {
+    young: f64,
+    poisson: f64,
+    density: f64,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StudyPairing {
+    mac_threshold: f64,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StudyExpansion {
+    method: String,
+    #[serde(default)]
+    study: bool,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StudyUpdate {
+    sets: Vec<String>,
+    #[serde(default)]
+    tuned: Option<usize>,
+    #[serde(default = "default_update_method")]
+    method: String,
+    #[serde(default)]
+    all: bool,
+}
+
+fn default_update_method() -> String {
+    "sbebe".into()
+}
+
+fn run_cmd(study: &Path, out: &Path, quiet: bool) -> Result<(), String> {
+    let text = std::fs::read_to_string(study).map_err(|e| format!("{}: {e}", study.display()))?;
+    let s: StudyFile = toml::from_str(&text).map_err(|e| {
+        let line = e
+            .span()
+            .map_or(0, |sp| text[..sp.start].matches('\n').count() + 1);
+        format!("{}:{line}: {}", study.display(), e.message())
+    })?;
+    let base = study.parent().unwrap_or(Path::new("."));
+    let model = base.join(&s.model);
+    let test = base.join(&s.test);
+    if let Some(m) = &s.material {
+        // a .msh model takes its material and constraints from the study file
+        let _ = MSH.set(MshOptions {
+            young: Some(m.young),
+            poisson: Some(m.poisson),
+            density: Some(m.density),
+            fix: s.fix.clone(),
+        });
+    }
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let threshold = s.pairing.as_ref().map_or(0.8, |p| p.mac_threshold);
+    if !quiet {
+        println!("# correlation");
+    }
+    correlate_cmd(
+        &model,
+        &test,
+        None,
+        threshold,
+        s.lumped,
+        Some(out.join("correlation.json")),
+        quiet,
+    )?;
+    let method = s
+        .expansion
+        .as_ref()
+        .map_or("dynamic".to_string(), |e| e.method.clone());
+    if !quiet {
+        println!("\n# estimators ({method} expansion)");
+    }
+    estimate_cmd(
+        &model,
+        &test,
+        &method,
+        None,
+        s.lumped,
+        Some(out.join("estimate.json")),
+        quiet,
+    )?;
+    if let Some(e) = &s.expansion {
+        if !quiet {
+            println!("\n# expansion");
+        }
+        let study_dir = e.study.then(|| out.join("figure1"));
+        expand_cmd(
+            &model,
+            &test,
+            &e.method,
+            s.lumped,
+            Some(out.join("expanded.vtu")),
+            study_dir,
+            Some(out.join("expansion.json")),
+            quiet,
+        )?;
+    }
+    if let Some(u) = &s.update {
+        if !quiet {
+            println!("\n# updating");
+        }
+        update_cmd(
+            &model,
+            &test,
+            &u.sets,
+            u.tuned,
+            &u.method,
+            u.all,
+            Some(out.join("update.json")),
+            quiet,
+        )?;
+    }
+    if !quiet {
+        println!("\nresults written to {}", out.display());
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let _ = MSH.set(MshOptions {
-        young: cli.young,
-        poisson: cli.poisson,
-        density: cli.density,
-        fix: cli.fix.clone(),
-    });
+    if cli.young.is_some() || cli.poisson.is_some() || cli.density.is_some() || !cli.fix.is_empty()
+    {
+        let _ = MSH.set(MshOptions {
+            young: cli.young,
+            poisson: cli.poisson,
+            density: cli.density,
+            fix: cli.fix.clone(),
+        });
+    }
     let result = match cli.command {
         Command::Estimate {
             model,
@@ -964,6 +1139,7 @@ fn main() -> ExitCode {
             study,
             json,
         } => expand_cmd(&model, &test, &method, lumped, vtu, study, json, cli.quiet),
+        Command::Run { study, out } => run_cmd(&study, &out, cli.quiet),
         Command::Demo {
             out,
             shape_noise,

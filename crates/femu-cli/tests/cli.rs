@@ -483,3 +483,78 @@ fn expand_recovers_a_model_mode() {
         .failure();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `femu run`: a study file with correlation, estimation and expansion (with the sensor-removal
+/// study) writes every result; an unknown key is an error naming its line.
+#[test]
+fn run_a_study_file() {
+    use femu_correlate::{Sensor, SensorLayout, TestModes};
+    let deck = fixture("two_hex.inp");
+    let model = femu_io::inp::read_inp(&deck).unwrap().to_model().unwrap();
+    let sys = model
+        .assemble(femu_fem::assembly::MassKind::Consistent)
+        .unwrap();
+    let modes = femu_sparse::eigen::eigs(
+        &sys.k,
+        &sys.m,
+        femu_sparse::eigen::Which::Lowest(3),
+        &Default::default(),
+    )
+    .unwrap();
+    let sensors: Vec<Sensor> = [3u64, 6, 9, 12]
+        .iter()
+        .flat_map(|n| (0..3).map(move |c| Sensor::axis(*n, c)))
+        .collect();
+    let layout = SensorLayout::new(model.mesh(), &sys.dofs, sensors.clone()).unwrap();
+    let at = layout
+        .measure_all(modes.vectors.as_ref().subcols(2, 1))
+        .unwrap();
+    let test = TestModes::new(vec![1.01 * modes.frequencies_hz()[2]], None, at).unwrap();
+    let dir = std::env::temp_dir().join(format!("femu-cli-run-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("test.csv"),
+        femu_io::csv::test_csv_string(&sensors, &test),
+    )
+    .unwrap();
+    std::fs::copy(&deck, dir.join("model.inp")).unwrap();
+    std::fs::copy(fixture("two_hex_nodes.inp"), dir.join("two_hex_nodes.inp")).unwrap();
+    let toml = "model = \"model.inp\"\ntest = \"test.csv\"\n[pairing]\nmac_threshold = 0.7\n[expansion]\nmethod = \"static\"\nstudy = true\n";
+    std::fs::write(dir.join("study.toml"), toml).unwrap();
+    let out = dir.join("out");
+    femu()
+        .args([
+            "run",
+            dir.join("study.toml").to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
+        .assert()
+        .success();
+    for f in [
+        "correlation.json",
+        "estimate.json",
+        "expansion.json",
+        "expanded.vtu",
+        "figure1/study.svg",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("correlation.json")).unwrap())
+            .unwrap();
+    assert_eq!(v["pairing"]["pairs"].as_array().unwrap().len(), 1);
+    std::fs::write(
+        dir.join("bad.toml"),
+        "model = \"model.inp\"\ntest = \"test.csv\"\nmodell = 1\n",
+    )
+    .unwrap();
+    let bad = femu()
+        .args(["run", dir.join("bad.toml").to_str().unwrap()])
+        .assert()
+        .failure();
+    let stderr = String::from_utf8(bad.get_output().stderr.clone()).unwrap();
+    assert!(stderr.contains("bad.toml:3"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
