@@ -397,11 +397,10 @@ pub fn run_demo(
         None,
         opts.stride,
     )?;
-    write(
-        &opts.out.join("figure1.svg"),
-        &study_svg(&figure1),
-        &mut files,
-    )?;
+    let svg = study_svg(&figure1);
+    write(&opts.out.join("figure1.svg"), &svg, &mut files)?;
+    crate::io::png::write_png(&svg, 2.0, opts.out.join("figure1.png"))?;
+    files.push(opts.out.join("figure1.png"));
     write(
         &opts.out.join("figure1.csv"),
         &study_csv(&figure1),
@@ -514,11 +513,10 @@ pub fn run_demo(
         &vtu,
     )?;
     files.push(vtu);
-    write(
-        &opts.out.join("error_map.svg"),
-        &bar_chart(&localisation),
-        &mut files,
-    )?;
+    let svg = bar_chart(&localisation);
+    write(&opts.out.join("error_map.svg"), &svg, &mut files)?;
+    crate::io::png::write_png(&svg, 2.0, opts.out.join("error_map.png"))?;
+    files.push(opts.out.join("error_map.png"));
 
     let report = DemoReport {
         dofs: n,
@@ -650,11 +648,11 @@ fn markdown(r: &DemoReport, o: &DemoOptions, test: &TestModes) -> String {
     }
     let _ = writeln!(
         s,
-        "\n## Figure 1: estimators against the number of measured nodes\n\n![Figure 1](figure1.svg)\n\nData: `figure1.csv` (triaxial sensors removed one node at a time in Effective Independence order).\n"
+        "\n## Figure 1: estimators against the number of measured nodes\n\n![Figure 1](figure1.png)\n\nVector version `figure1.svg`; data: `figure1.csv` (triaxial sensors removed one node at a time in Effective Independence order).\n"
     );
     let _ = writeln!(
         s,
-        "## Where is the model wrong?\n\n![error map](error_map.svg)\n\n{}\nElement map: cell data of `plate.vtu` (open in ParaView).\n",
+        "## Where is the model wrong?\n\n![error map](error_map.png)\n\n{}\nElement map: cell data of `plate.vtu` (open in ParaView).\n",
         r.localisation
     );
     let _ = writeln!(s, "## Updating\n\n{}\n{}", r.sbebe, r.eigensensitivity);

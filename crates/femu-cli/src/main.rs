@@ -515,13 +515,15 @@ fn expand_cmd(
             1,
         )
         .map_err(|e| e.to_string())?;
+        let svg = femu_correlate::study::study_svg(&points);
         for (name, text) in [
             ("study.csv", femu_correlate::study::study_csv(&points)),
-            ("study.svg", femu_correlate::study::study_svg(&points)),
+            ("study.svg", svg.clone()),
         ] {
             let p = dir.join(name);
             std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))?;
         }
+        femu_io::png::write_png(&svg, 2.0, dir.join("study.png")).map_err(|e| e.to_string())?;
     }
     pb.finish_and_clear();
     if !quiet {

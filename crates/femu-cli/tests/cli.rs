@@ -470,6 +470,8 @@ fn expand_recovers_a_model_mode() {
     let rho = v["rho_m"][0].as_f64().unwrap();
     assert!(rho < 1e-6 * modes.values[2], "{rho}");
     assert!(vtu.exists() && study.join("study.csv").exists() && study.join("study.svg").exists());
+    let png = std::fs::read(study.join("study.png")).unwrap();
+    assert_eq!(&png[..4], b"\x89PNG");
     assert!(!v["study"].as_array().unwrap().is_empty());
     femu()
         .args([

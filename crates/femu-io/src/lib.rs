@@ -12,6 +12,7 @@ mod error;
 pub mod gmsh;
 pub mod inp;
 pub mod json;
+pub mod png;
 pub mod uff;
 pub mod vtk;
 
