@@ -142,6 +142,23 @@ enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Export the assembled stiffness and mass as MatrixMarket files (`PREFIX_K.mtx`,
+    /// `PREFIX_M.mtx`, symmetric, lower triangle, free DOFs in femu's numbering) and the DOF map
+    /// (`PREFIX_dofs.csv`: row, node, component).
+    ///
+    /// Examples:
+    ///   femu matrices plate.inp --out plate
+    #[command(verbatim_doc_comment)]
+    Matrices {
+        /// The model (`.inp`, or `.msh` with --young, --poisson, --density, --fix).
+        model: PathBuf,
+        /// Output prefix.
+        #[arg(long)]
+        out: PathBuf,
+        /// Lumped (diagonal) mass instead of consistent.
+        #[arg(long)]
+        lumped: bool,
+    },
     /// Run a whole study described in a TOML file: correlation, estimation, expansion with the
     /// sensor-removal study, and updating, with every result written to the output folder.
     /// Paths in the file are relative to the file.
@@ -950,6 +967,44 @@ fn update_cmd(
     )
 }
 
+fn matrices_cmd(model_path: &Path, out: &Path, lumped: bool, quiet: bool) -> Result<(), String> {
+    let pb = spinner(quiet, "reading the model");
+    let loaded = load(model_path, lumped, quiet, &pb)?;
+    let sys = &loaded.sys;
+    let name = |suffix: &str| {
+        let mut p = out.as_os_str().to_owned();
+        p.push(suffix);
+        PathBuf::from(p)
+    };
+    let (k, m, d) = (name("_K.mtx"), name("_M.mtx"), name("_dofs.csv"));
+    pb.set_message("writing MatrixMarket files");
+    femu_sparse::mtx::write_matrix_market(&k, &sys.k, true).map_err(|e| e.to_string())?;
+    femu_sparse::mtx::write_matrix_market(&m, &sys.m, true).map_err(|e| e.to_string())?;
+    let mut csv = String::from("row,node,component\n");
+    for f in 0..sys.dofs.free_count() {
+        let full = sys.dofs.full_of_free(f);
+        csv.push_str(&format!(
+            "{},{},{}\n",
+            f + 1,
+            loaded.model.mesh().node_id(full / 3),
+            ["x", "y", "z"][full % 3]
+        ));
+    }
+    std::fs::write(&d, csv).map_err(|e| format!("{}: {e}", d.display()))?;
+    pb.finish_and_clear();
+    if !quiet {
+        println!(
+            "{} DOF, nnz(K) = {}: {}, {}, {}",
+            sys.k.rows(),
+            sys.k.nnz(),
+            k.display(),
+            m.display(),
+            d.display()
+        );
+    }
+    Ok(())
+}
+
 /// A study file (`femu run`).
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -1142,6 +1197,7 @@ fn main() -> ExitCode {
             json,
         } => expand_cmd(&model, &test, &method, lumped, vtu, study, json, cli.quiet),
         Command::Run { study, out } => run_cmd(&study, &out, cli.quiet),
+        Command::Matrices { model, out, lumped } => matrices_cmd(&model, &out, lumped, cli.quiet),
         Command::Demo {
             out,
             shape_noise,

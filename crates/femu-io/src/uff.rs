@@ -392,14 +392,18 @@ fn parse_55(path: &Path, body: &[(usize, &str)], out: &mut Universal) -> Result<
 }
 
 fn e13(v: f64) -> String {
-    // Fortran 1PE13.5: d.ddddde+xx, right-aligned in 13
+    // Fortran 1PE13.5: d.ddddde+xx, right-aligned in 13, with a leading blank always: a
+    // three-digit exponent (beyond Fortran's E13.5) would otherwise run into the previous field
+    // (found by the fuzzer). Non-finite values are written as they are (the reader refuses them,
+    // naming the line).
     let s = format!("{v:.5E}");
-    let (m, e) = s.split_once('E').expect("formatted with an exponent");
-    let e: i32 = e.parse().expect("exponent is an integer");
-    format!(
-        "{:>13}",
-        format!("{m}E{}{:02}", if e < 0 { '-' } else { '+' }, e.abs())
-    )
+    match s.split_once('E').map(|(m, e)| (m, e.parse::<i32>())) {
+        Some((m, Ok(e))) => format!(
+            " {:>12}",
+            format!("{m}E{}{:02}", if e < 0 { '-' } else { '+' }, e.abs())
+        ),
+        _ => format!(" {s:>12}"),
+    }
 }
 
 /// Writes units, nodes and real normal modes as datasets 164, 15 and 55 (SI units).

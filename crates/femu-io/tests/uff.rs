@@ -100,3 +100,23 @@ fn malformed_files_name_the_line() {
         }
     }
 }
+
+/// Found by the fuzzer: a value with a three-digit exponent ran into its neighbour on writing.
+#[test]
+fn three_digit_exponents_stay_separate() {
+    let mut u = sample();
+    u.modes[0].values[0].1 = [-9.06449e-3, -1.16504e101, 2.5e-120];
+    let text = uff_string(&u);
+    let back = parse_uff(&text, Path::new("e.unv")).unwrap();
+    assert_eq!(
+        back.modes[0].values[0].1,
+        [-9.06449e-3, -1.16504e101, 2.5e-120]
+    );
+    assert_eq!(uff_string(&back), text);
+    // a NaN written by a careless caller is refused on reading, with its line
+    u.modes[0].values[0].1[0] = f64::NAN;
+    assert!(matches!(
+        parse_uff(&uff_string(&u), Path::new("n.unv")),
+        Err(IoError::Parse { line: 23, .. })
+    ));
+}
