@@ -411,14 +411,21 @@ pub fn uff_string(u: &Universal) -> String {
     let mut s = String::new();
     if let Some(units) = &u.units {
         s.push_str("    -1\n   164\n");
-        let _ = writeln!(s, "{:>10}{:<20}{:>10}", units.code, units.description, 2);
+        // fixed columns I10, 20A1, I10: the description as the reader sees it (ASCII, 20 chars)
+        let description: String = units
+            .description
+            .chars()
+            .filter(|c| c.is_ascii_graphic() || *c == ' ')
+            .take(20)
+            .collect();
+        let _ = writeln!(s, "{:>10}{:<20}{:>10}", units.code, description.trim(), 2);
         let _ = writeln!(
             s,
-            "{:>25.17E}{:>25.17E}{:>25.17E}",
+            " {:>24.17E} {:>24.17E} {:>24.17E}",
             units.factors[0], units.factors[1], units.factors[2]
         )
         .map(|_| ());
-        s.push_str(&format!("{:>25.17E}\n", 273.15));
+        s.push_str(&format!(" {:>24.17E}\n", 273.15));
         s.push_str("    -1\n");
     }
     if !u.nodes.is_empty() {
@@ -426,7 +433,7 @@ pub fn uff_string(u: &Universal) -> String {
         for n in &u.nodes {
             let _ = writeln!(
                 s,
-                "{:>10}{:>10}{:>10}{:>10}{}{}{}",
+                " {:>9} {:>9} {:>9} {:>9}{}{}{}",
                 n.id,
                 0,
                 0,
@@ -449,8 +456,8 @@ pub fn uff_string(u: &Universal) -> String {
         ] {
             let _ = writeln!(s, "{line}");
         }
-        let _ = writeln!(s, "{:>10}{:>10}{:>10}{:>10}{:>10}{:>10}", 1, 2, 2, 8, 2, 3);
-        let _ = writeln!(s, "{:>10}{:>10}{:>10}{:>10}", 2, 4, 1, m.number);
+        let _ = writeln!(s, " {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}", 1, 2, 2, 8, 2, 3);
+        let _ = writeln!(s, " {:>9} {:>9} {:>9} {:>9}", 2, 4, 1, m.number);
         let _ = writeln!(
             s,
             "{}{}{}{}",

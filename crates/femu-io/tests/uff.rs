@@ -120,3 +120,21 @@ fn three_digit_exponents_stay_separate() {
         Err(IoError::Parse { line: 23, .. })
     ));
 }
+
+/// Found by the fuzzer too: dataset 164's D25.17 fields and the integer fields of datasets 15 and
+/// 55 had the same problem (a negative three-digit exponent, a ten-digit mode number).
+#[test]
+fn wide_fields_stay_separate() {
+    let mut u = sample();
+    u.units.as_mut().unwrap().factors = [0.0, -1.99475e-201, 0.232075];
+    u.units.as_mut().unwrap().description = "a very long unit description, é".into();
+    u.modes[0].number = -9_000_000_000;
+    let text = uff_string(&u);
+    let back = parse_uff(&text, Path::new("w.unv")).unwrap();
+    assert_eq!(
+        back.units.as_ref().unwrap().factors,
+        [0.0, -1.99475e-201, 0.232075]
+    );
+    assert_eq!(back.modes[0].number, -9_000_000_000);
+    assert_eq!(uff_string(&back), text);
+}
