@@ -41,7 +41,14 @@ fn inp_two_hex() {
         let _ = writeln!(s, "material {name}: {:?}", m);
     }
     let _ = writeln!(s, "sections: {}", deck.sections.len());
-    let _ = writeln!(s, "boundaries: {:?}", deck.boundaries);
+    // no paths in snapshots: they differ between clones
+    for b in &deck.boundaries {
+        let _ = writeln!(
+            s,
+            "boundary {:?} DOFs {}-{} (line {})",
+            b.target, b.first, b.last, b.line.line
+        );
+    }
     let _ = writeln!(s, "frequency: {:?}", deck.frequency);
     for w in &deck.warnings {
         let _ = writeln!(s, "warning line {}: {}", w.line, w.message);
