@@ -53,12 +53,32 @@ pub struct UffMode {
 pub struct Universal {
     /// Dataset 164, if present.
     pub units: Option<UffUnits>,
-    /// Dataset 15 nodes.
+    /// Nodes of dataset 15 (single precision) or 2411 (double precision).
     pub nodes: Vec<UffNode>,
+    /// Whether the nodes came from (and are written as) dataset 2411 instead of 15.
+    pub nodes_2411: bool,
+    /// Dataset 2412 elements.
+    pub elements: Vec<UffElement>,
     /// Dataset 55 modes.
     pub modes: Vec<UffMode>,
     /// Skipped datasets and approximations.
     pub warnings: Vec<Warning>,
+}
+
+/// One element of dataset 2412.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UffElement {
+    /// Element label.
+    pub id: u64,
+    /// FE descriptor id (111 linear tetrahedron, 112 linear wedge, 115 linear brick, ...).
+    pub descriptor: i64,
+    /// Node labels in the file's order.
+    pub nodes: Vec<u64>,
+}
+
+/// Beam descriptors carry an extra orientation record in dataset 2412.
+fn is_beam(descriptor: i64) -> bool {
+    matches!(descriptor, 11 | 21..=24)
 }
 
 fn perr(path: &Path, line: usize, reason: impl Into<String>) -> IoError {
@@ -165,6 +185,8 @@ pub fn parse_uff(text: &str, path: &Path) -> Result<Universal, IoError> {
         let body: Vec<(usize, &str)> = (start + 1..end).map(|j| (j + 1, lines[j])).collect();
         match kind {
             15 => parse_15(path, &body, &mut out)?,
+            2411 => parse_2411(path, &body, &mut out)?,
+            2412 => parse_2412(path, &body, &mut out)?,
             164 => parse_164(path, &body, &mut out)?,
             55 => parse_55(path, &body, &mut out)?,
             other => out.warnings.push(Warning {
@@ -201,6 +223,104 @@ fn parse_15(path: &Path, body: &[(usize, &str)], out: &mut Universal) -> Result<
             num(path, ln, t[6])?,
         ];
         out.nodes.push(UffNode { id: id as u64, x });
+    }
+    Ok(())
+}
+
+fn parse_2411(path: &Path, body: &[(usize, &str)], out: &mut Universal) -> Result<(), IoError> {
+    let lines: Vec<(usize, &str)> = body
+        .iter()
+        .copied()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .collect();
+    if !lines.len().is_multiple_of(2) {
+        return Err(perr(
+            path,
+            lines.last().map_or(0, |l| l.0),
+            "dataset 2411: a node without its coordinate record",
+        ));
+    }
+    for pair in lines.chunks(2) {
+        let (ln, l) = pair[0];
+        let h = ints(path, ln, l, 4)?;
+        if h[0] <= 0 {
+            return Err(perr(
+                path,
+                ln,
+                format!("node label {} must be positive", h[0]),
+            ));
+        }
+        let x = nums(path, pair[1].0, pair[1].1, 3)?;
+        out.nodes.push(UffNode {
+            id: h[0] as u64,
+            x: [x[0], x[1], x[2]],
+        });
+    }
+    out.nodes_2411 = true;
+    Ok(())
+}
+
+fn parse_2412(path: &Path, body: &[(usize, &str)], out: &mut Universal) -> Result<(), IoError> {
+    let lines: Vec<(usize, &str)> = body
+        .iter()
+        .copied()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .collect();
+    let mut k = 0;
+    while k < lines.len() {
+        let (ln, l) = lines[k];
+        let h = ints(path, ln, l, 6)?;
+        let (id, descriptor, count) = (h[0], h[1], h[5]);
+        if id <= 0 || !(1..=27).contains(&count) {
+            return Err(perr(
+                path,
+                ln,
+                format!("element {id}: label must be positive and node count 1-27, found {count}"),
+            ));
+        }
+        k += 1;
+        if is_beam(descriptor) {
+            k += 1; // orientation record
+        }
+        let mut nodes = Vec::with_capacity(count as usize);
+        while nodes.len() < count as usize {
+            let (ln2, l2) = *lines.get(k).ok_or_else(|| {
+                perr(
+                    path,
+                    ln,
+                    format!(
+                        "element {id}: {count} node labels expected, found {}",
+                        nodes.len()
+                    ),
+                )
+            })?;
+            for v in ints(path, ln2, l2, 1)? {
+                if v <= 0 {
+                    return Err(perr(
+                        path,
+                        ln2,
+                        format!("element {id}: node label {v} must be positive"),
+                    ));
+                }
+                nodes.push(v as u64);
+            }
+            k += 1;
+        }
+        if nodes.len() != count as usize {
+            return Err(perr(
+                path,
+                ln,
+                format!(
+                    "element {id}: {count} node labels expected, found {}",
+                    nodes.len()
+                ),
+            ));
+        }
+        out.elements.push(UffElement {
+            id: id as u64,
+            descriptor,
+            nodes,
+        });
     }
     Ok(())
 }
@@ -428,7 +548,42 @@ pub fn uff_string(u: &Universal) -> String {
         s.push_str(&format!(" {:>24.17E}\n", 273.15));
         s.push_str("    -1\n");
     }
-    if !u.nodes.is_empty() {
+    if !u.nodes.is_empty() && u.nodes_2411 {
+        s.push_str("    -1\n  2411\n");
+        for n in &u.nodes {
+            let _ = writeln!(s, " {:>9} {:>9} {:>9} {:>9}", n.id, 1, 1, 11);
+            let _ = writeln!(
+                s,
+                " {:>24.16E} {:>24.16E} {:>24.16E}",
+                n.x[0], n.x[1], n.x[2]
+            );
+        }
+        s.push_str("    -1\n");
+    }
+    if !u.elements.is_empty() {
+        s.push_str("    -1\n  2412\n");
+        for e in &u.elements {
+            let _ = writeln!(
+                s,
+                " {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+                e.id,
+                e.descriptor,
+                1,
+                1,
+                7,
+                e.nodes.len()
+            );
+            if is_beam(e.descriptor) {
+                let _ = writeln!(s, " {:>9} {:>9} {:>9}", 0, 1, 1);
+            }
+            for chunk in e.nodes.chunks(8) {
+                let row: Vec<String> = chunk.iter().map(|n| format!(" {n:>9}")).collect();
+                let _ = writeln!(s, "{}", row.concat());
+            }
+        }
+        s.push_str("    -1\n");
+    }
+    if !u.nodes.is_empty() && !u.nodes_2411 {
         s.push_str("    -1\n    15\n");
         for n in &u.nodes {
             let _ = writeln!(
@@ -488,6 +643,65 @@ pub fn write_uff(path: impl AsRef<Path>, u: &Universal) -> Result<(), IoError> {
 }
 
 impl Universal {
+    /// The femu mesh of the file's nodes and linear solid elements (descriptors 111 tetrahedron,
+    /// 112 wedge, 115 brick, whose node orders are Abaqus'); other elements (shells, beams) are
+    /// skipped and counted in the returned warnings; quadratic solids (116, 113, 118) are refused:
+    /// their interleaved node orders are not converted yet.
+    ///
+    /// # Errors
+    /// A quadratic solid (element label), a mesh error (duplicate or missing node), no solid.
+    pub fn to_mesh(&self, path: &Path) -> Result<(femu_fem::mesh::Mesh, Vec<Warning>), IoError> {
+        use femu_fem::element::ElementKind;
+        let model_err = |source| IoError::Model {
+            path: path.to_path_buf(),
+            line: 0,
+            source,
+        };
+        let mut mesh = femu_fem::mesh::Mesh::new();
+        for n in &self.nodes {
+            mesh.add_node(n.id, n.x).map_err(model_err)?;
+        }
+        let mut skipped = 0;
+        for e in &self.elements {
+            let kind = match e.descriptor {
+                111 => ElementKind::Tet4,
+                112 => ElementKind::Penta6,
+                115 => ElementKind::Hex8,
+                113 | 116 | 118 => {
+                    return Err(IoError::Parse {
+                        path: path.to_path_buf(),
+                        line: 0,
+                        reason: format!(
+                            "element {}: quadratic solid descriptor {} is not read by femu yet",
+                            e.id, e.descriptor
+                        ),
+                    });
+                }
+                _ => {
+                    skipped += 1;
+                    continue;
+                }
+            };
+            mesh.add_element(e.id, kind, &e.nodes).map_err(model_err)?;
+        }
+        if mesh.element_count() == 0 {
+            return Err(IoError::Parse {
+                path: path.to_path_buf(),
+                line: 0,
+                reason: "no solid element (descriptors 111, 112, 115) in dataset 2412".into(),
+            });
+        }
+        let mut warnings = Vec::new();
+        if skipped > 0 {
+            warnings.push(Warning {
+                path: path.to_path_buf(),
+                line: 0,
+                message: format!("{skipped} non-solid elements (shells, beams) skipped"),
+            });
+        }
+        Ok((mesh, warnings))
+    }
+
     /// The test modes and sensors of the file's dataset-55 modes: one sensor per node and axis
     /// whose value is non-zero in some mode (test systems write unmeasured directions as zeros),
     /// in node order then x, y, z. `path` names the file in errors.

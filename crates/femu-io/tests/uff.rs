@@ -2,7 +2,7 @@
 //! files (each error names its line).
 
 use femu_io::IoError;
-use femu_io::uff::{UffMode, UffNode, UffUnits, Universal, parse_uff, uff_string};
+use femu_io::uff::{UffElement, UffMode, UffNode, UffUnits, Universal, parse_uff, uff_string};
 use std::path::Path;
 
 fn sample() -> Universal {
@@ -30,7 +30,7 @@ fn sample() -> Universal {
             values: vec![(1, [0.0, 1.25e-3, -0.987654321]), (7, [0.0, -2.5e-12, 0.5])],
             complex: false,
         }],
-        warnings: vec![],
+        ..Default::default()
     }
 }
 
@@ -137,4 +137,81 @@ fn wide_fields_stay_separate() {
     );
     assert_eq!(back.modes[0].number, -9_000_000_000);
     assert_eq!(uff_string(&back), text);
+}
+
+/// Datasets 2411 and 2412: a hex8 and a wedge with a shell and a beam element; double-precision
+/// coordinates come back bit for bit, the text on rewrite; the mesh has the exact volume; a
+/// quadratic brick is refused with its label.
+#[test]
+fn nodes_and_elements_2411_2412() {
+    let x = |i: u64| {
+        let c = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [1.0, 1.0, 1.0],
+            [0.0, 1.0, 1.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 0.0, 1.0],
+        ];
+        let p = c[(i - 1) as usize];
+        [
+            p[0] * 0.1 + 1e-17,
+            p[1] * std::f64::consts::PI / 30.0,
+            p[2] * 0.01,
+        ]
+    };
+    let u = Universal {
+        nodes: (1..=10).map(|i| UffNode { id: i, x: x(i) }).collect(),
+        nodes_2411: true,
+        elements: vec![
+            UffElement {
+                id: 1,
+                descriptor: 115,
+                nodes: (1..=8).collect(),
+            },
+            UffElement {
+                id: 2,
+                descriptor: 112,
+                nodes: vec![2, 9, 3, 6, 10, 7],
+            },
+            UffElement {
+                id: 3,
+                descriptor: 94,
+                nodes: vec![1, 2, 3, 4],
+            },
+            UffElement {
+                id: 4,
+                descriptor: 21,
+                nodes: vec![1, 5],
+            },
+        ],
+        ..Default::default()
+    };
+    let text = uff_string(&u);
+    let back = parse_uff(&text, Path::new("m.unv")).unwrap();
+    assert_eq!(back.nodes, u.nodes);
+    assert_eq!(back.elements, u.elements);
+    assert_eq!(uff_string(&back), text);
+    let (mesh, warnings) = back.to_mesh(Path::new("m.unv")).unwrap();
+    assert_eq!(mesh.element_count(), 2);
+    assert_eq!(warnings.len(), 1);
+    let (lx, ly, lz) = (0.1, std::f64::consts::PI / 30.0, 0.01);
+    assert!((mesh.volume().unwrap() - 1.5 * lx * ly * lz).abs() < 1e-15);
+    let mut quad = back.clone();
+    quad.elements[0].descriptor = 116;
+    let e = quad.to_mesh(Path::new("q.unv")).unwrap_err().to_string();
+    assert!(e.contains("element 1") && e.contains("116"), "{e}");
+    // a truncated element record names its line
+    let cut = text.replace(
+        "         1         2         3         4         5         6         7         8\n",
+        "         1         2         3\n",
+    );
+    assert!(matches!(
+        parse_uff(&cut, Path::new("c.unv")),
+        Err(IoError::Parse { .. })
+    ));
 }
