@@ -18,28 +18,10 @@ use std::time::Duration;
 
 fn setup() -> (Model, SensorLayout, TestModes, Vec<String>) {
     let [nx, ny, nz] = common::cells([64, 20, 12]);
-    let mut model = common::clamped(BoxSpec::new(
-        [0.48, 0.16, 0.06],
-        [nx, ny, nz],
-        BoxCells::Hex,
-        false,
-    ));
-    let mut mesh = model.mesh().clone();
-    let mut sets = vec![Vec::new(); 10];
-    let mut xy = Vec::new();
-    for e in 0..mesh.element_count() {
-        mesh.element_coords(e, &mut xy);
-        let cx = xy.iter().map(|p| p[0]).sum::<f64>() / xy.len() as f64;
-        sets[((cx / 0.048) as usize).min(9)].push(mesh.element(e).id);
-    }
-    let names: Vec<String> = (0..10).map(|r| format!("r{r}")).collect();
-    for (r, ids) in sets.iter().enumerate() {
-        mesh.add_element_set(names[r].clone(), ids).unwrap();
-    }
-    let mut m2 = Model::new(mesh).unwrap();
-    m2.set_material(None, Material::steel()).unwrap();
-    m2.fix_set("xmin", &[0, 1, 2]).unwrap();
-    model = m2;
+    let spec = BoxSpec::new([0.48, 0.16, 0.06], [nx, ny, nz], BoxCells::Hex, false);
+    let mut mesh = box_mesh(&spec).unwrap();
+    let names = add_slab_sets(&mut mesh, 0, 10, "r").unwrap();
+    let model = common::clamped_mesh(mesh);
     let set_refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
     let mut truth = UpdateModel::from_element_sets(
         &model,
@@ -53,28 +35,11 @@ fn setup() -> (Model, SensorLayout, TestModes, Vec<String>) {
     truth.set_theta(&th).unwrap();
     let modes = model_modes(&mut truth, 4, &Default::default()).unwrap();
     let mesh = model.mesh();
-    let top = mesh.node_set("zmax").unwrap();
-    let mut sensors = Vec::new();
-    for i in 0..5 {
-        for j in 0..3 {
-            let target = [
-                0.48 * (0.1 + 0.2 * i as f64),
-                0.16 * (1.0 / 6.0 + j as f64 / 3.0),
-            ];
-            let best = top
-                .iter()
-                .min_by(|a, b| {
-                    let d = |n: usize| {
-                        let p = mesh.coords()[n];
-                        (p[0] - target[0]).powi(2) + (p[1] - target[1]).powi(2)
-                    };
-                    d(**a).total_cmp(&d(**b))
-                })
-                .unwrap();
-            sensors.push(Sensor::axis(mesh.node_id(*best), 1));
-            sensors.push(Sensor::axis(mesh.node_id(*best), 2));
-        }
-    }
+    let sensors = femu::correlate::placement::grid_nodes(mesh, "zmax", [5, 3])
+        .unwrap()
+        .into_iter()
+        .flat_map(|id| [Sensor::axis(id, 1), Sensor::axis(id, 2)])
+        .collect();
     let layout = SensorLayout::new(mesh, &truth.matrices().dofs, sensors).unwrap();
     let y = layout.measure_all(modes.shapes.as_ref()).unwrap();
     let test = TestModes::new(modes.frequencies_hz(), None, y).unwrap();

@@ -132,29 +132,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &EigenParams::default(),
     )?;
     // test: elastic modes 7-10 of the real plate, at 15 upper-surface nodes (a 5 x 3 grid), y and z
-    let top = mesh.node_set("zmax")?;
-    let pick = |tx: f64, ty: f64| -> u64 {
-        let target = [tx * spec.lengths[0], ty * spec.lengths[1]];
-        let best = top
-            .iter()
-            .min_by(|a, b| {
-                let d = |n: usize| {
-                    let p = mesh.coords()[n];
-                    (p[0] - target[0]).powi(2) + (p[1] - target[1]).powi(2)
-                };
-                d(**a).total_cmp(&d(**b))
-            })
-            .expect("the top face has nodes");
-        mesh.node_id(*best)
-    };
-    let mut sensors = Vec::new();
-    for i in 0..5 {
-        for j in 0..3 {
-            let node = pick(0.1 + 0.2 * i as f64, 1.0 / 6.0 + j as f64 / 3.0);
-            sensors.push(Sensor::axis(node, 1));
-            sensors.push(Sensor::axis(node, 2));
-        }
-    }
+    let sensors = femu::correlate::placement::grid_nodes(mesh, "zmax", [5, 3])?
+        .into_iter()
+        .flat_map(|id| [Sensor::axis(id, 1), Sensor::axis(id, 2)])
+        .collect();
     let layout = SensorLayout::new(mesh, &consistent.dofs, sensors)?;
     let x = truth.vectors.as_ref().subcols(6, 4).to_owned();
     let f_test: Vec<f64> = truth.values[6..10]

@@ -132,52 +132,13 @@ fn noise(seed: &mut u64) -> f64 {
     ((*seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) * 3f64.sqrt()
 }
 
-/// Ten regions along x as element sets `r0`..`r9`.
+/// The plate of `spec` in steel, with ten regions along x as element sets `r0`..`r9`.
 pub fn plate_with_regions(spec: &PlateSpec) -> Result<Model, Box<dyn std::error::Error>> {
     let mut mesh = mixed_plate(spec)?;
-    let mut sets = vec![Vec::new(); 10];
-    let mut xy = Vec::new();
-    for e in 0..mesh.element_count() {
-        mesh.element_coords(e, &mut xy);
-        let cx = xy.iter().map(|p| p[0]).sum::<f64>() / xy.len() as f64;
-        sets[((cx / spec.lengths[0] * 10.0) as usize).min(9)].push(mesh.element(e).id);
-    }
-    for (r, ids) in sets.iter().enumerate() {
-        mesh.add_element_set(format!("r{r}"), ids)?;
-    }
+    add_slab_sets(&mut mesh, 0, 10, "r")?;
     let mut model = Model::new(mesh)?;
     model.set_material(None, Material::steel())?;
     Ok(model)
-}
-
-/// 15 nodes of the upper surface in a 5 x 3 grid.
-pub fn sensor_nodes(
-    model: &Model,
-    spec: &PlateSpec,
-) -> Result<Vec<u64>, Box<dyn std::error::Error>> {
-    let mesh = model.mesh();
-    let top = mesh.node_set("zmax")?;
-    let mut out = Vec::new();
-    for i in 0..5 {
-        for j in 0..3 {
-            let target = [
-                spec.lengths[0] * (0.1 + 0.2 * i as f64),
-                spec.lengths[1] * (1.0 / 6.0 + j as f64 / 3.0),
-            ];
-            let best = top
-                .iter()
-                .min_by(|a, b| {
-                    let d = |n: usize| {
-                        let p = mesh.coords()[n];
-                        (p[0] - target[0]).powi(2) + (p[1] - target[1]).powi(2)
-                    };
-                    d(**a).total_cmp(&d(**b))
-                })
-                .ok_or("the plate has no upper surface")?;
-            out.push(mesh.node_id(*best));
-        }
-    }
-    Ok(out)
 }
 
 fn write(
@@ -239,7 +200,7 @@ pub fn run_demo(
         100.0 * opts.truth
     ));
     let truth = model_modes(&mut real, 6 + opts.modes, &Default::default())?;
-    let nodes = sensor_nodes(&model, spec)?;
+    let nodes = crate::correlate::placement::grid_nodes(model.mesh(), "zmax", [5, 3])?;
     let mut sensors = Vec::new();
     for id in &nodes {
         sensors.push(Sensor::axis(*id, 1));

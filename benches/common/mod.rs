@@ -4,8 +4,14 @@
 use femu::prelude::*;
 
 /// A steel box meshed by `spec`, clamped on its `x = 0` face.
+#[allow(dead_code)] // not every benchmark uses a plain box
 pub fn clamped(spec: BoxSpec) -> Model {
-    let mut model = Model::new(box_mesh(&spec).unwrap()).unwrap();
+    clamped_mesh(box_mesh(&spec).unwrap())
+}
+
+/// A steel model of `mesh` (a box of the generator, with its face sets), clamped at `x = 0`.
+pub fn clamped_mesh(mesh: Mesh) -> Model {
+    let mut model = Model::new(mesh).unwrap();
     model.set_material(None, Material::steel()).unwrap();
     model.fix_set("xmin", &[0, 1, 2]).unwrap();
     model

@@ -250,6 +250,13 @@ struct Loaded {
 }
 
 /// Reads `path` (warnings to stderr unless quiet), builds the model and assembles `K` and `M`.
+/// Whether `path` ends in one of `exts` (any case).
+fn has_extension(path: &Path, exts: &[&str]) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| exts.iter().any(|x| e.eq_ignore_ascii_case(x)))
+}
+
 /// Material and constraints of a Gmsh model, from the command line.
 #[derive(Clone, Default)]
 struct MshOptions {
@@ -291,10 +298,7 @@ fn load_msh(
 }
 
 fn load(path: &Path, lumped: bool, quiet: bool, pb: &ProgressBar) -> Result<Loaded, String> {
-    let is_msh = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("msh"));
+    let is_msh = has_extension(path, &["msh"]);
     let (model, frequency) = if is_msh {
         load_msh(path, quiet)?
     } else {
@@ -324,14 +328,8 @@ fn load_test(
     path: &Path,
     loaded: &Loaded,
 ) -> Result<(femu_io::csv::TestData, femu_correlate::SensorLayout), String> {
-    let is_uff = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "unv" | "uff"));
-    let is_json = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    let is_uff = has_extension(path, &["unv", "uff"]);
+    let is_json = has_extension(path, &["json"]);
     let test = if is_uff {
         femu_io::uff::read_uff(path)
             .and_then(|u| u.test_data(path))

@@ -13,6 +13,43 @@ fn femu() -> Command {
     Command::cargo_bin("femu").unwrap()
 }
 
+/// The two-hex fixture's model and its assembled matrices (consistent mass).
+fn two_hex_system() -> (femu_fem::model::Model, femu_fem::assembly::SystemMatrices) {
+    let model = femu_io::inp::read_inp(fixture("two_hex.inp"))
+        .unwrap()
+        .to_model()
+        .unwrap();
+    let sys = model
+        .assemble(femu_fem::assembly::MassKind::Consistent)
+        .unwrap();
+    (model, sys)
+}
+
+/// The two-hex fixture's lowest `count` modes and triaxial sensors on its free nodes 3, 6, 9, 12.
+fn two_hex_case(
+    count: usize,
+) -> (
+    femu_sparse::eigen::Modes,
+    Vec<femu_correlate::Sensor>,
+    femu_correlate::SensorLayout,
+) {
+    use femu_correlate::{Sensor, SensorLayout};
+    let (model, sys) = two_hex_system();
+    let modes = femu_sparse::eigen::eigs(
+        &sys.k,
+        &sys.m,
+        femu_sparse::eigen::Which::Lowest(count),
+        &Default::default(),
+    )
+    .unwrap();
+    let sensors: Vec<Sensor> = [3u64, 6, 9, 12]
+        .iter()
+        .flat_map(|n| (0..3).map(move |c| Sensor::axis(*n, c)))
+        .collect();
+    let layout = SensorLayout::new(model.mesh(), &sys.dofs, sensors.clone()).unwrap();
+    (modes, sensors, layout)
+}
+
 /// `femu modes` on the hand-made deck: the JSON frequencies equal a dense solution of the same
 /// model, the Sturm check passes, the table lists the modes.
 #[test]
@@ -52,13 +89,7 @@ fn modes_json_matches_dense_reference() {
         .collect();
     assert_eq!(f.len(), 4); // the deck's *FREQUENCY count
     // dense reference through the libraries
-    let model = femu_io::inp::read_inp(fixture("two_hex.inp"))
-        .unwrap()
-        .to_model()
-        .unwrap();
-    let sys = model
-        .assemble(femu_fem::assembly::MassKind::Consistent)
-        .unwrap();
+    let (_, sys) = two_hex_system();
     let eig = femu_sparse::dense::generalized_symmetric_eigen(
         femu_sparse::csc::to_dense(&sys.k).as_ref(),
         femu_sparse::csc::to_dense(&sys.m).as_ref(),
@@ -162,24 +193,9 @@ fn stderr_of_failure(args: &[&str]) -> String {
 /// frequency is 1 % below the model's: error +1/0.99 - 1).
 #[test]
 fn correlate_pairs_the_model_with_itself() {
-    use femu_correlate::{Sensor, SensorLayout, TestModes};
+    use femu_correlate::TestModes;
     let deck = fixture("two_hex.inp");
-    let model = femu_io::inp::read_inp(&deck).unwrap().to_model().unwrap();
-    let sys = model
-        .assemble(femu_fem::assembly::MassKind::Consistent)
-        .unwrap();
-    let modes = femu_sparse::eigen::eigs(
-        &sys.k,
-        &sys.m,
-        femu_sparse::eigen::Which::Lowest(4),
-        &Default::default(),
-    )
-    .unwrap();
-    let sensors: Vec<Sensor> = [3u64, 6, 9, 12]
-        .iter()
-        .flat_map(|n| (0..3).map(move |c| Sensor::axis(*n, c)))
-        .collect();
-    let layout = SensorLayout::new(model.mesh(), &sys.dofs, sensors.clone()).unwrap();
+    let (modes, sensors, layout) = two_hex_case(4);
     let at = layout.measure_all(modes.vectors.as_ref()).unwrap();
     let order = [1usize, 0, 2];
     let f = modes.frequencies_hz();
@@ -421,24 +437,9 @@ fn modes_of_a_gmsh_mesh() {
 /// own frequency, comes back exact (rho_M = 0 to round-off); the study and VTK files are written.
 #[test]
 fn expand_recovers_a_model_mode() {
-    use femu_correlate::{Sensor, SensorLayout, TestModes};
+    use femu_correlate::TestModes;
     let deck = fixture("two_hex.inp");
-    let model = femu_io::inp::read_inp(&deck).unwrap().to_model().unwrap();
-    let sys = model
-        .assemble(femu_fem::assembly::MassKind::Consistent)
-        .unwrap();
-    let modes = femu_sparse::eigen::eigs(
-        &sys.k,
-        &sys.m,
-        femu_sparse::eigen::Which::Lowest(3),
-        &Default::default(),
-    )
-    .unwrap();
-    let sensors: Vec<Sensor> = [3u64, 6, 9, 12]
-        .iter()
-        .flat_map(|n| (0..3).map(move |c| Sensor::axis(*n, c)))
-        .collect();
-    let layout = SensorLayout::new(model.mesh(), &sys.dofs, sensors.clone()).unwrap();
+    let (modes, sensors, layout) = two_hex_case(3);
     let at = layout
         .measure_all(modes.vectors.as_ref().subcols(2, 1))
         .unwrap();
@@ -490,24 +491,9 @@ fn expand_recovers_a_model_mode() {
 /// study) writes every result; an unknown key is an error naming its line.
 #[test]
 fn run_a_study_file() {
-    use femu_correlate::{Sensor, SensorLayout, TestModes};
+    use femu_correlate::TestModes;
     let deck = fixture("two_hex.inp");
-    let model = femu_io::inp::read_inp(&deck).unwrap().to_model().unwrap();
-    let sys = model
-        .assemble(femu_fem::assembly::MassKind::Consistent)
-        .unwrap();
-    let modes = femu_sparse::eigen::eigs(
-        &sys.k,
-        &sys.m,
-        femu_sparse::eigen::Which::Lowest(3),
-        &Default::default(),
-    )
-    .unwrap();
-    let sensors: Vec<Sensor> = [3u64, 6, 9, 12]
-        .iter()
-        .flat_map(|n| (0..3).map(move |c| Sensor::axis(*n, c)))
-        .collect();
-    let layout = SensorLayout::new(model.mesh(), &sys.dofs, sensors.clone()).unwrap();
+    let (modes, sensors, layout) = two_hex_case(3);
     let at = layout
         .measure_all(modes.vectors.as_ref().subcols(2, 1))
         .unwrap();
@@ -579,10 +565,7 @@ fn matrices_export_round_trips() {
         ])
         .assert()
         .success();
-    let model = femu_io::inp::read_inp(&deck).unwrap().to_model().unwrap();
-    let sys = model
-        .assemble(femu_fem::assembly::MassKind::Consistent)
-        .unwrap();
+    let (_, sys) = two_hex_system();
     let k = femu_sparse::mtx::read_matrix_market(dir.join("m_K.mtx")).unwrap();
     let m = femu_sparse::mtx::read_matrix_market(dir.join("m_M.mtx")).unwrap();
     let (kd, ke) = (

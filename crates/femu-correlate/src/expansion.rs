@@ -122,7 +122,9 @@ pub struct Expander<'a> {
     /// `K_oo` (CSC, both triangles) and `M_oo`'s values on its pattern
     k_oo: SparseMatrix,
     m_oo: Vec<f64>,
-    symbolic: SymbolicFactor,
+    /// analysed on first use: only static and dynamic expansion factor `K_oo - lambda M_oo`, and
+    /// SB-EBE builds an expander per iteration for the saddle-point methods alone
+    symbolic: std::sync::OnceLock<SymbolicFactor>,
 }
 
 impl<'a> Expander<'a> {
@@ -202,7 +204,6 @@ impl<'a> Expander<'a> {
             ptr.push(idx.len());
         }
         let k_oo = SparseMatrix::new_csc((no, no), ptr, idx, kv);
-        let symbolic = SymbolicFactor::new(&k_oo, Ordering::NestedDissection)?;
         Ok(Self {
             k,
             m,
@@ -210,13 +211,40 @@ impl<'a> Expander<'a> {
             m_on_k,
             k_oo,
             m_oo: mv,
-            symbolic,
+            symbolic: std::sync::OnceLock::new(),
         })
     }
 
     /// The partition.
     pub fn partition(&self) -> &Partition {
         &self.part
+    }
+
+    /// The symbolic analysis of `K_oo`, computed on first use.
+    fn symbolic_oo(&self) -> Result<&SymbolicFactor, CorrelateError> {
+        if let Some(s) = self.symbolic.get() {
+            return Ok(s);
+        }
+        let s = SymbolicFactor::new(&self.k_oo, Ordering::NestedDissection)?;
+        Ok(self.symbolic.get_or_init(|| s))
+    }
+
+    /// Checks a diagonal metric `w_inv` (one positive finite entry per DOF).
+    fn check_metric(&self, w_inv: &[f64]) -> Result<(), CorrelateError> {
+        if w_inv.len() != self.k.rows() {
+            return Err(CorrelateError::DimensionMismatch {
+                what: "diagonal metric against K",
+                expected: self.k.rows(),
+                got: w_inv.len(),
+            });
+        }
+        match w_inv.iter().position(|w| !(w.is_finite() && *w > 0.0)) {
+            Some(index) => Err(CorrelateError::Invalid {
+                what: "diagonal metric",
+                reason: format!("entry {index} = {} must be positive", w_inv[index]),
+            }),
+            None => Ok(()),
+        }
     }
 
     fn check_measured(&self, ya: MatRef<'_, f64>) -> Result<(), CorrelateError> {
@@ -296,8 +324,9 @@ impl<'a> Expander<'a> {
                 },
             };
             let mut b = Mat::from_fn(rhs.nrows(), group.len(), |i, g| -rhs[(i, group[g])]);
+            let symbolic = self.symbolic_oo()?;
             if lambda == 0.0 {
-                let llt = self.symbolic.llt(&self.k_oo, "K_oo").map_err(|e| match e {
+                let llt = symbolic.llt(&self.k_oo, "K_oo").map_err(|e| match e {
                     SparseError::NotPositiveDefinite { index, .. } => singular(index),
                     other => other.into(),
                 })?;
@@ -310,13 +339,13 @@ impl<'a> Expander<'a> {
                     .zip(&self.m_oo)
                     .map(|(k, m)| k - lambda * m)
                     .collect();
-                let ldlt = self
-                    .symbolic
-                    .ldlt_values(&self.k_oo, &values, "Z_oo")
-                    .map_err(|e| match e {
-                        SparseError::Singular { index, .. } => singular(index),
-                        other => other.into(),
-                    })?;
+                let ldlt =
+                    symbolic
+                        .ldlt_values(&self.k_oo, &values, "Z_oo")
+                        .map_err(|e| match e {
+                            SparseError::Singular { index, .. } => singular(index),
+                            other => other.into(),
+                        })?;
                 ldlt.solve_in_place(b.as_mut());
             }
             for (g, &c) in group.iter().enumerate() {
@@ -554,19 +583,7 @@ impl Expander<'_> {
         ya: MatRef<'_, f64>,
         w_inv: &[f64],
     ) -> Result<Mat<f64>, CorrelateError> {
-        if w_inv.len() != self.k.rows() {
-            return Err(CorrelateError::DimensionMismatch {
-                what: "diagonal metric against K",
-                expected: self.k.rows(),
-                got: w_inv.len(),
-            });
-        }
-        if let Some(index) = w_inv.iter().position(|w| !(w.is_finite() && *w > 0.0)) {
-            return Err(CorrelateError::Invalid {
-                what: "diagonal metric",
-                reason: format!("entry {index} = {} must be positive", w_inv[index]),
-            });
-        }
+        self.check_metric(w_inv)?;
         self.minimum_residual_in(lambdas, ya, Some(w_inv))
     }
 
@@ -586,21 +603,7 @@ impl Expander<'_> {
         w_inv: &[f64],
         mut columns: impl FnMut(usize, &[f64]) -> Result<Mat<f64>, E>,
     ) -> Result<(Mat<f64>, Vec<Mat<f64>>), E> {
-        if w_inv.len() != self.k.rows() {
-            return Err(CorrelateError::DimensionMismatch {
-                what: "diagonal metric against K",
-                expected: self.k.rows(),
-                got: w_inv.len(),
-            }
-            .into());
-        }
-        if let Some(index) = w_inv.iter().position(|w| !(w.is_finite() && *w > 0.0)) {
-            return Err(CorrelateError::Invalid {
-                what: "diagonal metric",
-                reason: format!("entry {index} = {} must be positive", w_inv[index]),
-            }
-            .into());
-        }
+        self.check_metric(w_inv)?;
         self.check_lambdas(lambdas, ya)?;
         let n = self.k.rows();
         let no = self.part.omitted.len();
@@ -676,17 +679,7 @@ impl Expander<'_> {
             }
             .into());
         }
-        if w_inv.len() != self.k.rows() || w_inv.iter().any(|w| !(w.is_finite() && *w > 0.0)) {
-            return Err(CorrelateError::Invalid {
-                what: "diagonal metric",
-                reason: format!(
-                    "{} entries for {} DOFs, each must be positive",
-                    w_inv.len(),
-                    self.k.rows()
-                ),
-            }
-            .into());
-        }
+        self.check_metric(w_inv)?;
         self.check_lambdas(lambdas, ya)?;
         let n = self.k.rows();
         let meas = &self.part.measured;

@@ -10,6 +10,50 @@
 
 use crate::{CorrelateError, SensorLayout};
 use faer::{Mat, MatRef};
+use femu_fem::mesh::Mesh;
+
+/// A regular sensor grid on a face: for each cell of an `nx x ny` grid over the x-y bounding box
+/// of node set `set`, the id of the set's node nearest (in x-y) to the cell centre, x-major
+/// (`i` outer, `j` inner). The paper's 15 upper-surface nodes are `grid_nodes(mesh, "zmax", [5, 3])`.
+///
+/// # Errors
+/// An unknown or empty node set, a zero grid size.
+pub fn grid_nodes(mesh: &Mesh, set: &str, grid: [usize; 2]) -> Result<Vec<u64>, CorrelateError> {
+    let nodes = mesh.node_set(set)?;
+    if nodes.is_empty() || grid[0] == 0 || grid[1] == 0 {
+        return Err(CorrelateError::Invalid {
+            what: "sensor grid",
+            reason: format!("node set {set} has {} nodes, grid {grid:?}", nodes.len()),
+        });
+    }
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for &n in nodes {
+        let p = mesh.coords()[n];
+        for c in 0..2 {
+            lo[c] = lo[c].min(p[c]);
+            hi[c] = hi[c].max(p[c]);
+        }
+    }
+    let mut out = Vec::with_capacity(grid[0] * grid[1]);
+    for i in 0..grid[0] {
+        for j in 0..grid[1] {
+            let t = [
+                lo[0] + (hi[0] - lo[0]) * (i as f64 + 0.5) / grid[0] as f64,
+                lo[1] + (hi[1] - lo[1]) * (j as f64 + 0.5) / grid[1] as f64,
+            ];
+            let d = |n: usize| {
+                let p = mesh.coords()[n];
+                (p[0] - t[0]).powi(2) + (p[1] - t[1]).powi(2)
+            };
+            let best = nodes
+                .iter()
+                .min_by(|a, b| d(**a).total_cmp(&d(**b)))
+                .expect("the set is not empty");
+            out.push(mesh.node_id(*best));
+        }
+    }
+    Ok(out)
+}
 
 /// Effective independence `E_i` of each row of `phi_s` (`s x m`, `s >= m`, full column rank).
 ///

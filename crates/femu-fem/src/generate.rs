@@ -354,6 +354,55 @@ pub fn mixed_plate(spec: &PlateSpec) -> Result<Mesh, FemError> {
     })
 }
 
+/// Splits a mesh into `count` equal slabs along `axis` (0 = x) of its bounding box and adds each as
+/// an element set `"{prefix}{k}"` (an element belongs to the slab holding its centroid): the
+/// regions of an updating study. Returns the set names.
+///
+/// ```
+/// use femu_fem::generate::{add_slab_sets, box_mesh, BoxCells, BoxSpec};
+/// let mut mesh = box_mesh(&BoxSpec::new([0.2, 0.02, 0.02], [10, 1, 1], BoxCells::Hex, false)).unwrap();
+/// let names = add_slab_sets(&mut mesh, 0, 5, "r").unwrap();
+/// assert_eq!(names, ["r0", "r1", "r2", "r3", "r4"]);
+/// assert_eq!(mesh.element_set("r2").unwrap().len(), 2);
+/// ```
+///
+/// # Errors
+/// [`FemError::InvalidGenerator`] for an axis above 2, no slab, or a mesh without elements.
+pub fn add_slab_sets(
+    mesh: &mut Mesh,
+    axis: usize,
+    count: usize,
+    prefix: &str,
+) -> Result<Vec<String>, FemError> {
+    if axis > 2 || count == 0 || mesh.element_count() == 0 {
+        return Err(FemError::InvalidGenerator {
+            reason: format!(
+                "slabs: axis {axis} (0-2), count {count} (at least 1), {} elements",
+                mesh.element_count()
+            ),
+        });
+    }
+    let (lo, hi) = mesh
+        .coords()
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+            (l.min(p[axis]), h.max(p[axis]))
+        });
+    let mut sets = vec![Vec::new(); count];
+    let mut xs = Vec::new();
+    for e in 0..mesh.element_count() {
+        mesh.element_coords(e, &mut xs);
+        let c = xs.iter().map(|p| p[axis]).sum::<f64>() / xs.len() as f64;
+        let k = ((c - lo) / (hi - lo) * count as f64) as usize;
+        sets[k.min(count - 1)].push(e);
+    }
+    let names: Vec<String> = (0..count).map(|k| format!("{prefix}{k}")).collect();
+    for (name, set) in names.iter().zip(sets) {
+        mesh.add_element_set_indices(name.clone(), set);
+    }
+    Ok(names)
+}
+
 /// The quadratic version of a mesh: every linear element gets straight-edge mid-edge nodes shared
 /// with its neighbours (new ids follow the largest existing one). Quadratic elements are kept as
 /// they are. A mid-edge node joins a node set when both ends of its edge are in the set, so face

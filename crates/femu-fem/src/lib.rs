@@ -43,7 +43,7 @@ pub mod prelude {
     pub use crate::assembly::{Assembler, MassKind, SystemMatrices};
     pub use crate::dof::DofMap;
     pub use crate::element::ElementKind;
-    pub use crate::generate::{BoxCells, BoxSpec, PlateSpec, box_mesh, mixed_plate};
+    pub use crate::generate::{BoxCells, BoxSpec, PlateSpec, add_slab_sets, box_mesh, mixed_plate};
     pub use crate::groups::{ParameterGroup, ParameterGroups};
     pub use crate::material::Material;
     pub use crate::mesh::Mesh;

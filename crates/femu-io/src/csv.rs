@@ -225,10 +225,7 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
 /// As [`parse_test_csv`], or [`IoError::Io`].
 pub fn read_test_csv(path: impl AsRef<Path>) -> Result<TestData, IoError> {
     let p = path.as_ref();
-    let text = std::fs::read_to_string(p).map_err(|e| IoError::Io {
-        path: p.to_path_buf(),
-        reason: e.to_string(),
-    })?;
+    let text = std::fs::read_to_string(p).map_err(|e| IoError::io(p, e))?;
     parse_test_csv(&text, p)
 }
 

@@ -37,6 +37,16 @@ pub enum IoError {
     },
 }
 
+impl IoError {
+    /// The system's error `e` on `path`.
+    pub(crate) fn io(path: &std::path::Path, e: std::io::Error) -> Self {
+        IoError::Io {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        }
+    }
+}
+
 /// A non-fatal finding (an unknown keyword, an approximation made while reading).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Warning {

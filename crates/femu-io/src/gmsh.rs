@@ -152,10 +152,7 @@ impl<'a> Lines<'a> {
 /// a missing node).
 pub fn read_msh(path: impl AsRef<Path>) -> Result<GmshMesh, IoError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| IoError::Io {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
+    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
     let text = String::from_utf8_lossy(&bytes);
     parse_msh(&text, path)
 }

@@ -94,16 +94,9 @@ struct Line {
     text: String,
 }
 
-fn io_err(path: &Path, e: std::io::Error) -> IoError {
-    IoError::Io {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    }
-}
-
 /// Reads the lines of `path` with its `*INCLUDE`s expanded in place (depth limited to 16).
 fn load(path: &Path, depth: usize, out: &mut Vec<Line>) -> Result<(), IoError> {
-    let text = std::fs::read(path).map_err(|e| io_err(path, e))?;
+    let text = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
     push_lines(&String::from_utf8_lossy(&text), path, depth, out)
 }
 
@@ -919,5 +912,5 @@ pub fn write_inp(
     path: impl AsRef<Path>,
 ) -> Result<(), IoError> {
     let text = inp_string(model, step)?;
-    std::fs::write(path.as_ref(), text).map_err(|e| io_err(path.as_ref(), e))
+    std::fs::write(path.as_ref(), text).map_err(|e| IoError::io(path.as_ref(), e))
 }

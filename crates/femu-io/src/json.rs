@@ -85,9 +85,6 @@ pub fn parse_test_json(text: &str, path: impl AsRef<Path>) -> Result<TestData, I
 /// [`IoError::Io`], and as [`parse_test_json`].
 pub fn read_test_json(path: impl AsRef<Path>) -> Result<TestData, IoError> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| IoError::Io {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
+    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
     parse_test_json(&text, path)
 }

@@ -55,8 +55,5 @@ pub fn svg_to_png(svg: &str, scale: f32) -> Result<Vec<u8>, IoError> {
 /// As [`svg_to_png`], and [`IoError::Io`] naming the file.
 pub fn write_png(svg: &str, scale: f32, path: impl AsRef<Path>) -> Result<(), IoError> {
     let bytes = svg_to_png(svg, scale)?;
-    std::fs::write(path.as_ref(), bytes).map_err(|e| IoError::Io {
-        path: path.as_ref().to_path_buf(),
-        reason: e.to_string(),
-    })
+    std::fs::write(path.as_ref(), bytes).map_err(|e| IoError::io(path.as_ref(), e))
 }

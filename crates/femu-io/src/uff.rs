@@ -140,10 +140,7 @@ fn ints(path: &Path, line: usize, text: &str, want: usize) -> Result<Vec<i64>, I
 /// content.
 pub fn read_uff(path: impl AsRef<Path>) -> Result<Universal, IoError> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| IoError::Io {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
+    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
     parse_uff(&text, path)
 }
 
@@ -636,10 +633,7 @@ pub fn uff_string(u: &Universal) -> String {
 /// [`IoError::Io`].
 pub fn write_uff(path: impl AsRef<Path>, u: &Universal) -> Result<(), IoError> {
     let path = path.as_ref();
-    std::fs::write(path, uff_string(u)).map_err(|e| IoError::Io {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })
+    std::fs::write(path, uff_string(u)).map_err(|e| IoError::io(path, e))
 }
 
 impl Universal {

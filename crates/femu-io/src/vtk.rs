@@ -198,10 +198,7 @@ pub fn write_vtu(
     path: impl AsRef<Path>,
 ) -> Result<(), IoError> {
     let text = vtu_string(mesh, points, cells)?;
-    std::fs::write(path.as_ref(), text).map_err(|e| IoError::Io {
-        path: path.as_ref().to_path_buf(),
-        reason: e.to_string(),
-    })
+    std::fs::write(path.as_ref(), text).map_err(|e| IoError::io(path.as_ref(), e))
 }
 
 /// A ParaView collection (`.pvd`) of `.vtu` files, one per "time step" (for example one per mode,

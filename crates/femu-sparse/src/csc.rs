@@ -93,6 +93,17 @@ pub fn check_symmetric(a: &SparseMatrix, name: &'static str, tol: f64) -> Result
     Ok(())
 }
 
+/// The diagonal of a square matrix (zeros where nothing is stored).
+pub fn diagonal(a: &SparseMatrix) -> Vec<f64> {
+    let mut d = vec![0.0; a.rows().min(a.cols())];
+    for (v, (r, c)) in a.iter() {
+        if r == c {
+            d[r] = *v;
+        }
+    }
+    d
+}
+
 /// A dense copy of a sparse matrix, for small problems and cross-checks.
 pub fn to_dense(a: &SparseMatrix) -> Mat<f64> {
     let mut d = Mat::zeros(a.rows(), a.cols());

@@ -28,9 +28,6 @@ use faer::{Mat, MatRef};
 use femu_correlate::StiffnessSolver;
 use serde::{Deserialize, Serialize};
 
-/// Projected sensitivity columns of one mode: `W` part and sensor part.
-type Projected = (Mat<f64>, Mat<f64>);
-
 /// Which indicator ranks the groups.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum Indicator {
@@ -177,13 +174,10 @@ pub fn localise(
     let r_f = femu_correlate::residues::force_residuals(&sys.k, &sys.m, lambdas, xs.as_ref())?;
     let solver = StiffnessSolver::new(&sys.k, &sys.m)?;
     let r_d = solver.displacement_residuals(r_f.as_ref())?;
-    let mut mdiag = vec![0.0; n];
-    for (v, (r, c)) in sys.m.iter() {
-        if r == c {
-            mdiag[r] = *v;
-        }
-    }
-    let w: Vec<f64> = mdiag.iter().map(|m| 1.0 / m).collect();
+    let w: Vec<f64> = femu_sparse::csc::diagonal(&sys.m)
+        .iter()
+        .map(|m| 1.0 / m)
+        .collect();
     let ones = vec![1.0; n];
     let groups = up.groups();
     let mut energy = vec![0.0; groups.len()];
@@ -259,50 +253,25 @@ pub fn localise_expanded(
     })?;
     let sys = up.matrices();
     let n = sys.dofs.free_count();
-    let mut w_inv = vec![0.0; n];
-    for (v, (r, c)) in sys.m.iter() {
-        if r == c {
-            w_inv[r] = *v;
-        }
-    }
+    let w_inv = femu_sparse::csc::diagonal(&sys.m);
     let w: Vec<f64> = w_inv.iter().map(|v| 1.0 / v).collect();
     let lambdas = test.eigenvalues();
     let groups = up.groups().len();
     let exp = femu_correlate::Expander::with_measured_dofs(&sys.k, &sys.m, &measured)?;
-    let dense = |xj: &[f64]| -> Result<Mat<f64>, UpdateError> {
-        let cols = up.group_stiffness_columns(xj)?;
-        let mut a = Mat::zeros(n, groups);
-        for (g, c) in cols.iter().enumerate() {
-            for (&d, &v) in c.dofs.iter().zip(&c.values) {
-                a[(d, g)] = v;
-            }
-        }
-        Ok(a)
-    };
-    // x, projected columns (W part, sensor part), sensor residuals sqrt(gamma) (C x - y)
-    let (x, projected, r2): (Mat<f64>, Vec<Projected>, Mat<f64>) = match rule.test_error {
-        Some(gamma) => {
-            let e = exp.test_error_projected(
-                &lambdas,
-                test.shapes.as_ref(),
-                &w_inv,
-                gamma,
-                |_, xj| dense(xj),
-            )?;
-            let r2 = Mat::from_fn(e.misfit.nrows(), e.misfit.ncols(), |s, j| {
-                e.gammas[j].sqrt() * e.misfit[(s, j)]
-            });
-            (e.x, e.projected, r2)
-        }
-        None => {
-            let (x, b) =
-                exp.minimum_residual_projected(&lambdas, test.shapes.as_ref(), &w_inv, |_, xj| {
-                    dense(xj)
-                })?;
-            let b = b.into_iter().map(|b| (b, Mat::zeros(0, groups))).collect();
-            (x, b, Mat::zeros(0, lambdas.len()))
-        }
-    };
+    let e = crate::problem::expand_projected(
+        &exp,
+        &lambdas,
+        test.shapes.as_ref(),
+        &w_inv,
+        rule.test_error,
+        |_, xj| {
+            Ok(crate::problem::dense_columns(
+                &up.group_stiffness_columns(xj)?,
+                n,
+            ))
+        },
+    )?;
+    let (x, projected, r2) = (e.x, e.blocks, e.r2);
     // scale every mode to unit M-norm (the projection is linear in x)
     let xs = normalise(&sys.m, x.as_ref())?;
     let scale: Vec<f64> = (0..x.ncols())

@@ -2,6 +2,8 @@
 //! "Updating") with its parameters, bounds and the element-by-element sensitivity columns.
 
 use crate::UpdateError;
+use faer::{Mat, MatRef};
+use femu_correlate::expansion::Expander;
 use femu_fem::assembly::{Assembler, MassKind, SystemMatrices};
 use femu_fem::groups::{ParameterGroup, ParameterGroups};
 use femu_fem::model::Model;
@@ -106,6 +108,23 @@ impl<'m> UpdateModel<'m> {
         mass: MassKind,
         corrections: Corrections,
     ) -> Result<Self, UpdateError> {
+        Self::with_groups(
+            model,
+            ParameterGroups::new(model, groups, mass)?,
+            corrections,
+        )
+    }
+
+    /// The model with groups whose element matrices are already computed (their mass kind is the
+    /// model's).
+    ///
+    /// # Errors
+    /// Assembly errors, no group.
+    pub fn with_groups(
+        model: &'m Model,
+        groups: ParameterGroups,
+        corrections: Corrections,
+    ) -> Result<Self, UpdateError> {
         if groups.is_empty() {
             return Err(UpdateError::Invalid {
                 what: "parameter groups",
@@ -113,8 +132,7 @@ impl<'m> UpdateModel<'m> {
             });
         }
         let asm = Assembler::new(model)?;
-        let base = asm.assemble(model, mass)?;
-        let groups = ParameterGroups::new(model, groups, mass)?;
+        let base = asm.assemble(model, groups.mass_kind())?;
         let mut group_dofs = Vec::with_capacity(groups.len());
         let mut group_mass = Vec::with_capacity(groups.len());
         for g in 0..groups.len() {
@@ -167,16 +185,8 @@ impl<'m> UpdateModel<'m> {
         mass: MassKind,
         corrections: Corrections,
     ) -> Result<Self, UpdateError> {
-        let groups = sets
-            .iter()
-            .map(|s| {
-                Ok(ParameterGroup {
-                    name: (*s).to_string(),
-                    elements: model.mesh().element_set(s)?.to_vec(),
-                })
-            })
-            .collect::<Result<Vec<_>, UpdateError>>()?;
-        Self::new(model, groups, mass, corrections)
+        let groups = ParameterGroups::from_element_sets(model, sets, mass)?;
+        Self::with_groups(model, groups, corrections)
     }
 
     /// One group per element (element-by-element updating).
@@ -188,15 +198,11 @@ impl<'m> UpdateModel<'m> {
         mass: MassKind,
         corrections: Corrections,
     ) -> Result<Self, UpdateError> {
-        let groups = model
-            .mesh()
-            .elements()
-            .map(|el| ParameterGroup {
-                name: format!("E{}", el.id),
-                elements: vec![el.index],
-            })
-            .collect();
-        Self::new(model, groups, mass, corrections)
+        Self::with_groups(
+            model,
+            ParameterGroups::elementwise(model, mass)?,
+            corrections,
+        )
     }
 
     /// The finite element model.
@@ -420,5 +426,67 @@ impl<'m> UpdateModel<'m> {
     /// Whether any parameter is a mass factor.
     pub fn has_mass_parameters(&self) -> bool {
         self.params.iter().any(|p| p.mass)
+    }
+}
+
+/// Sparse columns as a dense `n x columns` block (the form the projected expansions take).
+pub(crate) fn dense_columns(cols: &[SparseColumn], n: usize) -> Mat<f64> {
+    let mut a = Mat::zeros(n, cols.len());
+    for (k, c) in cols.iter().enumerate() {
+        for (&d, &v) in c.dofs.iter().zip(&c.values) {
+            a[(d, k)] = v;
+        }
+    }
+    a
+}
+
+/// Expanded shapes with projected sensitivity columns, as SB-EBE and localisation use them.
+pub(crate) struct ProjectedExpansion {
+    /// Expanded shapes (full length).
+    pub x: Mat<f64>,
+    /// `sqrt(gamma_j) (C x_j - y_j)` per mode; no rows when the measurements are imposed.
+    pub r2: Mat<f64>,
+    /// Per mode: the projected columns' `W` part (`n x c`) and sensor part (`s x c`, no rows when
+    /// the measurements are imposed).
+    pub blocks: Vec<(Mat<f64>, Mat<f64>)>,
+}
+
+/// Minimum-residual expansion in the metric `diag(w_inv)^-1` with the projected columns of
+/// `columns(j, x_j)`: measured values imposed (`test_error = None`) or expansion with test error.
+pub(crate) fn expand_projected(
+    exp: &Expander<'_>,
+    lambdas: &[f64],
+    ya: MatRef<'_, f64>,
+    w_inv: &[f64],
+    test_error: Option<f64>,
+    columns: impl FnMut(usize, &[f64]) -> Result<Mat<f64>, UpdateError>,
+) -> Result<ProjectedExpansion, UpdateError> {
+    match test_error {
+        Some(gamma) => {
+            let e = exp.test_error_projected(lambdas, ya, w_inv, gamma, columns)?;
+            let r2 = Mat::from_fn(e.misfit.nrows(), e.misfit.ncols(), |s, j| {
+                e.gammas[j].sqrt() * e.misfit[(s, j)]
+            });
+            Ok(ProjectedExpansion {
+                x: e.x,
+                r2,
+                blocks: e.projected,
+            })
+        }
+        None => {
+            let (x, b) = exp.minimum_residual_projected(lambdas, ya, w_inv, columns)?;
+            let blocks = b
+                .into_iter()
+                .map(|b| {
+                    let c = b.ncols();
+                    (b, Mat::zeros(0, c))
+                })
+                .collect();
+            Ok(ProjectedExpansion {
+                x,
+                r2: Mat::zeros(0, lambdas.len()),
+                blocks,
+            })
+        }
     }
 }

@@ -17,7 +17,7 @@
 
 use crate::UpdateError;
 use crate::lsq::{UpdateOptions, bounded_step};
-use crate::problem::UpdateModel;
+use crate::problem::{UpdateModel, dense_columns, expand_projected};
 use faer::Mat;
 use femu_correlate::expansion::Expander;
 use femu_correlate::{SensorLayout, TestModes};
@@ -171,62 +171,24 @@ pub fn sb_ebe(
     let lambdas = test.eigenvalues();
     let m0 = up.nominal().m.clone();
     let n = m0.rows();
-    let mut w_inv = vec![0.0; n];
-    for (v, (r, c)) in m0.iter() {
-        if r == c {
-            w_inv[r] = *v;
-        }
-    }
+    let w_inv = femu_sparse::csc::diagonal(&m0);
     let w: Vec<f64> = w_inv.iter().map(|v| 1.0 / v).collect();
-    let dense_columns =
-        |up: &UpdateModel<'_>, j: usize, xj: &[f64]| -> Result<Mat<f64>, UpdateError> {
-            let cols = up.columns(xj, lambdas[j])?;
-            let mut a = Mat::zeros(n, cols.len());
-            for (k, c) in cols.iter().enumerate() {
-                for (&d, &v) in c.dofs.iter().zip(&c.values) {
-                    a[(d, k)] = v;
-                }
-            }
-            Ok(a)
-        };
     let evaluate = |up: &UpdateModel<'_>| -> Result<State, UpdateError> {
         let sys = up.matrices();
         let exp = Expander::with_measured_dofs(&sys.k, &sys.m, &measured)?;
-        let (x, r2, projected) = match (options.test_error, options.projected) {
-            (Some(gamma), _) => {
-                let e = exp.test_error_projected(
-                    &lambdas,
-                    test.shapes.as_ref(),
-                    &w_inv,
-                    gamma,
-                    |j, xj| dense_columns(up, j, xj),
-                )?;
-                let r2 = Mat::from_fn(e.misfit.nrows(), e.misfit.ncols(), |s, j| {
-                    e.gammas[j].sqrt() * e.misfit[(s, j)]
-                });
-                (e.x, r2, Some(e.projected))
-            }
-            (None, true) => {
-                let (x, b) = exp.minimum_residual_projected(
-                    &lambdas,
-                    test.shapes.as_ref(),
-                    &w_inv,
-                    |j, xj| dense_columns(up, j, xj),
-                )?;
-                let s = Mat::zeros(0, lambdas.len());
-                let b = b
-                    .into_iter()
-                    .map(|b| {
-                        let np = b.ncols();
-                        (b, Mat::zeros(0, np))
-                    })
-                    .collect();
-                (x, s, Some(b))
-            }
-            (None, false) => {
-                let x = exp.minimum_residual_diagonal(&lambdas, test.shapes.as_ref(), &w_inv)?;
-                (x, Mat::zeros(0, lambdas.len()), None)
-            }
+        let (x, r2, projected) = if options.projected {
+            let e = expand_projected(
+                &exp,
+                &lambdas,
+                test.shapes.as_ref(),
+                &w_inv,
+                options.test_error,
+                |j, xj| Ok(dense_columns(&up.columns(xj, lambdas[j])?, n)),
+            )?;
+            (e.x, e.r2, Some(e.blocks))
+        } else {
+            let x = exp.minimum_residual_diagonal(&lambdas, test.shapes.as_ref(), &w_inv)?;
+            (x, Mat::zeros(0, lambdas.len()), None)
         };
         let r = femu_correlate::residues::force_residuals(&sys.k, &sys.m, &lambdas, x.as_ref())?;
         let terms = (0..lambdas.len())

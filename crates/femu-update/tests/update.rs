@@ -17,16 +17,7 @@ fn plate() -> Model {
         false,
     ))
     .unwrap();
-    let mut sets = vec![Vec::new(); REGIONS];
-    let mut xy = Vec::new();
-    for e in 0..mesh.element_count() {
-        mesh.element_coords(e, &mut xy);
-        let cx = xy.iter().map(|p| p[0]).sum::<f64>() / xy.len() as f64;
-        sets[((cx / 0.2 * REGIONS as f64) as usize).min(REGIONS - 1)].push(mesh.element(e).id);
-    }
-    for (r, ids) in sets.iter().enumerate() {
-        mesh.add_element_set(format!("r{r}"), ids).unwrap();
-    }
+    add_slab_sets(&mut mesh, 0, REGIONS, "r").unwrap();
     let mut model = Model::new(mesh).unwrap();
     model.set_material(None, Material::steel()).unwrap();
     model
@@ -36,30 +27,14 @@ fn region_names() -> Vec<String> {
     (0..REGIONS).map(|r| format!("r{r}")).collect()
 }
 
+/// The paper's 15 upper-surface nodes (a 5 x 3 grid), y and z.
 fn sensors(model: &Model, dofs: &femu_fem::dof::DofMap) -> SensorLayout {
     let mesh = model.mesh();
-    let top = mesh.node_set("zmax").unwrap();
-    let mut s = Vec::new();
-    for i in 0..5 {
-        for j in 0..3 {
-            let target = [
-                0.2 * (0.1 + 0.2 * i as f64),
-                0.07 * (1.0 / 6.0 + j as f64 / 3.0),
-            ];
-            let best = top
-                .iter()
-                .min_by(|a, b| {
-                    let d = |n: usize| {
-                        let p = mesh.coords()[n];
-                        (p[0] - target[0]).powi(2) + (p[1] - target[1]).powi(2)
-                    };
-                    d(**a).total_cmp(&d(**b))
-                })
-                .unwrap();
-            s.push(Sensor::axis(mesh.node_id(*best), 1));
-            s.push(Sensor::axis(mesh.node_id(*best), 2));
-        }
-    }
+    let s = femu_correlate::placement::grid_nodes(mesh, "zmax", [5, 3])
+        .unwrap()
+        .into_iter()
+        .flat_map(|id| [Sensor::axis(id, 1), Sensor::axis(id, 2)])
+        .collect();
     SensorLayout::new(mesh, dofs, s).unwrap()
 }
 
