@@ -1,10 +1,11 @@
-//! Gmsh `.msh` meshes: format 4.1 (ASCII) and 2.2 (ASCII). Volume elements of types 4 (tet4),
+//! Gmsh `.msh` meshes: format 4.1 (ASCII and binary) and 2.2 (ASCII). Volume elements of types 4 (tet4),
 //! 11 (tet10), 5 (hex8), 17 (hex20), 6 (prism6) and 18 (prism15) become femu elements, their node
 //! orderings converted to femu's (Abaqus) ones; physical groups of volumes become element sets
 //! and node sets, physical groups of surfaces, curves and points become node sets (the nodes of
 //! their elements: where boundary conditions and sensors go). Lower-dimensional elements are not
-//! elements of the model. Binary files are refused with a message (write ASCII with
-//! `gmsh -save -format msh41` or `Mesh.Binary = 0`).
+//! elements of the model. Binary 4.1 files (either byte order, 4- or 8-byte `size_t`) are read by
+//! [`read_msh`] and [`parse_msh_bytes`]; their errors give the byte offset and the line of the
+//! section they occur in. Binary 2.2 is refused with a message (save as 4.1).
 
 use crate::{IoError, Warning};
 use femu_fem::element::ElementKind;
@@ -153,8 +154,18 @@ impl<'a> Lines<'a> {
 pub fn read_msh(path: impl AsRef<Path>) -> Result<GmshMesh, IoError> {
     let path = path.as_ref();
     let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
-    let text = String::from_utf8_lossy(&bytes);
-    parse_msh(&text, path)
+    parse_msh_bytes(&bytes, path)
+}
+
+/// Parses a `.msh` file's bytes, ASCII or binary (`path` names it in errors).
+///
+/// # Errors
+/// As [`read_msh`].
+pub fn parse_msh_bytes(bytes: &[u8], path: &Path) -> Result<GmshMesh, IoError> {
+    if binary::is_binary(bytes) {
+        return binary::parse(bytes, path);
+    }
+    parse_msh(&String::from_utf8_lossy(bytes), path)
 }
 
 /// Parses `.msh` text (`path` names it in errors).
@@ -188,7 +199,7 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<GmshMesh, IoError> {
                 }
                 let v = t[0];
                 if t[1] != "0" {
-                    return Err(l.err(ln2, "binary .msh is not read by femu: save it as ASCII (gmsh -save -format msh41, or Mesh.Binary = 0)".into()));
+                    return Err(l.err(ln2, "a binary .msh as text: read it with read_msh or parse_msh_bytes (binary 2.2 is not read: save as 4.1)".into()));
                 }
                 if !(v.starts_with("4.1") || v.starts_with("2.2")) {
                     return Err(l.err(ln2, format!("format {v}: femu reads 4.1 and 2.2")));
@@ -200,20 +211,8 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<GmshMesh, IoError> {
                 let (_, n) = l.ints("$PhysicalNames", 1)?;
                 for _ in 0..n[0].max(0) {
                     let (ln2, s) = l.next("$PhysicalNames")?;
-                    let mut it = s.splitn(3, char::is_whitespace);
-                    let dim = it.next().and_then(|t| t.parse::<i64>().ok());
-                    let tag = it.next().and_then(|t| t.trim().parse::<i64>().ok());
-                    let name = it.next().map(|t| t.trim().trim_matches('"').to_string());
-                    match (dim, tag, name) {
-                        (Some(d), Some(t), Some(nm)) => {
-                            names.insert((d, t), nm);
-                        }
-                        _ => {
-                            return Err(
-                                l.err(ln2, format!("expected 'dim tag \"name\"', found '{s}'"))
-                            );
-                        }
-                    }
+                    let (key, name) = physical_name(s).map_err(|r| l.err(ln2, r))?;
+                    names.insert(key, name);
                 }
                 l.expect_end("PhysicalNames")?;
             }
@@ -382,8 +381,31 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<GmshMesh, IoError> {
     if version.is_none() {
         return Err(l.err(1, "no $MeshFormat section: not a Gmsh mesh".into()));
     }
+    build(path, &nodes, &elements, &names, warnings)
+}
+
+/// `dim tag "name"` of `$PhysicalNames`.
+fn physical_name(s: &str) -> Result<((i64, i64), String), String> {
+    let mut it = s.splitn(3, char::is_whitespace);
+    let dim = it.next().and_then(|t| t.parse::<i64>().ok());
+    let tag = it.next().and_then(|t| t.trim().parse::<i64>().ok());
+    let name = it.next().map(|t| t.trim().trim_matches('"').to_string());
+    match (dim, tag, name) {
+        (Some(d), Some(t), Some(nm)) => Ok(((d, t), nm)),
+        _ => Err(format!("expected 'dim tag \"name\"', found '{s}'")),
+    }
+}
+
+/// The femu mesh from the nodes and elements read (either encoding).
+fn build(
+    path: &Path,
+    nodes: &[(u64, [f64; 3], usize)],
+    elements: &[RawElement],
+    names: &BTreeMap<(i64, i64), String>,
+    mut warnings: Vec<Warning>,
+) -> Result<GmshMesh, IoError> {
     let mut mesh = Mesh::new();
-    for (id, x, ln) in &nodes {
+    for (id, x, ln) in nodes {
         mesh.add_node(*id, *x).map_err(|source| IoError::Model {
             path: path.to_path_buf(),
             line: *ln,
@@ -400,7 +422,7 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<GmshMesh, IoError> {
     let mut node_sets: BTreeMap<String, Vec<u64>> = BTreeMap::new();
     let mut skipped: BTreeMap<i64, usize> = BTreeMap::new();
     let mut first_skip_line = BTreeMap::new();
-    for (ty, tag, g, (dim, phys), ln) in &elements {
+    for (ty, tag, g, (dim, phys), ln) in elements {
         let (_, kind) = gmsh_type(*ty).expect("checked while reading");
         match kind {
             Some(kind) => {
@@ -455,4 +477,372 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<GmshMesh, IoError> {
             })?;
     }
     Ok(GmshMesh { mesh, warnings })
+}
+
+/// Binary 4.1: the same sections as ASCII with their numbers as raw bytes.
+mod binary {
+    use super::{RawElement, build, gmsh_type, physical_name};
+    use crate::{IoError, Warning};
+    use std::collections::BTreeMap;
+    use std::path::Path;
+
+    /// Whether the `$MeshFormat` line says binary (file-type 1).
+    pub(super) fn is_binary(bytes: &[u8]) -> bool {
+        let head = &bytes[..bytes.len().min(256)];
+        let text = String::from_utf8_lossy(head);
+        let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
+        while let Some(l) = lines.next() {
+            if l == "$MeshFormat" {
+                return lines
+                    .next()
+                    .and_then(|f| f.split_whitespace().nth(1))
+                    .is_some_and(|t| t == "1");
+            }
+        }
+        false
+    }
+
+    struct Reader<'a> {
+        b: &'a [u8],
+        at: usize,
+        path: &'a Path,
+        /// the file's byte order differs from this machine's
+        swap: bool,
+        size_t: usize,
+    }
+
+    impl<'a> Reader<'a> {
+        /// 1-based line of byte `at` (newlines inside binary blocks count too; the line of a
+        /// section header is exact).
+        fn line_of(&self, at: usize) -> usize {
+            1 + self.b[..at.min(self.b.len())]
+                .iter()
+                .filter(|c| **c == b'\n')
+                .count()
+        }
+
+        fn err(&self, reason: String) -> IoError {
+            IoError::Parse {
+                path: self.path.to_path_buf(),
+                line: self.line_of(self.at),
+                reason: format!("{reason} (byte offset {})", self.at),
+            }
+        }
+
+        fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], IoError> {
+            match self.at.checked_add(n) {
+                Some(end) if end <= self.b.len() => {
+                    let s = &self.b[self.at..end];
+                    self.at = end;
+                    Ok(s)
+                }
+                _ => Err(self.err(format!("file ends inside {what}"))),
+            }
+        }
+
+        fn raw<const N: usize>(&mut self, what: &str) -> Result<[u8; N], IoError> {
+            let mut a: [u8; N] = self.take(N, what)?.try_into().expect("N bytes");
+            if self.swap {
+                a.reverse();
+            }
+            Ok(a)
+        }
+
+        fn int(&mut self, what: &str) -> Result<i64, IoError> {
+            Ok(i32::from_ne_bytes(self.raw::<4>(what)?) as i64)
+        }
+
+        fn size(&mut self, what: &str) -> Result<u64, IoError> {
+            Ok(match self.size_t {
+                4 => u32::from_ne_bytes(self.raw::<4>(what)?) as u64,
+                _ => u64::from_ne_bytes(self.raw::<8>(what)?),
+            })
+        }
+
+        fn double(&mut self, what: &str) -> Result<f64, IoError> {
+            let at = self.at;
+            let v = f64::from_ne_bytes(self.raw::<8>(what)?);
+            if !v.is_finite() {
+                self.at = at;
+                return Err(self.err(format!("{what}: {v} is not a finite number")));
+            }
+            Ok(v)
+        }
+
+        /// A count of records of at least `min_bytes` each that the rest of the file can hold
+        /// (a corrupt count is an error, not a huge allocation).
+        fn count(&mut self, what: &str, min_bytes: usize) -> Result<usize, IoError> {
+            let at = self.at;
+            let n = self.size(what)?;
+            let left = (self.b.len() - self.at) as u64;
+            if n.saturating_mul(min_bytes.max(1) as u64) > left {
+                self.at = at;
+                return Err(self.err(format!(
+                    "{what}: {n} records cannot fit in the {left} bytes left"
+                )));
+            }
+            Ok(n as usize)
+        }
+
+        /// The next non-empty text line, trimmed, with its line number.
+        fn line(&mut self, what: &str) -> Result<(usize, &'a str), IoError> {
+            loop {
+                if self.at >= self.b.len() {
+                    return Err(self.err(format!("file ends inside {what}")));
+                }
+                let start = self.at;
+                let end = self.b[start..]
+                    .iter()
+                    .position(|c| *c == b'\n')
+                    .map_or(self.b.len(), |p| start + p);
+                self.at = (end + 1).min(self.b.len());
+                let s = std::str::from_utf8(&self.b[start..end])
+                    .map_err(|_| IoError::Parse {
+                        path: self.path.to_path_buf(),
+                        line: self.line_of(start),
+                        reason: format!("{what}: expected a text line (byte offset {start})"),
+                    })?
+                    .trim();
+                if !s.is_empty() {
+                    return Ok((self.line_of(start), s));
+                }
+            }
+        }
+
+        fn expect_end(&mut self, section: &str) -> Result<(), IoError> {
+            let (ln, l) = self.line(section)?;
+            if l != format!("$End{section}") {
+                return Err(IoError::Parse {
+                    path: self.path.to_path_buf(),
+                    line: ln,
+                    reason: format!(
+                        "expected $End{section} after the binary data, found '{}'",
+                        l.chars().take(40).collect::<String>()
+                    ),
+                });
+            }
+            Ok(())
+        }
+
+        /// Skips to after `$End<name>`.
+        fn skip_section(&mut self, name: &str) -> Result<(), IoError> {
+            let tag = format!("$End{name}");
+            let found = self.b[self.at..]
+                .windows(tag.len())
+                .position(|w| w == tag.as_bytes());
+            match found {
+                Some(p) => {
+                    self.at += p + tag.len();
+                    Ok(())
+                }
+                None => Err(self.err(format!("no {tag}"))),
+            }
+        }
+    }
+
+    pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<super::GmshMesh, IoError> {
+        let mut r = Reader {
+            b: bytes,
+            at: 0,
+            path,
+            swap: false,
+            size_t: 8,
+        };
+        let mut warnings = Vec::new();
+        let mut format = false;
+        let mut names: BTreeMap<(i64, i64), String> = BTreeMap::new();
+        let mut entity_phys: BTreeMap<(i64, i64), Vec<i64>> = BTreeMap::new();
+        let mut nodes: Vec<(u64, [f64; 3], usize)> = Vec::new();
+        let mut elements: Vec<RawElement> = Vec::new();
+        loop {
+            let head = match r.line("the file") {
+                Ok(h) => h,
+                Err(_) if r.at >= r.b.len() => break,
+                Err(e) => return Err(e),
+            };
+            let (ln, head) = head;
+            let parse_err = |line: usize, reason: String| IoError::Parse {
+                path: path.to_path_buf(),
+                line,
+                reason,
+            };
+            if head != "$MeshFormat" && !format {
+                return Err(parse_err(ln, "expected $MeshFormat first".into()));
+            }
+            match head {
+                "$MeshFormat" => {
+                    let (ln2, f) = r.line("$MeshFormat")?;
+                    let t: Vec<&str> = f.split_whitespace().collect();
+                    if t.len() < 3 || !t[0].starts_with("4.1") {
+                        return Err(parse_err(
+                            ln2,
+                            format!(
+                                "binary format '{f}': femu reads binary 4.1 (save 2.2 files as 4.1)"
+                            ),
+                        ));
+                    }
+                    r.size_t = match t[2] {
+                        "4" => 4,
+                        "8" => 8,
+                        other => {
+                            return Err(parse_err(
+                                ln2,
+                                format!("data size {other}: expected 4 or 8"),
+                            ));
+                        }
+                    };
+                    let one = r.take(4, "the byte-order marker")?;
+                    let one: [u8; 4] = one.try_into().expect("4 bytes");
+                    r.swap = if i32::from_ne_bytes(one) == 1 {
+                        false
+                    } else if i32::from_ne_bytes(one).swap_bytes() == 1 {
+                        true
+                    } else {
+                        r.at -= 4;
+                        return Err(r.err("the byte-order marker is not the integer 1".into()));
+                    };
+                    r.expect_end("MeshFormat")?;
+                    format = true;
+                }
+                "$PhysicalNames" => {
+                    let (ln2, n) = r.line("$PhysicalNames")?;
+                    let n: usize = n
+                        .parse()
+                        .map_err(|_| parse_err(ln2, format!("'{n}' is not a count")))?;
+                    for _ in 0..n {
+                        let (ln3, s) = r.line("$PhysicalNames")?;
+                        let (key, name) = physical_name(s).map_err(|e| parse_err(ln3, e))?;
+                        names.insert(key, name);
+                    }
+                    r.expect_end("PhysicalNames")?;
+                }
+                "$Entities" => {
+                    let counts: Vec<usize> = (0..4)
+                        .map(|_| r.count("entity count", 4))
+                        .collect::<Result<_, _>>()?;
+                    for (dim, count) in counts.into_iter().enumerate() {
+                        for _ in 0..count {
+                            let tag = r.int("entity tag")?;
+                            let bounds = if dim == 0 { 3 } else { 6 };
+                            for _ in 0..bounds {
+                                r.double("entity coordinates")?;
+                            }
+                            let np = r.count("physical tag count", 4)?;
+                            let phys: Vec<i64> = (0..np)
+                                .map(|_| r.int("physical tag").map(i64::abs))
+                                .collect::<Result<_, _>>()?;
+                            if dim > 0 {
+                                let nb = r.count("bounding entity count", 4)?;
+                                r.take(4 * nb, "bounding entities")?;
+                            }
+                            entity_phys.insert((dim as i64, tag), phys);
+                        }
+                    }
+                    r.expect_end("Entities")?;
+                }
+                "$Nodes" => {
+                    let blocks = r.count("node block count", 12)?;
+                    for _ in 0..3 {
+                        r.size("node counts")?;
+                    }
+                    for _ in 0..blocks {
+                        let block_line = r.line_of(r.at);
+                        let _dim = r.int("node block dimension")?;
+                        let _entity = r.int("node block entity")?;
+                        let parametric = r.int("node block parametric flag")?;
+                        if parametric != 0 {
+                            r.at -= 4;
+                            return Err(
+                                r.err("parametric node coordinates are not read by femu".into())
+                            );
+                        }
+                        let n = r.count("nodes in a block", r.size_t + 24)?;
+                        let mut tags = Vec::with_capacity(n);
+                        for _ in 0..n {
+                            let at = r.at;
+                            let t = r.size("node tag")?;
+                            if t == 0 {
+                                r.at = at;
+                                return Err(r.err("node tag 0: tags must be positive".into()));
+                            }
+                            tags.push(t);
+                        }
+                        for t in tags {
+                            let x = [
+                                r.double("node coordinates")?,
+                                r.double("node coordinates")?,
+                                r.double("node coordinates")?,
+                            ];
+                            nodes.push((t, x, block_line));
+                        }
+                    }
+                    r.expect_end("Nodes")?;
+                }
+                "$Elements" => {
+                    let blocks = r.count("element block count", 16)?;
+                    for _ in 0..3 {
+                        r.size("element counts")?;
+                    }
+                    for _ in 0..blocks {
+                        let block_line = r.line_of(r.at);
+                        let dim = r.int("element block dimension")?;
+                        let entity = r.int("element block entity")?;
+                        let ty = r.int("element type")?;
+                        let Some((nn, _)) = gmsh_type(ty) else {
+                            r.at -= 4;
+                            return Err(r.err(format!("unknown element type {ty}")));
+                        };
+                        let count = r.count("elements in a block", (nn + 1) * r.size_t)?;
+                        let phys = entity_phys.get(&(dim, entity)).cloned().unwrap_or_default();
+                        for _ in 0..count {
+                            let at = r.at;
+                            let ids: Vec<u64> = (0..=nn)
+                                .map(|_| r.size("an element"))
+                                .collect::<Result<_, _>>()?;
+                            if ids.contains(&0) {
+                                r.at = at;
+                                return Err(r.err(format!(
+                                    "element of type {ty} with a zero tag or node tag"
+                                )));
+                            }
+                            elements.push((
+                                ty,
+                                ids[0],
+                                ids[1..].to_vec(),
+                                (dim, phys.clone()),
+                                block_line,
+                            ));
+                        }
+                    }
+                    r.expect_end("Elements")?;
+                }
+                s if s.starts_with('$') && !s.starts_with("$End") => {
+                    let name = s[1..].to_string();
+                    warnings.push(Warning {
+                        path: path.to_path_buf(),
+                        line: ln,
+                        message: format!("section ${name} is not read by femu (skipped)"),
+                    });
+                    r.skip_section(&name)?;
+                }
+                other => {
+                    return Err(parse_err(
+                        ln,
+                        format!(
+                            "expected a section ($MeshFormat, $Nodes, ...), found '{}'",
+                            other.chars().take(40).collect::<String>()
+                        ),
+                    ));
+                }
+            }
+        }
+        if !format {
+            return Err(IoError::Parse {
+                path: path.to_path_buf(),
+                line: 1,
+                reason: "no $MeshFormat section: not a Gmsh mesh".into(),
+            });
+        }
+        build(path, &nodes, &elements, &names, warnings)
+    }
 }

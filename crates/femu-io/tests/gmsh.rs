@@ -251,3 +251,181 @@ fn inverted_element_is_named_by_the_model() {
     let e = Model::new(g.mesh).unwrap_err().to_string();
     assert!(e.contains('5'), "{e}");
 }
+
+/// Binary 4.1 files against their ASCII twins, both written by Gmsh 4.15 (`fixtures/msh/
+/// generate.py`): second-order hex20 + prism15 with physical volumes and a physical surface, and
+/// tet10. Same nodes (to the 16 digits of the ASCII file), elements, node orders and sets; the exact volumes 2 and 1.
+#[test]
+fn binary_41_equals_its_ascii_twin() {
+    for (name, volume, kinds) in [
+        (
+            "box_mixed2",
+            2.0,
+            vec![ElementKind::Hex20, ElementKind::Penta15],
+        ),
+        ("box_tet10", 1.0, vec![ElementKind::Tet10]),
+    ] {
+        let a = read_msh(fixture(&format!("{name}_ascii.msh")))
+            .unwrap()
+            .mesh;
+        let b = read_msh(fixture(&format!("{name}_binary.msh")))
+            .unwrap()
+            .mesh;
+        assert_eq!(a.node_count(), b.node_count(), "{name}");
+        for i in 0..a.node_count() {
+            assert_eq!(a.node_id(i), b.node_id(i));
+            // ASCII carries 16 significant digits, binary the double itself
+            for c in 0..3 {
+                let (x, y) = (a.coords()[i][c], b.coords()[i][c]);
+                assert!(
+                    (x - y).abs() <= 1e-15 * x.abs().max(1.0),
+                    "{name}: node {}: {x:e} {y:e}",
+                    a.node_id(i)
+                );
+            }
+        }
+        assert_eq!(a.element_count(), b.element_count());
+        for e in 0..a.element_count() {
+            let (ea, eb) = (a.element(e), b.element(e));
+            assert_eq!(
+                (ea.kind, &ea.nodes),
+                (eb.kind, &eb.nodes),
+                "{name}: element {e}"
+            );
+        }
+        assert_eq!(a.kind_counts().keys().copied().collect::<Vec<_>>(), kinds);
+        assert_eq!(a.element_sets(), b.element_sets(), "{name}");
+        assert_eq!(a.node_sets(), b.node_sets(), "{name}");
+        assert!(!a.element_sets().is_empty() && !a.node_sets().is_empty());
+        assert!((b.volume().unwrap() - volume).abs() < 1e-12, "{name}");
+    }
+    let mixed = read_msh(fixture("box_mixed2_binary.msh")).unwrap().mesh;
+    assert_eq!(mixed.element_set("quads").unwrap().len(), 8);
+    assert!(!mixed.element_set("wedges").unwrap().is_empty());
+    // x = 0 face of a 2 x 2 second-order quad grid: 5 x 5 nodes (serendipity: no face centres)
+    assert_eq!(mixed.node_set("xmin").unwrap().len(), 21);
+    let mut model = Model::new(mixed).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    assert!((model.total_mass().unwrap() - 2.0 * 7850.0).abs() < 1e-9);
+}
+
+/// A hand-built binary file (one tet4) in both byte orders and both `size_t` widths reads the
+/// same; truncated and corrupted binaries give errors with the byte offset.
+#[test]
+fn binary_byte_orders_and_malformed_binaries() {
+    fn file(big: bool, size_t: usize) -> Vec<u8> {
+        let mut b = Vec::new();
+        let int = |b: &mut Vec<u8>, v: i32| {
+            b.extend(if big {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            })
+        };
+        let size = |b: &mut Vec<u8>, v: u64| match (size_t, big) {
+            (4, true) => b.extend((v as u32).to_be_bytes()),
+            (4, false) => b.extend((v as u32).to_le_bytes()),
+            (_, true) => b.extend(v.to_be_bytes()),
+            (_, false) => b.extend(v.to_le_bytes()),
+        };
+        let dbl = |b: &mut Vec<u8>, v: f64| {
+            b.extend(if big {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            })
+        };
+        b.extend(format!("$MeshFormat\n4.1 1 {size_t}\n").as_bytes());
+        int(&mut b, 1);
+        b.extend(b"\n$EndMeshFormat\n$Nodes\n");
+        for v in [1, 4, 1, 4] {
+            size(&mut b, v);
+        }
+        int(&mut b, 3);
+        int(&mut b, 1);
+        int(&mut b, 0);
+        size(&mut b, 4);
+        for t in 1..=4 {
+            size(&mut b, t);
+        }
+        for x in [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ] {
+            x.iter().for_each(|c| dbl(&mut b, *c));
+        }
+        b.extend(b"\n$EndNodes\n$Elements\n");
+        for v in [1, 1, 1, 1] {
+            size(&mut b, v);
+        }
+        int(&mut b, 3);
+        int(&mut b, 1);
+        int(&mut b, 4);
+        size(&mut b, 1);
+        for v in [1, 1, 2, 3, 4] {
+            size(&mut b, v);
+        }
+        b.extend(b"\n$EndElements\n");
+        b
+    }
+    for (big, st) in [(false, 8), (true, 8), (false, 4), (true, 4)] {
+        let g = femu_io::gmsh::parse_msh_bytes(&file(big, st), Path::new("t.msh")).unwrap();
+        assert_eq!(g.mesh.element(0).kind, ElementKind::Tet4);
+        assert!(
+            (g.mesh.volume().unwrap() - 1.0 / 6.0).abs() < 1e-15,
+            "{big} {st}"
+        );
+    }
+    let good = file(false, 8);
+    let find = |pat: &[u8]| good.windows(pat.len()).position(|w| w == pat).unwrap();
+    let elements = find(b"$Elements\n") + b"$Elements\n".len();
+    let marker = find(b"4.1 1 8\n") + 8;
+    let mut bad_type = good.clone();
+    bad_type[elements + 32 + 8] = 42; // the element type of the first block
+    let mut huge = good.clone();
+    huge[elements..elements + 8].copy_from_slice(&u64::MAX.to_le_bytes());
+    let mut marker_bad = good.clone();
+    marker_bad[marker] = 7;
+    let mut nan = good.clone();
+    let coords = find(b"$Nodes\n") + 7 + 32 + 20 + 32;
+    nan[coords..coords + 8].copy_from_slice(&f64::NAN.to_le_bytes());
+    let cases: Vec<(Vec<u8>, String)> = vec![
+        (
+            good[..good.len() - 40].to_vec(),
+            format!(
+                "elements in a block: 1 records cannot fit in the 14 bytes left (byte offset {})",
+                elements + 32 + 12
+            ),
+        ),
+        (
+            good[..marker + 2].to_vec(),
+            "file ends inside the byte-order marker".into(),
+        ),
+        (
+            bad_type,
+            format!("unknown element type 42 (byte offset {})", elements + 40),
+        ),
+        (
+            huge,
+            format!(
+                "cannot fit in the {} bytes left (byte offset {elements})",
+                good.len() - elements - 8
+            ),
+        ),
+        (
+            marker_bad,
+            format!("byte-order marker is not the integer 1 (byte offset {marker})"),
+        ),
+        (nan, format!("not a finite number (byte offset {coords})")),
+    ];
+    for (k, (bytes, needle)) in cases.iter().enumerate() {
+        match femu_io::gmsh::parse_msh_bytes(bytes, Path::new("bad.msh")) {
+            Err(e @ IoError::Parse { .. }) => {
+                assert!(e.to_string().contains(needle.as_str()), "case {k}: {e}")
+            }
+            other => panic!("case {k}: {other:?}"),
+        }
+    }
+}
