@@ -11,7 +11,12 @@
 //! on `K_oo`'s pattern with its symbolic analysis; every identified eigenvalue then costs one
 //! numeric factorization of `Z_oo`, shared by the modes that have the same eigenvalue.
 
-use crate::{CorrelateError, SensorLayout};
+use crate::{CorrelateError, SensorLayout, SensorSpace};
+
+/// Above this many measured DOFs, [`Expander::minimum_residual`] and [`Expander::mdre`] use their
+/// saddle-point systems instead of the sensor space (whose cost grows with `2 s` solves and dense
+/// `n x s` blocks).
+pub const SENSOR_SPACE_LIMIT: usize = 300;
 use faer::{Mat, MatRef};
 use femu_sparse::cholesky::{Factorization, SymbolicFactor};
 use femu_sparse::csc::sym_mul_mat;
@@ -97,6 +102,33 @@ fn place(n: usize, measured: &[usize], ya: MatRef<'_, f64>) -> Mat<f64> {
     x
 }
 
+/// `M`'s values on `K`'s pattern (0 where `M` stores nothing), so that `Z = K - lambda M` is formed
+/// entry by entry on that pattern.
+///
+/// # Errors
+/// An entry of `M` outside `K`'s pattern.
+pub(crate) fn m_on_pattern(k: &SparseMatrix, m: &SparseMatrix) -> Result<Vec<f64>, CorrelateError> {
+    let n = k.rows();
+    let (kp, mp) = (k.indptr(), m.indptr());
+    let (kp, mp) = (kp.raw_storage(), mp.raw_storage());
+    let mut m_on_k = vec![0.0; k.nnz()];
+    for c in 0..n {
+        let mrows = &m.indices()[mp[c]..mp[c + 1]];
+        let krows = &k.indices()[kp[c]..kp[c + 1]];
+        for (q, r) in mrows.iter().enumerate() {
+            let pos = krows
+                .binary_search(r)
+                .map_err(|_| SparseError::DimensionMismatch {
+                    what: "pattern of M inside the pattern of K (entry of M missing from K)",
+                    expected: c,
+                    got: *r,
+                })?;
+            m_on_k[kp[c] + pos] = m.data()[mp[c] + q];
+        }
+    }
+    Ok(m_on_k)
+}
+
 /// The result of [`Expander::test_error_projected`].
 #[derive(Debug, Clone)]
 pub struct TestErrorExpansion {
@@ -169,23 +201,9 @@ impl<'a> Expander<'a> {
                 reason: "every DOF is measured: nothing to expand".into(),
             });
         }
-        let (kp, mp) = (k.indptr(), m.indptr());
-        let (kp, mp) = (kp.raw_storage(), mp.raw_storage());
-        let mut m_on_k = vec![0.0; k.nnz()];
-        for c in 0..n {
-            let mrows = &m.indices()[mp[c]..mp[c + 1]];
-            let krows = &k.indices()[kp[c]..kp[c + 1]];
-            for (q, r) in mrows.iter().enumerate() {
-                let pos = krows
-                    .binary_search(r)
-                    .map_err(|_| SparseError::DimensionMismatch {
-                        what: "pattern of M inside the pattern of K (entry of M missing from K)",
-                        expected: c,
-                        got: *r,
-                    })?;
-                m_on_k[kp[c] + pos] = m.data()[mp[c] + q];
-            }
-        }
+        let m_on_k = m_on_pattern(k, m)?;
+        let kp = k.indptr();
+        let kp = kp.raw_storage();
         let no = part.omitted.len();
         let mut ptr = Vec::with_capacity(no + 1);
         let mut idx = Vec::new();
@@ -538,7 +556,11 @@ impl Kkt {
 }
 
 impl Expander<'_> {
-    fn check_lambdas(&self, lambdas: &[f64], ya: MatRef<'_, f64>) -> Result<(), CorrelateError> {
+    pub(crate) fn check_lambdas(
+        &self,
+        lambdas: &[f64],
+        ya: MatRef<'_, f64>,
+    ) -> Result<(), CorrelateError> {
         self.check_measured(ya)?;
         if lambdas.len() != ya.ncols() {
             return Err(CorrelateError::DimensionMismatch {
@@ -561,14 +583,39 @@ impl Expander<'_> {
     /// system `M mu - Z_{:,o} x_o = Z_{:,a} x_a`, `-Z_{:,o}^T mu = 0` (`mu = M^-1 r`), regularised by
     /// `-delta I` (delta = 1e-8 max_j sum_r Z_rj^2 / M_rr) and refined to the exact solution.
     ///
+    /// This is the formulation for many sensors; [`Expander::minimum_residual`] chooses.
+    ///
     /// # Errors
     /// A singular problem (the refinement does not converge), sizes, NaN.
-    pub fn minimum_residual(
+    pub fn minimum_residual_saddle_point(
         &self,
         lambdas: &[f64],
         ya: MatRef<'_, f64>,
     ) -> Result<Mat<f64>, CorrelateError> {
         self.minimum_residual_in(lambdas, ya, None)
+    }
+
+    /// Minimum-residual expansion: `x_o = argmin ||Z_{:,o} x_o + Z_{:,a} x_a||_{M^-1}` with
+    /// `Z = K - lambda_id M` (MATH.md, `W = M^-1`). Up to [`SENSOR_SPACE_LIMIT`] measured DOFs
+    /// it is computed in the sensor space ([`SensorSpace`]: one `LDL^T` of `Z` per eigenvalue and
+    /// `2 s` solves), beyond with [`Expander::minimum_residual_saddle_point`]; the sensor-space
+    /// result is checked and recomputed by the saddle point when the check fails.
+    ///
+    /// # Errors
+    /// As [`Expander::minimum_residual_saddle_point`].
+    pub fn minimum_residual(
+        &self,
+        lambdas: &[f64],
+        ya: MatRef<'_, f64>,
+    ) -> Result<Mat<f64>, CorrelateError> {
+        if self.part.measured.len() > SENSOR_SPACE_LIMIT {
+            return self.minimum_residual_saddle_point(lambdas, ya);
+        }
+        SensorSpace::new(self.k, self.m, &self.part.measured)?.minimum_residual(
+            lambdas,
+            &self.part.measured,
+            ya,
+        )
     }
 
     /// Minimum-residual expansion in a diagonal metric: `x_o = argmin ||Z x||_W` with
@@ -835,6 +882,10 @@ impl Expander<'_> {
     /// `lambda_j / (lambda_j + shift)`. Solved as the saddle-point system
     /// `K_s u - Z x = 0`, `-Z u - gamma C^T C x = -gamma C^T x_a`, regularised and refined.
     ///
+    /// Up to [`SENSOR_SPACE_LIMIT`] measured DOFs it is computed in the sensor space
+    /// ([`SensorSpace`], checked, with this saddle point as the fallback), beyond with
+    /// [`Expander::mdre_saddle_point`].
+    ///
     /// # Errors
     /// `gamma` not positive, a negative shift, a singular problem, sizes, NaN.
     pub fn mdre(
@@ -844,19 +895,52 @@ impl Expander<'_> {
         gamma: f64,
         stiffness_shift: f64,
     ) -> Result<Mat<f64>, CorrelateError> {
-        self.check_lambdas(lambdas, ya)?;
+        if self.part.measured.len() > SENSOR_SPACE_LIMIT {
+            return self.mdre_saddle_point(lambdas, ya, gamma, stiffness_shift);
+        }
+        SensorSpace::new(self.k, self.m, &self.part.measured)?.mdre(
+            lambdas,
+            &self.part.measured,
+            ya,
+            gamma,
+            stiffness_shift,
+        )
+    }
+
+    /// Checks MDRE-WE's weights.
+    pub(crate) fn check_mdre_weights(
+        gamma: f64,
+        stiffness_shift: f64,
+    ) -> Result<(), CorrelateError> {
         let valid = gamma > 0.0
             && gamma.is_finite()
             && stiffness_shift >= 0.0
             && stiffness_shift.is_finite();
-        if !valid {
-            return Err(CorrelateError::Invalid {
-                what: "MDRE-WE weights",
-                reason: format!(
-                    "gamma = {gamma} must be positive, stiffness shift = {stiffness_shift} non-negative"
-                ),
-            });
+        if valid {
+            return Ok(());
         }
+        Err(CorrelateError::Invalid {
+            what: "MDRE-WE weights",
+            reason: format!(
+                "gamma = {gamma} must be positive, stiffness shift = {stiffness_shift} non-negative"
+            ),
+        })
+    }
+
+    /// [`Expander::mdre`] by its saddle-point system (size `2n`, one factorization per mode), the
+    /// formulation for many sensors.
+    ///
+    /// # Errors
+    /// As [`Expander::mdre`].
+    pub fn mdre_saddle_point(
+        &self,
+        lambdas: &[f64],
+        ya: MatRef<'_, f64>,
+        gamma: f64,
+        stiffness_shift: f64,
+    ) -> Result<Mat<f64>, CorrelateError> {
+        self.check_lambdas(lambdas, ya)?;
+        Self::check_mdre_weights(gamma, stiffness_shift)?;
         let n = self.k.rows();
         let mut out = Mat::zeros(n, lambdas.len());
         let mut symbolic = None;

@@ -12,6 +12,9 @@
 //! - [`estimators`]: `rho_M` and `rho_2`, Theorems 1-4 (26)-(29) in the paper's and the rigorous
 //!   form, a priori MAC and MSD bounds, Kato-Temple; [`bounds`]: `lambda_max` and `mu_min(M)`
 //!   bounds from element matrices; [`mass`]: the cheap `M^-1` products they need.
+//! - [`expansion`], [`sensor_space`], [`placement`], [`study`]: modal expansion from sensors
+//!   (static, dynamic, SEREP, minimum residual, MDRE-WE), sensor sets (EfI) and the paper's
+//!   Figure 1 study.
 //! - [`report`]: one-call correlation and estimation with serialisable, printable results.
 //!
 //! ```
@@ -53,6 +56,7 @@ pub mod pairing;
 pub mod placement;
 pub mod report;
 pub mod residues;
+pub mod sensor_space;
 pub mod sensors;
 pub mod study;
 
@@ -61,12 +65,13 @@ pub use error::CorrelateError;
 pub use estimators::{
     Bound, BoundKind, Estimator, Form, ModelSpectrum, PairedModel, Relation, ResidualNorms, assess,
 };
-pub use expansion::{Expander, Partition, TestErrorExpansion};
+pub use expansion::{Expander, Partition, SENSOR_SPACE_LIMIT, TestErrorExpansion};
 pub use mass::MassSolver;
 pub use modes::{ModeSet, TestModes};
 pub use pairing::{Pair, Pairing, PairingOptions, pair_modes};
 pub use report::{Assessment, CorrelationReport, correlate, estimate};
 pub use residues::StiffnessSolver;
+pub use sensor_space::{SensorSpace, SpaceMethod};
 pub use sensors::{Sensor, SensorLayout};
 
 /// The types most programs need.

@@ -6,7 +6,7 @@
 //! are computed at the identified eigenvalues, without any model eigenpair (except SEREP's basis).
 
 use crate::expansion::Expander;
-use crate::{CorrelateError, Estimator, SensorLayout};
+use crate::{CorrelateError, Estimator, SensorLayout, SensorSpace};
 use faer::{Mat, MatRef};
 use femu_fem::dof::DofMap;
 use femu_fem::mesh::Mesh;
@@ -93,6 +93,28 @@ pub fn sensor_removal_study(
     }
     let estimator = Estimator::new(k, m)?;
     let stride = stride.max(1);
+    // Static, dynamic, minimum-residual and MDRE-WE expansions of every set come from one
+    // factorization of Z per eigenvalue over the starting sensors' DOFs (sensor space); SEREP
+    // and sets where a check fails use the per-set expander.
+    let full_layout = SensorLayout::triaxial(mesh, dofs, start)?;
+    let mut space = match full_layout.measured_dofs() {
+        Some(c) if c.len() < dofs.free_count() => Some(SensorSpace::new(k, m, &c)?),
+        _ => None,
+    };
+    if let Some(space) = space.as_mut() {
+        let mut lams: Vec<f64> = lambdas.to_vec();
+        let mut shifts = Vec::new();
+        for method in methods {
+            match method {
+                Method::Static => lams.push(0.0),
+                Method::Mdre {
+                    stiffness_shift, ..
+                } => shifts.push(*stiffness_shift),
+                _ => {}
+            }
+        }
+        space.prepare(&lams, &shifts)?;
+    }
     let mut out = Vec::new();
     let mut nodes: Vec<u64> = start.to_vec();
     for step in 0..=removal.len() {
@@ -112,15 +134,29 @@ pub fn sensor_removal_study(
         } else {
             let exp = Expander::new(k, m, &layout)?;
             let ya = layout.measure_all(x)?;
+            let measured = exp.partition().measured().to_vec();
             for method in methods {
                 let context = |e: CorrelateError| CorrelateError::Invalid {
                     what: "sensor removal study",
                     reason: format!("{} with {} nodes: {e}", method.name(), nodes.len()),
                 };
-                let xe = match method {
-                    Method::Static => exp.static_(ya.as_ref()),
-                    Method::Dynamic => exp.dynamic(lambdas, ya.as_ref()),
-                    Method::Serep(count) => match serep_basis {
+                let zeros = vec![0.0; lambdas.len()];
+                let xe = match (method, space.as_mut()) {
+                    (Method::Static, Some(sp)) => sp.dynamic(&zeros, &measured, ya.as_ref()),
+                    (Method::Dynamic, Some(sp)) => sp.dynamic(lambdas, &measured, ya.as_ref()),
+                    (Method::MinimumResidual, Some(sp)) => {
+                        sp.minimum_residual(lambdas, &measured, ya.as_ref())
+                    }
+                    (
+                        Method::Mdre {
+                            gamma,
+                            stiffness_shift,
+                        },
+                        Some(sp),
+                    ) => sp.mdre(lambdas, &measured, ya.as_ref(), *gamma, *stiffness_shift),
+                    (Method::Static, None) => exp.static_(ya.as_ref()),
+                    (Method::Dynamic, None) => exp.dynamic(lambdas, ya.as_ref()),
+                    (Method::Serep(count), _) => match serep_basis {
                         Some(b) if *count <= b.ncols() => {
                             exp.serep(b.subcols(0, *count), ya.as_ref())
                         }
@@ -132,11 +168,14 @@ pub fn sensor_removal_study(
                             ),
                         }),
                     },
-                    Method::MinimumResidual => exp.minimum_residual(lambdas, ya.as_ref()),
-                    Method::Mdre {
-                        gamma,
-                        stiffness_shift,
-                    } => exp.mdre(lambdas, ya.as_ref(), *gamma, *stiffness_shift),
+                    (Method::MinimumResidual, None) => exp.minimum_residual(lambdas, ya.as_ref()),
+                    (
+                        Method::Mdre {
+                            gamma,
+                            stiffness_shift,
+                        },
+                        None,
+                    ) => exp.mdre(lambdas, ya.as_ref(), *gamma, *stiffness_shift),
                 }
                 .map_err(context)?;
                 expanded.push((method.name(), xe));
