@@ -1,13 +1,16 @@
 //! Modal expansion of 4 test modes from 30 sensors (10 triaxial nodes on the top face) against one
 //! sparse factorization of the model's `K` (ordering, symbolic analysis and numeric Cholesky),
 //! side by side in one run. Each expansion includes its own setup (`Expander::new`: extraction of
-//! `K_oo`, `M_oo` and their symbolic analysis).
+//! `K_oo`, `M_oo` and their symbolic analysis). Minimum residual and MDRE-WE go through the sensor
+//! space (30 measured DOFs: one `LDL^T` of `Z` per mode and 60-90 solves). `sensor_sweep` is the
+//! Figure 1 pattern: static, dynamic, minimum-residual and MDRE-WE expansion of the 4 modes for 7
+//! sensor sets (10 down to 4 nodes) from one `SensorSpace` (5 factorizations of `Z` in all).
 //!
 //! Size: `FEMU_BENCH_CELLS=nx,ny,nz` (default `16,16,16`, 14,688 DOF; `40,40,40` gives 201,720
 //! DOF). Run: `cargo bench --bench expansion`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use femu::correlate::{Expander, SensorLayout};
+use femu::correlate::{Expander, SensorLayout, SensorSpace};
 use femu::prelude::*;
 use femu::sparse::cholesky::SymbolicFactor;
 use femu::sparse::faer::Mat;
@@ -79,6 +82,25 @@ fn bench(c: &mut Criterion) {
                 .unwrap()
                 .mdre(&lambdas, ya.as_ref(), 1e12, 0.0)
                 .unwrap()
+        })
+    });
+    let measured = layout.measured_dofs().unwrap();
+    group.bench_function("sensor_sweep", |b| {
+        b.iter(|| {
+            let mut space = SensorSpace::new(&sys.k, &sys.m, &measured).unwrap();
+            space
+                .prepare(&[lambdas[0], lambdas[1], lambdas[2], lambdas[3], 0.0], &[0.0])
+                .unwrap();
+            for nodes in (4..=10).rev() {
+                let set = &measured[..3 * nodes];
+                let y = ya.as_ref().subrows(0, 3 * nodes);
+                space.dynamic(&[0.0; 4], set, y).unwrap();
+                space.dynamic(&lambdas, set, y).unwrap();
+                space.minimum_residual(&lambdas, set, y).unwrap();
+                space.mdre(&lambdas, set, y, 1e12, 0.0).unwrap();
+            }
+            assert_eq!(space.factorizations(), 5);
+            space.fallbacks()
         })
     });
     group.finish();
