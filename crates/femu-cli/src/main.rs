@@ -16,16 +16,17 @@ struct Cli {
     /// No progress and no table on stdout (errors still go to stderr).
     #[arg(long, global = true)]
     quiet: bool,
-    /// Gmsh models (`.msh`): Young's modulus in Pa (with --poisson and --density).
+    /// Mesh-only models (Gmsh `.msh`, universal file `.unv` with datasets 2411/2412): Young's
+    /// modulus in Pa (with --poisson and --density).
     #[arg(long, global = true)]
     young: Option<f64>,
-    /// Gmsh models: Poisson's ratio.
+    /// Mesh-only models: Poisson's ratio.
     #[arg(long, global = true)]
     poisson: Option<f64>,
-    /// Gmsh models: density in kg/m^3.
+    /// Mesh-only models: density in kg/m^3.
     #[arg(long, global = true)]
     density: Option<f64>,
-    /// Gmsh models: a physical group (node set) to clamp; repeat for several.
+    /// Mesh-only models: a node set (Gmsh physical group) to clamp; repeat for several.
     #[arg(long, global = true)]
     fix: Vec<String>,
     #[command(subcommand)]
@@ -42,7 +43,7 @@ enum Command {
     ///   femu estimate plate.inp test.csv --expansion static --json estimate.json
     #[command(verbatim_doc_comment)]
     Estimate {
-        /// The model (`.inp`, or `.msh` with --young, --poisson, --density, --fix).
+        /// The model (`.inp`, or `.msh`/`.unv` with --young, --poisson, --density, --fix).
         model: PathBuf,
         /// The test modes (`.csv`).
         test: PathBuf,
@@ -67,7 +68,7 @@ enum Command {
     ///   femu correlate plate.inp test.csv --mac-threshold 0.7 --json correlation.json
     #[command(verbatim_doc_comment)]
     Correlate {
-        /// The model (`.inp`, or `.msh` with --young, --poisson, --density, --fix).
+        /// The model (`.inp`, or `.msh`/`.unv` with --young, --poisson, --density, --fix).
         model: PathBuf,
         /// The test modes (`.csv`).
         test: PathBuf,
@@ -122,7 +123,7 @@ enum Command {
     ///   femu expand plate.inp test.csv --method min-residual --study figure1
     #[command(verbatim_doc_comment)]
     Expand {
-        /// The model (`.inp`, or `.msh` with --young, --poisson, --density, --fix).
+        /// The model (`.inp`, or `.msh`/`.unv` with --young, --poisson, --density, --fix).
         model: PathBuf,
         /// The test modes (`.csv`, `.json`, `.unv`).
         test: PathBuf,
@@ -150,7 +151,7 @@ enum Command {
     ///   femu matrices plate.inp --out plate
     #[command(verbatim_doc_comment)]
     Matrices {
-        /// The model (`.inp`, or `.msh` with --young, --poisson, --density, --fix).
+        /// The model (`.inp`, or `.msh`/`.unv` with --young, --poisson, --density, --fix).
         model: PathBuf,
         /// Output prefix.
         #[arg(long)]
@@ -217,7 +218,7 @@ enum Command {
     ///   femu update plate.inp test.csv --sets left,right --method ies --json update.json
     #[command(verbatim_doc_comment)]
     Update {
-        /// The model (`.inp`, or `.msh` with --young, --poisson, --density, --fix).
+        /// The model (`.inp`, or `.msh`/`.unv` with --young, --poisson, --density, --fix).
         model: PathBuf,
         /// The test modes (`.csv`, `.unv`).
         test: PathBuf,
@@ -257,7 +258,7 @@ fn has_extension(path: &Path, exts: &[&str]) -> bool {
         .is_some_and(|e| exts.iter().any(|x| e.eq_ignore_ascii_case(x)))
 }
 
-/// Material and constraints of a Gmsh model, from the command line.
+/// Material and constraints of a mesh-only model, from the command line.
 #[derive(Clone, Default)]
 struct MshOptions {
     young: Option<f64>,
@@ -268,7 +269,8 @@ struct MshOptions {
 
 static MSH: std::sync::OnceLock<MshOptions> = std::sync::OnceLock::new();
 
-/// A Gmsh mesh with the command line's material and clamped sets.
+/// A Gmsh mesh (`.msh`) or the solids of a universal file (`.unv`/`.uff`, datasets 2411/2412)
+/// with the command line's material and clamped sets.
 fn load_msh(
     path: &Path,
     quiet: bool,
@@ -276,16 +278,24 @@ fn load_msh(
     let o = MSH.get().cloned().unwrap_or_default();
     let (Some(e), Some(nu), Some(rho)) = (o.young, o.poisson, o.density) else {
         return Err(format!(
-            "{}: a Gmsh mesh has no material: give --young, --poisson and --density",
+            "{}: a mesh file has no material: give --young, --poisson and --density",
             path.display()
         ));
     };
-    let g = femu_io::gmsh::read_msh(path).map_err(|e| e.to_string())?;
+    let (mesh, warnings) = if has_extension(path, &["unv", "uff"]) {
+        let u = femu_io::uff::read_uff(path).map_err(|e| e.to_string())?;
+        let (mesh, mut w) = u.to_mesh(path).map_err(|e| e.to_string())?;
+        w.splice(0..0, u.warnings);
+        (mesh, w)
+    } else {
+        let g = femu_io::gmsh::read_msh(path).map_err(|e| e.to_string())?;
+        (g.mesh, g.warnings)
+    };
     if !quiet {
-        g.warnings.iter().for_each(|w| eprintln!("{w}"));
+        warnings.iter().for_each(|w| eprintln!("{w}"));
     }
     let mut model =
-        femu_fem::model::Model::new(g.mesh).map_err(|e| format!("{}: {e}", path.display()))?;
+        femu_fem::model::Model::new(mesh).map_err(|e| format!("{}: {e}", path.display()))?;
     let mat = femu_fem::material::Material::isotropic("command line", e, nu, rho)
         .map_err(|e| e.to_string())?;
     model.set_material(None, mat).map_err(|e| e.to_string())?;
@@ -298,7 +308,7 @@ fn load_msh(
 }
 
 fn load(path: &Path, lumped: bool, quiet: bool, pb: &ProgressBar) -> Result<Loaded, String> {
-    let is_msh = has_extension(path, &["msh"]);
+    let is_msh = has_extension(path, &["msh", "unv", "uff"]);
     let (model, frequency) = if is_msh {
         load_msh(path, quiet)?
     } else {

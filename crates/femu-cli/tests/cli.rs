@@ -590,3 +590,70 @@ fn matrices_export_round_trips() {
     assert_eq!(dofs.lines().count(), sys.dofs.free_count() + 1);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `femu modes` on the same free-free second-order mesh as a binary `.msh` and as a universal
+/// file (datasets 2411/2412 with parabolic solids), both written by Gmsh: the same frequencies;
+/// a clamp on a set the universal file does not carry is an error naming it.
+#[test]
+fn modes_of_binary_msh_and_unv_agree() {
+    let fixtures = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/msh");
+    let dir = std::env::temp_dir().join(format!("femu-cli-unv-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut freqs = Vec::new();
+    for name in ["box_mixed2_binary.msh", "box_mixed2.unv"] {
+        let json = dir.join(format!("{name}.json"));
+        let mesh = fixtures.join(name);
+        femu()
+            .args([
+                "modes",
+                mesh.to_str().unwrap(),
+                "--young",
+                "2.1e11",
+                "--poisson",
+                "0.3",
+                "--density",
+                "7850",
+                "--count",
+                "10",
+                "--json",
+                json.to_str().unwrap(),
+                "--quiet",
+            ])
+            .assert()
+            .success();
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(v["sturm_verified"], serde_json::Value::Bool(true));
+        let f: Vec<f64> = v["frequencies_hz"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        freqs.push(f);
+    }
+    assert_eq!(freqs[0].len(), freqs[1].len());
+    let top = freqs[0].iter().copied().fold(0.0, f64::max);
+    assert!(top > 1000.0);
+    for (a, b) in freqs[0].iter().zip(&freqs[1]) {
+        assert!((a - b).abs() <= 1e-9 * top, "{a} {b}");
+    }
+    let out = femu()
+        .args([
+            "modes",
+            fixtures.join("box_mixed2.unv").to_str().unwrap(),
+            "--young",
+            "2.1e11",
+            "--poisson",
+            "0.3",
+            "--density",
+            "7850",
+            "--fix",
+            "xmin",
+        ])
+        .assert()
+        .failure();
+    let stderr = String::from_utf8(out.get_output().stderr.clone()).unwrap();
+    assert!(stderr.contains("xmin"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,8 +1,14 @@
-//! Universal File Format (what test systems export): datasets 15 (nodes), 164 (units) and 55
-//! (modal data: real normal modes and complex modes), read and written. Other datasets are
-//! skipped with a warning naming their number and line. Fortran `D` exponents, CRLF line ends and
-//! fields run together by fixed widths of whitespace are accepted; a file written by femu reads
-//! back to the same text.
+//! Universal File Format (what test systems export), read and written: datasets 15 and 2411
+//! (nodes), 2412 (elements), 164 (units), 55 (modal data: real normal modes and complex modes),
+//! 58 and its binary variant 58b (functions at nodal DOFs: FRFs, time histories, spectra) and 82
+//! (trace lines). Other datasets are skipped with a warning naming their number and line. Fortran
+//! `D` exponents and CRLF line ends are read; a file written by femu reads back to the same bytes.
+//!
+//! Dataset 58b: records 1-11 as text, then the values as raw IEEE numbers in the byte order of
+//! the header (little or big endian), 4 bytes each for single-precision data (ordinate types 2,
+//! 5) and 8 for double (4, 6), an uneven abscissa in the same precision as the ordinate (as
+//! pyuff and the files it reads do). The byte count is computed from records 7 (points, type,
+//! spacing); a header that says otherwise gets a warning.
 
 use crate::{IoError, Warning};
 use faer::Mat;
@@ -61,6 +67,10 @@ pub struct Universal {
     pub elements: Vec<UffElement>,
     /// Dataset 55 modes.
     pub modes: Vec<UffMode>,
+    /// Dataset 58/58b functions (FRFs, time histories, ...).
+    pub functions: Vec<UffFunction>,
+    /// Dataset 82 trace lines.
+    pub trace_lines: Vec<UffTraceLine>,
     /// Skipped datasets and approximations.
     pub warnings: Vec<Warning>,
 }
@@ -75,6 +85,174 @@ pub struct UffElement {
     /// Node labels in the file's order.
     pub nodes: Vec<u64>,
 }
+
+/// An axis of dataset 58 (records 8-11: abscissa, ordinate numerator, ordinate denominator,
+/// z axis).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct UffAxis {
+    /// Specific data type (0 unknown, 1 general, 8 displacement, 12 acceleration, 13 excitation
+    /// force, 17 time, 18 frequency, ...).
+    pub data_type: i64,
+    /// Length, force and temperature unit exponents.
+    pub exponents: [i64; 3],
+    /// Axis label (20 characters at most when written).
+    pub label: String,
+    /// Units label (20 characters at most when written).
+    pub units: String,
+}
+
+/// The abscissa of a dataset 58 function.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Abscissa {
+    /// `min + k step` (record 7; written with 6 significant digits, as the format has them).
+    Even {
+        /// First abscissa.
+        min: f64,
+        /// Increment.
+        step: f64,
+    },
+    /// One abscissa per point, stored with the values.
+    Uneven(Vec<f64>),
+}
+
+/// The ordinate values of a dataset 58 function.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Ordinate {
+    /// Real values.
+    Real(Vec<f64>),
+    /// Complex values as (real, imaginary).
+    Complex(Vec<(f64, f64)>),
+}
+
+impl Ordinate {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        match self {
+            Ordinate::Real(v) => v.len(),
+            Ordinate::Complex(v) => v.len(),
+        }
+    }
+
+    /// Whether there is no point.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// A response or reference DOF of dataset 58 (record 6).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct UffDof {
+    /// Entity name (10 characters at most when written).
+    pub entity: String,
+    /// Node label (0 when none).
+    pub node: u64,
+    /// Direction: 1-3 translations X-Z, 4-6 rotations, negative for the opposite sense, 0 scalar.
+    pub direction: i64,
+}
+
+/// One function of dataset 58 (ASCII) or 58b (binary).
+#[derive(Debug, Clone, PartialEq)]
+pub struct UffFunction {
+    /// Records 1-5: identification lines (record 3 is usually the date).
+    pub ids: [String; 5],
+    /// Function type (0 general, 1 time response, 2 auto spectrum, 3 cross spectrum, 4 frequency
+    /// response function, 6 coherence, 9 power spectral density, ...).
+    pub function_type: i64,
+    /// Function identification number, version number, load case.
+    pub numbers: [i64; 3],
+    /// Response DOF.
+    pub response: UffDof,
+    /// Reference DOF.
+    pub reference: UffDof,
+    /// Whether the values are double precision (ordinate data types 4 and 6) or single (2, 5).
+    pub double: bool,
+    /// Abscissa.
+    pub abscissa: Abscissa,
+    /// Z-axis value (record 7).
+    pub z_value: f64,
+    /// Records 8-11.
+    pub axes: [UffAxis; 4],
+    /// Values.
+    pub ordinate: Ordinate,
+    /// Read from, and written as, binary 58b.
+    pub binary: bool,
+}
+
+impl UffFunction {
+    /// The abscissa of each point.
+    pub fn abscissa_values(&self) -> Vec<f64> {
+        match &self.abscissa {
+            Abscissa::Even { min, step } => (0..self.ordinate.len())
+                .map(|k| min + k as f64 * step)
+                .collect(),
+            Abscissa::Uneven(x) => x.clone(),
+        }
+    }
+
+    /// Ordinate data type of record 7: 2 real single, 4 real double, 5 complex single, 6 complex
+    /// double.
+    fn data_type(&self) -> i64 {
+        match (&self.ordinate, self.double) {
+            (Ordinate::Real(_), false) => 2,
+            (Ordinate::Real(_), true) => 4,
+            (Ordinate::Complex(_), false) => 5,
+            (Ordinate::Complex(_), true) => 6,
+        }
+    }
+
+    /// Values stored per point (abscissa included when uneven).
+    fn per_point(&self) -> usize {
+        let even = matches!(self.abscissa, Abscissa::Even { .. });
+        match (&self.ordinate, even) {
+            (Ordinate::Real(_), true) => 1,
+            (Ordinate::Real(_), false) | (Ordinate::Complex(_), true) => 2,
+            (Ordinate::Complex(_), false) => 3,
+        }
+    }
+
+    /// The stored values in file order.
+    fn stored(&self) -> Vec<f64> {
+        let x = match &self.abscissa {
+            Abscissa::Uneven(x) => Some(x),
+            Abscissa::Even { .. } => None,
+        };
+        let mut v = Vec::with_capacity(self.ordinate.len() * self.per_point());
+        for k in 0..self.ordinate.len() {
+            if let Some(x) = x {
+                v.push(x.get(k).copied().unwrap_or(0.0));
+            }
+            match &self.ordinate {
+                Ordinate::Real(y) => v.push(y[k]),
+                Ordinate::Complex(y) => v.extend([y[k].0, y[k].1]),
+            }
+        }
+        v
+    }
+}
+
+/// One trace line of dataset 82: a polyline through nodes, `0` lifting the pen.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UffTraceLine {
+    /// Trace line number.
+    pub number: i64,
+    /// Colour number.
+    pub color: i64,
+    /// Identification line.
+    pub id: String,
+    /// Node labels, `0` for "move to the next node without drawing".
+    pub nodes: Vec<u64>,
+}
+
+/// I-DEAS parabolic solids list each face's nodes corner, mid-edge, corner, ... : femu
+/// (Abaqus) order `femu[k] = unv[PERM[k]]`. Tetrahedron 118: corners 0 2 4 9, mid-edges 1 (0-2),
+/// 3 (2-4), 5 (4-0), 6 (0-9), 7 (2-9), 8 (4-9).
+const UNV_TET10: [usize; 10] = [0, 2, 4, 9, 1, 3, 5, 6, 7, 8];
+/// Wedge 113: bottom loop 0-5, vertical mid-edges 6 7 8, top loop 9-14.
+const UNV_PENTA15: [usize; 15] = [0, 2, 4, 9, 11, 13, 1, 3, 5, 10, 12, 14, 6, 7, 8];
+/// Brick 116: bottom loop 0-7, vertical mid-edges 8-11, top loop 12-19.
+const UNV_HEX20: [usize; 20] = [
+    0, 2, 4, 6, 12, 14, 16, 18, 1, 3, 5, 7, 13, 15, 17, 19, 8, 9, 10, 11,
+];
 
 /// Beam descriptors carry an extra orientation record in dataset 2412.
 fn is_beam(descriptor: i64) -> bool {
@@ -140,61 +318,562 @@ fn ints(path: &Path, line: usize, text: &str, want: usize) -> Result<Vec<i64>, I
 /// content.
 pub fn read_uff(path: impl AsRef<Path>) -> Result<Universal, IoError> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
-    parse_uff(&text, path)
+    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    parse_uff_bytes(&bytes, path)
 }
 
-/// Parses universal-file text (`path` names it in errors).
+/// Parses universal-file text (`path` names it in errors). Binary datasets (58b) need
+/// [`parse_uff_bytes`].
 ///
 /// # Errors
 /// [`IoError::Parse`] with the line for malformed content.
 pub fn parse_uff(text: &str, path: &Path) -> Result<Universal, IoError> {
-    let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
+    parse_uff_bytes(text.as_bytes(), path)
+}
+
+/// Lines of a byte buffer with their 1-based numbers; binary blocks are taken by length.
+struct ByteLines<'a> {
+    b: &'a [u8],
+    at: usize,
+    line: usize,
+}
+
+impl<'a> ByteLines<'a> {
+    /// The next line (without `\r\n`), its number, as text (invalid UTF-8 replaced).
+    fn next_line(&mut self) -> Option<(usize, std::borrow::Cow<'a, str>)> {
+        if self.at >= self.b.len() {
+            return None;
+        }
+        let start = self.at;
+        let end = self.b[start..]
+            .iter()
+            .position(|c| *c == b'\n')
+            .map_or(self.b.len(), |p| start + p);
+        self.at = if end < self.b.len() { end + 1 } else { end };
+        self.line += 1;
+        let raw = &self.b[start..end];
+        let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
+        Some((self.line, String::from_utf8_lossy(raw)))
+    }
+}
+
+/// Parses a universal file's bytes, text and binary datasets (`path` names it in errors).
+///
+/// # Errors
+/// [`IoError::Parse`] with the line (and byte offset in binary data) for malformed content.
+pub fn parse_uff_bytes(bytes: &[u8], path: &Path) -> Result<Universal, IoError> {
+    let mut src = ByteLines {
+        b: bytes,
+        at: 0,
+        line: 0,
+    };
     let mut out = Universal::default();
-    let mut i = 0;
-    while i < lines.len() {
-        if lines[i].trim().is_empty() {
-            i += 1;
+    while let Some((ln, l)) = src.next_line() {
+        if l.trim().is_empty() {
             continue;
         }
-        if lines[i].trim() != "-1" {
+        if l.trim() != "-1" {
             return Err(perr(
                 path,
-                i + 1,
+                ln,
                 format!(
                     "expected the dataset delimiter '-1', found '{}'",
-                    lines[i].trim()
+                    l.trim().chars().take(40).collect::<String>()
                 ),
             ));
         }
-        let start = i + 1;
-        let end = (start..lines.len())
-            .find(|&j| lines[j].trim() == "-1")
-            .ok_or_else(|| perr(path, i + 1, "dataset without its closing '-1'"))?;
-        if start == end {
+        let (start, head) = src
+            .next_line()
+            .ok_or_else(|| perr(path, ln, "dataset without its closing '-1'"))?;
+        if head.trim() == "-1" {
             return Err(perr(path, start, "empty dataset"));
         }
-        let kind = int(
-            path,
-            start + 1,
-            lines[start].split_whitespace().next().unwrap_or(""),
-        )?;
-        let body: Vec<(usize, &str)> = (start + 1..end).map(|j| (j + 1, lines[j])).collect();
+        let number = head.split_whitespace().next().unwrap_or("").to_string();
+        if let Some(base) = number.strip_suffix(['b', 'B']) {
+            if base != "58" {
+                return Err(perr(
+                    path,
+                    start,
+                    format!("binary dataset {number}: femu reads binary 58b only"),
+                ));
+            }
+            out.functions
+                .push(parse_58b(path, &mut src, start, &head, &mut out.warnings)?);
+            // the closing delimiter follows the binary block
+            loop {
+                let (l2, t) = src
+                    .next_line()
+                    .ok_or_else(|| perr(path, start, "dataset 58b without its closing '-1'"))?;
+                match t.trim() {
+                    "" => continue,
+                    "-1" => break,
+                    other => {
+                        return Err(perr(
+                            path,
+                            l2,
+                            format!(
+                                "expected '-1' after the binary data of dataset 58b, found '{}'",
+                                other.chars().take(40).collect::<String>()
+                            ),
+                        ));
+                    }
+                }
+            }
+            continue;
+        }
+        let kind = int(path, start, &number)?;
+        let mut owned: Vec<(usize, String)> = Vec::new();
+        loop {
+            let (l2, t) = src
+                .next_line()
+                .ok_or_else(|| perr(path, ln, "dataset without its closing '-1'"))?;
+            if t.trim() == "-1" {
+                break;
+            }
+            owned.push((l2, t.into_owned()));
+        }
+        let body: Vec<(usize, &str)> = owned.iter().map(|(l2, t)| (*l2, t.as_str())).collect();
         match kind {
             15 => parse_15(path, &body, &mut out)?,
             2411 => parse_2411(path, &body, &mut out)?,
             2412 => parse_2412(path, &body, &mut out)?,
             164 => parse_164(path, &body, &mut out)?,
             55 => parse_55(path, &body, &mut out)?,
+            58 => {
+                let (f, count) = parse_58_header(path, &body, start)?;
+                let values = parse_58_ascii(path, &body[11..], &f)?;
+                out.functions
+                    .push(finish_58(path, f, values, count, start)?);
+            }
+            82 => parse_82(path, &body, &mut out)?,
             other => out.warnings.push(Warning {
                 path: path.to_path_buf(),
-                line: start + 1,
+                line: start,
                 message: format!("dataset {other} is not read by femu (skipped)"),
             }),
         }
-        i = end + 1;
     }
     Ok(out)
+}
+
+/// A fixed-width field of a record (blank when the line is shorter).
+fn col(l: &str, from: usize, to: usize) -> &str {
+    let to = to.min(l.len());
+    if from >= to {
+        return "";
+    }
+    l.get(from..to).unwrap_or("")
+}
+
+/// An integer field of fixed columns (blank = 0).
+fn col_int(path: &Path, ln: usize, l: &str, from: usize, to: usize) -> Result<i64, IoError> {
+    match col(l, from, to).trim() {
+        "" => Ok(0),
+        t => int(path, ln, t),
+    }
+}
+
+/// Dataset 58 records 1-11, as a function without values, and the count of stored values.
+fn parse_58_header(
+    path: &Path,
+    body: &[(usize, &str)],
+    start: usize,
+) -> Result<(UffFunction, usize), IoError> {
+    if body.len() < 11 {
+        return Err(perr(
+            path,
+            start,
+            format!("dataset 58 needs 11 header records, found {}", body.len()),
+        ));
+    }
+    let ids: [String; 5] = std::array::from_fn(|k| body[k].1.trim_end().to_string());
+    let (l6, r6) = body[5];
+    let dof = |name: (usize, usize),
+               node: (usize, usize),
+               dir: (usize, usize)|
+     -> Result<UffDof, IoError> {
+        let n = col_int(path, l6, r6, node.0, node.1)?;
+        if n < 0 {
+            return Err(perr(
+                path,
+                l6,
+                format!("node label {n} must not be negative"),
+            ));
+        }
+        Ok(UffDof {
+            entity: col(r6, name.0, name.1).trim().to_string(),
+            node: n as u64,
+            direction: col_int(path, l6, r6, dir.0, dir.1)?,
+        })
+    };
+    let function_type = col_int(path, l6, r6, 0, 5)?;
+    let numbers = [
+        col_int(path, l6, r6, 5, 15)?,
+        col_int(path, l6, r6, 15, 20)?,
+        col_int(path, l6, r6, 20, 30)?,
+    ];
+    let response = dof((31, 41), (41, 51), (51, 55))?;
+    let reference = dof((56, 66), (66, 76), (76, 80))?;
+    let (l7, r7) = body[6];
+    let t = ints_then_nums(path, l7, r7)?;
+    let (data_type, points, spacing) = (t.0[0], t.0[1], t.0[2]);
+    let (min, step, z_value) = (t.1[0], t.1[1], t.1[2]);
+    let (double, complex) = match data_type {
+        2 => (false, false),
+        4 => (true, false),
+        5 => (false, true),
+        6 => (true, true),
+        o => {
+            return Err(perr(
+                path,
+                l7,
+                format!("ordinate data type {o}: expected 2, 4 (real) or 5, 6 (complex)"),
+            ));
+        }
+    };
+    if !(0..=100_000_000).contains(&points) || !(spacing == 0 || spacing == 1) {
+        return Err(perr(
+            path,
+            l7,
+            format!(
+                "{points} points with abscissa spacing {spacing}: need 0..1e8 points and spacing 0 (uneven) or 1 (even)"
+            ),
+        ));
+    }
+    let axes: [UffAxis; 4] = {
+        let mut a: [UffAxis; 4] = Default::default();
+        for (k, axis) in a.iter_mut().enumerate() {
+            let (ln, l) = body[7 + k];
+            *axis = UffAxis {
+                data_type: col_int(path, ln, l, 0, 10)?,
+                exponents: [
+                    col_int(path, ln, l, 10, 15)?,
+                    col_int(path, ln, l, 15, 20)?,
+                    col_int(path, ln, l, 20, 25)?,
+                ],
+                label: col(l, 26, 46).trim().to_string(),
+                units: col(l, 47, 67).trim().to_string(),
+            };
+        }
+        a
+    };
+    let even = spacing == 1;
+    let f = UffFunction {
+        ids,
+        function_type,
+        numbers,
+        response,
+        reference,
+        double,
+        abscissa: if even {
+            Abscissa::Even { min, step }
+        } else {
+            Abscissa::Uneven(Vec::new())
+        },
+        z_value,
+        axes,
+        ordinate: if complex {
+            Ordinate::Complex(Vec::new())
+        } else {
+            Ordinate::Real(Vec::new())
+        },
+        binary: false,
+    };
+    let per_point = match (complex, even) {
+        (false, true) => 1,
+        (true, false) => 3,
+        _ => 2,
+    };
+    let count = points as usize * per_point;
+    Ok((f, count))
+}
+
+/// Record 7: three integers (I10) then three reals (E13.5), by columns, or separated by blanks.
+fn ints_then_nums(path: &Path, ln: usize, l: &str) -> Result<([i64; 3], [f64; 3]), IoError> {
+    let by_columns = || -> Result<([i64; 3], [f64; 3]), IoError> {
+        let mut r = [0.0; 3];
+        for (k, v) in r.iter_mut().enumerate() {
+            *v = match col(l, 30 + 13 * k, 43 + 13 * k).trim() {
+                "" => 0.0,
+                t => num(path, ln, t)?,
+            };
+        }
+        Ok((
+            [
+                col_int(path, ln, l, 0, 10)?,
+                col_int(path, ln, l, 10, 20)?,
+                col_int(path, ln, l, 20, 30)?,
+            ],
+            r,
+        ))
+    };
+    by_columns().or_else(|e| {
+        let t: Vec<&str> = l.split_whitespace().collect();
+        if t.len() != 6 {
+            return Err(e);
+        }
+        Ok((
+            [
+                int(path, ln, t[0])?,
+                int(path, ln, t[1])?,
+                int(path, ln, t[2])?,
+            ],
+            [
+                num(path, ln, t[3])?,
+                num(path, ln, t[4])?,
+                num(path, ln, t[5])?,
+            ],
+        ))
+    })
+}
+
+/// The values of record 12 as text: blank-separated numbers, or fields of 13 and 20 columns run
+/// together (the widths of the data type).
+fn parse_58_ascii(
+    path: &Path,
+    body: &[(usize, &str)],
+    f: &UffFunction,
+) -> Result<Vec<f64>, IoError> {
+    let widths: &[usize] = match (f.data_type(), f.per_point()) {
+        (2 | 5, _) => &[13],
+        (4, 2) => &[13, 20],
+        (6, 3) => &[13, 20, 20],
+        _ => &[20],
+    };
+    let mut v = Vec::new();
+    for &(ln, l) in body {
+        if l.trim().is_empty() {
+            continue;
+        }
+        match nums(path, ln, l, 1) {
+            Ok(x) => v.extend(x),
+            Err(e) => {
+                // fields run together: cut by the format's widths
+                let (mut at, mut k) = (0, 0);
+                let mut any = false;
+                while at < l.len() {
+                    let w = widths[k % widths.len()];
+                    let t = col(l, at, at + w).trim();
+                    if !t.is_empty() {
+                        v.push(num(path, ln, t)?);
+                        any = true;
+                    }
+                    at += w;
+                    k += 1;
+                }
+                if !any {
+                    return Err(e);
+                }
+            }
+        }
+    }
+    Ok(v)
+}
+
+/// Puts the stored values into the function, checking their count.
+fn finish_58(
+    path: &Path,
+    mut f: UffFunction,
+    values: Vec<f64>,
+    count: usize,
+    start: usize,
+) -> Result<UffFunction, IoError> {
+    let per = f.per_point();
+    if values.len() != count || count == 0 {
+        return Err(perr(
+            path,
+            start,
+            format!(
+                "dataset 58: record 7 announces {} points ({count} values), {} values found",
+                count / per,
+                values.len()
+            ),
+        ));
+    }
+    let points = values.len() / per;
+    let complex = matches!(f.ordinate, Ordinate::Complex(_));
+    let off = usize::from(matches!(f.abscissa, Abscissa::Uneven(_)));
+    if off == 1 {
+        f.abscissa = Abscissa::Uneven((0..points).map(|k| values[k * per]).collect());
+    }
+    f.ordinate = if complex {
+        Ordinate::Complex(
+            (0..points)
+                .map(|k| (values[k * per + off], values[k * per + off + 1]))
+                .collect(),
+        )
+    } else {
+        Ordinate::Real((0..points).map(|k| values[k * per + off]).collect())
+    };
+    Ok(f)
+}
+
+/// Dataset 58b: the header line's fields, the 11 text records, then the binary values.
+fn parse_58b(
+    path: &Path,
+    src: &mut ByteLines<'_>,
+    start: usize,
+    head: &str,
+    warnings: &mut Vec<Warning>,
+) -> Result<UffFunction, IoError> {
+    let h: Vec<i64> = head
+        .split_whitespace()
+        .skip(1)
+        .map(|t| int(path, start, t))
+        .collect::<Result<_, _>>()?;
+    if h.len() < 4 {
+        return Err(perr(
+            path,
+            start,
+            "dataset 58b header: expected byte order, number format, text lines and bytes",
+        ));
+    }
+    let big = match h[0] {
+        1 => false,
+        2 => true,
+        o => {
+            return Err(perr(
+                path,
+                start,
+                format!("byte order {o}: expected 1 (little endian) or 2 (big endian)"),
+            ));
+        }
+    };
+    if h[1] != 2 {
+        return Err(perr(
+            path,
+            start,
+            format!("number format {}: femu reads IEEE 754 (2) only", h[1]),
+        ));
+    }
+    if h[2] != 11 {
+        return Err(perr(
+            path,
+            start,
+            format!("{} text records: dataset 58b has 11", h[2]),
+        ));
+    }
+    let mut owned = Vec::with_capacity(11);
+    for _ in 0..11 {
+        let (l, t) = src
+            .next_line()
+            .ok_or_else(|| perr(path, start, "dataset 58b ends inside its 11 text records"))?;
+        owned.push((l, t.into_owned()));
+    }
+    // a delimiter among the text records is a truncated dataset, not an identification line
+    if let Some((l, _)) = owned.iter().find(|(_, t)| t.trim() == "-1") {
+        return Err(perr(
+            path,
+            *l,
+            "dataset 58b ends inside its 11 text records",
+        ));
+    }
+    let body: Vec<(usize, &str)> = owned.iter().map(|(l, t)| (*l, t.as_str())).collect();
+    let (mut f, count) = parse_58_header(path, &body, start)?;
+    let size = if f.double { 8 } else { 4 };
+    let bytes = count * size;
+    if h[3] != bytes as i64 {
+        warnings.push(Warning {
+            path: path.to_path_buf(),
+            line: start,
+            message: format!(
+                "dataset 58b: the header says {} bytes, records 7 need {bytes} ({count} values of {size} bytes); read {bytes}",
+                h[3]
+            ),
+        });
+    }
+    let at = src.at;
+    if src.b.len() - at < bytes {
+        return Err(perr(
+            path,
+            src.line + 1,
+            format!(
+                "dataset 58b: {bytes} bytes of values expected, the file has {} left (byte offset {at})",
+                src.b.len() - at
+            ),
+        ));
+    }
+    let data = &src.b[at..at + bytes];
+    let mut values = Vec::with_capacity(count);
+    for (k, c) in data.chunks_exact(size).enumerate() {
+        let v = if f.double {
+            let a: [u8; 8] = c.try_into().expect("8 bytes");
+            if big {
+                f64::from_be_bytes(a)
+            } else {
+                f64::from_le_bytes(a)
+            }
+        } else {
+            let a: [u8; 4] = c.try_into().expect("4 bytes");
+            (if big {
+                f32::from_be_bytes(a)
+            } else {
+                f32::from_le_bytes(a)
+            }) as f64
+        };
+        if !v.is_finite() {
+            return Err(perr(
+                path,
+                src.line + 1,
+                format!(
+                    "dataset 58b: value {k} is {v} (byte offset {})",
+                    at + k * size
+                ),
+            ));
+        }
+        values.push(v);
+    }
+    // the newlines inside the binary block still count as lines for later messages
+    src.line += data.iter().filter(|c| **c == b'\n').count();
+    src.at = at + bytes;
+    f.binary = true;
+    finish_58(path, f, values, count, start)
+}
+
+fn parse_82(path: &Path, body: &[(usize, &str)], out: &mut Universal) -> Result<(), IoError> {
+    if body.len() < 2 {
+        return Err(perr(
+            path,
+            body.first().map_or(0, |b| b.0),
+            "dataset 82 needs a header, an identification line and node labels",
+        ));
+    }
+    let (ln, l) = body[0];
+    let h = ints(path, ln, l, 3)?;
+    let (number, count, color) = (h[0], h[1], h[2]);
+    let mut nodes = Vec::new();
+    for &(ln2, l2) in &body[2..] {
+        if l2.trim().is_empty() {
+            continue;
+        }
+        for v in ints(path, ln2, l2, 1)? {
+            if v < 0 {
+                return Err(perr(
+                    path,
+                    ln2,
+                    format!("node label {v} must not be negative"),
+                ));
+            }
+            nodes.push(v as u64);
+        }
+    }
+    if count < 0 || nodes.len() != count as usize {
+        return Err(perr(
+            path,
+            ln,
+            format!(
+                "trace line {number}: {count} node labels announced, {} found",
+                nodes.len()
+            ),
+        ));
+    }
+    out.trace_lines.push(UffTraceLine {
+        number,
+        color,
+        id: body[1].1.trim_end().to_string(),
+        nodes,
+    });
+    Ok(())
 }
 
 fn parse_15(path: &Path, body: &[(usize, &str)], out: &mut Universal) -> Result<(), IoError> {
@@ -509,22 +1188,179 @@ fn parse_55(path: &Path, body: &[(usize, &str)], out: &mut Universal) -> Result<
 }
 
 fn e13(v: f64) -> String {
-    // Fortran 1PE13.5: d.ddddde+xx, right-aligned in 13, with a leading blank always: a
-    // three-digit exponent (beyond Fortran's E13.5) would otherwise run into the previous field
-    // (found by the fuzzer). Non-finite values are written as they are (the reader refuses them,
-    // naming the line).
-    let s = format!("{v:.5E}");
-    match s.split_once('E').map(|(m, e)| (m, e.parse::<i32>())) {
-        Some((m, Ok(e))) => format!(
-            " {:>12}",
-            format!("{m}E{}{:02}", if e < 0 { '-' } else { '+' }, e.abs())
-        ),
-        _ => format!(" {s:>12}"),
+    efmt(v, 13, 5)
+}
+
+/// Fortran `1PEw.d`: `d.dddde+xx`, right-aligned in `w`, with a leading blank always: a
+/// three-digit exponent (beyond Fortran's) would otherwise run into the previous field (found by
+/// the fuzzer). Non-finite values are written as they are (the reader refuses them, naming the
+/// line).
+fn efmt(v: f64, w: usize, d: usize) -> String {
+    let s = format!("{v:.d$E}");
+    let body = match s.split_once('E').map(|(m, e)| (m, e.parse::<i32>())) {
+        Some((m, Ok(e))) => format!("{m}E{}{:02}", if e < 0 { '-' } else { '+' }, e.abs()),
+        _ => s,
+    };
+    format!(" {body:>width$}", width = w - 1)
+}
+
+/// ASCII only, at most `n` characters (fixed-width text fields).
+fn field(text: &str, n: usize) -> String {
+    text.chars()
+        .filter(|c| c.is_ascii_graphic() || *c == ' ')
+        .take(n)
+        .collect::<String>()
+        .trim()
+        .to_string()
+}
+
+/// Dataset 58 records 1-11 (after the header line).
+fn function_records(f: &UffFunction, s: &mut String) {
+    for id in &f.ids {
+        let _ = writeln!(s, "{}", field(id, 80));
+    }
+    let dof = |d: &UffDof| {
+        format!(
+            " {:<10}{:>10}{:>4}",
+            field(&d.entity, 10),
+            d.node,
+            d.direction
+        )
+    };
+    let _ = writeln!(
+        s,
+        "{:>5}{:>10}{:>5}{:>10}{}{}",
+        f.function_type,
+        f.numbers[0],
+        f.numbers[1],
+        f.numbers[2],
+        dof(&f.response),
+        dof(&f.reference)
+    );
+    let (spacing, min, step) = match f.abscissa {
+        Abscissa::Even { min, step } => (1, min, step),
+        Abscissa::Uneven(_) => (0, 0.0, 0.0),
+    };
+    let _ = writeln!(
+        s,
+        "{:>10}{:>10}{:>10}{}{}{}",
+        f.data_type(),
+        f.ordinate.len(),
+        spacing,
+        e13(min),
+        e13(step),
+        e13(f.z_value)
+    );
+    for a in &f.axes {
+        let _ = writeln!(
+            s,
+            "{:>10}{:>5}{:>5}{:>5} {:<20} {:<20}",
+            a.data_type,
+            a.exponents[0],
+            a.exponents[1],
+            a.exponents[2],
+            field(&a.label, 20),
+            field(&a.units, 20)
+        );
     }
 }
 
-/// Writes units, nodes and real normal modes as datasets 164, 15 and 55 (SI units).
+/// Dataset 58 (ASCII) or 58b (binary, little endian) of one function.
+fn function_bytes(f: &UffFunction, binary: bool, out: &mut Vec<u8>) {
+    let values = f.stored();
+    let mut s = String::from("    -1\n");
+    let size = if f.double { 8 } else { 4 };
+    if binary {
+        let _ = writeln!(
+            s,
+            "{:>6}b{:>6}{:>6}{:>12}{:>12}{:>6}{:>6}{:>12}{:>12}",
+            58,
+            1,
+            2,
+            11,
+            values.len() * size,
+            0,
+            0,
+            0,
+            0
+        );
+    } else {
+        s.push_str("    58\n");
+    }
+    function_records(f, &mut s);
+    if binary {
+        out.extend(s.as_bytes());
+        for v in &values {
+            if f.double {
+                out.extend(v.to_le_bytes());
+            } else {
+                out.extend((*v as f32).to_le_bytes());
+            }
+        }
+        out.extend(b"    -1\n");
+        return;
+    }
+    // record 12: the widths of the data type, as many per line as the format has
+    let (widths, per_line): (&[usize], usize) = match (f.data_type(), f.per_point()) {
+        (2 | 5, _) => (&[13], 6),
+        (4, 2) => (&[13, 20], 4),
+        (6, 3) => (&[13, 20, 20], 3),
+        _ => (&[20], 4),
+    };
+    for row in values.chunks(per_line) {
+        for (k, v) in row.iter().enumerate() {
+            let w = widths[k % widths.len()];
+            s.push_str(&efmt(*v, w, if w == 13 { 5 } else { 12 }));
+        }
+        s.push('\n');
+    }
+    s.push_str("    -1\n");
+    out.extend(s.as_bytes());
+}
+
+/// Dataset 82.
+fn trace_line_text(t: &UffTraceLine, s: &mut String) {
+    s.push_str("    -1\n    82\n");
+    let _ = writeln!(s, "{:>10}{:>10}{:>10}", t.number, t.nodes.len(), t.color);
+    let _ = writeln!(s, "{}", field(&t.id, 80));
+    for chunk in t.nodes.chunks(8) {
+        let row: Vec<String> = chunk.iter().map(|n| format!("{n:>10}")).collect();
+        let _ = writeln!(s, "{}", row.concat());
+    }
+    s.push_str("    -1\n");
+}
+
+/// The whole file as bytes: [`uff_string`]'s datasets, with the functions marked binary as 58b.
+pub fn uff_bytes(u: &Universal) -> Vec<u8> {
+    let mut out = head_text(u).into_bytes();
+    for f in &u.functions {
+        function_bytes(f, f.binary, &mut out);
+    }
+    let mut s = String::new();
+    for t in &u.trace_lines {
+        trace_line_text(t, &mut s);
+    }
+    out.extend(s.as_bytes());
+    out
+}
+
+/// Writes units, nodes, elements, real normal modes, functions and trace lines as datasets 164,
+/// 2411 or 15, 2412, 55, 58 and 82, all as text (functions read from 58b included: use
+/// [`uff_bytes`] to keep them binary).
 pub fn uff_string(u: &Universal) -> String {
+    let mut bytes = head_text(u).into_bytes();
+    for f in &u.functions {
+        function_bytes(f, false, &mut bytes);
+    }
+    let mut s = String::from_utf8(bytes).expect("text datasets are ASCII");
+    for t in &u.trace_lines {
+        trace_line_text(t, &mut s);
+    }
+    s
+}
+
+/// Datasets 164, 2411/15, 2412 and 55.
+fn head_text(u: &Universal) -> String {
     let mut s = String::new();
     if let Some(units) = &u.units {
         s.push_str("    -1\n   164\n");
@@ -627,23 +1463,24 @@ pub fn uff_string(u: &Universal) -> String {
     s
 }
 
-/// Writes [`uff_string`] to a file.
+/// Writes [`uff_bytes`] to a file.
 ///
 /// # Errors
 /// [`IoError::Io`].
 pub fn write_uff(path: impl AsRef<Path>, u: &Universal) -> Result<(), IoError> {
     let path = path.as_ref();
-    std::fs::write(path, uff_string(u)).map_err(|e| IoError::io(path, e))
+    std::fs::write(path, uff_bytes(u)).map_err(|e| IoError::io(path, e))
 }
 
 impl Universal {
-    /// The femu mesh of the file's nodes and linear solid elements (descriptors 111 tetrahedron,
-    /// 112 wedge, 115 brick, whose node orders are Abaqus'); other elements (shells, beams) are
-    /// skipped and counted in the returned warnings; quadratic solids (116, 113, 118) are refused:
-    /// their interleaved node orders are not converted yet.
+    /// The femu mesh of the file's nodes and solid elements: linear (descriptors 111 tetrahedron,
+    /// 112 wedge, 115 brick, whose node orders are Abaqus') and parabolic (118, 113, 116, whose
+    /// I-DEAS orders interleave corners and mid-edge nodes around each face: converted, see
+    /// `UNV_HEX20`); other elements (shells, beams) are skipped and counted in the returned
+    /// warnings.
     ///
     /// # Errors
-    /// A quadratic solid (element label), a mesh error (duplicate or missing node), no solid.
+    /// A wrong node count (element label), a mesh error (duplicate or missing node), no solid.
     pub fn to_mesh(&self, path: &Path) -> Result<(femu_fem::mesh::Mesh, Vec<Warning>), IoError> {
         use femu_fem::element::ElementKind;
         let model_err = |source| IoError::Model {
@@ -657,32 +1494,39 @@ impl Universal {
         }
         let mut skipped = 0;
         for e in &self.elements {
-            let kind = match e.descriptor {
-                111 => ElementKind::Tet4,
-                112 => ElementKind::Penta6,
-                115 => ElementKind::Hex8,
-                113 | 116 | 118 => {
-                    return Err(IoError::Parse {
-                        path: path.to_path_buf(),
-                        line: 0,
-                        reason: format!(
-                            "element {}: quadratic solid descriptor {} is not read by femu yet",
-                            e.id, e.descriptor
-                        ),
-                    });
-                }
+            let (kind, order): (ElementKind, &[usize]) = match e.descriptor {
+                111 => (ElementKind::Tet4, &[0, 1, 2, 3]),
+                112 => (ElementKind::Penta6, &[0, 1, 2, 3, 4, 5]),
+                115 => (ElementKind::Hex8, &[0, 1, 2, 3, 4, 5, 6, 7]),
+                118 => (ElementKind::Tet10, &UNV_TET10),
+                113 => (ElementKind::Penta15, &UNV_PENTA15),
+                116 => (ElementKind::Hex20, &UNV_HEX20),
                 _ => {
                     skipped += 1;
                     continue;
                 }
             };
-            mesh.add_element(e.id, kind, &e.nodes).map_err(model_err)?;
+            if e.nodes.len() != order.len() {
+                return Err(IoError::Parse {
+                    path: path.to_path_buf(),
+                    line: 0,
+                    reason: format!(
+                        "element {}: descriptor {} needs {} nodes, found {}",
+                        e.id,
+                        e.descriptor,
+                        order.len(),
+                        e.nodes.len()
+                    ),
+                });
+            }
+            let nodes: Vec<u64> = order.iter().map(|&k| e.nodes[k]).collect();
+            mesh.add_element(e.id, kind, &nodes).map_err(model_err)?;
         }
         if mesh.element_count() == 0 {
             return Err(IoError::Parse {
                 path: path.to_path_buf(),
                 line: 0,
-                reason: "no solid element (descriptors 111, 112, 115) in dataset 2412".into(),
+                reason: "no solid element (descriptors 111-118) in dataset 2412".into(),
             });
         }
         let mut warnings = Vec::new();
