@@ -89,7 +89,10 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             let mut space = SensorSpace::new(&sys.k, &sys.m, &measured).unwrap();
             space
-                .prepare(&[lambdas[0], lambdas[1], lambdas[2], lambdas[3], 0.0], &[0.0])
+                .prepare(
+                    &[lambdas[0], lambdas[1], lambdas[2], lambdas[3], 0.0],
+                    &[0.0],
+                )
                 .unwrap();
             for nodes in (4..=10).rev() {
                 let set = &measured[..3 * nodes];
