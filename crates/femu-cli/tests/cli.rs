@@ -372,6 +372,28 @@ fn demo_then_update_from_its_files() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `femu modes MESH` with steel from the command line, `extra` arguments and `--json`: the JSON.
+fn steel_modes(
+    mesh: &std::path::Path,
+    extra: &[&str],
+    json: &std::path::Path,
+) -> serde_json::Value {
+    let mut args = vec![
+        "modes",
+        mesh.to_str().unwrap(),
+        "--young",
+        "2.1e11",
+        "--poisson",
+        "0.3",
+        "--density",
+        "7850",
+    ];
+    args.extend(extra);
+    args.extend(["--json", json.to_str().unwrap(), "--quiet"]);
+    femu().args(&args).assert().success();
+    serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
+}
+
 /// `femu modes` on a Gmsh mesh with the material and clamp from the command line: the JSON
 /// frequencies equal a dense solution of the same model built through the library.
 #[test]
@@ -381,28 +403,7 @@ fn modes_of_a_gmsh_mesh() {
     let dir = std::env::temp_dir().join(format!("femu-cli-msh-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let json = dir.join("modes.json");
-    femu()
-        .args([
-            "modes",
-            msh.to_str().unwrap(),
-            "--young",
-            "2.1e11",
-            "--poisson",
-            "0.3",
-            "--density",
-            "7850",
-            "--fix",
-            "bottom",
-            "--count",
-            "3",
-            "--json",
-            json.to_str().unwrap(),
-            "--quiet",
-        ])
-        .assert()
-        .success();
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v = steel_modes(&msh, &["--fix", "bottom", "--count", "3"], &json);
     let g = femu_io::gmsh::read_msh(&msh).unwrap();
     let mut model = femu_fem::model::Model::new(g.mesh).unwrap();
     model
@@ -602,27 +603,7 @@ fn modes_of_binary_msh_and_unv_agree() {
     let mut freqs = Vec::new();
     for name in ["box_mixed2_binary.msh", "box_mixed2.unv"] {
         let json = dir.join(format!("{name}.json"));
-        let mesh = fixtures.join(name);
-        femu()
-            .args([
-                "modes",
-                mesh.to_str().unwrap(),
-                "--young",
-                "2.1e11",
-                "--poisson",
-                "0.3",
-                "--density",
-                "7850",
-                "--count",
-                "10",
-                "--json",
-                json.to_str().unwrap(),
-                "--quiet",
-            ])
-            .assert()
-            .success();
-        let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let v = steel_modes(&fixtures.join(name), &["--count", "10"], &json);
         assert_eq!(v["sturm_verified"], serde_json::Value::Bool(true));
         let f: Vec<f64> = v["frequencies_hz"]
             .as_array()

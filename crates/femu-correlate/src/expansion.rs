@@ -884,7 +884,10 @@ impl Expander<'_> {
     ///
     /// Up to [`SENSOR_SPACE_LIMIT`] measured DOFs it is computed in the sensor space
     /// ([`SensorSpace`], checked, with this saddle point as the fallback), beyond with
-    /// [`Expander::mdre_saddle_point`].
+    /// [`Expander::mdre_saddle_point`]. In the sensor space (`x` from `Z^-1 K_s Z^-1`, no inverse
+    /// of `K_s`) a zero shift is defined for a free-free model too: the limit of the shifted
+    /// energy norm as the shift goes to 0 (the rigid-body part of the residual is penalised
+    /// without bound); the shifted saddle point approaches it linearly in the shift (tested).
     ///
     /// # Errors
     /// `gamma` not positive, a negative shift, a singular problem, sizes, NaN.

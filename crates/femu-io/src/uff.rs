@@ -7,7 +7,7 @@
 //! Dataset 58b: records 1-11 as text, then the values as raw IEEE numbers in the byte order of
 //! the header (little or big endian), 4 bytes each for single-precision data (ordinate types 2,
 //! 5) and 8 for double (4, 6), an uneven abscissa in the same precision as the ordinate (as
-//! pyuff and the files it reads do). The byte count is computed from records 7 (points, type,
+//! pyuff and the files it reads do). The byte count is computed from record 7 (points, type,
 //! spacing); a header that says otherwise gets a warning.
 
 use crate::{IoError, Warning};
@@ -777,7 +777,7 @@ fn parse_58b(
             path: path.to_path_buf(),
             line: start,
             message: format!(
-                "dataset 58b: the header says {} bytes, records 7 need {bytes} ({count} values of {size} bytes); read {bytes}",
+                "dataset 58b: the header says {} bytes, record 7 needs {bytes} ({count} values of {size} bytes); read {bytes}",
                 h[3]
             ),
         });

@@ -58,7 +58,13 @@ fn inp_two_hex() {
 
 #[test]
 fn msh_fixtures() {
-    for name in ["hex20_cube_v41.msh", "mixed_v22.msh"] {
+    for name in [
+        "hex20_cube_v41.msh",
+        "mixed_v22.msh",
+        "box_mixed2_binary.msh",
+        "box_tet10_binary.msh",
+        "box_mixed1.msh",
+    ] {
         let g = femu_io::gmsh::read_msh(fixture("msh", name)).unwrap();
         let mut s = mesh_summary(&g.mesh);
         for w in &g.warnings {
@@ -110,4 +116,62 @@ fn csv_two_modes() {
         let _ = writeln!(s, "shape {}: {col:?}", j + 1);
     }
     insta::assert_snapshot!(s);
+}
+
+#[test]
+fn uff_functions_and_trace_lines() {
+    for name in ["frf_ascii.uff", "frf_binary.uff"] {
+        let u = femu_io::uff::read_uff(fixture("uff", name)).unwrap();
+        let mut s = String::new();
+        for f in &u.functions {
+            let _ = writeln!(
+                s,
+                "function type {} {:?} -> {:?}, double {}, binary {}, {} points, abscissa {:?}",
+                f.function_type,
+                f.reference,
+                f.response,
+                f.double,
+                f.binary,
+                f.ordinate.len(),
+                match &f.abscissa {
+                    femu_io::uff::Abscissa::Even { min, step } => format!("even {min} + k {step}"),
+                    femu_io::uff::Abscissa::Uneven(x) => format!("uneven {x:?}"),
+                }
+            );
+            let _ = writeln!(s, "  ids {:?}", f.ids);
+            let _ = writeln!(s, "  axes {:?}", f.axes);
+            let v = match &f.ordinate {
+                femu_io::uff::Ordinate::Real(y) => format!("{:?} .. {:?}", y.first(), y.last()),
+                femu_io::uff::Ordinate::Complex(y) => format!("{:?} .. {:?}", y.first(), y.last()),
+            };
+            let _ = writeln!(s, "  values {v}");
+        }
+        for t in &u.trace_lines {
+            let _ = writeln!(s, "trace line {t:?}");
+        }
+        for w in &u.warnings {
+            let _ = writeln!(s, "warning line {}: {}", w.line, w.message);
+        }
+        insta::assert_snapshot!(name, s);
+    }
+}
+
+#[test]
+fn unv_meshes() {
+    for name in ["box_mixed2.unv", "box_tet10.unv"] {
+        let path = fixture("msh", name);
+        let u = femu_io::uff::read_uff(&path).unwrap();
+        let (mesh, warnings) = u.to_mesh(&path).unwrap();
+        let mut s = mesh_summary(&mesh);
+        let descriptors: std::collections::BTreeMap<i64, usize> =
+            u.elements.iter().fold(Default::default(), |mut m, e| {
+                *m.entry(e.descriptor).or_default() += 1;
+                m
+            });
+        let _ = writeln!(s, "descriptors: {descriptors:?}");
+        for w in u.warnings.iter().chain(&warnings) {
+            let _ = writeln!(s, "warning line {}: {}", w.line, w.message);
+        }
+        insta::assert_snapshot!(name, s);
+    }
 }

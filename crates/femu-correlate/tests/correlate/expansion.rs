@@ -382,4 +382,22 @@ fn sensor_space_equals_dense_formulas_on_every_set() {
     let got = space.dynamic(&[0.0], &a, y.as_ref()).unwrap();
     assert!(rel(&col(&got, 0), &col(&reference, 0)) < 1e-9);
     assert_eq!(space.fallbacks(), 1);
+    // free-free MDRE-WE: the sensor space is defined at a zero stiffness shift too, as the limit
+    // of the shifted energy norm (the saddle point with a small shift approaches it)
+    let lambda = 4.0e6;
+    let zero = space.mdre(&[lambda], &a, y.as_ref(), 1e12, 0.0).unwrap();
+    let exp = Expander::new(&sff.k, &sff.m, &layout).unwrap();
+    // measured: 7.9e-3, 8.0e-4, 7.9e-6 at shifts 1e-5, 1e-6, 1e-8 lambda (linear in the shift);
+    // at the same shift both formulations agree to the saddle point's accuracy
+    for sh in [1e-5, 1e-6, 1e-8] {
+        let shifted = exp
+            .mdre_saddle_point(&[lambda], y.as_ref(), 1e12, sh * lambda)
+            .unwrap();
+        let d = rel(&col(&shifted, 0), &col(&zero, 0));
+        assert!(d < 1e3 * sh, "shift {sh:e}: {d:e}");
+        let via = space
+            .mdre(&[lambda], &a, y.as_ref(), 1e12, sh * lambda)
+            .unwrap();
+        assert!(rel(&col(&shifted, 0), &col(&via, 0)) < 1e-6);
+    }
 }
