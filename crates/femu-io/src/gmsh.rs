@@ -624,6 +624,27 @@ mod binary {
             Ok(())
         }
 
+        /// `numEntityBlocks` (blocks of at least `min_bytes`) and the three counts that follow
+        /// it (total, min and max tag: not needed).
+        fn section_head(&mut self, what: &str, min_bytes: usize) -> Result<usize, IoError> {
+            let blocks = self.count(&format!("{what} block count"), min_bytes)?;
+            for _ in 0..3 {
+                self.size(&format!("{what} counts"))?;
+            }
+            Ok(blocks)
+        }
+
+        /// A block's line and its three `int`s (entity dimension, entity tag, then the
+        /// parametric flag of a node block or the type of an element block).
+        fn block_head(&mut self, what: &str) -> Result<(usize, [i64; 3]), IoError> {
+            let line = self.line_of(self.at);
+            let mut v = [0; 3];
+            for x in &mut v {
+                *x = self.int(&format!("{what} block header"))?;
+            }
+            Ok((line, v))
+        }
+
         /// Skips to after `$End<name>`.
         fn skip_section(&mut self, name: &str) -> Result<(), IoError> {
             let tag = format!("$End{name}");
@@ -741,15 +762,9 @@ mod binary {
                     r.expect_end("Entities")?;
                 }
                 "$Nodes" => {
-                    let blocks = r.count("node block count", 12)?;
-                    for _ in 0..3 {
-                        r.size("node counts")?;
-                    }
+                    let blocks = r.section_head("node", 12)?;
                     for _ in 0..blocks {
-                        let block_line = r.line_of(r.at);
-                        let _dim = r.int("node block dimension")?;
-                        let _entity = r.int("node block entity")?;
-                        let parametric = r.int("node block parametric flag")?;
+                        let (block_line, [_dim, _entity, parametric]) = r.block_head("node")?;
                         if parametric != 0 {
                             r.at -= 4;
                             return Err(
@@ -779,15 +794,9 @@ mod binary {
                     r.expect_end("Nodes")?;
                 }
                 "$Elements" => {
-                    let blocks = r.count("element block count", 16)?;
-                    for _ in 0..3 {
-                        r.size("element counts")?;
-                    }
+                    let blocks = r.section_head("element", 16)?;
                     for _ in 0..blocks {
-                        let block_line = r.line_of(r.at);
-                        let dim = r.int("element block dimension")?;
-                        let entity = r.int("element block entity")?;
-                        let ty = r.int("element type")?;
+                        let (block_line, [dim, entity, ty]) = r.block_head("element")?;
                         let Some((nn, _)) = gmsh_type(ty) else {
                             r.at -= 4;
                             return Err(r.err(format!("unknown element type {ty}")));
