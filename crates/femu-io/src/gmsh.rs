@@ -363,11 +363,7 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<GmshMesh, IoError> {
             }
             s if s.starts_with('$') && !s.starts_with("$End") => {
                 let name = s[1..].to_string();
-                warnings.push(Warning {
-                    path: path.to_path_buf(),
-                    line: ln,
-                    message: format!("section ${name} is not read by femu (skipped)"),
-                });
+                warnings.push(skipped_section(path, ln, &name));
                 l.skip_section(&name)?;
             }
             other => {
@@ -382,6 +378,15 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<GmshMesh, IoError> {
         return Err(l.err(1, "no $MeshFormat section: not a Gmsh mesh".into()));
     }
     build(path, &nodes, &elements, &names, warnings)
+}
+
+/// The warning for a section femu does not read.
+fn skipped_section(path: &Path, line: usize, name: &str) -> Warning {
+    Warning {
+        path: path.to_path_buf(),
+        line,
+        message: format!("section ${name} is not read by femu (skipped)"),
+    }
 }
 
 /// `dim tag "name"` of `$PhysicalNames`.
@@ -482,7 +487,7 @@ fn build(
 /// Binary 4.1: the same sections as ASCII with their numbers as raw bytes.
 mod binary {
     use super::{RawElement, build, gmsh_type, physical_name};
-    use crate::{IoError, Warning};
+    use crate::IoError;
     use std::collections::BTreeMap;
     use std::path::Path;
 
@@ -827,11 +832,7 @@ mod binary {
                 }
                 s if s.starts_with('$') && !s.starts_with("$End") => {
                     let name = s[1..].to_string();
-                    warnings.push(Warning {
-                        path: path.to_path_buf(),
-                        line: ln,
-                        message: format!("section ${name} is not read by femu (skipped)"),
-                    });
+                    warnings.push(super::skipped_section(path, ln, &name));
                     r.skip_section(&name)?;
                 }
                 other => {
