@@ -1050,11 +1050,12 @@ fn parse_55(path: &Path, body: &[(usize, &str)], out: &mut Universal) -> Result<
             ));
         }
     };
-    if ndv < 3 {
+    // 3 translations, or 6 with rotations; an absurd count is an error, not an allocation
+    if !(3..=6).contains(&ndv) {
         return Err(perr(
             path,
             l6,
-            format!("{ndv} values per node: need at least 3 translations"),
+            format!("{ndv} values per node: expected 3 (translations) to 6 (with rotations)"),
         ));
     }
     let (l7, r7) = body[6];

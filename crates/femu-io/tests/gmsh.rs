@@ -429,3 +429,14 @@ fn binary_byte_orders_and_malformed_binaries() {
         }
     }
 }
+
+/// Found by the fuzzer: a node block announcing 10^15 nodes asked for that much memory before
+/// reading them and aborted the process; now the count only bounds what the lines hold.
+#[test]
+fn absurd_counts_are_errors_not_allocations() {
+    let good = std::fs::read_to_string(fixture("hex20_cube_v41.msh")).unwrap();
+    let bad = good.replacen("3 1 0 20\n", "3 1 0 1000000000000000\n", 1);
+    // (here the coordinate lines are read as tags and the first one, 0, is refused)
+    let e = parse_msh(&bad, Path::new("huge.msh")).unwrap_err();
+    assert!(matches!(e, IoError::Parse { line: 37, .. }), "{e}");
+}

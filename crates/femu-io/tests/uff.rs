@@ -215,3 +215,21 @@ fn nodes_and_elements_2411_2412() {
         Err(IoError::Parse { .. })
     ));
 }
+
+/// Dataset 55 with an absurd count of values per node is an error naming record 6, not an
+/// allocation of that size.
+#[test]
+fn absurd_values_per_node() {
+    let good = uff_string(&sample());
+    let bad = good.replace(
+        "         1         2         2         8         2         3",
+        "         1         2         2         8         2 900000000000000",
+    );
+    match parse_uff(&bad, Path::new("v.unv")) {
+        Err(IoError::Parse { line, reason, .. }) => {
+            assert_eq!(line, 19, "{reason}");
+            assert!(reason.contains("values per node"), "{reason}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
