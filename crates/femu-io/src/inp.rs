@@ -619,6 +619,21 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
                 if inc == 0 || b < a {
                     return Err(err(l, format!("GENERATE range {a}, {b}, {inc} is invalid")));
                 }
+                // every generated id must exist, so a range longer than the model is an error
+                // before it is an allocation
+                let (count, have, what) = if is_node {
+                    ((b - a) / inc + 1, mesh.node_count(), "nodes")
+                } else {
+                    ((b - a) / inc + 1, mesh.element_count(), "elements")
+                };
+                if count > have as u64 {
+                    return Err(err(
+                        l,
+                        format!(
+                            "GENERATE range {a}, {b}, {inc} names {count} ids; the model has {have} {what}"
+                        ),
+                    ));
+                }
                 ids.extend((a..=b).step_by(inc as usize));
             }
         } else {

@@ -189,6 +189,12 @@ fn malformed_decks_name_the_line() {
             10,
             "GENERATE",
         ),
+        // a range longer than the model: an error, not 10^15 ids in memory
+        (
+            format!("{nodes}*NSET, NSET=A, GENERATE\n1, 1000000000000000, 1\n"),
+            10,
+            "the model has 8 nodes",
+        ),
         ("*ELASTIC\n1, 0.3\n".into(), 1, "outside a *MATERIAL"),
         (
             "*MATERIAL, NAME=A\n*ELASTIC\n1e9, 0.3\n".into(),
