@@ -1,7 +1,7 @@
 //! Universal File Format (what test systems export), read and written: datasets 15 and 2411
 //! (nodes), 2412 (elements), 164 (units), 55 (modal data: real normal modes and complex modes),
-//! 58 and its binary variant 58b (functions at nodal DOFs: FRFs, time histories, spectra) and 82
-//! (trace lines). Other datasets are skipped with a warning naming their number and line. Fortran
+//! 58 and its binary variant 58b (functions at nodal DOFs: FRFs, time histories, spectra), 82
+//! (trace lines) and 2477 (permanent groups: the sets of [`Universal::to_mesh`]). Other datasets are skipped with a warning naming their number and line. Fortran
 //! `D` exponents and CRLF line ends are read; a file written by femu reads back to the same bytes.
 //!
 //! Dataset 58b: records 1-11 as text, then the values as raw IEEE numbers in the byte order of
@@ -71,6 +71,8 @@ pub struct Universal {
     pub functions: Vec<UffFunction>,
     /// Dataset 82 trace lines.
     pub trace_lines: Vec<UffTraceLine>,
+    /// Dataset 2477 (and 2467) permanent groups.
+    pub groups: Vec<UffGroup>,
     /// Skipped datasets and approximations.
     pub warnings: Vec<Warning>,
 }
@@ -228,6 +230,20 @@ impl UffFunction {
         }
         v
     }
+}
+
+/// One permanent group of dataset 2477: named lists of nodes and elements (what FE
+/// pre-processors and Gmsh's physical groups write), the sets of [`Universal::to_mesh`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct UffGroup {
+    /// Group number.
+    pub number: i64,
+    /// Group name (40 characters at most when written).
+    pub name: String,
+    /// Node labels (entity type 7).
+    pub nodes: Vec<u64>,
+    /// Element labels (entity type 8).
+    pub elements: Vec<u64>,
 }
 
 /// One trace line of dataset 82: a polyline through nodes, `0` lifting the pen.
@@ -446,6 +462,7 @@ pub fn parse_uff_bytes(bytes: &[u8], path: &Path) -> Result<Universal, IoError> 
                     .push(finish_58(path, f, values, count, start)?);
             }
             82 => parse_82(path, &body, &mut out)?,
+            2467 | 2477 => parse_2477(path, &body, &mut out)?,
             other => out.warnings.push(Warning {
                 path: path.to_path_buf(),
                 line: start,
@@ -830,6 +847,85 @@ fn parse_58b(
     finish_58(path, f, values, count, start)
 }
 
+/// Dataset 2477: per group a header (8I10, the last the entity count), the name, then entities
+/// as (type, tag, 0, 0) quadruples, two per line; types other than nodes (7) and elements (8)
+/// are skipped with a warning.
+fn parse_2477(path: &Path, body: &[(usize, &str)], out: &mut Universal) -> Result<(), IoError> {
+    let mut k = 0;
+    while k < body.len() {
+        let (ln, l) = body[k];
+        if l.trim().is_empty() {
+            k += 1;
+            continue;
+        }
+        let h = ints(path, ln, l, 8)?;
+        let (number, count) = (h[0], h[7]);
+        if !(0..=100_000_000).contains(&count) {
+            return Err(perr(path, ln, format!("group {number}: {count} entities")));
+        }
+        let name = body
+            .get(k + 1)
+            .ok_or_else(|| perr(path, ln, format!("group {number} without its name")))?
+            .1
+            .trim()
+            .to_string();
+        k += 2;
+        let mut group = UffGroup {
+            number,
+            name,
+            nodes: Vec::new(),
+            elements: Vec::new(),
+        };
+        let mut read = 0;
+        let mut other = 0;
+        while read < count {
+            let (ln2, l2) = *body.get(k).ok_or_else(|| {
+                perr(
+                    path,
+                    ln,
+                    format!("group {number}: {count} entities announced, {read} found"),
+                )
+            })?;
+            let v = ints(path, ln2, l2, 4)?;
+            for q in v.chunks(4) {
+                if q.len() < 4 || read == count {
+                    return Err(perr(
+                        path,
+                        ln2,
+                        "an entity needs 4 integers (type, tag, 0, 0)",
+                    ));
+                }
+                if q[1] <= 0 {
+                    return Err(perr(
+                        path,
+                        ln2,
+                        format!("entity tag {} must be positive", q[1]),
+                    ));
+                }
+                match q[0] {
+                    7 => group.nodes.push(q[1] as u64),
+                    8 => group.elements.push(q[1] as u64),
+                    _ => other += 1,
+                }
+                read += 1;
+            }
+            k += 1;
+        }
+        if other > 0 {
+            out.warnings.push(Warning {
+                path: path.to_path_buf(),
+                line: ln,
+                message: format!(
+                    "group {}: {other} entities neither nodes nor elements skipped",
+                    group.name
+                ),
+            });
+        }
+        out.groups.push(group);
+    }
+    Ok(())
+}
+
 fn parse_82(path: &Path, body: &[(usize, &str)], out: &mut Universal) -> Result<(), IoError> {
     if body.len() < 2 {
         return Err(perr(
@@ -1205,14 +1301,18 @@ fn efmt(v: f64, w: usize, d: usize) -> String {
     format!(" {body:>width$}", width = w - 1)
 }
 
-/// ASCII only, at most `n` characters (fixed-width text fields).
+/// ASCII only, at most `n` characters (fixed-width text fields); a text that would read as the
+/// dataset delimiter `-1` is bracketed (found by the fuzzer: an identification line of
+/// non-ASCII bytes around "-1" became the delimiter when written).
 fn field(text: &str, n: usize) -> String {
-    text.chars()
+    let t = text
+        .chars()
         .filter(|c| c.is_ascii_graphic() || *c == ' ')
         .take(n)
         .collect::<String>()
         .trim()
-        .to_string()
+        .to_string();
+    if t == "-1" { "(-1)".into() } else { t }
 }
 
 /// Dataset 58 records 1-11 (after the header line).
@@ -1417,6 +1517,38 @@ fn head_text(u: &Universal) -> String {
         }
         s.push_str("    -1\n");
     }
+    if !u.groups.is_empty() {
+        s.push_str("    -1\n  2477\n");
+        for g in &u.groups {
+            let entities: Vec<(i64, u64)> = g
+                .nodes
+                .iter()
+                .map(|n| (7, *n))
+                .chain(g.elements.iter().map(|e| (8, *e)))
+                .collect();
+            let _ = writeln!(
+                s,
+                "{:>10}{:>10}{:>10}{:>10}{:>10}{:>10}{:>10}{:>10}",
+                g.number,
+                0,
+                0,
+                0,
+                0,
+                0,
+                0,
+                entities.len()
+            );
+            let _ = writeln!(s, "{}", field(&g.name, 40));
+            for pair in entities.chunks(2) {
+                let row: Vec<String> = pair
+                    .iter()
+                    .map(|(t, n)| format!("{t:>10}{n:>10}{:>10}{:>10}", 0, 0))
+                    .collect();
+                let _ = writeln!(s, "{}", row.concat());
+            }
+        }
+        s.push_str("    -1\n");
+    }
     if !u.nodes.is_empty() && !u.nodes_2411 {
         s.push_str("    -1\n    15\n");
         for n in &u.nodes {
@@ -1529,6 +1661,40 @@ impl Universal {
                 line: 0,
                 reason: "no solid element (descriptors 111-118) in dataset 2412".into(),
             });
+        }
+        // groups: solid elements make an element set; every element (shells and beams too) and
+        // node of a group puts its nodes in the node set of that name (where clamps and sensors
+        // go), as Gmsh does with physical groups
+        let by_id: std::collections::HashMap<u64, &UffElement> =
+            self.elements.iter().map(|e| (e.id, e)).collect();
+        for g in &self.groups {
+            let mut nodes: Vec<u64> = g.nodes.clone();
+            let mut solids = Vec::new();
+            for id in &g.elements {
+                let e = by_id.get(id).ok_or_else(|| IoError::Parse {
+                    path: path.to_path_buf(),
+                    line: 0,
+                    reason: format!("group {}: element {id} is not in dataset 2412", g.name),
+                })?;
+                nodes.extend(&e.nodes);
+                if mesh.element_index(*id).is_some() {
+                    solids.push(*id);
+                }
+            }
+            nodes.sort_unstable();
+            nodes.dedup();
+            let set_err = |e| IoError::Parse {
+                path: path.to_path_buf(),
+                line: 0,
+                reason: format!("group {}: {e}", g.name),
+            };
+            if !solids.is_empty() {
+                mesh.add_element_set(g.name.clone(), &solids)
+                    .map_err(set_err)?;
+            }
+            if !nodes.is_empty() {
+                mesh.add_node_set(g.name.clone(), &nodes).map_err(set_err)?;
+            }
         }
         let mut warnings = Vec::new();
         if skipped > 0 {

@@ -250,9 +250,26 @@ fn elements(mesh: &Mesh) -> Vec<(ElementKind, Vec<u64>)> {
     v
 }
 
+/// Element and node sets by name, as sorted ids.
+fn sets(mesh: &Mesh) -> Vec<(String, bool, Vec<u64>)> {
+    let mut v = Vec::new();
+    for (name, ids) in mesh.element_sets() {
+        let mut ids: Vec<u64> = ids.iter().map(|e| mesh.element(*e).id).collect();
+        ids.sort_unstable();
+        v.push((name.clone(), false, ids));
+    }
+    for (name, ids) in mesh.node_sets() {
+        let mut ids: Vec<u64> = ids.iter().map(|n| mesh.node_id(*n)).collect();
+        ids.sort_unstable();
+        v.push((name.clone(), true, ids));
+    }
+    v
+}
+
 /// Dataset 2412's parabolic solids (118, 113, 116) and linear ones (111, 112, 115), as Gmsh
 /// writes them, give the same femu elements (node for node) as Gmsh's `.msh` of the same mesh,
-/// whose orderings are checked by geometry in `gmsh.rs`.
+/// whose orderings are checked by geometry in `gmsh.rs`; the groups of dataset 2477 give the same
+/// element and node sets as the `.msh`'s physical groups.
 #[test]
 fn quadratic_solids_from_gmsh_unv_equal_the_msh() {
     for (unv, msh, volume) in [
@@ -271,6 +288,9 @@ fn quadratic_solids_from_gmsh_unv_equal_the_msh() {
         let (a, b) = (elements(&from_unv), elements(&from_msh));
         assert_eq!(a.len(), b.len(), "{unv}");
         assert_eq!(a, b, "{unv}");
+        // the groups of dataset 2477 are Gmsh's physical groups: the same sets, by ids
+        assert_eq!(sets(&from_unv), sets(&from_msh), "{unv}");
+        assert!(!sets(&from_unv).is_empty());
         assert!((from_unv.volume().unwrap() - volume).abs() < 1e-12, "{unv}");
         for e in 0..from_unv.element_count() {
             let el = from_unv.element(e);
@@ -294,4 +314,49 @@ fn quadratic_solids_from_gmsh_unv_equal_the_msh() {
         err.contains(&format!("element {id}")) && err.contains("needs 20"),
         "{err}"
     );
+}
+
+/// Dataset 2477 groups round-trip (text identical); a group announcing more entities than it
+/// lists, or naming an element that does not exist, is an error naming it.
+#[test]
+fn groups_round_trip_and_malformed_groups() {
+    let path = fixture("msh", "box_mixed2.unv");
+    let u = read_uff(&path).unwrap();
+    assert_eq!(
+        u.groups.iter().map(|g| g.name.as_str()).collect::<Vec<_>>(),
+        ["xmin", "quads", "wedges"]
+    );
+    let text = uff_string(&u);
+    let back = parse_uff(&text, Path::new("g.unv")).unwrap();
+    assert_eq!(back.groups, u.groups);
+    assert_eq!(uff_string(&back), text);
+    let good = std::fs::read_to_string(&path).unwrap();
+    let short = good.replacen(
+        "         1         0         0         0         0         0         0         8\nquads",
+        "         1         0         0         0         0         0         0         9\nquads",
+        1,
+    );
+    assert_ne!(short, good);
+    let e = parse_uff(&short, Path::new("s.unv"))
+        .unwrap_err()
+        .to_string();
+    // the next group's header is read as entities: its zeros are not tags
+    assert!(e.contains(":533:") && e.contains("entity tag 0"), "{e}");
+    let mut missing = u.clone();
+    missing.groups[1].elements.push(999_999);
+    let e = missing.to_mesh(&path).unwrap_err().to_string();
+    assert!(e.contains("quads") && e.contains("999999"), "{e}");
+}
+
+/// Found by the fuzzer: a text field that reads "-1" once written (here after its non-ASCII
+/// characters are dropped) would end its dataset; it is written as "(-1)".
+#[test]
+fn a_text_field_never_writes_the_delimiter() {
+    let mut u = read_uff(fixture("uff", "frf_ascii.uff")).unwrap();
+    u.trace_lines[0].id = "\u{fffd}-1\u{fffd}".into();
+    u.functions[0].ids[1] = " -1 ".into();
+    let back = parse_uff(&uff_string(&u), Path::new("d.uff")).unwrap();
+    assert_eq!(back.trace_lines[0].id, "(-1)");
+    assert_eq!(back.functions[0].ids[1], "(-1)");
+    assert_eq!(back.trace_lines[0].nodes, u.trace_lines[0].nodes);
 }
