@@ -129,6 +129,49 @@ pub(crate) fn m_on_pattern(k: &SparseMatrix, m: &SparseMatrix) -> Result<Vec<f64
     Ok(m_on_k)
 }
 
+/// Measured shapes: one row per measured DOF, finite values.
+fn check_measured(measured: usize, ya: MatRef<'_, f64>) -> Result<(), CorrelateError> {
+    if ya.nrows() != measured {
+        return Err(CorrelateError::DimensionMismatch {
+            what: "measured shapes against the measured DOFs",
+            expected: measured,
+            got: ya.nrows(),
+        });
+    }
+    for j in 0..ya.ncols() {
+        if let Some(i) = ya.col(j).iter().position(|v| !v.is_finite()) {
+            return Err(CorrelateError::NonFinite {
+                what: "measured shape",
+                index: j * ya.nrows() + i,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Measured shapes as [`check_measured`] and one finite eigenvalue per shape.
+pub(crate) fn check_expansion_data(
+    measured: usize,
+    lambdas: &[f64],
+    ya: MatRef<'_, f64>,
+) -> Result<(), CorrelateError> {
+    check_measured(measured, ya)?;
+    if lambdas.len() != ya.ncols() {
+        return Err(CorrelateError::DimensionMismatch {
+            what: "eigenvalues against measured shapes",
+            expected: ya.ncols(),
+            got: lambdas.len(),
+        });
+    }
+    match lambdas.iter().position(|l| !l.is_finite()) {
+        Some(index) => Err(CorrelateError::NonFinite {
+            what: "expansion eigenvalue",
+            index,
+        }),
+        None => Ok(()),
+    }
+}
+
 /// The result of [`Expander::test_error_projected`].
 #[derive(Debug, Clone)]
 pub struct TestErrorExpansion {
@@ -266,22 +309,7 @@ impl<'a> Expander<'a> {
     }
 
     fn check_measured(&self, ya: MatRef<'_, f64>) -> Result<(), CorrelateError> {
-        if ya.nrows() != self.part.measured.len() {
-            return Err(CorrelateError::DimensionMismatch {
-                what: "measured shapes against the measured DOFs",
-                expected: self.part.measured.len(),
-                got: ya.nrows(),
-            });
-        }
-        for j in 0..ya.ncols() {
-            if let Some(i) = ya.col(j).iter().position(|v| !v.is_finite()) {
-                return Err(CorrelateError::NonFinite {
-                    what: "measured shape",
-                    index: j * ya.nrows() + i,
-                });
-            }
-        }
-        Ok(())
+        check_measured(self.part.measured.len(), ya)
     }
 
     /// Full-length vectors with `ya` on the measured DOFs and zero elsewhere.
@@ -556,26 +584,8 @@ impl Kkt {
 }
 
 impl Expander<'_> {
-    pub(crate) fn check_lambdas(
-        &self,
-        lambdas: &[f64],
-        ya: MatRef<'_, f64>,
-    ) -> Result<(), CorrelateError> {
-        self.check_measured(ya)?;
-        if lambdas.len() != ya.ncols() {
-            return Err(CorrelateError::DimensionMismatch {
-                what: "eigenvalues against measured shapes",
-                expected: ya.ncols(),
-                got: lambdas.len(),
-            });
-        }
-        match lambdas.iter().position(|l| !l.is_finite()) {
-            Some(index) => Err(CorrelateError::NonFinite {
-                what: "expansion eigenvalue",
-                index,
-            }),
-            None => Ok(()),
-        }
+    fn check_lambdas(&self, lambdas: &[f64], ya: MatRef<'_, f64>) -> Result<(), CorrelateError> {
+        check_expansion_data(self.part.measured.len(), lambdas, ya)
     }
 
     /// Minimum-residual expansion: `x_o = argmin ||Z_{:,o} x_o + Z_{:,a} x_a||_{M^-1}` with
@@ -611,11 +621,8 @@ impl Expander<'_> {
         if self.part.measured.len() > SENSOR_SPACE_LIMIT {
             return self.minimum_residual_saddle_point(lambdas, ya);
         }
-        SensorSpace::new(self.k, self.m, &self.part.measured)?.minimum_residual(
-            lambdas,
-            &self.part.measured,
-            ya,
-        )
+        self.sensor_space()?
+            .minimum_residual(lambdas, &self.part.measured, ya)
     }
 
     /// Minimum-residual expansion in a diagonal metric: `x_o = argmin ||Z x||_W` with
@@ -901,12 +908,17 @@ impl Expander<'_> {
         if self.part.measured.len() > SENSOR_SPACE_LIMIT {
             return self.mdre_saddle_point(lambdas, ya, gamma, stiffness_shift);
         }
-        SensorSpace::new(self.k, self.m, &self.part.measured)?.mdre(
-            lambdas,
+        self.sensor_space()?
+            .mdre(lambdas, &self.part.measured, ya, gamma, stiffness_shift)
+    }
+
+    /// The sensor space of this expander's measured DOFs, sharing `M`'s values on `K`'s pattern.
+    fn sensor_space(&self) -> Result<SensorSpace<'_>, CorrelateError> {
+        SensorSpace::with_m_on_k(
+            self.k,
+            self.m,
             &self.part.measured,
-            ya,
-            gamma,
-            stiffness_shift,
+            std::borrow::Cow::Borrowed(&self.m_on_k),
         )
     }
 

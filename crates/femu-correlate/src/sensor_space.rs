@@ -30,7 +30,7 @@
 //! the expansion is recomputed with [`Expander`]'s omitted-DOF or saddle-point formulation, which
 //! either succeeds or reports why the expansion is not unique.
 
-use crate::expansion::{Expander, m_on_pattern};
+use crate::expansion::{Expander, check_expansion_data, m_on_pattern};
 use crate::{CorrelateError, Partition};
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef};
@@ -38,6 +38,7 @@ use femu_sparse::SparseMatrix;
 use femu_sparse::cholesky::{Factorization, SymbolicFactor};
 use femu_sparse::csc::sym_mul_mat;
 use femu_sparse::ordering::Ordering;
+use std::borrow::Cow;
 
 /// Backward-error tolerance of the a posteriori checks: residuals of the method's conditions
 /// relative to the size of the terms that cancel in them.
@@ -118,7 +119,8 @@ pub struct SensorSpace<'a> {
     candidates: Vec<usize>,
     /// for each free DOF, its position in `candidates` (usize::MAX when not a candidate)
     slot: Vec<usize>,
-    m_on_k: Vec<f64>,
+    /// `M`'s values on `K`'s pattern (borrowed from an [`Expander`] that has them)
+    m_on_k: Cow<'a, [f64]>,
     symbolic: Option<SymbolicFactor>,
     cache: Vec<Entry>,
     fallbacks: usize,
@@ -136,9 +138,18 @@ impl<'a> SensorSpace<'a> {
         m: &'a SparseMatrix,
         candidates: &[usize],
     ) -> Result<Self, CorrelateError> {
+        Self::with_m_on_k(k, m, candidates, Cow::Owned(m_on_pattern(k, m)?))
+    }
+
+    /// [`SensorSpace::new`] with `M`'s values on `K`'s pattern already at hand.
+    pub(crate) fn with_m_on_k(
+        k: &'a SparseMatrix,
+        m: &'a SparseMatrix,
+        candidates: &[usize],
+        m_on_k: Cow<'a, [f64]>,
+    ) -> Result<Self, CorrelateError> {
         let n = k.rows();
         Partition::new(n, candidates)?;
-        let m_on_k = m_on_pattern(k, m)?;
         let mut slot = vec![usize::MAX; n];
         for (i, d) in candidates.iter().enumerate() {
             slot[*d] = i;
@@ -258,9 +269,7 @@ impl<'a> SensorSpace<'a> {
                 s => Ok(s),
             })
             .collect::<Result<_, _>>()?;
-        // the omitted-DOF expander validates sizes and values; it is also the fallback
-        let fallback = Expander::with_measured_dofs(self.k, self.m, measured)?;
-        fallback.check_lambdas(lambdas, ya)?;
+        check_expansion_data(measured.len(), lambdas, ya)?;
         let shifts: Vec<f64> = match method {
             SpaceMethod::Mdre {
                 gamma,
@@ -286,6 +295,8 @@ impl<'a> SensorSpace<'a> {
             }
         }
         if !failed.is_empty() {
+            // built only here: extracting K_oo is work the sensor space exists to avoid
+            let fallback = Expander::with_measured_dofs(self.k, self.m, measured)?;
             self.fallbacks += failed.len();
             let lam: Vec<f64> = failed.iter().map(|j| lambdas[*j]).collect();
             let yf = Mat::from_fn(measured.len(), failed.len(), |i, c| ya[(i, failed[c])]);
@@ -361,7 +372,7 @@ impl<'a> SensorSpace<'a> {
             .k
             .data()
             .iter()
-            .zip(&self.m_on_k)
+            .zip(self.m_on_k.iter())
             .map(|(k, m)| k - lambda * m)
             .collect();
         self.factorizations += 1;

@@ -132,50 +132,30 @@ pub fn sensor_removal_study(
         if layout.len() == dofs.free_count() {
             expanded.push(("full".into(), x.to_owned()));
         } else {
-            let exp = Expander::new(k, m, &layout)?;
             let ya = layout.measure_all(x)?;
-            let measured = exp.partition().measured().to_vec();
+            let measured = layout.measured_dofs().ok_or(CorrelateError::Invalid {
+                what: "sensor removal study",
+                reason: "triaxial sensors without measured DOFs".into(),
+            })?;
+            // the per-set expander (extraction of K_oo) only where the sensor space does not serve
+            let mut per_set: Option<Expander> = None;
             for method in methods {
                 let context = |e: CorrelateError| CorrelateError::Invalid {
                     what: "sensor removal study",
                     reason: format!("{} with {} nodes: {e}", method.name(), nodes.len()),
                 };
-                let zeros = vec![0.0; lambdas.len()];
-                let xe = match (method, space.as_mut()) {
-                    (Method::Static, Some(sp)) => sp.dynamic(&zeros, &measured, ya.as_ref()),
-                    (Method::Dynamic, Some(sp)) => sp.dynamic(lambdas, &measured, ya.as_ref()),
-                    (Method::MinimumResidual, Some(sp)) => {
-                        sp.minimum_residual(lambdas, &measured, ya.as_ref())
+                let shared = space
+                    .as_mut()
+                    .and_then(|sp| in_space(sp, method, lambdas, &measured, ya.as_ref()));
+                let xe = match shared {
+                    Some(result) => result,
+                    None => {
+                        let exp = match per_set {
+                            Some(ref e) => e,
+                            None => per_set.insert(Expander::new(k, m, &layout).map_err(context)?),
+                        };
+                        by_set(exp, method, lambdas, ya.as_ref(), serep_basis)
                     }
-                    (
-                        Method::Mdre {
-                            gamma,
-                            stiffness_shift,
-                        },
-                        Some(sp),
-                    ) => sp.mdre(lambdas, &measured, ya.as_ref(), *gamma, *stiffness_shift),
-                    (Method::Static, None) => exp.static_(ya.as_ref()),
-                    (Method::Dynamic, None) => exp.dynamic(lambdas, ya.as_ref()),
-                    (Method::Serep(count), _) => match serep_basis {
-                        Some(b) if *count <= b.ncols() => {
-                            exp.serep(b.subcols(0, *count), ya.as_ref())
-                        }
-                        _ => Err(CorrelateError::Invalid {
-                            what: "SEREP",
-                            reason: format!(
-                                "{count} modes requested, basis has {}",
-                                serep_basis.map_or(0, |b| b.ncols())
-                            ),
-                        }),
-                    },
-                    (Method::MinimumResidual, None) => exp.minimum_residual(lambdas, ya.as_ref()),
-                    (
-                        Method::Mdre {
-                            gamma,
-                            stiffness_shift,
-                        },
-                        None,
-                    ) => exp.mdre(lambdas, ya.as_ref(), *gamma, *stiffness_shift),
                 }
                 .map_err(context)?;
                 expanded.push((method.name(), xe));
@@ -196,6 +176,55 @@ pub fn sensor_removal_study(
         }
     }
     Ok(out)
+}
+
+/// `method` from the sensor space shared by every set (`None` for SEREP, which factors nothing).
+fn in_space(
+    sp: &mut SensorSpace<'_>,
+    method: &Method,
+    lambdas: &[f64],
+    measured: &[usize],
+    ya: MatRef<'_, f64>,
+) -> Option<Result<Mat<f64>, CorrelateError>> {
+    Some(match method {
+        Method::Static => sp.dynamic(&vec![0.0; lambdas.len()], measured, ya),
+        Method::Dynamic => sp.dynamic(lambdas, measured, ya),
+        Method::MinimumResidual => sp.minimum_residual(lambdas, measured, ya),
+        Method::Mdre {
+            gamma,
+            stiffness_shift,
+        } => sp.mdre(lambdas, measured, ya, *gamma, *stiffness_shift),
+        Method::Serep(_) => return None,
+    })
+}
+
+/// `method` by the expander of one sensor set.
+fn by_set(
+    exp: &Expander<'_>,
+    method: &Method,
+    lambdas: &[f64],
+    ya: MatRef<'_, f64>,
+    serep_basis: Option<MatRef<'_, f64>>,
+) -> Result<Mat<f64>, CorrelateError> {
+    match method {
+        Method::Static => exp.static_(ya),
+        Method::Dynamic => exp.dynamic(lambdas, ya),
+        Method::Serep(count) => match serep_basis {
+            Some(b) if *count <= b.ncols() => exp.serep(b.subcols(0, *count), ya),
+            _ => Err(CorrelateError::Invalid {
+                what: "SEREP",
+                reason: format!(
+                    "{count} modes requested, basis has {}",
+                    serep_basis.map_or(0, |b| b.ncols())
+                ),
+            }),
+        },
+        Method::MinimumResidual => exp.minimum_residual(lambdas, ya),
+        Method::Mdre {
+            gamma,
+            stiffness_shift,
+        } => exp.mdre(lambdas, ya, *gamma, *stiffness_shift),
+    }
 }
 
 /// The study as CSV (`nodes,sensors,method,mode,rho_m,rho_2`, one row per point).
