@@ -888,11 +888,18 @@ fn parse_2477(path: &Path, body: &[(usize, &str)], out: &mut Universal) -> Resul
             })?;
             let v = ints(path, ln2, l2, 4)?;
             for q in v.chunks(4) {
-                if q.len() < 4 || read == count {
+                if q.len() < 4 {
                     return Err(perr(
                         path,
                         ln2,
                         "an entity needs 4 integers (type, tag, 0, 0)",
+                    ));
+                }
+                if read == count {
+                    return Err(perr(
+                        path,
+                        ln2,
+                        format!("group {number}: more than the {count} entities announced"),
                     ));
                 }
                 if q[1] <= 0 {
