@@ -517,16 +517,23 @@ mod binary {
         /// the file's byte order differs from this machine's
         swap: bool,
         size_t: usize,
+        /// (byte, its line) last counted: `line_of` is asked at every block, so it counts
+        /// newlines onwards from there instead of from the start of the file
+        counted: std::cell::Cell<(usize, usize)>,
     }
 
     impl<'a> Reader<'a> {
         /// 1-based line of byte `at` (newlines inside binary blocks count too; the line of a
         /// section header is exact).
         fn line_of(&self, at: usize) -> usize {
-            1 + self.b[..at.min(self.b.len())]
-                .iter()
-                .filter(|c| **c == b'\n')
-                .count()
+            let at = at.min(self.b.len());
+            let (from, line) = match self.counted.get() {
+                (from, line) if from <= at => (from, line),
+                _ => (0, 1),
+            };
+            let line = line + self.b[from..at].iter().filter(|c| **c == b'\n').count();
+            self.counted.set((at, line));
+            line
         }
 
         fn err(&self, reason: String) -> IoError {
@@ -676,6 +683,7 @@ mod binary {
             path,
             swap: false,
             size_t: 8,
+            counted: std::cell::Cell::new((0, 1)),
         };
         let mut warnings = Vec::new();
         let mut format = false;

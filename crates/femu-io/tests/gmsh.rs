@@ -423,7 +423,21 @@ fn binary_byte_orders_and_malformed_binaries() {
     for (k, (bytes, needle)) in cases.iter().enumerate() {
         match femu_io::gmsh::parse_msh_bytes(bytes, Path::new("bad.msh")) {
             Err(e @ IoError::Parse { .. }) => {
-                assert!(e.to_string().contains(needle.as_str()), "case {k}: {e}")
+                assert!(e.to_string().contains(needle.as_str()), "case {k}: {e}");
+                // the line is that of the byte offset, counted from the start of the file
+                let IoError::Parse { line, reason, .. } = &e else {
+                    unreachable!()
+                };
+                if let Some(at) = reason
+                    .rsplit_once("(byte offset ")
+                    .and_then(|(_, t)| t.trim_end_matches(')').parse::<usize>().ok())
+                {
+                    let want = 1 + bytes[..at.min(bytes.len())]
+                        .iter()
+                        .filter(|c| **c == b'\n')
+                        .count();
+                    assert_eq!(*line, want, "case {k}: {e}");
+                }
             }
             other => panic!("case {k}: {other:?}"),
         }
