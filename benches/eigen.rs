@@ -7,7 +7,7 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use femu::prelude::*;
-use femu::sparse::eigen::{EigenParams, Which, eigs};
+use femu::sparse::eigen::{EigenOptions, Which, eigs};
 use std::time::Duration;
 
 mod common;
@@ -42,7 +42,7 @@ fn bench(c: &mut Criterion) {
         group.bench_function(id, |b| {
             b.iter(|| {
                 let modes =
-                    eigs(&sys.k, &sys.m, Which::Lowest(20), &EigenParams::default()).unwrap();
+                    eigs(&sys.k, &sys.m, Which::Lowest(20), &EigenOptions::default()).unwrap();
                 assert!(modes.sturm.verified());
                 modes.values.len()
             })

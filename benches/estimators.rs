@@ -16,7 +16,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use faer::Mat;
 use femu::correlate::{Estimator, MassSolver};
 use femu::prelude::*;
-use femu::sparse::eigen::{EigenParams, Pencil, Which};
+use femu::sparse::eigen::{EigenOptions, Pencil, Which};
 use femu::sparse::ordering::Ordering;
 use std::time::Duration;
 
@@ -74,7 +74,7 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             let pencil = Pencil::new(&cons.k, &cons.m, Ordering::NestedDissection).unwrap();
             let modes = pencil
-                .solve(Which::Lowest(4), &EigenParams::default())
+                .solve(Which::Lowest(4), &EigenOptions::default())
                 .unwrap();
             assert!(modes.sturm.verified());
             modes.values.len()

@@ -2,7 +2,7 @@
 //! (the same study as `femu demo`). Writes the report (Markdown, SVG, JSON, VTK, UFF) and prints
 //! where it is.
 
-use femu::demo::{DemoOptions, run_demo};
+use femu::study::demo::{DemoOptions, run_demo};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = std::env::args()

@@ -8,7 +8,7 @@
 
 use femu::io::inp::{FrequencyStep, write_inp};
 use femu::prelude::*;
-use femu::sparse::eigen::{EigenParams, Which, eigs};
+use femu::sparse::eigen::{EigenOptions, Which, eigs};
 use std::time::Instant;
 
 fn model(kind: &str, n: usize) -> Result<Model, Box<dyn std::error::Error>> {
@@ -59,7 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         "solve" => {
             let t = Instant::now();
-            let mut params = EigenParams::default();
+            let mut params = EigenOptions::default();
             if let Some(b) = std::env::var("FEMU_BLOCK")
                 .ok()
                 .and_then(|v| v.parse().ok())

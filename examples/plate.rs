@@ -14,7 +14,7 @@
 use femu::correlate::modes::hz_of_eigenvalue;
 use femu::prelude::*;
 use femu::sparse::csc::bilinear;
-use femu::sparse::eigen::{EigenParams, Which, eigs};
+use femu::sparse::eigen::{EigenOptions, Which, eigs};
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -62,7 +62,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut results = Vec::new();
     for (name, sys) in [("consistent", &consistent), ("lumped", &lumped)] {
         let t = Instant::now();
-        let modes = eigs(&sys.k, &sys.m, Which::Lowest(16), &EigenParams::default())?;
+        let modes = eigs(&sys.k, &sys.m, Which::Lowest(16), &EigenOptions::default())?;
         println!(
             "{name} mass: {} modes in {:.2} s (shift {:.3e} s^-2); Sturm check: {} eigenvalues below {:.4e} s^-2, {} returned: {}",
             modes.values.len(),
@@ -129,7 +129,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &real_sys.k,
         &real_sys.m,
         Which::Lowest(10),
-        &EigenParams::default(),
+        &EigenOptions::default(),
     )?;
     // test: elastic modes 7-10 of the real plate, at 15 upper-surface nodes (a 5 x 3 grid), y and z
     let sensors = femu::correlate::placement::grid_nodes(mesh, "zmax", [5, 3])?

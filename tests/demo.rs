@@ -1,7 +1,7 @@
 //! The plate study end to end through the facade, on the smaller plate, noise-free and with the
 //! demo's default noise: its key numbers pinned against what they must be.
 
-use femu::demo::{DemoOptions, run_demo};
+use femu::study::demo::{DemoOptions, run_demo};
 
 fn out(name: &str) -> std::path::PathBuf {
     std::env::temp_dir().join(format!("femu-demo-test-{name}-{}", std::process::id()))

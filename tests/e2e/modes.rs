@@ -3,7 +3,7 @@
 use femu::prelude::*;
 use femu::sparse::csc::to_dense;
 use femu::sparse::dense::generalized_symmetric_eigen;
-use femu::sparse::eigen::{EigenParams, Which, eigs};
+use femu::sparse::eigen::{EigenOptions, Which, eigs};
 
 fn plate(quadratic: bool) -> Model {
     let spec = PlateSpec {
@@ -29,7 +29,7 @@ fn free_free_fe_models_match_the_dense_reference() {
             let dense =
                 generalized_symmetric_eigen(to_dense(&sys.k).as_ref(), to_dense(&sys.m).as_ref())
                     .unwrap();
-            let modes = eigs(&sys.k, &sys.m, Which::Lowest(16), &EigenParams::default()).unwrap();
+            let modes = eigs(&sys.k, &sys.m, Which::Lowest(16), &EigenOptions::default()).unwrap();
             assert!(modes.sturm.verified(), "{:?}", modes.sturm);
             assert!(modes.shift < 0.0);
             let first_elastic = dense.values[6];
@@ -77,7 +77,7 @@ fn clamped_beam_shift_and_band_match_the_dense_reference() {
         &sys.k,
         &sys.m,
         Which::Nearest { shift, count: 6 },
-        &EigenParams::default(),
+        &EigenOptions::default(),
     )
     .unwrap();
     let mut idx: Vec<usize> = (0..dense.values.len()).collect();
@@ -97,7 +97,7 @@ fn clamped_beam_shift_and_band_match_the_dense_reference() {
         &sys.k,
         &sys.m,
         Which::Band { lo, hi },
-        &EigenParams::default(),
+        &EigenOptions::default(),
     )
     .unwrap();
     assert_eq!(band.values.len(), 10);
@@ -128,7 +128,7 @@ fn free_free_requests_at_or_below_the_rigid_body_count() {
             generalized_symmetric_eigen(to_dense(&sys.k).as_ref(), to_dense(&sys.m).as_ref())
                 .unwrap();
         for k in [1, 6, 7] {
-            let modes = eigs(&sys.k, &sys.m, Which::Lowest(k), &EigenParams::default())
+            let modes = eigs(&sys.k, &sys.m, Which::Lowest(k), &EigenOptions::default())
                 .unwrap_or_else(|e| panic!("{divisions:?} k={k}: {e}"));
             assert!(modes.sturm.verified());
             assert_eq!(modes.values.len(), k.max(6), "{divisions:?} k={k}");

@@ -266,13 +266,20 @@ fn correlate_pairs_the_model_with_itself() {
             }
         }
     }
-    let err = stderr_of_failure(&[
-        "estimate",
-        deck.to_str().unwrap(),
-        csv.to_str().unwrap(),
-        "--expansion",
-        "guess",
-    ]);
+    // an unknown method is a usage error of the argument parser (exit 2, as for every other
+    // invalid option value), listing the methods
+    let out = femu()
+        .args([
+            "estimate",
+            deck.to_str().unwrap(),
+            csv.to_str().unwrap(),
+            "--expansion",
+            "guess",
+        ])
+        .assert()
+        .failure()
+        .code(2);
+    let err = String::from_utf8_lossy(&out.get_output().stderr).into_owned();
     assert!(err.contains("guess"), "{err}");
     // a sensor on a missing node is an error naming the file and the node
     std::fs::write(

@@ -65,13 +65,13 @@ pub use error::CorrelateError;
 pub use estimators::{
     Bound, BoundKind, Estimator, Form, ModelSpectrum, PairedModel, Relation, ResidualNorms, assess,
 };
-pub use expansion::{Expander, Partition, SENSOR_SPACE_LIMIT, TestErrorExpansion};
+pub use expansion::{Expander, Method, Partition, SENSOR_SPACE_LIMIT, TestErrorExpansion};
 pub use mass::MassSolver;
 pub use modes::{ModeSet, TestModes};
 pub use pairing::{Pair, Pairing, PairingOptions, pair_modes};
 pub use report::{Assessment, CorrelationReport, correlate, estimate};
 pub use residues::StiffnessSolver;
-pub use sensor_space::{SensorSpace, SpaceMethod};
+pub use sensor_space::SensorSpace;
 pub use sensors::{Sensor, SensorLayout};
 
 /// The types most programs need.

@@ -14,7 +14,7 @@ use crate::{CorrelateError, MassSolver};
 use faer::{Mat, MatRef};
 use femu_sparse::cholesky::{Factorization, Ldlt, Llt};
 use femu_sparse::csc::sym_mul_mat;
-use femu_sparse::eigen::{EigenParams, Pencil, Which};
+use femu_sparse::eigen::{EigenOptions, Pencil, Which};
 use femu_sparse::ordering::Ordering;
 use femu_sparse::{SparseError, SparseMatrix};
 
@@ -209,7 +209,7 @@ impl<'a> StiffnessSolver<'a> {
                 ),
             });
         }
-        let modes = pencil.solve(Which::Lowest(zeros), &EigenParams::default())?;
+        let modes = pencil.solve(Which::Lowest(zeros), &EigenOptions::default())?;
         let count = modes.values.iter().filter(|v| v.abs() < thr).count();
         let rigid = modes.vectors.subcols(0, count).to_owned();
         Self::singular(k, m, rigid, &pencil, thr)

@@ -30,7 +30,7 @@
 //! the expansion is recomputed with [`Expander`]'s omitted-DOF or saddle-point formulation, which
 //! either succeeds or reports why the expansion is not unique.
 
-use crate::expansion::{Expander, check_expansion_data, m_on_pattern};
+use crate::expansion::{Expander, Method, check_expansion_data, m_on_pattern};
 use crate::{CorrelateError, Partition};
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef};
@@ -44,9 +44,10 @@ use std::borrow::Cow;
 /// relative to the size of the terms that cancel in them.
 const CHECK_TOL: f64 = 1e-8;
 
-/// The expansion methods the sensor-space formulation provides.
+/// The forms of [`Method`] the sensor space computes (static is dynamic at `lambda = 0`; SEREP
+/// needs no factorization and is not one of them).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum SpaceMethod {
+enum SpaceMethod {
     /// Dynamic at the identified eigenvalue (static when it is 0).
     Dynamic,
     /// Minimum residual in the `M^-1` norm (sensor values imposed).
@@ -210,7 +211,7 @@ impl<'a> SensorSpace<'a> {
         measured: &[usize],
         ya: MatRef<'_, f64>,
     ) -> Result<Mat<f64>, CorrelateError> {
-        self.expand(SpaceMethod::Dynamic, lambdas, measured, ya)
+        self.expand(Method::Dynamic, lambdas, measured, ya)
     }
 
     /// Minimum-residual expansion (`W = M^-1`, values imposed); see [`SensorSpace::dynamic`].
@@ -223,7 +224,7 @@ impl<'a> SensorSpace<'a> {
         measured: &[usize],
         ya: MatRef<'_, f64>,
     ) -> Result<Mat<f64>, CorrelateError> {
-        self.expand(SpaceMethod::MinimumResidual, lambdas, measured, ya)
+        self.expand(Method::MinimumResidual, lambdas, measured, ya)
     }
 
     /// MDRE-WE expansion (test values weighed by `gamma`, energy norm of `K + stiffness_shift M`);
@@ -239,24 +240,50 @@ impl<'a> SensorSpace<'a> {
         gamma: f64,
         stiffness_shift: f64,
     ) -> Result<Mat<f64>, CorrelateError> {
-        let method = SpaceMethod::Mdre {
+        let method = Method::Mdre {
             gamma,
-            stiffness_shift,
+            stiffness_shift: Some(stiffness_shift),
         };
         self.expand(method, lambdas, measured, ya)
     }
 
-    /// Any [`SpaceMethod`].
+    /// Static, dynamic, minimum-residual or MDRE-WE expansion by `method` (static is the dynamic
+    /// expansion at `lambda = 0`; MDRE-WE's automatic shift is [`Method::stiffness_shift`]).
     ///
     /// # Errors
-    /// As the method's own function.
+    /// SEREP (it needs model modes, not this factorization: use [`Expander::serep`]), and as the
+    /// method's own function.
     pub fn expand(
         &mut self,
-        method: SpaceMethod,
+        method: Method,
         lambdas: &[f64],
         measured: &[usize],
         ya: MatRef<'_, f64>,
     ) -> Result<Mat<f64>, CorrelateError> {
+        let zeros;
+        let (method, lambdas) = match method {
+            Method::Static => {
+                zeros = vec![0.0; lambdas.len()];
+                (SpaceMethod::Dynamic, &zeros[..])
+            }
+            Method::Dynamic => (SpaceMethod::Dynamic, lambdas),
+            Method::MinimumResidual => (SpaceMethod::MinimumResidual, lambdas),
+            Method::Mdre { gamma, .. } => (
+                SpaceMethod::Mdre {
+                    gamma,
+                    stiffness_shift: method.stiffness_shift(lambdas).unwrap_or(0.0),
+                },
+                lambdas,
+            ),
+            Method::Serep(_) => {
+                return Err(CorrelateError::Invalid {
+                    what: "sensor-space expansion",
+                    reason:
+                        "SEREP expands with model modes, not a factorization: use Expander::serep"
+                            .into(),
+                });
+            }
+        };
         let n = self.k.rows();
         Partition::new(n, measured)?;
         let sel: Vec<usize> = measured

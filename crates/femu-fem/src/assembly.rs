@@ -38,6 +38,15 @@ pub struct SystemMatrices {
     pub mass_kind: MassKind,
 }
 
+static ASSEMBLIES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// How many global assemblies of `K` and `M` from element matrices ([`Assembler::assemble`],
+/// [`Assembler::assemble_into`]) this process has done: a diagnostic for workflows that must
+/// assemble a model once (a counter, not a timer, so tests can assert it).
+pub fn assemblies_so_far() -> usize {
+    ASSEMBLIES.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 /// The sparsity pattern and element colouring of a model, computed once and reused for every
 /// assembly with new values (updating iterations, parameter groups).
 #[derive(Debug, Clone)]
@@ -248,6 +257,7 @@ impl Assembler {
     /// # Errors
     /// As [`Assembler::assemble`], and [`FemError::LengthMismatch`] if `sys` is not on this pattern.
     pub fn assemble_into(&self, model: &Model, sys: &mut SystemMatrices) -> Result<(), FemError> {
+        ASSEMBLIES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let mesh = model.mesh();
         let n = self.dofs.free_count();
         if model.dof_map() != self.dofs || sys.dofs != self.dofs {

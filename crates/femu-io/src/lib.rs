@@ -12,7 +12,6 @@ mod error;
 pub mod gmsh;
 pub mod inp;
 pub mod json;
-pub mod png;
 pub mod uff;
 pub mod vtk;
 

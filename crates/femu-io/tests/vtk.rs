@@ -176,26 +176,3 @@ fn cells_follow_vtk_conventions() {
     let pvd = pvd_string(&[(100.0, "mode1.vtu"), (250.5, "mode2.vtu")]);
     assert!(pvd.contains("timestep=\"250.5\" file=\"mode2.vtu\""));
 }
-
-/// SVG to PNG: the image has the SVG's size times the scale, a red square where the SVG puts it,
-/// white elsewhere, and text renders (dark pixels inside the text's box) with the shipped font.
-#[test]
-fn svg_to_png_renders_shapes_and_text() {
-    let svg = r##"<svg xmlns="http://www.w3.org/2000/svg" width="40" height="20"><rect x="0" y="0" width="10" height="10" fill="#ff0000"/><text x="15" y="16" font-size="14">A</text></svg>"##;
-    let bytes = femu_io::png::svg_to_png(svg, 2.0).unwrap();
-    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
-    let img = resvg::tiny_skia::Pixmap::decode_png(&bytes).unwrap();
-    assert_eq!((img.width(), img.height()), (80, 40));
-    let px = |x: u32, y: u32| img.pixel(x, y).unwrap();
-    let red = px(5, 5);
-    assert_eq!((red.red(), red.green(), red.blue()), (255, 0, 0));
-    let white = px(70, 5);
-    assert_eq!((white.red(), white.green(), white.blue()), (255, 255, 255));
-    let dark = (30..50)
-        .flat_map(|x| (10..34).map(move |y| (x, y)))
-        .filter(|(x, y)| px(*x, *y).red() < 100)
-        .count();
-    assert!(dark > 20, "text drew {dark} dark pixels");
-    assert!(femu_io::png::svg_to_png("<svg", 1.0).is_err());
-    assert!(femu_io::png::svg_to_png(svg, 0.0).is_err());
-}

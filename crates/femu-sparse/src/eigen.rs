@@ -45,7 +45,7 @@ pub enum Which {
 
 /// Settings of the eigensolver.
 #[derive(Debug, Clone, PartialEq)]
-pub struct EigenParams {
+pub struct EigenOptions {
     /// Convergence tolerance on the shifted relative residual
     /// `||K x - lambda M x|| / ||(K - sigma M) x||`.
     pub tol: f64,
@@ -61,7 +61,7 @@ pub struct EigenParams {
     pub seed: u64,
 }
 
-impl Default for EigenParams {
+impl Default for EigenOptions {
     fn default() -> Self {
         Self {
             tol: 1e-10,
@@ -338,7 +338,7 @@ impl<'a> Pencil<'a> {
     /// [`SparseError::NoConvergence`] (with the number converged) after `max_restarts`,
     /// [`SparseError::NotPositiveDefinite`]-like errors from the factorizations, and
     /// [`SparseError::Singular`] when a shift falls exactly on an eigenvalue.
-    pub fn solve(&self, which: Which, params: &EigenParams) -> Result<Modes, SparseError> {
+    pub fn solve(&self, which: Which, params: &EigenOptions) -> Result<Modes, SparseError> {
         let n = self.dim();
         let mut stats = EigenStats {
             symbolic_seconds: self.symbolic_seconds,
@@ -584,7 +584,7 @@ impl<'a> Pencil<'a> {
 /// Computes modes of `(K, M)`: a one-call front end of [`Pencil`].
 ///
 /// ```
-/// use femu_sparse::eigen::{eigs, EigenParams, Which};
+/// use femu_sparse::eigen::{eigs, EigenOptions, Which};
 /// use femu_sparse::SparseMatrix;
 /// // A spring chain fixed at one end: K tridiagonal (2, -1), M = I.
 /// let n = 50;
@@ -595,7 +595,7 @@ impl<'a> Pencil<'a> {
 /// }
 /// let k: SparseMatrix = t.to_csc();
 /// let m = SparseMatrix::eye(n);
-/// let modes = eigs(&k, &m, Which::Lowest(3), &EigenParams::default()).unwrap();
+/// let modes = eigs(&k, &m, Which::Lowest(3), &EigenOptions::default()).unwrap();
 /// // lambda_j = 4 sin^2((2j - 1) pi / (2 (2n + 1)))
 /// for (j, l) in modes.values.iter().enumerate() {
 ///     let x = ((2 * j + 1) as f64 * std::f64::consts::PI / (2.0 * (2 * n + 1) as f64)).sin();
@@ -610,7 +610,7 @@ pub fn eigs(
     k: &SparseMatrix,
     m: &SparseMatrix,
     which: Which,
-    params: &EigenParams,
+    params: &EigenOptions,
 ) -> Result<Modes, SparseError> {
     Pencil::new(k, m, params.ordering)?.solve(which, params)
 }
@@ -641,7 +641,7 @@ struct Lanczos<'p, 'a> {
     /// another shift: two factors alive at once set femu's peak memory (about 2x CalculiX's).
     op: Option<Ldlt>,
     sigma: f64,
-    params: EigenParams,
+    params: EigenOptions,
     n: usize,
     /// locked eigenvectors, their M images and eigenvalues
     x: Vec<Vec<f64>>,
@@ -653,7 +653,7 @@ struct Lanczos<'p, 'a> {
 }
 
 impl<'p, 'a> Lanczos<'p, 'a> {
-    fn new(pencil: &'p Pencil<'a>, op: Ldlt, sigma: f64, params: &EigenParams) -> Self {
+    fn new(pencil: &'p Pencil<'a>, op: Ldlt, sigma: f64, params: &EigenOptions) -> Self {
         Self {
             pencil,
             op: Some(op),

@@ -84,4 +84,13 @@ pub enum SparseError {
         /// What failed.
         reason: String,
     },
+    /// Iterative refinement of a regularised saddle-point system did not reach a backward error
+    /// of `1e-11`.
+    #[error(
+        "invalid {system}: the regularised saddle-point system did not refine to a backward error of 1e-11: the problem is singular or nearly so (an expansion eigenvalue on an eigenvalue of the constrained structure, or too few sensors)"
+    )]
+    NotRefined {
+        /// Which system.
+        system: &'static str,
+    },
 }

@@ -24,6 +24,7 @@ pub mod csc;
 pub mod dense;
 pub mod eigen;
 mod error;
+pub mod kkt;
 pub mod mtx;
 pub mod ordering;
 

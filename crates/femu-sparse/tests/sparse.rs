@@ -6,23 +6,13 @@ use faer::linalg::solvers::Solve;
 use femu_sparse::cholesky::{Factorization, SymbolicFactor};
 use femu_sparse::csc::to_dense;
 use femu_sparse::dense::{generalized_symmetric_eigen, generalized_symmetric_eigenvalues};
-use femu_sparse::eigen::{EigenParams, Pencil, Which, eigs};
+use femu_sparse::eigen::{EigenOptions, Pencil, Which, eigs};
 use femu_sparse::ordering::Ordering;
 use femu_sparse::{SparseError, SparseMatrix};
 use proptest::prelude::*;
 use sprs::TriMat;
 
-struct Rng(u64);
-impl Rng {
-    fn f(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use femu_testkit::Rng;
 
 /// A random sparse SPD pencil: `K` diagonally dominant on a random pattern, `M` SPD on a
 /// sub-pattern of `K`'s (as FE matrices: M's pattern inside K's).
@@ -32,14 +22,14 @@ fn random_pencil(n: usize, density: f64, seed: u64) -> (SparseMatrix, SparseMatr
     let (mut kd, mut md) = (vec![0.0; n], vec![0.0; n]);
     for i in 0..n {
         for j in 0..i {
-            if rng.f() < density {
-                let v = rng.f() - 0.5;
+            if rng.next_f64() < density {
+                let v = rng.next_f64() - 0.5;
                 kt.add_triplet(i, j, v);
                 kt.add_triplet(j, i, v);
                 kd[i] += v.abs();
                 kd[j] += v.abs();
-                if rng.f() < 0.5 {
-                    let w = 0.2 * (rng.f() - 0.5);
+                if rng.next_f64() < 0.5 {
+                    let w = 0.2 * (rng.next_f64() - 0.5);
                     mt.add_triplet(i, j, w);
                     mt.add_triplet(j, i, w);
                     md[i] += w.abs();
@@ -49,8 +39,8 @@ fn random_pencil(n: usize, density: f64, seed: u64) -> (SparseMatrix, SparseMatr
         }
     }
     for i in 0..n {
-        kt.add_triplet(i, i, kd[i] + 0.1 + 10.0 * rng.f());
-        mt.add_triplet(i, i, md[i] + 0.5 + rng.f());
+        kt.add_triplet(i, i, kd[i] + 0.1 + 10.0 * rng.next_f64());
+        mt.add_triplet(i, i, md[i] + 0.5 + rng.next_f64());
     }
     (kt.to_csc(), mt.to_csc())
 }
@@ -215,7 +205,7 @@ fn indefinite_and_bad_input_are_errors_with_the_place() {
             &asym,
             &SparseMatrix::eye(2),
             Which::Lowest(1),
-            &EigenParams::default()
+            &EigenOptions::default()
         ),
         Err(SparseError::NotSymmetric { .. })
     ));
@@ -238,7 +228,7 @@ fn eigensolver_matches_dense_on_random_pencils() {
                 count: 7,
             },
         ] {
-            let modes = eigs(&k, &m, which, &EigenParams::default()).unwrap();
+            let modes = eigs(&k, &m, which, &EigenOptions::default()).unwrap();
             assert!(modes.sturm.verified(), "{which:?}: {:?}", modes.sturm);
             let first = match which {
                 Which::Lowest(_) => 0,
@@ -279,9 +269,9 @@ fn repeated_eigenvalues_of_the_3d_laplacian_are_all_found() {
     let a = laplacian_3d(nn);
     let m = SparseMatrix::eye(nn * nn * nn);
     for block_size in [1, 4] {
-        let params = EigenParams {
+        let params = EigenOptions {
             block_size,
-            ..EigenParams::default()
+            ..EigenOptions::default()
         };
         let modes = eigs(&a, &m, Which::Lowest(20), &params).unwrap();
         let exact = laplacian_spectrum(nn, modes.values.len());
@@ -296,7 +286,7 @@ fn repeated_eigenvalues_of_the_3d_laplacian_are_all_found() {
     }
     // Every eigenvalue in a band.
     let (lo, hi) = (0.5, 0.9);
-    let modes = eigs(&a, &m, Which::Band { lo, hi }, &EigenParams::default()).unwrap();
+    let modes = eigs(&a, &m, Which::Band { lo, hi }, &EigenOptions::default()).unwrap();
     let exact: Vec<f64> = laplacian_spectrum(nn, nn * nn * nn)
         .into_iter()
         .filter(|l| *l >= lo && *l <= hi)

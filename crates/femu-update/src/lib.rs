@@ -54,7 +54,7 @@ pub use error::UpdateError;
 pub use localise::{Indicator, Localisation, SelectionRule, localise, localise_expanded};
 pub use lsq::{MassGuard, UpdateOptions};
 pub use problem::{Corrections, Parameter, UpdateModel};
-pub use sbebe::{Iteration, SbebeOptions, UpdateResult, sb_ebe};
+pub use sbebe::{Iteration, SbebeOptions, StopReason, UpdateMethod, UpdateResult, sb_ebe};
 pub use sensitivity::{SensitivityOptions, inverse_eigensensitivity, model_modes};
 pub use truth::{ModeCheck, ParameterCheck, TruthCheck, truth_check};
 
@@ -62,7 +62,8 @@ pub use truth::{ModeCheck, ParameterCheck, TruthCheck, truth_check};
 pub mod prelude {
     pub use crate::{
         Corrections, Indicator, Localisation, MassGuard, SbebeOptions, SelectionRule,
-        SensitivityOptions, TruthCheck, UpdateError, UpdateModel, UpdateOptions, UpdateResult,
-        inverse_eigensensitivity, localise, localise_expanded, model_modes, sb_ebe, truth_check,
+        SensitivityOptions, StopReason, TruthCheck, UpdateError, UpdateMethod, UpdateModel,
+        UpdateOptions, UpdateResult, inverse_eigensensitivity, localise, localise_expanded,
+        model_modes, sb_ebe, truth_check,
     };
 }

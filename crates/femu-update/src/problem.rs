@@ -133,6 +133,34 @@ impl<'m> UpdateModel<'m> {
         }
         let asm = Assembler::new(model)?;
         let base = asm.assemble(model, groups.mass_kind())?;
+        Self::from_assembly(model, groups, corrections, asm, base)
+    }
+
+    /// The model with groups, from an assembler and nominal matrices the caller already has (a
+    /// workflow that assembled the model once reuses them here). `base` must be `asm`'s assembly
+    /// of `model` with the groups' mass kind.
+    ///
+    /// # Errors
+    /// No group, a mass kind or size that does not match, and the groups' errors.
+    pub fn from_assembly(
+        model: &'m Model,
+        groups: ParameterGroups,
+        corrections: Corrections,
+        asm: Assembler,
+        base: SystemMatrices,
+    ) -> Result<Self, UpdateError> {
+        if groups.is_empty() {
+            return Err(UpdateError::Invalid {
+                what: "parameter groups",
+                reason: "no group to update".into(),
+            });
+        }
+        if base.mass_kind != groups.mass_kind() || base.k.rows() != asm.dofs().free_count() {
+            return Err(UpdateError::Invalid {
+                what: "nominal matrices",
+                reason: "not the assembler's assembly with the groups' mass kind".into(),
+            });
+        }
         let mut group_dofs = Vec::with_capacity(groups.len());
         let mut group_mass = Vec::with_capacity(groups.len());
         for g in 0..groups.len() {

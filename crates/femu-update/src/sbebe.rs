@@ -41,8 +41,8 @@ pub struct Iteration {
 /// The result of an updating run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct UpdateResult {
-    /// `"SB-EBE"` or `"inverse eigensensitivity"`.
-    pub method: String,
+    /// The updating method.
+    pub method: UpdateMethod,
     /// Parameter names, in `theta` order.
     pub names: Vec<String>,
     /// The final parameters (applied to the model).
@@ -52,7 +52,89 @@ pub struct UpdateResult {
     /// Whether the stopping test was met (otherwise the iteration limit was).
     pub converged: bool,
     /// Why the iteration stopped.
-    pub stop_reason: String,
+    pub stop_reason: StopReason,
+}
+
+/// An updating method: SB-EBE ([`sb_ebe`]) or inverse eigensensitivity
+/// ([`crate::inverse_eigensensitivity`]). Text form `sbebe` or `ies` (command line, study files).
+///
+/// ```
+/// use femu_update::UpdateMethod;
+/// assert_eq!("ies".parse::<UpdateMethod>().unwrap(), UpdateMethod::InverseEigensensitivity);
+/// assert_eq!(UpdateMethod::SbEbe.to_string(), "SB-EBE");
+/// assert!("newton".parse::<UpdateMethod>().is_err());
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum UpdateMethod {
+    /// Sensitivity-based element-by-element updating (`docs/MATH.md`, "Updating", (13)-(15)).
+    #[serde(rename = "sbebe")]
+    SbEbe,
+    /// Gauss-Newton (Levenberg-Marquardt) on relative eigenvalue errors.
+    #[serde(rename = "ies")]
+    InverseEigensensitivity,
+}
+
+impl std::fmt::Display for UpdateMethod {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            UpdateMethod::SbEbe => "SB-EBE",
+            UpdateMethod::InverseEigensensitivity => "inverse eigensensitivity",
+        })
+    }
+}
+
+impl std::str::FromStr for UpdateMethod {
+    type Err = UpdateError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "sbebe" | "sb-ebe" => Ok(UpdateMethod::SbEbe),
+            "ies" | "inverse-eigensensitivity" => Ok(UpdateMethod::InverseEigensensitivity),
+            other => Err(UpdateError::Invalid {
+                what: "updating method",
+                reason: format!("'{other}': expected sbebe or ies"),
+            }),
+        }
+    }
+}
+
+/// Why an updating iteration stopped.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StopReason {
+    /// The objective is exactly zero (SB-EBE).
+    ZeroResidual,
+    /// The eigenvalues match to round-off (inverse eigensensitivity).
+    RoundOff,
+    /// The objective decreased by less than the tolerance in the last step.
+    Stalled,
+    /// No step along the correction (halved or damped) decreased the objective; the last trial
+    /// model's failure, if trials were rejected by an error.
+    NoDescent {
+        /// The error that rejected the last trial model.
+        last_failure: Option<String>,
+    },
+    /// The iteration limit was reached.
+    IterationLimit(usize),
+}
+
+impl std::fmt::Display for StopReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StopReason::ZeroResidual => f.write_str("zero residual"),
+            StopReason::RoundOff => f.write_str("eigenvalues matched to round-off"),
+            StopReason::Stalled => f.write_str("objective stopped decreasing"),
+            StopReason::NoDescent { last_failure: None } => f.write_str(
+                "objective stopped decreasing (no step along the correction reduces it)",
+            ),
+            StopReason::NoDescent {
+                last_failure: Some(e),
+            } => write!(
+                f,
+                "objective stopped decreasing (trial models rejected; last failure: {e})"
+            ),
+            StopReason::IterationLimit(n) => write!(f, "iteration limit {n} reached"),
+        }
+    }
 }
 
 impl std::fmt::Display for UpdateResult {
@@ -244,13 +326,13 @@ pub fn sb_ebe(
     log(&history[0]);
     let (mut converged, mut stop_reason) = (
         false,
-        format!("iteration limit {} reached", options.update.max_iterations),
+        StopReason::IterationLimit(options.update.max_iterations),
     );
     for it in 1..=options.update.max_iterations {
         let t = Instant::now();
         if state.objective == 0.0 {
             converged = true;
-            stop_reason = "zero residual".into();
+            stop_reason = StopReason::ZeroResidual;
             break;
         }
         // correction: min sum_i w_i ||R_i + B_i (theta' - theta)||_W^2
@@ -308,13 +390,8 @@ pub fn sb_ebe(
         let Some(next) = accepted else {
             up.set_theta(&theta)?;
             converged = true;
-            stop_reason = match failure {
-                Some(e) => format!(
-                    "objective stopped decreasing (trial models rejected; last failure: {e})"
-                ),
-                None => {
-                    "objective stopped decreasing (no step along the correction reduces it)".into()
-                }
+            stop_reason = StopReason::NoDescent {
+                last_failure: failure.map(|e| e.to_string()),
             };
             break;
         };
@@ -332,12 +409,12 @@ pub fn sb_ebe(
         history.push(entry);
         if decrease <= options.update.tolerance * previous {
             converged = true;
-            stop_reason = "objective stopped decreasing".into();
+            stop_reason = StopReason::Stalled;
             break;
         }
     }
     Ok(UpdateResult {
-        method: "SB-EBE".into(),
+        method: UpdateMethod::SbEbe,
         names: up.parameters().iter().map(|p| p.name.clone()).collect(),
         theta,
         history,
@@ -378,5 +455,23 @@ pub(crate) fn accumulate_normal(
                 h[(k, l)] += a * b * w[d];
             }
         }
+    }
+}
+
+/// Command-line values `sbebe` and `ies`.
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for UpdateMethod {
+    fn value_variants<'a>() -> &'a [Self] {
+        &[UpdateMethod::SbEbe, UpdateMethod::InverseEigensensitivity]
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        use clap::builder::PossibleValue;
+        Some(match self {
+            UpdateMethod::SbEbe => PossibleValue::new("sbebe").help("SB-EBE (element by element)"),
+            UpdateMethod::InverseEigensensitivity => {
+                PossibleValue::new("ies").help("inverse eigensensitivity")
+            }
+        })
     }
 }

@@ -10,11 +10,11 @@
 use crate::UpdateError;
 use crate::lsq::{UpdateOptions, bounded_step};
 use crate::problem::UpdateModel;
-use crate::sbebe::{Iteration, UpdateResult};
+use crate::sbebe::{Iteration, StopReason, UpdateMethod, UpdateResult};
 use faer::Mat;
 use femu_correlate::correlation::mac_matrix;
 use femu_correlate::{ModeSet, PairingOptions, SensorLayout, TestModes, pair_modes};
-use femu_sparse::eigen::{EigenParams, Pencil, Which};
+use femu_sparse::eigen::{EigenOptions, Pencil, Which};
 use std::time::Instant;
 
 /// Settings of inverse eigensensitivity.
@@ -30,7 +30,7 @@ pub struct SensitivityOptions {
     /// Initial Levenberg-Marquardt damping, relative to the diagonal of `J^T J` (default 1e-3).
     pub damping: f64,
     /// Eigensolver settings.
-    pub eigen: EigenParams,
+    pub eigen: EigenOptions,
 }
 
 impl Default for SensitivityOptions {
@@ -40,7 +40,7 @@ impl Default for SensitivityOptions {
             model_modes: None,
             pairing: PairingOptions::default(),
             damping: 1e-3,
-            eigen: EigenParams::default(),
+            eigen: EigenOptions::default(),
         }
     }
 }
@@ -61,7 +61,7 @@ pub(crate) struct Evaluation {
 pub fn model_modes(
     up: &mut UpdateModel<'_>,
     count: usize,
-    params: &EigenParams,
+    params: &EigenOptions,
 ) -> Result<ModeSet, UpdateError> {
     let symbolic = up.symbolic()?;
     let sys = up.matrices();
@@ -139,12 +139,15 @@ pub fn inverse_eigensensitivity(
     }];
     log(&history[0]);
     let mut mu = options.damping;
-    let (mut converged, mut stop_reason) = (false, String::new());
+    let (mut converged, mut stop_reason) = (
+        false,
+        StopReason::IterationLimit(options.update.max_iterations),
+    );
     for it in 1..=options.update.max_iterations {
         let t = Instant::now();
         if cost(&eval) < 1e-28 {
             converged = true;
-            stop_reason = "eigenvalues matched to round-off".into();
+            stop_reason = StopReason::RoundOff;
             break;
         }
         // Jacobian rows: d lambda_j / d theta / lambda_id
@@ -190,7 +193,7 @@ pub fn inverse_eigensensitivity(
         let Some((trial, e)) = accepted else {
             up.set_theta(&theta)?;
             converged = true;
-            stop_reason = "no damped step decreases the objective".into();
+            stop_reason = StopReason::NoDescent { last_failure: None };
             break;
         };
         let decrease = current - cost(&e);
@@ -206,15 +209,12 @@ pub fn inverse_eigensensitivity(
         history.push(entry);
         if decrease <= options.update.tolerance * current {
             converged = true;
-            stop_reason = "objective stopped decreasing".into();
+            stop_reason = StopReason::Stalled;
             break;
-        }
-        if it == options.update.max_iterations {
-            stop_reason = format!("iteration limit {} reached", options.update.max_iterations);
         }
     }
     Ok(UpdateResult {
-        method: "inverse eigensensitivity".into(),
+        method: UpdateMethod::InverseEigensensitivity,
         names: up.parameters().iter().map(|p| p.name.clone()).collect(),
         theta,
         history,

@@ -5,40 +5,7 @@ use femu_fem::prelude::*;
 use femu_sparse::SparseMatrix;
 use femu_sparse::dense::{GeneralizedEigen, generalized_symmetric_eigen};
 
-/// SplitMix64, so tests need no RNG crate.
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next_f64(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-    /// Uniform in [-1, 1].
-    pub fn sym(&mut self) -> f64 {
-        2.0 * self.next_f64() - 1.0
-    }
-}
-
-/// A steel bar `0.2 x 0.04 x 0.02` m of hex8 cells, optionally clamped at `x = 0`.
-pub fn bar(divisions: [usize; 3], clamped: bool) -> Model {
-    let mesh = box_mesh(&BoxSpec::new(
-        [0.2, 0.04, 0.02],
-        divisions,
-        BoxCells::Hex,
-        false,
-    ))
-    .unwrap();
-    let mut model = Model::new(mesh).unwrap();
-    model.set_material(None, Material::steel()).unwrap();
-    if clamped {
-        model.fix_set("xmin", &[0, 1, 2]).unwrap();
-    }
-    model
-}
+pub use femu_testkit::{Rng, bar};
 
 pub fn dense(a: &SparseMatrix) -> Mat<f64> {
     femu_sparse::csc::to_dense(a)

@@ -2,7 +2,7 @@
 //! rigid-body modes of a free-free model, parameter groups, thread-count independence.
 
 use femu_fem::assembly::{Assembler, MassKind};
-use femu_fem::generate::{BoxCells, BoxSpec, PlateSpec, box_mesh, mixed_plate};
+use femu_fem::generate::{BoxCells, BoxSpec, box_mesh};
 use femu_fem::groups::ParameterGroups;
 use femu_fem::kernel;
 use femu_fem::material::Material;
@@ -11,21 +11,7 @@ use femu_sparse::csc::{bilinear, mul_vec, symmetry_defect, to_dense};
 use femu_sparse::dense::{generalized_symmetric_eigen, generalized_symmetric_eigenvalues};
 
 fn small_plate(quadratic: bool) -> Model {
-    let spec = PlateSpec {
-        lengths: [0.06, 0.04, 0.01],
-        divisions: [6, 4, 2],
-        tet_block: [2, 2],
-        quadratic,
-    };
-    let mut model = Model::new(mixed_plate(&spec).unwrap()).unwrap();
-    model.set_material(None, Material::steel()).unwrap();
-    model
-        .set_material(
-            Some("tet"),
-            Material::isotropic("al", 70e9, 0.33, 2700.0).unwrap(),
-        )
-        .unwrap();
-    model
+    femu_testkit::mixed_steel_aluminium_plate(2, quadratic)
 }
 
 /// The assembled K and M equal a plain dense sum of element matrices (written here without the

@@ -2,23 +2,7 @@
 
 use femu_fem::element::ElementKind;
 
-/// A small deterministic generator (SplitMix64) so tests need no RNG crate.
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next_f64(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-    /// Uniform in [-1, 1].
-    pub fn sym(&mut self) -> f64 {
-        2.0 * self.next_f64() - 1.0
-    }
-}
+pub use femu_testkit::Rng;
 
 /// The affine map used for "undistorted" elements: a general (sheared, rotated, scaled) map with
 /// positive determinant.

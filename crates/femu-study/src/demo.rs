@@ -14,15 +14,25 @@
 //!    localised regions with inverse eigensensitivity beside it, and the held-out check on modes
 //!    5-10: does the updated model tell the truth?
 
-use crate::correlate::modes::hz_of_eigenvalue;
-use crate::correlate::study::{Method, StudyPoint, sensor_removal_study, study_csv, study_svg};
-use crate::correlate::{Assessment, BoundKind, CorrelationReport, Form};
-use crate::io::uff::{UffMode, UffNode, UffUnits, Universal};
-use crate::prelude::*;
-use crate::update::{Localisation, TruthCheck, UpdateResult};
+use crate::StudyError;
+use crate::chart::{error_map_svg, write_png};
+use crate::estimate::{EstimateOptions, EstimateRow, estimate_with_bounds, expand_shapes};
+use crate::removal::{RemovalOptions, removal_study, write_removal_study};
+use crate::report::{create_dir, full_fields, write_json, write_text};
+use crate::updating::{UpdateStudyOptions, localise_update_check};
+use femu_correlate::expansion::Method;
+use femu_correlate::modes::hz_of_eigenvalue;
+use femu_correlate::study::StudyPoint;
+use femu_correlate::{CorrelationReport, PairingOptions, Sensor, SensorLayout, TestModes};
+use femu_fem::prelude::*;
+use femu_io::uff::{UffMode, UffNode, UffUnits, Universal};
+use femu_update::{
+    Corrections, Localisation, ParameterCheck, TruthCheck, UpdateMethod, UpdateModel, UpdateResult,
+    model_modes,
+};
 use serde::Serialize;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Settings of the demo.
@@ -76,27 +86,6 @@ impl DemoOptions {
     }
 }
 
-/// One row of Table 2.
-#[derive(Debug, Clone, Serialize)]
-pub struct Table2Row {
-    /// Test mode (1-based).
-    pub test: usize,
-    /// Smallest gap `min_j |lambda_id - lambda_j|` over the model's spectrum, s^-2.
-    pub min_gap: f64,
-    /// Gap to the paired model mode, s^-2.
-    pub paired_gap: Option<f64>,
-    /// `rho_M` (rigorous).
-    pub rho_m: f64,
-    /// `rho_2` (paper).
-    pub rho_2: f64,
-    /// Whether Theorem 2 holds in the paper's form (`min gap <= rho_2`).
-    pub t2_paper_holds: bool,
-    /// Whether it holds in the rigorous form (a theorem: always).
-    pub t2_rigorous_holds: bool,
-    /// The frequency interval (Hz) Theorem 2 guarantees holds a model frequency.
-    pub interval_hz: (f64, f64),
-}
-
 /// What the demo found, also written as `report.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct DemoReport {
@@ -105,7 +94,7 @@ pub struct DemoReport {
     /// Table 1.
     pub table1: CorrelationReport,
     /// Table 2.
-    pub table2: Vec<Table2Row>,
+    pub table2: Vec<EstimateRow>,
     /// Figure 1's points.
     pub figure1: Vec<StudyPoint>,
     /// The localisation.
@@ -133,22 +122,12 @@ fn noise(seed: &mut u64) -> f64 {
 }
 
 /// The plate of `spec` in steel, with ten regions along x as element sets `r0`..`r9`.
-pub fn plate_with_regions(spec: &PlateSpec) -> Result<Model, Box<dyn std::error::Error>> {
+pub fn plate_with_regions(spec: &PlateSpec) -> Result<Model, StudyError> {
     let mut mesh = mixed_plate(spec)?;
     add_slab_sets(&mut mesh, 0, 10, "r")?;
     let mut model = Model::new(mesh)?;
     model.set_material(None, Material::steel())?;
     Ok(model)
-}
-
-fn write(
-    path: &Path,
-    text: &str,
-    files: &mut Vec<PathBuf>,
-) -> Result<(), Box<dyn std::error::Error>> {
-    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?;
-    files.push(path.to_path_buf());
-    Ok(())
 }
 
 /// Runs the study; `progress` receives one line per step.
@@ -158,15 +137,17 @@ fn write(
 pub fn run_demo(
     opts: &DemoOptions,
     mut progress: impl FnMut(&str),
-) -> Result<DemoReport, Box<dyn std::error::Error>> {
+) -> Result<DemoReport, StudyError> {
     if opts.tuned == 0 || opts.tuned >= opts.modes {
-        return Err(format!(
-            "tuned modes {} must be at least 1 and fewer than the {} test modes",
-            opts.tuned, opts.modes
-        )
-        .into());
+        return Err(StudyError::invalid(
+            "tuned modes",
+            format!(
+                "{} must be at least 1 and fewer than the {} test modes",
+                opts.tuned, opts.modes
+            ),
+        ));
     }
-    std::fs::create_dir_all(&opts.out).map_err(|e| format!("{}: {e}", opts.out.display()))?;
+    create_dir(&opts.out)?;
     let mut files = Vec::new();
     let mut timings = Vec::new();
     let mut clock = Instant::now();
@@ -177,7 +158,7 @@ pub fn run_demo(
     let spec = &opts.plate;
     let model = plate_with_regions(spec)?;
     let inp = opts.out.join("plate.inp");
-    crate::io::inp::write_inp(&model, None, &inp)?;
+    femu_io::inp::write_inp(&model, None, &inp)?;
     files.push(inp);
     let regions: Vec<String> = (0..10).map(|r| format!("r{r}")).collect();
     let sets: Vec<&str> = regions.iter().map(|s| s.as_str()).collect();
@@ -200,7 +181,7 @@ pub fn run_demo(
         100.0 * opts.truth
     ));
     let truth = model_modes(&mut real, 6 + opts.modes, &Default::default())?;
-    let nodes = crate::correlate::placement::grid_nodes(model.mesh(), "zmax", [5, 3])?;
+    let nodes = femu_correlate::placement::grid_nodes(model.mesh(), "zmax", [5, 3])?;
     let mut sensors = Vec::new();
     for id in &nodes {
         sensors.push(Sensor::axis(*id, 1));
@@ -231,7 +212,9 @@ pub fn run_demo(
         ..Default::default()
     };
     for id in &nodes {
-        let i = model.mesh().node_index(*id).ok_or("sensor node vanished")?;
+        let i = model.mesh().node_index(*id).ok_or_else(|| {
+            StudyError::invalid("sensor node", format!("{id} is not in the plate"))
+        })?;
         uff.nodes.push(UffNode {
             id: *id,
             x: model.mesh().coords()[i],
@@ -252,9 +235,9 @@ pub fn run_demo(
         });
     }
     let uff_path = opts.out.join("test.unv");
-    crate::io::uff::write_uff(&uff_path, &uff)?;
+    femu_io::uff::write_uff(&uff_path, &uff)?;
     files.push(uff_path.clone());
-    let data = crate::io::uff::read_uff(&uff_path)?.test_data(&uff_path)?;
+    let data = femu_io::uff::read_uff(&uff_path)?.test_data(&uff_path)?;
     let layout = SensorLayout::new(model.mesh(), &dofs, data.sensors.clone())?;
     let test = data.modes;
     lap("simulate the test and write it as UFF", &mut timings);
@@ -274,209 +257,148 @@ pub fn run_demo(
     )?;
     let model_set = model_modes(&mut nominal, 6 + opts.modes + 6, &Default::default())?;
     lap("nominal modes (Sturm-verified)", &mut timings);
-    let table1 = correlate(&model_set, &test, &layout, &PairingOptions::default())?;
-    progress("Table 1: correlation done");
 
-    // Table 2: estimators on the shapes expanded from the 30 measurements
+    // Tables 1 and 2: correlation, and the estimators on the shapes expanded from the 30
+    // measurements
     let sys = nominal.matrices().clone();
     let lambdas = test.eigenvalues();
-    let expanded = crate::correlate::Expander::new(&sys.k, &sys.m, &layout)?
-        .minimum_residual(&lambdas, test.shapes.as_ref())?;
-    let eb = element_bounds(&model, MassKind::Consistent)?;
-    let spectrum = ModelSpectrum {
-        values: model_set.values.clone(),
-        complete: false,
-        lambda_max: eb.lambda_max_upper,
-        mu_min: Some(eb.mu_min_lower),
-        identity_mass: false,
+    let estimate_options = EstimateOptions {
+        expansion: Method::MinimumResidual,
+        pairing: PairingOptions::default(),
     };
-    let paired: Vec<Option<usize>> = (0..test.len())
-        .map(|t| table1.pairing.of_test(t).map(|p| p.model))
-        .collect();
-    let assessments: Vec<Assessment> = estimate(
-        &sys.k,
-        &sys.m,
+    let expanded = expand_shapes(
+        &sys,
+        &layout,
         &lambdas,
-        expanded.as_ref(),
-        &spectrum,
-        Some(&model_set),
-        &paired,
+        test.shapes.as_ref(),
+        estimate_options.expansion,
+        None,
     )?;
-    let top = *model_set.values.last().ok_or("no model modes")?;
-    let mut table2 = Vec::new();
-    for (t, a) in assessments.iter().enumerate() {
-        let lam = lambdas[t];
-        // the smallest gap is exact when the nearest eigenvalue is inside the verified range
-        let min_gap = model_set
-            .values
-            .iter()
-            .map(|l| (lam - l).abs())
-            .fold(f64::INFINITY, f64::min)
-            .min((top - lam).abs());
-        let t2 = |form: Form| {
-            a.bounds
-                .iter()
-                .find(|b| b.kind == BoundKind::T2 && b.form == form)
-                .and_then(|b| b.holds())
-        };
-        table2.push(Table2Row {
-            test: t + 1,
-            min_gap,
-            paired_gap: table1.pairing.of_test(t).map(|p| p.eigenvalue_gap),
-            rho_m: a.norms.rho_m,
-            rho_2: a.norms.rho_2,
-            t2_paper_holds: t2(Form::Paper).unwrap_or(min_gap <= a.norms.rho_2),
-            t2_rigorous_holds: t2(Form::Rigorous).unwrap_or(min_gap <= a.norms.rho_m),
-            interval_hz: a.frequency_interval_hz,
-        });
-    }
+    let estimated = estimate_with_bounds(
+        &model,
+        &sys,
+        MassKind::Consistent,
+        &layout,
+        &test,
+        &model_set,
+        expanded.as_ref(),
+        &estimate_options,
+    )?;
+    progress("Table 1: correlation done");
+    let table1 = estimated.correlation;
+    let table2 = estimated.rows;
     lap("Table 2: expansion and estimators", &mut timings);
     progress("Table 2: estimators done");
 
     // Figure 1: sensor removal in EfI order, for the first `tuned` modes
     let k_modes = opts.tuned;
-    let start: Vec<u64> = nodes.clone();
-    let tri = SensorLayout::triaxial(model.mesh(), &dofs, &start)?;
-    let order = crate::correlate::placement::efi_removal_order(
-        &tri,
-        model_set.shapes.as_ref().subcols(6, k_modes),
-    )?;
     // down to 5 nodes: below that the minimum-residual problem of this free-free plate is too
     // ill-conditioned to refine (reported as an error, never a NaN)
-    let removal: Vec<u64> = order.into_iter().take(start.len() - 5).collect();
-    let methods = [Method::Static, Method::Dynamic, Method::MinimumResidual];
-    let figure1 = sensor_removal_study(
-        &sys.k,
-        &sys.m,
+    let removal_options = RemovalOptions {
+        methods: Method::FIGURE1.to_vec(),
+        keep: 5,
+        stride: opts.stride,
+    };
+    let figure1 = removal_study(
+        &sys,
         model.mesh(),
-        &dofs,
+        &nodes,
+        model_set.shapes.as_ref().subcols(6, k_modes),
         &lambdas[..k_modes],
         x_true.as_ref().subcols(0, k_modes),
-        &start,
-        &removal,
-        &methods,
-        None,
-        opts.stride,
-    )?;
-    let svg = study_svg(&figure1);
-    write(&opts.out.join("figure1.svg"), &svg, &mut files)?;
-    crate::io::png::write_png(&svg, 2.0, opts.out.join("figure1.png"))?;
-    files.push(opts.out.join("figure1.png"));
-    write(
-        &opts.out.join("figure1.csv"),
-        &study_csv(&figure1),
-        &mut files,
-    )?;
+        &removal_options,
+    )?
+    .points;
+    files.extend(write_removal_study(&opts.out, "figure1", &figure1)?);
     lap("Figure 1: sensor-removal study", &mut timings);
     progress(&format!("Figure 1: {} points", figure1.len()));
 
-    // localisation and updating on the tuned modes
-    let tuned = TestModes::new(
-        test.frequencies_hz[..opts.tuned].to_vec(),
+    // localisation, updating on the tuned modes and the held-out check
+    let update_options = UpdateStudyOptions {
+        method: UpdateMethod::SbEbe,
+        compare: true,
+        check_modes: 6 + opts.modes + 6,
+        ..UpdateStudyOptions::new(opts.tuned, opts.modes)
+    };
+    let study = localise_update_check(
+        &model,
+        &sets,
+        &layout,
+        &test,
+        Some(&model_set),
         None,
-        test.shapes.as_ref().subcols(0, opts.tuned).to_owned(),
+        &update_options,
+        |it| {
+            progress(&format!(
+                "SB-EBE iteration {}: objective {:.4e}",
+                it.iteration, it.objective
+            ))
+        },
     )?;
-    let localisation = localise_expanded(&nominal, &layout, &tuned, &SelectionRule::default())?;
-    let selected: Vec<&str> = localisation.selected.iter().map(|g| sets[*g]).collect();
-    lap("localisation", &mut timings);
-    progress(&format!("localisation: selected {selected:?}"));
-    let mut up = UpdateModel::from_element_sets(
-        &model,
-        &selected,
-        MassKind::Consistent,
-        Corrections::Stiffness,
-    )?;
-    let opts_sb = SbebeOptions {
-        test_error: Some(1e-3),
-        ..Default::default()
-    };
-    let sbebe = sb_ebe(&mut up, &layout, &tuned, &opts_sb, |it| {
-        progress(&format!(
-            "SB-EBE iteration {}: objective {:.4e}",
-            it.iteration, it.objective
-        ))
-    })?;
-    lap("SB-EBE", &mut timings);
-    let updated = model_modes(&mut up, 6 + opts.modes + 6, &Default::default())?;
-    let tuned_idx: Vec<usize> = (0..opts.tuned).collect();
-    let truth_check = {
-        let mut c = truth_check(
-            &model_set,
-            &updated,
-            &test,
-            &layout,
-            &tuned_idx,
-            &PairingOptions::default(),
-        )?;
-        for (name, v) in sbebe.names.iter().zip(&sbebe.theta) {
-            let t = if name == "k:r3" { opts.truth } else { 0.0 };
-            c.parameters.push(crate::update::ParameterCheck {
-                name: name.clone(),
-                identified: *v,
-                truth: t,
-            });
-        }
-        c
-    };
-    let mut ies = UpdateModel::from_element_sets(
-        &model,
-        &selected,
-        MassKind::Consistent,
-        Corrections::Stiffness,
-    )?;
-    let eigensensitivity =
-        inverse_eigensensitivity(&mut ies, &layout, &tuned, &Default::default(), |_| {})?;
+    let localisation = study.localisation;
+    let sbebe = study.result;
+    let eigensensitivity = study
+        .comparison
+        .ok_or_else(|| StudyError::invalid("demo", "no comparison run"))?;
+    let mut truth_check = study.truth_check;
+    for (name, v) in sbebe.names.iter().zip(&sbebe.theta) {
+        let t = if name == "k:r3" { opts.truth } else { 0.0 };
+        truth_check.parameters.push(ParameterCheck {
+            name: name.clone(),
+            identified: *v,
+            truth: t,
+        });
+    }
+    let selected = study.updated_sets;
     lap(
-        "updating, held-out check and inverse eigensensitivity",
+        "localisation, updating, held-out check and inverse eigensensitivity",
         &mut timings,
     );
+    progress(&format!("localisation: selected {selected:?}"));
     progress(&format!(
         "does the updated model tell the truth? {}",
         truth_check.verdict()
     ));
 
     // VTK: error map and the updated model's first elastic modes
+    let updated = study.updated_modes;
     let density = localisation.density_by_element(&nominal);
     let mut point_fields = Vec::new();
-    let mode_vectors: Vec<Vec<f64>> = (0..4)
-        .map(|j| {
-            full_vector(
-                &dofs,
-                model.mesh().node_count(),
-                updated.shapes.col(6 + j).iter().copied().collect(),
-            )
-        })
-        .collect();
+    let mode_vectors = full_fields(
+        &dofs,
+        model.mesh().node_count(),
+        updated.shapes.as_ref().subcols(6, 4),
+    );
     let names: Vec<String> = (0..4)
         .map(|j| {
             format!(
-                "mode {} ({:.1} Hz)",
+                "updated model mode {} ({:.1} Hz)",
                 j + 1,
                 hz_of_eigenvalue(updated.values[6 + j])
             )
         })
         .collect();
     for j in 0..4 {
-        point_fields.push(crate::io::vtk::PointField {
+        point_fields.push(femu_io::vtk::PointField {
             name: &names[j],
             components: 3,
             values: &mode_vectors[j],
         });
     }
     let vtu = opts.out.join("plate.vtu");
-    crate::io::vtk::write_vtu(
+    femu_io::vtk::write_vtu(
         model.mesh(),
         &point_fields,
-        &[crate::io::vtk::CellField {
+        &[femu_io::vtk::CellField {
             name: "error indicator (explained residual density)",
             values: &density,
         }],
         &vtu,
     )?;
     files.push(vtu);
-    let svg = bar_chart(&localisation);
-    write(&opts.out.join("error_map.svg"), &svg, &mut files)?;
-    crate::io::png::write_png(&svg, 2.0, opts.out.join("error_map.png"))?;
+    let svg = error_map_svg(&localisation);
+    write_text(&opts.out.join("error_map.svg"), &svg, &mut files)?;
+    write_png(&svg, 2.0, opts.out.join("error_map.png"))?;
     files.push(opts.out.join("error_map.png"));
 
     let report = DemoReport {
@@ -493,74 +415,13 @@ pub fn run_demo(
         files: Vec::new(),
     };
     let md = markdown(&report, opts, &test);
-    write(&opts.out.join("report.md"), &md, &mut files)?;
+    write_text(&opts.out.join("report.md"), &md, &mut files)?;
     let json_path = opts.out.join("report.json");
     files.push(json_path.clone());
     let mut report = report;
     report.files = files;
-    write(
-        &json_path,
-        &serde_json::to_string_pretty(&report)?,
-        &mut Vec::new(),
-    )?;
+    write_json(&json_path, &report)?;
     Ok(report)
-}
-
-fn full_vector(dofs: &DofMap, nodes: usize, free: Vec<f64>) -> Vec<f64> {
-    let mut v = vec![0.0; 3 * nodes];
-    for (f, x) in free.iter().enumerate() {
-        v[dofs.full_of_free(f)] = *x;
-    }
-    v
-}
-
-fn bar_chart(loc: &Localisation) -> String {
-    let mut by: Vec<(String, f64)> = loc
-        .ranking
-        .iter()
-        .map(|r| (r.name.clone(), r.explained))
-        .collect();
-    by.sort_by(|a, b| a.0.cmp(&b.0));
-    let (w, h, pad) = (520.0, 260.0, 40.0);
-    let bw = (w - 2.0 * pad) / by.len() as f64;
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"11\">\n<text x=\"{}\" y=\"16\" text-anchor=\"middle\">Fraction of the residual each region explains alone</text>\n",
-        w / 2.0
-    );
-    for (i, (name, v)) in by.iter().enumerate() {
-        let bh = v * (h - 2.0 * pad);
-        let x = pad + i as f64 * bw;
-        let colour = if loc
-            .selected
-            .iter()
-            .any(|g| loc.ranking.iter().any(|r| r.group == *g && &r.name == name))
-        {
-            "#c0392b"
-        } else {
-            "#7f8c8d"
-        };
-        let _ = writeln!(
-            s,
-            "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"{:.1}\" height=\"{bh:.1}\" fill=\"{colour}\"/>",
-            x + 4.0,
-            h - pad - bh,
-            bw - 8.0
-        );
-        let _ = writeln!(
-            s,
-            "<text x=\"{:.1}\" y=\"{}\" text-anchor=\"middle\">{name}</text>",
-            x + bw / 2.0,
-            h - pad + 14.0
-        );
-        let _ = writeln!(
-            s,
-            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{v:.2}</text>",
-            x + bw / 2.0,
-            h - pad - bh - 3.0
-        );
-    }
-    s.push_str("</svg>\n");
-    s
 }
 
 fn markdown(r: &DemoReport, o: &DemoOptions, test: &TestModes) -> String {

@@ -1,23 +1,19 @@
 //! PNG images of femu's SVG charts (the sensor-removal study, the error map), rasterised by resvg
-//! with the DejaVu Sans font shipped in `assets/fonts` (so text renders the same on a machine
+//! with the DejaVu Sans font shipped in this crate's `assets/fonts` (so text renders the same on a machine
 //! without fonts), for reports and viewers that do not show SVG.
 
-use crate::IoError;
+use crate::StudyError;
 use std::path::Path;
 use std::sync::Arc;
 
-static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// Rasterises SVG text at `scale` (1 = the SVG's own pixel size) to PNG bytes.
 ///
 /// # Errors
-/// [`IoError::Parse`] for SVG resvg cannot read or an empty image.
-pub fn svg_to_png(svg: &str, scale: f32) -> Result<Vec<u8>, IoError> {
-    let bad = |reason: String| IoError::Parse {
-        path: "<svg>".into(),
-        line: 0,
-        reason,
-    };
+/// [`StudyError::Invalid`] for SVG resvg cannot read or an empty image.
+pub fn svg_to_png(svg: &str, scale: f32) -> Result<Vec<u8>, StudyError> {
+    let bad = |reason: String| StudyError::invalid("SVG to PNG", reason);
     if !(scale.is_finite() && scale > 0.0) {
         return Err(bad(format!("scale {scale} must be positive")));
     }
@@ -52,8 +48,8 @@ pub fn svg_to_png(svg: &str, scale: f32) -> Result<Vec<u8>, IoError> {
 /// Writes [`svg_to_png`] of `svg` to `path`.
 ///
 /// # Errors
-/// As [`svg_to_png`], and [`IoError::Io`] naming the file.
-pub fn write_png(svg: &str, scale: f32, path: impl AsRef<Path>) -> Result<(), IoError> {
+/// As [`svg_to_png`], and [`StudyError::File`] naming the file.
+pub fn write_png(svg: &str, scale: f32, path: impl AsRef<Path>) -> Result<(), StudyError> {
     let bytes = svg_to_png(svg, scale)?;
-    std::fs::write(path.as_ref(), bytes).map_err(|e| IoError::io(path.as_ref(), e))
+    std::fs::write(path.as_ref(), bytes).map_err(|e| StudyError::file(path.as_ref(), e))
 }

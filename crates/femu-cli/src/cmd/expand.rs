@@ -1,0 +1,140 @@
+//! `femu expand`: test shapes expanded to every model DOF, their estimators, and the
+//! sensor-removal study.
+
+use crate::common::{MeshOptions, load_model, load_test, spinner, write_json};
+use crate::error::CliError;
+use clap::Args;
+use femu::correlate::Method;
+use femu::study::removal::write_removal_study;
+use femu::study::report::{create_dir, full_fields};
+use femu::study::study_file::expansion_report;
+use std::path::PathBuf;
+
+/// Expand test shapes to every model DOF: rho_M and rho_2 of the expanded shapes, a VTK file of
+/// them, and optionally the sensor-removal study (the paper's Figure 1) over the test's nodes,
+/// removed in Effective Independence order (triaxial sensors at each node).
+///
+/// Examples:
+///   femu expand plate.inp test.unv --method dynamic --vtu expanded.vtu
+///   femu expand plate.inp test.csv --method min-residual --study figure1
+#[derive(Args, Debug)]
+#[command(verbatim_doc_comment)]
+pub struct ExpandArgs {
+    /// The model (`.inp`, or `.msh`/`.unv` with --young, --poisson, --density, --fix).
+    pub model: PathBuf,
+    /// The test modes (`.unv`/`.uff`, `.json` or `.csv`).
+    pub test: PathBuf,
+    /// The expansion method.
+    #[arg(long, value_enum, default_value = "dynamic")]
+    pub method: Method,
+    /// Lumped (diagonal) mass instead of consistent.
+    #[arg(long)]
+    pub lumped: bool,
+    /// Write the expanded shapes for ParaView.
+    #[arg(long)]
+    pub vtu: Option<PathBuf>,
+    /// Run the sensor-removal study and write study.csv, study.svg and study.png into this
+    /// folder.
+    #[arg(long)]
+    pub study: Option<PathBuf>,
+    /// Write rho_M, rho_2 and the study's points as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// Runs `femu expand`.
+///
+/// # Errors
+/// Reading, assembly and expansion errors; a study with fewer than 3 measured nodes.
+pub fn run(a: &ExpandArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliError> {
+    let pb = spinner(quiet, "reading the model");
+    let loaded = load_model(&a.model, mesh, a.lumped, quiet, &pb)?;
+    let test = load_test(&a.test, &loaded)?;
+    let modes = &test.data.modes;
+    pb.set_message(format!(
+        "expanding {} test modes ({}){}",
+        modes.len(),
+        a.method,
+        if a.study.is_some() {
+            " and the sensor-removal study"
+        } else {
+            ""
+        }
+    ));
+    let (x, report) = expansion_report(&loaded, &test, a.method, a.study.is_some())?;
+    if let Some(path) = &a.vtu {
+        let fields = full_fields(
+            &loaded.sys.dofs,
+            loaded.model.mesh().node_count(),
+            x.as_ref(),
+        );
+        let names: Vec<String> = (0..x.ncols())
+            .map(|j| {
+                format!(
+                    "test mode {} expanded ({:.2} Hz)",
+                    j + 1,
+                    modes.frequencies_hz[j]
+                )
+            })
+            .collect();
+        let points: Vec<femu::io::vtk::PointField<'_>> = fields
+            .iter()
+            .zip(&names)
+            .map(|(v, name)| femu::io::vtk::PointField {
+                name,
+                components: 3,
+                values: v,
+            })
+            .collect();
+        femu::io::vtk::write_vtu(loaded.model.mesh(), &points, &[], path)?;
+    }
+    if let (Some(dir), Some(st)) = (&a.study, &report.study) {
+        create_dir(dir)?;
+        write_removal_study(dir, "study", &st.points)?;
+    }
+    pb.finish_and_clear();
+    if !quiet {
+        println!(
+            "{} test modes at {} sensors, {} expansion to {} DOF",
+            modes.len(),
+            test.layout.len(),
+            a.method,
+            loaded.sys.k.rows()
+        );
+        println!("| test | f (Hz) | rho_M (s^-2) | rho_2 | a model frequency within (Hz) |");
+        println!("|---|---|---|---|---|");
+        for (j, n) in report.norms.iter().enumerate() {
+            let (lo, hi) = n.frequency_interval_hz();
+            println!(
+                "| {} | {:.2} | {:.4e} | {:.4e} | {lo:.1} .. {hi:.1} |",
+                j + 1,
+                modes.frequencies_hz[j],
+                n.rho_m,
+                n.rho_2
+            );
+        }
+        if let (Some(dir), Some(st)) = (&a.study, &report.study) {
+            println!(
+                "sensor-removal study: {} points in {}",
+                st.points.len(),
+                dir.display()
+            );
+        }
+    }
+    #[derive(serde::Serialize)]
+    struct Out<'a> {
+        method: Method,
+        rho_m: Vec<f64>,
+        rho_2: Vec<f64>,
+        study: &'a [femu::correlate::study::StudyPoint],
+    }
+    write_json(
+        a.json.as_deref(),
+        &Out {
+            method: a.method,
+            rho_m: report.norms.iter().map(|n| n.rho_m).collect(),
+            rho_2: report.norms.iter().map(|n| n.rho_2).collect(),
+            study: report.study.as_ref().map_or(&[], |s| &s.points),
+        },
+    )
+}

@@ -1,0 +1,110 @@
+//! `femu modes`: the lowest modes of a model (or those nearest a frequency, or in a band), with
+//! their Sturm evidence.
+
+use crate::common::{MeshOptions, load_model, spinner, write_json};
+use crate::error::CliError;
+use clap::Args;
+use femu::study::modes::{ModesOptions, solve_modes};
+use femu::study::report::full_fields;
+use std::path::PathBuf;
+
+/// Lowest modes of a model, verified by a Sturm count.
+///
+/// Examples:
+///   femu modes plate.inp --count 20
+///   femu modes plate.inp --shift 1500 --count 6 --json modes.json
+///   femu modes plate.inp --band 1000 3000 --vtu modes.vtu
+#[derive(Args, Debug)]
+#[command(verbatim_doc_comment)]
+pub struct ModesArgs {
+    /// The model: an Abaqus/CalculiX `.inp` deck, or a `.msh`/`.unv` mesh with --young,
+    /// --poisson, --density (and --fix).
+    pub model: PathBuf,
+    /// How many modes (lowest, or nearest the shift). Default: the deck's *FREQUENCY count, or 10.
+    #[arg(long)]
+    pub count: Option<usize>,
+    /// Modes nearest this frequency (Hz).
+    #[arg(long, conflicts_with = "band", allow_negative_numbers = true)]
+    pub shift: Option<f64>,
+    /// Every mode between two frequencies (Hz).
+    #[arg(long, num_args = 2, value_names = ["LO", "HI"], allow_negative_numbers = true)]
+    pub band: Option<Vec<f64>>,
+    /// Lumped (diagonal) mass instead of consistent.
+    #[arg(long)]
+    pub lumped: bool,
+    /// Write the result as JSON to this file.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Write the mesh and the mode shapes (point vectors, mass-normalised) for ParaView.
+    #[arg(long)]
+    pub vtu: Option<PathBuf>,
+}
+
+/// Runs `femu modes`.
+///
+/// # Errors
+/// Reading, assembly and eigensolver errors; bad counts, shifts and bands.
+pub fn run(a: &ModesArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliError> {
+    let pb = spinner(quiet, "reading the model");
+    let loaded = load_model(&a.model, mesh, a.lumped, quiet, &pb)?;
+    pb.set_message(format!("solving ({} DOF)", loaded.sys.k.rows()));
+    let options = ModesOptions {
+        count: a.count,
+        shift_hz: a.shift,
+        band_hz: a.band.as_ref().map(|b| (b[0], b[1])),
+    };
+    let (result, report) = solve_modes(&loaded, &options)?;
+    pb.finish_and_clear();
+    let f = &report.frequencies_hz;
+    if !quiet {
+        println!(
+            "{} DOF, {} mass, {} modes",
+            report.dofs,
+            report.mass,
+            f.len()
+        );
+        println!("| mode | f (Hz) | lambda (s^-2) | residual |");
+        println!("|---|---|---|---|");
+        for (j, (fj, (l, r))) in f
+            .iter()
+            .zip(result.values.iter().zip(&result.residuals))
+            .enumerate()
+        {
+            println!("| {} | {:.6} | {:.6e} | {:.1e} |", j + 1, fj, l, r);
+        }
+        println!(
+            "Sturm check: {} eigenvalues below {:.6e} s^-2, {} returned: {}",
+            result.sturm.count,
+            result.sturm.upper,
+            result.sturm.returned,
+            if result.sturm.verified() {
+                "verified"
+            } else {
+                "FAILED"
+            }
+        );
+    }
+    if let Some(path) = &a.vtu {
+        let shapes = full_fields(
+            &loaded.sys.dofs,
+            loaded.model.mesh().node_count(),
+            result.vectors.as_ref(),
+        );
+        let names: Vec<String> = f
+            .iter()
+            .enumerate()
+            .map(|(j, fj)| format!("mode {} ({fj:.3} Hz)", j + 1))
+            .collect();
+        let fields: Vec<femu::io::vtk::PointField<'_>> = shapes
+            .iter()
+            .zip(&names)
+            .map(|(v, n)| femu::io::vtk::PointField {
+                name: n,
+                components: 3,
+                values: v,
+            })
+            .collect();
+        femu::io::vtk::write_vtu(loaded.model.mesh(), &fields, &[], path)?;
+    }
+    write_json(a.json.as_deref(), &report)
+}

@@ -1,0 +1,292 @@
+//! Datasets of the test geometry: nodes (15, 2411), elements (2412, with femu's node orders),
+//! permanent groups (2477) and trace lines (82).
+
+use super::*;
+
+pub(super) const UNV_TET10: [usize; 10] = [0, 2, 4, 9, 1, 3, 5, 6, 7, 8];
+/// Wedge 113: bottom loop 0-5, vertical mid-edges 6 7 8, top loop 9-14.
+pub(super) const UNV_PENTA15: [usize; 15] = [0, 2, 4, 9, 11, 13, 1, 3, 5, 10, 12, 14, 6, 7, 8];
+/// Brick 116: bottom loop 0-7, vertical mid-edges 8-11, top loop 12-19.
+pub(super) const UNV_HEX20: [usize; 20] = [
+    0, 2, 4, 6, 12, 14, 16, 18, 1, 3, 5, 7, 13, 15, 17, 19, 8, 9, 10, 11,
+];
+
+/// Beam descriptors carry an extra orientation record in dataset 2412.
+pub(super) fn is_beam(descriptor: i64) -> bool {
+    matches!(descriptor, 11 | 21..=24)
+}
+
+pub(super) fn parse_2477(
+    path: &Path,
+    body: &[(usize, &str)],
+    out: &mut Universal,
+) -> Result<(), IoError> {
+    let mut k = 0;
+    while k < body.len() {
+        let (ln, l) = body[k];
+        if l.trim().is_empty() {
+            k += 1;
+            continue;
+        }
+        let h = ints(path, ln, l, 8)?;
+        let (number, count) = (h[0], h[7]);
+        if !(0..=100_000_000).contains(&count) {
+            return Err(perr(path, ln, format!("group {number}: {count} entities")));
+        }
+        let name = body
+            .get(k + 1)
+            .ok_or_else(|| perr(path, ln, format!("group {number} without its name")))?
+            .1
+            .trim()
+            .to_string();
+        k += 2;
+        let mut group = UffGroup {
+            number,
+            name,
+            nodes: Vec::new(),
+            elements: Vec::new(),
+        };
+        let mut read = 0;
+        let mut other = 0;
+        while read < count {
+            let (ln2, l2) = *body.get(k).ok_or_else(|| {
+                perr(
+                    path,
+                    ln,
+                    format!("group {number}: {count} entities announced, {read} found"),
+                )
+            })?;
+            let v = ints(path, ln2, l2, 4)?;
+            for q in v.chunks(4) {
+                if q.len() < 4 {
+                    return Err(perr(
+                        path,
+                        ln2,
+                        "an entity needs 4 integers (type, tag, 0, 0)",
+                    ));
+                }
+                if read == count {
+                    return Err(perr(
+                        path,
+                        ln2,
+                        format!("group {number}: more than the {count} entities announced"),
+                    ));
+                }
+                if q[1] <= 0 {
+                    return Err(perr(
+                        path,
+                        ln2,
+                        format!("entity tag {} must be positive", q[1]),
+                    ));
+                }
+                match q[0] {
+                    7 => group.nodes.push(q[1] as u64),
+                    8 => group.elements.push(q[1] as u64),
+                    _ => other += 1,
+                }
+                read += 1;
+            }
+            k += 1;
+        }
+        if other > 0 {
+            out.warnings.push(Warning {
+                path: path.to_path_buf(),
+                line: ln,
+                message: format!(
+                    "group {}: {other} entities neither nodes nor elements skipped",
+                    group.name
+                ),
+            });
+        }
+        out.groups.push(group);
+    }
+    Ok(())
+}
+
+/// Dataset 82.
+pub(super) fn parse_82(
+    path: &Path,
+    body: &[(usize, &str)],
+    out: &mut Universal,
+) -> Result<(), IoError> {
+    if body.len() < 2 {
+        return Err(perr(
+            path,
+            body.first().map_or(0, |b| b.0),
+            "dataset 82 needs a header, an identification line and node labels",
+        ));
+    }
+    let (ln, l) = body[0];
+    let h = ints(path, ln, l, 3)?;
+    let (number, count, color) = (h[0], h[1], h[2]);
+    let mut nodes = Vec::new();
+    for &(ln2, l2) in &body[2..] {
+        if l2.trim().is_empty() {
+            continue;
+        }
+        for v in ints(path, ln2, l2, 1)? {
+            if v < 0 {
+                return Err(perr(
+                    path,
+                    ln2,
+                    format!("node label {v} must not be negative"),
+                ));
+            }
+            nodes.push(v as u64);
+        }
+    }
+    if count < 0 || nodes.len() != count as usize {
+        return Err(perr(
+            path,
+            ln,
+            format!(
+                "trace line {number}: {count} node labels announced, {} found",
+                nodes.len()
+            ),
+        ));
+    }
+    out.trace_lines.push(UffTraceLine {
+        number,
+        color,
+        id: body[1].1.trim_end().to_string(),
+        nodes,
+    });
+    Ok(())
+}
+
+pub(super) fn parse_15(
+    path: &Path,
+    body: &[(usize, &str)],
+    out: &mut Universal,
+) -> Result<(), IoError> {
+    for &(ln, l) in body {
+        if l.trim().is_empty() {
+            continue;
+        }
+        let t: Vec<&str> = l.split_whitespace().collect();
+        if t.len() < 7 {
+            return Err(perr(
+                path,
+                ln,
+                format!("a dataset 15 node needs 7 fields, found {}", t.len()),
+            ));
+        }
+        let id = int(path, ln, t[0])?;
+        if id <= 0 {
+            return Err(perr(path, ln, format!("node label {id} must be positive")));
+        }
+        let x = [
+            num(path, ln, t[4])?,
+            num(path, ln, t[5])?,
+            num(path, ln, t[6])?,
+        ];
+        out.nodes.push(UffNode { id: id as u64, x });
+    }
+    Ok(())
+}
+
+pub(super) fn parse_2411(
+    path: &Path,
+    body: &[(usize, &str)],
+    out: &mut Universal,
+) -> Result<(), IoError> {
+    let lines: Vec<(usize, &str)> = body
+        .iter()
+        .copied()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .collect();
+    if !lines.len().is_multiple_of(2) {
+        return Err(perr(
+            path,
+            lines.last().map_or(0, |l| l.0),
+            "dataset 2411: a node without its coordinate record",
+        ));
+    }
+    for pair in lines.chunks(2) {
+        let (ln, l) = pair[0];
+        let h = ints(path, ln, l, 4)?;
+        if h[0] <= 0 {
+            return Err(perr(
+                path,
+                ln,
+                format!("node label {} must be positive", h[0]),
+            ));
+        }
+        let x = nums(path, pair[1].0, pair[1].1, 3)?;
+        out.nodes.push(UffNode {
+            id: h[0] as u64,
+            x: [x[0], x[1], x[2]],
+        });
+    }
+    out.nodes_2411 = true;
+    Ok(())
+}
+
+pub(super) fn parse_2412(
+    path: &Path,
+    body: &[(usize, &str)],
+    out: &mut Universal,
+) -> Result<(), IoError> {
+    let lines: Vec<(usize, &str)> = body
+        .iter()
+        .copied()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .collect();
+    let mut k = 0;
+    while k < lines.len() {
+        let (ln, l) = lines[k];
+        let h = ints(path, ln, l, 6)?;
+        let (id, descriptor, count) = (h[0], h[1], h[5]);
+        if id <= 0 || !(1..=27).contains(&count) {
+            return Err(perr(
+                path,
+                ln,
+                format!("element {id}: label must be positive and node count 1-27, found {count}"),
+            ));
+        }
+        k += 1;
+        if is_beam(descriptor) {
+            k += 1; // orientation record
+        }
+        let mut nodes = Vec::with_capacity(count as usize);
+        while nodes.len() < count as usize {
+            let (ln2, l2) = *lines.get(k).ok_or_else(|| {
+                perr(
+                    path,
+                    ln,
+                    format!(
+                        "element {id}: {count} node labels expected, found {}",
+                        nodes.len()
+                    ),
+                )
+            })?;
+            for v in ints(path, ln2, l2, 1)? {
+                if v <= 0 {
+                    return Err(perr(
+                        path,
+                        ln2,
+                        format!("element {id}: node label {v} must be positive"),
+                    ));
+                }
+                nodes.push(v as u64);
+            }
+            k += 1;
+        }
+        if nodes.len() != count as usize {
+            return Err(perr(
+                path,
+                ln,
+                format!(
+                    "element {id}: {count} node labels expected, found {}",
+                    nodes.len()
+                ),
+            ));
+        }
+        out.elements.push(UffElement {
+            id: id as u64,
+            descriptor,
+            nodes,
+        });
+    }
+    Ok(())
+}

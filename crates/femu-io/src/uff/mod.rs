@@ -1,0 +1,279 @@
+//! Universal File Format (what test systems export), read and written: datasets 15 and 2411
+//! (nodes), 2412 (elements), 164 (units), 55 (modal data: real normal modes and complex modes),
+//! 58 and its binary variant 58b (functions at nodal DOFs: FRFs, time histories, spectra), 82
+//! (trace lines) and 2477 (permanent groups: the sets of [`Universal::to_mesh`]). Other datasets are skipped with a warning naming their number and line. Fortran
+//! `D` exponents and CRLF line ends are read; a file written by femu reads back to the same bytes.
+//!
+//! Dataset 58b: records 1-11 as text, then the values as raw IEEE numbers in the byte order of
+//! the header (little or big endian), 4 bytes each for single-precision data (ordinate types 2,
+//! 5) and 8 for double (4, 6), an uneven abscissa in the same precision as the ordinate (as
+//! pyuff and the files it reads do). The byte count is computed from record 7 (points, type,
+//! spacing); a header that says otherwise gets a warning.
+
+use crate::{IoError, Warning};
+use faer::Mat;
+use femu_correlate::{Sensor, TestModes};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Units of dataset 164.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UffUnits {
+    /// Unit system code (1 = SI: m, N, s).
+    pub code: i64,
+    /// Description.
+    pub description: String,
+    /// Length, force, temperature factors to SI.
+    pub factors: [f64; 3],
+}
+
+/// One node of dataset 15.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UffNode {
+    /// Node label.
+    pub id: u64,
+    /// Coordinates.
+    pub x: [f64; 3],
+}
+
+/// One mode of dataset 55.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UffMode {
+    /// Mode number (record 7).
+    pub number: i64,
+    /// Frequency, Hz.
+    pub frequency_hz: f64,
+    /// Viscous damping ratio.
+    pub damping: f64,
+    /// Modal mass (0 when not given).
+    pub modal_mass: f64,
+    /// Per node: the translations (x, y, z); for complex data the real-normalised values (each
+    /// mode rotated by the phase of its largest component, then the real part).
+    pub values: Vec<(u64, [f64; 3])>,
+    /// Whether the file stored complex values.
+    pub complex: bool,
+}
+
+/// The supported content of a universal file.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Universal {
+    /// Dataset 164, if present.
+    pub units: Option<UffUnits>,
+    /// Nodes of dataset 15 (single precision) or 2411 (double precision).
+    pub nodes: Vec<UffNode>,
+    /// Whether the nodes came from (and are written as) dataset 2411 instead of 15.
+    pub nodes_2411: bool,
+    /// Dataset 2412 elements.
+    pub elements: Vec<UffElement>,
+    /// Dataset 55 modes.
+    pub modes: Vec<UffMode>,
+    /// Dataset 58/58b functions (FRFs, time histories, ...).
+    pub functions: Vec<UffFunction>,
+    /// Dataset 82 trace lines.
+    pub trace_lines: Vec<UffTraceLine>,
+    /// Dataset 2477 (and 2467) permanent groups.
+    pub groups: Vec<UffGroup>,
+    /// Skipped datasets and approximations.
+    pub warnings: Vec<Warning>,
+}
+
+/// One element of dataset 2412.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UffElement {
+    /// Element label.
+    pub id: u64,
+    /// FE descriptor id (111 linear tetrahedron, 112 linear wedge, 115 linear brick, ...).
+    pub descriptor: i64,
+    /// Node labels in the file's order.
+    pub nodes: Vec<u64>,
+}
+
+/// An axis of dataset 58 (records 8-11: abscissa, ordinate numerator, ordinate denominator,
+/// z axis).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct UffAxis {
+    /// Specific data type (0 unknown, 1 general, 8 displacement, 12 acceleration, 13 excitation
+    /// force, 17 time, 18 frequency, ...).
+    pub data_type: i64,
+    /// Length, force and temperature unit exponents.
+    pub exponents: [i64; 3],
+    /// Axis label (20 characters at most when written).
+    pub label: String,
+    /// Units label (20 characters at most when written).
+    pub units: String,
+}
+
+/// The abscissa of a dataset 58 function.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Abscissa {
+    /// `min + k step` (record 7; written with 6 significant digits, as the format has them).
+    Even {
+        /// First abscissa.
+        min: f64,
+        /// Increment.
+        step: f64,
+    },
+    /// One abscissa per point, stored with the values.
+    Uneven(Vec<f64>),
+}
+
+/// The ordinate values of a dataset 58 function.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Ordinate {
+    /// Real values.
+    Real(Vec<f64>),
+    /// Complex values as (real, imaginary).
+    Complex(Vec<(f64, f64)>),
+}
+
+impl Ordinate {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        match self {
+            Ordinate::Real(v) => v.len(),
+            Ordinate::Complex(v) => v.len(),
+        }
+    }
+
+    /// Whether there is no point.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// A response or reference DOF of dataset 58 (record 6).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct UffDof {
+    /// Entity name (10 characters at most when written).
+    pub entity: String,
+    /// Node label (0 when none).
+    pub node: u64,
+    /// Direction: 1-3 translations X-Z, 4-6 rotations, negative for the opposite sense, 0 scalar.
+    pub direction: i64,
+}
+
+/// One function of dataset 58 (ASCII) or 58b (binary).
+#[derive(Debug, Clone, PartialEq)]
+pub struct UffFunction {
+    /// Records 1-5: identification lines (record 3 is usually the date).
+    pub ids: [String; 5],
+    /// Function type (0 general, 1 time response, 2 auto spectrum, 3 cross spectrum, 4 frequency
+    /// response function, 6 coherence, 9 power spectral density, ...).
+    pub function_type: i64,
+    /// Function identification number, version number, load case.
+    pub numbers: [i64; 3],
+    /// Response DOF.
+    pub response: UffDof,
+    /// Reference DOF.
+    pub reference: UffDof,
+    /// Whether the values are double precision (ordinate data types 4 and 6) or single (2, 5).
+    pub double: bool,
+    /// Abscissa.
+    pub abscissa: Abscissa,
+    /// Z-axis value (record 7).
+    pub z_value: f64,
+    /// Records 8-11.
+    pub axes: [UffAxis; 4],
+    /// Values.
+    pub ordinate: Ordinate,
+    /// Read from, and written as, binary 58b.
+    pub binary: bool,
+}
+
+impl UffFunction {
+    /// The abscissa of each point.
+    pub fn abscissa_values(&self) -> Vec<f64> {
+        match &self.abscissa {
+            Abscissa::Even { min, step } => (0..self.ordinate.len())
+                .map(|k| min + k as f64 * step)
+                .collect(),
+            Abscissa::Uneven(x) => x.clone(),
+        }
+    }
+
+    /// Ordinate data type of record 7: 2 real single, 4 real double, 5 complex single, 6 complex
+    /// double.
+    fn data_type(&self) -> i64 {
+        match (&self.ordinate, self.double) {
+            (Ordinate::Real(_), false) => 2,
+            (Ordinate::Real(_), true) => 4,
+            (Ordinate::Complex(_), false) => 5,
+            (Ordinate::Complex(_), true) => 6,
+        }
+    }
+
+    /// Values stored per point (abscissa included when uneven).
+    fn per_point(&self) -> usize {
+        let even = matches!(self.abscissa, Abscissa::Even { .. });
+        match (&self.ordinate, even) {
+            (Ordinate::Real(_), true) => 1,
+            (Ordinate::Real(_), false) | (Ordinate::Complex(_), true) => 2,
+            (Ordinate::Complex(_), false) => 3,
+        }
+    }
+
+    /// The stored values in file order.
+    fn stored(&self) -> Vec<f64> {
+        let x = match &self.abscissa {
+            Abscissa::Uneven(x) => Some(x),
+            Abscissa::Even { .. } => None,
+        };
+        let mut v = Vec::with_capacity(self.ordinate.len() * self.per_point());
+        for k in 0..self.ordinate.len() {
+            if let Some(x) = x {
+                v.push(x.get(k).copied().unwrap_or(0.0));
+            }
+            match &self.ordinate {
+                Ordinate::Real(y) => v.push(y[k]),
+                Ordinate::Complex(y) => v.extend([y[k].0, y[k].1]),
+            }
+        }
+        v
+    }
+}
+
+/// One permanent group of dataset 2477: named lists of nodes and elements (what FE
+/// pre-processors and Gmsh's physical groups write), the sets of [`Universal::to_mesh`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct UffGroup {
+    /// Group number.
+    pub number: i64,
+    /// Group name (40 characters at most when written).
+    pub name: String,
+    /// Node labels (entity type 7).
+    pub nodes: Vec<u64>,
+    /// Element labels (entity type 8).
+    pub elements: Vec<u64>,
+}
+
+/// One trace line of dataset 82: a polyline through nodes, `0` lifting the pen.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UffTraceLine {
+    /// Trace line number.
+    pub number: i64,
+    /// Colour number.
+    pub color: i64,
+    /// Identification line.
+    pub id: String,
+    /// Node labels, `0` for "move to the next node without drawing".
+    pub nodes: Vec<u64>,
+}
+
+/// I-DEAS parabolic solids list each face's nodes corner, mid-edge, corner, ... : femu
+/// (Abaqus) order `femu[k] = unv[PERM[k]]`. Tetrahedron 118: corners 0 2 4 9, mid-edges 1 (0-2),
+/// 3 (2-4), 5 (4-0), 6 (0-9), 7 (2-9), 8 (4-9).
+mod functions;
+mod geometry;
+mod modal;
+mod model;
+mod read;
+mod write;
+
+use functions::*;
+use geometry::*;
+use modal::*;
+use read::*;
+use write::*;
+
+pub use read::{parse_uff, parse_uff_bytes, read_uff};
+pub use write::{uff_bytes, uff_string, write_uff};

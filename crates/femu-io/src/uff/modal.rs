@@ -1,0 +1,198 @@
+//! Units (164) and modal data (55: real normal modes and complex modes).
+
+use super::*;
+
+pub(super) fn parse_164(
+    path: &Path,
+    body: &[(usize, &str)],
+    out: &mut Universal,
+) -> Result<(), IoError> {
+    if body.len() < 2 {
+        return Err(perr(
+            path,
+            body.first().map_or(0, |b| b.0),
+            "dataset 164 needs 2 records",
+        ));
+    }
+    let (ln, l) = body[0];
+    let code = int(path, ln, l.get(..10).unwrap_or(l).trim())?;
+    let description = l.get(10..30).unwrap_or("").trim().to_string();
+    let f = nums(path, body[1].0, body[1].1, 3)?;
+    out.units = Some(UffUnits {
+        code,
+        description,
+        factors: [f[0], f[1], f[2]],
+    });
+    Ok(())
+}
+
+pub(super) fn parse_55(
+    path: &Path,
+    body: &[(usize, &str)],
+    out: &mut Universal,
+) -> Result<(), IoError> {
+    if body.len() < 8 {
+        return Err(perr(
+            path,
+            body.first().map_or(0, |b| b.0),
+            "dataset 55 needs at least 8 records",
+        ));
+    }
+    let (l6, r6) = body[5];
+    let h = ints(path, l6, r6, 6)?;
+    let (analysis, characteristic, data_type, ndv) = (h[1], h[2], h[4], h[5]);
+    if !(characteristic == 2 || characteristic == 3) {
+        return Err(perr(
+            path,
+            l6,
+            format!("data characteristic {characteristic}: femu reads translations (2 or 3)"),
+        ));
+    }
+    let complex = match data_type {
+        2 => false,
+        5 => true,
+        o => {
+            return Err(perr(
+                path,
+                l6,
+                format!("data type {o}: expected 2 (real) or 5 (complex)"),
+            ));
+        }
+    };
+    // 3 translations, or 6 with rotations; an absurd count is an error, not an allocation
+    if !(3..=6).contains(&ndv) {
+        return Err(perr(
+            path,
+            l6,
+            format!("{ndv} values per node: expected 3 (translations) to 6 (with rotations)"),
+        ));
+    }
+    let (l7, r7) = body[6];
+    let r7v = ints(path, l7, r7, 4)?;
+    let (nint, nrdv) = (r7v[0], r7v[1]);
+    let number = r7v.get(3).copied().unwrap_or(0);
+    // the real parameters may wrap over several lines of 6
+    let per_line = 6usize;
+    let rec8_lines = (nrdv.max(0) as usize).div_ceil(per_line).max(1);
+    let _ = nint;
+    let mut reals = Vec::new();
+    for k in 0..rec8_lines {
+        let (ln, l) = *body
+            .get(7 + k)
+            .ok_or_else(|| perr(path, l7, "record 8 is missing"))?;
+        reals.extend(nums(path, ln, l, 1)?);
+    }
+    let (frequency_hz, modal_mass, damping) = match analysis {
+        2 => {
+            if reals.len() < 3 {
+                return Err(perr(
+                    path,
+                    body[7].0,
+                    "a normal mode needs frequency, modal mass and damping",
+                ));
+            }
+            (reals[0], reals[1], reals[2])
+        }
+        3 => {
+            if reals.len() < 2 {
+                return Err(perr(path, body[7].0, "a complex mode needs its eigenvalue"));
+            }
+            let (re, im) = (reals[0], reals[1]);
+            let w = re.hypot(im);
+            (
+                w / (2.0 * std::f64::consts::PI),
+                0.0,
+                if w > 0.0 { -re / w } else { 0.0 },
+            )
+        }
+        o => {
+            return Err(perr(
+                path,
+                l6,
+                format!("analysis type {o}: femu reads normal (2) and complex (3) modes"),
+            ));
+        }
+    };
+    if !(frequency_hz > 0.0) {
+        return Err(perr(
+            path,
+            body[7].0,
+            format!("frequency {frequency_hz} Hz must be positive"),
+        ));
+    }
+    let width = if complex {
+        2 * ndv as usize
+    } else {
+        ndv as usize
+    };
+    let mut values = Vec::new();
+    let mut raw: Vec<(u64, Vec<f64>)> = Vec::new();
+    let mut k = 7 + rec8_lines;
+    while k < body.len() {
+        let (ln, l) = body[k];
+        if l.trim().is_empty() {
+            k += 1;
+            continue;
+        }
+        let node = int(path, ln, l.split_whitespace().next().unwrap_or(""))?;
+        if node <= 0 {
+            return Err(perr(
+                path,
+                ln,
+                format!("node label {node} must be positive"),
+            ));
+        }
+        let mut v = Vec::with_capacity(width);
+        k += 1;
+        while v.len() < width {
+            let (ln2, l2) = *body.get(k).ok_or_else(|| {
+                perr(
+                    path,
+                    ln,
+                    format!("node {node}: {width} values expected, found {}", v.len()),
+                )
+            })?;
+            v.extend(nums(path, ln2, l2, 1)?);
+            k += 1;
+        }
+        if v.len() != width {
+            return Err(perr(
+                path,
+                ln,
+                format!("node {node}: {width} values expected, found {}", v.len()),
+            ));
+        }
+        raw.push((node as u64, v));
+    }
+    if complex {
+        // rotate by the phase of the largest component: a real mode stored as complex comes back exactly
+        let (mut best, mut phase) = (0.0, 0.0);
+        for (_, v) in &raw {
+            for c in 0..3 {
+                let (re, im) = (v[2 * c], v[2 * c + 1]);
+                if re.hypot(im) > best {
+                    best = re.hypot(im);
+                    phase = im.atan2(re);
+                }
+            }
+        }
+        let (cs, sn) = (phase.cos(), phase.sin());
+        for (n, v) in raw {
+            let r = |c: usize| v[2 * c] * cs + v[2 * c + 1] * sn;
+            values.push((n, [r(0), r(1), r(2)]));
+        }
+    } else {
+        for (n, v) in raw {
+            values.push((n, [v[0], v[1], v[2]]));
+        }
+    }
+    out.modes.push(UffMode {
+        number,
+        frequency_hz,
+        damping,
+        modal_mass,
+        values,
+        complex,
+    });
+    Ok(())
+}

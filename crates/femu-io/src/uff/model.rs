@@ -1,0 +1,159 @@
+//! A universal file as femu data: test modes on sensors, and solids as a mesh with sets.
+
+use super::*;
+
+impl Universal {
+    /// The femu mesh of the file's nodes and solid elements: linear (descriptors 111 tetrahedron,
+    /// 112 wedge, 115 brick, whose node orders are Abaqus') and parabolic (118, 113, 116, whose
+    /// I-DEAS orders interleave corners and mid-edge nodes around each face: converted, see
+    /// `UNV_HEX20`); other elements (shells, beams) are skipped and counted in the returned
+    /// warnings.
+    ///
+    /// # Errors
+    /// A wrong node count (element label), a mesh error (duplicate or missing node), no solid.
+    pub fn to_mesh(&self, path: &Path) -> Result<(femu_fem::mesh::Mesh, Vec<Warning>), IoError> {
+        use femu_fem::element::ElementKind;
+        let model_err = |source| IoError::Model {
+            path: path.to_path_buf(),
+            line: 0,
+            source,
+        };
+        let mut mesh = femu_fem::mesh::Mesh::new();
+        for n in &self.nodes {
+            mesh.add_node(n.id, n.x).map_err(model_err)?;
+        }
+        let mut skipped = 0;
+        for e in &self.elements {
+            let (kind, order): (ElementKind, &[usize]) = match e.descriptor {
+                111 => (ElementKind::Tet4, &[0, 1, 2, 3]),
+                112 => (ElementKind::Penta6, &[0, 1, 2, 3, 4, 5]),
+                115 => (ElementKind::Hex8, &[0, 1, 2, 3, 4, 5, 6, 7]),
+                118 => (ElementKind::Tet10, &UNV_TET10),
+                113 => (ElementKind::Penta15, &UNV_PENTA15),
+                116 => (ElementKind::Hex20, &UNV_HEX20),
+                _ => {
+                    skipped += 1;
+                    continue;
+                }
+            };
+            if e.nodes.len() != order.len() {
+                return Err(IoError::Parse {
+                    path: path.to_path_buf(),
+                    line: 0,
+                    reason: format!(
+                        "element {}: descriptor {} needs {} nodes, found {}",
+                        e.id,
+                        e.descriptor,
+                        order.len(),
+                        e.nodes.len()
+                    ),
+                });
+            }
+            let nodes: Vec<u64> = order.iter().map(|&k| e.nodes[k]).collect();
+            mesh.add_element(e.id, kind, &nodes).map_err(model_err)?;
+        }
+        if mesh.element_count() == 0 {
+            return Err(IoError::Parse {
+                path: path.to_path_buf(),
+                line: 0,
+                reason: "no solid element (descriptors 111-118) in dataset 2412".into(),
+            });
+        }
+        // groups: solid elements make an element set; every element (shells and beams too) and
+        // node of a group puts its nodes in the node set of that name (where clamps and sensors
+        // go), as Gmsh does with physical groups
+        let by_id: std::collections::HashMap<u64, &UffElement> =
+            self.elements.iter().map(|e| (e.id, e)).collect();
+        for g in &self.groups {
+            let mut nodes: Vec<u64> = g.nodes.clone();
+            let mut solids = Vec::new();
+            for id in &g.elements {
+                let e = by_id.get(id).ok_or_else(|| IoError::Parse {
+                    path: path.to_path_buf(),
+                    line: 0,
+                    reason: format!("group {}: element {id} is not in dataset 2412", g.name),
+                })?;
+                nodes.extend(&e.nodes);
+                if mesh.element_index(*id).is_some() {
+                    solids.push(*id);
+                }
+            }
+            nodes.sort_unstable();
+            nodes.dedup();
+            let set_err = |e| IoError::Parse {
+                path: path.to_path_buf(),
+                line: 0,
+                reason: format!("group {}: {e}", g.name),
+            };
+            if !solids.is_empty() {
+                mesh.add_element_set(g.name.clone(), &solids)
+                    .map_err(set_err)?;
+            }
+            if !nodes.is_empty() {
+                mesh.add_node_set(g.name.clone(), &nodes).map_err(set_err)?;
+            }
+        }
+        let mut warnings = Vec::new();
+        if skipped > 0 {
+            warnings.push(Warning {
+                path: path.to_path_buf(),
+                line: 0,
+                message: format!("{skipped} non-solid elements (shells, beams) skipped"),
+            });
+        }
+        Ok((mesh, warnings))
+    }
+
+    /// The test modes and sensors of the file's dataset-55 modes: one sensor per node and axis
+    /// whose value is non-zero in some mode (test systems write unmeasured directions as zeros),
+    /// in node order then x, y, z. `path` names the file in errors.
+    ///
+    /// # Errors
+    /// No modes, modes on different node lists, no non-zero value, invalid frequencies.
+    pub fn test_data(&self, path: &Path) -> Result<crate::csv::TestData, IoError> {
+        let bad = |reason: String| IoError::Parse {
+            path: PathBuf::from(path),
+            line: 0,
+            reason,
+        };
+        let first = self
+            .modes
+            .first()
+            .ok_or_else(|| bad("no dataset 55 (modal data) in the file".into()))?;
+        let nodes: Vec<u64> = first.values.iter().map(|(n, _)| *n).collect();
+        for m in &self.modes {
+            let these: Vec<u64> = m.values.iter().map(|(n, _)| *n).collect();
+            if these != nodes {
+                return Err(bad(format!(
+                    "mode {} is given on other nodes than mode {}",
+                    m.number, first.number
+                )));
+            }
+        }
+        let mut sensors = Vec::new();
+        let mut rows = Vec::new();
+        for (k, n) in nodes.iter().enumerate() {
+            for c in 0..3 {
+                if self.modes.iter().any(|m| m.values[k].1[c] != 0.0) {
+                    sensors.push(Sensor::axis(*n, c));
+                    rows.push((k, c));
+                }
+            }
+        }
+        if sensors.is_empty() {
+            return Err(bad("every mode shape value is zero".into()));
+        }
+        let shapes = Mat::from_fn(rows.len(), self.modes.len(), |r, j| {
+            let (k, c) = rows[r];
+            self.modes[j].values[k].1[c]
+        });
+        let damping = self.modes.iter().map(|m| m.damping).collect();
+        let modes = TestModes::new(
+            self.modes.iter().map(|m| m.frequency_hz).collect(),
+            Some(damping),
+            shapes,
+        )
+        .map_err(|e| bad(e.to_string()))?;
+        Ok(crate::csv::TestData { sensors, modes })
+    }
+}

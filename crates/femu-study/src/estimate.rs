@@ -1,0 +1,162 @@
+//! The estimate workflow: test shapes expanded to every DOF, the model's lowest modes paired with
+//! the test, and for each test mode the residual norms `rho_M` and `rho_2`, the frequency interval
+//! that must hold a model frequency, and every bound of `docs/MATH.md` ("Estimators", Theorems
+//! 1-4 of the paper, (26)-(29)) with what it bounds. The paper's Table 2 is its summary.
+
+use crate::StudyError;
+use faer::{Mat, MatRef};
+use femu_correlate::expansion::{Expander, Method, place_measured};
+use femu_correlate::{
+    Assessment, BoundKind, CorrelationReport, Form, ModeSet, ModelSpectrum, PairingOptions,
+    SensorLayout, TestModes, correlate, element_bounds, estimate,
+};
+use femu_fem::assembly::{MassKind, SystemMatrices};
+use femu_fem::model::Model;
+use serde::{Deserialize, Serialize};
+
+/// Expands measured shapes `ya` (one row per sensor of `layout`) to every free DOF by `method`.
+/// When the sensors cover every free DOF, the readings are placed on their DOFs as they are.
+///
+/// # Errors
+/// Oblique sensors, sizes, NaN, and the method's errors (a singular expansion).
+pub fn expand_shapes(
+    sys: &SystemMatrices,
+    layout: &SensorLayout,
+    lambdas: &[f64],
+    ya: MatRef<'_, f64>,
+    method: Method,
+    serep_basis: Option<MatRef<'_, f64>>,
+) -> Result<Mat<f64>, StudyError> {
+    Ok(match layout.measured_dofs() {
+        Some(dofs) if dofs.len() == sys.dofs.free_count() => {
+            place_measured(sys.k.rows(), &dofs, ya)?
+        }
+        _ => Expander::new(&sys.k, &sys.m, layout)?.expand(method, lambdas, ya, serep_basis)?,
+    })
+}
+
+/// Settings of [`estimate_with_bounds`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EstimateOptions {
+    /// How the measured shapes are expanded (default dynamic).
+    pub expansion: Method,
+    /// Pairing of test and model modes.
+    pub pairing: PairingOptions,
+}
+
+impl Default for EstimateOptions {
+    fn default() -> Self {
+        Self {
+            expansion: Method::Dynamic,
+            pairing: PairingOptions::default(),
+        }
+    }
+}
+
+/// One row of the paper's Table 2 for one test mode.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EstimateRow {
+    /// Test mode (1-based).
+    pub test: usize,
+    /// Smallest gap `min_j |lambda_id - lambda_j|` over the computed spectrum, s^-2 (the
+    /// distance to the top computed eigenvalue counts, so that a test eigenvalue above the
+    /// computed modes is not given a gap larger than it is).
+    pub min_gap: f64,
+    /// Gap to the paired model mode, s^-2.
+    pub paired_gap: Option<f64>,
+    /// `rho_M = ||R_F||_{M^-1} / ||x||_M`, s^-2 (the rigorous ratio).
+    pub rho_m: f64,
+    /// `rho_2 = ||R_F||_2 / ||x||_2` (the paper's ratio; units of `K` when `M` has mass).
+    pub rho_2: f64,
+    /// Whether Theorem 2 holds in the paper's form (`min gap <= rho_2`).
+    pub t2_paper_holds: bool,
+    /// Whether it holds in the rigorous form (a theorem: always, to round-off).
+    pub t2_rigorous_holds: bool,
+    /// The frequency interval (Hz) Theorem 2 guarantees holds a model frequency.
+    pub interval_hz: (f64, f64),
+}
+
+/// What [`estimate_with_bounds`] found.
+#[derive(Debug, Clone, Serialize)]
+pub struct EstimateResult {
+    /// The expansion used.
+    pub expansion: Method,
+    /// Pairs, frequency errors and MAC (the paper's Table 1).
+    pub correlation: CorrelationReport,
+    /// Norms, interval and every bound per test mode.
+    pub assessments: Vec<Assessment>,
+    /// The paper's Table 2.
+    pub rows: Vec<EstimateRow>,
+}
+
+/// Correlates `test` with the model modes `modes`, and assesses the expanded test shapes `x`
+/// (full length, one column per test mode) against the spectrum: `rho_M`, `rho_2`, Theorems 1-4
+/// in both forms with `lambda_max` and `mu_min(M)` bounded element by element (`docs/MATH.md`,
+/// "Estimators").
+///
+/// # Errors
+/// Sizes, NaN, a pairing or estimator error.
+pub fn estimate_with_bounds(
+    model: &Model,
+    sys: &SystemMatrices,
+    mass: MassKind,
+    layout: &SensorLayout,
+    test: &TestModes,
+    modes: &ModeSet,
+    x: MatRef<'_, f64>,
+    options: &EstimateOptions,
+) -> Result<EstimateResult, StudyError> {
+    let correlation = correlate(modes, test, layout, &options.pairing)?;
+    let lambdas = test.eigenvalues();
+    let eb = element_bounds(model, mass)?;
+    let spectrum = ModelSpectrum {
+        values: modes.values.clone(),
+        complete: false,
+        lambda_max: eb.lambda_max_upper,
+        mu_min: Some(eb.mu_min_lower),
+        identity_mass: false,
+    };
+    let paired: Vec<Option<usize>> = (0..test.len())
+        .map(|t| correlation.pairing.of_test(t).map(|p| p.model))
+        .collect();
+    let assessments = estimate(&sys.k, &sys.m, &lambdas, x, &spectrum, Some(modes), &paired)?;
+    let top = *modes
+        .values
+        .last()
+        .ok_or_else(|| StudyError::invalid("model modes", "none computed"))?;
+    let rows = assessments
+        .iter()
+        .enumerate()
+        .map(|(t, a)| {
+            let lam = lambdas[t];
+            let min_gap = modes
+                .values
+                .iter()
+                .map(|l| (lam - l).abs())
+                .fold(f64::INFINITY, f64::min)
+                .min((top - lam).abs());
+            let t2 = |form: Form| {
+                a.bounds
+                    .iter()
+                    .find(|b| b.kind == BoundKind::T2 && b.form == form)
+                    .and_then(|b| b.holds())
+            };
+            EstimateRow {
+                test: t + 1,
+                min_gap,
+                paired_gap: correlation.pairing.of_test(t).map(|p| p.eigenvalue_gap),
+                rho_m: a.norms.rho_m,
+                rho_2: a.norms.rho_2,
+                t2_paper_holds: t2(Form::Paper).unwrap_or(min_gap <= a.norms.rho_2),
+                t2_rigorous_holds: t2(Form::Rigorous).unwrap_or(min_gap <= a.norms.rho_m),
+                interval_hz: a.frequency_interval_hz,
+            }
+        })
+        .collect();
+    Ok(EstimateResult {
+        expansion: options.expansion,
+        correlation,
+        assessments,
+        rows,
+    })
+}

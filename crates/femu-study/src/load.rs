@@ -1,0 +1,177 @@
+//! Loading a model and a test the way every workflow does: read the file by its extension, build
+//! and check the model, assemble `K` and `M` once, and map the test's sensors onto the model.
+
+use crate::StudyError;
+use femu_correlate::SensorLayout;
+use femu_fem::assembly::{Assembler, MassKind, SystemMatrices};
+use femu_fem::material::Material;
+use femu_fem::model::Model;
+use femu_io::csv::TestData;
+use femu_io::inp::FrequencyStep;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// An isotropic material for a mesh-only model (Gmsh `.msh`, universal file solids).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialOptions {
+    /// Young's modulus, Pa.
+    pub young: f64,
+    /// Poisson's ratio.
+    pub poisson: f64,
+    /// Density, kg/m^3.
+    pub density: f64,
+}
+
+/// How to turn a model file into a model.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ModelOptions {
+    /// The material of a mesh-only model (required for `.msh`/`.unv`, not used for an `.inp`
+    /// deck, which has its own).
+    pub material: Option<MaterialOptions>,
+    /// Node sets (Gmsh physical groups, UFF groups) to clamp in a mesh-only model.
+    pub fix: Vec<String>,
+    /// Lumped (row-sum/HRZ) instead of consistent mass.
+    pub lumped: bool,
+}
+
+impl ModelOptions {
+    /// The mass kind.
+    pub fn mass(&self) -> MassKind {
+        if self.lumped {
+            MassKind::Lumped
+        } else {
+            MassKind::Consistent
+        }
+    }
+}
+
+/// A model read, checked and assembled once.
+#[derive(Debug, Clone)]
+pub struct LoadedModel {
+    /// The file it came from.
+    pub path: PathBuf,
+    /// The model.
+    pub model: Model,
+    /// `K` and `M` on the free DOFs, with the DOF map.
+    pub sys: SystemMatrices,
+    /// The mass kind of `sys.m`.
+    pub mass: MassKind,
+    /// The pattern and colouring `sys` was assembled with (reused by updating).
+    pub asm: Assembler,
+    /// The deck's `*FREQUENCY` step, if any.
+    pub frequency: Option<FrequencyStep>,
+    /// What the readers noticed and the options that did not apply, one line each.
+    pub warnings: Vec<String>,
+}
+
+/// A test read and mapped onto a model.
+#[derive(Debug, Clone)]
+pub struct LoadedTest {
+    /// The file it came from.
+    pub path: PathBuf,
+    /// The sensors and the modes, as read.
+    pub data: TestData,
+    /// The sensors on the model's DOFs.
+    pub layout: SensorLayout,
+}
+
+/// Whether `path` ends in one of `exts` (any case).
+pub fn has_extension(path: &Path, exts: &[&str]) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| exts.iter().any(|x| e.eq_ignore_ascii_case(x)))
+}
+
+/// Reads a model: an Abaqus/CalculiX `.inp` deck (materials and constraints inside), or a mesh
+/// (Gmsh `.msh`, universal file `.unv`/`.uff` with datasets 2411/2412) with the material and
+/// clamped sets of `options`; then assembles `K` and `M`.
+///
+/// # Errors
+/// The readers' errors (file and line), a mesh without a material, an unknown set to fix, and
+/// assembly errors (naming the element).
+pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, StudyError> {
+    let mut warnings = Vec::new();
+    let (model, frequency) = if has_extension(path, &["msh", "unv", "uff"]) {
+        let Some(mat) = options.material else {
+            return Err(StudyError::in_file(
+                path,
+                "material",
+                "a mesh file has no material: give Young's modulus, Poisson's ratio and the density (--young, --poisson, --density, or [material] in a study file)",
+            ));
+        };
+        let mesh = if has_extension(path, &["unv", "uff"]) {
+            let u = femu_io::uff::read_uff(path)?;
+            let (mesh, w) = u.to_mesh(path)?;
+            warnings.extend(u.warnings.iter().map(|w| w.to_string()));
+            warnings.extend(w.iter().map(|w| w.to_string()));
+            mesh
+        } else {
+            let g = femu_io::gmsh::read_msh(path)?;
+            warnings.extend(g.warnings.iter().map(|w| w.to_string()));
+            g.mesh
+        };
+        let mut model =
+            Model::new(mesh).map_err(|e| StudyError::in_file(path, "mesh", e.to_string()))?;
+        let material = Material::isotropic("command line", mat.young, mat.poisson, mat.density)?;
+        model.set_material(None, material)?;
+        for set in &options.fix {
+            model.fix_set(set, &[0, 1, 2]).map_err(|e| {
+                StudyError::in_file(path, format!("fixed set {set}"), e.to_string())
+            })?;
+        }
+        (model, None)
+    } else {
+        let deck = femu_io::inp::read_inp(path)?;
+        warnings.extend(deck.warnings.iter().map(|w| w.to_string()));
+        if options.material.is_some() {
+            warnings.push(format!(
+                "{}: the deck has its own materials: the given Young's modulus, Poisson's ratio and density are not used",
+                path.display()
+            ));
+        }
+        if !options.fix.is_empty() {
+            warnings.push(format!(
+                "{}: the deck has its own boundary conditions: the sets to fix ({}) are not used",
+                path.display(),
+                options.fix.join(", ")
+            ));
+        }
+        (deck.to_model()?, deck.frequency)
+    };
+    let mass = options.mass();
+    let asm = Assembler::new(&model)?;
+    let sys = asm.assemble(&model, mass)?;
+    Ok(LoadedModel {
+        path: path.to_path_buf(),
+        model,
+        sys,
+        mass,
+        asm,
+        frequency,
+        warnings,
+    })
+}
+
+/// Reads test modes (`.unv`/`.uff` universal file, `.json`, or CSV) and maps their sensors onto
+/// `model`.
+///
+/// # Errors
+/// The readers' errors, and sensors on nodes or DOFs the model does not have (naming the test
+/// file).
+pub fn load_test(path: &Path, model: &LoadedModel) -> Result<LoadedTest, StudyError> {
+    let data = if has_extension(path, &["unv", "uff"]) {
+        femu_io::uff::read_uff(path).and_then(|u| u.test_data(path))?
+    } else if has_extension(path, &["json"]) {
+        femu_io::json::read_test_json(path)?
+    } else {
+        femu_io::csv::read_test_csv(path)?
+    };
+    let layout = SensorLayout::new(model.model.mesh(), &model.sys.dofs, data.sensors.clone())
+        .map_err(|e| StudyError::in_file(path, "sensors", e.to_string()))?;
+    Ok(LoadedTest {
+        path: path.to_path_buf(),
+        data,
+        layout,
+    })
+}

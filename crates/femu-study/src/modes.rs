@@ -1,0 +1,130 @@
+//! The modes workflow: the lowest modes of a model, those nearest a frequency, or every mode in a
+//! band, each result with its evidence (residuals and the Sturm count that proves no mode in the
+//! interval was skipped).
+
+use crate::StudyError;
+use crate::load::LoadedModel;
+use femu_correlate::modes::eigenvalue_of_hz;
+use femu_fem::assembly::MassKind;
+use femu_sparse::eigen::{EigenOptions, Modes, Which, eigs};
+use serde::Serialize;
+
+/// Which modes [`solve_modes`] computes.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ModesOptions {
+    /// How many (lowest, or nearest the shift). Default: the deck's `*FREQUENCY` count, or 10.
+    pub count: Option<usize>,
+    /// Modes nearest this frequency, Hz.
+    pub shift_hz: Option<f64>,
+    /// Every mode between two frequencies, Hz.
+    pub band_hz: Option<(f64, f64)>,
+}
+
+/// The summary of a modes run (what `femu modes --json` writes).
+#[derive(Debug, Clone, Serialize)]
+pub struct ModesReport {
+    /// The model file.
+    pub model: String,
+    /// Free DOFs.
+    pub dofs: usize,
+    /// `consistent` or `lumped`.
+    pub mass: &'static str,
+    /// Frequencies, Hz.
+    pub frequencies_hz: Vec<f64>,
+    /// Eigenvalues `omega^2`, s^-2.
+    pub eigenvalues: Vec<f64>,
+    /// Relative residuals `||K x - lambda M x|| / ||K x||`.
+    pub residuals: Vec<f64>,
+    /// Whether the Sturm count matches the modes returned.
+    pub sturm_verified: bool,
+    /// Eigenvalues below `sturm_upper` by inertia.
+    pub sturm_count: usize,
+    /// Upper end of the counted interval, s^-2.
+    pub sturm_upper: f64,
+    /// Wall time of the solve, s.
+    pub seconds: f64,
+}
+
+/// Solves for the modes `options` asks for.
+///
+/// # Errors
+/// A count of 0, a negative or non-finite frequency, a band with `LO >= HI`, and the
+/// eigensolver's errors.
+pub fn solve_modes(
+    loaded: &LoadedModel,
+    options: &ModesOptions,
+) -> Result<(Modes, ModesReport), StudyError> {
+    let start = std::time::Instant::now();
+    let sys = &loaded.sys;
+    let count = options
+        .count
+        .or(loaded.frequency.map(|f| f.count))
+        .unwrap_or(10);
+    if count == 0 {
+        return Err(StudyError::invalid("count", "must be at least 1"));
+    }
+    let which = match (options.shift_hz, options.band_hz) {
+        (Some(hz), _) => {
+            if !(hz.is_finite() && hz >= 0.0) {
+                return Err(StudyError::invalid(
+                    "shift",
+                    format!("{hz} Hz must be a non-negative frequency"),
+                ));
+            }
+            Which::Nearest {
+                shift: eigenvalue_of_hz(hz),
+                count,
+            }
+        }
+        (None, Some((lo, hi))) => {
+            if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo < hi) {
+                return Err(StudyError::invalid(
+                    "band",
+                    format!("{lo} {hi}: need 0 <= LO < HI (Hz)"),
+                ));
+            }
+            Which::Band {
+                lo: eigenvalue_of_hz(lo),
+                hi: eigenvalue_of_hz(hi),
+            }
+        }
+        (None, None) => Which::Lowest(count),
+    };
+    let modes = eigs(&sys.k, &sys.m, which, &EigenOptions::default())?;
+    let report = ModesReport {
+        model: loaded.path.display().to_string(),
+        dofs: sys.k.rows(),
+        mass: match loaded.mass {
+            MassKind::Lumped => "lumped",
+            _ => "consistent",
+        },
+        frequencies_hz: modes.frequencies_hz(),
+        eigenvalues: modes.values.clone(),
+        residuals: modes.residuals.clone(),
+        sturm_verified: modes.sturm.verified(),
+        sturm_count: modes.sturm.count,
+        sturm_upper: modes.sturm.upper,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    Ok((modes, report))
+}
+
+/// The lowest `count` modes (default: twice the test modes plus 4, at most the DOFs), as the
+/// correlation and estimate workflows need them.
+///
+/// # Errors
+/// The eigensolver's errors.
+pub fn lowest_for_test(
+    loaded: &LoadedModel,
+    count: Option<usize>,
+    test_modes: usize,
+) -> Result<Modes, StudyError> {
+    let sys = &loaded.sys;
+    let count = count.unwrap_or(2 * test_modes + 4).min(sys.k.rows());
+    Ok(eigs(
+        &sys.k,
+        &sys.m,
+        Which::Lowest(count),
+        &EigenOptions::default(),
+    )?)
+}
