@@ -4,7 +4,7 @@
 //!   positive definite, the Rayleigh quotient gives
 //!   `x^T K x = sum_e x_e^T K_e x_e <= sum_e lambda_max(K_e, M_e) x_e^T M_e x_e
 //!   <= max_e lambda_max(K_e, M_e) x^T M x`, so `lambda_max(K, M) <= max_e lambda_max(K_e, M_e)`.
-//!   This bounds `spread_k` of Theorems 1 and 3 (MATH.md).
+//!   This bounds `spread_k` of Theorems 1 and 3 (docs/MATH.md).
 //! - The smallest eigenvalue of `M`: `x^T M x = sum_e x_e^T M_e x_e >= min_e mu_min(M_e)
 //!   sum_e ||x_e||^2 >= min_e mu_min(M_e) ||x||^2`, since every DOF belongs to an element. It
 //!   turns the paper's Euclidean ratio into a rigorous bound: `rho_M <= rho_2 / mu_min(M)`.

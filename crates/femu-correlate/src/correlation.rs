@@ -1,4 +1,4 @@
-//! Test-analysis correlation measures (MATH.md, "Correlation"; the paper's (16)-(17), Table 1).
+//! Test-analysis correlation measures (docs/MATH.md, "Correlation"; the paper's (16)-(17), Table 1).
 //!
 //! Mass-weighted measures need full-length vectors (every free DOF); the test engineer's measures
 //! work on the sensors. Matrices of measures have one row per test mode and one column per model
@@ -240,7 +240,7 @@ pub fn comac(
 
 /// Cross-orthogonality `X^T M Phi` (rows: test, columns: model). With both sets M-normalised,
 /// paired entries near +-1 and the rest near 0 mean good correlation; each entry is `c_j` of
-/// MATH.md, the modal coordinate of the test vector on the model mode.
+/// docs/MATH.md, the modal coordinate of the test vector on the model mode.
 ///
 /// # Errors
 /// Mismatched sizes.

@@ -1,4 +1,4 @@
-//! The a priori error estimators (MATH.md, "The spectral identity (25)" and "The estimators";
+//! The a priori error estimators (docs/MATH.md, "The spectral identity (25)" and "The estimators";
 //! the paper's Theorems 1-4, (26)-(29)).
 //!
 //! From a test pair `(lambda_id, x)` and the model's `K`, `M` alone, [`Estimator`] computes

@@ -6,7 +6,7 @@
 //! - [`modes`]: model mode sets (s^-2, M-normalisation recorded) and test modes (Hz, shapes at
 //!   sensors); [`sensors`]: sensor layouts (node + any direction) mapped to model DOFs.
 //! - [`residues`]: force (3), forced (4), displacement (5), ECL (7)-(8), EIL (10)-(11), with the
-//!   free-free convention of MATH.md for a singular `K`.
+//!   free-free convention of docs/MATH.md for a singular `K`.
 //! - [`correlation`]: frequency errors, eigenvalue gaps, `MAC_M` (16) and MAC on sensors, AutoMAC,
 //!   COMAC, MSD (17), cross-orthogonality; [`pairing`]: optimal assignment with a MAC threshold.
 //! - [`estimators`]: `rho_M` and `rho_2`, Theorems 1-4 (26)-(29) in the paper's and the rigorous

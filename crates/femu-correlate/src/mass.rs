@@ -1,4 +1,4 @@
-//! Products with `M^-1`: the dual norm `||r||_{M^-1}` of force residuals (MATH.md, "Norms") and
+//! Products with `M^-1`: the dual norm `||r||_{M^-1}` of force residuals (docs/MATH.md, "Norms") and
 //! the error-in-inertia-law residue (10)-(12).
 //!
 //! A lumped `M` is diagonal and is inverted entry by entry. A consistent `M` is spectrally

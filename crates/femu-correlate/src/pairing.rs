@@ -1,4 +1,4 @@
-//! Mode pairing by optimal assignment (MATH.md, "Pairing").
+//! Mode pairing by optimal assignment (docs/MATH.md, "Pairing").
 //!
 //! Each test mode is paired with at most one model mode and each model mode with at most one test
 //! mode, maximising the total MAC over admissible pairs (MAC at or above the threshold): the

@@ -1,4 +1,4 @@
-//! Modal residues (MATH.md, "Residues"; the paper's (3)-(12)).
+//! Modal residues (docs/MATH.md, "Residues"; the paper's (3)-(12)).
 //!
 //! All residues follow from the force residual `R_F = (K - lambda_id M) x` (3):
 //! the displacement residual solves `K R_D = R_F` (5); the error in constitutive law
@@ -332,7 +332,7 @@ impl<'a> StiffnessSolver<'a> {
     }
 
     /// Solves `K Y = B` column by column. For a singular `K`, solves
-    /// `K Y = (I - M Phi_r Phi_r^T) B` with `Phi_r^T M Y = 0` (MATH.md's free-free convention) by
+    /// `K Y = (I - M Phi_r Phi_r^T) B` with `Phi_r^T M Y = 0` (docs/MATH.md's free-free convention) by
     /// iterative refinement on `K - sigma M` (`sigma` just below zero): each step divides the
     /// error of elastic mode `j` by `(lambda_j - sigma) / |sigma|`, about 10^9 or more.
     ///

@@ -2,7 +2,7 @@
 //! per identified eigenvalue serves every sensor set drawn from a set of candidate DOFs.
 //!
 //! With `E` the unit columns of the candidate DOFs and `S` a sensor set among them (`C = E_S^T`),
-//! each method of MATH.md's expansion table is a combination of the columns of one dense block
+//! each method of docs/MATH.md's expansion table is a combination of the columns of one dense block
 //! `B = Z^-1 W Z^-1 E` (or `Z^-1 E`), fitted to the data on the sensors:
 //!
 //! | method | block `B` | expansion |

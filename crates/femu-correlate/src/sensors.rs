@@ -3,7 +3,7 @@
 //! A sensor is a node and a unit direction (any direction, not only the axes). Its reading of a
 //! model displacement `u` is `d . u(node)`; stacked over sensors this is the observation matrix
 //! `C` (`s x n`, one row per sensor, at most three entries per row), so the model mode shapes at
-//! the sensors are `C Phi`. Measured DOFs `a` of MATH.md are the sensors of an axis-aligned layout.
+//! the sensors are `C Phi`. Measured DOFs `a` of docs/MATH.md are the sensors of an axis-aligned layout.
 
 use crate::CorrelateError;
 use faer::{Mat, MatRef};
@@ -181,7 +181,7 @@ impl SensorLayout {
     }
 
     /// The measured DOF of each sensor when every sensor is along an axis (`None` otherwise):
-    /// the set `a` of MATH.md's expansion formulas.
+    /// the set `a` of docs/MATH.md's expansion formulas.
     pub fn measured_dofs(&self) -> Option<Vec<usize>> {
         self.rows
             .iter()

@@ -1,4 +1,4 @@
-//! Parameter groups: `K(p) = K_0 + sum_g p_g K_g`, `M(q) = M_0 + sum_g q_g M_g` (MATH.md,
+//! Parameter groups: `K(p) = K_0 + sum_g p_g K_g`, `M(q) = M_0 + sum_g q_g M_g` (docs/MATH.md,
 //! "Updating").
 //!
 //! A group is a set of elements (an element set, or one element on its own); `K_g`, `M_g` are its
@@ -200,7 +200,7 @@ impl ParameterGroups {
         Ok(())
     }
 
-    /// `y += K_g x` for group `g` (free-DOF vectors): the SB-EBE sensitivity column of MATH.md.
+    /// `y += K_g x` for group `g` (free-DOF vectors): the SB-EBE sensitivity column of docs/MATH.md.
     ///
     /// # Errors
     /// [`FemError::LengthMismatch`] or [`FemError::InvalidGroup`].

@@ -4,7 +4,7 @@
 //! isoparametric elements (tet4, tet10, hex8, hex20, penta6, penta15), linear elastic materials,
 //! DOF maps with fixed DOFs, and parallel assembly of the sparse stiffness `K` and mass `M` on a
 //! pattern computed once, with parameter groups `K(p) = K_0 + sum_g p_g K_g` for updating
-//! (MATH.md, "Updating").
+//! (docs/MATH.md, "Updating").
 //!
 //! ```
 //! use femu_fem::prelude::*;

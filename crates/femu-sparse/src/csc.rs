@@ -1,4 +1,4 @@
-//! Helpers on [`SparseMatrix`](crate::SparseMatrix): products, symmetry checks, conversion to dense.
+//! Helpers on [`SparseMatrix`]: products, symmetry checks, conversion to dense.
 
 use crate::{SparseError, SparseMatrix};
 use faer::Mat;
@@ -29,7 +29,7 @@ pub fn mul_vec(a: &SparseMatrix, x: &[f64], y: &mut [f64]) -> Result<(), SparseE
     Ok(())
 }
 
-/// `x^T A y` (for `A = M`, the mass inner product of MATH.md).
+/// `x^T A y` (for `A = M`, the mass inner product of docs/MATH.md).
 ///
 /// # Errors
 /// [`SparseError::DimensionMismatch`] if the vectors do not match `A`.

@@ -9,7 +9,7 @@ use faer::{Mat, MatRef, Side};
 pub struct GeneralizedEigen {
     /// Eigenvalues `lambda_j` in nondecreasing order (s^-2 when `K`, `M` are in SI units).
     pub values: Vec<f64>,
-    /// Eigenvectors in the columns, M-normalised: `phi_i^T M phi_j = delta_ij` (MATH.md notation).
+    /// Eigenvectors in the columns, M-normalised: `phi_i^T M phi_j = delta_ij` (docs/MATH.md notation).
     pub vectors: Mat<f64>,
 }
 

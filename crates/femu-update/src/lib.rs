@@ -6,7 +6,7 @@
 //!
 //! - [`problem`]: the parameterised model ([`UpdateModel`]) on the fixed sparse pattern, with
 //!   bounds and the element-by-element sensitivity columns `K_g x`, `-lambda M_g x`.
-//! - [`localise`]: element (group) indicators from the residues: residual force and strain
+//! - [`localise`](mod@localise): element (group) indicators from the residues: residual force and strain
 //!   energy of the displacement residual (5), ranked, with a selection rule.
 //! - [`sbebe`]: SB-EBE, alternating minimum-residual expansion and bounded least-squares
 //!   corrections (13)-(15), nondimensionalised, with the total-mass guard.

@@ -1,10 +1,10 @@
-//! Error localisation: element (group) indicators from the residues (MATH.md, "Updating").
+//! Error localisation: element (group) indicators from the residues (docs/MATH.md, "Updating").
 //!
 //! For test pairs `(lambda_i, x_i)` with full-length (measured or expanded) shapes, scaled to
 //! `||x_i||_M = 1`, and the force residual (3) `R_F,i = (K - lambda_i M) x_i`:
 //! - the **strain energy of the displacement residual** (5) in group `g`:
 //!   `e_g = sum_i R_D,i^T K_g R_D,i` with `K R_D,i = R_F,i` (free-free: the representative of
-//!   MATH.md, M-orthogonal to the rigid-body modes);
+//!   docs/MATH.md, M-orthogonal to the rigid-body modes);
 //! - the **residual force** on the group's DOFs: `f_g = sum_i sum_{d in g} R_F,i[d]^2 / M_dd`.
 //!
 //! Why both: if the truth is `K_0 + p_d K_d` and `x_i` its exact mode, `R_F,i = -p_d K_d x_i` lives

@@ -1,4 +1,4 @@
-//! The parameterised model `K(p) = K_0 + sum_g p_g K_g`, `M(q) = M_0 + sum_g q_g M_g` (MATH.md,
+//! The parameterised model `K(p) = K_0 + sum_g p_g K_g`, `M(q) = M_0 + sum_g q_g M_g` (docs/MATH.md,
 //! "Updating") with its parameters, bounds and the element-by-element sensitivity columns.
 
 use crate::UpdateError;

@@ -1,4 +1,4 @@
-//! SB-EBE: sensitivity-based element-by-element updating (the paper's refs [4]-[5]; MATH.md,
+//! SB-EBE: sensitivity-based element-by-element updating (the paper's refs \[4\]-\[5\]; docs/MATH.md,
 //! "Updating", formulation (13)-(15)).
 //!
 //! The objective is `J(theta, x) = sum_i ||(K(p) - lambda_i M(q)) x_i||_W^2` over the test pairs,

@@ -3,7 +3,7 @@
 //! Levenberg-Marquardt on `sum_i ((lambda_j(i)(theta) - lambda_id,i) / lambda_id,i)^2` over the
 //! tuned test modes `i`, each paired (MAC on the sensors, optimal assignment) with a model mode
 //! `j(i)` re-computed every iteration, with `d lambda_j / d p_g = phi_j^T K_g phi_j` and
-//! `d lambda_j / d q_g = -lambda_j phi_j^T M_g phi_j` (MATH.md, "Updating"; `phi_j` M-normalised).
+//! `d lambda_j / d q_g = -lambda_j phi_j^T M_g phi_j` (docs/MATH.md, "Updating"; `phi_j` M-normalised).
 //! Each eigen solve reuses the symbolic analysis of the nominal `K` (the pattern never changes);
 //! every solve is Sturm-checked. Bounds, Tikhonov and the total-mass guard as in SB-EBE.
 

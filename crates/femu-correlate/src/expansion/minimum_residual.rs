@@ -26,7 +26,7 @@ impl Expander<'_> {
     }
 
     /// Minimum-residual expansion: `x_o = argmin ||Z_{:,o} x_o + Z_{:,a} x_a||_{M^-1}` with
-    /// `Z = K - lambda_id M` (MATH.md, `W = M^-1`). Solved without `M^-1` as the saddle-point
+    /// `Z = K - lambda_id M` (docs/MATH.md, `W = M^-1`). Solved without `M^-1` as the saddle-point
     /// system `M mu - Z_{:,o} x_o = Z_{:,a} x_a`, `-Z_{:,o}^T mu = 0` (`mu = M^-1 r`), regularised by
     /// `-delta I` (delta = 1e-8 max_j sum_r Z_rj^2 / M_rr) and refined to the exact solution.
     ///
@@ -43,7 +43,7 @@ impl Expander<'_> {
     }
 
     /// Minimum-residual expansion: `x_o = argmin ||Z_{:,o} x_o + Z_{:,a} x_a||_{M^-1}` with
-    /// `Z = K - lambda_id M` (MATH.md, `W = M^-1`). Up to [`SENSOR_SPACE_LIMIT`] measured DOFs
+    /// `Z = K - lambda_id M` (docs/MATH.md, `W = M^-1`). Up to [`SENSOR_SPACE_LIMIT`] measured DOFs
     /// it is computed in the sensor space ([`SensorSpace`]: one `LDL^T` of `Z` per eigenvalue and
     /// `2 s` solves), beyond with [`Expander::minimum_residual_saddle_point`]; the sensor-space
     /// result is checked and recomputed by the saddle point when the check fails.

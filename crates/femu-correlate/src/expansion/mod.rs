@@ -1,5 +1,5 @@
 //! Modal expansion: test shapes known on the measured DOFs `a` filled in on the omitted DOFs `o`
-//! (MATH.md, "Incomplete instrumentation: modal expansion"), with sparse factorizations only.
+//! (docs/MATH.md, "Incomplete instrumentation: modal expansion"), with sparse factorizations only.
 //!
 //! | method | omitted part |
 //! |---|---|

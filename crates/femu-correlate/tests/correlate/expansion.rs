@@ -1,4 +1,4 @@
-//! Modal expansion against dense implementations of MATH.md's formulas, exactness properties and
+//! Modal expansion against dense implementations of docs/MATH.md's formulas, exactness properties and
 //! bad input.
 
 use super::common::*;

@@ -1,4 +1,4 @@
-//! The identities of MATH.md on small models with a full dense eigendecomposition: the spectral
+//! The identities of docs/MATH.md on small models with a full dense eigendecomposition: the spectral
 //! identity (25), the residue relations (5), (9), (12), and the free-free convention.
 
 use super::common::*;
