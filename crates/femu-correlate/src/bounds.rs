@@ -90,6 +90,8 @@ fn element_extremes(model: &Model, e: usize, mass: MassKind) -> Result<(f64, f64
 
 /// Element-by-element bounds of `lambda_max(K, M)` and `mu_min(M)` for a model's mass kind.
 ///
+/// `docs/MATH.md`, "The estimators": Irons' bound of `lambda_max` for `spread_k` and the lower bound of `mu_min(M)`.
+///
 /// # Errors
 /// An element without material, an inverted element, an element mass that is not positive
 /// definite, or an empty mesh.

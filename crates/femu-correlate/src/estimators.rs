@@ -103,6 +103,8 @@ impl<'a> Estimator<'a> {
 
     /// Residual norms of the pairs `(lambdas[i], x[:, i])`, full-length `x` (every free DOF).
     ///
+    /// `docs/MATH.md`, "The spectral identity (25)": `rho_M` and the paper's `rho_2`.
+    ///
     /// # Errors
     /// Sizes, non-finite input, a zero shape, a failed `M^-1` solve.
     pub fn residual_norms(
@@ -259,6 +261,8 @@ pub struct PairedModel<'a> {
 ///
 /// `x` is the full-length test vector (needed only for the quantities that compare it with a
 /// model shape), `norms` its [`ResidualNorms`].
+///
+/// `docs/MATH.md`, "The estimators": Theorems 1-4, the paper's (26)-(29), in both forms, with the MAC, MSD and Kato-Temple bounds.
 ///
 /// # Errors
 /// A paired index outside the known spectrum, or sizes that do not match `M`.

@@ -68,6 +68,8 @@ impl Pairing {
 
 /// Pairs test modes (rows of `mac`) with model modes (columns).
 ///
+/// `docs/MATH.md`, "Pairing" (MAC (16)).
+///
 /// # Errors
 /// Sizes that do not match the frequency lists, a MAC outside `[0, 1]` (beyond round-off) or
 /// not finite, a threshold outside `(0, 1]`.

@@ -162,6 +162,8 @@ fn det_factor(ainv: &Mat<f64>, phi_s: MatRef<'_, f64>, rows: &[usize], sign: f64
 /// `det(Phi_s^T Phi_s)`. Stops when removing any further node would leave fewer sensors than modes
 /// or a rank-deficient set; the nodes not listed are the ones to keep.
 ///
+/// `docs/MATH.md`, "Expansion": the sensor sets of the paper's Figure 1 (Effective Independence, Kammer 1991).
+///
 /// # Errors
 /// Sizes; target modes dependent at the initial sensors.
 pub fn efi_removal_order(

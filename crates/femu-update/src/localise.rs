@@ -148,6 +148,8 @@ impl std::fmt::Display for Localisation {
 /// Computes the indicators of every group of `up` at its current parameters from full-length
 /// shapes `x` (columns; measured or expanded) and identified eigenvalues `lambdas` (s^-2).
 ///
+/// `docs/MATH.md`, "Localisation" (residues (3), (5)).
+///
 /// # Errors
 /// Sizes, NaN, zero shapes, a bad rule, and the stiffness solver's errors.
 pub fn localise(

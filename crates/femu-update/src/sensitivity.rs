@@ -109,6 +109,8 @@ pub(crate) fn evaluate(
 /// Runs inverse eigensensitivity on `up` (updated in place) with the test modes `test` measured
 /// on `layout` (used for pairing only). `log` is called after each accepted iteration.
 ///
+/// `docs/MATH.md`, "Updating": inverse eigensensitivity.
+///
 /// # Errors
 /// A tuned test mode that loses its pair, eigensolver errors, bad options.
 pub fn inverse_eigensensitivity(

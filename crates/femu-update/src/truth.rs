@@ -167,6 +167,8 @@ impl std::fmt::Display for TruthCheck {
 /// Correlates the model before and after updating with every test mode; `tuned` lists the test
 /// modes (0-based) used in updating, the others are held out.
 ///
+/// `docs/MATH.md`, "Updating": the truth check on held-out modes.
+///
 /// # Errors
 /// The correlation's errors (sizes, zero shapes), a tuned index out of range.
 pub fn truth_check(
