@@ -1,7 +1,7 @@
 //! What several subcommands share: the model options, the progress spinner, warnings.
 
 use clap::Args;
-use femu::study::load::{LoadedModel, LoadedTest, MaterialOptions, ModelOptions};
+use femu::study::load::{LoadedModel, MaterialOptions, ModelOptions};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::Path;
 use std::time::Duration;
@@ -95,14 +95,6 @@ pub fn load_model(
     let loaded = femu::study::load::load_model(path, &mesh.model_options(lumped)?)?;
     pb.suspend(|| warn(quiet, &loaded.warnings));
     Ok(loaded)
-}
-
-/// Reads the test and maps it onto the model.
-///
-/// # Errors
-/// As [`femu::study::load::load_test`].
-pub fn load_test(path: &Path, model: &LoadedModel) -> Result<LoadedTest, CliError> {
-    Ok(femu::study::load::load_test(path, model)?)
 }
 
 /// Writes `value` as pretty JSON when a path is given.

@@ -55,11 +55,6 @@ impl QuasiDefinite {
         }
     }
 
-    /// The regularised matrix.
-    pub fn matrix(&self) -> &SparseMatrix {
-        &self.a
-    }
-
     /// Solves `A_0 z = b` (the unregularised system) for the columns of `b`; `what` names the
     /// system in errors. `symbolic` is the analysis of an earlier system with the same pattern
     /// (computed and kept on first use), so one ordering serves a sequence of systems.

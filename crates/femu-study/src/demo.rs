@@ -16,9 +16,10 @@
 
 use crate::StudyError;
 use crate::chart::{error_map_svg, write_png};
-use crate::estimate::{EstimateOptions, EstimateRow, estimate_with_bounds, expand_shapes};
+use crate::estimate::{EstimateOptions, EstimateRow, estimate_with_bounds};
+use crate::expand::expand_shapes;
 use crate::removal::{RemovalOptions, removal_study, write_removal_study};
-use crate::report::{create_dir, full_fields, write_json, write_text};
+use crate::report::{create_dir, write_json, write_shapes_vtu, write_text};
 use crate::updating::{UpdateStudyOptions, localise_update_check};
 use femu_correlate::expansion::Method;
 use femu_correlate::modes::hz_of_eigenvalue;
@@ -277,7 +278,6 @@ pub fn run_demo(
     let estimated = estimate_with_bounds(
         &model,
         &sys,
-        MassKind::Consistent,
         &layout,
         &test,
         &model_set,
@@ -326,7 +326,7 @@ pub fn run_demo(
         &layout,
         &test,
         Some(&model_set),
-        None,
+        Some((nominal.assembler(), nominal.nominal())),
         &update_options,
         |it| {
             progress(&format!(
@@ -363,12 +363,6 @@ pub fn run_demo(
     // VTK: error map and the updated model's first elastic modes
     let updated = study.updated_modes;
     let density = localisation.density_by_element(&nominal);
-    let mut point_fields = Vec::new();
-    let mode_vectors = full_fields(
-        &dofs,
-        model.mesh().node_count(),
-        updated.shapes.as_ref().subcols(6, 4),
-    );
     let names: Vec<String> = (0..4)
         .map(|j| {
             format!(
@@ -378,22 +372,17 @@ pub fn run_demo(
             )
         })
         .collect();
-    for j in 0..4 {
-        point_fields.push(femu_io::vtk::PointField {
-            name: &names[j],
-            components: 3,
-            values: &mode_vectors[j],
-        });
-    }
     let vtu = opts.out.join("plate.vtu");
-    femu_io::vtk::write_vtu(
+    write_shapes_vtu(
+        &vtu,
         model.mesh(),
-        &point_fields,
+        &dofs,
+        updated.shapes.as_ref().subcols(6, 4),
+        &names,
         &[femu_io::vtk::CellField {
             name: "error indicator (explained residual density)",
             values: &density,
         }],
-        &vtu,
     )?;
     files.push(vtu);
     let svg = error_map_svg(&localisation);

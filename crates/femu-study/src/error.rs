@@ -34,6 +34,14 @@ pub enum StudyError {
         /// The system's error.
         source: std::io::Error,
     },
+    /// An error found while building a model or a sensor layout from a file, with the file.
+    #[error("{}: {source}", path.display())]
+    InFile {
+        /// The model or test file.
+        path: PathBuf,
+        /// What went wrong.
+        source: Box<StudyError>,
+    },
     /// A model or test file, or a setting, that does not fit the workflow.
     #[error("{}{what}: {reason}", context.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default())]
     Invalid {
@@ -79,6 +87,14 @@ impl StudyError {
             context: Some(path.into()),
             what: what.into(),
             reason: reason.into(),
+        }
+    }
+
+    /// `source` found while building something from the file `path`.
+    pub fn within(path: impl Into<PathBuf>, source: impl Into<StudyError>) -> Self {
+        StudyError::InFile {
+            path: path.into(),
+            source: Box::new(source.into()),
         }
     }
 

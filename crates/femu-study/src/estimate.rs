@@ -1,39 +1,18 @@
-//! The estimate workflow: test shapes expanded to every DOF, the model's lowest modes paired with
+//! The estimate workflow: test shapes expanded to every DOF ([`crate::expand`]), the model's lowest modes paired with
 //! the test, and for each test mode the residual norms `rho_M` and `rho_2`, the frequency interval
 //! that must hold a model frequency, and every bound of `docs/MATH.md` ("Estimators", Theorems
 //! 1-4 of the paper, (26)-(29)) with what it bounds. The paper's Table 2 is its summary.
 
 use crate::StudyError;
-use faer::{Mat, MatRef};
-use femu_correlate::expansion::{Expander, Method, place_measured};
+use faer::MatRef;
+use femu_correlate::expansion::Method;
 use femu_correlate::{
     Assessment, BoundKind, CorrelationReport, Form, ModeSet, ModelSpectrum, PairingOptions,
     SensorLayout, TestModes, correlate, element_bounds, estimate,
 };
-use femu_fem::assembly::{MassKind, SystemMatrices};
+use femu_fem::assembly::SystemMatrices;
 use femu_fem::model::Model;
 use serde::{Deserialize, Serialize};
-
-/// Expands measured shapes `ya` (one row per sensor of `layout`) to every free DOF by `method`.
-/// When the sensors cover every free DOF, the readings are placed on their DOFs as they are.
-///
-/// # Errors
-/// Oblique sensors, sizes, NaN, and the method's errors (a singular expansion).
-pub fn expand_shapes(
-    sys: &SystemMatrices,
-    layout: &SensorLayout,
-    lambdas: &[f64],
-    ya: MatRef<'_, f64>,
-    method: Method,
-    serep_basis: Option<MatRef<'_, f64>>,
-) -> Result<Mat<f64>, StudyError> {
-    Ok(match layout.measured_dofs() {
-        Some(dofs) if dofs.len() == sys.dofs.free_count() => {
-            place_measured(sys.k.rows(), &dofs, ya)?
-        }
-        _ => Expander::new(&sys.k, &sys.m, layout)?.expand(method, lambdas, ya, serep_basis)?,
-    })
-}
 
 /// Settings of [`estimate_with_bounds`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -99,7 +78,6 @@ pub struct EstimateResult {
 pub fn estimate_with_bounds(
     model: &Model,
     sys: &SystemMatrices,
-    mass: MassKind,
     layout: &SensorLayout,
     test: &TestModes,
     modes: &ModeSet,
@@ -108,7 +86,7 @@ pub fn estimate_with_bounds(
 ) -> Result<EstimateResult, StudyError> {
     let correlation = correlate(modes, test, layout, &options.pairing)?;
     let lambdas = test.eigenvalues();
-    let eb = element_bounds(model, mass)?;
+    let eb = element_bounds(model, sys.mass_kind)?;
     let spectrum = ModelSpectrum {
         values: modes.values.clone(),
         complete: false,

@@ -8,7 +8,7 @@
 //! | load a model and a test | [`load::load_model`], [`load::load_test`] | every command |
 //! | modes with their Sturm evidence | [`modes::solve_modes`] | `femu modes` |
 //! | correlation and the a priori estimators (the paper's Tables 1 and 2) | [`estimate::estimate_with_bounds`] | `femu correlate`, `femu estimate` |
-//! | expansion and the sensor-removal study (the paper's Figure 1) | [`study_file::expansion_report`], [`removal::removal_study`] | `femu expand` |
+//! | expansion and the sensor-removal study (the paper's Figure 1) | [`expand::expansion_report`], [`removal::removal_study`] | `femu expand` |
 //! | localise, update, check held-out modes | [`updating::localise_update_check`] | `femu update` |
 //! | a whole study from a TOML file, the model assembled once | [`study_file::run_study_file`] | `femu run` |
 //! | the paper's plate study end to end | [`demo::run_demo`] | `femu demo` |
@@ -30,6 +30,7 @@ pub mod chart;
 pub mod demo;
 mod error;
 pub mod estimate;
+pub mod expand;
 pub mod load;
 pub mod modes;
 pub mod removal;
@@ -43,9 +44,8 @@ pub use error::StudyError;
 pub mod prelude {
     pub use crate::StudyError;
     pub use crate::demo::{DemoOptions, DemoReport, run_demo};
-    pub use crate::estimate::{
-        EstimateOptions, EstimateResult, estimate_with_bounds, expand_shapes,
-    };
+    pub use crate::estimate::{EstimateOptions, EstimateResult, estimate_with_bounds};
+    pub use crate::expand::{ExpansionReport, expand_shapes, expansion_report};
     pub use crate::load::{
         LoadedModel, LoadedTest, MaterialOptions, ModelOptions, load_model, load_test,
     };

@@ -55,8 +55,6 @@ pub struct LoadedModel {
     pub model: Model,
     /// `K` and `M` on the free DOFs, with the DOF map.
     pub sys: SystemMatrices,
-    /// The mass kind of `sys.m`.
-    pub mass: MassKind,
     /// The pattern and colouring `sys` was assembled with (reused by updating).
     pub asm: Assembler,
     /// The deck's `*FREQUENCY` step, if any.
@@ -111,14 +109,13 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
             warnings.extend(g.warnings.iter().map(|w| w.to_string()));
             g.mesh
         };
-        let mut model =
-            Model::new(mesh).map_err(|e| StudyError::in_file(path, "mesh", e.to_string()))?;
+        let mut model = Model::new(mesh).map_err(|e| StudyError::within(path, e))?;
         let material = Material::isotropic("command line", mat.young, mat.poisson, mat.density)?;
         model.set_material(None, material)?;
         for set in &options.fix {
-            model.fix_set(set, &[0, 1, 2]).map_err(|e| {
-                StudyError::in_file(path, format!("fixed set {set}"), e.to_string())
-            })?;
+            model
+                .fix_set(set, &[0, 1, 2])
+                .map_err(|e| StudyError::within(path, e))?;
         }
         (model, None)
     } else {
@@ -139,14 +136,12 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         }
         (deck.to_model()?, deck.frequency)
     };
-    let mass = options.mass();
     let asm = Assembler::new(&model)?;
-    let sys = asm.assemble(&model, mass)?;
+    let sys = asm.assemble(&model, options.mass())?;
     Ok(LoadedModel {
         path: path.to_path_buf(),
         model,
         sys,
-        mass,
         asm,
         frequency,
         warnings,
@@ -168,7 +163,7 @@ pub fn load_test(path: &Path, model: &LoadedModel) -> Result<LoadedTest, StudyEr
         femu_io::csv::read_test_csv(path)?
     };
     let layout = SensorLayout::new(model.model.mesh(), &model.sys.dofs, data.sensors.clone())
-        .map_err(|e| StudyError::in_file(path, "sensors", e.to_string()))?;
+        .map_err(|e| StudyError::within(path, e))?;
     Ok(LoadedTest {
         path: path.to_path_buf(),
         data,

@@ -94,7 +94,7 @@ pub fn solve_modes(
     let report = ModesReport {
         model: loaded.path.display().to_string(),
         dofs: sys.k.rows(),
-        mass: match loaded.mass {
+        mass: match loaded.sys.mass_kind {
             MassKind::Lumped => "lumped",
             _ => "consistent",
         },

@@ -4,6 +4,7 @@
 
 use crate::StudyError;
 use crate::chart::{figure1_svg, write_png};
+use crate::load::{LoadedModel, LoadedTest};
 use crate::report::{study_csv, write_text};
 use faer::MatRef;
 use femu_correlate::SensorLayout;
@@ -93,6 +94,27 @@ pub fn removal_study(
         removal,
         points,
     })
+}
+
+/// The study over the test's own nodes (triaxial sensors at each, the default methods, down to 2
+/// nodes), with the expanded test shapes `x` as the EfI basis and as the shapes re-expanded.
+///
+/// # Errors
+/// As [`removal_study`].
+pub fn removal_over_test(
+    model: &LoadedModel,
+    test: &LoadedTest,
+    x: MatRef<'_, f64>,
+) -> Result<RemovalStudy, StudyError> {
+    removal_study(
+        &model.sys,
+        model.model.mesh(),
+        &sensor_nodes(&test.layout),
+        x,
+        &test.data.modes.eigenvalues(),
+        x,
+        &RemovalOptions::default(),
+    )
 }
 
 /// The distinct nodes of a layout's sensors, ascending.

@@ -3,7 +3,11 @@
 
 use crate::StudyError;
 use crate::chart::method_label;
+use faer::MatRef;
 use femu_correlate::study::StudyPoint;
+use femu_fem::dof::DofMap;
+use femu_fem::mesh::Mesh;
+use femu_io::vtk::{CellField, PointField, write_vtu};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -54,20 +58,37 @@ pub fn study_csv(points: &[StudyPoint]) -> String {
     s
 }
 
-/// Free-DOF columns of `x` scattered to full nodal vectors (3 components per node, zero on fixed
-/// DOFs), for VTK point fields.
-pub fn full_fields(
-    dofs: &femu_fem::dof::DofMap,
-    nodes: usize,
-    x: faer::MatRef<'_, f64>,
-) -> Vec<Vec<f64>> {
-    (0..x.ncols())
-        .map(|j| {
-            let mut v = vec![0.0; 3 * nodes];
-            for f in 0..x.nrows() {
-                v[dofs.full_of_free(f)] = x[(f, j)];
-            }
-            v
+/// Writes the columns of `x` (free-DOF vectors, e.g. mode shapes) as 3-component point fields
+/// named `names`, scattered to the nodes by [`DofMap::expand`] (zero on fixed DOFs), with the
+/// cell fields `cells`, to a VTK `.vtu` file for ParaView.
+///
+/// # Errors
+/// Sizes that do not match the DOF map or the names, and the writer's errors (naming the file).
+pub fn write_shapes_vtu(
+    path: &Path,
+    mesh: &Mesh,
+    dofs: &DofMap,
+    x: MatRef<'_, f64>,
+    names: &[String],
+    cells: &[CellField<'_>],
+) -> Result<(), StudyError> {
+    if names.len() != x.ncols() {
+        return Err(StudyError::invalid(
+            "VTK point fields",
+            format!("{} names for {} shapes", names.len(), x.ncols()),
+        ));
+    }
+    let values = (0..x.ncols())
+        .map(|j| dofs.expand(&x.col(j).iter().copied().collect::<Vec<f64>>()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let points: Vec<PointField<'_>> = values
+        .iter()
+        .zip(names)
+        .map(|(v, name)| PointField {
+            name,
+            components: 3,
+            values: v,
         })
-        .collect()
+        .collect();
+    Ok(write_vtu(mesh, &points, cells, path)?)
 }

@@ -19,17 +19,15 @@
 //! Paths in the file are relative to the file. Unknown keys are errors with their line.
 
 use crate::StudyError;
-use crate::estimate::{EstimateOptions, EstimateResult, estimate_with_bounds, expand_shapes};
-use crate::load::{LoadedModel, LoadedTest, MaterialOptions, ModelOptions, load_model, load_test};
+use crate::estimate::{EstimateOptions, EstimateResult, estimate_with_bounds};
+use crate::expand::{ExpansionReport, expand_shapes, expanded_names};
+use crate::load::{MaterialOptions, ModelOptions, load_model, load_test};
 use crate::modes::lowest_for_test;
-use crate::removal::{
-    RemovalOptions, RemovalStudy, removal_study, sensor_nodes, write_removal_study,
-};
-use crate::report::{create_dir, full_fields, write_json};
-use crate::updating::{UpdateStudy, UpdateStudyOptions, localise_update_check};
-use femu_correlate::ResidualNorms;
+use crate::removal::{removal_over_test, write_removal_study};
+use crate::report::{create_dir, write_json, write_shapes_vtu};
+use crate::updating::{UpdateStudy, UpdateStudyOptions, localise_update_check, resolve_sets};
 use femu_correlate::expansion::Method;
-use femu_correlate::{CorrelationReport, Estimator, ModeSet, PairingOptions};
+use femu_correlate::{ModeSet, PairingOptions};
 use femu_update::UpdateMethod;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -120,78 +118,19 @@ impl StudyFile {
     }
 }
 
-/// `rho_M` and `rho_2` of expanded test shapes, and the removal study when asked for.
-#[derive(Debug, Clone, Serialize)]
-pub struct ExpansionReport {
-    /// The method.
-    pub method: Method,
-    /// Per test mode: `rho_M`, `rho_2`, the Rayleigh quotient (`docs/MATH.md`, (25)).
-    pub norms: Vec<ResidualNorms>,
-    /// The sensor-removal study.
-    pub study: Option<RemovalStudy>,
-}
-
-/// Expands the test shapes by `method` and evaluates the residual norms; with `study`, runs the
-/// sensor-removal study over the test's nodes (EfI order on the expanded shapes, down to 2 nodes).
-/// Returns the expanded shapes with the report.
-///
-/// # Errors
-/// As [`expand_shapes`] and [`removal_study`].
-pub fn expansion_report(
-    model: &LoadedModel,
-    test: &LoadedTest,
-    method: Method,
-    study: bool,
-) -> Result<(faer::Mat<f64>, ExpansionReport), StudyError> {
-    let sys = &model.sys;
-    let lambdas = test.data.modes.eigenvalues();
-    let x = expand_shapes(
-        sys,
-        &test.layout,
-        &lambdas,
-        test.data.modes.shapes.as_ref(),
-        method,
-        None,
-    )?;
-    let (norms, _) = Estimator::new(&sys.k, &sys.m)?.residual_norms(&lambdas, x.as_ref())?;
-    let study = if study {
-        let nodes = sensor_nodes(&test.layout);
-        Some(removal_study(
-            sys,
-            model.model.mesh(),
-            &nodes,
-            x.as_ref(),
-            &lambdas,
-            x.as_ref(),
-            &RemovalOptions::default(),
-        )?)
-    } else {
-        None
-    };
-    Ok((
-        x,
-        ExpansionReport {
-            method,
-            norms,
-            study,
-        },
-    ))
-}
-
 /// What a study file produced.
 #[derive(Debug, Clone, Serialize)]
 pub struct StudyRun {
-    /// Pairs, MAC, frequency errors (`correlation.json`).
-    pub correlation: CorrelationReport,
-    /// The estimators (`estimate.json`).
+    /// The correlation (`estimate.correlation`, also written as `correlation.json`) and the
+    /// estimators (`estimate.json`).
     pub estimate: EstimateResult,
     /// Expansion (`expansion.json`, `expanded.vtu`, `figure1/`).
     pub expansion: Option<ExpansionReport>,
     /// Updating (`update.json`).
     pub update: Option<UpdateStudy>,
-    /// The model's modes used by every step (count and Sturm evidence in `modes.json`).
+    /// The model's modes, solved once and used by every step.
     #[serde(skip)]
-    pub modes: Option<ModeSet>,
+    pub modes: ModeSet,
     /// What the readers noticed.
     pub warnings: Vec<String>,
     /// Files written.
@@ -233,14 +172,20 @@ pub fn run_study_file(
     };
     let method = s.expansion.map_or(Method::Dynamic, |e| e.method);
     progress(&format!("expanding the test shapes ({method})"));
-    let (x, expansion) =
-        expansion_report(&model, &test, method, s.expansion.is_some_and(|e| e.study))?;
+    let modes_t = &test.data.modes;
+    let x = expand_shapes(
+        &model.sys,
+        &test.layout,
+        &modes_t.eigenvalues(),
+        modes_t.shapes.as_ref(),
+        method,
+        None,
+    )?;
     let estimate = estimate_with_bounds(
         &model.model,
         &model.sys,
-        model.mass,
         &test.layout,
-        &test.data.modes,
+        modes_t,
         &modes,
         x.as_ref(),
         &EstimateOptions {
@@ -248,49 +193,51 @@ pub fn run_study_file(
             pairing,
         },
     )?;
-    let correlation = estimate.correlation.clone();
     for (name, value) in [
-        ("correlation.json", serde_json::to_value(&correlation)?),
+        (
+            "correlation.json",
+            serde_json::to_value(&estimate.correlation)?,
+        ),
         ("estimate.json", serde_json::to_value(&estimate)?),
     ] {
         let p = out.join(name);
         write_json(&p, &value)?;
         files.push(p);
     }
-    let expansion = if s.expansion.is_some() {
-        let fields = full_fields(&model.sys.dofs, model.model.mesh().node_count(), x.as_ref());
-        let names: Vec<String> = (0..x.ncols())
-            .map(|j| {
-                format!(
-                    "test mode {} expanded ({:.2} Hz)",
-                    j + 1,
-                    test.data.modes.frequencies_hz[j]
-                )
-            })
-            .collect();
-        let points: Vec<femu_io::vtk::PointField<'_>> = fields
-            .iter()
-            .zip(&names)
-            .map(|(v, name)| femu_io::vtk::PointField {
-                name,
-                components: 3,
-                values: v,
-            })
-            .collect();
-        let vtu = out.join("expanded.vtu");
-        femu_io::vtk::write_vtu(model.model.mesh(), &points, &[], &vtu)?;
-        files.push(vtu);
-        if let Some(st) = &expansion.study {
-            let dir = out.join("figure1");
-            create_dir(&dir)?;
-            files.extend(write_removal_study(&dir, "study", &st.points)?);
+    let expansion = match s.expansion {
+        Some(e) => {
+            let vtu = out.join("expanded.vtu");
+            write_shapes_vtu(
+                &vtu,
+                model.model.mesh(),
+                &model.sys.dofs,
+                x.as_ref(),
+                &expanded_names(modes_t),
+                &[],
+            )?;
+            files.push(vtu);
+            let study = if e.study {
+                progress("sensor-removal study");
+                let st = removal_over_test(&model, &test, x.as_ref())?;
+                let dir = out.join("figure1");
+                create_dir(&dir)?;
+                files.extend(write_removal_study(&dir, "study", &st.points)?);
+                Some(st)
+            } else {
+                None
+            };
+            // the estimate's residual norms are those of the expanded shapes
+            let expansion = ExpansionReport {
+                method,
+                norms: estimate.assessments.iter().map(|a| a.norms).collect(),
+                study,
+            };
+            let p = out.join("expansion.json");
+            write_json(&p, &expansion)?;
+            files.push(p);
+            Some(expansion)
         }
-        let p = out.join("expansion.json");
-        write_json(&p, &expansion)?;
-        files.push(p);
-        Some(expansion)
-    } else {
-        None
+        None => None,
     };
     let update = match &s.update {
         Some(u) => {
@@ -328,39 +275,11 @@ pub fn run_study_file(
         None => None,
     };
     Ok(StudyRun {
-        correlation,
         estimate,
         expansion,
         update,
-        modes: Some(modes),
+        modes,
         warnings: model.warnings,
         files,
     })
-}
-
-/// The model's element sets named by `sets` (Abaqus names are case-insensitive; the reader keeps
-/// them upper case).
-///
-/// # Errors
-/// A set the model does not have, naming the model file and the sets it has.
-pub fn resolve_sets(model: &LoadedModel, sets: &[String]) -> Result<Vec<String>, StudyError> {
-    let known = model.model.mesh().element_sets();
-    sets.iter()
-        .map(|s| {
-            known
-                .keys()
-                .find(|k| k.eq_ignore_ascii_case(s))
-                .cloned()
-                .ok_or_else(|| {
-                    StudyError::in_file(
-                        &model.path,
-                        "element sets",
-                        format!(
-                            "no element set {s} (the model has: {})",
-                            known.keys().cloned().collect::<Vec<_>>().join(", ")
-                        ),
-                    )
-                })
-        })
-        .collect()
 }

@@ -3,6 +3,7 @@
 //! and check the updated model on held-out test modes it was not tuned on (the truth check).
 
 use crate::StudyError;
+use crate::load::LoadedModel;
 use femu_correlate::{ModeSet, SensorLayout, TestModes};
 use femu_fem::assembly::{Assembler, MassKind, SystemMatrices};
 use femu_fem::groups::ParameterGroups;
@@ -186,4 +187,31 @@ pub fn localise_update_check(
         truth_check,
         updated_modes: after,
     })
+}
+
+/// The model's element sets named by `sets` (Abaqus names are case-insensitive; the reader keeps
+/// them upper case).
+///
+/// # Errors
+/// A set the model does not have, naming the model file and the sets it has.
+pub fn resolve_sets(model: &LoadedModel, sets: &[String]) -> Result<Vec<String>, StudyError> {
+    let known = model.model.mesh().element_sets();
+    sets.iter()
+        .map(|s| {
+            known
+                .keys()
+                .find(|k| k.eq_ignore_ascii_case(s))
+                .cloned()
+                .ok_or_else(|| {
+                    StudyError::in_file(
+                        &model.path,
+                        "element sets",
+                        format!(
+                            "no element set {s} (the model has: {})",
+                            known.keys().cloned().collect::<Vec<_>>().join(", ")
+                        ),
+                    )
+                })
+        })
+        .collect()
 }

@@ -125,12 +125,6 @@ impl<'m> UpdateModel<'m> {
         groups: ParameterGroups,
         corrections: Corrections,
     ) -> Result<Self, UpdateError> {
-        if groups.is_empty() {
-            return Err(UpdateError::Invalid {
-                what: "parameter groups",
-                reason: "no group to update".into(),
-            });
-        }
         let asm = Assembler::new(model)?;
         let base = asm.assemble(model, groups.mass_kind())?;
         Self::from_assembly(model, groups, corrections, asm, base)

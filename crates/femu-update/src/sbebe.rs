@@ -87,8 +87,8 @@ impl std::str::FromStr for UpdateMethod {
     type Err = UpdateError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s {
-            "sbebe" | "sb-ebe" => Ok(UpdateMethod::SbEbe),
-            "ies" | "inverse-eigensensitivity" => Ok(UpdateMethod::InverseEigensensitivity),
+            "sbebe" => Ok(UpdateMethod::SbEbe),
+            "ies" => Ok(UpdateMethod::InverseEigensensitivity),
             other => Err(UpdateError::Invalid {
                 what: "updating method",
                 reason: format!("'{other}': expected sbebe or ies"),

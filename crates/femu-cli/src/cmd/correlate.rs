@@ -1,9 +1,10 @@
 //! `femu correlate`: test modes paired with the model's lowest modes.
 
-use crate::common::{MeshOptions, load_model, load_test, spinner, write_json};
+use crate::common::{MeshOptions, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
 use femu::correlate::{ModeSet, PairingOptions, correlate};
+use femu::study::load::load_test;
 use femu::study::modes::lowest_for_test;
 use std::path::PathBuf;
 

@@ -1,10 +1,12 @@
 //! `femu estimate`: the paper's a priori estimators for test modes, after expansion.
 
-use crate::common::{MeshOptions, load_model, load_test, spinner, write_json};
+use crate::common::{MeshOptions, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
 use femu::correlate::{Method, ModeSet};
-use femu::study::estimate::{EstimateOptions, estimate_with_bounds, expand_shapes};
+use femu::study::estimate::{EstimateOptions, estimate_with_bounds};
+use femu::study::expand::expand_shapes;
+use femu::study::load::load_test;
 use femu::study::modes::lowest_for_test;
 use std::path::PathBuf;
 
@@ -64,7 +66,6 @@ pub fn run(a: &EstimateArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliE
     let out = estimate_with_bounds(
         &loaded.model,
         &loaded.sys,
-        loaded.mass,
         &test.layout,
         modes_t,
         &set,

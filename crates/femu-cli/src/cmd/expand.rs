@@ -1,13 +1,14 @@
 //! `femu expand`: test shapes expanded to every model DOF, their estimators, and the
 //! sensor-removal study.
 
-use crate::common::{MeshOptions, load_model, load_test, spinner, write_json};
+use crate::common::{MeshOptions, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
 use femu::correlate::Method;
+use femu::study::expand::{expanded_names, expansion_report};
+use femu::study::load::load_test;
 use femu::study::removal::write_removal_study;
-use femu::study::report::{create_dir, full_fields};
-use femu::study::study_file::expansion_report;
+use femu::study::report::{create_dir, write_shapes_vtu};
 use std::path::PathBuf;
 
 /// Expand test shapes to every model DOF: rho_M and rho_2 of the expanded shapes, a VTK file of
@@ -63,30 +64,14 @@ pub fn run(a: &ExpandArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliErr
     ));
     let (x, report) = expansion_report(&loaded, &test, a.method, a.study.is_some())?;
     if let Some(path) = &a.vtu {
-        let fields = full_fields(
+        write_shapes_vtu(
+            path,
+            loaded.model.mesh(),
             &loaded.sys.dofs,
-            loaded.model.mesh().node_count(),
             x.as_ref(),
-        );
-        let names: Vec<String> = (0..x.ncols())
-            .map(|j| {
-                format!(
-                    "test mode {} expanded ({:.2} Hz)",
-                    j + 1,
-                    modes.frequencies_hz[j]
-                )
-            })
-            .collect();
-        let points: Vec<femu::io::vtk::PointField<'_>> = fields
-            .iter()
-            .zip(&names)
-            .map(|(v, name)| femu::io::vtk::PointField {
-                name,
-                components: 3,
-                values: v,
-            })
-            .collect();
-        femu::io::vtk::write_vtu(loaded.model.mesh(), &points, &[], path)?;
+            &expanded_names(modes),
+            &[],
+        )?;
     }
     if let (Some(dir), Some(st)) = (&a.study, &report.study) {
         create_dir(dir)?;

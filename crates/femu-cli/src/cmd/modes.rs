@@ -5,7 +5,7 @@ use crate::common::{MeshOptions, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
 use femu::study::modes::{ModesOptions, solve_modes};
-use femu::study::report::full_fields;
+use femu::study::report::write_shapes_vtu;
 use std::path::PathBuf;
 
 /// Lowest modes of a model, verified by a Sturm count.
@@ -85,26 +85,19 @@ pub fn run(a: &ModesArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliErro
         );
     }
     if let Some(path) = &a.vtu {
-        let shapes = full_fields(
-            &loaded.sys.dofs,
-            loaded.model.mesh().node_count(),
-            result.vectors.as_ref(),
-        );
         let names: Vec<String> = f
             .iter()
             .enumerate()
             .map(|(j, fj)| format!("mode {} ({fj:.3} Hz)", j + 1))
             .collect();
-        let fields: Vec<femu::io::vtk::PointField<'_>> = shapes
-            .iter()
-            .zip(&names)
-            .map(|(v, n)| femu::io::vtk::PointField {
-                name: n,
-                components: 3,
-                values: v,
-            })
-            .collect();
-        femu::io::vtk::write_vtu(loaded.model.mesh(), &fields, &[], path)?;
+        write_shapes_vtu(
+            path,
+            loaded.model.mesh(),
+            &loaded.sys.dofs,
+            result.vectors.as_ref(),
+            &names,
+            &[],
+        )?;
     }
     write_json(a.json.as_deref(), &report)
 }

@@ -52,7 +52,7 @@ pub fn run(a: &RunArgs, quiet: bool) -> Result<(), CliError> {
     if quiet {
         return Ok(());
     }
-    println!("# correlation\n\n{}", r.correlation);
+    println!("# correlation\n\n{}", r.estimate.correlation);
     println!(
         "# estimators ({} expansion)\n\n| test | min gap (s^-2) | rho_2 (paper) | rho_M (rigorous) | a model frequency within (Hz) |\n|---|---|---|---|---|",
         r.estimate.expansion

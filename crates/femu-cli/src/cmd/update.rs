@@ -1,10 +1,10 @@
 //! `femu update`: localisation, updating and the held-out truth check.
 
-use crate::common::{MeshOptions, load_model, load_test, spinner, write_json};
+use crate::common::{MeshOptions, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
-use femu::study::study_file::resolve_sets;
-use femu::study::updating::{UpdateStudyOptions, localise_update_check};
+use femu::study::load::load_test;
+use femu::study::updating::{UpdateStudyOptions, localise_update_check, resolve_sets};
 use femu::update::UpdateMethod;
 use std::path::PathBuf;
 
