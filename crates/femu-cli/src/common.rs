@@ -24,6 +24,10 @@ pub struct MeshOptions {
     /// Mesh-only models: a node set (Gmsh physical group) to clamp; repeat for several.
     #[arg(long, global = true)]
     pub fix: Vec<String>,
+    /// `.inp` decks: unknown keywords are warnings instead of errors (unknown parameters of known
+    /// keywords stay errors).
+    #[arg(long, global = true)]
+    pub lenient: bool,
 }
 
 impl MeshOptions {
@@ -55,6 +59,7 @@ impl MeshOptions {
             material,
             fix: self.fix.clone(),
             lumped,
+            lenient: self.lenient,
         })
     }
 }

@@ -14,6 +14,16 @@ pub enum CliError {
     Usage(String),
 }
 
+impl CliError {
+    /// The warnings a reader collected before the error.
+    pub fn warnings(&self) -> Vec<String> {
+        match self {
+            CliError::Study(e) => e.warnings(),
+            CliError::Usage(_) => Vec::new(),
+        }
+    }
+}
+
 macro_rules! via_study {
     ($($t:ty),*) => {$(
         impl From<$t> for CliError {

@@ -51,6 +51,8 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
+            // what the reader noticed before the error is often its cause
+            common::warn(false, &e.warnings());
             eprintln!("error: {e}");
             ExitCode::FAILURE
         }

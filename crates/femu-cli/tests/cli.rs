@@ -78,7 +78,7 @@ fn modes_json_matches_dense_reference() {
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(v["dofs"], 24);
     let vtu_text = std::fs::read_to_string(&vtu).unwrap();
-    assert_eq!(vtu_text.matches("Name=\"mode ").count(), 4);
+    assert_eq!(vtu_text.matches("Name=\"model mode ").count(), 4);
     assert!(vtu_text.contains("NumberOfPoints=\"12\" NumberOfCells=\"2\""));
     assert_eq!(v["sturm_verified"], true);
     let f: Vec<f64> = v["frequencies_hz"]

@@ -13,7 +13,7 @@ pub enum CorrelateError {
     #[error(transparent)]
     Fem(#[from] FemError),
     /// A sensor on a node the mesh does not have.
-    #[error("sensor {sensor} is on node {node}, which is not in the mesh")]
+    #[error("sensor {} (in the order of the file) is on node {node}, which the model does not have", sensor + 1)]
     SensorOnMissingNode {
         /// Position of the sensor in the layout (0-based).
         sensor: usize,
@@ -23,7 +23,9 @@ pub enum CorrelateError {
     /// A sensor whose direction has a component along a constrained DOF: the model says that
     /// motion is zero, so the reading cannot be compared (usually a wrong node id).
     #[error(
-        "sensor {sensor} on node {node} measures along constrained direction {component} (0 = x, 1 = y, 2 = z)"
+        "sensor {} on node {node} measures along {}, which the model clamps (its motion there is zero by the boundary conditions; is the node id right?)",
+        sensor + 1,
+        ["x", "y", "z"].get(*component).copied().unwrap_or("an unknown direction")
     )]
     SensorOnConstrainedDof {
         /// Position of the sensor in the layout.
@@ -34,7 +36,10 @@ pub enum CorrelateError {
         component: usize,
     },
     /// A sensor direction that is zero or not finite.
-    #[error("sensor {sensor} on node {node} has an invalid direction {direction:?}")]
+    #[error(
+        "sensor {} on node {node} has an invalid direction ({}, {}, {}): it must be finite and not zero",
+        sensor + 1, direction[0], direction[1], direction[2]
+    )]
     BadDirection {
         /// Position of the sensor in the layout.
         sensor: usize,

@@ -52,7 +52,10 @@ pub enum FemError {
         got: usize,
     },
     /// A negative Jacobian determinant: the element is inverted (wrong node order or tangled).
-    #[error("element {element} is inverted: det J = {det_j:e} at reference point {point:?}")]
+    #[error(
+        "element {element} is inverted: det J = {det_j:e} at reference point ({:.4}, {:.4}, {:.4}) (check its node order)",
+        point[0], point[1], point[2]
+    )]
     InvertedElement {
         /// Element id.
         element: u64,

@@ -484,6 +484,15 @@ fn build(
                 source,
             })?;
     }
+    if mesh.element_count() == 0 {
+        return Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: format!(
+                "no volume elements in the mesh ({} nodes): femu needs tetrahedra, hexahedra or prisms ($Elements of dimension 3)",
+                mesh.node_count()
+            ),
+        });
+    }
     Ok(GmshMesh { mesh, warnings })
 }
 

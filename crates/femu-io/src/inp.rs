@@ -5,9 +5,21 @@
 //! reduced-integration C3D8R and C3D20R are read as full integration, with a warning), `*NSET`,
 //! `*ELSET` (lists of ids or set names, or `GENERATE`), `*MATERIAL`, `*ELASTIC` (isotropic),
 //! `*DENSITY`, `*SOLID SECTION`, `*BOUNDARY` (DOFs 1-3, zero values), `*INCLUDE`, `*STEP`,
-//! `*FREQUENCY`, `*END STEP`. Any other keyword is skipped with a warning. Names are
-//! case-insensitive (stored upper case); comments (`**`) and blank lines are ignored; numbers may
-//! use Fortran `D` exponents. Node ordering is femu's (which is Abaqus's).
+//! `*FREQUENCY`, `*END STEP`.
+//!
+//! The deck is checked as strictly as CalculiX and Abaqus check it, so that a typo never changes
+//! the model silently:
+//! - a keyword femu reads accepts only its known parameters: an unknown one (`*NSET, NSET=A,
+//!   GENERTE`) is an error naming the nearest known spelling;
+//! - a keyword that cannot change `K` or `M` (output requests, loads, amplitudes, other steps) is
+//!   skipped with a warning;
+//! - a keyword that would change `K` or `M` and that femu cannot model (shells, beams, point masses,
+//!   springs, constraint equations, couplings, parts and instances, other materials) is an error;
+//! - any other keyword is unknown: an error naming the nearest known spelling (`*BOUNDRY`: did you
+//!   mean `*BOUNDARY`?), or a warning with [`InpOptions::lenient`].
+//!
+//! Names are case-insensitive (stored upper case); comments (`**`) and blank lines are ignored;
+//! numbers may use Fortran `D` exponents. Node ordering is femu's (which is Abaqus's).
 
 use crate::{IoError, Warning};
 use femu_fem::element::ElementKind;
@@ -17,6 +29,251 @@ use femu_fem::model::Model;
 use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+/// How strictly a deck is read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct InpOptions {
+    /// Unknown keywords are warnings instead of errors (unknown parameters of known keywords stay
+    /// errors: they change what a known keyword means).
+    pub lenient: bool,
+}
+
+/// The keywords femu reads, with the parameters each accepts.
+const READ: &[(&str, &[&str])] = &[
+    ("HEADING", &[]),
+    ("NODE", &["NSET", "SYSTEM"]),
+    ("ELEMENT", &["TYPE", "ELSET"]),
+    ("NSET", &["NSET", "GENERATE", "UNSORTED", "INTERNAL"]),
+    ("ELSET", &["ELSET", "GENERATE", "UNSORTED", "INTERNAL"]),
+    ("MATERIAL", &["NAME"]),
+    ("ELASTIC", &["TYPE", "DEPENDENCIES", "MODULI"]),
+    ("DENSITY", &["DEPENDENCIES"]),
+    (
+        "SOLID SECTION",
+        &[
+            "ELSET",
+            "MATERIAL",
+            "ORIENTATION",
+            "CONTROLS",
+            "SECTION CONTROLS",
+        ],
+    ),
+    (
+        "BOUNDARY",
+        &[
+            "OP",
+            "TYPE",
+            "AMPLITUDE",
+            "FIXED",
+            "USER",
+            "SUBMODEL",
+            "LOAD CASE",
+        ],
+    ),
+    ("INCLUDE", &["INPUT"]),
+    (
+        "STEP",
+        &[
+            "NAME",
+            "NLGEOM",
+            "INC",
+            "INCF",
+            "PERTURBATION",
+            "AMPLITUDE",
+            "UNSYMM",
+            "EXTRAPOLATION",
+            "THERMAL NETWORK",
+        ],
+    ),
+    (
+        "FREQUENCY",
+        &[
+            "SOLVER",
+            "STORAGE",
+            "GLOBAL",
+            "CYCMPC",
+            "MATRIXSTORAGE",
+            "EIGENSOLVER",
+            "NORMALIZATION",
+            "ACOUSTIC COUPLING",
+            "SIM",
+            "PROPERTY EVALUATION",
+            "RESIDUAL MODES",
+        ],
+    ),
+    ("END STEP", &[]),
+];
+
+/// Keywords that cannot change `K` or `M` of an undamped frequency analysis: skipped, with a
+/// warning.
+const NO_EFFECT: &[&str] = &[
+    "AMPLITUDE",
+    "BUCKLE",
+    "CLOAD",
+    "CONTACT FILE",
+    "CONTACT OUTPUT",
+    "CONTACT PRINT",
+    "CONDUCTIVITY",
+    "DAMPING",
+    "DASHPOT",
+    "DLOAD",
+    "DSLOAD",
+    "EL FILE",
+    "EL PRINT",
+    "ELEMENT OUTPUT",
+    "END PART",
+    "ENERGY OUTPUT",
+    "EXPANSION",
+    "FILM",
+    "HEAT TRANSFER",
+    "INITIAL CONDITIONS",
+    "MODAL DAMPING",
+    "MODAL DYNAMIC",
+    "NODE FILE",
+    "NODE OUTPUT",
+    "NODE PRINT",
+    "OUTPUT",
+    "PLASTIC",
+    "PREPRINT",
+    "RADIATE",
+    "RESTART",
+    "SPECIFIC HEAT",
+    "STATIC",
+    "STEADY STATE DYNAMICS",
+    "SURFACE",
+    "TEMPERATURE",
+    "TIME POINTS",
+];
+
+/// Keywords that would change `K` or `M` and that femu cannot model: errors.
+const UNSUPPORTED: &[(&str, &str)] = &[
+    (
+        "ASSEMBLY",
+        "part/instance input: flatten the deck (nodes and elements at the top level)",
+    ),
+    (
+        "BEAM SECTION",
+        "beam elements are not supported (solids only)",
+    ),
+    (
+        "BEAM GENERAL SECTION",
+        "beam elements are not supported (solids only)",
+    ),
+    ("COUPLING", "couplings are not supported yet"),
+    (
+        "CONTACT PAIR",
+        "contact changes the stiffness and is not supported",
+    ),
+    ("DISTRIBUTING COUPLING", "couplings are not supported yet"),
+    ("EQUATION", "constraint equations are not supported yet"),
+    ("GAP", "gap elements are not supported"),
+    (
+        "HYPERELASTIC",
+        "only linear isotropic elasticity is supported",
+    ),
+    (
+        "INSTANCE",
+        "part/instance input: flatten the deck (nodes and elements at the top level)",
+    ),
+    ("KINEMATIC COUPLING", "couplings are not supported yet"),
+    ("MASS", "point masses are not supported yet"),
+    (
+        "MEMBRANE SECTION",
+        "membrane elements are not supported (solids only)",
+    ),
+    ("MPC", "multi-point constraints are not supported yet"),
+    (
+        "NONSTRUCTURAL MASS",
+        "non-structural mass is not supported yet",
+    ),
+    (
+        "PART",
+        "part/instance input: flatten the deck (nodes and elements at the top level)",
+    ),
+    ("RIGID BODY", "rigid bodies are not supported yet"),
+    (
+        "ROTARY INERTIA",
+        "rotary inertia is not supported (solid elements have no rotations)",
+    ),
+    (
+        "SHELL SECTION",
+        "shell elements are not supported (solids only)",
+    ),
+    ("SPRING", "spring elements are not supported yet"),
+    ("TIE", "tied surfaces are not supported yet"),
+    (
+        "TRANSFORM",
+        "local nodal systems are not supported yet: constraints would act in the wrong directions",
+    ),
+    (
+        "USER MATERIAL",
+        "only linear isotropic elasticity is supported",
+    ),
+];
+
+/// Every keyword femu knows, for "did you mean".
+fn known_keywords() -> impl Iterator<Item = &'static str> {
+    READ.iter()
+        .map(|(k, _)| *k)
+        .chain(NO_EFFECT.iter().copied())
+        .chain(UNSUPPORTED.iter().map(|(k, _)| *k))
+}
+
+/// What to do with the keyword `name` with `params` on line `l`: `Ok(true)` when femu reads it,
+/// `Ok(false)` when it is skipped (with a warning pushed), or the error.
+fn check_keyword(
+    name: &str,
+    params: &[(String, String)],
+    options: &InpOptions,
+    l: &Line,
+    warnings: &mut Vec<Warning>,
+) -> Result<bool, IoError> {
+    let err = |reason: String| IoError::Parse {
+        path: l.path.clone(),
+        line: l.number,
+        reason,
+    };
+    if let Some((_, accepted)) = READ.iter().find(|(k, _)| *k == name) {
+        for (p, _) in params {
+            if !accepted.contains(&p.as_str()) {
+                let hint = crate::spelling::suggestion(p, accepted.iter().copied(), "");
+                let list = if accepted.is_empty() {
+                    "none".to_string()
+                } else {
+                    accepted.join(", ")
+                };
+                return Err(err(format!(
+                    "unknown parameter {p} of *{name}{hint}; *{name} accepts: {list}"
+                )));
+            }
+        }
+        return Ok(true);
+    }
+    if NO_EFFECT.contains(&name) {
+        warnings.push(Warning {
+            path: l.path.clone(),
+            line: l.number,
+            message: format!("*{name} skipped: it does not change the stiffness or the mass"),
+        });
+        return Ok(false);
+    }
+    if let Some((_, why)) = UNSUPPORTED.iter().find(|(k, _)| *k == name) {
+        return Err(err(format!("*{name}: {why}")));
+    }
+    let hint = crate::spelling::suggestion(name, known_keywords(), "*");
+    if options.lenient {
+        warnings.push(Warning {
+            path: l.path.clone(),
+            line: l.number,
+            message: format!("unknown keyword *{name}{hint} skipped (--lenient)"),
+        });
+        return Ok(false);
+    }
+    Err(err(format!(
+        "unknown keyword *{name}{hint}; a misspelt keyword would change the model silently, so it \
+         is an error (--lenient makes unknown keywords warnings)"
+    )))
+}
 
 /// The `*FREQUENCY` step: how many modes, and the shift (s^-2) when given.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -86,6 +343,8 @@ pub struct InpDeck {
     pub warnings: Vec<Warning>,
     /// where each element was defined (for errors found later)
     element_lines: HashMap<u64, Location>,
+    /// the file read (for errors that concern the whole deck)
+    path: PathBuf,
 }
 
 struct Line {
@@ -121,7 +380,18 @@ fn push_lines(text: &str, path: &Path, depth: usize, out: &mut Vec<Line>) -> Res
                     reason: "*INCLUDE nested more than 16 deep (a cycle?)".into(),
                 });
             }
-            load(&dir.join(file.trim_matches('"')), depth + 1, out)?;
+            let target = dir.join(file.trim_matches('"'));
+            load(&target, depth + 1, out).map_err(|e| match e {
+                IoError::Io { reason, .. } => IoError::Parse {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    reason: format!(
+                        "*INCLUDE, INPUT={file}: cannot read {}: {reason}",
+                        target.display()
+                    ),
+                },
+                e => e,
+            })?;
             continue;
         }
         out.push(Line {
@@ -202,9 +472,17 @@ struct PendingMaterial {
 /// [`IoError::Io`] for unreadable files, [`IoError::Parse`] with file and line for malformed
 /// content, [`IoError::Model`] for a valid deck that does not make a valid mesh.
 pub fn read_inp(path: impl AsRef<Path>) -> Result<InpDeck, IoError> {
+    read_inp_with(path, &InpOptions::default())
+}
+
+/// Reads a deck from a file (with its includes) as `options` say.
+///
+/// # Errors
+/// As [`read_inp`]; errors found after warnings carry them ([`IoError::warnings`]).
+pub fn read_inp_with(path: impl AsRef<Path>, options: &InpOptions) -> Result<InpDeck, IoError> {
     let mut lines = Vec::new();
     load(path.as_ref(), 0, &mut lines)?;
-    parse(&lines)
+    parse(&lines, path.as_ref(), options)
 }
 
 /// Parses a deck held in memory (`path` names it in messages; `*INCLUDE` is resolved against the
@@ -215,17 +493,26 @@ pub fn read_inp(path: impl AsRef<Path>) -> Result<InpDeck, IoError> {
 pub fn parse_inp(text: &str, path: impl AsRef<Path>) -> Result<InpDeck, IoError> {
     let mut lines = Vec::new();
     push_lines(text, path.as_ref(), 0, &mut lines)?;
-    parse(&lines)
+    parse(&lines, path.as_ref(), &InpOptions::default())
+}
+
+fn parse(lines: &[Line], path: &Path, options: &InpOptions) -> Result<InpDeck, IoError> {
+    let mut warnings = Vec::new();
+    parse_collecting(lines, path, options, &mut warnings).map_err(|e| e.after(&warnings))
 }
 
 #[allow(clippy::type_complexity)]
-fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
+fn parse_collecting(
+    lines: &[Line],
+    path: &Path,
+    options: &InpOptions,
+    warnings: &mut Vec<Warning>,
+) -> Result<InpDeck, IoError> {
     let err = |l: &Line, reason: String| IoError::Parse {
         path: l.path.clone(),
         line: l.number,
         reason,
     };
-    let mut warnings = Vec::new();
     let warn = |w: &mut Vec<Warning>, l: &Line, message: String| {
         w.push(Warning {
             path: l.path.clone(),
@@ -250,6 +537,7 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
     let mut element_kind_now: Option<(ElementKind, usize)> = None;
     let mut element_buffer: Vec<String> = Vec::new();
     let mut element_start = 0usize;
+    let mut seen_keyword = false;
     let finish_material = |p: Option<PendingMaterial>,
                            materials: &mut BTreeMap<String, Material>|
      -> Result<(), IoError> {
@@ -290,7 +578,17 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
                     "element definition cut short by a keyword".into(),
                 ));
             }
+            seen_keyword = true;
             let (name, params) = keyword(t);
+            let mut sorted: Vec<(String, String)> = params.clone().into_iter().collect();
+            sorted.sort();
+            if !check_keyword(&name, &sorted, options, l, warnings)? {
+                // skipped: its data lines are skipped with it
+                finish_material(pending.take(), &mut materials)?;
+                block = String::new();
+                element_kind_now = None;
+                continue;
+            }
             let material_keyword = matches!(name.as_str(), "ELASTIC" | "DENSITY");
             if !material_keyword && name != "MATERIAL" {
                 finish_material(pending.take(), &mut materials)?;
@@ -301,6 +599,17 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
             match name.as_str() {
                 "HEADING" | "END STEP" | "STEP" => {}
                 "NODE" => {
+                    if let Some(sys) = params
+                        .get("SYSTEM")
+                        .filter(|v| !v.eq_ignore_ascii_case("R"))
+                    {
+                        return Err(err(
+                            l,
+                            format!(
+                                "*NODE, SYSTEM={sys}: only rectangular coordinates (SYSTEM=R) are supported"
+                            ),
+                        ));
+                    }
                     if let Some(s) = params.get("NSET") {
                         node_set_of_block.push((s.to_ascii_uppercase(), Vec::new()));
                     }
@@ -314,7 +623,7 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
                     })?;
                     if approx {
                         warn(
-                            &mut warnings,
+                            warnings,
                             l,
                             format!("{ty} read as {} with full integration", kind.abaqus_name()),
                         );
@@ -380,18 +689,41 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
                     });
                 }
                 "BOUNDARY" => {
+                    if params
+                        .get("OP")
+                        .is_some_and(|v| v.eq_ignore_ascii_case("NEW"))
+                    {
+                        // OP=NEW removes every boundary condition defined before it
+                        boundaries.clear();
+                    }
                     if params.contains_key("TYPE") || params.contains_key("AMPLITUDE") {
                         warn(
-                            &mut warnings,
+                            warnings,
                             l,
                             "*BOUNDARY options ignored (homogeneous constraints only)".into(),
                         );
                     }
                 }
-                "FREQUENCY" => {}
-                other => warn(&mut warnings, l, format!("keyword *{other} ignored")),
+                _ => {} // HEADING, FREQUENCY, INCLUDE: nothing to do at the keyword
             }
             continue;
+        }
+        if t.chars()
+            .any(|c| c == '\u{FFFD}' || (c.is_control() && c != '\t'))
+        {
+            return Err(err(
+                l,
+                "binary data where a deck has text: is this an Abaqus/CalculiX .inp deck?".into(),
+            ));
+        }
+        if !seen_keyword {
+            return Err(err(
+                l,
+                format!(
+                    "data line {:?} before any keyword: a deck starts with a *KEYWORD line",
+                    t.chars().take(40).collect::<String>()
+                ),
+            ));
         }
         // data line of the current block
         let f = fields(t);
@@ -475,7 +807,7 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
                     .ok_or_else(|| err(l, format!("nu = {:?} is not a number", f[1])))?;
                 if f.len() > 2 {
                     warn(
-                        &mut warnings,
+                        warnings,
                         l,
                         "temperature-dependent elasticity: the first line is used".into(),
                     );
@@ -517,7 +849,7 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
                 if let Some(v) = f.get(3).and_then(|s| parse_f64(s)).filter(|v| *v != 0.0) {
                     {
                         warn(
-                            &mut warnings,
+                            warnings,
                             l,
                             format!(
                                 "prescribed value {v} read as 0 (femu's constraints are homogeneous)"
@@ -529,7 +861,7 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
                     return Err(err(l, format!("DOF range {first}..{last} is invalid")));
                 }
                 if last > 3 {
-                    warn(&mut warnings, l, "DOFs above 3 (rotations, temperature) do not exist on solid elements: ignored".into());
+                    warn(warnings, l, "DOFs above 3 (rotations, temperature) do not exist on solid elements: ignored".into());
                 }
                 if first <= 3 {
                     boundaries.push(Boundary {
@@ -571,6 +903,10 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
         ));
     }
     finish_material(pending.take(), &mut materials)?;
+    let whole = |reason: String| IoError::Content {
+        path: path.to_path_buf(),
+        reason,
+    };
     // build the mesh
     let model_err = |li: usize, source| IoError::Model {
         path: lines[li].path.clone(),
@@ -603,6 +939,11 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
     }
     for (name, is_node, tokens, generate, li) in sets {
         let l = &lines[li];
+        let (what, a_what) = if is_node {
+            ("node", "a node")
+        } else {
+            ("element", "an element")
+        };
         let mut ids = Vec::new();
         if generate {
             let nums: Result<Vec<u64>, _> = tokens.iter().map(|s| s.parse::<u64>()).collect();
@@ -643,13 +984,38 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
                     Err(_) => {
                         let key = tok.to_ascii_uppercase();
                         let src = if is_node { &node_sets } else { &elem_sets };
-                        let members = src
-                            .get(&key)
-                            .ok_or_else(|| err(l, format!("unknown set {tok}")))?;
+                        let members = src.get(&key).ok_or_else(|| {
+                            let hint = crate::spelling::suggestion(
+                                &key,
+                                src.keys().map(String::as_str),
+                                "",
+                            );
+                            err(
+                                l,
+                                format!(
+                                    "*{}SET {name} names {tok}, which is neither {a_what} id nor {a_what} set defined before it{hint}",
+                                    if is_node { "N" } else { "EL" }
+                                ),
+                            )
+                        })?;
                         ids.extend(members.iter().copied());
                     }
                 }
             }
+        }
+        // every id listed here must exist: the error names this set and its line
+        let exists = |id: &u64| {
+            if is_node {
+                mesh.node_index(*id).is_some()
+            } else {
+                mesh.element_index(*id).is_some()
+            }
+        };
+        if let Some(bad) = ids.iter().find(|id| !exists(id)) {
+            return Err(err(
+                l,
+                format!("{what} set {name} lists {what} {bad}, which the deck does not define"),
+            ));
         }
         if is_node {
             &mut node_sets
@@ -660,21 +1026,27 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
         .or_default()
         .extend(ids);
     }
+    if nodes.is_empty() {
+        return Err(whole(if lines.iter().all(|l| l.text.trim().is_empty()) {
+            "the deck is empty: an Abaqus/CalculiX deck needs *NODE, *ELEMENT, *MATERIAL and *SOLID SECTION".into()
+        } else {
+            "the deck defines no nodes (*NODE)".into()
+        }));
+    }
+    if elements.is_empty() {
+        return Err(whole(format!(
+            "the deck defines {} nodes and no elements (*ELEMENT, TYPE=C3D8 and the other solids)",
+            nodes.len()
+        )));
+    }
+    // the ids were checked where each set was defined
     for (name, ids) in &node_sets {
         mesh.add_node_set(name.clone(), ids)
-            .map_err(|e| IoError::Parse {
-                path: lines.first().map(|l| l.path.clone()).unwrap_or_default(),
-                line: 0,
-                reason: format!("node set {name}: {e}"),
-            })?;
+            .map_err(|e| whole(format!("node set {name}: {e}")))?;
     }
     for (name, ids) in &elem_sets {
         mesh.add_element_set(name.clone(), ids)
-            .map_err(|e| IoError::Parse {
-                path: lines.first().map(|l| l.path.clone()).unwrap_or_default(),
-                line: 0,
-                reason: format!("element set {name}: {e}"),
-            })?;
+            .map_err(|e| whole(format!("element set {name}: {e}")))?;
     }
     Ok(InpDeck {
         mesh,
@@ -682,8 +1054,9 @@ fn parse(lines: &[Line]) -> Result<InpDeck, IoError> {
         sections,
         boundaries,
         frequency,
-        warnings,
+        warnings: std::mem::take(warnings),
         element_lines,
+        path: path.to_path_buf(),
     })
 }
 
@@ -695,23 +1068,58 @@ impl InpDeck {
     /// on an unknown set or material, a boundary on an unknown node or set; elements without a
     /// section.
     pub fn to_model(&self) -> Result<Model, IoError> {
-        let mut model = Model::new(self.mesh.clone()).map_err(|source| {
-            let loc = element_of(&source).and_then(|id| self.element_lines.get(&id));
-            IoError::Model {
-                path: loc.map(|l| l.path.clone()).unwrap_or_default(),
-                line: loc.map_or(0, |l| l.line),
+        self.build_model().map_err(|e| e.after(&self.warnings))
+    }
+
+    /// Where element `id` was defined, or the deck itself.
+    fn at_element(&self, id: Option<u64>, source: femu_fem::FemError) -> IoError {
+        match id.and_then(|id| self.element_lines.get(&id)) {
+            Some(l) => IoError::Model {
+                path: l.path.clone(),
+                line: l.line,
                 source,
-            }
-        })?;
+            },
+            None => IoError::Content {
+                path: self.path.clone(),
+                reason: source.to_string(),
+            },
+        }
+    }
+
+    fn build_model(&self) -> Result<Model, IoError> {
+        let mut model = Model::new(self.mesh.clone())
+            .map_err(|source| self.at_element(element_of(&source), source))?;
         for s in &self.sections {
-            let material = self
-                .materials
-                .get(&s.material)
-                .ok_or_else(|| IoError::Parse {
+            let material = self.materials.get(&s.material).ok_or_else(|| {
+                let hint = crate::spelling::suggestion(
+                    &s.material,
+                    self.materials.keys().map(String::as_str),
+                    "",
+                );
+                IoError::Parse {
                     path: s.line.path.clone(),
                     line: s.line.line,
-                    reason: format!("unknown material {}", s.material),
-                })?;
+                    reason: format!(
+                        "*SOLID SECTION names material {}, which no *MATERIAL defines{hint}",
+                        s.material
+                    ),
+                }
+            })?;
+            if self.mesh.element_sets().get(&s.elset).is_none() {
+                let hint = crate::spelling::suggestion(
+                    &s.elset,
+                    self.mesh.element_sets().keys().map(String::as_str),
+                    "",
+                );
+                return Err(IoError::Parse {
+                    path: s.line.path.clone(),
+                    line: s.line.line,
+                    reason: format!(
+                        "*SOLID SECTION names element set {}, which the deck does not define{hint}",
+                        s.elset
+                    ),
+                });
+            }
             model
                 .set_material(Some(&s.elset), material.clone())
                 .map_err(|source| IoError::Model {
@@ -724,7 +1132,23 @@ impl InpDeck {
             let comps: Vec<usize> = (b.first - 1..b.last).collect();
             let r = match &b.target {
                 Target::Node(id) => model.fix_nodes(&[*id], &comps),
-                Target::Set(s) => model.fix_set(s, &comps),
+                Target::Set(s) => {
+                    if self.mesh.node_sets().get(s).is_none() {
+                        let hint = crate::spelling::suggestion(
+                            s,
+                            self.mesh.node_sets().keys().map(String::as_str),
+                            "",
+                        );
+                        return Err(IoError::Parse {
+                            path: b.line.path.clone(),
+                            line: b.line.line,
+                            reason: format!(
+                                "*BOUNDARY names {s}, which is neither a node id nor a node set of the deck{hint}"
+                            ),
+                        });
+                    }
+                    model.fix_set(s, &comps)
+                }
             };
             r.map_err(|source| IoError::Model {
                 path: b.line.path.clone(),
@@ -736,12 +1160,7 @@ impl InpDeck {
         for e in 0..model.mesh().element_count() {
             if let Err(source) = model.material_of(e) {
                 let id = model.mesh().element(e).id;
-                let loc = self.element_lines.get(&id);
-                return Err(IoError::Model {
-                    path: loc.map(|l| l.path.clone()).unwrap_or_default(),
-                    line: loc.map_or(0, |l| l.line),
-                    source,
-                });
+                return Err(self.at_element(Some(id), source));
             }
         }
         Ok(model)
@@ -777,9 +1196,8 @@ fn number_field(v: f64) -> String {
 /// An element without material; an anisotropic material (not written yet).
 pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String, IoError> {
     let mesh = model.mesh();
-    let unwritable = |reason: String| IoError::Parse {
+    let unwritable = |reason: String| IoError::Content {
         path: PathBuf::from("<model>"),
-        line: 0,
         reason,
     };
     let mut s = String::from("*HEADING\nwritten by femu\n*NODE, NSET=NALL\n");

@@ -29,28 +29,49 @@ enum Direction {
     Vector([f64; 3]),
 }
 
-#[derive(Deserialize)]
-#[serde(untagged)]
-enum Doc {
-    Rows(Vec<Row>),
-    Wrapped { rows: Vec<Row> },
-}
-
 /// Parses JSON test modes (`path` names the file in messages).
 ///
 /// # Errors
-/// [`IoError::Parse`]: a JSON syntax or shape error (with the JSON line), or a content error of the
-/// CSV reader's kind (line 0, the row named in the message).
+/// [`IoError::Parse`] for a JSON syntax error (with the JSON line and column);
+/// [`IoError::Content`] for an empty file, a document that is not a list of rows, and a row with
+/// an unknown or missing field or a content error of the CSV reader's kind (the row named, 1-based).
 pub fn parse_test_json(text: &str, path: impl AsRef<Path>) -> Result<TestData, IoError> {
     let path = path.as_ref();
-    let doc: Doc = serde_json::from_str(text).map_err(|e| IoError::Parse {
+    let whole = |reason: String| IoError::Content {
+        path: path.to_path_buf(),
+        reason,
+    };
+    if text.trim().is_empty() {
+        return Err(whole(
+            "the file is empty: JSON test modes are a list of rows [{\"mode\": 1, \"frequency_hz\": ..., \"node\": ..., \"direction\": \"y\", \"value\": ...}, ...]".into(),
+        ));
+    }
+    let doc: serde_json::Value = serde_json::from_str(text).map_err(|e| IoError::Parse {
         path: path.to_path_buf(),
         line: e.line(),
         reason: format!("column {}: {e}", e.column()),
     })?;
-    let rows = match doc {
-        Doc::Rows(r) | Doc::Wrapped { rows: r } => r,
+    let items = match doc {
+        serde_json::Value::Array(items) => items,
+        serde_json::Value::Object(mut o) if o.len() == 1 && o.contains_key("rows") => {
+            match o.remove("rows") {
+                Some(serde_json::Value::Array(items)) => items,
+                _ => return Err(whole("\"rows\" must be a list of rows".into())),
+            }
+        }
+        _ => {
+            return Err(whole(
+                "expected a list of rows, or an object {\"rows\": [...]}".into(),
+            ));
+        }
     };
+    let rows = items
+        .into_iter()
+        .enumerate()
+        .map(|(i, v)| {
+            serde_json::from_value::<Row>(v).map_err(|e| whole(format!("row {}: {e}", i + 1)))
+        })
+        .collect::<Result<Vec<Row>, IoError>>()?;
     // the CSV reader holds every check: write the rows as CSV, map its line back to the row
     let mut csv = String::from("mode,frequency_hz,node,direction,value,damping\n");
     for r in &rows {
@@ -66,15 +87,11 @@ pub fn parse_test_json(text: &str, path: impl AsRef<Path>) -> Result<TestData, I
         );
     }
     parse_test_csv(&csv, path).map_err(|e| match e {
-        IoError::Parse { line, reason, .. } => IoError::Parse {
-            path: path.to_path_buf(),
-            line: 0,
-            reason: if line >= 2 {
-                format!("row {}: {reason}", line - 1)
-            } else {
-                reason
-            },
-        },
+        IoError::Parse { line, reason, .. } => whole(if line >= 2 {
+            format!("row {}: {reason}", line - 1)
+        } else {
+            reason
+        }),
         other => other,
     })
 }

@@ -4,14 +4,17 @@
 //! ([`inp`]) and writes VTK files for ParaView ([`vtk`]); test modes as CSV ([`csv`]);
 //! Gmsh and the Universal File Format follow.
 //!
-//! Every parse error names the file and the line; unknown keywords become warnings, never
-//! failures.
+//! Every parse error names the file and the line. Input is read as strictly as the reference
+//! codes read it: an unknown keyword or parameter in a deck is an error naming the nearest known
+//! spelling ([`inp::InpOptions::lenient`] turns unknown keywords, never unknown parameters, into
+//! warnings); the warnings collected before an error travel with it ([`IoError::warnings`]).
 
 pub mod csv;
 mod error;
 pub mod gmsh;
 pub mod inp;
 pub mod json;
+mod spelling;
 pub mod uff;
 pub mod vtk;
 

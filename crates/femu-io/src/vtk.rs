@@ -59,9 +59,8 @@ pub fn vtu_string(
     points: &[PointField<'_>],
     cells: &[CellField<'_>],
 ) -> Result<String, IoError> {
-    let bad = |reason: String| IoError::Parse {
+    let bad = |reason: String| IoError::Content {
         path: "<vtu>".into(),
-        line: 0,
         reason,
     };
     for p in points {

@@ -183,7 +183,11 @@ fn malformed_decks_name_the_line() {
             11,
             "missing node 99",
         ),
-        (format!("{nodes}*NSET, NSET=A\nNOPE\n"), 10, "unknown set"),
+        (
+            format!("{nodes}*NSET, NSET=A\nNOPE\n"),
+            10,
+            "NOPE, which is neither",
+        ),
         (
             format!("{nodes}*NSET, NSET=A, GENERATE\n5, 1, 1\n"),
             10,

@@ -94,6 +94,44 @@ impl SturmCheck {
     }
 }
 
+impl SturmCheck {
+    /// The counted interval as text, `(a, b] s^-2` (`-inf` for an unbounded lower end).
+    pub fn interval(&self) -> String {
+        match self.lower {
+            Some(l) => format!("({l:.6e}, {:.6e}] s^-2", self.upper),
+            None => format!("(-inf, {:.6e}] s^-2", self.upper),
+        }
+    }
+}
+
+/// The relative offset of a factored shift from the shift asked for (`1e-4 (sqrt 2 - 1)`).
+const SHIFT_OFFSET: f64 = 1e-4 * (std::f64::consts::SQRT_2 - 1.0);
+
+/// A mode is zero-energy when `||K x|| <= ZERO_ENERGY ||K||_1 ||x||`: `K x` is then round-off.
+const ZERO_ENERGY: f64 = 1e-11;
+
+/// Which residual a mode reports in [`Modes::residuals`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ResidualKind {
+    /// `||K x - lambda M x|| / ||K x||`, the relative residual of a mode with strain energy.
+    Relative,
+    /// `||K x - lambda M x|| / ((||K||_1 + |lambda| ||M||_1) ||x||)`, the normwise backward error,
+    /// for a zero-energy (rigid-body or mechanism) mode: its `K x` is round-off
+    /// (`||K x|| <= 1e-11 ||K||_1 ||x||`), so a residual relative to it compares round-off with
+    /// round-off and says nothing.
+    Backward,
+}
+
+impl ResidualKind {
+    /// `"relative"` or `"backward"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ResidualKind::Relative => "relative",
+            ResidualKind::Backward => "backward",
+        }
+    }
+}
+
 /// Where the time went and how much work was done.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct EigenStats {
@@ -122,9 +160,16 @@ pub struct Modes {
     pub values: Vec<f64>,
     /// Mode shapes in the columns, M-normalised (`phi_i^T M phi_j = delta_ij`).
     pub vectors: Mat<f64>,
-    /// `||K x - lambda M x|| / ||K x||` per mode (the classical relative residual; meaningless for
-    /// rigid-body modes, where `K x` is round-off: see `shifted_residuals`).
+    /// The residual of each mode, of the kind given in `residual_kinds`: the relative residual
+    /// `||K x - lambda M x|| / ||K x||` for a mode with strain energy, the backward error for a
+    /// zero-energy (rigid-body) mode, whose `K x` is round-off.
     pub residuals: Vec<f64>,
+    /// Which residual `residuals` holds for each mode.
+    pub residual_kinds: Vec<ResidualKind>,
+    /// How many modes were asked for (`Lowest` and `Nearest`; the count by inertia for a `Band`).
+    /// `values` is longer when the request ended inside a cluster of equal eigenvalues, which is
+    /// returned whole.
+    pub requested: usize,
     /// `||K x - lambda M x|| / ||(K - sigma M) x||` per mode, the converged quantity.
     pub shifted_residuals: Vec<f64>,
     /// The shift `sigma` used (s^-2).
@@ -332,12 +377,32 @@ impl<'a> Pencil<'a> {
         -(1e-10 * self.diagonal_ratio()).max(f64::MIN_POSITIVE)
     }
 
+    /// The tolerance within which two computed eigenvalues near `v` are one repeated eigenvalue,
+    /// `1e-8 |v| + 1e-12 ||K||_1 / ||M||_1`. The second term is the resolution of an inertia count
+    /// (the `LDL^T` of `K - s M` is backward stable to round-off times `||K||`): an end of a counted
+    /// interval is never placed closer than this to a computed eigenvalue.
+    pub fn tie_tolerance(&self, v: f64) -> f64 {
+        1e-8 * v.abs() + 1e-12 * self.k_norm / self.m_norm.max(f64::MIN_POSITIVE)
+    }
+
     /// Computes the requested modes; see the module documentation.
     ///
+    /// Repeated eigenvalues are handled whole: a cluster of eigenvalues equal within
+    /// [`Pencil::tie_tolerance`] at the end of a `Lowest` or `Nearest` request is completed (the
+    /// result then holds more than the requested count, [`Modes::requested`] says how many were
+    /// asked for), and the ends of every counted interval lie in gaps of the spectrum, never inside
+    /// a cluster. A `Band` is closed: its ends are widened by the tie tolerance, so an eigenvalue on
+    /// an end (zero for a free-free model) is inside. A `Nearest` shift that falls exactly on an
+    /// eigenvalue is factored a little off it; a `Nearest` shift at or below zero is a `Lowest`
+    /// request (`K` is positive semi-definite).
+    ///
     /// # Errors
+    /// [`SparseError::TooManyModes`] for a count above the dimension,
+    /// [`SparseError::InvalidRequest`] for a non-finite shift or an empty band,
     /// [`SparseError::NoConvergence`] (with the number converged) after `max_restarts`,
-    /// [`SparseError::NotPositiveDefinite`]-like errors from the factorizations, and
-    /// [`SparseError::Singular`] when a shift falls exactly on an eigenvalue.
+    /// [`SparseError::SturmMismatch`] when the count by inertia and the pairs found still disagree
+    /// after the retries, and [`SparseError::NotPositiveDefinite`] when `K` has negative
+    /// eigenvalues below the lowest-mode shift.
     pub fn solve(&self, which: Which, params: &EigenOptions) -> Result<Modes, SparseError> {
         let n = self.dim();
         let mut stats = EigenStats {
@@ -345,43 +410,75 @@ impl<'a> Pencil<'a> {
             factor_len: self.symbolic.factor_len(),
             ..Default::default()
         };
-        let (sigma, mut want, band) = match which {
-            Which::Lowest(k) => (self.lowest_shift(), k, None),
-            Which::Nearest { shift, count } => (shift, count, None),
-            Which::Band { lo, hi } => {
-                if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-                    return Err(SparseError::DimensionMismatch {
-                        what: "band with lo < hi",
-                        expected: 0,
-                        got: 0,
+        let requested = match which {
+            Which::Lowest(k) => k,
+            Which::Nearest { count, .. } => count,
+            Which::Band { .. } => 0,
+        };
+        if requested > n {
+            return Err(SparseError::TooManyModes { requested, dim: n });
+        }
+        if let Which::Nearest { shift, count } = which
+            && shift.is_finite()
+            && shift <= self.tie_tolerance(0.0)
+        {
+            // K is positive semi-definite: the eigenvalues nearest a shift at or below zero are the
+            // lowest ones, found by the lowest-mode strategy (a shift below the spectrum, away from
+            // the rigid-body zeros) instead of a shift on the zeros
+            return self.solve(Which::Lowest(count), params);
+        }
+        let (mut sigma, band) = match which {
+            Which::Lowest(_) => (self.lowest_shift(), None),
+            Which::Nearest { shift, .. } => {
+                if !shift.is_finite() {
+                    return Err(SparseError::InvalidRequest {
+                        reason: format!("the shift {shift} is not a finite number"),
                     });
                 }
+                (shift, None)
+            }
+            Which::Band { lo, hi } => {
+                if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                    return Err(SparseError::InvalidRequest {
+                        reason: format!(
+                            "the band [{lo:e}, {hi:e}] s^-2 needs finite ends with the lower below the upper"
+                        ),
+                    });
+                }
+                let (lo, hi) = (lo - self.tie_tolerance(lo), hi + self.tie_tolerance(hi));
                 let t = Instant::now();
                 let (nl, nh) = (self.count_below(lo)?, self.count_below(hi)?);
                 stats.factor_seconds += t.elapsed().as_secs_f64();
                 stats.factorizations += 2;
-                (0.5 * (lo + hi), nh - nl, Some((lo, hi, nh - nl)))
+                (0.5 * (lo + hi), Some((lo, hi, nh - nl)))
             }
         };
-        if !sigma.is_finite() {
-            return Err(SparseError::NonFinite {
-                matrix: "shift",
-                row: 0,
-                col: 0,
-            });
-        }
-        if want > n {
-            return Err(SparseError::DimensionMismatch {
-                what: "requested modes against dimension",
-                expected: n,
-                got: want,
-            });
+        let mut want = band.map_or(requested, |b| b.2);
+        // the nearest modes are chosen by their distance to the shift the user gave
+        let target = sigma;
+        if !matches!(which, Which::Lowest(_)) {
+            // A shift given by the user is often a computed eigenvalue, and a band's midpoint can
+            // be one: with K - sigma M singular to round-off, the solves amplify that eigenvector
+            // by 1e16 and every other direction drowns in its round-off. Factor a little off it
+            // (1e-4 relative, by an irrational factor so that no eigenvalue sits there by
+            // symmetry); the modes are still chosen by their distance to the shift given.
+            let scale = sigma
+                .abs()
+                .max(1e-3 * self.k_norm / self.m_norm.max(f64::MIN_POSITIVE));
+            sigma += SHIFT_OFFSET * scale;
         }
         let t = Instant::now();
-        let mut op = self.factor_shifted(sigma)?;
+        let mut op = match self.factor_shifted(sigma) {
+            Err(SparseError::Singular { .. }) if !matches!(which, Which::Lowest(_)) => {
+                // the shift is numerically exactly an eigenvalue: step off it
+                sigma += self.tie_tolerance(sigma);
+                stats.factorizations += 1;
+                self.factor_shifted(sigma)?
+            }
+            r => r?,
+        };
         stats.factor_seconds += t.elapsed().as_secs_f64();
         stats.factorizations += 1;
-        let mut sigma = sigma;
         if matches!(which, Which::Lowest(_)) {
             if op.inertia().negative > 0 {
                 return Err(SparseError::NotPositiveDefinite {
@@ -390,13 +487,14 @@ impl<'a> Pencil<'a> {
                 });
             }
             // With near-zero (rigid-body) eigenvalues, place the shift at half the first clearly
-            // nonzero eigenvalue, estimated by a short probe cycle at the tiny shift: K - sigma M is then well conditioned even for a free-free model
-            // (condition lambda_max / |sigma| instead of lambda_max / 1e-10 mean(K_ii / M_ii)),
-            // and rigid-body and elastic modes stay well separated.
-            // "Near zero" is relative to the tiny shift itself (1e-10 mean(K_ii / M_ii)): rigid-body
-            // eigenvalues come out at round-off (about 1e-16 lambda_max), elastic ones far above
-            // 1e3 |sigma|. A probe that sees only near-zero values (as many rigid-body modes as
-            // its better half holds) is repeated with a larger basis.
+            // nonzero eigenvalue, estimated by a short probe cycle at the tiny shift: K - sigma M is
+            // then well conditioned even for a free-free model (condition lambda_max / |sigma|
+            // instead of lambda_max / 1e-10 mean(K_ii / M_ii)), and rigid-body and elastic modes
+            // stay well separated. "Near zero" is relative to the tiny shift itself
+            // (1e-10 mean(K_ii / M_ii)): rigid-body eigenvalues come out at round-off (about
+            // 1e-16 lambda_max), elastic ones far above 1e3 |sigma|. A probe that sees only
+            // near-zero values (as many rigid-body modes as its better half holds) is repeated
+            // with a larger basis.
             let zero_like = 1e3 * sigma.abs();
             let mut guess = Vec::new();
             let first_size = (3 * params.block_size.max(1))
@@ -443,7 +541,9 @@ impl<'a> Pencil<'a> {
                 values: vec![],
                 vectors: Mat::zeros(n, 0),
                 residuals: vec![],
+                residual_kinds: vec![],
                 shifted_residuals: vec![],
+                requested,
                 shift: sigma,
                 sturm: SturmCheck {
                     lower: band.map(|b| b.0),
@@ -465,79 +565,26 @@ impl<'a> Pencil<'a> {
                 stats.factor_seconds += t.elapsed().as_secs_f64();
                 stats.factorizations += 1;
             }
-            lanczos.run(want + guard, &mut stats)?;
-            // Sort what was locked by distance to the shift, keep the wanted ones.
-            let locked = lanczos.sorted_locked();
-            let (sel, check) = match which {
-                Which::Band { .. } => {
-                    let (lo, hi, count) = band.expect("band");
-                    let sel: Vec<usize> = locked
-                        .iter()
-                        .copied()
+            lanczos.run((want + guard).min(n), &mut stats)?;
+            let (sel, check) = match band {
+                Some((lo, hi, count)) => {
+                    let sel: Vec<usize> = (0..lanczos.values.len())
                         .filter(|i| lanczos.values[*i] >= lo && lanczos.values[*i] <= hi)
                         .collect();
                     let returned = sel.len();
-                    (
-                        sel,
-                        SturmCheck {
-                            lower: Some(lo),
-                            upper: hi,
-                            count,
-                            returned,
-                        },
-                    )
+                    let check = SturmCheck {
+                        lower: Some(lo),
+                        upper: hi,
+                        count,
+                        returned,
+                    };
+                    (sel, check)
                 }
-                _ => {
-                    let mut sel: Vec<usize> = locked[..want.min(locked.len())].to_vec();
-                    // Extend to a gap: the check shift must not split a cluster.
-                    let mut values: Vec<f64> = sel.iter().map(|i| lanczos.values[*i]).collect();
-                    let mut rest: Vec<usize> = locked[sel.len()..].to_vec();
-                    rest.sort_by(|a, b| lanczos.values[*a].total_cmp(&lanczos.values[*b]));
-                    values.sort_by(f64::total_cmp);
-                    let scale = values.iter().fold(sigma.abs(), |m, v| m.max(v.abs()));
-                    let top = *values.last().expect("want > 0");
-                    let above: Vec<usize> = rest
-                        .iter()
-                        .copied()
-                        .filter(|i| lanczos.values[*i] > top)
-                        .collect();
-                    let mut next = None;
-                    for i in above {
-                        let v = lanczos.values[i];
-                        if v - top <= 1e-8 * scale.max(v.abs()) {
-                            sel.push(i);
-                        } else {
-                            next = Some(v);
-                            break;
-                        }
-                    }
-                    let top = sel
-                        .iter()
-                        .map(|i| lanczos.values[*i])
-                        .fold(f64::NEG_INFINITY, f64::max);
-                    let upper = match next {
-                        Some(v) => 0.5 * (top + v),
-                        None => top + 1e-6 * scale.max(top.abs()),
-                    };
-                    let lower = match which {
-                        Which::Nearest { .. } => {
-                            let bottom = sel
-                                .iter()
-                                .map(|i| lanczos.values[*i])
-                                .fold(f64::INFINITY, f64::min);
-                            let below = rest
-                                .iter()
-                                .map(|i| lanczos.values[*i])
-                                .filter(|v| *v < bottom)
-                                .fold(f64::NEG_INFINITY, f64::max);
-                            Some(if below.is_finite() {
-                                0.5 * (bottom + below)
-                            } else {
-                                bottom - 1e-6 * scale.max(bottom.abs())
-                            })
-                        }
-                        _ => None,
-                    };
+                None => {
+                    let nearest = matches!(which, Which::Nearest { .. });
+                    let centre = if nearest { target } else { sigma };
+                    let (sel, lower, upper) =
+                        self.select(&lanczos.values, requested, centre, nearest);
                     // one factor alive at a time: release the iteration's before the check's
                     lanczos.op = None;
                     let t = Instant::now();
@@ -546,31 +593,24 @@ impl<'a> Pencil<'a> {
                     stats.factor_seconds += t.elapsed().as_secs_f64();
                     stats.factorizations += 1 + usize::from(lower.is_some());
                     let returned = sel.len();
-                    (
-                        sel,
-                        SturmCheck {
-                            lower,
-                            upper,
-                            count,
-                            returned,
-                        },
-                    )
+                    let check = SturmCheck {
+                        lower,
+                        upper,
+                        count,
+                        returned,
+                    };
+                    (sel, check)
                 }
             };
             if check.verified() {
-                return Ok(lanczos.finish(sel, sigma, check, stats));
+                return Ok(lanczos.finish(sel, sigma, check, requested, stats));
             }
             attempts += 1;
-            if check.count < check.returned || attempts > 8 {
-                return Err(SparseError::NoConvergence {
-                    reason: format!(
-                        "Sturm check failed: {} eigenvalues in ({:?}, {:e}] by inertia, {} found ({} locked)",
-                        check.count,
-                        check.lower,
-                        check.upper,
-                        check.returned,
-                        lanczos.values.len()
-                    ),
+            if check.count < check.returned || attempts > 8 || lanczos.values.len() >= n {
+                return Err(SparseError::SturmMismatch {
+                    interval: check.interval(),
+                    count: check.count,
+                    returned: check.returned,
                 });
             }
             // Missed modes (repeated eigenvalues): ask for more, restarting from random vectors
@@ -578,6 +618,70 @@ impl<'a> Pencil<'a> {
             want = lanczos.values.len() + (check.count - check.returned);
             lanczos.force_random_start = true;
         }
+    }
+
+    /// From the locked `values`, the `requested` nearest `sigma` with any cluster at either end
+    /// completed, and the ends of the interval to count: in the gaps to the nearest values found
+    /// outside (or a step of `max(1e-6 scale, 2 tie)` beyond when none was found). `lower` is
+    /// `None` (minus infinity) unless `nearest`.
+    fn select(
+        &self,
+        values: &[f64],
+        requested: usize,
+        sigma: f64,
+        nearest: bool,
+    ) -> (Vec<usize>, Option<f64>, f64) {
+        let mut order: Vec<usize> = (0..values.len()).collect();
+        order.sort_by(|a, b| {
+            (values[*a] - sigma)
+                .abs()
+                .total_cmp(&(values[*b] - sigma).abs())
+        });
+        let mut sel: Vec<usize> = order[..requested.min(order.len())].to_vec();
+        let mut rest: Vec<usize> = order[sel.len()..].to_vec();
+        let close = |a: f64, b: f64| (a - b).abs() <= self.tie_tolerance(a.abs().max(b.abs()));
+        let ends = |sel: &[usize]| {
+            sel.iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), i| {
+                    (lo.min(values[*i]), hi.max(values[*i]))
+                })
+        };
+        loop {
+            let (bottom, top) = ends(&sel);
+            let tied = rest
+                .iter()
+                .position(|&i| close(values[i], top) || (nearest && close(values[i], bottom)));
+            match tied {
+                Some(p) => sel.push(rest.remove(p)),
+                None => break,
+            }
+        }
+        let (bottom, top) = ends(&sel);
+        let scale = values.iter().fold(sigma.abs(), |m, v| m.max(v.abs()));
+        let step = |v: f64| (1e-6 * scale.max(v.abs())).max(2.0 * self.tie_tolerance(v));
+        let above = rest
+            .iter()
+            .map(|i| values[*i])
+            .filter(|v| *v > top)
+            .fold(f64::INFINITY, f64::min);
+        let upper = if above.is_finite() {
+            0.5 * (top + above)
+        } else {
+            top + step(top)
+        };
+        let lower = nearest.then(|| {
+            let below = rest
+                .iter()
+                .map(|i| values[*i])
+                .filter(|v| *v < bottom)
+                .fold(f64::NEG_INFINITY, f64::max);
+            if below.is_finite() {
+                0.5 * (bottom + below)
+            } else {
+                bottom - step(bottom)
+            }
+        });
+        (sel, lower, upper)
     }
 }
 
@@ -809,8 +913,10 @@ impl<'p, 'a> Lanczos<'p, 'a> {
     /// `||r|| / ((||K|| + |lambda| ||M||) ||x||)` is at round-off level (1e-13): rigid-body modes,
     /// with `K x` pure round-off, can only meet the latter.
     fn converged(&self, x: &[f64], lambda: f64) -> bool {
-        let (rho, eta) = self.residuals(x, lambda);
-        rho < self.params.tol || eta < 1e-13
+        let (rho, eta, relative) = self.residuals(x, lambda);
+        // With the shift on (or within round-off of) an eigenvalue, `(K - sigma M) x` vanishes
+        // and the shifted residual cannot be small: the classical relative residual decides.
+        rho < self.params.tol || eta < 1e-13 || relative < self.params.tol
     }
 
     /// Runs thick-restarted block Lanczos until `want` pairs are locked.
@@ -966,8 +1072,8 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         true
     }
 
-    /// `(||K x - lambda M x|| / ||(K - sigma M) x||, backward error)`.
-    fn residuals(&self, x: &[f64], lambda: f64) -> (f64, f64) {
+    /// `(||K x - lambda M x|| / ||(K - sigma M) x||, backward error, ||K x - lambda M x|| / ||K x||)`.
+    fn residuals(&self, x: &[f64], lambda: f64) -> (f64, f64, f64) {
         let mut kx = vec![0.0; self.n];
         crate::csc::mul_vec(self.pencil.k, x, &mut kx).expect("sizes checked");
         let mx = self.m_times(x);
@@ -981,18 +1087,11 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         let eta = rn
             / ((self.pencil.k_norm + lambda.abs() * self.pencil.m_norm) * norm(x))
                 .max(f64::MIN_POSITIVE);
-        (rn / norm(&s).max(f64::MIN_POSITIVE), eta)
-    }
-
-    /// Locked indices ordered by distance to the shift.
-    fn sorted_locked(&self) -> Vec<usize> {
-        let mut idx: Vec<usize> = (0..self.values.len()).collect();
-        idx.sort_by(|a, b| {
-            (self.values[*a] - self.sigma)
-                .abs()
-                .total_cmp(&(self.values[*b] - self.sigma).abs())
-        });
-        idx
+        (
+            rn / norm(&s).max(f64::MIN_POSITIVE),
+            eta,
+            rn / norm(&kx).max(f64::MIN_POSITIVE),
+        )
     }
 
     fn finish(
@@ -1000,11 +1099,12 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         mut sel: Vec<usize>,
         sigma: f64,
         sturm: SturmCheck,
+        requested: usize,
         stats: EigenStats,
     ) -> Modes {
         sel.sort_by(|a, b| self.values[*a].total_cmp(&self.values[*b]));
         let vectors = Mat::from_fn(self.n, sel.len(), |i, j| self.x[sel[j]][i]);
-        let residuals = sel
+        let (residuals, residual_kinds): (Vec<f64>, Vec<ResidualKind>) = sel
             .iter()
             .map(|&s| {
                 let x = &self.x[s];
@@ -1015,14 +1115,23 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                     .zip(&self.mx[s])
                     .map(|(k, m)| k - self.values[s] * m)
                     .collect();
-                norm(&r) / norm(&kx).max(f64::MIN_POSITIVE)
+                let (rn, kn, xn) = (norm(&r), norm(&kx), norm(x));
+                if kn <= ZERO_ENERGY * self.pencil.k_norm * xn {
+                    let scale =
+                        (self.pencil.k_norm + self.values[s].abs() * self.pencil.m_norm) * xn;
+                    (rn / scale.max(f64::MIN_POSITIVE), ResidualKind::Backward)
+                } else {
+                    (rn / kn, ResidualKind::Relative)
+                }
             })
-            .collect();
+            .unzip();
         Modes {
             values: sel.iter().map(|s| self.values[*s]).collect(),
             vectors,
             residuals,
+            residual_kinds,
             shifted_residuals: sel.iter().map(|s| self.shifted_res[*s]).collect(),
+            requested,
             shift: sigma,
             sturm,
             stats,

@@ -78,6 +78,35 @@ pub enum SparseError {
         /// What is wrong.
         reason: String,
     },
+    /// More eigenpairs were requested than the pencil has.
+    #[error(
+        "{requested} modes requested, but the model has only {dim} free degrees of freedom (at most {dim} modes): ask for fewer"
+    )]
+    TooManyModes {
+        /// How many were requested.
+        requested: usize,
+        /// The dimension of the pencil.
+        dim: usize,
+    },
+    /// An eigenvalue interval or shift that cannot be used.
+    #[error("invalid eigenvalue request: {reason}")]
+    InvalidRequest {
+        /// What is wrong and what to do.
+        reason: String,
+    },
+    /// The count of eigenvalues by inertia disagrees with the eigenpairs found, after the solver's
+    /// retries: no result is returned rather than an unverified one.
+    #[error(
+        "Sturm check failed: the inertia of K - s M counts {count} eigenvalues in {interval}, the solver found {returned}; try another shift or ask for more modes"
+    )]
+    SturmMismatch {
+        /// The interval, written `(a, b]` in s^-2.
+        interval: String,
+        /// Eigenvalues counted by inertia.
+        count: usize,
+        /// Eigenpairs found in it.
+        returned: usize,
+    },
     /// An iterative or dense eigensolver did not converge.
     #[error("eigensolver did not converge: {reason}")]
     NoConvergence {

@@ -90,6 +90,15 @@ impl StudyError {
         }
     }
 
+    /// The warnings a reader collected before this error (print them before it).
+    pub fn warnings(&self) -> Vec<String> {
+        match self {
+            StudyError::Io(e) => e.warnings().iter().map(ToString::to_string).collect(),
+            StudyError::InFile { source, .. } => source.warnings(),
+            _ => Vec::new(),
+        }
+    }
+
     /// `source` found while building something from the file `path`.
     pub fn within(path: impl Into<PathBuf>, source: impl Into<StudyError>) -> Self {
         StudyError::InFile {

@@ -33,6 +33,9 @@ pub struct ModelOptions {
     pub fix: Vec<String>,
     /// Lumped (row-sum/HRZ) instead of consistent mass.
     pub lumped: bool,
+    /// Unknown keywords in an `.inp` deck are warnings instead of errors
+    /// ([`femu_io::inp::InpOptions::lenient`]).
+    pub lenient: bool,
 }
 
 impl ModelOptions {
@@ -74,6 +77,12 @@ pub struct LoadedTest {
     pub layout: SensorLayout,
 }
 
+/// The extensions of the model files femu reads.
+pub const MODEL_EXTENSIONS: &[&str] = &["inp", "msh", "unv", "uff"];
+
+/// The extensions of the test files femu reads.
+pub const TEST_EXTENSIONS: &[&str] = &["unv", "uff", "json", "csv", "txt"];
+
 /// Whether `path` ends in one of `exts` (any case).
 pub fn has_extension(path: &Path, exts: &[&str]) -> bool {
     path.extension()
@@ -90,6 +99,13 @@ pub fn has_extension(path: &Path, exts: &[&str]) -> bool {
 /// assembly errors (naming the element).
 pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, StudyError> {
     let mut warnings = Vec::new();
+    if !has_extension(path, MODEL_EXTENSIONS) {
+        return Err(StudyError::in_file(
+            path,
+            "model",
+            "femu reads models as Abaqus/CalculiX decks (.inp), Gmsh meshes (.msh) and universal files (.unv, .uff); the file's extension is none of them",
+        ));
+    }
     let (model, frequency) = if has_extension(path, &["msh", "unv", "uff"]) {
         let Some(mat) = options.material else {
             return Err(StudyError::in_file(
@@ -109,6 +125,12 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
             warnings.extend(g.warnings.iter().map(|w| w.to_string()));
             g.mesh
         };
+        if options.lenient {
+            warnings.push(format!(
+                "{}: lenient reading applies to .inp decks: not used for this mesh",
+                path.display()
+            ));
+        }
         let mut model = Model::new(mesh).map_err(|e| StudyError::within(path, e))?;
         let material = Material::isotropic("command line", mat.young, mat.poisson, mat.density)?;
         model.set_material(None, material)?;
@@ -119,7 +141,10 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         }
         (model, None)
     } else {
-        let deck = femu_io::inp::read_inp(path)?;
+        let inp_options = femu_io::inp::InpOptions {
+            lenient: options.lenient,
+        };
+        let deck = femu_io::inp::read_inp_with(path, &inp_options)?;
         warnings.extend(deck.warnings.iter().map(|w| w.to_string()));
         if options.material.is_some() {
             warnings.push(format!(
@@ -136,8 +161,12 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         }
         (deck.to_model()?, deck.frequency)
     };
-    let asm = Assembler::new(&model)?;
-    let sys = asm.assemble(&model, options.mass())?;
+    let mut model = model;
+    leave_out_orphans(&mut model, path, &mut warnings)?;
+    let asm = Assembler::new(&model).map_err(|e| StudyError::within(path, e))?;
+    let sys = asm
+        .assemble(&model, options.mass())
+        .map_err(|e| StudyError::within(path, e))?;
     Ok(LoadedModel {
         path: path.to_path_buf(),
         model,
@@ -148,6 +177,41 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
     })
 }
 
+/// Nodes that belong to no element have no stiffness and no mass: left free they make `K` and `M`
+/// singular. As CalculiX does, they are left out (their DOFs are fixed), with a warning naming them.
+fn leave_out_orphans(
+    model: &mut Model,
+    path: &Path,
+    warnings: &mut Vec<String>,
+) -> Result<(), StudyError> {
+    let mesh = model.mesh();
+    let mut used = vec![false; mesh.node_count()];
+    for el in mesh.elements() {
+        for n in el.nodes {
+            used[*n] = true;
+        }
+    }
+    let orphans: Vec<u64> = (0..mesh.node_count())
+        .filter(|i| !used[*i])
+        .map(|i| mesh.node_id(i))
+        .collect();
+    if orphans.is_empty() {
+        return Ok(());
+    }
+    let shown: Vec<String> = orphans.iter().take(8).map(u64::to_string).collect();
+    warnings.push(format!(
+        "{}: {} node(s) belong to no element and are left out (no stiffness, no mass): {}{}",
+        path.display(),
+        orphans.len(),
+        shown.join(", "),
+        if orphans.len() > 8 { ", ..." } else { "" }
+    ));
+    model
+        .fix_nodes(&orphans, &[0, 1, 2])
+        .map_err(|e| StudyError::within(path, e))?;
+    Ok(())
+}
+
 /// Reads test modes (`.unv`/`.uff` universal file, `.json`, or CSV) and maps their sensors onto
 /// `model`.
 ///
@@ -155,6 +219,13 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
 /// The readers' errors, and sensors on nodes or DOFs the model does not have (naming the test
 /// file).
 pub fn load_test(path: &Path, model: &LoadedModel) -> Result<LoadedTest, StudyError> {
+    if !has_extension(path, TEST_EXTENSIONS) {
+        return Err(StudyError::in_file(
+            path,
+            "test",
+            "femu reads test modes from universal files (.unv, .uff: datasets 15/2411 and 55), JSON (.json) and CSV (.csv, .txt); this extension is none of them",
+        ));
+    }
     let data = if has_extension(path, &["unv", "uff"]) {
         femu_io::uff::read_uff(path).and_then(|u| u.test_data(path))?
     } else if has_extension(path, &["json"]) {

@@ -6,7 +6,7 @@ use crate::StudyError;
 use crate::load::LoadedModel;
 use femu_correlate::modes::eigenvalue_of_hz;
 use femu_fem::assembly::MassKind;
-use femu_sparse::eigen::{EigenOptions, Modes, Which, eigs};
+use femu_sparse::eigen::{EigenOptions, Modes, ResidualKind, Which, eigs};
 use serde::Serialize;
 
 /// Which modes [`solve_modes`] computes.
@@ -33,14 +33,24 @@ pub struct ModesReport {
     pub frequencies_hz: Vec<f64>,
     /// Eigenvalues `omega^2`, s^-2.
     pub eigenvalues: Vec<f64>,
-    /// Relative residuals `||K x - lambda M x|| / ||K x||`.
+    /// Residual of each mode, of the kind in `residual_kinds`.
     pub residuals: Vec<f64>,
+    /// `relative` (`||K x - lambda M x|| / ||K x||`) or, for a zero-energy (rigid-body) mode,
+    /// `backward` (`||K x - lambda M x|| / ((||K||_1 + |lambda| ||M||_1) ||x||)`).
+    pub residual_kinds: Vec<&'static str>,
+    /// How many modes were asked for (fewer than returned when the request ended inside a
+    /// repeated eigenvalue, which is returned whole).
+    pub requested: usize,
     /// Whether the Sturm count matches the modes returned.
     pub sturm_verified: bool,
-    /// Eigenvalues below `sturm_upper` by inertia.
+    /// Eigenvalues in the counted interval by inertia.
     pub sturm_count: usize,
+    /// Lower end of the counted interval, s^-2 (absent: from minus infinity).
+    pub sturm_lower: Option<f64>,
     /// Upper end of the counted interval, s^-2.
     pub sturm_upper: f64,
+    /// What the user should know about the result (a completed cluster, rigid-body residuals).
+    pub notes: Vec<String>,
     /// Wall time of the solve, s.
     pub seconds: f64,
 }
@@ -101,12 +111,49 @@ pub fn solve_modes(
         frequencies_hz: modes.frequencies_hz(),
         eigenvalues: modes.values.clone(),
         residuals: modes.residuals.clone(),
+        residual_kinds: modes.residual_kinds.iter().map(|k| k.name()).collect(),
+        requested: modes.requested,
         sturm_verified: modes.sturm.verified(),
         sturm_count: modes.sturm.count,
+        sturm_lower: modes.sturm.lower,
         sturm_upper: modes.sturm.upper,
+        notes: notes(&modes, matches!(which, Which::Band { .. })),
         seconds: start.elapsed().as_secs_f64(),
     };
     Ok((modes, report))
+}
+
+/// What a reader of a modes table should be told: a request completed to a whole cluster, and
+/// which modes report the backward error rather than the relative residual.
+pub fn notes(modes: &Modes, band: bool) -> Vec<String> {
+    let mut notes = Vec::new();
+    if !band && modes.values.len() > modes.requested {
+        let f = modes.frequencies_hz();
+        notes.push(format!(
+            "{} modes requested, {} returned: modes {}-{} complete a repeated eigenvalue at \
+             {:.6} Hz that the request ended inside (a repeated eigenvalue is returned whole)",
+            modes.requested,
+            modes.values.len(),
+            modes.requested + 1,
+            modes.values.len(),
+            f[modes.requested.saturating_sub(1)],
+        ));
+    }
+    let zero: Vec<String> = modes
+        .residual_kinds
+        .iter()
+        .enumerate()
+        .filter(|(_, k)| **k == ResidualKind::Backward)
+        .map(|(j, _)| (j + 1).to_string())
+        .collect();
+    if !zero.is_empty() {
+        notes.push(format!(
+            "mode(s) {} have no strain energy (rigid-body): their residual is the backward error \
+             ||K x - lambda M x|| / ((||K|| + |lambda| ||M||) ||x||), since K x is round-off",
+            zero.join(", ")
+        ));
+    }
+    notes
 }
 
 /// The lowest `count` modes (default: twice the test modes plus 4, at most the DOFs), as the

@@ -49,6 +49,9 @@ pub struct StudyFile {
     /// Lumped mass.
     #[serde(default)]
     pub lumped: bool,
+    /// Unknown keywords of an `.inp` model are warnings instead of errors.
+    #[serde(default)]
+    pub lenient: bool,
     /// Pairing settings.
     #[serde(default)]
     pub pairing: Option<PairingSection>,
@@ -153,10 +156,16 @@ pub fn run_study_file(
         material: s.material,
         fix: s.fix.clone(),
         lumped: s.lumped,
+        lenient: s.lenient,
     };
     progress("reading and assembling the model");
-    let model = load_model(&base.join(&s.model), &options)?;
-    let test = load_test(&base.join(&s.test), &model)?;
+    // a file the study names that cannot be read: say which study file names it
+    let named = |e: StudyError| match e {
+        StudyError::Io(femu_io::IoError::Io { .. }) => StudyError::within(path, e),
+        e => e,
+    };
+    let model = load_model(&base.join(&s.model), &options).map_err(named)?;
+    let test = load_test(&base.join(&s.test), &model).map_err(named)?;
     create_dir(out)?;
     let mut files = Vec::new();
     let n_test = test.data.modes.len();

@@ -63,19 +63,25 @@ pub fn run(a: &ModesArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliErro
             report.mass,
             f.len()
         );
-        println!("| mode | f (Hz) | lambda (s^-2) | residual |");
-        println!("|---|---|---|---|");
-        for (j, (fj, (l, r))) in f
-            .iter()
-            .zip(result.values.iter().zip(&result.residuals))
-            .enumerate()
-        {
-            println!("| {} | {:.6} | {:.6e} | {:.1e} |", j + 1, fj, l, r);
+        println!("| mode | f (Hz) | lambda (s^-2) | residual | residual kind |");
+        println!("|---|---|---|---|---|");
+        for (j, fj) in f.iter().enumerate() {
+            println!(
+                "| {} | {:.6} | {:.6e} | {:.1e} | {} |",
+                j + 1,
+                fj,
+                result.values[j],
+                result.residuals[j],
+                report.residual_kinds[j]
+            );
+        }
+        for note in &report.notes {
+            println!("note: {note}");
         }
         println!(
-            "Sturm check: {} eigenvalues below {:.6e} s^-2, {} returned: {}",
+            "Sturm check: {} eigenvalues in {} by inertia, {} returned: {}",
             result.sturm.count,
-            result.sturm.upper,
+            result.sturm.interval(),
             result.sturm.returned,
             if result.sturm.verified() {
                 "verified"
@@ -88,7 +94,7 @@ pub fn run(a: &ModesArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliErro
         let names: Vec<String> = f
             .iter()
             .enumerate()
-            .map(|(j, fj)| format!("mode {} ({fj:.3} Hz)", j + 1))
+            .map(|(j, fj)| format!("model mode {} ({fj:.3} Hz)", j + 1))
             .collect();
         write_shapes_vtu(
             path,

@@ -37,9 +37,8 @@ impl Universal {
                 }
             };
             if e.nodes.len() != order.len() {
-                return Err(IoError::Parse {
+                return Err(IoError::Content {
                     path: path.to_path_buf(),
-                    line: 0,
                     reason: format!(
                         "element {}: descriptor {} needs {} nodes, found {}",
                         e.id,
@@ -53,10 +52,17 @@ impl Universal {
             mesh.add_element(e.id, kind, &nodes).map_err(model_err)?;
         }
         if mesh.element_count() == 0 {
-            return Err(IoError::Parse {
+            return Err(IoError::Content {
                 path: path.to_path_buf(),
-                line: 0,
-                reason: "no solid element (descriptors 111-118) in dataset 2412".into(),
+                reason: if self.nodes.is_empty() && self.elements.is_empty() {
+                    "no mesh in the file: a model needs nodes (dataset 2411 or 15) and solid elements (dataset 2412, descriptors 111-118)".into()
+                } else {
+                    format!(
+                        "no solid element in the file ({} nodes, {} elements of other kinds): a model needs solid elements (dataset 2412, descriptors 111-118)",
+                        self.nodes.len(),
+                        self.elements.len()
+                    )
+                },
             });
         }
         // groups: solid elements make an element set; every element (shells and beams too) and
@@ -68,9 +74,8 @@ impl Universal {
             let mut nodes: Vec<u64> = g.nodes.clone();
             let mut solids = Vec::new();
             for id in &g.elements {
-                let e = by_id.get(id).ok_or_else(|| IoError::Parse {
+                let e = by_id.get(id).ok_or_else(|| IoError::Content {
                     path: path.to_path_buf(),
-                    line: 0,
                     reason: format!("group {}: element {id} is not in dataset 2412", g.name),
                 })?;
                 nodes.extend(&e.nodes);
@@ -80,9 +85,8 @@ impl Universal {
             }
             nodes.sort_unstable();
             nodes.dedup();
-            let set_err = |e| IoError::Parse {
+            let set_err = |e| IoError::Content {
                 path: path.to_path_buf(),
-                line: 0,
                 reason: format!("group {}: {e}", g.name),
             };
             if !solids.is_empty() {
@@ -111,15 +115,13 @@ impl Universal {
     /// # Errors
     /// No modes, modes on different node lists, no non-zero value, invalid frequencies.
     pub fn test_data(&self, path: &Path) -> Result<crate::csv::TestData, IoError> {
-        let bad = |reason: String| IoError::Parse {
+        let bad = |reason: String| IoError::Content {
             path: PathBuf::from(path),
-            line: 0,
             reason,
         };
-        let first = self
-            .modes
-            .first()
-            .ok_or_else(|| bad("no dataset 55 (modal data) in the file".into()))?;
+        let first = self.modes.first().ok_or_else(|| {
+            bad("no test modes in the file: test modes are dataset 55 (modal data)".into())
+        })?;
         let nodes: Vec<u64> = first.values.iter().map(|(n, _)| *n).collect();
         for m in &self.modes {
             let these: Vec<u64> = m.values.iter().map(|(n, _)| *n).collect();

@@ -1,0 +1,414 @@
+//! Repeated and clustered eigenvalues at every position of a request: shifts below, on, inside and
+//! above a cluster, counts that end inside one, band ends on an eigenvalue, rigid-body zeros.
+//! Every result is checked against the dense generalized eigensolver (the reference) and the
+//! analytic spectrum of the pencils (tensor products of 1D linear finite elements, whose
+//! eigenvalues are sums `mu_i + mu_j (+ mu_k)` of the 1D ones, so a cube's triples and sextuples and
+//! a square's pairs are exact), and its Sturm interval is recounted from the dense spectrum.
+
+use femu_sparse::SparseMatrix;
+use femu_sparse::csc::to_dense;
+use femu_sparse::dense::generalized_symmetric_eigenvalues;
+use femu_sparse::eigen::{EigenOptions, Modes, ResidualKind, Which, eigs};
+use sprs::TriMat;
+
+/// 1D linear elements on [0, 1] with `ne` elements: `(K, M)` dense, Dirichlet at both ends
+/// (interior nodes) or free (all nodes).
+fn bar(ne: usize, free: bool) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    let h = 1.0 / ne as f64;
+    let nodes = ne + 1;
+    let mut k = vec![vec![0.0; nodes]; nodes];
+    let mut m = vec![vec![0.0; nodes]; nodes];
+    for e in 0..ne {
+        for (a, b, kv, mv) in [
+            (e, e, 1.0, 2.0),
+            (e + 1, e + 1, 1.0, 2.0),
+            (e, e + 1, -1.0, 1.0),
+            (e + 1, e, -1.0, 1.0),
+        ] {
+            k[a][b] += kv / h;
+            m[a][b] += mv * h / 6.0;
+        }
+    }
+    if free {
+        (k, m)
+    } else {
+        let cut = |a: Vec<Vec<f64>>| -> Vec<Vec<f64>> {
+            a[1..nodes - 1]
+                .iter()
+                .map(|r| r[1..nodes - 1].to_vec())
+                .collect()
+        };
+        (cut(k), cut(m))
+    }
+}
+
+/// The 1D eigenvalues `mu_k = (6 / h^2) (1 - cos t) / (2 + cos t)`, `t = k pi / ne`.
+fn bar_spectrum(ne: usize, free: bool) -> Vec<f64> {
+    let h = 1.0 / ne as f64;
+    let ks: Vec<usize> = if free {
+        (0..=ne).collect()
+    } else {
+        (1..ne).collect()
+    };
+    ks.into_iter()
+        .map(|k| {
+            let c = (k as f64 * std::f64::consts::PI / ne as f64).cos();
+            6.0 / (h * h) * (1.0 - c) / (2.0 + c)
+        })
+        .collect()
+}
+
+fn kron(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let (na, nb) = (a.len(), b.len());
+    let mut out = vec![vec![0.0; na * nb]; na * nb];
+    for i in 0..na {
+        for j in 0..na {
+            for p in 0..nb {
+                for q in 0..nb {
+                    out[i * nb + p][j * nb + q] = a[i][j] * b[p][q];
+                }
+            }
+        }
+    }
+    out
+}
+
+fn add(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    a.iter()
+        .zip(b)
+        .map(|(r, s)| r.iter().zip(s).map(|(x, y)| x + y).collect())
+        .collect()
+}
+
+/// `copies` uncoupled copies of `a` (the components of a vector field).
+fn block_diagonal(a: &[Vec<f64>], copies: usize) -> Vec<Vec<f64>> {
+    let n = a.len();
+    let mut out = vec![vec![0.0; n * copies]; n * copies];
+    for c in 0..copies {
+        for i in 0..n {
+            for j in 0..n {
+                out[c * n + i][c * n + j] = a[i][j];
+            }
+        }
+    }
+    out
+}
+
+/// `a` stored on the pattern of `a` and `b` together (the trilinear stiffness has exact zeros
+/// where the mass has entries: K's pattern must hold M's).
+fn sparse(a: &[Vec<f64>], b: &[Vec<f64>]) -> SparseMatrix {
+    let n = a.len();
+    let mut t = TriMat::new((n, n));
+    for i in 0..n {
+        for j in 0..n {
+            if a[i][j] != 0.0 || b[i][j] != 0.0 {
+                t.add_triplet(i, j, a[i][j]);
+            }
+        }
+    }
+    t.to_csc()
+}
+
+/// The tensor-product pencil of `dim` (2 or 3) bars, `copies` components.
+fn pencil(ne: usize, dim: usize, free: bool, copies: usize) -> (SparseMatrix, SparseMatrix) {
+    let (k1, m1) = bar(ne, free);
+    let (k, m) = if dim == 2 {
+        (add(&kron(&k1, &m1), &kron(&m1, &k1)), kron(&m1, &m1))
+    } else {
+        let mm = kron(&m1, &m1);
+        let k = add(
+            &add(&kron(&k1, &mm), &kron(&m1, &kron(&k1, &m1))),
+            &kron(&mm, &k1),
+        );
+        (k, kron(&m1, &mm))
+    };
+    let (k, m) = (block_diagonal(&k, copies), block_diagonal(&m, copies));
+    (sparse(&k, &m), sparse(&m, &m))
+}
+
+fn analytic(ne: usize, dim: usize, free: bool, copies: usize) -> Vec<f64> {
+    let mu = bar_spectrum(ne, free);
+    let mut v = Vec::new();
+    for a in &mu {
+        for b in &mu {
+            if dim == 2 {
+                v.push(a + b);
+            } else {
+                for c in &mu {
+                    v.push(a + b + c);
+                }
+            }
+        }
+    }
+    let mut all: Vec<f64> = v.iter().flat_map(|x| vec![*x; copies]).collect();
+    all.sort_by(f64::total_cmp);
+    all
+}
+
+struct Case {
+    k: SparseMatrix,
+    m: SparseMatrix,
+    dense: Vec<f64>,
+    /// the tie tolerance of the reference: equal eigenvalues of the pencil agree to this
+    tie: f64,
+    /// the accuracy of the reference (1e-13 of the largest eigenvalue, 500 round-offs)
+    exact: f64,
+}
+
+impl Case {
+    fn new(ne: usize, dim: usize, free: bool, copies: usize) -> Self {
+        let (k, m) = pencil(ne, dim, free, copies);
+        let dense = generalized_symmetric_eigenvalues(to_dense(&k).as_ref(), to_dense(&m).as_ref())
+            .unwrap();
+        let exact = analytic(ne, dim, free, copies);
+        let top = *exact.last().unwrap();
+        for (d, e) in dense.iter().zip(&exact) {
+            assert!((d - e).abs() <= 1e-11 * top, "dense {d} vs analytic {e}");
+        }
+        Case {
+            k,
+            m,
+            dense,
+            tie: 1e-9 * top,
+            exact: 1e-13 * top,
+        }
+    }
+
+    /// Dense eigenvalues in `(lo, hi]`.
+    fn count(&self, lo: Option<f64>, hi: f64) -> usize {
+        self.dense
+            .iter()
+            .filter(|v| lo.is_none_or(|l| **v > l) && **v <= hi)
+            .count()
+    }
+
+    /// How many dense eigenvalues equal `v` (within the tie tolerance).
+    fn multiplicity(&self, v: f64) -> usize {
+        self.dense
+            .iter()
+            .filter(|d| (*d - v).abs() <= self.tie)
+            .count()
+    }
+
+    /// The checks every result must pass; returns the result for case-specific ones.
+    fn check(&self, which: Which) -> Modes {
+        let modes = eigs(&self.k, &self.m, which, &EigenOptions::default())
+            .unwrap_or_else(|e| panic!("{which:?}: {e}"));
+        let s = &modes.sturm;
+        assert!(s.verified(), "{which:?}: {s:?}");
+        // the inertia count is the dense count in the same interval
+        assert_eq!(s.count, self.count(s.lower, s.upper), "{which:?}: {s:?}");
+        // the interval's ends lie in gaps, not on or among eigenvalues
+        for end in s.lower.into_iter().chain([s.upper]) {
+            assert!(
+                self.dense.iter().all(|d| (d - end).abs() > self.exact),
+                "{which:?}: end {end} on an eigenvalue"
+            );
+        }
+        // every value is an eigenvalue, and every copy of each is returned
+        let mut seen = Vec::new();
+        for (j, v) in modes.values.iter().enumerate() {
+            assert!(
+                self.dense.iter().any(|d| (d - v).abs() <= self.tie),
+                "{which:?}: {v} is not an eigenvalue"
+            );
+            assert!(
+                modes.residuals[j] < 1e-8,
+                "{which:?}: residual {}",
+                modes.residuals[j]
+            );
+            if !seen.iter().any(|s: &f64| (s - v).abs() <= self.tie) {
+                seen.push(*v);
+                let returned = modes
+                    .values
+                    .iter()
+                    .filter(|w| (*w - v).abs() <= self.tie)
+                    .count();
+                assert_eq!(returned, self.multiplicity(*v), "{which:?}: copies of {v}");
+            }
+        }
+        // never fewer than asked, and more only to complete the last cluster
+        if !matches!(which, Which::Band { .. }) {
+            assert!(modes.values.len() >= modes.requested, "{which:?}");
+        }
+        modes
+    }
+}
+
+/// The distinct eigenvalues of `dense` with their multiplicities.
+fn clusters(case: &Case) -> Vec<(f64, usize)> {
+    let mut out: Vec<(f64, usize)> = Vec::new();
+    for d in &case.dense {
+        match out.last_mut() {
+            Some((v, m)) if (d - *v).abs() <= case.tie => *m += 1,
+            _ => out.push((*d, 1)),
+        }
+    }
+    out
+}
+
+/// A cube (3D, Dirichlet): multiplicities 1, 3, 3, 3, 1, 6, ... Lowest counts ending at every position
+/// inside the first clusters; the nearest modes at shifts below, exactly on, just above a cluster
+/// and midway between two; bands with both ends exactly on eigenvalues.
+#[test]
+fn cube_triples_and_sextuples_at_every_shift_and_edge() {
+    let case = Case::new(7, 3, false, 1);
+    let cl = clusters(&case);
+    assert_eq!(
+        cl.iter().take(6).map(|c| c.1).collect::<Vec<_>>(),
+        [1, 3, 3, 3, 1, 6],
+        "the cube's multiplicities"
+    );
+    for k in 1..=14 {
+        let modes = case.check(Which::Lowest(k));
+        // the lowest, complete: the first len values of the dense spectrum
+        for (v, d) in modes.values.iter().zip(&case.dense) {
+            assert!((v - d).abs() <= case.tie);
+        }
+    }
+    for c in 1..6 {
+        let (v, mult) = cl[c];
+        let (prev, next) = (cl[c - 1].0, cl[c + 1].0);
+        for shift in [
+            v,                       // on the cluster: K - v M is singular
+            v * (1.0 - 1e-12),       // inside its round-off
+            v * (1.0 + 1e-6),        // just above
+            0.5 * (v + prev) + 1e-3, // between, nearer the lower
+            0.5 * (v + next) - 1e-3, // between, nearer the upper
+        ] {
+            for count in [1, mult, mult + 1] {
+                let modes = case.check(Which::Nearest { shift, count });
+                // nearest: no eigenvalue outside the result is nearer than one inside
+                let far = modes
+                    .values
+                    .iter()
+                    .map(|x| (x - shift).abs())
+                    .fold(0.0, f64::max);
+                let nearer = case
+                    .dense
+                    .iter()
+                    .filter(|d| (*d - shift).abs() < far - case.tie)
+                    .count();
+                assert!(nearer <= modes.values.len(), "shift {shift} count {count}");
+            }
+        }
+        // a band whose ends are exactly eigenvalues holds both end clusters
+        let modes = case.check(Which::Band { lo: v, hi: next });
+        assert_eq!(modes.values.len(), mult + cl[c + 1].1);
+    }
+}
+
+/// A square (2D, Dirichlet): pairs (the symmetric plate's double modes) at the end of Lowest
+/// requests and around shifts.
+#[test]
+fn square_pairs() {
+    let case = Case::new(9, 2, false, 1);
+    let cl = clusters(&case);
+    assert_eq!(
+        cl.iter().take(4).map(|c| c.1).collect::<Vec<_>>(),
+        [1, 2, 1, 2]
+    );
+    for k in 1..=8 {
+        let modes = case.check(Which::Lowest(k));
+        let pairs_cut = cl
+            .iter()
+            .scan(0, |acc, c| {
+                *acc += c.1;
+                Some(*acc)
+            })
+            .find(|acc| *acc >= k)
+            .unwrap();
+        assert_eq!(
+            modes.values.len(),
+            pairs_cut,
+            "Lowest({k}) ends on a whole cluster"
+        );
+    }
+    for (v, _) in cl.iter().take(6).skip(1) {
+        for count in 1..=3 {
+            case.check(Which::Nearest { shift: *v, count });
+        }
+    }
+}
+
+/// Free-free: a three-component field has a triple zero eigenvalue (the rigid-body translations)
+/// and every elastic eigenvalue three times. `Lowest(2)` returns the three zeros, said by
+/// `requested`; zero-energy modes report the backward error, elastic ones the relative residual; a
+/// band from 0 holds the zeros.
+#[test]
+fn rigid_body_cluster_is_completed_and_reports_the_backward_error() {
+    let case = Case::new(4, 3, true, 3);
+    let modes = case.check(Which::Lowest(2));
+    assert_eq!((modes.requested, modes.values.len()), (2, 3));
+    assert!(
+        modes
+            .residual_kinds
+            .iter()
+            .all(|k| *k == ResidualKind::Backward)
+    );
+    assert!(
+        modes.residuals.iter().all(|r| *r < 1e-12),
+        "{:?}",
+        modes.residuals
+    );
+    let modes = case.check(Which::Lowest(4));
+    // the first elastic eigenvalue of the scalar cube is triple, and three components make it 9
+    assert_eq!(
+        modes.values.len(),
+        12,
+        "3 zeros and the first elastic cluster"
+    );
+    assert!(
+        modes.residual_kinds[..3]
+            .iter()
+            .all(|k| *k == ResidualKind::Backward)
+    );
+    assert!(
+        modes.residual_kinds[3..]
+            .iter()
+            .all(|k| *k == ResidualKind::Relative)
+    );
+    let first_elastic = clusters(&case)[1].0;
+    let modes = case.check(Which::Band {
+        lo: 0.0,
+        hi: first_elastic,
+    });
+    assert_eq!(modes.values.len(), 12);
+    // the nearest modes to 0 on a free-free pencil: the shift is on the triple zero
+    case.check(Which::Nearest {
+        shift: 0.0,
+        count: 3,
+    });
+}
+
+/// Requests that cannot be met are errors that say why.
+#[test]
+fn impossible_requests_say_why() {
+    let case = Case::new(4, 2, false, 1);
+    let n = case.dense.len();
+    let e = eigs(
+        &case.k,
+        &case.m,
+        Which::Lowest(n + 1),
+        &EigenOptions::default(),
+    )
+    .unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "{} modes requested, but the model has only {n} free degrees of freedom (at most {n} modes): ask for fewer",
+            n + 1
+        )
+    );
+    let e = eigs(
+        &case.k,
+        &case.m,
+        Which::Band { lo: 2.0, hi: 1.0 },
+        &EigenOptions::default(),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("lower below the upper"), "{e}");
+    // all of them: the whole spectrum
+    let modes = case.check(Which::Lowest(n));
+    assert_eq!(modes.values.len(), n);
+}
