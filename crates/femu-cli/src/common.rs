@@ -35,9 +35,32 @@ impl MeshOptions {
     ///
     /// # Errors
     /// Some but not all of --young, --poisson and --density, naming the missing ones.
-    pub fn model_options(&self, lumped: bool) -> Result<ModelOptions, CliError> {
+    pub fn model_options(
+        &self,
+        path: &Path,
+        lumped: bool,
+        quiet: bool,
+    ) -> Result<ModelOptions, CliError> {
+        let deck = femu::study::load::has_extension(path, &["inp"]);
         let material = match (self.young, self.poisson, self.density) {
             (None, None, None) => None,
+            // a deck has its own materials
+            (y, p, d) if deck => {
+                let given: Vec<&str> = [("--young", y), ("--poisson", p), ("--density", d)]
+                    .iter()
+                    .filter(|(_, v)| v.is_some())
+                    .map(|(n, _)| *n)
+                    .collect();
+                warn(
+                    quiet,
+                    &[format!(
+                        "{}: the deck has its own materials: {} not used",
+                        path.display(),
+                        given.join(", ")
+                    )],
+                );
+                None
+            }
             (Some(young), Some(poisson), Some(density)) => Some(MaterialOptions {
                 young,
                 poisson,
@@ -97,7 +120,7 @@ pub fn load_model(
     pb: &ProgressBar,
 ) -> Result<LoadedModel, CliError> {
     pb.set_message(format!("reading and assembling {}", path.display()));
-    let loaded = femu::study::load::load_model(path, &mesh.model_options(lumped)?)?;
+    let loaded = femu::study::load::load_model(path, &mesh.model_options(path, lumped, quiet)?)?;
     pb.suspend(|| warn(quiet, &loaded.warnings));
     Ok(loaded)
 }

@@ -4,7 +4,9 @@
 //! mode, maximising the total MAC over admissible pairs (MAC at or above the threshold): the
 //! Hungarian algorithm, not a greedy choice, so two modes whose order swapped between model and
 //! test are both paired correctly. A test mode with no admissible partner is reported unpaired,
-//! never forced onto a poor match.
+//! never forced onto a poor match. An optional frequency window makes pairs with a larger
+//! relative frequency error inadmissible; without one, pairs beyond 10 % are accepted on MAC alone
+//! and named in [`Pairing::warnings`].
 
 use crate::CorrelateError;
 use crate::correlation::{eigenvalue_gap_hz, frequency_error};
@@ -16,13 +18,25 @@ use serde::{Deserialize, Serialize};
 pub struct PairingOptions {
     /// Smallest MAC accepted for a pair (default 0.8, the paper's "80 %, typically").
     pub mac_threshold: f64,
+    /// Largest relative frequency error `|f_model - f_test| / f_test` of an admissible pair
+    /// (`None`: MAC alone decides, with a warning for each pair beyond
+    /// [`LARGE_FREQUENCY_ERROR`]).
+    #[serde(default)]
+    pub max_frequency_error: Option<f64>,
 }
 
 impl Default for PairingOptions {
     fn default() -> Self {
-        Self { mac_threshold: 0.8 }
+        Self {
+            mac_threshold: 0.8,
+            max_frequency_error: None,
+        }
     }
 }
+
+/// A pair whose frequency error exceeds this (10 %) was most likely made on MAC alone by a
+/// sparse sensor set that cannot tell two shapes apart: the pairing warns.
+pub const LARGE_FREQUENCY_ERROR: f64 = 0.10;
 
 /// A test mode paired with a model mode.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -52,6 +66,13 @@ pub struct Pairing {
     pub unpaired_test: Vec<usize>,
     /// The threshold used.
     pub mac_threshold: f64,
+    /// The frequency window used (relative), if any.
+    #[serde(default)]
+    pub max_frequency_error: Option<f64>,
+    /// Pairs the reader should check: a frequency error above [`LARGE_FREQUENCY_ERROR`] accepted
+    /// on MAC alone, or a test mode left unpaired by the frequency window only.
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 impl Pairing {
@@ -105,9 +126,21 @@ pub fn pair_modes(
             }
         }
     }
+    let window = options.max_frequency_error;
+    if let Some(w) = window
+        && !(w.is_finite() && w > 0.0)
+    {
+        return Err(CorrelateError::Invalid {
+            what: "frequency window",
+            reason: format!("{w} is not a positive relative error"),
+        });
+    }
+    let in_window = |i: usize, j: usize| {
+        window.is_none_or(|w| frequency_error(f_test[i], f_model[j]).abs() <= w)
+    };
     let weight = |i: usize, j: usize| -> f64 {
         let v = mac[(i, j)];
-        if v >= thr { v } else { 0.0 }
+        if v >= thr && in_window(i, j) { v } else { 0.0 }
     };
     // The Hungarian algorithm needs rows <= columns; transpose otherwise.
     let assignment: Vec<Option<usize>> = if t <= m {
@@ -124,9 +157,10 @@ pub fn pair_modes(
     };
     let mut pairs = Vec::new();
     let mut unpaired_test = Vec::new();
+    let mut warnings = Vec::new();
     for (i, a) in assignment.iter().enumerate() {
         match a {
-            Some(j) if mac[(i, *j)] >= thr => pairs.push(Pair {
+            Some(j) if weight(i, *j) > 0.0 => pairs.push(Pair {
                 test: i,
                 model: *j,
                 mac: mac[(i, *j)],
@@ -135,13 +169,35 @@ pub fn pair_modes(
                 frequency_error: frequency_error(f_test[i], f_model[*j]),
                 eigenvalue_gap: eigenvalue_gap_hz(f_test[i], f_model[*j]),
             }),
-            _ => unpaired_test.push(i),
+            _ => {
+                if window.is_some() && (0..m).any(|j| mac[(i, j)] >= thr) {
+                    warnings.push(format!(
+                        "test mode {} is unpaired: a model mode reaches MAC {thr} with it, but only outside the frequency window of {:.1} %",
+                        i + 1,
+                        100.0 * window.unwrap_or(0.0)
+                    ));
+                }
+                unpaired_test.push(i);
+            }
+        }
+    }
+    for p in &pairs {
+        if window.is_none() && p.frequency_error.abs() > LARGE_FREQUENCY_ERROR {
+            warnings.push(format!(
+                "test mode {} is paired with model mode {} on MAC {:.3} alone at {:+.1} % frequency error: check the pair, or set a frequency window",
+                p.test + 1,
+                p.model + 1,
+                p.mac,
+                100.0 * p.frequency_error
+            ));
         }
     }
     Ok(Pairing {
         pairs,
         unpaired_test,
         mac_threshold: thr,
+        max_frequency_error: window,
+        warnings,
     })
 }
 

@@ -111,6 +111,20 @@ impl fmt::Display for CorrelationReport {
                 self.pairing.mac_threshold
             )?;
         }
+        writeln!(
+            f,
+            "\nerror = (f model - f test) / f test; gap = |lambda model - lambda test| with \
+             lambda = (2 pi f)^2; MAC and MSD (mode shape difference after the modal scale factor) \
+             on the sensor readings; pairs by optimal assignment at MAC >= {}{}.",
+            self.pairing.mac_threshold,
+            self.pairing
+                .max_frequency_error
+                .map(|w| format!(" within {:.1} % frequency error", 100.0 * w))
+                .unwrap_or_default()
+        )?;
+        for w in &self.pairing.warnings {
+            writeln!(f, "warning: {w}")?;
+        }
         Ok(())
     }
 }

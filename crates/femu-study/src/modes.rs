@@ -128,15 +128,11 @@ pub fn solve_modes(
 pub fn notes(modes: &Modes, band: bool) -> Vec<String> {
     let mut notes = Vec::new();
     if !band && modes.values.len() > modes.requested {
-        let f = modes.frequencies_hz();
         notes.push(format!(
-            "{} modes requested, {} returned: modes {}-{} complete a repeated eigenvalue at \
-             {:.6} Hz that the request ended inside (a repeated eigenvalue is returned whole)",
+            "{} modes requested, {} returned: the request ended inside a repeated eigenvalue \
+             (equal to the solver's tie tolerance, 1e-8 relative), which is returned whole",
             modes.requested,
             modes.values.len(),
-            modes.requested + 1,
-            modes.values.len(),
-            f[modes.requested.saturating_sub(1)],
         ));
     }
     let zero: Vec<String> = modes

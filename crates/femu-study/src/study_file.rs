@@ -68,7 +68,15 @@ pub struct StudyFile {
 #[serde(deny_unknown_fields)]
 pub struct PairingSection {
     /// Smallest MAC accepted for a pair.
+    #[serde(default = "default_mac_threshold")]
     pub mac_threshold: f64,
+    /// Largest frequency error of a pair, percent.
+    #[serde(default)]
+    pub max_frequency_error: Option<f64>,
+}
+
+fn default_mac_threshold() -> f64 {
+    0.8
 }
 
 /// `[expansion]`.
@@ -178,6 +186,10 @@ pub fn run_study_file(
     let modes = ModeSet::from_modes(&lowest_for_test(&model, Some(count), n_test)?);
     let pairing = PairingOptions {
         mac_threshold: s.pairing.map_or(0.8, |p| p.mac_threshold),
+        max_frequency_error: s
+            .pairing
+            .and_then(|p| p.max_frequency_error)
+            .map(|p| p / 100.0),
     };
     let method = s.expansion.map_or(Method::Dynamic, |e| e.method);
     progress(&format!("expanding the test shapes ({method})"));

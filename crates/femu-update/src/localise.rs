@@ -141,6 +141,14 @@ impl std::fmt::Display for Localisation {
                 }
             )?;
         }
+        writeln!(
+            f,
+            "\nresidual force: sum over the tuned modes of the squared residual force (K - lambda M) x on \
+             the group's DOFs in the diag(M)^-1 norm; strain energy: e_g = sum_i R_D,i^T K_g R_D,i of \
+             the displacement residual (J for mass-normalised shapes); explained: the fraction (0 to 1) \
+             of the objective a change of the group's stiffness alone removes; density: the group's \
+             share of the ranking divided by its share of the mass (1 = average); ranked by density."
+        )?;
         Ok(())
     }
 }

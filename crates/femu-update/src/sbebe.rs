@@ -158,6 +158,21 @@ impl std::fmt::Display for UpdateResult {
                 th.join(" | ")
             )?;
         }
+        let objective = match self.method {
+            crate::UpdateMethod::SbEbe => {
+                "sum over the tuned modes of ||(K(p) - lambda_i M) x_i||^2 in the diag(M)^-1 norm, \
+                 each weighted by 1 / ||x_i||_M^2 of the first expansion (only its decrease matters)"
+            }
+            crate::UpdateMethod::InverseEigensensitivity => {
+                "sum over the tuned modes of ((lambda_i(p) - lambda_test,i) / lambda_test,i)^2 \
+                 (dimensionless)"
+            }
+        };
+        writeln!(
+            f,
+            "\nobjective: {objective}; k:G is the relative change of group G's stiffness \
+             (-0.20 = 20 % softer), m:G of its mass."
+        )?;
         Ok(())
     }
 }

@@ -26,6 +26,10 @@ pub struct CorrelateArgs {
     /// Smallest MAC accepted for a pair.
     #[arg(long, default_value_t = 0.8)]
     pub mac_threshold: f64,
+    /// Largest frequency error of a pair, percent (default: MAC alone decides, and pairs beyond
+    /// 10 % are named in a warning).
+    #[arg(long, value_name = "PERCENT")]
+    pub max_frequency_error: Option<f64>,
     /// Lumped (diagonal) mass instead of consistent.
     #[arg(long)]
     pub lumped: bool,
@@ -47,6 +51,7 @@ pub fn run(a: &CorrelateArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), Cli
     pb.finish_and_clear();
     let options = PairingOptions {
         mac_threshold: a.mac_threshold,
+        max_frequency_error: a.max_frequency_error.map(|p| p / 100.0),
     };
     let report = correlate(
         &ModeSet::from_modes(&modes),

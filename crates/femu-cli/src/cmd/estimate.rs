@@ -85,16 +85,21 @@ pub fn run(a: &EstimateArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliE
             loaded.sys.k.rows()
         );
         println!(
-            "| test | f test (Hz) | rho_M (s^-2) | rho_2 | a model mode lies in (Hz) | paired model (Hz) |"
+            "| test | f test (Hz) | rho_M (s^-2) | rho_2 (N/m) | a model mode lies in (Hz) | rho_M / gap | paired model (Hz) |"
         );
-        println!("|---|---|---|---|---|---|");
+        println!("|---|---|---|---|---|---|---|");
         let f_model = set.frequencies_hz();
-        for e in &out.assessments {
+        for (e, row) in out.assessments.iter().zip(&out.rows) {
             let pm = e.paired_model.map_or("-".to_string(), |j| {
                 format!("{} ({:.1})", j + 1, f_model[j])
             });
+            let width = if row.informative {
+                format!("{:.1}", row.width_over_gap)
+            } else {
+                format!("{:.0}: too wide to inform", row.width_over_gap)
+            };
             println!(
-                "| {} | {:.1} | {:.4e} | {:.4e} | {:.1} .. {:.1} | {pm} |",
+                "| {} | {:.1} | {:.4e} | {:.4e} | {:.1} .. {:.1} | {width} | {pm} |",
                 e.test + 1,
                 modes_t.frequencies_hz[e.test],
                 e.norms.rho_m,
@@ -102,6 +107,13 @@ pub fn run(a: &EstimateArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliE
                 e.frequency_interval_hz.0,
                 e.frequency_interval_hz.1
             );
+        }
+        println!(
+            "\nrho_M = ||(K - lambda M) x||_M^-1 / ||x||_M: a model eigenvalue lies within rho_M of each test eigenvalue (Theorem 2); rho_2 is the paper's Euclidean ratio; gap = distance to the nearest model eigenvalue; a bound above {} times the gap is too wide to inform.",
+            femu::study::estimate::TOO_WIDE
+        );
+        for w in &out.correlation.pairing.warnings {
+            println!("warning: {w}");
         }
     }
     write_json(a.json.as_deref(), &out.assessments)

@@ -144,6 +144,37 @@ fn pairing_swapped_missing_and_greedy_trap() {
     let p = pair_modes(mac.as_ref(), &ft, &fm, &PairingOptions::default()).unwrap();
     assert_eq!(p.index_pairs(), vec![(0, 1), (1, 0)]);
     assert_eq!(p.unpaired_test, vec![2]);
+    // accepted on MAC alone at +98 % and -49.5 %: both named
+    assert_eq!(
+        p.warnings,
+        [
+            "test mode 1 is paired with model mode 2 on MAC 0.950 alone at +98.0 % frequency error: check the pair, or set a frequency window",
+            "test mode 2 is paired with model mode 1 on MAC 0.970 alone at -49.5 % frequency error: check the pair, or set a frequency window",
+        ]
+    );
+    // a 10 % window makes both pairs inadmissible and says why each test mode is unpaired
+    let windowed = PairingOptions {
+        max_frequency_error: Some(0.1),
+        ..PairingOptions::default()
+    };
+    let w = pair_modes(mac.as_ref(), &ft, &fm, &windowed).unwrap();
+    assert!(w.pairs.is_empty());
+    assert_eq!(w.unpaired_test, vec![0, 1, 2]);
+    assert_eq!(w.warnings.len(), 2, "{:?}", w.warnings);
+    assert!(w.warnings[0].starts_with("test mode 1 is unpaired"));
+    // a window of 100 % admits them again, without warnings
+    let wide = PairingOptions {
+        max_frequency_error: Some(1.0),
+        ..PairingOptions::default()
+    };
+    let w = pair_modes(mac.as_ref(), &ft, &fm, &wide).unwrap();
+    assert_eq!(w.index_pairs(), vec![(0, 1), (1, 0)]);
+    assert!(w.warnings.is_empty());
+    let bad = PairingOptions {
+        max_frequency_error: Some(-0.1),
+        ..PairingOptions::default()
+    };
+    assert!(pair_modes(mac.as_ref(), &ft, &fm, &bad).is_err());
     let pair = p.of_test(0).unwrap();
     assert!((pair.frequency_error - (198.0 - 100.0) / 100.0).abs() < 1e-15);
     assert!(
@@ -175,6 +206,7 @@ fn pairing_swapped_missing_and_greedy_trap() {
         &fm[..2],
         &PairingOptions {
             mac_threshold: 0.89,
+            ..PairingOptions::default()
         },
     )
     .unwrap();
@@ -187,7 +219,10 @@ fn pairing_swapped_missing_and_greedy_trap() {
             trap.as_ref(),
             &ft[..2],
             &fm[..2],
-            &PairingOptions { mac_threshold: 0.0 }
+            &PairingOptions {
+                mac_threshold: 0.0,
+                ..PairingOptions::default()
+            }
         )
         .is_err()
     );

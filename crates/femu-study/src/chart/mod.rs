@@ -27,6 +27,11 @@ pub fn figure1_svg(points: &[StudyPoint]) -> String {
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"12\">"
     );
     let _ = writeln!(s, "<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>");
+    let _ = writeln!(
+        s,
+        "<text x=\"{:.1}\" y=\"18\" text-anchor=\"middle\">rho_M of each test mode's expanded shape against the number of measured nodes</text>",
+        left + pw / 2.0
+    );
     let finite: Vec<&StudyPoint> = points
         .iter()
         .filter(|p| p.rho_m > 0.0 && p.rho_m.is_finite())
@@ -89,7 +94,7 @@ pub fn figure1_svg(points: &[StudyPoint]) -> String {
     }
     let _ = writeln!(
         s,
-        "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">measured nodes</text>",
+        "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">measured nodes (x, y and z at each, removed in Effective Independence order)</text>",
         left + pw / 2.0,
         h - 10.0
     );
@@ -173,15 +178,62 @@ pub fn error_map_svg(loc: &Localisation) -> String {
         .map(|r| (r.name.clone(), r.explained))
         .collect();
     by.sort_by(|a, b| a.0.cmp(&b.0));
-    let (w, h, pad) = (520.0, 260.0, 40.0);
-    let bw = (w - 2.0 * pad) / by.len() as f64;
+    let (w, h, left, right, top, bottom) = (660.0, 300.0, 60.0, 170.0, 34.0, 50.0);
+    let (pw, ph) = (w - left - right, h - top - bottom);
+    let bw = pw / by.len().max(1) as f64;
     let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"11\">\n<text x=\"{}\" y=\"16\" text-anchor=\"middle\">Fraction of the residual each region explains alone</text>\n",
-        w / 2.0
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n<text x=\"{:.1}\" y=\"18\" text-anchor=\"middle\">Fraction of the tuned modes' residual each region's stiffness explains alone</text>\n",
+        left + pw / 2.0
     );
+    // axes with ticks at 0, 0.25, ..., 1
+    let _ = writeln!(
+        s,
+        "<line x1=\"{left}\" y1=\"{top}\" x2=\"{left}\" y2=\"{:.1}\" stroke=\"black\"/>\n<line x1=\"{left}\" y1=\"{:.1}\" x2=\"{:.1}\" y2=\"{:.1}\" stroke=\"black\"/>",
+        top + ph,
+        top + ph,
+        left + pw,
+        top + ph
+    );
+    for k in 0..=4 {
+        let v = k as f64 / 4.0;
+        let y = top + ph - v * ph;
+        let _ = writeln!(
+            s,
+            "<line x1=\"{:.1}\" y1=\"{y:.1}\" x2=\"{left}\" y2=\"{y:.1}\" stroke=\"black\"/>\n<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{v:.2}</text>",
+            left - 4.0,
+            left - 6.0,
+            y + 4.0
+        );
+    }
+    let _ = writeln!(
+        s,
+        "<text x=\"14\" y=\"{:.1}\" transform=\"rotate(-90 14 {:.1})\" text-anchor=\"middle\">explained fraction (0 to 1)</text>\n<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">candidate region (element set)</text>",
+        top + ph / 2.0,
+        top + ph / 2.0,
+        left + pw / 2.0,
+        h - 10.0
+    );
+    // legend
+    for (i, (colour, text)) in [
+        ("#c0392b", "selected for updating"),
+        ("#7f8c8d", "not selected"),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let y = top + 10.0 + 18.0 * i as f64;
+        let _ = writeln!(
+            s,
+            "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"12\" height=\"12\" fill=\"{colour}\"/>\n<text x=\"{:.1}\" y=\"{:.1}\">{text}</text>",
+            left + pw + 12.0,
+            y - 10.0,
+            left + pw + 30.0,
+            y
+        );
+    }
     for (i, (name, v)) in by.iter().enumerate() {
-        let bh = v * (h - 2.0 * pad);
-        let x = pad + i as f64 * bw;
+        let bh = v.clamp(0.0, 1.0) * ph;
+        let x = left + i as f64 * bw;
         let colour = if loc
             .selected
             .iter()
@@ -195,20 +247,20 @@ pub fn error_map_svg(loc: &Localisation) -> String {
             s,
             "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"{:.1}\" height=\"{bh:.1}\" fill=\"{colour}\"/>",
             x + 4.0,
-            h - pad - bh,
-            bw - 8.0
+            top + ph - bh,
+            (bw - 8.0).max(1.0)
         );
         let _ = writeln!(
             s,
-            "<text x=\"{:.1}\" y=\"{}\" text-anchor=\"middle\">{name}</text>",
+            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{name}</text>",
             x + bw / 2.0,
-            h - pad + 14.0
+            top + ph + 14.0
         );
         let _ = writeln!(
             s,
             "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{v:.2}</text>",
             x + bw / 2.0,
-            h - pad - bh - 3.0
+            top + ph - bh - 3.0
         );
     }
     s.push_str("</svg>\n");
