@@ -257,10 +257,10 @@ fn malformed_decks_name_the_line() {
         err.to_string().contains("um.inp:12:") && err.to_string().contains("GOLD"),
         "{err}"
     );
-    // a missing include names the missing file
+    // a missing include names the including line and the missing file
     let err = parse_inp("*INCLUDE, INPUT=nowhere.inp\n", "inc.inp").unwrap_err();
     assert!(
-        matches!(&err, IoError::Io { path, .. } if path.ends_with("nowhere.inp")),
+        matches!(&err, IoError::Parse { path, line: 1, reason } if path.ends_with("inc.inp") && reason.contains("cannot read nowhere.inp")),
         "{err}"
     );
     // a missing file

@@ -1016,7 +1016,8 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             if restarts > self.params.max_restarts {
                 return Err(SparseError::NoConvergence {
                     reason: format!(
-                        "{} of {} eigenpairs converged after {} restarts",
+                        "{} of {} eigenpairs converged after {} restarts: ask for fewer modes, or \
+                         solve nearer the wanted ones (a shift), or allow more restarts",
                         self.values.len(),
                         want,
                         restarts - 1

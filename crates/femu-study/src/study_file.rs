@@ -5,8 +5,10 @@
 //! ```toml
 //! model = "plate.inp"            # or a .msh/.unv with [material] and fix
 //! test = "test.unv"              # .unv, .csv or .json
+//! lenient = false               # true: unknown .inp keywords are warnings
 //! [pairing]
 //! mac_threshold = 0.8
+//! max_frequency_error = 10       # percent (optional frequency window)
 //! [expansion]
 //! method = "dynamic"             # static, dynamic, serep:M, min-residual, mdre
 //! study = true                   # the sensor-removal study (Figure 1)

@@ -294,7 +294,10 @@ fn correlate_and_estimate_reports() {
     assert_eq!(report.comac.len(), layout.len());
     let table = report.to_string();
     assert!(
-        table.starts_with("| test | f test (Hz)") && table.lines().count() == 6,
+        table.starts_with("| test | f test (Hz)")
+            && table.lines().filter(|l| l.starts_with('|')).count() == 6
+            && table.contains("error = (f model - f test) / f test")
+            && !table.contains("warning"),
         "{table}"
     );
     // estimate: every interval holds a model eigenvalue; the rigorous T2 holds.
