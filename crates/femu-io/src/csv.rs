@@ -91,7 +91,16 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
                     ),
                 ));
             }
-            damping_column = h.get(5).is_some_and(|c| c == "damping");
+            if let Some(extra) = h.get(5).filter(|c| c.as_str() != "damping").or(h.get(6)) {
+                let hint = crate::spelling::suggestion(extra, ["damping"], "");
+                return Err(err(
+                    line,
+                    format!(
+                        "unknown column {extra:?}{hint}: the columns are mode,frequency_hz,node,direction,value and optionally damping"
+                    ),
+                ));
+            }
+            damping_column = h.len() == 6;
             header_seen = true;
             continue;
         }
@@ -185,8 +194,17 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
             ));
         }
     }
-    if !header_seen || modes.is_empty() {
-        return Err(err(1, "no test modes in the file".into()));
+    if !header_seen {
+        return Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: "the file is empty: CSV test modes start with the header mode,frequency_hz,node,direction,value[,damping]".into(),
+        });
+    }
+    if modes.is_empty() {
+        return Err(err(
+            1,
+            "no test modes in the file: the header has no rows below it".into(),
+        ));
     }
     let ns = sensors.len();
     let mut shapes = Mat::<f64>::zeros(ns, modes.len());

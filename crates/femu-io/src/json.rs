@@ -72,6 +72,11 @@ pub fn parse_test_json(text: &str, path: impl AsRef<Path>) -> Result<TestData, I
             serde_json::from_value::<Row>(v).map_err(|e| whole(format!("row {}: {e}", i + 1)))
         })
         .collect::<Result<Vec<Row>, IoError>>()?;
+    if rows.is_empty() {
+        return Err(whole(
+            "no test modes in the file: the list of rows is empty".into(),
+        ));
+    }
     // the CSV reader holds every check: write the rows as CSV, map its line back to the row
     let mut csv = String::from("mode,frequency_hz,node,direction,value,damping\n");
     for r in &rows {
