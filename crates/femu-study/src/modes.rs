@@ -130,7 +130,7 @@ pub fn notes(modes: &Modes, band: bool) -> Vec<String> {
     if !band && modes.values.len() > modes.requested {
         notes.push(format!(
             "{} modes requested, {} returned: the request ended inside a repeated eigenvalue \
-             (equal to the solver's tie tolerance, 1e-8 relative), which is returned whole",
+             (eigenvalues equal within the solver's tie tolerance), which is returned whole",
             modes.requested,
             modes.values.len(),
         ));
