@@ -344,6 +344,45 @@ impl<'a> Pencil<'a> {
         self.symbolic.ldlt_values(self.k, &values, "K - sigma M")
     }
 
+    /// `LDL^T` of `K - sigma M` with row and column `pinned` replaced by those of the identity
+    /// (scaled by `|K_pp|`): the matrix of Nelson's method for eigenvector derivatives, which is
+    /// nonsingular at a simple eigenvalue `sigma` when `pinned` is a DOF where the eigenvector is
+    /// large. Same pattern, same symbolic analysis.
+    ///
+    /// # Errors
+    /// [`SparseError::DimensionMismatch`] for `pinned` out of range, [`SparseError::Singular`]
+    /// when the pinned matrix is still singular (a repeated eigenvalue).
+    pub fn factor_shifted_pinned(&self, sigma: f64, pinned: usize) -> Result<Ldlt, SparseError> {
+        let n = self.dim();
+        if pinned >= n {
+            return Err(SparseError::DimensionMismatch {
+                what: "pinned DOF against the dimension",
+                expected: n,
+                got: pinned,
+            });
+        }
+        let mut values = self.k.data().to_vec();
+        for (pm, pk) in self.m_in_k.iter().enumerate() {
+            values[*pk] -= sigma * self.m.data()[pm];
+        }
+        let scale = self
+            .k
+            .get(pinned, pinned)
+            .map_or(1.0, |v| v.abs().max(f64::MIN_POSITIVE));
+        let p = self.k.indptr();
+        let p = p.raw_storage();
+        for c in 0..n {
+            for k in p[c]..p[c + 1] {
+                let r = self.k.indices()[k];
+                if r == pinned || c == pinned {
+                    values[k] = if r == c { scale } else { 0.0 };
+                }
+            }
+        }
+        self.symbolic
+            .ldlt_values(self.k, &values, "K - lambda M (pinned)")
+    }
+
     /// The number of eigenvalues below `sigma` (Sturm count by inertia).
     ///
     /// # Errors

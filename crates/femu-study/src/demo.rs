@@ -28,8 +28,8 @@ use femu_correlate::{CorrelationReport, PairingOptions, Sensor, SensorLayout, Te
 use femu_fem::prelude::*;
 use femu_io::uff::{UffMode, UffNode, UffUnits, Universal};
 use femu_update::{
-    Corrections, Localisation, ParameterCheck, TruthCheck, UpdateMethod, UpdateModel, UpdateResult,
-    model_modes,
+    Corrections, Localisation, ParameterCheck, TestUncertainty, TruthCheck, UpdateMethod,
+    UpdateModel, UpdateResult, model_modes,
 };
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -104,8 +104,12 @@ pub struct DemoReport {
     pub sbebe: UpdateResult,
     /// Inverse eigensensitivity on the same regions.
     pub eigensensitivity: UpdateResult,
-    /// The held-out check of the SB-EBE model.
+    /// The held-out check of the SB-EBE model, judged.
     pub truth_check: TruthCheck,
+    /// Before updating, what the selected regions can reach.
+    pub reach: crate::reach::Reach,
+    /// The nominal model's discretisation error (the same mesh with quadratic elements).
+    pub discretisation: Option<crate::discretisation::DiscretisationEstimate>,
     /// The true correction and its region.
     pub true_parameter: (String, f64),
     /// Seconds per step.
@@ -317,7 +321,15 @@ pub fn run_demo(
     let update_options = UpdateStudyOptions {
         method: UpdateMethod::SbEbe,
         compare: true,
+        // the comparison fits frequencies and shapes
+        shapes: true,
         check_modes: 6 + opts.modes + 6,
+        // the demo knows its test's noise: standard deviations of the uniform noise it adds
+        uncertainty: TestUncertainty {
+            frequency: opts.frequency_noise.max(1e-6),
+            shape: opts.shape_noise.max(1e-6),
+            given: true,
+        },
         ..UpdateStudyOptions::new(opts.tuned, opts.modes)
     };
     let study = localise_update_check(
@@ -341,6 +353,8 @@ pub fn run_demo(
         .comparison
         .ok_or_else(|| StudyError::invalid("demo", "no comparison run"))?;
     let mut truth_check = study.truth_check;
+    let discretisation = study.discretisation;
+    let reach = study.reach;
     for (name, v) in sbebe.names.iter().zip(&sbebe.theta) {
         let t = if name == "k:r3" { opts.truth } else { 0.0 };
         truth_check.parameters.push(ParameterCheck {
@@ -399,6 +413,8 @@ pub fn run_demo(
         sbebe,
         eigensensitivity,
         truth_check,
+        reach,
+        discretisation,
         true_parameter: ("k:r3".into(), opts.truth),
         timings,
         files: Vec::new(),
@@ -463,7 +479,18 @@ fn markdown(r: &DemoReport, o: &DemoOptions, test: &TestModes) -> String {
         "## Where is the model wrong?\n\n![error map](error_map.png)\n\n{}\nElement map: cell data of `plate.vtu` (open in ParaView).\n",
         r.localisation
     );
-    let _ = writeln!(s, "## Updating\n\n{}\n{}", r.sbebe, r.eigensensitivity);
+    let _ = writeln!(
+        s,
+        "## Updating\n\n{}\n{}\n{}",
+        r.reach, r.sbebe, r.eigensensitivity
+    );
+    if let Some(d) = &r.discretisation {
+        let _ = writeln!(
+            s,
+            "## The model's own error\n\n{}",
+            crate::discretisation::table(d, &r.truth_check)
+        );
+    }
     let _ = writeln!(
         s,
         "## Does the updated model tell the truth?\n\n{}",

@@ -28,11 +28,13 @@
 
 pub mod chart;
 pub mod demo;
+pub mod discretisation;
 mod error;
 pub mod estimate;
 pub mod expand;
 pub mod load;
 pub mod modes;
+pub mod reach;
 pub mod removal;
 pub mod report;
 pub mod study_file;

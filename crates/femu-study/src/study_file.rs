@@ -16,6 +16,9 @@
 //! sets = ["r0", "r1", "r2", "r3"]
 //! tuned = 4
 //! method = "sbebe"               # or "ies"
+//! shapes = true                  # ies: fit the shapes too
+//! frequency_uncertainty = 0.1    # percent, one standard deviation
+//! shape_uncertainty = 1          # percent of each mode's largest reading
 //! ```
 //!
 //! Paths in the file are relative to the file. Unknown keys are errors with their line.
@@ -107,6 +110,25 @@ pub struct UpdateSection {
     /// Update every candidate set instead of the localised ones.
     #[serde(default)]
     pub all: bool,
+    /// The test's frequency uncertainty, percent (default 0.1, assumed and said so).
+    #[serde(default)]
+    pub frequency_uncertainty: Option<f64>,
+    /// The test's shape uncertainty, percent of each mode's largest reading (default 1).
+    #[serde(default)]
+    pub shape_uncertainty: Option<f64>,
+    /// Inverse eigensensitivity fits the shapes too.
+    #[serde(default)]
+    pub shapes: bool,
+    /// SB-EBE's test-error weight (default 1e-3).
+    #[serde(default)]
+    pub test_error: Option<f64>,
+    /// Estimate the model's discretisation error (default true).
+    #[serde(default = "default_true")]
+    pub discretisation: bool,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 fn default_update_method() -> UpdateMethod {
@@ -267,10 +289,18 @@ pub fn run_study_file(
             progress("localising and updating");
             let names = resolve_sets(&model, &u.sets)?;
             let tuned = u.tuned.unwrap_or((2 * n_test).div_ceil(3)).min(n_test);
+            let defaults = UpdateStudyOptions::new(tuned, n_test);
             let opts = UpdateStudyOptions {
                 method: u.method,
                 all: u.all,
-                ..UpdateStudyOptions::new(tuned, n_test)
+                shapes: u.shapes,
+                uncertainty: femu_update::TestUncertainty::from_percent(
+                    u.frequency_uncertainty,
+                    u.shape_uncertainty,
+                )?,
+                test_error: u.test_error.or(defaults.test_error),
+                discretisation: u.discretisation,
+                ..defaults
             };
             let nominal = (!s.lumped).then_some((&model.asm, &model.sys));
             let names: Vec<&str> = names.iter().map(|s| s.as_str()).collect();

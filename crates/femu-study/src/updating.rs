@@ -3,15 +3,18 @@
 //! and check the updated model on held-out test modes it was not tuned on (the truth check).
 
 use crate::StudyError;
+use crate::discretisation::{DiscretisationEstimate, estimate as estimate_discretisation};
 use crate::load::LoadedModel;
+use crate::reach::{Reach, reach};
 use femu_correlate::{ModeSet, SensorLayout, TestModes};
+use femu_correlate::{PairingOptions, correlate};
 use femu_fem::assembly::{Assembler, MassKind, SystemMatrices};
 use femu_fem::groups::ParameterGroups;
 use femu_fem::model::Model;
 use femu_update::{
-    Corrections, Iteration, Localisation, SbebeOptions, SelectionRule, TruthCheck, UpdateMethod,
-    UpdateModel, UpdateResult, inverse_eigensensitivity, localise_expanded, model_modes, sb_ebe,
-    truth_check,
+    Corrections, Iteration, JudgeInputs, Localisation, ParameterFinding, SbebeOptions,
+    SelectionRule, SensitivityOptions, TestUncertainty, TruthCheck, UpdateMethod, UpdateModel,
+    UpdateResult, inverse_eigensensitivity, localise_expanded, model_modes, sb_ebe, truth_check,
 };
 use serde::Serialize;
 
@@ -31,6 +34,13 @@ pub struct UpdateStudyOptions {
     pub compare: bool,
     /// Model modes computed before and after updating for the truth check.
     pub check_modes: usize,
+    /// The test's uncertainty: the truth check's tolerance, inverse eigensensitivity's weights.
+    pub uncertainty: TestUncertainty,
+    /// Inverse eigensensitivity fits the shapes at the sensors too (eigenvector derivatives).
+    pub shapes: bool,
+    /// Estimate the model's discretisation error (the same mesh with quadratic elements) and
+    /// weigh the verdict with it (default true; skipped for quadratic meshes).
+    pub discretisation: bool,
 }
 
 impl UpdateStudyOptions {
@@ -44,6 +54,9 @@ impl UpdateStudyOptions {
             test_error: Some(1e-3),
             compare: false,
             check_modes: test_modes + 10,
+            uncertainty: TestUncertainty::default(),
+            shapes: false,
+            discretisation: true,
         }
     }
 }
@@ -61,8 +74,14 @@ pub struct UpdateStudy {
     pub result: UpdateResult,
     /// The other method on the same sets, when asked for.
     pub comparison: Option<UpdateResult>,
-    /// Held-out check of the updated model.
+    /// Held-out check of the updated model, judged against the test's uncertainty, the
+    /// discretisation error and the parameters' plausibility.
     pub truth_check: TruthCheck,
+    /// The model's discretisation error, when estimated.
+    pub discretisation: Option<DiscretisationEstimate>,
+    /// Before updating, what the chosen parameters can reach (best residual in their span and
+    /// the Theorem 2 interval that follows on each tuned mode).
+    pub reach: Reach,
     /// The updated model's modes (those of the check).
     #[serde(skip)]
     pub updated_modes: ModeSet,
@@ -132,6 +151,17 @@ pub fn localise_update_check(
             .map(|g| candidates[*g])
             .collect()
     };
+    let chosen_groups: Vec<usize> = chosen
+        .iter()
+        .filter_map(|c| candidates.iter().position(|k| k == c))
+        .collect();
+    let reach = reach(
+        &localisation,
+        &chosen_groups,
+        &mut build(&chosen)?,
+        layout,
+        &tuned,
+    )?;
     let computed;
     let before = match before {
         Some(b) => b,
@@ -153,7 +183,12 @@ pub fn localise_update_check(
                 sb_ebe(&mut up, layout, &tuned, &o, log)?
             }
             UpdateMethod::InverseEigensensitivity => {
-                inverse_eigensensitivity(&mut up, layout, &tuned, &Default::default(), log)?
+                let o = SensitivityOptions {
+                    shapes: options.shapes,
+                    uncertainty: options.uncertainty,
+                    ..Default::default()
+                };
+                inverse_eigensensitivity(&mut up, layout, &tuned, &o, log)?
             }
         };
         Ok((up, result))
@@ -161,7 +196,7 @@ pub fn localise_update_check(
     let (mut up, result) = run(options.method, &mut progress)?;
     let after = model_modes(&mut up, options.check_modes, &Default::default())?;
     let tuned_idx: Vec<usize> = (0..options.tuned).collect();
-    let truth_check = truth_check(
+    let mut truth_check = truth_check(
         before,
         &after,
         test,
@@ -169,6 +204,59 @@ pub fn localise_update_check(
         &tuned_idx,
         &Default::default(),
     )?;
+    let discretisation = if options.discretisation {
+        estimate_discretisation(model, before)?
+    } else {
+        None
+    };
+    // the discretisation error of the model mode each test mode pairs with before updating
+    let per_test: Vec<Option<f64>> = match &discretisation {
+        Some(d) => {
+            let pairing = correlate(before, test, layout, &PairingOptions::default())?.pairing;
+            (0..test.len())
+                .map(|t| {
+                    pairing
+                        .of_test(t)
+                        .and_then(|p| d.relative.get(p.model).copied().flatten())
+                })
+                .collect()
+        }
+        None => Vec::new(),
+    };
+    let parameters = up
+        .parameters()
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let set = chosen[p.group];
+            let group = candidates.iter().position(|c| *c == set);
+            ParameterFinding {
+                name: p.name.clone(),
+                value: result.theta[k],
+                bounds: (p.lower, p.upper),
+                half_width_95: result
+                    .confidence
+                    .as_ref()
+                    .and_then(|c| c.half_width_95.get(k).copied()),
+                evidence: group.is_some_and(|g| localisation.selected.contains(&g)),
+            }
+        })
+        .collect();
+    truth_check.judge(&JudgeInputs {
+        uncertainty: options.uncertainty,
+        discretisation: per_test,
+        parameters,
+    });
+    if !reach.can_explain() {
+        truth_check.judgement.reasons.insert(
+            0,
+            format!(
+                "before updating: the best fit of {} removes only {:.0} % of the expanded residual: most of it lies outside these parameters' span",
+                chosen.join(", "),
+                100.0 * reach.explained
+            ),
+        );
+    }
     let comparison = if options.compare {
         let other = match options.method {
             UpdateMethod::SbEbe => UpdateMethod::InverseEigensensitivity,
@@ -185,6 +273,8 @@ pub fn localise_update_check(
         result,
         comparison,
         truth_check,
+        discretisation,
+        reach,
         updated_modes: after,
     })
 }

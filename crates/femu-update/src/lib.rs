@@ -42,6 +42,7 @@
 //! assert!((result.theta[1] + 0.2).abs() < 1e-4, "{result}");
 //! ```
 
+pub mod derivatives;
 mod error;
 pub mod localise;
 pub mod lsq;
@@ -50,20 +51,26 @@ pub mod sbebe;
 pub mod sensitivity;
 pub mod truth;
 
+pub use derivatives::{EigenpairDerivatives, eigenpair_derivatives};
 pub use error::UpdateError;
 pub use localise::{Indicator, Localisation, SelectionRule, localise, localise_expanded};
 pub use lsq::{MassGuard, UpdateOptions};
 pub use problem::{Corrections, Parameter, UpdateModel};
-pub use sbebe::{Iteration, SbebeOptions, StopReason, UpdateMethod, UpdateResult, sb_ebe};
-pub use sensitivity::{SensitivityOptions, inverse_eigensensitivity, model_modes};
-pub use truth::{ModeCheck, ParameterCheck, TruthCheck, truth_check};
+pub use sbebe::{
+    Confidence, Iteration, SbebeOptions, StopReason, UpdateMethod, UpdateResult, sb_ebe,
+};
+pub use sensitivity::{SensitivityOptions, TestUncertainty, inverse_eigensensitivity, model_modes};
+pub use truth::{
+    JudgeInputs, Judgement, ModeCheck, ParameterCheck, ParameterFinding, TruthCheck, Verdict,
+    truth_check,
+};
 
 /// The types most programs need.
 pub mod prelude {
     pub use crate::{
         Corrections, Indicator, Localisation, MassGuard, SbebeOptions, SelectionRule,
-        SensitivityOptions, StopReason, TruthCheck, UpdateError, UpdateMethod, UpdateModel,
-        UpdateOptions, UpdateResult, inverse_eigensensitivity, localise, localise_expanded,
-        model_modes, sb_ebe, truth_check,
+        SensitivityOptions, StopReason, TestUncertainty, TruthCheck, UpdateError, UpdateMethod,
+        UpdateModel, UpdateOptions, UpdateResult, inverse_eigensensitivity, localise,
+        localise_expanded, model_modes, sb_ebe, truth_check,
     };
 }

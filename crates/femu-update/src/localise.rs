@@ -93,9 +93,68 @@ pub struct Localisation {
     pub selected: Vec<usize>,
     /// The rule used.
     pub rule: SelectionRule,
+    /// The normal equations of the explained residual over every group (projected columns):
+    /// `(B^T W B, B^T W r, r^T W r)`, for [`Localisation::joint_fit`]; present after
+    /// [`localise_expanded`].
+    #[serde(skip)]
+    pub normal: Option<(Vec<Vec<f64>>, Vec<f64>, f64)>,
 }
 
 impl Localisation {
+    /// The least-squares stiffness factors of `groups` together, at the expansion of the
+    /// localisation (the first Gauss-Newton step of the expanded objective), and the fraction of
+    /// the objective they remove; `None` without the normal equations.
+    pub fn joint_fit(&self, groups: &[usize]) -> Option<(Vec<f64>, f64)> {
+        let (gram, num, objective) = self.normal.as_ref()?;
+        let p = groups.len();
+        // [G | -num] reduced by Gauss-Jordan with partial pivoting (p is small)
+        let mut m: Vec<Vec<f64>> = groups
+            .iter()
+            .map(|&a| {
+                let mut row: Vec<f64> = groups.iter().map(|&b| gram[a][b]).collect();
+                row.push(-num[a]);
+                row
+            })
+            .collect();
+        let tiny = 1e-14 * groups.iter().map(|&a| gram[a][a]).fold(0.0, f64::max);
+        for c in 0..p {
+            let piv = (c..p).max_by(|x, y| m[*x][c].abs().total_cmp(&m[*y][c].abs()))?;
+            m.swap(c, piv);
+            let d = m[c][c];
+            if d.abs() <= tiny {
+                continue;
+            }
+            let pivot = m[c].clone();
+            for (r, row) in m.iter_mut().enumerate() {
+                if r != c {
+                    let f = row[c] / d;
+                    row.iter_mut().zip(&pivot).for_each(|(v, w)| *v -= f * w);
+                }
+            }
+        }
+        let theta: Vec<f64> = (0..p)
+            .map(|a| {
+                if m[a][a].abs() > tiny {
+                    m[a][p] / m[a][a]
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        // removed = -theta . num (the decrease of the quadratic at its minimum)
+        let removed: f64 = -groups
+            .iter()
+            .zip(&theta)
+            .map(|(&a, t)| t * num[a])
+            .sum::<f64>();
+        let explained = if *objective > 0.0 {
+            (removed / objective).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        Some((theta, explained))
+    }
+
     /// The density of each group in group order (for VTK cell data and plots).
     pub fn density_by_group(&self, groups: usize) -> Vec<f64> {
         let mut d = vec![0.0; groups];
@@ -302,10 +361,27 @@ pub fn localise_expanded(
     let ones = vec![1.0; n];
     let (mut energy, mut force) = (vec![0.0; groups], vec![0.0; groups]);
     let (mut num, mut den, mut objective) = (vec![0.0; groups], vec![0.0; groups], 0.0);
+    let mut gram = vec![vec![0.0; groups]; groups];
     for i in 0..lambdas.len() {
         let ri: Vec<f64> = r_f.col(i).iter().copied().collect();
         objective += ri.iter().zip(&w).map(|(r, w)| r * r * w).sum::<f64>();
         let (b, b2) = &projected[i];
+        for g in 0..groups {
+            for h in g..groups {
+                let mut v = 0.0;
+                for d in 0..n {
+                    v += b[(d, g)] * b[(d, h)] * w[d];
+                }
+                for t in 0..b2.nrows() {
+                    v += b2[(t, g)] * b2[(t, h)];
+                }
+                v *= scale[i] * scale[i];
+                gram[g][h] += v;
+                if h != g {
+                    gram[h][g] += v;
+                }
+            }
+        }
         objective += scale[i] * scale[i] * r2.col(i).iter().map(|v| v * v).sum::<f64>();
         for g in 0..groups {
             let (mut bn, mut bb) = (0.0, 0.0);
@@ -335,7 +411,9 @@ pub fn localise_expanded(
     let explained = (0..groups)
         .map(|g| explained_fraction(num[g], den[g], objective))
         .collect();
-    Ok(rank(up, energy, force, explained, rule))
+    let mut loc = rank(up, energy, force, explained, rule);
+    loc.normal = Some((gram, num, objective));
+    Ok(loc)
 }
 
 fn rank(
@@ -383,6 +461,7 @@ fn rank(
         ranking,
         selected,
         rule: rule.clone(),
+        normal: None,
     }
 }
 

@@ -53,6 +53,26 @@ pub struct UpdateResult {
     pub converged: bool,
     /// Why the iteration stopped.
     pub stop_reason: StopReason,
+    /// The parameters' uncertainty from the test's (inverse eigensensitivity), when computed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub confidence: Option<Confidence>,
+}
+
+/// Linearised confidence of identified parameters: with `J` the Jacobian of the residuals
+/// weighted by the test's uncertainty at the solution, `Cov = s^2 (J^T J)^-1` with
+/// `s^2 = max(1, chi^2 / (m - p))`: the test's uncertainty, inflated when the residual left is
+/// larger than it explains (model-form error).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Confidence {
+    /// Half-widths of the 95 % intervals (`1.96 sqrt(Cov_kk)`), `theta` order; infinite for a
+    /// parameter the data do not determine.
+    pub half_width_95: Vec<f64>,
+    /// `chi^2`: the weighted residual left, `sum r_i^2`.
+    pub chi_square: f64,
+    /// Residual rows `m` (frequencies, and shape readings when fitted).
+    pub residuals: usize,
+    /// `s^2` applied (1 when the residual left is within the test's uncertainty).
+    pub scale: f64,
 }
 
 /// An updating method: SB-EBE ([`sb_ebe`]) or inverse eigensensitivity
@@ -164,10 +184,32 @@ impl std::fmt::Display for UpdateResult {
                  each weighted by 1 / ||x_i||_M^2 of the first expansion (only its decrease matters)"
             }
             crate::UpdateMethod::InverseEigensensitivity => {
-                "sum over the tuned modes of ((lambda_i(p) - lambda_test,i) / lambda_test,i)^2 \
-                 (dimensionless)"
+                "chi-square: the sum of squared residuals in units of the test's uncertainty \
+                 (relative eigenvalue errors over 2 sigma_f, and with shapes the scaled model \
+                 readings minus the test's over sigma_s)"
             }
         };
+        if let Some(c) = &self.confidence {
+            let w: Vec<String> = c
+                .half_width_95
+                .iter()
+                .map(|v| {
+                    if v.is_finite() {
+                        format!("+-{v:.4}")
+                    } else {
+                        "not determined".into()
+                    }
+                })
+                .collect();
+            writeln!(f, "| 95 % interval | | {} |", w.join(" | "))?;
+            writeln!(
+                f,
+                "\nchi-square {:.3e} over {} residuals; intervals scaled by {:.3}",
+                c.chi_square,
+                c.residuals,
+                c.scale.sqrt()
+            )?;
+        }
         writeln!(
             f,
             "\nobjective: {objective}; k:G is the relative change of group G's stiffness \
@@ -429,6 +471,7 @@ pub fn sb_ebe(
         }
     }
     Ok(UpdateResult {
+        confidence: None,
         method: UpdateMethod::SbEbe,
         names: up.parameters().iter().map(|p| p.name.clone()).collect(),
         theta,

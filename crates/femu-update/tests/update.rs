@@ -124,6 +124,21 @@ fn stiffness_loss_noise_free() {
         "{loc}"
     );
     assert_eq!(loc.selected, vec![3], "{loc}");
+    // the joint fit of one group is that group's explained fraction (num^2 / (den objective));
+    // with every group the fraction can only grow, and the fit of r3 alone finds about -0.3
+    for g in &loc.ranking {
+        let (_, e) = loc.joint_fit(&[g.group]).unwrap();
+        assert!(
+            (e - g.explained).abs() < 1e-9,
+            "{}: {e} vs {}",
+            g.name,
+            g.explained
+        );
+    }
+    let all: Vec<usize> = (0..REGIONS).collect();
+    assert!(loc.joint_fit(&all).unwrap().1 >= loc.ranking[0].explained - 1e-12);
+    let (theta, _) = loc.joint_fit(&[3]).unwrap();
+    assert!((theta[0] + 0.3).abs() < 0.1, "{theta:?}");
     let before = model_modes(&mut up, 16, &Default::default()).unwrap();
     let mut iterations = 0;
     let result = sb_ebe(&mut up, &layout, &tuned, &Default::default(), |_| {

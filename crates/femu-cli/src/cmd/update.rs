@@ -33,6 +33,25 @@ pub struct UpdateArgs {
     /// Update every candidate set instead of the localised ones.
     #[arg(long)]
     pub all: bool,
+    /// The test's frequency uncertainty, percent (one standard deviation; default: 0.1 %,
+    /// assumed and said so). The truth check's tolerance is three of it.
+    #[arg(long, value_name = "PERCENT")]
+    pub frequency_uncertainty: Option<f64>,
+    /// The test's shape uncertainty, percent of each mode's largest reading (default: 1 %).
+    #[arg(long, value_name = "PERCENT")]
+    pub shape_uncertainty: Option<f64>,
+    /// Inverse eigensensitivity fits the shapes at the sensors as well as the frequencies
+    /// (eigenvector derivatives); recommended when the model is not the structure.
+    #[arg(long)]
+    pub shapes: bool,
+    /// SB-EBE's trust in the measured shapes: the weight of the test-error term of the expansion
+    /// (default 1e-3; smaller trusts the test more).
+    #[arg(long, value_name = "WEIGHT")]
+    pub test_error: Option<f64>,
+    /// Skip the estimate of the model's discretisation error (the same mesh with quadratic
+    /// elements, solved once).
+    #[arg(long)]
+    pub no_discretisation: bool,
     /// Write localisation, iterations and the held-out check as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -53,10 +72,23 @@ pub fn run(a: &UpdateArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliErr
     }
     let names = resolve_sets(&loaded, &a.sets)?;
     let names: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+    if a.shapes && a.method != UpdateMethod::InverseEigensensitivity {
+        crate::common::warn(
+            quiet,
+            &["--shapes applies to --method ies: SB-EBE always uses the shapes".into()],
+        );
+    }
+    let uncertainty =
+        femu::update::TestUncertainty::from_percent(a.frequency_uncertainty, a.shape_uncertainty)?;
+    let defaults = UpdateStudyOptions::new(tuned, n_test);
     let options = UpdateStudyOptions {
         method: a.method,
         all: a.all,
-        ..UpdateStudyOptions::new(tuned, n_test)
+        shapes: a.shapes,
+        uncertainty,
+        test_error: a.test_error.or(defaults.test_error),
+        discretisation: !a.no_discretisation,
+        ..defaults
     };
     pb.set_message("localising and updating");
     let study = localise_update_check(
@@ -81,7 +113,14 @@ pub fn run(a: &UpdateArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliErr
             names.len(),
             study.localisation
         );
+        println!("{}", study.reach);
         println!("{}", study.result);
+        if let Some(d) = &study.discretisation {
+            println!(
+                "{}",
+                femu::study::discretisation::table(d, &study.truth_check)
+            );
+        }
         println!("{}", study.truth_check);
     }
     write_json(a.json.as_deref(), &study)

@@ -1,0 +1,167 @@
+//! The model's own error: how far its mesh is from converged, estimated by solving the same mesh
+//! with quadratic elements (every linear element gets straight mid-edge nodes; same materials,
+//! same constraints) and pairing the modes by MAC at the original nodes. For a linear mesh that
+//! locks in bending (one or two hex8 through a plate's thickness) the difference is the error that
+//! updating would otherwise absorb into its parameters; `docs/MATH.md`, "The truth check".
+
+use crate::StudyError;
+use femu_correlate::correlation::mac_matrix;
+use femu_correlate::{ModeSet, PairingOptions, Sensor, SensorLayout, pair_modes};
+use femu_fem::assembly::{Assembler, MassKind};
+use femu_fem::generate::to_quadratic;
+use femu_fem::model::Model;
+use femu_sparse::eigen::{EigenOptions, Which, eigs};
+use serde::Serialize;
+
+/// The discretisation error of a model's modes.
+#[derive(Debug, Clone, Serialize)]
+pub struct DiscretisationEstimate {
+    /// What the modes were compared with.
+    pub reference: String,
+    /// DOFs of the reference.
+    pub reference_dofs: usize,
+    /// Per model mode (in the order of the modes given): `(f_model - f_reference) / f_reference`,
+    /// `None` when no reference mode pairs with it (MAC below 0.8).
+    pub relative: Vec<Option<f64>>,
+    /// The model modes' frequencies, Hz (the same order).
+    pub frequencies_hz: Vec<f64>,
+}
+
+/// Estimates the discretisation error of the first modes of `model` (`modes`, the model's own
+/// modes, consistent mass). `None` when the mesh is already quadratic (nothing cheaper to compare
+/// with; said by the callers).
+///
+/// # Errors
+/// Building or solving the quadratic model.
+pub fn estimate(
+    model: &Model,
+    modes: &ModeSet,
+) -> Result<Option<DiscretisationEstimate>, StudyError> {
+    let mesh = model.mesh();
+    if mesh.elements().all(|e| e.kind.is_quadratic()) {
+        return Ok(None);
+    }
+    let qmesh = to_quadratic(mesh);
+    let mut q = Model::new(qmesh)?;
+    // materials element by element, grouped by material
+    let mut by_material: Vec<(femu_fem::material::Material, Vec<u64>)> = Vec::new();
+    for e in 0..mesh.element_count() {
+        let m = model.material_of(e)?;
+        let id = mesh.element(e).id;
+        match by_material.iter_mut().find(|(d, _)| d == m) {
+            Some(d) => d.1.push(id),
+            None => by_material.push((m.clone(), vec![id])),
+        }
+    }
+    let mut qm = q.mesh().clone();
+    for (i, (_, ids)) in by_material.iter().enumerate() {
+        qm.add_element_set(format!("__femu_discretisation_{i}"), ids)?;
+    }
+    q = Model::new(qm)?;
+    for (i, (m, _)) in by_material.iter().enumerate() {
+        q.set_material(Some(&format!("__femu_discretisation_{i}")), m.clone())?;
+    }
+    // constraints: the same nodes, and a mid-edge node where both ends of its edge are fixed
+    let fixed: std::collections::HashSet<(u64, usize)> = model
+        .fixed_dofs()
+        .map(|(n, c)| (mesh.node_id(n), c))
+        .collect();
+    let mut extra: Vec<(u64, usize)> = Vec::new();
+    {
+        let qmesh = q.mesh();
+        for el in qmesh.elements() {
+            let corners = el.kind.num_corners();
+            for (k, e) in el.kind.edges().iter().enumerate() {
+                let (a, b) = (qmesh.node_id(el.nodes[e[0]]), qmesh.node_id(el.nodes[e[1]]));
+                let mid = qmesh.node_id(el.nodes[corners + k]);
+                for c in 0..3 {
+                    if fixed.contains(&(a, c)) && fixed.contains(&(b, c)) {
+                        extra.push((mid, c));
+                    }
+                }
+            }
+        }
+    }
+    for (id, c) in fixed.iter().chain(&extra) {
+        q.fix_nodes(&[*id], &[*c])?;
+    }
+    let asm = Assembler::new(&q)?;
+    let sys = asm.assemble(&q, MassKind::Consistent)?;
+    let count = (modes.len() + 4).min(sys.k.rows());
+    let reference = eigs(
+        &sys.k,
+        &sys.m,
+        Which::Lowest(count),
+        &EigenOptions::default(),
+    )?;
+    let reference = ModeSet::from_modes(&reference);
+    // pair on the original nodes (the model's DOFs and the reference's, same ids), triaxial
+    let nodes: Vec<u64> = (0..mesh.node_count()).map(|i| mesh.node_id(i)).collect();
+    let model_dofs = model.dof_map();
+    let sensors: Vec<Sensor> = nodes
+        .iter()
+        .flat_map(|id| (0..3).map(move |c| Sensor::axis(*id, c)))
+        .filter(|s| {
+            let c = (0..3).find(|c| s.direction[*c] != 0.0).unwrap_or(0);
+            !fixed.contains(&(s.node, c))
+        })
+        .collect();
+    let on_model = SensorLayout::new(mesh, &model_dofs, sensors.clone())?;
+    let on_reference = SensorLayout::new(q.mesh(), &sys.dofs, sensors)?;
+    let a = on_model.measure_all(modes.shapes.as_ref())?;
+    let b = on_reference.measure_all(reference.shapes.as_ref())?;
+    let mac = mac_matrix(a.as_ref(), b.as_ref())?;
+    let f_model = modes.frequencies_hz();
+    let f_ref = reference.frequencies_hz();
+    let pairing = pair_modes(mac.as_ref(), &f_model, &f_ref, &PairingOptions::default())?;
+    // rigid-body modes (zero frequency) have no relative error
+    let relative = (0..modes.len())
+        .map(|j| {
+            pairing
+                .of_test(j)
+                .filter(|p| p.f_test > 1e-6 * f_ref.last().copied().unwrap_or(1.0))
+                .map(|p| (p.f_test - p.f_model) / p.f_model)
+        })
+        .collect();
+    let f_model = modes.frequencies_hz();
+    Ok(Some(DiscretisationEstimate {
+        reference: "the same mesh with quadratic elements".into(),
+        reference_dofs: sys.k.rows(),
+        relative,
+        frequencies_hz: f_model,
+    }))
+}
+
+/// The discretisation error beside the test-analysis difference, per test mode, as a Markdown
+/// table with its definitions (the modes paired before updating, as in `check`).
+pub fn table(d: &DiscretisationEstimate, check: &femu_update::TruthCheck) -> String {
+    use std::fmt::Write as _;
+    let mut s = format!(
+        "The model's modes against {} ({} DOF), mode by mode: what the mesh alone gets wrong.\n\n| test | f test (Hz) | f model (Hz) | discretisation (%) |\n|---|---|---|---|\n",
+        d.reference, d.reference_dofs
+    );
+    for m in &check.modes {
+        let _ = writeln!(
+            s,
+            "| {} | {:.1} | {} | {} |",
+            m.test,
+            m.f_test,
+            m.f_before.map_or("unpaired".into(), |f| format!("{f:.1}")),
+            m.f_before
+                .and_then(|f| d.at_frequency(f))
+                .map_or("-".into(), |e| format!("{:+.2}", 100.0 * e))
+        );
+    }
+    s.push_str("\ndiscretisation = (f model - f quadratic) / f quadratic for the model mode paired with the test mode.\n");
+    s
+}
+
+impl DiscretisationEstimate {
+    /// The relative error of the model mode at frequency `f_hz` (the one a test mode paired with).
+    pub fn at_frequency(&self, f_hz: f64) -> Option<f64> {
+        self.frequencies_hz
+            .iter()
+            .position(|f| (f - f_hz).abs() <= 1e-9 * f_hz.abs().max(1.0))
+            .and_then(|j| self.relative.get(j).copied().flatten())
+    }
+}

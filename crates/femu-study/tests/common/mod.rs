@@ -1,0 +1,2 @@
+//! Shared helpers of the workflow tests.
+pub mod real;

@@ -1,0 +1,103 @@
+//! "Real" structures for the truth tests, built independently of the model a user would update:
+//! the same plate geometry on another mesh (finer, or with quadratic elements), one region
+//! softer, measured at the model's 15 upper-surface sensor nodes in y and z (the paper's 30
+//! readings), with noise. Only the geometry and the sensor coordinates are shared with the model.
+
+#![allow(dead_code)]
+
+use faer::Mat;
+use femu_correlate::prelude::*;
+use femu_fem::prelude::*;
+use femu_update::prelude::*;
+
+/// Regions along x, as element sets `r0`..`r9`.
+pub const REGIONS: usize = 10;
+/// The plate: 200 x 70 x 10 mm, steel, free-free.
+pub const LENGTHS: [f64; 3] = [0.2, 0.07, 0.01];
+
+/// The plate meshed with `divisions` hex cells (hex20 when `quadratic`), regions `r0`..`r9`.
+pub fn plate(divisions: [usize; 3], quadratic: bool) -> Model {
+    plate_of(divisions, BoxCells::Hex, quadratic)
+}
+
+/// The plate meshed with `divisions` cells of the given kind, regions `r0`..`r9`.
+pub fn plate_of(divisions: [usize; 3], cells: BoxCells, quadratic: bool) -> Model {
+    let mut mesh = box_mesh(&BoxSpec::new(LENGTHS, divisions, cells, quadratic)).unwrap();
+    add_slab_sets(&mut mesh, 0, REGIONS, "r").unwrap();
+    let mut model = Model::new(mesh).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    model
+}
+
+/// `r0`..`r9`.
+pub fn regions() -> Vec<String> {
+    (0..REGIONS).map(|r| format!("r{r}")).collect()
+}
+
+/// The model's sensor nodes: a 5 x 3 grid of the upper surface.
+pub fn sensor_nodes(model: &Model) -> Vec<u64> {
+    femu_correlate::placement::grid_nodes(model.mesh(), "zmax", [5, 3]).unwrap()
+}
+
+/// The node of `mesh` at `x` (the meshes share the sensor positions).
+fn node_at(mesh: &Mesh, x: [f64; 3]) -> u64 {
+    let (i, d) = (0..mesh.node_count())
+        .map(|i| {
+            let c = mesh.coords()[i];
+            (
+                i,
+                ((c[0] - x[0]).powi(2) + (c[1] - x[1]).powi(2) + (c[2] - x[2]).powi(2)).sqrt(),
+            )
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap();
+    assert!(d < 1e-9, "no node of the real mesh at {x:?} ({d})");
+    mesh.node_id(i)
+}
+
+/// A test: the first `count` elastic modes of `real` with region stiffness factors `theta`,
+/// read at `model`'s sensor nodes in y and z, noise `shape_noise` times each mode's largest
+/// reading (uniform, unit variance) and `frequency_noise` relative on the frequencies.
+pub fn measure(
+    real: &Model,
+    theta: &[f64],
+    model: &Model,
+    count: usize,
+    shape_noise: f64,
+    frequency_noise: f64,
+    seed: u64,
+) -> (TestModes, Vec<Sensor>) {
+    let names = regions();
+    let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+    let mut up =
+        UpdateModel::from_element_sets(real, &sets, MassKind::Consistent, Corrections::Stiffness)
+            .unwrap();
+    up.set_theta(theta).unwrap();
+    let modes = model_modes(&mut up, 6 + count, &Default::default()).unwrap();
+    let nodes = sensor_nodes(model);
+    let mut real_sensors = Vec::new();
+    let mut sensors = Vec::new();
+    for id in &nodes {
+        let x = model.mesh().coords()[model.mesh().node_index(*id).unwrap()];
+        let rid = node_at(real.mesh(), x);
+        for c in [1, 2] {
+            real_sensors.push(Sensor::axis(rid, c));
+            sensors.push(Sensor::axis(*id, c));
+        }
+    }
+    let layout = SensorLayout::new(real.mesh(), &up.matrices().dofs, real_sensors).unwrap();
+    let shapes = modes.shapes.as_ref().subcols(6, count).to_owned();
+    let mut y: Mat<f64> = layout.measure_all(shapes.as_ref()).unwrap();
+    let mut rng = femu_testkit::Rng(seed);
+    for j in 0..count {
+        let peak = y.col(j).iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+        for i in 0..y.nrows() {
+            y[(i, j)] += shape_noise * peak * 3f64.sqrt() * rng.sym();
+        }
+    }
+    let f: Vec<f64> = modes.frequencies_hz()[6..6 + count]
+        .iter()
+        .map(|f| f * (1.0 + frequency_noise * 3f64.sqrt() * rng.sym()))
+        .collect();
+    (TestModes::new(f, None, y).unwrap(), sensors)
+}
