@@ -13,12 +13,26 @@ use femu_update::prelude::*;
 fn main() {
     let mut theta = vec![0.0; real::REGIONS];
     theta[3] = -0.25;
-    let cases: Vec<(&str, Model, Model, &[f64])> = vec![(
-        "hex20 model vs tet10 real",
-        real::plate([20, 7, 2], true),
-        real::plate_of([20, 7, 2], femu_fem::prelude::BoxCells::Tet6, true),
-        &[0.0, 0.01],
-    )];
+    let cases: Vec<(&str, Model, Model, &[f64])> = vec![
+        (
+            "same mesh hex8",
+            real::plate([20, 7, 2], false),
+            real::plate([20, 7, 2], false),
+            &[0.0, 0.005, 0.01, 0.02],
+        ),
+        (
+            "hex20 model vs tet10 real",
+            real::plate([20, 7, 2], true),
+            real::plate_of([20, 7, 2], femu_fem::prelude::BoxCells::Tet6, true),
+            &[0.0, 0.01],
+        ),
+        (
+            "locked hex8 vs hex20",
+            real::plate([20, 7, 1], false),
+            real::plate([20, 7, 2], true),
+            &[0.0],
+        ),
+    ];
     let names = real::regions();
     let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
     for (name, model, realm, noises) in cases {

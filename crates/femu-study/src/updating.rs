@@ -247,6 +247,11 @@ pub fn localise_update_check(
         discretisation: per_test,
         parameters,
     });
+    if options.discretisation && discretisation.is_none() {
+        truth_check.judgement.reasons.push(
+            "the model's discretisation error was not estimated: its mesh is already quadratic (refine it once and compare to know it)".into(),
+        );
+    }
     if !reach.can_explain() {
         truth_check.judgement.reasons.insert(
             0,
