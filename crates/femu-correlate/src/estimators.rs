@@ -24,7 +24,9 @@ pub struct ResidualNorms {
     pub lambda_id: f64,
     /// `rho_M = ||R_F||_{M^-1} / ||x||_M`, s^-2 (rigorous form).
     pub rho_m: f64,
-    /// `rho_2 = ||R_F||_2 / ||x||_2` (the paper's form; N/(kg m) units only when `M` is in kg).
+    /// `rho_2 = ||R_F||_2 / ||x||_2` (the paper's form). Its units are those of `K` (N/m for
+    /// displacement shapes) whenever `M` has mass; it is an eigenvalue (s^-2) only when `M = I`,
+    /// which is why its theorems hold only then.
     pub rho_2: f64,
     /// Rayleigh quotient `lambda_R = x^T K x / x^T M x`, s^-2.
     pub rayleigh: f64,
@@ -188,6 +190,9 @@ pub enum BoundKind {
     KatoTempleUpper,
     /// The paper's ratio made rigorous: `min_j |lambda_id - lambda_j| <= rho_2 / mu_min(M)`.
     EuclideanScaled,
+    /// Davis-Kahan (beyond the paper): `sin theta_M(x, phi_k) <= rho_M / delta_k` with
+    /// `delta_k = min_{j != k} |lambda_id - lambda_j|`; often tighter than T4.
+    DavisKahan,
 }
 
 /// How the quantity relates to the bound.
@@ -231,21 +236,94 @@ impl Bound {
     }
 }
 
+/// What proves that the known eigenvalues are what they are said to be: the bounds that need
+/// neighbours or the whole spectrum are theorems only with such a proof ([`assess`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum SpectrumProof {
+    /// `values` is the whole spectrum (a dense solution).
+    Complete,
+    /// `values` are the lowest eigenvalues, none skipped: a Sturm count says that every
+    /// eigenvalue up to `upper` (s^-2) is among them.
+    Lowest {
+        /// The end of the counted interval; every other eigenvalue lies above it.
+        upper: f64,
+    },
+    /// `values` are every eigenvalue in `(lo, hi]` (s^-2), by a Sturm count over the band.
+    Band {
+        /// Lower end.
+        lo: f64,
+        /// Upper end.
+        hi: f64,
+    },
+    /// Nothing proves that no eigenvalue was skipped.
+    Unverified,
+}
+
+impl SpectrumProof {
+    /// The proof a result of femu's eigensolver carries: its Sturm check.
+    pub fn of(modes: &femu_sparse::eigen::Modes) -> Self {
+        let s = &modes.sturm;
+        match (s.verified(), s.lower) {
+            (false, _) => SpectrumProof::Unverified,
+            (true, None) => SpectrumProof::Lowest { upper: s.upper },
+            (true, Some(lo)) => SpectrumProof::Band { lo, hi: s.upper },
+        }
+    }
+}
+
 /// What is known of the model's spectrum.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ModelSpectrum {
-    /// The lowest eigenvalues (s^-2), ascending, none skipped (as the Sturm-verified eigensolver
-    /// returns them).
+    /// Known eigenvalues (s^-2), ascending.
     pub values: Vec<f64>,
-    /// Whether `values` is the whole spectrum (a dense solution).
-    pub complete: bool,
-    /// `lambda_max` when `complete`, otherwise an upper bound of it (see
-    /// [`element_bounds`](crate::element_bounds)).
+    /// What proves them complete where they claim to be.
+    pub proof: SpectrumProof,
+    /// An upper bound of `lambda_max` (see [`element_bounds`](crate::element_bounds)); with a
+    /// complete spectrum its largest value is used instead.
     pub lambda_max: f64,
     /// A lower bound of the smallest eigenvalue of `M`, for [`BoundKind::EuclideanScaled`].
     pub mu_min: Option<f64>,
-    /// `M = I`: the paper's Euclidean forms are then theorems.
-    pub identity_mass: bool,
+}
+
+impl ModelSpectrum {
+    /// The spectrum of an eigensolver result, with its proof.
+    pub fn from_modes(
+        modes: &femu_sparse::eigen::Modes,
+        lambda_max: f64,
+        mu_min: Option<f64>,
+    ) -> Self {
+        Self {
+            values: modes.values.clone(),
+            proof: SpectrumProof::of(modes),
+            lambda_max,
+            mu_min,
+        }
+    }
+
+    /// Whether `values` is the whole spectrum.
+    pub fn complete(&self) -> bool {
+        self.proof == SpectrumProof::Complete
+    }
+}
+
+/// Whether `m` is the identity (the paper's Euclidean forms are then theorems): computed, never
+/// taken from the caller.
+pub fn is_identity(m: &SparseMatrix) -> bool {
+    let p = m.indptr();
+    let p = p.raw_storage();
+    (0..m.cols()).all(|c| {
+        let rows = &m.indices()[p[c]..p[c + 1]];
+        let vals = &m.data()[p[c]..p[c + 1]];
+        let mut diagonal = false;
+        rows.iter().zip(vals).all(|(&r, &v)| {
+            if r == c {
+                diagonal = v == 1.0;
+                diagonal
+            } else {
+                v == 0.0
+            }
+        }) && diagonal
+    }) && m.rows() == m.cols()
 }
 
 /// The model mode paired with a test mode, for Theorems 3-4 and the derived bounds.
@@ -275,24 +353,36 @@ pub fn assess(
 ) -> Result<Vec<Bound>, CorrelateError> {
     let lam = norms.lambda_id;
     let vals = &spectrum.values;
+    let proof = spectrum.proof;
+    let identity_mass = is_identity(m);
     let mut bounds = Vec::new();
     let gaps: Vec<f64> = vals.iter().map(|l| (lam - l).abs()).collect();
-    // min_j |lambda_id - lambda_j| is exact once the known values reach past lambda_id: any
-    // unknown eigenvalue lies above the last known one, farther from lambda_id.
-    let min_gap = match vals.last() {
-        Some(last) if spectrum.complete || *last >= lam => {
-            Some(gaps.iter().copied().fold(f64::INFINITY, f64::min))
+    // min_j |lambda_id - lambda_j| is exact when no unknown eigenvalue can be nearer than the
+    // nearest known one: unknown ones lie outside the proven interval
+    let nearest = gaps.iter().copied().fold(f64::INFINITY, f64::min);
+    let unknown_at_least = match proof {
+        SpectrumProof::Complete => Some(f64::INFINITY),
+        SpectrumProof::Lowest { upper } => Some((upper - lam).max(0.0)),
+        SpectrumProof::Band { lo, hi } => Some(if lo <= lam && lam <= hi {
+            (lam - lo).min(hi - lam)
+        } else {
+            0.0
+        }),
+        SpectrumProof::Unverified => None,
+    };
+    let min_gap = unknown_at_least
+        .filter(|u| !vals.is_empty() && nearest <= *u)
+        .map(|_| nearest);
+    // with the whole spectrum, its own largest value, not the caller's bound
+    let max_gap = match (proof, vals.first(), vals.last()) {
+        (SpectrumProof::Complete, Some(first), Some(last)) => {
+            Some((lam - first).abs().max((last - lam).abs()))
         }
         _ => None,
     };
-    let max_gap = if spectrum.complete && !vals.is_empty() {
-        Some((lam - vals[0]).abs().max((spectrum.lambda_max - lam).abs()))
-    } else {
-        None
-    };
     for (form, rho, theorem) in [
         (Form::Rigorous, norms.rho_m, true),
-        (Form::Paper, norms.rho_2, spectrum.identity_mass),
+        (Form::Paper, norms.rho_2, identity_mass),
     ] {
         bounds.push(Bound {
             kind: BoundKind::T1,
@@ -332,14 +422,38 @@ pub fn assess(
         });
     };
     let dk = (lam - lk).abs();
-    let lower_neighbour = k.checked_sub(1).map(|i| vals[i]);
-    let upper_neighbour = vals.get(k + 1).copied();
-    let spread = (lk - vals[0]).max(spectrum.lambda_max - lk);
-    // gap_k needs both neighbours (or the end of a complete spectrum).
-    let gap = match (lower_neighbour, upper_neighbour) {
-        (Some(a), Some(b)) => Some((lk - a).min(b - lk)),
-        (None, Some(b)) => Some(b - lk),
-        (Some(a), None) if spectrum.complete => Some(lk - a),
+    // the nearest eigenvalues below and above lambda_k, or the ends of the proven interval (no
+    // eigenvalue lies between them and lambda_k); None when nothing proves it
+    let below: Option<f64> = match (k.checked_sub(1), proof) {
+        (_, SpectrumProof::Unverified) => None,
+        (Some(i), _) => Some(vals[i]),
+        (None, SpectrumProof::Complete | SpectrumProof::Lowest { .. }) => Some(f64::NEG_INFINITY),
+        (None, SpectrumProof::Band { lo, .. }) => Some(lo),
+    };
+    let above: Option<f64> = match (vals.get(k + 1), proof) {
+        (_, SpectrumProof::Unverified) => None,
+        (Some(b), _) => Some(*b),
+        (None, SpectrumProof::Complete) => Some(f64::INFINITY),
+        (None, SpectrumProof::Lowest { upper }) => Some(upper),
+        (None, SpectrumProof::Band { hi, .. }) => Some(hi),
+    };
+    // spread_k = max(lambda_k - lambda_1, lambda_max - lambda_k): lambda_1 is vals[0] for the
+    // lowest values, otherwise bounded below by 0 (K is positive semi-definite); a larger
+    // spread keeps T3 a theorem
+    let lowest_known = match proof {
+        SpectrumProof::Complete | SpectrumProof::Lowest { .. } => vals[0],
+        _ => vals[0].min(0.0),
+    };
+    let top = if spectrum.complete() {
+        *vals.last().unwrap_or(&spectrum.lambda_max)
+    } else {
+        spectrum.lambda_max
+    };
+    let spread = (lk - lowest_known).max(top - lk);
+    // gap_k from the neighbours (a lower bound at the end of a proven interval: T4 stays a
+    // theorem); none when unproven or when lambda_k is alone
+    let gap = match (below, above) {
+        (Some(a), Some(b)) => Some((lk - a).min(b - lk)).filter(|g| g.is_finite()),
         _ => None,
     };
     let (sin_m, msd_2, msd_mm) = match p.shape {
@@ -356,7 +470,7 @@ pub fn assess(
     let mac = sin_m.map(|s| 1.0 - s * s);
     for (form, rho, s, theorem) in [
         (Form::Rigorous, norms.rho_m, sin_m, true),
-        (Form::Paper, norms.rho_2, msd_2, spectrum.identity_mass),
+        (Form::Paper, norms.rho_2, msd_2, identity_mass),
     ] {
         bounds.push(Bound {
             kind: BoundKind::T3,
@@ -396,15 +510,35 @@ pub fn assess(
             }
         }
     }
-    // Kato-Temple on (a, b) = (lambda_{k-1}, lambda_{k+1}), which holds lambda_k alone.
+    // Davis-Kahan: every eigenvalue but lambda_k is at least delta_k from lambda_id; unknown ones
+    // lie outside the proven interval
+    let others = vals
+        .iter()
+        .enumerate()
+        .filter(|(j, _)| *j != k)
+        .map(|(_, l)| (lam - l).abs())
+        .fold(f64::INFINITY, f64::min);
+    if let Some(u) = unknown_at_least {
+        let delta = others.min(u);
+        if delta > 0.0 && delta.is_finite() {
+            bounds.push(Bound {
+                kind: BoundKind::DavisKahan,
+                form: Form::Rigorous,
+                bound: norms.rho_m / delta,
+                relation: Relation::AtMost,
+                quantity: sin_m,
+                theorem: true,
+            });
+        }
+    }
+    // Kato-Temple on (a, b) = (lambda_{k-1}, lambda_{k+1}) or the ends of the proven interval,
+    // which holds lambda_k alone; not formed without a proof
     let lr = norms.rayleigh;
     let rr2 = norms.rho_rayleigh * norms.rho_rayleigh;
-    let a = lower_neighbour.unwrap_or(f64::NEG_INFINITY);
-    let b = upper_neighbour.unwrap_or(if spectrum.complete {
-        f64::INFINITY
-    } else {
-        f64::NAN
-    });
+    let (a, b) = match (below, above) {
+        (Some(a), Some(b)) => (a, b),
+        _ => (f64::NAN, f64::NAN),
+    };
     if a < lr && lr < b {
         bounds.push(Bound {
             kind: BoundKind::KatoTempleLower,
@@ -432,6 +566,19 @@ pub fn assess(
         });
     }
     Ok(bounds)
+}
+
+/// The smaller of the theorems that bound `sin theta_M(x, phi_k)`: rigorous T4 and Davis-Kahan,
+/// with its source (`bound.kind`).
+pub fn sin_theta_bound(bounds: &[Bound]) -> Option<&Bound> {
+    bounds
+        .iter()
+        .filter(|b| {
+            b.theorem
+                && b.form == Form::Rigorous
+                && matches!(b.kind, BoundKind::T4 | BoundKind::DavisKahan)
+        })
+        .min_by(|a, b| a.bound.total_cmp(&b.bound))
 }
 
 /// `rho_M` for each column as a plain vector (convenience for studies and plots).

@@ -63,7 +63,8 @@ pub mod study;
 pub use bounds::{ElementBounds, element_bounds};
 pub use error::CorrelateError;
 pub use estimators::{
-    Bound, BoundKind, Estimator, Form, ModelSpectrum, PairedModel, Relation, ResidualNorms, assess,
+    Bound, BoundKind, Estimator, Form, ModelSpectrum, PairedModel, Relation, ResidualNorms,
+    SpectrumProof, assess, is_identity, sin_theta_bound,
 };
 pub use expansion::{Expander, Method, Partition, SENSOR_SPACE_LIMIT, TestErrorExpansion};
 pub use mass::MassSolver;

@@ -2,6 +2,7 @@
 //! test's (frequencies in Hz, shapes at the sensors).
 
 use crate::CorrelateError;
+use crate::estimators::SpectrumProof;
 use faer::{Mat, MatRef};
 use femu_sparse::SparseMatrix;
 use femu_sparse::eigen::Modes;
@@ -50,6 +51,9 @@ pub struct ModeSet {
     pub shapes: Mat<f64>,
     /// Whether `phi_i^T M phi_j = delta_ij` holds (recorded, not assumed).
     pub mass_normalised: bool,
+    /// What proves that no eigenvalue among `values` was skipped (the eigensolver's Sturm
+    /// check; [`SpectrumProof::Unverified`] for modes given by hand).
+    pub proof: SpectrumProof,
 }
 
 impl ModeSet {
@@ -81,6 +85,7 @@ impl ModeSet {
             values,
             shapes,
             mass_normalised,
+            proof: SpectrumProof::Unverified,
         })
     }
 
@@ -90,6 +95,7 @@ impl ModeSet {
             values: modes.values.clone(),
             shapes: modes.vectors.clone(),
             mass_normalised: true,
+            proof: SpectrumProof::of(modes),
         }
     }
 

@@ -37,9 +37,10 @@ impl Default for EstimateOptions {
 pub struct EstimateRow {
     /// Test mode (1-based).
     pub test: usize,
-    /// Smallest gap `min_j |lambda_id - lambda_j|` over the computed spectrum, s^-2 (the
-    /// distance to the top computed eigenvalue counts, so that a test eigenvalue above the
-    /// computed modes is not given a gap larger than it is).
+    /// Smallest gap `min_j |lambda_id - lambda_j|` over the computed spectrum, s^-2. Exact when
+    /// the test eigenvalue lies below the top computed eigenvalue by at least this gap (the
+    /// uncomputed ones lie above the top); otherwise an upper bound, since an uncomputed
+    /// eigenvalue may be nearer.
     pub min_gap: f64,
     /// Gap to the paired model mode, s^-2.
     pub paired_gap: Option<f64>,
@@ -112,12 +113,12 @@ pub fn estimate_with_bounds(
     let correlation = correlate(modes, test, layout, &options.pairing)?;
     let lambdas = test.eigenvalues();
     let eb = element_bounds(model, sys.mass_kind)?;
+    // the mode set carries its Sturm proof: which bounds are theorems follows from it
     let spectrum = ModelSpectrum {
         values: modes.values.clone(),
-        complete: false,
+        proof: modes.proof,
         lambda_max: eb.lambda_max_upper,
         mu_min: Some(eb.mu_min_lower),
-        identity_mass: false,
     };
     let paired: Vec<Option<usize>> = (0..test.len())
         .map(|t| correlation.pairing.of_test(t).map(|p| p.model))

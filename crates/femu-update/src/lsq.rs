@@ -292,7 +292,9 @@ pub struct UpdateOptions {
     /// Stop when the objective decreases by less than this fraction in an iteration (default 1e-6).
     pub tolerance: f64,
     /// Tikhonov weight `alpha` on `||theta||^2`, relative to the mean diagonal of the normal matrix
-    /// (default 1e-10: only enough to keep an unidentifiable parameter at its current value).
+    /// (default 1e-10). It pulls every parameter towards zero (the nominal model), not towards its
+    /// current value: an unidentifiable parameter is kept near zero, and a large weight biases
+    /// every estimate towards the nominal model.
     pub tikhonov: f64,
     /// The total-mass guard.
     pub mass_guard: MassGuard,

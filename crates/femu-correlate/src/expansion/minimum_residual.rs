@@ -28,7 +28,10 @@ impl Expander<'_> {
     /// Minimum-residual expansion: `x_o = argmin ||Z_{:,o} x_o + Z_{:,a} x_a||_{M^-1}` with
     /// `Z = K - lambda_id M` (docs/MATH.md, `W = M^-1`). Solved without `M^-1` as the saddle-point
     /// system `M mu - Z_{:,o} x_o = Z_{:,a} x_a`, `-Z_{:,o}^T mu = 0` (`mu = M^-1 r`), regularised by
-    /// `-delta I` (delta = 1e-8 max_j sum_r Z_rj^2 / M_rr) and refined to the exact solution.
+    /// `-delta I` (delta = 1e-8 max_j sum_r Z_rj^2 / M_rr) and refined towards the unregularised
+    /// solution by iterative refinement, which stops at a backward error of 1e-11 or reports
+    /// [`femu_sparse::SparseError::NotRefined`]; the forward error stagnates near 1e-7 relative
+    /// (the regularisation's conditioning), which is the accuracy to expect, not round-off.
     ///
     /// This is the formulation for many sensors; [`Expander::minimum_residual`] chooses.
     ///

@@ -6,7 +6,8 @@ use super::common::*;
 use faer::{Mat, MatRef};
 use femu_correlate::correlation::{msd, msd_m};
 use femu_correlate::{
-    Bound, BoundKind, Estimator, Form, ModelSpectrum, PairedModel, assess, element_bounds,
+    Bound, BoundKind, Estimator, Form, ModelSpectrum, PairedModel, SpectrumProof, assess,
+    element_bounds, sin_theta_bound,
 };
 use femu_fem::prelude::*;
 use femu_sparse::dense::generalized_symmetric_eigen;
@@ -34,12 +35,12 @@ fn all_bounds(k: &Mat<f64>, m: &Mat<f64>, x: &[f64], lambda_id: f64, identity: b
     )
     .unwrap()
     .values[0];
+    assert_eq!(femu_correlate::is_identity(&ms), identity);
     let spectrum = ModelSpectrum {
         values: eig.values.clone(),
-        complete: true,
+        proof: SpectrumProof::Complete,
         lambda_max: *eig.values.last().unwrap(),
         mu_min: Some(mu_min * (1.0 - 1e-12)),
-        identity_mass: identity,
     };
     let est = Estimator::new(&ks, &ms).unwrap();
     let (norms, _) = est.residual_norms(&[lambda_id], one(x)).unwrap();
@@ -234,13 +235,7 @@ fn partial_spectrum_on_fe_model() {
     .unwrap();
     assert!(modes.sturm.verified());
     let eb = element_bounds(&model, MassKind::Consistent).unwrap();
-    let spectrum = ModelSpectrum {
-        values: modes.values.clone(),
-        complete: false,
-        lambda_max: eb.lambda_max_upper,
-        mu_min: Some(eb.mu_min_lower),
-        identity_mass: false,
-    };
+    let spectrum = ModelSpectrum::from_modes(&modes, eb.lambda_max_upper, Some(eb.mu_min_lower));
     let est = Estimator::new(&sys.k, &sys.m).unwrap();
     for (mode, x_cut) in [(0, 0.04), (1, 0.1), (3, 0.15)] {
         let (lt, x) = perturbed_mode(&model, x_cut, 0.8, mode);
@@ -271,5 +266,235 @@ fn partial_spectrum_on_fe_model() {
         assert_eq!(find(&bounds, BoundKind::T1, Form::Rigorous).quantity, None);
         // T4 and the MAC bound are present with the neighbours known.
         assert!(find(&bounds, BoundKind::Mac, Form::Rigorous).holds() == Some(true));
+        // Davis-Kahan holds, and the smaller sin-theta bound is reported with its source
+        let dk = find(&bounds, BoundKind::DavisKahan, Form::Rigorous);
+        let t4 = find(&bounds, BoundKind::T4, Form::Rigorous);
+        assert_eq!(dk.holds(), Some(true), "mode {mode}: {dk:?}");
+        let best = sin_theta_bound(&bounds).unwrap();
+        assert_eq!(best.bound, dk.bound.min(t4.bound));
     }
+}
+
+/// The equality cases at an interior mode k of a pencil with M != I (complete dense spectrum):
+/// with `lambda_id = lambda_k` and `x = cos t phi_k + sin t phi_j`,
+/// - `j` the nearer neighbour: T4 (rigorous) and Davis-Kahan are equalities, `sin theta = |sin t|`;
+/// - `j` the mode that sets `spread_k`: T3 (rigorous) is an equality, `rho_M = |sin t| spread_k`.
+#[test]
+fn equality_cases_of_t3_t4_and_davis_kahan() {
+    let (k, m, _, _) = random_case(11, 9, false);
+    let (ks, ms) = (sparse(&k), sparse(&m));
+    let eig = generalized_symmetric_eigen(k.as_ref(), m.as_ref()).unwrap();
+    let v = &eig.values;
+    let spectrum = ModelSpectrum {
+        values: v.clone(),
+        proof: SpectrumProof::Complete,
+        // a loose bound on purpose: a complete spectrum uses its own largest value
+        lambda_max: 10.0 * v[v.len() - 1],
+        mu_min: None,
+    };
+    let est = Estimator::new(&ks, &ms).unwrap();
+    let kk = 4;
+    let near = if v[kk] - v[kk - 1] < v[kk + 1] - v[kk] {
+        kk - 1
+    } else {
+        kk + 1
+    };
+    let far = if v[kk] - v[0] > v[v.len() - 1] - v[kk] {
+        0
+    } else {
+        v.len() - 1
+    };
+    let t: f64 = 0.3;
+    for (j, kinds) in [
+        (near, vec![BoundKind::T4, BoundKind::DavisKahan]),
+        (far, vec![BoundKind::T3]),
+    ] {
+        let x: Vec<f64> = (0..v.len())
+            .map(|i| t.cos() * eig.vectors[(i, kk)] + t.sin() * eig.vectors[(i, j)])
+            .collect();
+        let (norms, _) = est.residual_norms(&[v[kk]], one(&x)).unwrap();
+        let phi = col(&eig.vectors, kk);
+        let bounds = assess(
+            &ms,
+            &x,
+            &norms[0],
+            &spectrum,
+            Some(PairedModel {
+                index: kk,
+                shape: Some(&phi),
+            }),
+        )
+        .unwrap();
+        for kind in kinds {
+            let b = find(&bounds, kind, Form::Rigorous);
+            let q = b.quantity.unwrap();
+            assert!(
+                (b.bound - q).abs() <= 1e-9 * q.abs().max(1e-300),
+                "{kind:?} with j = {j}: bound {} quantity {q}",
+                b.bound
+            );
+            assert_eq!(b.holds(), Some(true));
+        }
+        // the largest eigenvalue of the complete spectrum, not the loose lambda_max, in T1
+        let t1 = find(&bounds, BoundKind::T1, Form::Rigorous);
+        let exact = (v[kk] - v[0]).max(v[v.len() - 1] - v[kk]);
+        assert_eq!(t1.quantity, Some(exact));
+    }
+}
+
+/// Kato-Temple's interval for `x = phi_k + eps w` shrinks as eps^2: ten times less noise, a
+/// hundred times narrower (within 20 %), and it holds lambda_k.
+#[test]
+fn kato_temple_is_second_order() {
+    let (k, m, w, _) = random_case(5, 10, false);
+    let (ks, ms) = (sparse(&k), sparse(&m));
+    let eig = generalized_symmetric_eigen(k.as_ref(), m.as_ref()).unwrap();
+    let spectrum = ModelSpectrum {
+        values: eig.values.clone(),
+        proof: SpectrumProof::Complete,
+        lambda_max: eig.values[eig.values.len() - 1],
+        mu_min: None,
+    };
+    let est = Estimator::new(&ks, &ms).unwrap();
+    let kk = 3;
+    let phi = col(&eig.vectors, kk);
+    let width = |eps: f64| {
+        let x: Vec<f64> = phi.iter().zip(&w).map(|(p, n)| p + eps * n).collect();
+        let (norms, _) = est.residual_norms(&[eig.values[kk]], one(&x)).unwrap();
+        let b = assess(
+            &ms,
+            &x,
+            &norms[0],
+            &spectrum,
+            Some(PairedModel {
+                index: kk,
+                shape: Some(&phi),
+            }),
+        )
+        .unwrap();
+        let lo = find(&b, BoundKind::KatoTempleLower, Form::Rigorous);
+        let hi = find(&b, BoundKind::KatoTempleUpper, Form::Rigorous);
+        assert_eq!((lo.holds(), hi.holds()), (Some(true), Some(true)));
+        hi.bound - lo.bound
+    };
+    let ratio = width(1e-3) / width(1e-4);
+    assert!((80.0..120.0).contains(&ratio), "{ratio}");
+}
+
+/// Contract: modes from a `Nearest` solve carry a band proof, and the first mode of the band has
+/// an unknown neighbour below it. Pencil `K = diag(l m)`, `M = diag(m)` with eigenvalues
+/// 1, 2, 2.1, 5, 8, 13, 20, 30: the 3 modes nearest 5.5 are 2.1, 5 and 8, and 2 lies just below
+/// the band. With `x = cos t phi(2.1) + sin t phi(2)` and `lambda_id = 2.1`, `sin theta = |sin t|`
+/// while a gap taken as `5 - 2.1` (as if 2.1 were the lowest eigenvalue) would bound it by
+/// `|sin t| 0.1 / 2.9`: the band's own lower end keeps T4 and Davis-Kahan theorems that hold.
+#[test]
+fn a_nearest_solve_carries_a_band_proof() {
+    let values = [1.0, 2.0, 2.1, 5.0, 8.0, 13.0, 20.0, 30.0];
+    let masses = [1.0, 3.0, 0.5, 2.0, 1.5, 4.0, 0.7, 1.2];
+    let n = values.len();
+    let kd = Mat::from_fn(
+        n,
+        n,
+        |i, j| if i == j { values[i] * masses[i] } else { 0.0 },
+    );
+    let md = Mat::from_fn(n, n, |i, j| if i == j { masses[i] } else { 0.0 });
+    let (ks, ms) = (sparse(&kd), sparse(&md));
+    let modes = femu_sparse::eigen::eigs(
+        &ks,
+        &ms,
+        femu_sparse::eigen::Which::Nearest {
+            shift: 5.5,
+            count: 3,
+        },
+        &Default::default(),
+    )
+    .unwrap();
+    let set = femu_correlate::ModeSet::from_modes(&modes);
+    assert!(
+        matches!(set.proof, SpectrumProof::Band { .. }),
+        "{:?}",
+        set.proof
+    );
+    assert!((set.values[0] - 2.1).abs() < 1e-12);
+    let spectrum = ModelSpectrum {
+        values: set.values.clone(),
+        proof: set.proof,
+        lambda_max: 30.0,
+        mu_min: None,
+    };
+    // phi(2.1) and phi(2): unit vectors scaled to M-norm 1
+    let unit = |i: usize| {
+        let mut v = vec![0.0; n];
+        v[i] = 1.0 / masses[i].sqrt();
+        v
+    };
+    let t: f64 = 0.2;
+    let x: Vec<f64> = unit(2)
+        .iter()
+        .zip(unit(1))
+        .map(|(a, b)| t.cos() * a + t.sin() * b)
+        .collect();
+    let est = Estimator::new(&ks, &ms).unwrap();
+    let (norms, _) = est.residual_norms(&[2.1], one(&x)).unwrap();
+    let phi = col(&set.shapes, 0);
+    let bounds = assess(
+        &ms,
+        &x,
+        &norms[0],
+        &spectrum,
+        Some(PairedModel {
+            index: 0,
+            shape: Some(&phi),
+        }),
+    )
+    .unwrap();
+    for kind in [BoundKind::T4, BoundKind::DavisKahan] {
+        let b = find(&bounds, kind, Form::Rigorous);
+        assert!(b.theorem);
+        assert_eq!(b.holds(), Some(true), "{b:?}");
+        assert!((b.quantity.unwrap() - t.sin()).abs() < 1e-12);
+    }
+    // a hand-made mode set proves nothing: no neighbour-based theorem is formed
+    let unproven = ModelSpectrum {
+        proof: SpectrumProof::Unverified,
+        ..spectrum
+    };
+    let bounds = assess(
+        &ms,
+        &x,
+        &norms[0],
+        &unproven,
+        Some(PairedModel {
+            index: 0,
+            shape: Some(&phi),
+        }),
+    )
+    .unwrap();
+    for kind in [
+        BoundKind::T4,
+        BoundKind::DavisKahan,
+        BoundKind::KatoTempleLower,
+        BoundKind::KatoTempleUpper,
+    ] {
+        assert!(
+            !bounds.iter().any(|b| b.kind == kind),
+            "{kind:?} formed without a proof"
+        );
+    }
+    assert_eq!(find(&bounds, BoundKind::T2, Form::Rigorous).quantity, None);
+}
+
+/// `M = I` is computed from `M`, never taken from the caller.
+#[test]
+fn identity_mass_is_computed() {
+    let i3 = sparse(&Mat::identity(3, 3));
+    assert!(femu_correlate::is_identity(&i3));
+    let two = sparse(&Mat::from_fn(3, 3, |i, j| if i == j { 2.0 } else { 0.0 }));
+    assert!(!femu_correlate::is_identity(&two));
+    let coupled = sparse(&Mat::from_fn(3, 3, |i, j| match (i, j) {
+        (0, 1) | (1, 0) => 1e-300,
+        _ if i == j => 1.0,
+        _ => 0.0,
+    }));
+    assert!(!femu_correlate::is_identity(&coupled));
 }

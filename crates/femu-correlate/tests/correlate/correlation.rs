@@ -236,7 +236,9 @@ fn pairing_swapped_missing_and_greedy_trap() {
 #[test]
 fn correlate_and_estimate_reports() {
     use femu_correlate::modes::eigenvalue_of_hz;
-    use femu_correlate::{ModeSet, ModelSpectrum, SensorLayout, TestModes, correlate, estimate};
+    use femu_correlate::{
+        ModeSet, ModelSpectrum, SensorLayout, SpectrumProof, TestModes, correlate, estimate,
+    };
     let model = bar([8, 2, 1], true);
     let sys = model.assemble(MassKind::Consistent).unwrap();
     let eig = full_eigen(&sys);
@@ -303,10 +305,9 @@ fn correlate_and_estimate_reports() {
     // estimate: every interval holds a model eigenvalue; the rigorous T2 holds.
     let spectrum = ModelSpectrum {
         values: eig.values.clone(),
-        complete: true,
+        proof: SpectrumProof::Complete,
         lambda_max: *eig.values.last().unwrap(),
         mu_min: None,
-        identity_mass: false,
     };
     let lambdas: Vec<f64> = f_test.iter().map(|f| eigenvalue_of_hz(*f)).collect();
     let paired: Vec<Option<usize>> = (0..4)
