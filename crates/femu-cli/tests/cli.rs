@@ -346,7 +346,8 @@ fn demo_then_update_from_its_files() {
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(v["result"]["names"][0], "k:R3");
     let p = v["result"]["theta"][0].as_f64().unwrap();
-    assert!((p - 0.3).abs() < 2e-3, "{p}");
+    // six stored digits in the UFF and 14 in the deck: 1e-5 (measured 5e-7)
+    assert!((p - 0.3).abs() < 1e-5, "{p}");
     // bad input: an unknown set, an unknown method, noise out of range
     let bad = femu()
         .args([

@@ -36,7 +36,7 @@ fn spectral_identity_25_holds_to_machine_precision() {
         let sum: f64 = terms.iter().sum();
         let rho2 = norms[0].rho_m * norms[0].rho_m;
         assert!(
-            (sum / rho2 - 1.0).abs() < 1e-9,
+            (sum / rho2 - 1.0).abs() < 1e-11,
             "(25) clamped={clamped} {mass:?}: sum {sum:e} vs rho_M^2 {rho2:e}"
         );
         let mac = mac_m_matrix(&sys.m, one(&x), eig.vectors.as_ref()).unwrap();
