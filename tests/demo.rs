@@ -28,6 +28,21 @@ fn noise_free_study_finds_and_corrects_the_error() {
     // Euclidean form fails on this plate (M != I), as in the paper's own Table 2
     assert!(r.table2.iter().all(|row| row.t2_rigorous_holds));
     assert!(r.table2.iter().any(|row| !row.t2_paper_holds));
+    // on the paper's plate every theorem-labelled bound with a quantity holds, Davis-Kahan
+    // included, and the smaller sin-theta bound is reported with its source
+    let mut dk = 0;
+    for a in &r.assessments {
+        for b in &a.bounds {
+            if b.theorem && b.quantity.is_some() {
+                assert_eq!(b.holds(), Some(true), "test mode {}: {b:?}", a.test + 1);
+            }
+            dk += usize::from(b.kind == femu::correlate::BoundKind::DavisKahan);
+        }
+        if a.paired_model.is_some() {
+            assert!(femu::correlate::sin_theta_bound(&a.bounds).is_some());
+        }
+    }
+    assert!(dk >= 4, "{dk} Davis-Kahan bounds");
     for row in &r.table2 {
         assert!(row.rho_m >= row.min_gap, "{row:?}");
     }

@@ -221,8 +221,24 @@ fn correlate_pairs_the_model_with_itself() {
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let pairs = v["pairing"]["pairs"].as_array().unwrap();
-    // modes 1 and 2 are a repeated pair (square section): each test mode pairs with a copy
+    // modes 1 and 2 are a repeated pair (square section): each test mode pairs with a copy in
+    // another basis of the pair's plane, so its own MAC may be anything; its MACs with both
+    // copies sum to 1 (the copies' readings are orthogonal: bending in y and in z)
     assert_eq!(pairs.len(), 3);
+    let mac = v["mac"].as_array().unwrap();
+    let copies: Vec<usize> = pairs
+        .iter()
+        .filter(|p| p["test"].as_u64().unwrap() < 2)
+        .map(|p| p["model"].as_u64().unwrap() as usize)
+        .collect();
+    assert_eq!(copies.len(), 2);
+    for t in 0..2 {
+        let sum: f64 = copies
+            .iter()
+            .map(|m| mac[t].as_array().unwrap()[*m].as_f64().unwrap())
+            .sum();
+        assert!((sum - 1.0).abs() < 1e-9, "test mode {t}: summed MAC {sum}");
+    }
     for p in pairs {
         assert!(
             (p["mac"].as_f64().unwrap() - 1.0).abs() < 1e-9 || p["test"].as_u64().unwrap() < 2,
