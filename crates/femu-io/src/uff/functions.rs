@@ -22,7 +22,14 @@ pub(super) fn parse_58_header(
                node: (usize, usize),
                dir: (usize, usize)|
      -> Result<UffDof, IoError> {
+        let entity = col(r6, name.0, name.1).trim().to_string();
         let n = col_int(path, l6, r6, node.0, node.1)?;
+        // vendors write -1 for the node of a reference that does not exist ("NONE")
+        let n = if n < 0 && entity.eq_ignore_ascii_case("NONE") {
+            0
+        } else {
+            n
+        };
         if n < 0 {
             return Err(perr(
                 path,
@@ -31,7 +38,7 @@ pub(super) fn parse_58_header(
             ));
         }
         Ok(UffDof {
-            entity: col(r6, name.0, name.1).trim().to_string(),
+            entity,
             node: n as u64,
             direction: col_int(path, l6, r6, dir.0, dir.1)?,
         })

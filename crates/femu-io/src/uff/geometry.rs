@@ -135,15 +135,22 @@ pub(super) fn parse_82(
             nodes.push(v as u64);
         }
     }
-    if count < 0 || nodes.len() != count as usize {
-        return Err(perr(
-            path,
-            ln,
-            format!(
-                "trace line {number}: {count} node labels announced, {} found",
+    // Writers disagree on the count: LMS TestLab announces fewer labels than it writes and pads
+    // the record with zeros (0 means "lift the pen"). Labels beyond the count that are all zero
+    // are padding; otherwise every label is kept, with a warning.
+    let announced = usize::try_from(count).unwrap_or(0);
+    if nodes.len() > announced && nodes[announced..].iter().all(|v| *v == 0) {
+        nodes.truncate(announced);
+    } else if nodes.len() != announced {
+        out.warnings.push(Warning {
+            path: path.to_path_buf(),
+            line: ln,
+            message: format!(
+                "trace line {number}: {count} node labels announced, {} found: all {} kept",
+                nodes.len(),
                 nodes.len()
             ),
-        ));
+        });
     }
     out.trace_lines.push(UffTraceLine {
         number,

@@ -24,10 +24,29 @@ pub(super) fn int(path: &Path, line: usize, tok: &str) -> Result<i64, IoError> {
         .map_err(|_| perr(path, line, format!("'{tok}' is not an integer")))
 }
 
-/// Numbers of a line; `want` of them at least.
+/// A token of fixed-width FORTRAN fields that touch (`4.1E+03-3.1E+03`: a negative number fills
+/// its field and leaves no blank before it), split before every sign that follows a digit or a
+/// point (a sign after an exponent letter belongs to the exponent).
+fn split_touching(tok: &str) -> Vec<&str> {
+    let b = tok.as_bytes();
+    let mut parts = Vec::new();
+    let mut start = 0;
+    for i in 1..b.len() {
+        if (b[i] == b'-' || b[i] == b'+') && (b[i - 1].is_ascii_digit() || b[i - 1] == b'.') {
+            parts.push(&tok[start..i]);
+            start = i;
+        }
+    }
+    parts.push(&tok[start..]);
+    parts
+}
+
+/// Numbers of a line (fields that touch are split, as FORTRAN writers leave them); `want` of them
+/// at least.
 pub(super) fn nums(path: &Path, line: usize, text: &str, want: usize) -> Result<Vec<f64>, IoError> {
     let v: Vec<f64> = text
         .split_whitespace()
+        .flat_map(split_touching)
         .map(|t| num(path, line, t))
         .collect::<Result<_, _>>()?;
     if v.len() < want {
@@ -221,5 +240,21 @@ pub(super) fn col_int(
     match col(l, from, to).trim() {
         "" => Ok(0),
         t => int(path, ln, t),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::split_touching;
+
+    #[test]
+    fn touching_fields_are_split_and_exponents_kept() {
+        assert_eq!(
+            split_touching("4.111111E+03-3.111111E+03-1.1E-05"),
+            ["4.111111E+03", "-3.111111E+03", "-1.1E-05"]
+        );
+        assert_eq!(split_touching("-1.5D-03"), ["-1.5D-03"]);
+        assert_eq!(split_touching("12"), ["12"]);
+        assert_eq!(split_touching("1.-2."), ["1.", "-2."]);
     }
 }
