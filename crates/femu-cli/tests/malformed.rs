@@ -144,3 +144,34 @@ fn lenient_reads_unknown_keywords_only() {
         .expect("the error");
     assert!(warning < error, "{stderr}");
 }
+
+/// `femu info` on one file of each format (run in `fixtures/` so that the paths are short): what
+/// each holds and what femu would do with it, as a reviewed snapshot.
+#[test]
+fn info_describes_every_format() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures");
+    let mut out = String::new();
+    for f in [
+        "inp/two_hex.inp",
+        "msh/mixed_v22.msh",
+        "msh/box_mixed1.unv",
+        "uff/plate_test.unv",
+        "uff/pyuff/testlab_161_164_18_15_82.uff",
+        "csv/two_modes.csv",
+    ] {
+        let o = Command::cargo_bin("femu")
+            .unwrap()
+            .current_dir(&dir)
+            .args(["info", f])
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{f}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        out.push_str(&String::from_utf8_lossy(&o.stdout));
+        out.push('\n');
+    }
+    insta::assert_snapshot!(out);
+}

@@ -32,6 +32,7 @@ pub mod discretisation;
 mod error;
 pub mod estimate;
 pub mod expand;
+pub mod info;
 pub mod load;
 pub mod modes;
 pub mod reach;

@@ -4,6 +4,7 @@ pub mod correlate;
 pub mod demo;
 pub mod estimate;
 pub mod expand;
+pub mod info;
 pub mod matrices;
 pub mod modes;
 pub mod run;

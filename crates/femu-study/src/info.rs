@@ -1,0 +1,227 @@
+//! `femu info FILE`: what a file femu reads contains, and what femu would do with it.
+
+use crate::StudyError;
+use crate::load::{MODEL_EXTENSIONS, TEST_EXTENSIONS, has_extension};
+use femu_fem::mesh::Mesh;
+use std::fmt::Write as _;
+use std::path::Path;
+
+fn mesh_lines(s: &mut String, mesh: &Mesh) {
+    let _ = writeln!(s, "nodes: {}", mesh.node_count());
+    let kinds: Vec<String> = mesh
+        .kind_counts()
+        .iter()
+        .map(|(k, n)| format!("{n} {}", k.abaqus_name()))
+        .collect();
+    let _ = writeln!(
+        s,
+        "solid elements: {} ({})",
+        mesh.element_count(),
+        if kinds.is_empty() {
+            "none".into()
+        } else {
+            kinds.join(", ")
+        }
+    );
+    for (name, set) in mesh.node_sets() {
+        let _ = writeln!(s, "node set {name}: {} nodes", set.len());
+    }
+    for (name, set) in mesh.element_sets() {
+        let _ = writeln!(s, "element set {name}: {} elements", set.len());
+    }
+}
+
+fn frequencies(f: &[f64]) -> String {
+    let shown: Vec<String> = f.iter().take(12).map(|v| format!("{v:.4}")).collect();
+    format!(
+        "{}{}",
+        shown.join(", "),
+        if f.len() > 12 { ", ..." } else { "" }
+    )
+}
+
+/// A description of `path`: its content by the reader femu would use, its warnings, and what
+/// femu would do with it (a model, a test, both, or neither).
+///
+/// # Errors
+/// The readers' errors (the file is not valid), and an extension femu does not read.
+pub fn describe(path: &Path) -> Result<String, StudyError> {
+    let mut s = format!("{}\n", path.display());
+    let mut warnings: Vec<String> = Vec::new();
+    if has_extension(path, &["inp"]) {
+        let deck = femu_io::inp::read_inp(path)?;
+        let _ = writeln!(s, "format: Abaqus/CalculiX input deck");
+        mesh_lines(&mut s, &deck.mesh);
+        for (name, m) in &deck.materials {
+            let elastic = match &m.elasticity {
+                femu_fem::material::Elasticity::Isotropic { e, nu } => {
+                    format!("E = {e:e} Pa, nu = {nu}")
+                }
+                _ => "anisotropic".to_string(),
+            };
+            let _ = writeln!(
+                s,
+                "material {name}: {elastic}, density {} kg/m^3",
+                m.density
+            );
+        }
+        let _ = writeln!(s, "solid sections: {}", deck.sections.len());
+        let _ = writeln!(s, "boundary conditions: {}", deck.boundaries.len());
+        if let Some(f) = deck.frequency {
+            let _ = writeln!(s, "frequency step: {} modes", f.count);
+        }
+        warnings.extend(deck.warnings.iter().map(ToString::to_string));
+        let model = deck.to_model()?;
+        let _ = writeln!(
+            s,
+            "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",
+            model.dof_map().free_count()
+        );
+    } else if has_extension(path, &["msh"]) {
+        let g = femu_io::gmsh::read_msh(path)?;
+        let _ = writeln!(s, "format: Gmsh mesh");
+        mesh_lines(&mut s, &g.mesh);
+        warnings.extend(g.warnings.iter().map(ToString::to_string));
+        let _ = writeln!(
+            s,
+            "femu would: use it as a model once given a material (--young, --poisson, --density) and, if clamped, the sets to fix (--fix)"
+        );
+    } else if has_extension(path, &["unv", "uff"]) {
+        let u = femu_io::uff::read_uff(path)?;
+        let _ = writeln!(s, "format: universal file");
+        if let Some(units) = &u.units {
+            let _ = writeln!(
+                s,
+                "units (164): {} (code {}), length factor {}",
+                units.description, units.code, units.factors[0]
+            );
+        }
+        let _ = writeln!(
+            s,
+            "nodes ({}): {}",
+            if u.nodes_2411 { "2411" } else { "15" },
+            u.nodes.len()
+        );
+        let solids = u
+            .elements
+            .iter()
+            .filter(|e| (111..=118).contains(&e.descriptor))
+            .count();
+        let _ = writeln!(
+            s,
+            "elements (2412): {} ({} solids, {} beams, shells and others)",
+            u.elements.len(),
+            solids,
+            u.elements.len() - solids
+        );
+        for g in &u.groups {
+            let _ = writeln!(
+                s,
+                "group {}: {} nodes, {} elements",
+                g.name,
+                g.nodes.len(),
+                g.elements.len()
+            );
+        }
+        for t in &u.trace_lines {
+            let _ = writeln!(
+                s,
+                "trace line {} ({}): {} labels",
+                t.number,
+                t.id,
+                t.nodes.len()
+            );
+        }
+        if !u.modes.is_empty() {
+            let f: Vec<f64> = u.modes.iter().map(|m| m.frequency_hz).collect();
+            let _ = writeln!(
+                s,
+                "modes (55): {} at {} nodes{}; Hz: {}",
+                u.modes.len(),
+                u.modes[0].values.len(),
+                if u.modes.iter().any(|m| m.complex) {
+                    ", complex (read as real shapes)"
+                } else {
+                    ""
+                },
+                frequencies(&f)
+            );
+        }
+        if !u.functions.is_empty() {
+            let _ = writeln!(s, "functions (58/58b): {}", u.functions.len());
+        }
+        warnings.extend(u.warnings.iter().map(ToString::to_string));
+        let mut does = Vec::new();
+        if solids > 0 {
+            does.push("a model (with a material given on the command line)");
+        }
+        if !u.modes.is_empty() {
+            does.push("test modes (femu correlate, estimate, expand, update)");
+        }
+        let _ = writeln!(
+            s,
+            "femu would: {}",
+            if does.is_empty() {
+                "nothing: no solid mesh and no modes (its functions and geometry are read by femu_io::uff)".to_string()
+            } else {
+                format!("use it as {}", does.join(" and as "))
+            }
+        );
+    } else if has_extension(path, &["json", "csv", "txt"]) {
+        let data = if has_extension(path, &["json"]) {
+            femu_io::json::read_test_json(path)?
+        } else {
+            femu_io::csv::read_test_csv(path)?
+        };
+        let mut nodes: Vec<u64> = data.sensors.iter().map(|s| s.node).collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        let _ = writeln!(
+            s,
+            "format: test modes ({})",
+            if has_extension(path, &["json"]) {
+                "JSON"
+            } else {
+                "CSV"
+            }
+        );
+        let _ = writeln!(
+            s,
+            "modes: {}; Hz: {}",
+            data.modes.len(),
+            frequencies(&data.modes.frequencies_hz)
+        );
+        let _ = writeln!(
+            s,
+            "sensors: {} readings at {} nodes",
+            data.sensors.len(),
+            nodes.len()
+        );
+        let _ = writeln!(
+            s,
+            "femu would: use it as test modes, its node ids being the model's (femu correlate, estimate, expand, update)"
+        );
+    } else {
+        let mut all: Vec<&str> = MODEL_EXTENSIONS.to_vec();
+        all.extend(
+            TEST_EXTENSIONS
+                .iter()
+                .filter(|e| !MODEL_EXTENSIONS.contains(e)),
+        );
+        return Err(StudyError::in_file(
+            path,
+            "format",
+            format!(
+                "femu reads {}; the file's extension is none of them",
+                all.iter()
+                    .map(|e| format!(".{e}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        ));
+    }
+    for w in &warnings {
+        let _ = writeln!(s, "warning: {w}");
+    }
+    Ok(s)
+}
