@@ -10,13 +10,38 @@ fn fixture(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// LMS TestLab geometry: 36 nodes (dataset 15) and three trace lines (82) whose announced label
+/// LMS TestLab geometry: coordinate systems (18), 36 nodes (dataset 15) and three trace lines
+/// (82) whose announced label
 /// counts (9, 32, 11) differ from the records as written: TestLab pads with zeros, which are not
 /// labels; "Stator" announces all 32 it writes.
 #[test]
 fn testlab_trace_lines_with_padded_records() {
     let u = femu_io::uff::read_uff(fixture("testlab_161_164_18_15_82.uff")).unwrap();
     assert_eq!(u.nodes.len(), 36);
+    // 36 coordinate systems (18), 30 of them turned; every node measures in its own system.
+    // SYS1 by its points: origin (-2.4, -0.95, 0), x towards (-3.4, -0.95, -8.7e-8), xz plane
+    // through (-3.4, -0.95, -1): local x = -X, y = +Y, z = -Z (to the file's 8.7e-8)
+    assert_eq!(u.coordinate_systems.len(), 36);
+    assert_eq!(
+        u.coordinate_systems
+            .values()
+            .filter(|c| !c.is_global_orientation())
+            .count(),
+        30
+    );
+    assert_eq!(u.displacement_systems.len(), 36);
+    let sys1 = &u.coordinate_systems[&1];
+    assert_eq!(sys1.name, "SYS1");
+    let want = [[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]];
+    for i in 0..3 {
+        for j in 0..3 {
+            assert!(
+                (sys1.axes[i][j] - want[i][j]).abs() < 1e-6,
+                "{:?}",
+                sys1.axes
+            );
+        }
+    }
     // node 36: "36 0 36 8 1.20000e+00 8.40000e+00 0.00000e+00"
     let n36 = u.nodes.iter().find(|n| n.id == 36).unwrap();
     assert_eq!(n36.x, [1.2, 8.4, 0.0]);
@@ -100,4 +125,125 @@ fn dataset_2412_without_solids() {
         e.ends_with("no solid element in the file (5 nodes, 5 elements of other kinds): a model needs solid elements (dataset 2412, descriptors 111-118)"),
         "{e}"
     );
+}
+
+/// Coordinate systems (dataset 18) as test systems use them: a system 5 at origin (1, 2, 3)
+/// turned 90 degrees about z (local x = global -y, local y = global x), by its three points.
+/// Node 1 is measured along its three local axes in system 5: read as global components
+/// `(b, -a, c)` of the local `(a, b, c)`; node 2 only along its local x: one sensor along global
+/// -y with its reading as written; node 3 in the global system; node 4's coordinates (1, 0, 0)
+/// in system 5 are (1, 1, 3) globally. A system named but not defined is an error naming the
+/// node.
+#[test]
+fn displacement_and_definition_systems_of_dataset_18() {
+    use femu_io::uff::{UffMode, UffNode, Universal, parse_uff, uff_string};
+    let u = Universal {
+        nodes: (1..=4)
+            .map(|id| UffNode {
+                id,
+                x: [id as f64, 0.0, 0.0],
+            })
+            .collect(),
+        modes: vec![UffMode {
+            number: 1,
+            frequency_hz: 100.0,
+            damping: 0.0,
+            modal_mass: 0.0,
+            values: vec![
+                (1, [0.5, -0.25, 0.125]),
+                (2, [0.75, 0.0, 0.0]),
+                (3, [0.0, 1.0, 0.0]),
+                (4, [0.0, 0.0, 0.5]),
+            ],
+            complex: false,
+        }],
+        ..Default::default()
+    };
+    let text = uff_string(&u);
+    let system = "    -1\n    18\n         5         0         0         8         1\nTURNED\n  1.00000e+00  2.00000e+00  3.00000e+00  1.00000e+00  1.00000e+00  3.00000e+00\n  1.00000e+00  2.00000e+00  4.00000e+00\n    -1\n";
+    // nodes 1 and 2 measure in system 5; node 4 is defined in it
+    let mut patched = String::new();
+    for line in text.lines() {
+        let t: Vec<&str> = line.split_whitespace().collect();
+        let line = if t.len() == 7 && (t[0] == "1" || t[0] == "2") && t[3] == "11" {
+            line.replacen("         0        11", "         5        11", 1)
+        } else if t.len() == 7 && t[0] == "4" && t[3] == "11" {
+            format!(
+                "         4         5         0        11  1.00000E+00  0.00000E+00  0.00000E+00"
+            )
+        } else {
+            line.to_string()
+        };
+        patched.push_str(&line);
+        patched.push('\n');
+    }
+    let at = patched.find("    -1\n    15\n").unwrap();
+    patched.insert_str(at, system);
+    let read = parse_uff(&patched, std::path::Path::new("cs.uff")).unwrap();
+    let n4 = read.nodes.iter().find(|n| n.id == 4).unwrap();
+    for (got, want) in n4.x.iter().zip([1.0, 1.0, 3.0]) {
+        assert!((got - want).abs() < 1e-12, "{:?}", n4.x);
+    }
+    let data = read.test_data(std::path::Path::new("cs.uff")).unwrap();
+    let got: Vec<(u64, [f64; 3], f64)> = data
+        .sensors
+        .iter()
+        .enumerate()
+        .map(|(r, s)| (s.node, s.direction, data.modes.shapes[(r, 0)]))
+        .collect();
+    let want: Vec<(u64, [f64; 3], f64)> = vec![
+        (1, [1.0, 0.0, 0.0], -0.25),
+        (1, [0.0, 1.0, 0.0], -0.5),
+        (1, [0.0, 0.0, 1.0], 0.125),
+        (2, [0.0, -1.0, 0.0], 0.75),
+        (3, [0.0, 1.0, 0.0], 1.0),
+        (4, [0.0, 0.0, 1.0], 0.5),
+    ];
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for ((n, d, v), (wn, wd, wv)) in got.iter().zip(&want) {
+        assert_eq!(n, wn);
+        for c in 0..3 {
+            assert!((d[c] - wd[c]).abs() < 1e-12, "node {n}: {d:?} vs {wd:?}");
+        }
+        assert!((v - wv).abs() < 1e-12, "node {n}: {v} vs {wv}");
+    }
+    // a system named but not defined
+    let undefined = patched.replacen("    18\n         5", "    18\n         6", 1);
+    let e = parse_uff(&undefined, std::path::Path::new("cs.uff"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(
+            "node 4 is defined in coordinate system 5, which no dataset 18 before it defines"
+        ),
+        "{e}"
+    );
+}
+
+/// The TestLab geometry written by femu and read back: the same coordinate systems (to the six
+/// digits of the format), the same nodes and displacement systems.
+#[test]
+fn coordinate_systems_survive_a_round_trip() {
+    let u = femu_io::uff::read_uff(fixture("testlab_161_164_18_15_82.uff")).unwrap();
+    let text = femu_io::uff::uff_string(&u);
+    let back = femu_io::uff::parse_uff(&text, std::path::Path::new("back.uff")).unwrap();
+    assert_eq!(back.displacement_systems, u.displacement_systems);
+    assert_eq!(back.nodes.len(), u.nodes.len());
+    for (a, b) in u.nodes.iter().zip(&back.nodes) {
+        assert_eq!(a.id, b.id);
+        for c in 0..3 {
+            assert!((a.x[c] - b.x[c]).abs() <= 1e-5 * a.x[c].abs().max(1.0));
+        }
+    }
+    assert_eq!(back.coordinate_systems.len(), u.coordinate_systems.len());
+    for (k, a) in &u.coordinate_systems {
+        let b = &back.coordinate_systems[k];
+        assert_eq!((&a.name, a.kind), (&b.name, b.kind));
+        for i in 0..3 {
+            assert!((a.origin[i] - b.origin[i]).abs() < 1e-5);
+            for j in 0..3 {
+                assert!((a.axes[i][j] - b.axes[i][j]).abs() < 1e-5, "system {k}");
+            }
+        }
+    }
 }

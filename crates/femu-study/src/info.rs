@@ -102,6 +102,20 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
             if u.nodes_2411 { "2411" } else { "15" },
             u.nodes.len()
         );
+        if !u.coordinate_systems.is_empty() {
+            let turned = u
+                .coordinate_systems
+                .values()
+                .filter(|c| !c.is_global_orientation())
+                .count();
+            let _ = writeln!(
+                s,
+                "coordinate systems (18): {} ({} turned from the global axes); {} nodes measure in one of them (read in global directions)",
+                u.coordinate_systems.len(),
+                turned,
+                u.displacement_systems.len()
+            );
+        }
         let solids = u
             .elements
             .iter()

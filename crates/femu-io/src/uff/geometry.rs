@@ -103,6 +103,123 @@ pub(super) fn parse_2477(
     Ok(())
 }
 
+/// Node `id`'s coordinates `x`, given in definition system `cs`, in global coordinates: the
+/// system must have been defined before (dataset 18 precedes the nodes in every export seen).
+fn in_global(
+    path: &Path,
+    ln: usize,
+    out: &Universal,
+    id: i64,
+    cs: i64,
+    x: [f64; 3],
+) -> Result<[f64; 3], IoError> {
+    // 0, and 1 when the file defines no system 1 (I-DEAS's and Gmsh's label of the global
+    // system), are the global system
+    let Some(sys) = out.coordinate_systems.get(&cs).filter(|_| cs != 0) else {
+        if cs > 1 {
+            return Err(perr(
+                path,
+                ln,
+                format!(
+                    "node {id} is defined in coordinate system {cs}, which no dataset 18 before it defines"
+                ),
+            ));
+        }
+        return Ok(x);
+    };
+    if sys.kind != 0 {
+        return Err(perr(
+            path,
+            ln,
+            format!(
+                "node {id} is defined in coordinate system {cs} ({}), which is not cartesian: femu transforms cartesian systems only",
+                sys.name
+            ),
+        ));
+    }
+    let g = sys.to_global(x);
+    Ok(std::array::from_fn(|i| sys.origin[i] + g[i]))
+}
+
+/// Dataset 18 (coordinate systems, defined by three points: the origin, a point on the local x
+/// axis, a point in the local xz plane), relative to the global system.
+pub(super) fn parse_18(
+    path: &Path,
+    body: &[(usize, &str)],
+    out: &mut Universal,
+) -> Result<(), IoError> {
+    let lines: Vec<(usize, &str)> = body.to_vec();
+    let mut k = 0;
+    while k < lines.len() {
+        let (ln, l) = lines[k];
+        if l.trim().is_empty() {
+            k += 1;
+            continue;
+        }
+        if k + 3 >= lines.len() {
+            return Err(perr(
+                path,
+                ln,
+                "dataset 18: a coordinate system needs 4 records",
+            ));
+        }
+        let h = ints(path, ln, l, 5)?;
+        let (number, kind, reference) = (h[0], h[1], h[2]);
+        let name = lines.get(k + 1).map_or("", |x| x.1).trim().to_string();
+        let mut v = nums(path, lines[k + 2].0, lines[k + 2].1, 6)?;
+        let (ln3, l3) = *lines
+            .get(k + 3)
+            .ok_or_else(|| perr(path, ln, "dataset 18: a coordinate system needs 4 records"))?;
+        v.extend(nums(path, ln3, l3, 3)?);
+        if reference != 0 {
+            return Err(perr(
+                path,
+                ln,
+                format!(
+                    "coordinate system {number} is defined relative to system {reference}: femu reads systems relative to the global one only"
+                ),
+            ));
+        }
+        let a = [v[0], v[1], v[2]];
+        let sub = |p: [f64; 3]| [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
+        let dot = |p: [f64; 3], q: [f64; 3]| p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
+        let unit = |p: [f64; 3]| {
+            let n = dot(p, p).sqrt();
+            (n > 0.0).then(|| [p[0] / n, p[1] / n, p[2] / n])
+        };
+        let degenerate = || {
+            perr(
+                path,
+                ln3,
+                format!(
+                    "coordinate system {number}: its three points do not define axes (coincident or collinear)"
+                ),
+            )
+        };
+        let ex = unit(sub([v[3], v[4], v[5]])).ok_or_else(degenerate)?;
+        let c = sub([v[6], v[7], v[8]]);
+        let cx = dot(c, ex);
+        let ez = unit([c[0] - cx * ex[0], c[1] - cx * ex[1], c[2] - cx * ex[2]])
+            .ok_or_else(degenerate)?;
+        let ey = [
+            ez[1] * ex[2] - ez[2] * ex[1],
+            ez[2] * ex[0] - ez[0] * ex[2],
+            ez[0] * ex[1] - ez[1] * ex[0],
+        ];
+        out.coordinate_systems.insert(
+            number,
+            CoordinateSystem {
+                name,
+                kind,
+                origin: a,
+                axes: std::array::from_fn(|i| [ex[i], ey[i], ez[i]]),
+            },
+        );
+        k += 4;
+    }
+    Ok(())
+}
+
 /// Dataset 82.
 pub(super) fn parse_82(
     path: &Path,
@@ -187,6 +304,11 @@ pub(super) fn parse_15(
             num(path, ln, t[5])?,
             num(path, ln, t[6])?,
         ];
+        let (definition, displacement) = (int(path, ln, t[1])?, int(path, ln, t[2])?);
+        let x = in_global(path, ln, out, id, definition, x)?;
+        if displacement > 1 || out.coordinate_systems.contains_key(&displacement) {
+            out.displacement_systems.insert(id as u64, displacement);
+        }
         out.nodes.push(UffNode { id: id as u64, x });
     }
     Ok(())
@@ -220,10 +342,11 @@ pub(super) fn parse_2411(
             ));
         }
         let x = nums(path, pair[1].0, pair[1].1, 3)?;
-        out.nodes.push(UffNode {
-            id: h[0] as u64,
-            x: [x[0], x[1], x[2]],
-        });
+        let x = in_global(path, ln, out, h[0], h[1], [x[0], x[1], x[2]])?;
+        if h[2] > 1 || out.coordinate_systems.contains_key(&h[2]) {
+            out.displacement_systems.insert(h[0] as u64, h[2]);
+        }
+        out.nodes.push(UffNode { id: h[0] as u64, x });
     }
     out.nodes_2411 = true;
     Ok(())

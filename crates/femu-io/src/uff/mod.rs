@@ -73,8 +73,44 @@ pub struct Universal {
     pub trace_lines: Vec<UffTraceLine>,
     /// Dataset 2477 (and 2467) permanent groups.
     pub groups: Vec<UffGroup>,
+    /// Dataset 18 coordinate systems, by number (node coordinates in a non-global definition
+    /// system are transformed to global ones when read).
+    pub coordinate_systems: std::collections::BTreeMap<i64, CoordinateSystem>,
+    /// The displacement coordinate system of each node that names one other than the global
+    /// (datasets 15 and 2411; 0, and 1 when no system 1 is defined, are the global system): test
+    /// modes measured there are turned to global directions by [`Universal::test_data`].
+    pub displacement_systems: std::collections::BTreeMap<u64, i64>,
     /// Skipped datasets and approximations.
     pub warnings: Vec<Warning>,
+}
+
+/// A coordinate system of dataset 18: `x_global = origin + axes x_local` (columns of `axes` are
+/// the local unit axes in global components, for a cartesian system).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CoordinateSystem {
+    /// Its name (record 2).
+    pub name: String,
+    /// 0 cartesian, 1 cylindrical, 2 spherical (femu transforms cartesian systems only).
+    pub kind: i64,
+    /// Origin in global coordinates.
+    pub origin: [f64; 3],
+    /// `axes[i][j]`: global component `i` of local axis `j`.
+    pub axes: [[f64; 3]; 3],
+}
+
+impl CoordinateSystem {
+    /// Whether the system is the global one (cartesian, axes equal to the identity to 1e-12).
+    pub fn is_global_orientation(&self) -> bool {
+        self.kind == 0
+            && (0..3).all(|i| {
+                (0..3).all(|j| (self.axes[i][j] - f64::from(u8::from(i == j))).abs() < 1e-12)
+            })
+    }
+
+    /// `axes v` (a local vector in global components).
+    pub fn to_global(&self, v: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|i| (0..3).map(|j| self.axes[i][j] * v[j]).sum())
+    }
 }
 
 /// One element of dataset 2412.

@@ -132,13 +132,61 @@ impl Universal {
                 )));
             }
         }
+        // Values are in each node's displacement coordinate system. A node measured along all
+        // three local axes is turned to global components (global axis sensors); one measured
+        // along some of them keeps its readings, on sensors along those local axes in global
+        // components (oblique sensors).
         let mut sensors = Vec::new();
-        let mut rows = Vec::new();
+        // per row: node position, and the global combination of its local components
+        let mut rows: Vec<(usize, [f64; 3])> = Vec::new();
         for (k, n) in nodes.iter().enumerate() {
-            for c in 0..3 {
-                if self.modes.iter().any(|m| m.values[k].1[c] != 0.0) {
-                    sensors.push(Sensor::axis(*n, c));
-                    rows.push((k, c));
+            let measured: Vec<usize> = (0..3)
+                .filter(|c| self.modes.iter().any(|m| m.values[k].1[*c] != 0.0))
+                .collect();
+            let system = match self.displacement_systems.get(n) {
+                None => None,
+                Some(cs) => {
+                    let sys = self.coordinate_systems.get(cs).ok_or_else(|| {
+                        bad(format!(
+                            "node {n} measures in displacement coordinate system {cs}, which the file does not define (dataset 18)"
+                        ))
+                    })?;
+                    if sys.kind != 0 {
+                        return Err(bad(format!(
+                            "node {n} measures in coordinate system {cs} ({}), which is not cartesian: femu turns cartesian systems only",
+                            sys.name
+                        )));
+                    }
+                    (!sys.is_global_orientation()).then_some(sys)
+                }
+            };
+            match system {
+                None => {
+                    for c in measured {
+                        sensors.push(Sensor::axis(*n, c));
+                        let mut w = [0.0; 3];
+                        w[c] = 1.0;
+                        rows.push((k, w));
+                    }
+                }
+                Some(sys) if measured.len() == 3 => {
+                    // global component i = sum_j axes[i][j] local_j
+                    for i in 0..3 {
+                        sensors.push(Sensor::axis(*n, i));
+                        rows.push((k, sys.axes[i]));
+                    }
+                }
+                Some(sys) => {
+                    for c in measured {
+                        let direction = std::array::from_fn(|i| sys.axes[i][c]);
+                        sensors.push(Sensor {
+                            node: *n,
+                            direction,
+                        });
+                        let mut w = [0.0; 3];
+                        w[c] = 1.0;
+                        rows.push((k, w));
+                    }
                 }
             }
         }
@@ -146,8 +194,9 @@ impl Universal {
             return Err(bad("every mode shape value is zero".into()));
         }
         let shapes = Mat::from_fn(rows.len(), self.modes.len(), |r, j| {
-            let (k, c) = rows[r];
-            self.modes[j].values[k].1[c]
+            let (k, w) = rows[r];
+            let v = self.modes[j].values[k].1;
+            w[0] * v[0] + w[1] * v[1] + w[2] * v[2]
         });
         let damping = self.modes.iter().map(|m| m.damping).collect();
         let modes = TestModes::new(

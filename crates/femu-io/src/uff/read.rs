@@ -198,6 +198,7 @@ pub fn parse_uff_bytes(bytes: &[u8], path: &Path) -> Result<Universal, IoError> 
         let body: Vec<(usize, &str)> = owned.iter().map(|(l2, t)| (*l2, t.as_str())).collect();
         match kind {
             15 => parse_15(path, &body, &mut out)?,
+            18 => parse_18(path, &body, &mut out)?,
             2411 => parse_2411(path, &body, &mut out)?,
             2412 => parse_2412(path, &body, &mut out)?,
             164 => parse_164(path, &body, &mut out)?,

@@ -97,10 +97,49 @@ pub(super) fn head_text(u: &Universal) -> String {
         s.push_str(&format!(" {:>24.17E}\n", 273.15));
         s.push_str("    -1\n");
     }
+    // coordinate systems by their three points (origin, a point on x, a point in the xz plane);
+    // node coordinates are global, and a node keeps its displacement system
+    if !u.coordinate_systems.is_empty() {
+        s.push_str("    -1\n    18\n");
+        for (number, c) in &u.coordinate_systems {
+            let _ = writeln!(s, "{:>10}{:>10}{:>10}{:>10}{:>10}", number, c.kind, 0, 8, 1);
+            let _ = writeln!(s, "{}", c.name);
+            let o = c.origin;
+            let xp: [f64; 3] = std::array::from_fn(|i| o[i] + c.axes[i][0]);
+            let zp: [f64; 3] = std::array::from_fn(|i| o[i] + c.axes[i][2]);
+            let _ = writeln!(
+                s,
+                "{}{}{}{}{}{}",
+                e13(o[0]),
+                e13(o[1]),
+                e13(o[2]),
+                e13(xp[0]),
+                e13(xp[1]),
+                e13(xp[2])
+            );
+            let _ = writeln!(s, "{}{}{}", e13(zp[0]), e13(zp[1]), e13(zp[2]));
+        }
+        s.push_str("    -1\n");
+    }
+    // the global system's label: 1 (I-DEAS's and Gmsh's) unless the file defines a system 1
+    let global = if u.coordinate_systems.contains_key(&1) {
+        0
+    } else {
+        1
+    };
+    let displacement =
+        |id: u64, default: i64| u.displacement_systems.get(&id).copied().unwrap_or(default);
     if !u.nodes.is_empty() && u.nodes_2411 {
         s.push_str("    -1\n  2411\n");
         for n in &u.nodes {
-            let _ = writeln!(s, " {:>9} {:>9} {:>9} {:>9}", n.id, 1, 1, 11);
+            let _ = writeln!(
+                s,
+                " {:>9} {:>9} {:>9} {:>9}",
+                n.id,
+                global,
+                displacement(n.id, global),
+                11
+            );
             let _ = writeln!(
                 s,
                 " {:>24.16E} {:>24.16E} {:>24.16E}",
@@ -172,7 +211,7 @@ pub(super) fn head_text(u: &Universal) -> String {
                 " {:>9} {:>9} {:>9} {:>9}{}{}{}",
                 n.id,
                 0,
-                0,
+                displacement(n.id, 0),
                 11,
                 e13(n.x[0]),
                 e13(n.x[1]),
