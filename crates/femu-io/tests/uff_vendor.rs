@@ -168,9 +168,8 @@ fn displacement_and_definition_systems_of_dataset_18() {
         let line = if t.len() == 7 && (t[0] == "1" || t[0] == "2") && t[3] == "11" {
             line.replacen("         0        11", "         5        11", 1)
         } else if t.len() == 7 && t[0] == "4" && t[3] == "11" {
-            format!(
-                "         4         5         0        11  1.00000E+00  0.00000E+00  0.00000E+00"
-            )
+            "         4         5         0        11  1.00000E+00  0.00000E+00  0.00000E+00"
+                .to_string()
         } else {
             line.to_string()
         };
