@@ -28,6 +28,10 @@ pub struct MeshOptions {
     /// keywords stay errors).
     #[arg(long, global = true)]
     pub lenient: bool,
+    /// Universal-file tests with their own node numbering: map each test node to the nearest
+    /// model node within this distance (m; coordinates in the file's units, dataset 164).
+    #[arg(long, global = true, value_name = "METRES")]
+    pub map_nearest: Option<f64>,
 }
 
 impl MeshOptions {
@@ -123,6 +127,29 @@ pub fn load_model(
     let loaded = femu::study::load::load_model(path, &mesh.model_options(path, lumped, quiet)?)?;
     pb.suspend(|| warn(quiet, &loaded.warnings));
     Ok(loaded)
+}
+
+/// Reads the test and maps it onto the model (with `--map-nearest`, printing the mapping).
+///
+/// # Errors
+/// As [`femu::study::load::load_test_with`].
+pub fn load_test(
+    path: &Path,
+    loaded: &LoadedModel,
+    mesh: &MeshOptions,
+    quiet: bool,
+) -> Result<femu::study::load::LoadedTest, CliError> {
+    let options = femu::study::load::TestOptions {
+        map_nearest: mesh.map_nearest,
+    };
+    let test = femu::study::load::load_test_with(path, loaded, &options)?;
+    if !quiet && !test.mapping.is_empty() {
+        eprintln!("test node -> model node (distance, m):");
+        for m in &test.mapping {
+            eprintln!("  {} -> {} ({:.3e})", m.test, m.model, m.distance);
+        }
+    }
+    Ok(test)
 }
 
 /// Writes `value` as pretty JSON when a path is given.

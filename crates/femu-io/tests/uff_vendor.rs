@@ -246,3 +246,54 @@ fn coordinate_systems_survive_a_round_trip() {
         }
     }
 }
+
+/// A mesh in millimetres (dataset 164, length factor 1000, as I-DEAS writes a mm system): the
+/// model's coordinates are metres, and the conversion is said.
+#[test]
+fn millimetre_meshes_become_metres() {
+    use femu_io::uff::{UffElement, UffNode, UffUnits, Universal, parse_uff, uff_string};
+    let corners = [
+        [0.0, 0.0, 0.0],
+        [100.0, 0.0, 0.0],
+        [100.0, 50.0, 0.0],
+        [0.0, 50.0, 0.0],
+        [0.0, 0.0, 20.0],
+        [100.0, 0.0, 20.0],
+        [100.0, 50.0, 20.0],
+        [0.0, 50.0, 20.0],
+    ];
+    let u = Universal {
+        units: Some(UffUnits {
+            code: 5,
+            description: "mm (milli newton)".into(),
+            factors: [1000.0, 1.0, 1.0],
+        }),
+        nodes: corners
+            .iter()
+            .enumerate()
+            .map(|(i, x)| UffNode {
+                id: i as u64 + 1,
+                x: *x,
+            })
+            .collect(),
+        nodes_2411: true,
+        elements: vec![UffElement {
+            id: 1,
+            descriptor: 115,
+            nodes: (1..=8).collect(),
+        }],
+        ..Default::default()
+    };
+    let path = std::path::Path::new("mm.unv");
+    let back = parse_uff(&uff_string(&u), path).unwrap();
+    let (mesh, warnings) = back.to_mesh(path).unwrap();
+    assert_eq!(mesh.coords()[6], [0.1, 0.05, 0.02]);
+    // 0.1 x 0.05 x 0.02 m
+    assert!((mesh.volume().unwrap() - 1e-4).abs() < 1e-18);
+    assert!(
+        warnings.iter().any(|w| w
+            .message
+            .starts_with("coordinates converted to metres: divided by the length factor 1000")),
+        "{warnings:?}"
+    );
+}

@@ -26,7 +26,7 @@
 use crate::StudyError;
 use crate::estimate::{EstimateOptions, EstimateResult, estimate_with_bounds};
 use crate::expand::{ExpansionReport, expand_shapes, expanded_names};
-use crate::load::{MaterialOptions, ModelOptions, load_model, load_test};
+use crate::load::{MaterialOptions, ModelOptions, TestOptions, load_model, load_test_with};
 use crate::modes::lowest_for_test;
 use crate::removal::{removal_over_test, write_removal_study};
 use crate::report::{create_dir, write_json, write_shapes_vtu};
@@ -57,6 +57,10 @@ pub struct StudyFile {
     /// Unknown keywords of an `.inp` model are warnings instead of errors.
     #[serde(default)]
     pub lenient: bool,
+    /// A universal-file test with its own node numbering: each test node is mapped to the nearest
+    /// model node within this distance (m).
+    #[serde(default)]
+    pub map_nearest: Option<f64>,
     /// Pairing settings.
     #[serde(default)]
     pub pairing: Option<PairingSection>,
@@ -197,7 +201,14 @@ pub fn run_study_file(
         e => e,
     };
     let model = load_model(&base.join(&s.model), &options).map_err(named)?;
-    let test = load_test(&base.join(&s.test), &model).map_err(named)?;
+    let test = load_test_with(
+        &base.join(&s.test),
+        &model,
+        &TestOptions {
+            map_nearest: s.map_nearest,
+        },
+    )
+    .map_err(named)?;
     create_dir(out)?;
     let mut files = Vec::new();
     let n_test = test.data.modes.len();

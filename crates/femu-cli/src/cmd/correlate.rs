@@ -4,7 +4,6 @@ use crate::common::{MeshOptions, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
 use femu::correlate::{ModeSet, PairingOptions, correlate};
-use femu::study::load::load_test;
 use femu::study::modes::lowest_for_test;
 use std::path::PathBuf;
 
@@ -45,7 +44,7 @@ pub struct CorrelateArgs {
 pub fn run(a: &CorrelateArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliError> {
     let pb = spinner(quiet, "reading the model");
     let loaded = load_model(&a.model, mesh, a.lumped, quiet, &pb)?;
-    let test = load_test(&a.test, &loaded)?;
+    let test = crate::common::load_test(&a.test, &loaded, mesh, quiet)?;
     pb.set_message("solving for the model's modes");
     let modes = lowest_for_test(&loaded, a.count, test.data.modes.len())?;
     pb.finish_and_clear();

@@ -6,7 +6,6 @@ use clap::Args;
 use femu::correlate::{Method, ModeSet};
 use femu::study::estimate::{EstimateOptions, estimate_with_bounds};
 use femu::study::expand::expand_shapes;
-use femu::study::load::load_test;
 use femu::study::modes::lowest_for_test;
 use std::path::PathBuf;
 
@@ -44,7 +43,7 @@ pub struct EstimateArgs {
 pub fn run(a: &EstimateArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliError> {
     let pb = spinner(quiet, "reading the model");
     let loaded = load_model(&a.model, mesh, a.lumped, quiet, &pb)?;
-    let test = load_test(&a.test, &loaded)?;
+    let test = crate::common::load_test(&a.test, &loaded, mesh, quiet)?;
     let modes_t = &test.data.modes;
     let lambdas = modes_t.eigenvalues();
     pb.set_message(format!(

@@ -6,7 +6,6 @@ use crate::error::CliError;
 use clap::Args;
 use femu::correlate::Method;
 use femu::study::expand::{expanded_names, expansion_report};
-use femu::study::load::load_test;
 use femu::study::removal::write_removal_study;
 use femu::study::report::{create_dir, write_shapes_vtu};
 use std::path::PathBuf;
@@ -50,7 +49,7 @@ pub struct ExpandArgs {
 pub fn run(a: &ExpandArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliError> {
     let pb = spinner(quiet, "reading the model");
     let loaded = load_model(&a.model, mesh, a.lumped, quiet, &pb)?;
-    let test = load_test(&a.test, &loaded)?;
+    let test = crate::common::load_test(&a.test, &loaded, mesh, quiet)?;
     let modes = &test.data.modes;
     pb.set_message(format!(
         "expanding {} test modes ({}){}",

@@ -3,7 +3,6 @@
 use crate::common::{MeshOptions, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
-use femu::study::load::load_test;
 use femu::study::updating::{UpdateStudyOptions, localise_update_check, resolve_sets};
 use femu::update::UpdateMethod;
 use std::path::PathBuf;
@@ -64,7 +63,7 @@ pub struct UpdateArgs {
 pub fn run(a: &UpdateArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliError> {
     let pb = spinner(quiet, "reading the model");
     let loaded = load_model(&a.model, mesh, false, quiet, &pb)?;
-    let test = load_test(&a.test, &loaded)?;
+    let test = crate::common::load_test(&a.test, &loaded, mesh, quiet)?;
     let n_test = test.data.modes.len();
     let tuned = a.tuned.unwrap_or((2 * n_test).div_ceil(3)).min(n_test);
     if tuned == 0 {

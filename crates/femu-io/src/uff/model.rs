@@ -3,14 +3,32 @@
 use super::*;
 
 impl Universal {
+    /// The file's length factor (dataset 164; 1 without it): SI = file units / factor.
+    ///
+    /// # Errors
+    /// A factor that is not a positive finite number.
+    pub fn length_factor(&self, path: &Path) -> Result<f64, IoError> {
+        let f = self.units.as_ref().map_or(1.0, |u| u.factors[0]);
+        if f.is_finite() && f > 0.0 {
+            Ok(f)
+        } else {
+            Err(IoError::Content {
+                path: path.to_path_buf(),
+                reason: format!("dataset 164's length factor {f} is not a positive number"),
+            })
+        }
+    }
+
     /// The femu mesh of the file's nodes and solid elements: linear (descriptors 111 tetrahedron,
     /// 112 wedge, 115 brick, whose node orders are Abaqus') and parabolic (118, 113, 116, whose
     /// I-DEAS orders interleave corners and mid-edge nodes around each face: converted, see
     /// `UNV_HEX20`); other elements (shells, beams) are skipped and counted in the returned
-    /// warnings.
+    /// warnings. Coordinates are converted to metres with the file's units (dataset 164: SI = file
+    /// units / length factor, so a millimetre file's factor is 1000), said in a warning when not 1.
     ///
     /// # Errors
-    /// A wrong node count (element label), a mesh error (duplicate or missing node), no solid.
+    /// A wrong node count (element label), a mesh error (duplicate or missing node), no solid, a
+    /// length factor that is not a positive number.
     pub fn to_mesh(&self, path: &Path) -> Result<(femu_fem::mesh::Mesh, Vec<Warning>), IoError> {
         use femu_fem::element::ElementKind;
         let model_err = |source| IoError::Model {
@@ -18,9 +36,11 @@ impl Universal {
             line: 0,
             source,
         };
+        let length = self.length_factor(path)?;
         let mut mesh = femu_fem::mesh::Mesh::new();
         for n in &self.nodes {
-            mesh.add_node(n.id, n.x).map_err(model_err)?;
+            mesh.add_node(n.id, n.x.map(|v| v / length))
+                .map_err(model_err)?;
         }
         let mut skipped = 0;
         for e in &self.elements {
@@ -98,6 +118,16 @@ impl Universal {
             }
         }
         let mut warnings = Vec::new();
+        if length != 1.0 {
+            warnings.push(Warning {
+                path: path.to_path_buf(),
+                line: 0,
+                message: format!(
+                    "coordinates converted to metres: divided by the length factor {length} of dataset 164 ({})",
+                    self.units.as_ref().map_or("", |u| u.description.as_str())
+                ),
+            });
+        }
         if skipped > 0 {
             warnings.push(Warning {
                 path: path.to_path_buf(),
