@@ -32,6 +32,10 @@ pub struct MeshOptions {
     /// model node within this distance (m; coordinates in the file's units, dataset 164).
     #[arg(long, global = true, value_name = "METRES")]
     pub map_nearest: Option<f64>,
+    /// The unit of a test file's coordinates when it does not say (no dataset 164): m, cm, mm,
+    /// in or ft. Used with --map-nearest.
+    #[arg(long, global = true, value_name = "UNIT")]
+    pub test_units: Option<String>,
 }
 
 impl MeshOptions {
@@ -141,7 +145,18 @@ pub fn load_test(
 ) -> Result<femu::study::load::LoadedTest, CliError> {
     let options = femu::study::load::TestOptions {
         map_nearest: mesh.map_nearest,
+        test_units: mesh
+            .test_units
+            .as_deref()
+            .map(femu::study::load::length_unit)
+            .transpose()?,
     };
+    if mesh.test_units.is_some() && mesh.map_nearest.is_none() {
+        warn(
+            quiet,
+            &["--test-units applies with --map-nearest (test coordinates): not used".into()],
+        );
+    }
     let test = femu::study::load::load_test_with(path, loaded, &options)?;
     if !quiet && !test.mapping.is_empty() {
         eprintln!("test node -> model node (distance, m):");

@@ -221,6 +221,29 @@ pub struct TestOptions {
     /// 2411, in the file's units) to the nearest model node within this distance (m), instead of
     /// taking test node ids as model node ids.
     pub map_nearest: Option<f64>,
+    /// Metres per unit of the test's coordinates where the file says nothing (no dataset 164):
+    /// 0.001 for millimetres. A file's own units win.
+    pub test_units: Option<f64>,
+}
+
+/// Metres per unit of `name` (`m`, `cm`, `mm`, `in`, `ft`).
+///
+/// # Errors
+/// Another name.
+pub fn length_unit(name: &str) -> Result<f64, StudyError> {
+    Ok(match name.to_ascii_lowercase().as_str() {
+        "m" => 1.0,
+        "cm" => 0.01,
+        "mm" => 0.001,
+        "in" => 0.0254,
+        "ft" => 0.3048,
+        other => {
+            return Err(StudyError::invalid(
+                "test units",
+                format!("{other}: expected m, cm, mm, in or ft"),
+            ));
+        }
+    })
 }
 
 /// Reads test modes (`.unv`/`.uff` universal file, `.json`, or CSV) and maps their sensors onto
@@ -258,7 +281,13 @@ pub fn load_test_with(
         let u = femu_io::uff::read_uff(path)?;
         let mut data = u.test_data(path)?;
         if let Some(tol) = options.map_nearest {
-            mapping = map_nearest(&u, &mut data, model, tol, path)?;
+            // metres per file unit: the file's dataset 164, else the option, else metres
+            let metres = match (&u.units, options.test_units) {
+                (Some(_), _) => 1.0 / u.length_factor(path)?,
+                (None, Some(m)) => m,
+                (None, None) => 1.0,
+            };
+            mapping = map_nearest(&u, &mut data, model, tol, metres, path)?;
         }
         data
     } else if has_extension(path, &["json"]) {
@@ -300,6 +329,7 @@ fn map_nearest(
     data: &mut TestData,
     model: &LoadedModel,
     tol: f64,
+    metres: f64,
     path: &Path,
 ) -> Result<Vec<NodeMapping>, StudyError> {
     if !(tol.is_finite() && tol >= 0.0) {
@@ -308,12 +338,11 @@ fn map_nearest(
             format!("{tol} m is not a non-negative distance"),
         ));
     }
-    let length = u.length_factor(path)?;
     let mesh = model.model.mesh();
     let coords: std::collections::HashMap<u64, [f64; 3]> = u
         .nodes
         .iter()
-        .map(|n| (n.id, n.x.map(|v| v / length)))
+        .map(|n| (n.id, n.x.map(|v| v * metres)))
         .collect();
     let mut test_nodes: Vec<u64> = data.sensors.iter().map(|s| s.node).collect();
     test_nodes.sort_unstable();

@@ -206,6 +206,7 @@ pub fn run_study_file(
         &model,
         &TestOptions {
             map_nearest: s.map_nearest,
+            test_units: None,
         },
     )
     .map_err(named)?;

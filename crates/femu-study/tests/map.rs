@@ -65,6 +65,7 @@ fn a_test_on_its_own_wireframe_maps_onto_the_model() {
         &model,
         &TestOptions {
             map_nearest: Some(1e-3),
+            ..Default::default()
         },
     )
     .unwrap();
@@ -82,6 +83,7 @@ fn a_test_on_its_own_wireframe_maps_onto_the_model() {
         &model,
         &TestOptions {
             map_nearest: Some(1e-4),
+            ..Default::default()
         },
     )
     .unwrap_err()
@@ -103,6 +105,7 @@ fn a_test_on_its_own_wireframe_maps_onto_the_model() {
         &model,
         &TestOptions {
             map_nearest: Some(1e-3),
+            ..Default::default()
         },
     )
     .unwrap_err()
@@ -117,9 +120,42 @@ fn a_test_on_its_own_wireframe_maps_onto_the_model() {
         &model,
         &TestOptions {
             map_nearest: Some(1e-3),
+            ..Default::default()
         },
     )
     .unwrap_err()
     .to_string();
     assert!(e.contains("needs the test nodes' coordinates"), "{e}");
+}
+
+/// A test file in millimetres that does not say so (no dataset 164): with the unit given, it maps.
+#[test]
+fn test_units_where_the_file_says_nothing() {
+    let model = load_model(&fixture("inp", "two_hex.inp"), &ModelOptions::default()).unwrap();
+    let path = test_file("silent", |id| 1000 + id, 0.0);
+    // drop dataset 164
+    let text = std::fs::read_to_string(&path).unwrap();
+    let start = text.find("    -1\n   164\n").expect("dataset 164");
+    let end = start + text[start + 7..].find("    -1\n").unwrap() + 7 + 7;
+    let text = format!("{}{}", &text[..start], &text[end..]);
+    assert!(!text.contains("   164\n"));
+    std::fs::write(&path, text).unwrap();
+    let mm = TestOptions {
+        map_nearest: Some(1e-3),
+        test_units: Some(femu_study::load::length_unit("mm").unwrap()),
+    };
+    let mapped = load_test_with(&path, &model, &mm).unwrap();
+    assert!(
+        mapped
+            .mapping
+            .iter()
+            .all(|m| m.distance < 1e-12 && m.model + 1000 == m.test)
+    );
+    // read as metres, the nodes are 200 m away
+    let metres = TestOptions {
+        map_nearest: Some(1e-3),
+        test_units: None,
+    };
+    assert!(load_test_with(&path, &model, &metres).is_err());
+    assert!(femu_study::load::length_unit("furlong").is_err());
 }
