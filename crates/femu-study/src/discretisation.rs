@@ -41,8 +41,7 @@ pub fn estimate(
     if mesh.elements().all(|e| e.kind.is_quadratic()) {
         return Ok(None);
     }
-    let qmesh = to_quadratic(mesh);
-    let mut q = Model::new(qmesh)?;
+    let mut qm = to_quadratic(mesh);
     // materials element by element, grouped by material
     let mut by_material: Vec<(femu_fem::material::Material, Vec<u64>)> = Vec::new();
     for e in 0..mesh.element_count() {
@@ -53,11 +52,10 @@ pub fn estimate(
             None => by_material.push((m.clone(), vec![id])),
         }
     }
-    let mut qm = q.mesh().clone();
     for (i, (_, ids)) in by_material.iter().enumerate() {
         qm.add_element_set(format!("__femu_discretisation_{i}"), ids)?;
     }
-    q = Model::new(qm)?;
+    let mut q = Model::new(qm)?;
     for (i, (m, _)) in by_material.iter().enumerate() {
         q.set_material(Some(&format!("__femu_discretisation_{i}")), m.clone())?;
     }

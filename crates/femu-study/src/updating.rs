@@ -7,7 +7,6 @@ use crate::discretisation::{DiscretisationEstimate, estimate as estimate_discret
 use crate::load::LoadedModel;
 use crate::reach::{Reach, reach};
 use femu_correlate::{ModeSet, SensorLayout, TestModes};
-use femu_correlate::{PairingOptions, correlate};
 use femu_fem::assembly::{Assembler, MassKind, SystemMatrices};
 use femu_fem::groups::ParameterGroups;
 use femu_fem::model::Model;
@@ -155,13 +154,9 @@ pub fn localise_update_check(
         .iter()
         .filter_map(|c| candidates.iter().position(|k| k == c))
         .collect();
-    let reach = reach(
-        &localisation,
-        &chosen_groups,
-        &mut build(&chosen)?,
-        layout,
-        &tuned,
-    )?;
+    // the model that will be updated serves the a priori reach first (left at zero)
+    let mut up = build(&chosen)?;
+    let reach = reach(&localisation, &chosen_groups, &mut up, layout, &tuned)?;
     let computed;
     let before = match before {
         Some(b) => b,
@@ -171,16 +166,16 @@ pub fn localise_update_check(
         }
     };
     let run = |method: UpdateMethod,
+               up: &mut UpdateModel<'_>,
                log: &mut dyn FnMut(&Iteration)|
-     -> Result<(UpdateModel<'_>, UpdateResult), StudyError> {
-        let mut up = build(&chosen)?;
-        let result = match method {
+     -> Result<UpdateResult, StudyError> {
+        Ok(match method {
             UpdateMethod::SbEbe => {
                 let o = SbebeOptions {
                     test_error: options.test_error,
                     ..Default::default()
                 };
-                sb_ebe(&mut up, layout, &tuned, &o, log)?
+                sb_ebe(up, layout, &tuned, &o, log)?
             }
             UpdateMethod::InverseEigensensitivity => {
                 let o = SensitivityOptions {
@@ -188,12 +183,11 @@ pub fn localise_update_check(
                     uncertainty: options.uncertainty,
                     ..Default::default()
                 };
-                inverse_eigensensitivity(&mut up, layout, &tuned, &o, log)?
+                inverse_eigensensitivity(up, layout, &tuned, &o, log)?
             }
-        };
-        Ok((up, result))
+        })
     };
-    let (mut up, result) = run(options.method, &mut progress)?;
+    let result = run(options.method, &mut up, &mut progress)?;
     let after = model_modes(&mut up, options.check_modes, &Default::default())?;
     let tuned_idx: Vec<usize> = (0..options.tuned).collect();
     let mut truth_check = truth_check(
@@ -209,18 +203,13 @@ pub fn localise_update_check(
     } else {
         None
     };
-    // the discretisation error of the model mode each test mode pairs with before updating
+    // the discretisation error of the model mode each test mode paired with before updating
     let per_test: Vec<Option<f64>> = match &discretisation {
-        Some(d) => {
-            let pairing = correlate(before, test, layout, &PairingOptions::default())?.pairing;
-            (0..test.len())
-                .map(|t| {
-                    pairing
-                        .of_test(t)
-                        .and_then(|p| d.relative.get(p.model).copied().flatten())
-                })
-                .collect()
-        }
+        Some(d) => truth_check
+            .modes
+            .iter()
+            .map(|m| m.f_before.and_then(|f| d.at_frequency(f)))
+            .collect(),
         None => Vec::new(),
     };
     let parameters = up
@@ -267,7 +256,7 @@ pub fn localise_update_check(
             UpdateMethod::SbEbe => UpdateMethod::InverseEigensensitivity,
             UpdateMethod::InverseEigensensitivity => UpdateMethod::SbEbe,
         };
-        Some(run(other, &mut |_| {})?.1)
+        Some(run(other, &mut build(&chosen)?, &mut |_| {})?)
     } else {
         None
     };

@@ -106,39 +106,16 @@ impl Localisation {
     /// the objective they remove; `None` without the normal equations.
     pub fn joint_fit(&self, groups: &[usize]) -> Option<(Vec<f64>, f64)> {
         let (gram, num, objective) = self.normal.as_ref()?;
-        let p = groups.len();
-        // [G | -num] reduced by Gauss-Jordan with partial pivoting (p is small)
-        let mut m: Vec<Vec<f64>> = groups
-            .iter()
-            .map(|&a| {
-                let mut row: Vec<f64> = groups.iter().map(|&b| gram[a][b]).collect();
-                row.push(-num[a]);
-                row
-            })
-            .collect();
-        let tiny = 1e-14 * groups.iter().map(|&a| gram[a][a]).fold(0.0, f64::max);
-        for c in 0..p {
-            let piv = (c..p).max_by(|x, y| m[*x][c].abs().total_cmp(&m[*y][c].abs()))?;
-            m.swap(c, piv);
-            let d = m[c][c];
-            if d.abs() <= tiny {
-                continue;
-            }
-            let pivot = m[c].clone();
-            for (r, row) in m.iter_mut().enumerate() {
-                if r != c {
-                    let f = row[c] / d;
-                    row.iter_mut().zip(&pivot).for_each(|(v, w)| *v -= f * w);
-                }
-            }
-        }
-        let theta: Vec<f64> = (0..p)
+        let g = faer::Mat::from_fn(groups.len(), groups.len(), |a, b| {
+            gram[groups[a]][groups[b]]
+        });
+        // the minimum-norm least-squares factors: groups the data do not see stay at zero
+        let (inverse, _) = crate::lsq::symmetric_pseudo_inverse(g.as_ref()).ok()?;
+        let theta: Vec<f64> = (0..groups.len())
             .map(|a| {
-                if m[a][a].abs() > tiny {
-                    m[a][p] / m[a][a]
-                } else {
-                    0.0
-                }
+                -(0..groups.len())
+                    .map(|b| inverse[(a, b)] * num[groups[b]])
+                    .sum::<f64>()
             })
             .collect();
         // removed = -theta . num (the decrease of the quadratic at its minimum)

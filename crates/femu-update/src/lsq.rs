@@ -149,6 +149,37 @@ pub fn box_qp(
     })
 }
 
+/// The pseudo-inverse of a small symmetric positive semi-definite matrix (a normal matrix
+/// `J^T J`) by its eigendecomposition (`femu_sparse::dense::symmetric_eigen`), eigenvalues at or
+/// below `1e-13` of the largest counted as zero; and, per index, whether it has a component
+/// (above 1e-8) along that null space: such a parameter is not determined by the data.
+///
+/// # Errors
+/// The dense eigensolver's non-convergence.
+pub(crate) fn symmetric_pseudo_inverse(
+    a: MatRef<'_, f64>,
+) -> Result<(Mat<f64>, Vec<bool>), UpdateError> {
+    let p = a.nrows();
+    let (mu, v) = femu_sparse::dense::symmetric_eigen(a)?;
+    let tiny = 1e-13 * mu.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let mut inverse = Mat::<f64>::zeros(p, p);
+    let mut undetermined = vec![false; p];
+    for (j, m) in mu.iter().enumerate() {
+        if *m <= tiny {
+            for (k, u) in undetermined.iter_mut().enumerate() {
+                *u |= v[(k, j)].abs() > 1e-8;
+            }
+            continue;
+        }
+        for r in 0..p {
+            for c in 0..p {
+                inverse[(r, c)] += v[(r, j)] * v[(c, j)] / m;
+            }
+        }
+    }
+    Ok((inverse, undetermined))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -267,7 +267,8 @@ fn jacobian(
     Ok(jac)
 }
 
-/// `Cov = s^2 (J^T J)^-1` (Gauss-Jordan with pivoting; `p` is small): the 95 % half-widths.
+/// `Cov = s^2 (J^T J)^-1`: the 95 % half-widths (infinite for a parameter the data do not
+/// determine).
 fn confidence(jac: &Mat<f64>, residual: &[f64]) -> Confidence {
     let (m, p) = (jac.nrows(), jac.ncols());
     let chi: f64 = residual.iter().map(|r| r * r).sum();
@@ -277,57 +278,20 @@ fn confidence(jac: &Mat<f64>, residual: &[f64]) -> Confidence {
         f64::INFINITY
     };
     let jtj = jac.transpose() * jac;
-    // [H | I] -> [I | H^-1]
-    let mut a: Vec<Vec<f64>> = (0..p)
-        .map(|r| {
-            (0..2 * p)
-                .map(|c| {
-                    if c < p {
-                        jtj[(r, c)]
-                    } else if c - p == r {
-                        1.0
-                    } else {
-                        0.0
-                    }
-                })
-                .collect()
-        })
-        .collect();
-    let tiny = 1e-13 * (0..p).map(|k| jtj[(k, k)].abs()).fold(0.0, f64::max);
-    let mut singular = vec![false; p];
-    for col in 0..p {
-        let piv = (col..p)
-            .max_by(|x, y| a[*x][col].abs().total_cmp(&a[*y][col].abs()))
-            .unwrap_or(col);
-        if a[piv][col].abs() <= tiny {
-            singular[col] = true;
-            continue;
-        }
-        a.swap(col, piv);
-        let d = a[col][col];
-        a[col].iter_mut().for_each(|v| *v /= d);
-        for r in 0..p {
-            if r != col {
-                let f = a[r][col];
-                if f != 0.0 {
-                    let pivot_row = a[col].clone();
-                    a[r].iter_mut()
-                        .zip(&pivot_row)
-                        .for_each(|(v, w)| *v -= f * w);
+    // a parameter along a null direction of J^T J is not determined: an infinite interval
+    let half_width_95 = match crate::lsq::symmetric_pseudo_inverse(jtj.as_ref()) {
+        Ok((inverse, undetermined)) => (0..p)
+            .map(|k| {
+                let var = inverse[(k, k)];
+                if undetermined[k] || !(var.is_finite() && var >= 0.0) {
+                    f64::INFINITY
+                } else {
+                    1.96 * (scale * var).sqrt()
                 }
-            }
-        }
-    }
-    let half_width_95 = (0..p)
-        .map(|k| {
-            let var = a[k][p + k];
-            if singular.iter().any(|s| *s) || !(var.is_finite() && var >= 0.0) {
-                f64::INFINITY
-            } else {
-                1.96 * (scale * var).sqrt()
-            }
-        })
-        .collect();
+            })
+            .collect(),
+        Err(_) => vec![f64::INFINITY; p],
+    };
     Confidence {
         half_width_95,
         chi_square: chi,

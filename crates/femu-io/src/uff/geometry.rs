@@ -141,6 +141,25 @@ fn in_global(
     Ok(std::array::from_fn(|i| sys.origin[i] + g[i]))
 }
 
+/// Adds node `id` (datasets 15 and 2411) with coordinates `x` in its definition system
+/// `systems[0]`, made global, and records its displacement system `systems[1]` unless global.
+fn push_node(
+    path: &Path,
+    ln: usize,
+    out: &mut Universal,
+    id: i64,
+    systems: [i64; 2],
+    x: [f64; 3],
+) -> Result<(), IoError> {
+    let x = in_global(path, ln, out, id, systems[0], x)?;
+    let displacement = systems[1];
+    if displacement > 1 || out.coordinate_systems.contains_key(&displacement) {
+        out.displacement_systems.insert(id as u64, displacement);
+    }
+    out.nodes.push(UffNode { id: id as u64, x });
+    Ok(())
+}
+
 /// Dataset 18 (coordinate systems, defined by three points: the origin, a point on the local x
 /// axis, a point in the local xz plane), relative to the global system.
 pub(super) fn parse_18(
@@ -304,12 +323,8 @@ pub(super) fn parse_15(
             num(path, ln, t[5])?,
             num(path, ln, t[6])?,
         ];
-        let (definition, displacement) = (int(path, ln, t[1])?, int(path, ln, t[2])?);
-        let x = in_global(path, ln, out, id, definition, x)?;
-        if displacement > 1 || out.coordinate_systems.contains_key(&displacement) {
-            out.displacement_systems.insert(id as u64, displacement);
-        }
-        out.nodes.push(UffNode { id: id as u64, x });
+        let systems = [int(path, ln, t[1])?, int(path, ln, t[2])?];
+        push_node(path, ln, out, id, systems, x)?;
     }
     Ok(())
 }
@@ -342,11 +357,7 @@ pub(super) fn parse_2411(
             ));
         }
         let x = nums(path, pair[1].0, pair[1].1, 3)?;
-        let x = in_global(path, ln, out, h[0], h[1], [x[0], x[1], x[2]])?;
-        if h[2] > 1 || out.coordinate_systems.contains_key(&h[2]) {
-            out.displacement_systems.insert(h[0] as u64, h[2]);
-        }
-        out.nodes.push(UffNode { id: h[0] as u64, x });
+        push_node(path, ln, out, h[0], [h[1], h[2]], [x[0], x[1], x[2]])?;
     }
     out.nodes_2411 = true;
     Ok(())
