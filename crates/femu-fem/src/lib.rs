@@ -30,6 +30,7 @@ mod error;
 pub mod generate;
 pub mod groups;
 pub mod kernel;
+pub mod locate;
 pub mod material;
 pub mod mesh;
 pub mod model;

@@ -5,5 +5,6 @@ mod fem {
     pub mod common;
     mod convergence;
     mod elements;
+    mod locate;
     mod mesh;
 }
