@@ -66,7 +66,9 @@ pub use estimators::{
     Bound, BoundKind, Estimator, Form, ModelSpectrum, PairedModel, Relation, ResidualNorms,
     SpectrumProof, assess, is_identity, sin_theta_bound,
 };
-pub use expansion::{Expander, Method, Partition, SENSOR_SPACE_LIMIT, TestErrorExpansion};
+pub use expansion::{
+    Expander, Method, Partition, SENSOR_SPACE_LIMIT, SensorBasis, TestErrorExpansion,
+};
 pub use mass::MassSolver;
 pub use modes::{ModeSet, TestModes};
 pub use pairing::{Pair, Pairing, PairingOptions, pair_modes};

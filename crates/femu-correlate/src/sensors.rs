@@ -13,20 +13,46 @@ use femu_sparse::SparseMatrix;
 use serde::{Deserialize, Serialize};
 
 /// One sensor: a node (the user's id) and a direction (normalised when the layout is built).
+///
+/// A sensor between FE nodes (a test node mapped into an element, docs/MATH.md "Mapping test
+/// nodes") keeps the test's label in `node` and reads the shape-function combination `at` of
+/// model nodes: `u(p) = sum_a w_a u(node_a)`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Sensor {
-    /// Node id, as in the mesh file.
+    /// Node id: a model node, or the test's label of a sensor with `at`.
     pub node: u64,
     /// Measuring direction (global axes); need not be unit length.
     pub direction: [f64; 3],
+    /// Model node ids and weights a sensor between nodes reads; empty for a sensor on `node`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub at: Vec<(u64, f64)>,
 }
 
 impl Sensor {
+    /// A sensor on model node `node` along `direction`.
+    pub fn new(node: u64, direction: [f64; 3]) -> Self {
+        Self {
+            node,
+            direction,
+            at: Vec::new(),
+        }
+    }
+
     /// A sensor along a global axis (`0 = x, 1 = y, 2 = z`).
     pub fn axis(node: u64, component: usize) -> Self {
         let mut direction = [0.0; 3];
         direction[component.min(2)] = 1.0;
-        Self { node, direction }
+        Self::new(node, direction)
+    }
+
+    /// A sensor labelled `label` at a point between model nodes, reading `sum_a w_a u(node_a)`
+    /// along `direction` (`at` holds `(model node id, w_a)`, the shape functions at the point).
+    pub fn between(label: u64, direction: [f64; 3], at: Vec<(u64, f64)>) -> Self {
+        Self {
+            node: label,
+            direction,
+            at,
+        }
     }
 }
 
@@ -53,12 +79,6 @@ impl SensorLayout {
         let mut rows = Vec::with_capacity(sensors.len());
         let mut normalised = Vec::with_capacity(sensors.len());
         for (s, sensor) in sensors.iter().enumerate() {
-            let node = mesh
-                .node_index(sensor.node)
-                .ok_or(CorrelateError::SensorOnMissingNode {
-                    sensor: s,
-                    node: sensor.node,
-                })?;
             let d = sensor.direction;
             let norm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             if !(norm.is_finite() && norm > 0.0) {
@@ -69,21 +89,71 @@ impl SensorLayout {
                 });
             }
             let unit = [d[0] / norm, d[1] / norm, d[2] / norm];
-            let node_dofs = dofs.node_dofs(node);
             let mut row = Vec::with_capacity(3);
-            for c in 0..3 {
-                if unit[c].abs() <= COMPONENT_EPS {
-                    continue;
-                }
-                match node_dofs[c] {
-                    Some(f) => row.push((f, unit[c])),
-                    None => {
-                        return Err(CorrelateError::SensorOnConstrainedDof {
+            if sensor.at.is_empty() {
+                let node =
+                    mesh.node_index(sensor.node)
+                        .ok_or(CorrelateError::SensorOnMissingNode {
                             sensor: s,
                             node: sensor.node,
-                            component: c,
+                        })?;
+                let node_dofs = dofs.node_dofs(node);
+                for c in 0..3 {
+                    if unit[c].abs() <= COMPONENT_EPS {
+                        continue;
+                    }
+                    match node_dofs[c] {
+                        Some(f) => row.push((f, unit[c])),
+                        None => {
+                            return Err(CorrelateError::SensorOnConstrainedDof {
+                                sensor: s,
+                                node: sensor.node,
+                                component: c,
+                            });
+                        }
+                    }
+                }
+            } else {
+                // between nodes: fixed DOFs read zero and drop out of the row
+                for &(id, w) in &sensor.at {
+                    let node = mesh
+                        .node_index(id)
+                        .ok_or(CorrelateError::SensorOnMissingNode {
+                            sensor: s,
+                            node: id,
+                        })?;
+                    if !w.is_finite() {
+                        return Err(CorrelateError::BadDirection {
+                            sensor: s,
+                            node: sensor.node,
+                            direction: d,
                         });
                     }
+                    let node_dofs = dofs.node_dofs(node);
+                    for c in 0..3 {
+                        let v = w * unit[c];
+                        if v.abs() <= COMPONENT_EPS {
+                            continue;
+                        }
+                        if let Some(f) = node_dofs[c] {
+                            match row.iter_mut().find(|(g, _)| *g == f) {
+                                Some((_, acc)) => *acc += v,
+                                None => row.push((f, v)),
+                            }
+                        }
+                    }
+                }
+                row.sort_by_key(|(f, _)| *f);
+                if row.is_empty() {
+                    return Err(CorrelateError::SensorOnConstrainedDof {
+                        sensor: s,
+                        node: sensor.node,
+                        component: unit
+                            .iter()
+                            .enumerate()
+                            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+                            .map_or(0, |(c, _)| c),
+                    });
                 }
             }
             for (t, (earlier, prev)) in normalised.iter().zip(&sensors).enumerate() {
@@ -103,10 +173,7 @@ impl SensorLayout {
         let sensors = sensors
             .into_iter()
             .zip(normalised)
-            .map(|(s, d)| Sensor {
-                node: s.node,
-                direction: d,
-            })
+            .map(|(s, d)| Sensor { direction: d, ..s })
             .collect();
         Ok(Self {
             sensors,

@@ -162,10 +162,7 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
         }) {
             Some(s) => s,
             None => {
-                sensors.push(Sensor {
-                    node,
-                    direction: dir,
-                });
+                sensors.push(Sensor::new(node, dir));
                 sensors.len() - 1
             }
         };

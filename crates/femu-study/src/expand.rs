@@ -6,7 +6,7 @@ use crate::StudyError;
 use crate::load::{LoadedModel, LoadedTest};
 use crate::removal::{RemovalStudy, removal_over_test};
 use faer::{Mat, MatRef};
-use femu_correlate::expansion::{Expander, Method, place_measured};
+use femu_correlate::expansion::{Expander, Method, SensorBasis, place_measured};
 use femu_correlate::{Estimator, ResidualNorms, SensorLayout};
 use femu_fem::assembly::SystemMatrices;
 use serde::Serialize;
@@ -15,7 +15,8 @@ use serde::Serialize;
 /// When the sensors cover every free DOF, the readings are placed on their DOFs as they are.
 ///
 /// # Errors
-/// Oblique sensors, sizes, NaN, and the method's errors (a singular expansion).
+/// Sizes, NaN, two sensors too close for expansion ([`SensorBasis::new`]), and the method's
+/// errors (a singular expansion).
 pub fn expand_shapes(
     sys: &SystemMatrices,
     layout: &SensorLayout,
@@ -28,7 +29,14 @@ pub fn expand_shapes(
         Some(dofs) if dofs.len() == sys.dofs.free_count() => {
             place_measured(sys.k.rows(), &dofs, ya)?
         }
-        _ => Expander::new(&sys.k, &sys.m, layout)?.expand(method, lambdas, ya, serep_basis)?,
+        Some(_) => {
+            Expander::new(&sys.k, &sys.m, layout)?.expand(method, lambdas, ya, serep_basis)?
+        }
+        // oblique sensors and sensors between nodes: expansion in the coordinates where every
+        // reading is a DOF
+        None => {
+            SensorBasis::new(&sys.k, &sys.m, layout)?.expand(method, lambdas, ya, serep_basis)?
+        }
     })
 }
 

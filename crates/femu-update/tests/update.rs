@@ -440,10 +440,7 @@ fn bad_input_is_an_error() {
     let oblique = SensorLayout::new(
         up.model().mesh(),
         &dofs,
-        vec![Sensor {
-            node,
-            direction: [1.0, 1.0, 0.0],
-        }],
+        vec![Sensor::new(node, [1.0, 1.0, 0.0])],
     )
     .unwrap();
     let test = TestModes::new(vec![1500.0], None, Mat::from_fn(1, 1, |_, _| 1.0)).unwrap();

@@ -319,11 +319,13 @@ impl<'a> Expander<'a> {
     }
 }
 
+mod basis;
 mod condensation;
 mod mdre;
 mod minimum_residual;
 mod serep;
 
+pub use basis::SensorBasis;
 pub use minimum_residual::TestErrorExpansion;
 
 /// An expansion method: the one name for it in the expander, the sensor space, the

@@ -4,7 +4,7 @@
 use super::common::*;
 use faer::Mat;
 use faer::linalg::solvers::Solve;
-use femu_correlate::{Expander, Sensor, SensorLayout, SensorSpace};
+use femu_correlate::{Expander, Method, Sensor, SensorLayout, SensorSpace};
 use femu_fem::prelude::*;
 use femu_sparse::dense::generalized_symmetric_eigen;
 
@@ -168,10 +168,7 @@ fn bad_expansion_input() {
     let oblique = SensorLayout::new(
         c.model.mesh(),
         &c.sys.dofs,
-        vec![Sensor {
-            node: tip,
-            direction: [1.0, 1.0, 0.0],
-        }],
+        vec![Sensor::new(tip, [1.0, 1.0, 0.0])],
     )
     .unwrap();
     assert!(Expander::new(&c.sys.k, &c.sys.m, &oblique).is_err());
@@ -429,4 +426,132 @@ fn sensor_space_at_model_eigenvalues() {
         fallbacks.push(space.fallbacks());
     }
     assert_eq!(fallbacks, vec![0, 0, 0], "{fallbacks:?}");
+}
+
+/// Sensors between nodes (shape-function rows found by `femu_fem::locate`) and oblique ones on
+/// the clamped bar.
+fn between_nodes_case() -> (Model, SystemMatrices, SensorLayout) {
+    let model = bar([8, 2, 2], true);
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let mesh = model.mesh();
+    let locator = femu_fem::locate::Locator::new(mesh);
+    let mut sensors = Vec::new();
+    for (label, p) in [
+        (1001, [0.031, 0.004, 0.02]),
+        (1002, [0.087, 0.013, 0.02]),
+        (1003, [0.142, 0.007, 0.011]),
+        (1004, [0.19, 0.019, 0.003]),
+    ] {
+        let loc = locator.locate(mesh, p, 0.0).unwrap();
+        let at: Vec<(u64, f64)> = loc
+            .weights
+            .iter()
+            .map(|(a, w)| (mesh.node_id(*a), *w))
+            .collect();
+        for d in [[1.0, 0.0, 0.0], [0.0, 0.6, 0.8], [0.0, 0.0, 1.0]] {
+            sensors.push(Sensor::between(label, d, at.clone()));
+        }
+    }
+    let layout = SensorLayout::new(mesh, &sys.dofs, sensors).unwrap();
+    (model, sys, layout)
+}
+
+/// Dense constrained expansion: `[Z C^T; C 0] [x; mu] = [0; y]` (`Z = K - lambda M`).
+fn dense_constrained(
+    sys: &SystemMatrices,
+    layout: &SensorLayout,
+    lambda: f64,
+    y: &[f64],
+) -> Vec<f64> {
+    let n = sys.k.rows();
+    let s = layout.len();
+    let z = dense(&sys.k) - dense(&sys.m) * faer::Scale(lambda);
+    let c = dense(&layout.matrix().to_csc());
+    let kkt = Mat::from_fn(n + s, n + s, |i, j| match (i < n, j < n) {
+        (true, true) => z[(i, j)],
+        (true, false) => c[(j - n, i)],
+        (false, true) => c[(i - n, j)],
+        (false, false) => 0.0,
+    });
+    let rhs = Mat::from_fn(n + s, 1, |i, _| if i < n { 0.0 } else { y[i - n] });
+    let sol = kkt.partial_piv_lu().solve(&rhs);
+    (0..n).map(|i| sol[(i, 0)]).collect()
+}
+
+#[test]
+fn sensors_between_nodes_expand_as_the_constrained_dense_formulas() {
+    let (_model, sys, layout) = between_nodes_case();
+    let eig = full_eigen(&sys);
+    let basis = femu_correlate::SensorBasis::new(&sys.k, &sys.m, &layout).unwrap();
+    // the congruence keeps the spectrum: the lowest eigenvalues of (K_z, M_z) are (K, M)'s
+    let ez =
+        generalized_symmetric_eigen(dense(basis.k()).as_ref(), dense(basis.m()).as_ref()).unwrap();
+    for i in 0..6 {
+        assert!(
+            (ez.values[i] / eig.values[i] - 1.0).abs() < 1e-9,
+            "eigenvalue {i}"
+        );
+    }
+    // readings of a perturbed mode, expanded statically and dynamically
+    let (lambda, phi) = super::common::perturbed_mode(&_model, 0.1, 0.8, 0);
+    let y = layout.measure(&phi).unwrap();
+    let ya = Mat::from_fn(y.len(), 1, |i, _| y[i]);
+    for (method, shift) in [(Method::Static, 0.0), (Method::Dynamic, lambda)] {
+        let x = basis.expand(method, &[lambda], ya.as_ref(), None).unwrap();
+        let reference = dense_constrained(&sys, &layout, shift, &y);
+        let got = col(&x, 0);
+        assert!(
+            rel(&got, &reference) < 1e-9,
+            "{method}: {}",
+            rel(&got, &reference)
+        );
+        // the expanded shape reproduces the readings exactly
+        let back = layout.measure(&got).unwrap();
+        assert!(rel(&back, &y) < 1e-12);
+    }
+    // SEREP: x = Phi (C Phi)^-1 y with 12 model modes on the 12 readings
+    let basis_modes = Mat::from_fn(sys.k.rows(), 12, |i, j| eig.vectors[(i, j)]);
+    let x = basis
+        .expand(
+            Method::Serep(12),
+            &[lambda],
+            ya.as_ref(),
+            Some(basis_modes.as_ref()),
+        )
+        .unwrap();
+    let cphi = layout.measure_all(basis_modes.as_ref()).unwrap();
+    let q = cphi.partial_piv_lu().solve(&ya);
+    let reference = &basis_modes * &q;
+    assert!(rel(&col(&x, 0), &col(&reference, 0)) < 1e-8);
+    // minimum residual imposes the readings too
+    let x = basis
+        .expand(Method::MinimumResidual, &[lambda], ya.as_ref(), None)
+        .unwrap();
+    assert!(rel(&layout.measure(&col(&x, 0)).unwrap(), &y) < 1e-10);
+}
+
+#[test]
+fn two_sensors_on_one_point_cannot_be_expanded() {
+    let model = bar([8, 2, 2], true);
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let mesh = model.mesh();
+    let locator = femu_fem::locate::Locator::new(mesh);
+    let loc = locator.locate(mesh, [0.05, 0.01, 0.01], 0.0).unwrap();
+    let at: Vec<(u64, f64)> = loc
+        .weights
+        .iter()
+        .map(|(a, w)| (mesh.node_id(*a), *w))
+        .collect();
+    let layout = SensorLayout::new(
+        mesh,
+        &sys.dofs,
+        vec![
+            Sensor::between(7, [1.0, 0.0, 0.0], at.clone()),
+            Sensor::between(8, [1.0, 0.0, 0.0], at),
+        ],
+    )
+    .unwrap();
+    let err = femu_correlate::SensorBasis::new(&sys.k, &sys.m, &layout).unwrap_err();
+    assert!(err.to_string().contains("sensor 1 (node 8)"), "{err}");
+    assert!(err.to_string().contains("sensor 0 (node 7)"), "{err}");
 }

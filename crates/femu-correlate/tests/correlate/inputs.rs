@@ -18,13 +18,7 @@ fn sensor_layout_maps_directions_to_dofs() {
     let layout = SensorLayout::new(
         mesh,
         &sys.dofs,
-        vec![
-            Sensor {
-                node: tip_id,
-                direction: d,
-            },
-            Sensor::axis(tip_id, 2),
-        ],
+        vec![Sensor::new(tip_id, d), Sensor::axis(tip_id, 2)],
     )
     .unwrap();
     assert_eq!(layout.len(), 2);
@@ -78,26 +72,17 @@ fn bad_sensors_are_named() {
         }
     );
     assert!(matches!(
-        layout(vec![Sensor {
-            node: tip,
-            direction: [0.0; 3]
-        }]),
+        layout(vec![Sensor::new(tip, [0.0; 3])]),
         CorrelateError::BadDirection { sensor: 0, .. }
     ));
     assert!(matches!(
-        layout(vec![Sensor {
-            node: tip,
-            direction: [f64::NAN, 0.0, 1.0]
-        }]),
+        layout(vec![Sensor::new(tip, [f64::NAN, 0.0, 1.0])]),
         CorrelateError::BadDirection { .. }
     ));
     assert_eq!(
         layout(vec![
             Sensor::axis(tip, 0),
-            Sensor {
-                node: tip,
-                direction: [-2.0, 0.0, 0.0]
-            }
+            Sensor::new(tip, [-2.0, 0.0, 0.0])
         ]),
         CorrelateError::DuplicateSensor {
             first: 0,

@@ -209,10 +209,7 @@ impl Universal {
                 Some(sys) => {
                     for c in measured {
                         let direction = std::array::from_fn(|i| sys.axes[i][c]);
-                        sensors.push(Sensor {
-                            node: *n,
-                            direction,
-                        });
+                        sensors.push(Sensor::new(*n, direction));
                         let mut w = [0.0; 3];
                         w[c] = 1.0;
                         rows.push((k, w));
