@@ -145,4 +145,10 @@ pub enum FemError {
         /// What is wrong.
         reason: String,
     },
+    /// A test wireframe that cannot be aligned onto the model.
+    #[error("alignment: {reason}")]
+    Alignment {
+        /// What is wrong.
+        reason: String,
+    },
 }

@@ -23,6 +23,7 @@
 //! assert!((mass / (7850.0 * 0.1 * 0.02 * 0.02) - 1.0).abs() < 1e-12);
 //! ```
 
+pub mod align;
 pub mod assembly;
 pub mod dof;
 pub mod element;

@@ -126,7 +126,7 @@ fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
     Some(out)
 }
 
-fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+pub(crate) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
@@ -246,7 +246,7 @@ pub struct Location {
 
 /// A uniform grid of cells, each listing the items whose boxes overlap it (compressed rows).
 #[derive(Debug, Clone)]
-struct Grid {
+pub(crate) struct Grid {
     lo: [f64; 3],
     cell: f64,
     dims: [usize; 3],
@@ -255,7 +255,7 @@ struct Grid {
 }
 
 impl Grid {
-    fn new(boxes: &[([f64; 3], [f64; 3])], typical: f64) -> Self {
+    pub(crate) fn new(boxes: &[([f64; 3], [f64; 3])], typical: f64) -> Self {
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for (a, b) in boxes {
@@ -324,7 +324,7 @@ impl Grid {
     }
 
     /// Items of the cells overlapping the box `[p - r, p + r]` (with repetitions).
-    fn visit(&self, p: [f64; 3], r: f64, mut f: impl FnMut(usize)) {
+    pub(crate) fn visit(&self, p: [f64; 3], r: f64, mut f: impl FnMut(usize)) {
         let mut range = [(0usize, 0usize); 3];
         for i in 0..3 {
             let a = ((p[i] - r - self.lo[i]) / self.cell).floor();

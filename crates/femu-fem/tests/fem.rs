@@ -1,6 +1,7 @@
 //! Evidence for the finite element core, gathered in one test binary.
 
 mod fem {
+    mod align;
     mod assembly;
     pub mod common;
     mod convergence;
