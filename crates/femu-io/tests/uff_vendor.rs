@@ -213,7 +213,7 @@ fn displacement_and_definition_systems_of_dataset_18() {
         .to_string();
     assert!(
         e.contains(
-            "node 4 is defined in coordinate system 5, which no dataset 18 before it defines"
+            "node 4 is defined in coordinate system 5, which no dataset 18 or 2420 before it defines"
         ),
         "{e}"
     );
@@ -295,5 +295,149 @@ fn millimetre_meshes_become_metres() {
             .message
             .starts_with("coordinates converted to metres: divided by the length factor 1000")),
         "{warnings:?}"
+    );
+}
+
+/// NX export: coordinate systems of dataset 2420 (rows 1-3 of the matrix are the local axes in
+/// global components, row 4 the origin), each node defined and measured in its own system, and
+/// 176 complex normal modes of dataset 2414. Expected values computed by hand with numpy from
+/// the file's records: node 3992 is given as (20.9409, 13.0694, 39.6833) in CS1; `x_local R`
+/// puts it at (-13.00982232, 39.70284674, -20.94090139) mm; its first mode (record 10 mode 1,
+/// 2.33832E+04 Hz) reads (0.0195655, 13.0354, -1.92335e-7) in CS1, globally
+/// (-13.03538532, 0.01956535, -0.0195655). The 18 nodes lie in one plane z = -20.9409 (as the
+/// curved beam they are) only with this reading of the matrix: the transposed reading scatters
+/// them by 0.04 mm off any plane.
+#[test]
+fn nx_coordinate_systems_of_2420_and_modes_of_2414() {
+    let path = fixture("nx_2420_2414_beam.uff");
+    let u = femu_io::uff::read_uff(&path).unwrap();
+    assert_eq!(u.coordinate_systems.len(), 18);
+    assert_eq!(u.modes.len(), 176);
+    assert_eq!(u.modes_from_2414, 176);
+    assert!(u.modes.iter().all(|m| m.complex));
+    let n = u.nodes.iter().find(|n| n.id == 3992).unwrap();
+    let want = [-13.00982232, 39.70284674, -20.94090139];
+    for i in 0..3 {
+        assert!((n.x[i] - want[i]).abs() < 1e-7, "{:?}", n.x);
+    }
+    let z: Vec<f64> = u.nodes.iter().map(|n| n.x[2]).collect();
+    assert!(z.iter().all(|v| (v + 20.9409).abs() < 1e-4), "{z:?}");
+    assert_eq!(u.modes[0].number, 1);
+    assert!((u.modes[0].frequency_hz - 2.33832e4).abs() < 1e-6);
+    let data = u.test_data(&path).unwrap();
+    assert_eq!(data.modes.frequencies_hz[0], 2.33832e4);
+    let row = |c: usize| {
+        data.sensors
+            .iter()
+            .position(|s| s.node == 3992 && s.direction[c] == 1.0)
+            .unwrap()
+    };
+    let want = [-13.03538532, 0.01956535, -0.0195655];
+    for (c, w) in want.iter().enumerate() {
+        let got = data.modes.shapes[(row(c), 0)];
+        assert!((got - w).abs() < 1e-7, "component {c}: {got} vs {w}");
+    }
+}
+
+/// A temperature result in dataset 2414 is not a mode: skipped with a warning naming it.
+#[test]
+fn dataset_2414_static_result_is_skipped() {
+    let u = femu_io::uff::read_uff(fixture("heat_engine_2414_static.uff")).unwrap();
+    assert!(u.modes.is_empty());
+    let w: Vec<String> = u.warnings.iter().map(ToString::to_string).collect();
+    assert!(
+        w.iter().any(|m| m.ends_with(
+            "heat_engine_2414_static.uff:61: dataset 2414 1 (Temperature) is a static result, not a mode: skipped"
+        )),
+        "{w:?}"
+    );
+}
+
+/// Cylindrical and spherical systems of dataset 2420, by hand: both share the frame origin
+/// (1, 2, 3), local x = global Y, local y = global Z, local z = global X.
+/// Node 9 at cylindrical (r 2, theta 90 deg, z 0.5): local (0, 2, 0.5), global (1.5, 2, 5); its
+/// reading (u_r, u_theta, u_z) = (0.3, -0.2, 0.7) along e_r = Z, e_theta = -Y, e_z = X is
+/// globally (0.7, 0.2, 0.3). Node 10 at spherical (r 1, theta 90, phi 90): local (0, 1, 0),
+/// global (1, 2, 4); e_r = Z, e_theta = -X, e_phi = -Y, so (0.1, 0.2, 0.4) is (-0.2, -0.4, 0.1).
+#[test]
+fn cylindrical_and_spherical_systems_of_2420() {
+    use femu_io::uff::{UffMode, UffNode, Universal, parse_uff, uff_string};
+    let u = Universal {
+        nodes: vec![
+            UffNode {
+                id: 9,
+                x: [2.0, 90.0, 0.5],
+            },
+            UffNode {
+                id: 10,
+                x: [1.0, 90.0, 90.0],
+            },
+        ],
+        modes: vec![UffMode {
+            number: 1,
+            frequency_hz: 50.0,
+            damping: 0.0,
+            modal_mass: 0.0,
+            values: vec![(9, [0.3, -0.2, 0.7]), (10, [0.1, 0.2, 0.4])],
+            complex: false,
+        }],
+        ..Default::default()
+    };
+    let text = uff_string(&u);
+    let frame = "  0.0  1.0  0.0\n  0.0  0.0  1.0\n  1.0  0.0  0.0\n  1.0  2.0  3.0\n";
+    let systems = format!(
+        "    -1\n  2420\n         1\nPart\n         7         1         8\nCYL\n{frame}         8         2         8\nSPH\n{frame}    -1\n"
+    );
+    let mut patched = String::new();
+    for line in text.lines() {
+        let t: Vec<&str> = line.split_whitespace().collect();
+        let line = match (t.len(), t.first()) {
+            (7, Some(&"9")) => line.replacen(
+                "         0         0        11",
+                "         7         7        11",
+                1,
+            ),
+            (7, Some(&"10")) => line.replacen(
+                "         0         0        11",
+                "         8         8        11",
+                1,
+            ),
+            _ => line.to_string(),
+        };
+        patched.push_str(&line);
+        patched.push('\n');
+    }
+    let at = patched.find("    -1\n    15\n").unwrap();
+    patched.insert_str(at, &systems);
+    let path = std::path::Path::new("curvilinear.uff");
+    let read = parse_uff(&patched, path).unwrap();
+    assert_eq!(read.coordinate_systems[&7].kind, 1);
+    assert_eq!(read.coordinate_systems[&8].kind, 2);
+    let at = |id: u64| read.nodes.iter().find(|n| n.id == id).unwrap().x;
+    for (id, want) in [(9, [1.5, 2.0, 5.0]), (10, [1.0, 2.0, 4.0])] {
+        let x = at(id);
+        assert!(
+            (0..3).all(|i| (x[i] - want[i]).abs() < 1e-5),
+            "node {id}: {x:?}"
+        );
+    }
+    let data = read.test_data(path).unwrap();
+    for (id, want) in [(9, [0.7, 0.2, 0.3]), (10, [-0.2, -0.4, 0.1])] {
+        for (c, w) in want.iter().enumerate() {
+            let r = data
+                .sensors
+                .iter()
+                .position(|s| s.node == id && s.direction[c] == 1.0)
+                .unwrap();
+            let got = data.modes.shapes[(r, 0)];
+            assert!((got - w).abs() < 1e-5, "node {id} component {c}: {got}");
+        }
+    }
+    // a matrix whose rows are not orthonormal axes
+    let skewed = patched.replacen("  0.0  1.0  0.0\n", "  0.0  1.0  0.5\n", 1);
+    let e = parse_uff(&skewed, path).unwrap_err().to_string();
+    assert!(
+        e.contains("coordinate system 7: rows 1-3 of its matrix are not orthonormal axes"),
+        "{e}"
     );
 }

@@ -108,11 +108,17 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
                 .values()
                 .filter(|c| !c.is_global_orientation())
                 .count();
+            let curvilinear = u
+                .coordinate_systems
+                .values()
+                .filter(|c| c.kind != 0)
+                .count();
             let _ = writeln!(
                 s,
-                "coordinate systems (18): {} ({} turned from the global axes); {} nodes measure in one of them (read in global directions)",
+                "coordinate systems (18/2420): {} ({} turned from the global axes, {} cylindrical or spherical); {} nodes measure in one of them (read in global directions)",
                 u.coordinate_systems.len(),
                 turned,
+                curvilinear,
                 u.displacement_systems.len()
             );
         }
@@ -150,7 +156,12 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
             let f: Vec<f64> = u.modes.iter().map(|m| m.frequency_hz).collect();
             let _ = writeln!(
                 s,
-                "modes (55): {} at {} nodes{}; Hz: {}",
+                "modes ({}): {} at {} nodes{}; Hz: {}",
+                match (u.modes_from_2414, u.modes.len() - u.modes_from_2414) {
+                    (0, _) => "55: test modes".to_string(),
+                    (_, 0) => "2414: analysis results of an FE code".to_string(),
+                    (r, t) => format!("{t} of dataset 55, {r} of dataset 2414"),
+                },
                 u.modes.len(),
                 u.modes[0].values.len(),
                 if u.modes.iter().any(|m| m.complex) {
@@ -171,6 +182,8 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
         }
         if !u.modes.is_empty() {
             does.push("test modes (femu correlate, estimate, expand, update)");
+        } else if !u.nodes.is_empty() && solids == 0 {
+            does.push("a test wireframe (its nodes' coordinates, for --map), without modes");
         }
         let _ = writeln!(
             s,

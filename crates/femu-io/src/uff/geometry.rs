@@ -114,31 +114,30 @@ fn in_global(
     x: [f64; 3],
 ) -> Result<[f64; 3], IoError> {
     // 0, and 1 when the file defines no system 1 (I-DEAS's and Gmsh's label of the global
-    // system), are the global system
+    // system), are the global system; systems come from datasets 18 and 2420
     let Some(sys) = out.coordinate_systems.get(&cs).filter(|_| cs != 0) else {
         if cs > 1 {
             return Err(perr(
                 path,
                 ln,
                 format!(
-                    "node {id} is defined in coordinate system {cs}, which no dataset 18 before it defines"
+                    "node {id} is defined in coordinate system {cs}, which no dataset 18 or 2420 before it defines"
                 ),
             ));
         }
         return Ok(x);
     };
-    if sys.kind != 0 {
+    if !(0..=2).contains(&sys.kind) {
         return Err(perr(
             path,
             ln,
             format!(
-                "node {id} is defined in coordinate system {cs} ({}), which is not cartesian: femu transforms cartesian systems only",
-                sys.name
+                "node {id} is defined in coordinate system {cs} ({}) of kind {}: expected 0 (cartesian), 1 (cylindrical) or 2 (spherical)",
+                sys.name, sys.kind
             ),
         ));
     }
-    let g = sys.to_global(x);
-    Ok(std::array::from_fn(|i| sys.origin[i] + g[i]))
+    Ok(sys.point_to_global(x))
 }
 
 /// Adds node `id` (datasets 15 and 2411) with coordinates `x` in its definition system
@@ -235,6 +234,85 @@ pub(super) fn parse_18(
             },
         );
         k += 4;
+    }
+    Ok(())
+}
+
+/// Dataset 2420 (coordinate systems of a part): per system a label, kind and colour, a name
+/// and a 4 x 3 matrix whose rows 1-3 are the local axes in global components and row 4 the
+/// origin (`x_global = x_local R + origin`, the row-vector form I-DEAS and NX write).
+pub(super) fn parse_2420(
+    path: &Path,
+    body: &[(usize, &str)],
+    out: &mut Universal,
+) -> Result<(), IoError> {
+    if body.len() < 2 {
+        return Err(perr(
+            path,
+            body.first().map_or(0, |b| b.0),
+            "dataset 2420 needs a part label and a part name",
+        ));
+    }
+    let mut k = 2;
+    while k < body.len() {
+        let (ln, l) = body[k];
+        if l.trim().is_empty() {
+            k += 1;
+            continue;
+        }
+        if k + 5 >= body.len() {
+            return Err(perr(
+                path,
+                ln,
+                "dataset 2420: a coordinate system needs 6 records (label, name, 4 matrix rows)",
+            ));
+        }
+        let h = ints(path, ln, l, 2)?;
+        let (number, kind) = (h[0], h[1]);
+        if !(0..=2).contains(&kind) {
+            return Err(perr(
+                path,
+                ln,
+                format!(
+                    "coordinate system {number} has kind {kind}: expected 0 (cartesian), 1 (cylindrical) or 2 (spherical)"
+                ),
+            ));
+        }
+        let name = body[k + 1].1.trim().to_string();
+        let mut rows = [[0.0; 3]; 4];
+        for (r, row) in rows.iter_mut().enumerate() {
+            let (lr, tr) = body[k + 2 + r];
+            let v = nums(path, lr, tr, 3)?;
+            *row = [v[0], v[1], v[2]];
+        }
+        // the axes must be orthonormal (to 1e-6: files print 16 digits, some fewer)
+        for a in 0..3 {
+            for b in 0..3 {
+                let d: f64 = (0..3).map(|i| rows[a][i] * rows[b][i]).sum();
+                let want = if a == b { 1.0 } else { 0.0 };
+                if (d - want).abs() > 1e-6 {
+                    return Err(perr(
+                        path,
+                        body[k + 2].0,
+                        format!(
+                            "coordinate system {number}: rows 1-3 of its matrix are not orthonormal axes (row {} . row {} = {d:.6})",
+                            a + 1,
+                            b + 1
+                        ),
+                    ));
+                }
+            }
+        }
+        out.coordinate_systems.insert(
+            number,
+            CoordinateSystem {
+                name,
+                kind,
+                origin: rows[3],
+                axes: std::array::from_fn(|i| [rows[0][i], rows[1][i], rows[2][i]]),
+            },
+        );
+        k += 6;
     }
     Ok(())
 }

@@ -36,7 +36,7 @@ pub struct UffNode {
     pub x: [f64; 3],
 }
 
-/// One mode of dataset 55.
+/// One mode of dataset 55 (test modes) or 2414 (modes another FE code computed).
 #[derive(Debug, Clone, PartialEq)]
 pub struct UffMode {
     /// Mode number (record 7).
@@ -65,8 +65,10 @@ pub struct Universal {
     pub nodes_2411: bool,
     /// Dataset 2412 elements.
     pub elements: Vec<UffElement>,
-    /// Dataset 55 modes.
+    /// Modes: test modes of dataset 55, then analysis results of dataset 2414.
     pub modes: Vec<UffMode>,
+    /// How many of `modes` came from dataset 2414 (analysis results) rather than 55.
+    pub modes_from_2414: usize,
     /// Dataset 58/58b functions (FRFs, time histories, ...).
     pub functions: Vec<UffFunction>,
     /// Dataset 82 trace lines.
@@ -84,13 +86,19 @@ pub struct Universal {
     pub warnings: Vec<Warning>,
 }
 
-/// A coordinate system of dataset 18: `x_global = origin + axes x_local` (columns of `axes` are
-/// the local unit axes in global components, for a cartesian system).
+/// A coordinate system of dataset 18 or 2420: a frame (`origin`, `axes`) and a kind.
+///
+/// A point's local cartesian coordinates `c` give `x_global = origin + axes c`; a cylindrical
+/// system's coordinates are `(r, theta, z)` with `c = (r cos theta, r sin theta, z)`, a spherical
+/// system's `(r, theta, phi)` with `theta` from the local z axis and `phi` about it from the local
+/// x axis, `c = r (sin theta cos phi, sin theta sin phi, cos theta)` (angles in degrees, as
+/// I-DEAS and Nastran write them). Displacements in a cylindrical or spherical system are along its
+/// unit vectors at the node (`e_r, e_theta, e_z` or `e_r, e_theta, e_phi`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CoordinateSystem {
     /// Its name (record 2).
     pub name: String,
-    /// 0 cartesian, 1 cylindrical, 2 spherical (femu transforms cartesian systems only).
+    /// 0 cartesian, 1 cylindrical, 2 spherical.
     pub kind: i64,
     /// Origin in global coordinates.
     pub origin: [f64; 3],
@@ -107,9 +115,62 @@ impl CoordinateSystem {
             })
     }
 
-    /// `axes v` (a local vector in global components).
+    /// `axes v` (a local cartesian vector in global components).
     pub fn to_global(&self, v: [f64; 3]) -> [f64; 3] {
         std::array::from_fn(|i| (0..3).map(|j| self.axes[i][j] * v[j]).sum())
+    }
+
+    /// The global position of the point with coordinates `c` in this system (by its kind).
+    pub fn point_to_global(&self, c: [f64; 3]) -> [f64; 3] {
+        let local = match self.kind {
+            1 => {
+                let t = c[1].to_radians();
+                [c[0] * t.cos(), c[0] * t.sin(), c[2]]
+            }
+            2 => {
+                let (t, p) = (c[1].to_radians(), c[2].to_radians());
+                [
+                    c[0] * t.sin() * p.cos(),
+                    c[0] * t.sin() * p.sin(),
+                    c[0] * t.cos(),
+                ]
+            }
+            _ => c,
+        };
+        let g = self.to_global(local);
+        std::array::from_fn(|i| self.origin[i] + g[i])
+    }
+
+    /// The displacement axes at global point `x` in global components (`axes[i][j]`: component
+    /// `i` of local direction `j`): the frame's axes for a cartesian system, the unit vectors of
+    /// the cylindrical or spherical coordinates at `x` otherwise. On the axis of a cylindrical
+    /// system (or the polar axis of a spherical one) the angle is taken as 0.
+    pub fn axes_at(&self, x: [f64; 3]) -> [[f64; 3]; 3] {
+        if self.kind != 1 && self.kind != 2 {
+            return self.axes;
+        }
+        let d: [f64; 3] = std::array::from_fn(|i| x[i] - self.origin[i]);
+        // local cartesian coordinates: axes^T d
+        let c: [f64; 3] = std::array::from_fn(|j| (0..3).map(|i| self.axes[i][j] * d[i]).sum());
+        let local: [[f64; 3]; 3] = if self.kind == 1 {
+            let t = c[1].atan2(c[0]);
+            let (s, co) = t.sin_cos();
+            [[co, s, 0.0], [-s, co, 0.0], [0.0, 0.0, 1.0]]
+        } else {
+            let rho = c[0].hypot(c[1]);
+            let theta = rho.atan2(c[2]);
+            let phi = c[1].atan2(c[0]);
+            let (st, ct) = theta.sin_cos();
+            let (sp, cp) = phi.sin_cos();
+            [
+                [st * cp, st * sp, ct],
+                [ct * cp, ct * sp, -st],
+                [-sp, cp, 0.0],
+            ]
+        };
+        // column j of the result: axes * local[j]
+        let cols: [[f64; 3]; 3] = std::array::from_fn(|j| self.to_global(local[j]));
+        std::array::from_fn(|i| std::array::from_fn(|j| cols[j][i]))
     }
 }
 

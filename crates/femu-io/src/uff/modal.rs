@@ -126,8 +126,28 @@ pub(super) fn parse_55(
         ndv as usize
     };
     let mut values = Vec::new();
-    let mut raw: Vec<(u64, Vec<f64>)> = Vec::new();
-    let mut k = 7 + rec8_lines;
+    let k = 7 + rec8_lines;
+    let raw = node_values(path, &body[k..], width)?;
+    values.extend(translations(raw, complex));
+    out.modes.push(UffMode {
+        number,
+        frequency_hz,
+        damping,
+        modal_mass,
+        values,
+        complex,
+    });
+    Ok(())
+}
+
+/// Records of a node label followed by `width` values (over as many lines as they take).
+fn node_values(
+    path: &Path,
+    body: &[(usize, &str)],
+    width: usize,
+) -> Result<Vec<(u64, Vec<f64>)>, IoError> {
+    let mut raw = Vec::new();
+    let mut k = 0;
     while k < body.len() {
         let (ln, l) = body[k];
         if l.trim().is_empty() {
@@ -164,35 +184,155 @@ pub(super) fn parse_55(
         }
         raw.push((node as u64, v));
     }
-    if complex {
-        // rotate by the phase of the largest component: a real mode stored as complex comes back exactly
-        let (mut best, mut phase) = (0.0, 0.0);
-        for (_, v) in &raw {
-            for c in 0..3 {
-                let (re, im) = (v[2 * c], v[2 * c + 1]);
-                if re.hypot(im) > best {
-                    best = re.hypot(im);
-                    phase = im.atan2(re);
-                }
+    Ok(raw)
+}
+
+/// The translations of each node; complex values rotated by the phase of the mode's largest
+/// component and their real part taken (a real mode stored as complex comes back exactly).
+fn translations(raw: Vec<(u64, Vec<f64>)>, complex: bool) -> Vec<(u64, [f64; 3])> {
+    if !complex {
+        return raw
+            .into_iter()
+            .map(|(n, v)| (n, [v[0], v[1], v[2]]))
+            .collect();
+    }
+    let (mut best, mut phase) = (0.0, 0.0);
+    for (_, v) in &raw {
+        for c in 0..3 {
+            let (re, im) = (v[2 * c], v[2 * c + 1]);
+            if re.hypot(im) > best {
+                best = re.hypot(im);
+                phase = im.atan2(re);
             }
         }
-        let (cs, sn) = (phase.cos(), phase.sin());
-        for (n, v) in raw {
-            let r = |c: usize| v[2 * c] * cs + v[2 * c + 1] * sn;
-            values.push((n, [r(0), r(1), r(2)]));
-        }
-    } else {
-        for (n, v) in raw {
-            values.push((n, [v[0], v[1], v[2]]));
-        }
     }
+    let (cs, sn) = (phase.cos(), phase.sin());
+    raw.into_iter()
+        .map(|(n, v)| {
+            let r = |c: usize| v[2 * c] * cs + v[2 * c + 1] * sn;
+            (n, [r(0), r(1), r(2)])
+        })
+        .collect()
+}
+
+/// Dataset 2414 (analysis results): the normal and complex modes another FE code computed, at
+/// nodes, read as modes (so femu can correlate its modes with another solver's). Other results
+/// (static, transient, stresses, element data) are skipped with a warning.
+pub(super) fn parse_2414(
+    path: &Path,
+    body: &[(usize, &str)],
+    out: &mut Universal,
+) -> Result<(), IoError> {
+    let start = body.first().map_or(0, |b| b.0);
+    if body.len() < 13 {
+        return Err(perr(path, start, "dataset 2414 needs at least 13 records"));
+    }
+    let skip = |out: &mut Universal, why: String| {
+        out.warnings.push(Warning {
+            path: path.to_path_buf(),
+            line: start,
+            message: format!("dataset 2414 {why}: skipped"),
+        });
+        Ok(())
+    };
+    let label = int(path, body[0].0, body[0].1.trim())?;
+    let name = body[1].1.trim().to_string();
+    let location = int(path, body[2].0, body[2].1.trim())?;
+    if location != 1 {
+        return skip(
+            out,
+            format!("{label} ({name}) holds data at location {location}, not at nodes (1)"),
+        );
+    }
+    let (l9, r9) = body[8];
+    let h = ints(path, l9, r9, 6)?;
+    let (analysis, characteristic, data_type, ndv) = (h[1], h[2], h[4], h[5]);
+    let analysis_name = match analysis {
+        2 => "normal mode",
+        3 | 7 => "complex eigenvalue",
+        0 => "unknown analysis",
+        1 => "static",
+        4 => "transient",
+        5 => "frequency response",
+        6 => "buckling",
+        _ => "other analysis",
+    };
+    if !matches!(analysis, 2 | 3 | 7) {
+        return skip(
+            out,
+            format!("{label} ({name}) is a {analysis_name} result, not a mode"),
+        );
+    }
+    if !(characteristic == 2 || characteristic == 3) {
+        return skip(
+            out,
+            format!(
+                "{label} ({name}) has data characteristic {characteristic}, not translations (2 or 3)"
+            ),
+        );
+    }
+    let complex = match data_type {
+        2 | 4 => false,
+        5 | 6 => true,
+        o => {
+            return Err(perr(
+                path,
+                l9,
+                format!("data type {o}: expected 2 or 4 (real), 5 or 6 (complex)"),
+            ));
+        }
+    };
+    if !(3..=6).contains(&ndv) {
+        return Err(perr(
+            path,
+            l9,
+            format!("{ndv} values per node: expected 3 (translations) to 6 (with rotations)"),
+        ));
+    }
+    let i10 = ints(path, body[9].0, body[9].1, 6)?;
+    let number = i10[5];
+    let mut reals = nums(path, body[11].0, body[11].1, 3)?;
+    reals.extend(nums(path, body[12].0, body[12].1, 2)?);
+    let (frequency_hz, modal_mass, damping) = if analysis == 2 {
+        let f = if reals[1] > 0.0 {
+            reals[1]
+        } else {
+            reals[2].max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
+        };
+        (f, reals[3], reals.get(4).copied().unwrap_or(0.0))
+    } else {
+        // record 13: the eigenvalue's real and imaginary parts
+        let (re, im) = (reals[6], reals.get(7).copied().unwrap_or(0.0));
+        let w = re.hypot(im);
+        (
+            w / (2.0 * std::f64::consts::PI),
+            0.0,
+            if w > 0.0 { -re / w } else { 0.0 },
+        )
+    };
+    if !(frequency_hz > 0.0 && frequency_hz.is_finite()) {
+        return Err(perr(
+            path,
+            body[11].0,
+            format!(
+                "mode {number} of dataset 2414 {label}: frequency {frequency_hz} Hz must be positive"
+            ),
+        ));
+    }
+    let width = if complex {
+        2 * ndv as usize
+    } else {
+        ndv as usize
+    };
+    let raw = node_values(path, &body[13..], width)?;
     out.modes.push(UffMode {
         number,
         frequency_hz,
         damping,
         modal_mass,
-        values,
+        values: translations(raw, complex),
         complex,
     });
+    out.modes_from_2414 += 1;
     Ok(())
 }

@@ -150,7 +150,7 @@ impl Universal {
             reason,
         };
         let first = self.modes.first().ok_or_else(|| {
-            bad("no test modes in the file: test modes are dataset 55 (modal data)".into())
+            bad("no modes in the file: test modes are dataset 55 (modal data), modes of another FE code dataset 2414 (analysis results)".into())
         })?;
         let nodes: Vec<u64> = first.values.iter().map(|(n, _)| *n).collect();
         for m in &self.modes {
@@ -169,6 +169,8 @@ impl Universal {
         let mut sensors = Vec::new();
         // per row: node position, and the global combination of its local components
         let mut rows: Vec<(usize, [f64; 3])> = Vec::new();
+        let positions: std::collections::HashMap<u64, [f64; 3]> =
+            self.nodes.iter().map(|n| (n.id, n.x)).collect();
         for (k, n) in nodes.iter().enumerate() {
             let measured: Vec<usize> = (0..3)
                 .filter(|c| self.modes.iter().any(|m| m.values[k].1[*c] != 0.0))
@@ -181,13 +183,20 @@ impl Universal {
                             "node {n} measures in displacement coordinate system {cs}, which the file does not define (dataset 18)"
                         ))
                     })?;
-                    if sys.kind != 0 {
-                        return Err(bad(format!(
-                            "node {n} measures in coordinate system {cs} ({}), which is not cartesian: femu turns cartesian systems only",
-                            sys.name
-                        )));
+                    if sys.is_global_orientation() {
+                        None
+                    } else if sys.kind == 0 {
+                        Some(sys.axes)
+                    } else {
+                        // cylindrical and spherical axes depend on where the node is
+                        let x = positions.get(n).ok_or_else(|| {
+                            bad(format!(
+                                "node {n} measures in the {} coordinate system {cs}, whose axes depend on the node's position, and the file gives no coordinates for it (dataset 15 or 2411)",
+                                if sys.kind == 1 { "cylindrical" } else { "spherical" }
+                            ))
+                        })?;
+                        Some(sys.axes_at(*x))
                     }
-                    (!sys.is_global_orientation()).then_some(sys)
                 }
             };
             match system {
@@ -199,16 +208,16 @@ impl Universal {
                         rows.push((k, w));
                     }
                 }
-                Some(sys) if measured.len() == 3 => {
+                Some(axes) if measured.len() == 3 => {
                     // global component i = sum_j axes[i][j] local_j
-                    for i in 0..3 {
+                    for (i, row) in axes.iter().enumerate() {
                         sensors.push(Sensor::axis(*n, i));
-                        rows.push((k, sys.axes[i]));
+                        rows.push((k, *row));
                     }
                 }
-                Some(sys) => {
+                Some(axes) => {
                     for c in measured {
-                        let direction = std::array::from_fn(|i| sys.axes[i][c]);
+                        let direction = std::array::from_fn(|i| axes[i][c]);
                         sensors.push(Sensor::new(*n, direction));
                         let mut w = [0.0; 3];
                         w[c] = 1.0;

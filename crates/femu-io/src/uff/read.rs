@@ -203,6 +203,8 @@ pub fn parse_uff_bytes(bytes: &[u8], path: &Path) -> Result<Universal, IoError> 
             2412 => parse_2412(path, &body, &mut out)?,
             164 => parse_164(path, &body, &mut out)?,
             55 => parse_55(path, &body, &mut out)?,
+            2414 => parse_2414(path, &body, &mut out)?,
+            2420 => parse_2420(path, &body, &mut out)?,
             58 => {
                 let (f, count) = parse_58_header(path, &body, start)?;
                 let values = parse_58_ascii(path, &body[11..], &f)?;
