@@ -28,12 +28,24 @@ pub struct MeshOptions {
     /// keywords stay errors).
     #[arg(long, global = true)]
     pub lenient: bool,
-    /// Universal-file tests with their own node numbering: map each test node to the nearest
-    /// model node within this distance (m; coordinates in the file's units, dataset 164).
+    /// A test on its own wireframe (its node labels and coordinates): map every test node onto
+    /// the model, to the nearest FE node or interpolated inside an element.
+    #[arg(long, global = true, value_name = "nearest|interpolate")]
+    pub map: Option<String>,
+    /// With --map: the largest distance from a test node to the model, m (default 1 % of the
+    /// model's bounding-box diagonal).
     #[arg(long, global = true, value_name = "METRES")]
-    pub map_nearest: Option<f64>,
-    /// The unit of a test file's coordinates when it does not say (no dataset 164): m, cm, mm,
-    /// in or ft. Used with --map-nearest.
+    pub tolerance: Option<f64>,
+    /// With --map: bring the test's frame onto the model's first, from pairs of test and model
+    /// nodes (`101:3,102:6,103:9`, at least three) or automatically (`auto`: best fit onto the
+    /// model's surface).
+    #[arg(long, global = true, value_name = "PAIRS|auto")]
+    pub align: Option<String>,
+    /// With --align: fit a uniform scale too.
+    #[arg(long, global = true)]
+    pub align_scale: bool,
+    /// The unit of a test file's coordinates when it does not say (CSV, JSON, a universal file
+    /// without dataset 164): m, cm, mm, in or ft.
     #[arg(long, global = true, value_name = "UNIT")]
     pub test_units: Option<String>,
 }
@@ -133,36 +145,56 @@ pub fn load_model(
     Ok(loaded)
 }
 
-/// Reads the test and maps it onto the model (with `--map-nearest`, printing the mapping).
+/// Reads the test and maps it onto the model (with `--map`, printing the mapping table).
 ///
 /// # Errors
-/// As [`femu::study::load::load_test_with`].
+/// As [`femu::study::load::load_test_with`], and a bad --map or --align value.
 pub fn load_test(
     path: &Path,
     loaded: &LoadedModel,
     mesh: &MeshOptions,
     quiet: bool,
 ) -> Result<femu::study::load::LoadedTest, CliError> {
+    use femu::study::mapping::{Align, MapOptions};
+    let map = match &mesh.map {
+        Some(m) => Some(MapOptions {
+            method: m.parse()?,
+            tolerance: mesh.tolerance,
+            align: mesh
+                .align
+                .as_deref()
+                .map(str::parse)
+                .transpose()?
+                .unwrap_or(Align::None),
+            scale: mesh.align_scale,
+        }),
+        None => {
+            let unused: Vec<String> = [
+                ("--tolerance", mesh.tolerance.is_some()),
+                ("--align", mesh.align.is_some()),
+                ("--align-scale", mesh.align_scale),
+            ]
+            .iter()
+            .filter(|(_, given)| *given)
+            .map(|(name, _)| {
+                format!("{name} applies with --map (a test on its own wireframe): not used")
+            })
+            .collect();
+            warn(quiet, &unused);
+            None
+        }
+    };
     let options = femu::study::load::TestOptions {
-        map_nearest: mesh.map_nearest,
+        map,
         test_units: mesh
             .test_units
             .as_deref()
             .map(femu::study::load::length_unit)
             .transpose()?,
     };
-    if mesh.test_units.is_some() && mesh.map_nearest.is_none() {
-        warn(
-            quiet,
-            &["--test-units applies with --map-nearest (test coordinates): not used".into()],
-        );
-    }
     let test = femu::study::load::load_test_with(path, loaded, &options)?;
-    if !quiet && !test.mapping.is_empty() {
-        eprintln!("test node -> model node (distance, m):");
-        for m in &test.mapping {
-            eprintln!("  {} -> {} ({:.3e})", m.test, m.model, m.distance);
-        }
+    if !quiet && let Some(m) = &test.mapping {
+        println!("{m}");
     }
     Ok(test)
 }

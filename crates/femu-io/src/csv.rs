@@ -10,9 +10,11 @@
 //! ```
 //!
 //! `direction` is `x`, `y`, `z` (optionally signed, `-y`) or three numbers separated by spaces
-//! (`0.707 0.707 0`). An optional sixth column `damping` gives the modal damping ratio. Sensors are
-//! the distinct (node, direction) pairs in order of first appearance; every mode must give a value
-//! for every sensor, and one frequency.
+//! (`0.707 0.707 0`). Optional columns after `value`: `damping` (the modal damping ratio) and
+//! `x,y,z` (the test node's coordinates in the test's own frame and units, for mapping a test
+//! wireframe onto the model; the same on every row of a node). Sensors are the distinct (node,
+//! direction) pairs in order of first appearance; every mode must give a value for every sensor,
+//! and one frequency.
 
 use crate::IoError;
 use femu_correlate::{Sensor, TestModes};
@@ -27,6 +29,8 @@ pub struct TestData {
     pub sensors: Vec<Sensor>,
     /// The modes.
     pub modes: TestModes,
+    /// Test node coordinates the file gives (its own frame and units; empty when it gives none).
+    pub coordinates: BTreeMap<u64, [f64; 3]>,
 }
 
 /// One mode's rows: frequency, damping, first line, values by sensor.
@@ -72,6 +76,8 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
     };
     let mut header_seen = false;
     let mut damping_column = false;
+    let mut xyz_from: Option<usize> = None;
+    let mut coordinates: BTreeMap<u64, ([f64; 3], usize)> = BTreeMap::new();
     let mut sensors: Vec<Sensor> = Vec::new();
     let mut modes: BTreeMap<u64, ModeRows> = BTreeMap::new();
     for (i, raw) in text.lines().enumerate() {
@@ -87,20 +93,33 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
                 return Err(err(
                     line,
                     format!(
-                        "expected the header mode,frequency_hz,node,direction,value[,damping], got {t:?}"
+                        "expected the header mode,frequency_hz,node,direction,value[,damping][,x,y,z], got {t:?}"
                     ),
                 ));
             }
-            if let Some(extra) = h.get(5).filter(|c| c.as_str() != "damping").or(h.get(6)) {
-                let hint = crate::spelling::suggestion(extra, ["damping"], "");
-                return Err(err(
-                    line,
-                    format!(
-                        "unknown column {extra:?}{hint}: the columns are mode,frequency_hz,node,direction,value and optionally damping"
-                    ),
-                ));
-            }
-            damping_column = h.len() == 6;
+            let rest: Vec<&str> = h[5..].iter().map(String::as_str).collect();
+            let (damping, xyz) = match rest.as_slice() {
+                [] => (false, false),
+                ["damping"] => (true, false),
+                ["x", "y", "z"] => (false, true),
+                ["damping", "x", "y", "z"] => (true, true),
+                _ => {
+                    let extra = rest
+                        .iter()
+                        .find(|c| !["damping", "x", "y", "z"].contains(c))
+                        .copied()
+                        .unwrap_or(rest[0]);
+                    let hint = crate::spelling::suggestion(extra, ["damping", "x", "y", "z"], "");
+                    return Err(err(
+                        line,
+                        format!(
+                            "unknown or misplaced column {extra:?}{hint}: the columns are mode,frequency_hz,node,direction,value, then optionally damping, then optionally x,y,z"
+                        ),
+                    ));
+                }
+            };
+            damping_column = damping;
+            xyz_from = xyz.then_some(5 + usize::from(damping));
             header_seen = true;
             continue;
         }
@@ -136,6 +155,39 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
             .ok()
             .filter(|v| v.is_finite())
             .ok_or_else(|| err(line, format!("value {:?} is not a finite number", f[4])))?;
+        if let Some(at) = xyz_from {
+            let mut x = [0.0; 3];
+            for (c, v) in x.iter_mut().enumerate() {
+                let t = f.get(at + c).copied().unwrap_or("");
+                *v = t
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| {
+                        err(
+                            line,
+                            format!(
+                                "coordinate {} {t:?} of node {node} is not a finite number",
+                                ["x", "y", "z"][c]
+                            ),
+                        )
+                    })?;
+            }
+            match coordinates.get(&node) {
+                Some((earlier, at_line)) if *earlier != x => {
+                    return Err(err(
+                        line,
+                        format!(
+                            "node {node} is at {x:?} here and at {earlier:?} on line {at_line}"
+                        ),
+                    ));
+                }
+                Some(_) => {}
+                None => {
+                    coordinates.insert(node, (x, line));
+                }
+            }
+        }
         let damping = match (damping_column, f.get(5)) {
             (true, Some(s)) if !s.is_empty() => Some(
                 s.parse::<f64>()
@@ -194,7 +246,7 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
     if !header_seen {
         return Err(IoError::Content {
             path: path.to_path_buf(),
-            reason: "the file is empty: CSV test modes start with the header mode,frequency_hz,node,direction,value[,damping]".into(),
+            reason: "the file is empty: CSV test modes start with the header mode,frequency_hz,node,direction,value[,damping][,x,y,z]".into(),
         });
     }
     if modes.is_empty() {
@@ -231,7 +283,11 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
         None
     };
     let modes = TestModes::new(freqs, damping, shapes).map_err(|e| err(1, e.to_string()))?;
-    Ok(TestData { sensors, modes })
+    Ok(TestData {
+        sensors,
+        modes,
+        coordinates: coordinates.into_iter().map(|(n, (x, _))| (n, x)).collect(),
+    })
 }
 
 /// Reads CSV test modes from a file.

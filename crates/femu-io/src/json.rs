@@ -1,7 +1,8 @@
 //! JSON test modes for people without UFF: the rows of the CSV format as objects,
 //! `[{"mode": 1, "frequency_hz": 1520.5, "node": 7, "direction": "y", "value": 0.25,
 //! "damping": 0.002}, ...]` (or `{"rows": [...]}`); `direction` is `"x"`, `"-y"`, ... or three
-//! numbers `[dx, dy, dz]`. Syntax errors name the JSON line and column; content errors the row
+//! numbers `[dx, dy, dz]`. Optional `"x"`, `"y"`, `"z"` give the test node's coordinates in the
+//! test's frame (on every row, or on none). Syntax errors name the JSON line and column; content errors the row
 //! (1-based), with the same checks as the CSV reader.
 
 use crate::IoError;
@@ -20,6 +21,13 @@ struct Row {
     value: f64,
     #[serde(default)]
     damping: Option<f64>,
+    /// The node's coordinates in the test's frame (all three or none).
+    #[serde(default)]
+    x: Option<f64>,
+    #[serde(default)]
+    y: Option<f64>,
+    #[serde(default)]
+    z: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -78,17 +86,30 @@ pub fn parse_test_json(text: &str, path: impl AsRef<Path>) -> Result<TestData, I
         ));
     }
     // the CSV reader holds every check: write the rows as CSV, map its line back to the row
-    let mut csv = String::from("mode,frequency_hz,node,direction,value,damping\n");
+    let with_xyz = rows
+        .iter()
+        .any(|r| r.x.is_some() || r.y.is_some() || r.z.is_some());
+    let mut csv = String::from(if with_xyz {
+        "mode,frequency_hz,node,direction,value,damping,x,y,z\n"
+    } else {
+        "mode,frequency_hz,node,direction,value,damping\n"
+    });
     for r in &rows {
         let dir = match &r.direction {
             Direction::Axis(s) => s.replace(',', " "),
             Direction::Vector(v) => format!("{:e} {:e} {:e}", v[0], v[1], v[2]),
         };
         let damping = r.damping.map(|d| format!("{d:e}")).unwrap_or_default();
+        let xyz = if with_xyz {
+            let c = |v: Option<f64>| v.map(|v| format!(",{v:e}")).unwrap_or_else(|| ",".into());
+            format!("{}{}{}", c(r.x), c(r.y), c(r.z))
+        } else {
+            String::new()
+        };
         let _ = writeln!(
             csv,
-            "{},{:e},{},{},{:e},{}",
-            r.mode, r.frequency_hz, r.node, dir, r.value, damping
+            "{},{:e},{},{},{:e},{}{}",
+            r.mode, r.frequency_hz, r.node, dir, r.value, damping, xyz
         );
     }
     parse_test_csv(&csv, path).map_err(|e| match e {

@@ -34,6 +34,7 @@ pub mod estimate;
 pub mod expand;
 pub mod info;
 pub mod load;
+pub mod mapping;
 pub mod modes;
 pub mod reach;
 pub mod removal;

@@ -2,6 +2,7 @@
 //! and check the model, assemble `K` and `M` once, and map the test's sensors onto the model.
 
 use crate::StudyError;
+use crate::mapping::{MapOptions, Mapping, map_test};
 use femu_correlate::SensorLayout;
 use femu_fem::assembly::{Assembler, MassKind, SystemMatrices};
 use femu_fem::material::Material;
@@ -75,8 +76,8 @@ pub struct LoadedTest {
     pub data: TestData,
     /// The sensors on the model's DOFs.
     pub layout: SensorLayout,
-    /// Test node -> model node, when the test was mapped ([`TestOptions::map_nearest`]).
-    pub mapping: Vec<NodeMapping>,
+    /// The mapping table, when the test was mapped ([`TestOptions::map`]).
+    pub mapping: Option<Mapping>,
 }
 
 /// The extensions of the model files femu reads.
@@ -215,14 +216,13 @@ fn leave_out_orphans(
 }
 
 /// How a test's sensors find their model nodes.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct TestOptions {
-    /// Map every test node of a universal file (its own numbering, coordinates of dataset 15 or
-    /// 2411, in the file's units) to the nearest model node within this distance (m), instead of
-    /// taking test node ids as model node ids.
-    pub map_nearest: Option<f64>,
-    /// Metres per unit of the test's coordinates where the file says nothing (no dataset 164):
-    /// 0.001 for millimetres. A file's own units win.
+    /// Map the test's own wireframe (its node labels and coordinates) onto the model
+    /// ([`crate::mapping`]); without it, test node ids are model node ids.
+    pub map: Option<MapOptions>,
+    /// Metres per unit of the test's coordinates where the file says nothing (no dataset 164;
+    /// CSV and JSON): 0.001 for millimetres. A file's own units win.
     pub test_units: Option<f64>,
 }
 
@@ -256,14 +256,11 @@ pub fn load_test(path: &Path, model: &LoadedModel) -> Result<LoadedTest, StudyEr
     load_test_with(path, model, &TestOptions::default())
 }
 
-/// [`load_test`] with `options`: with [`TestOptions::map_nearest`], each test node of a
-/// universal file is moved to the nearest model node (the mapping is in
-/// [`LoadedTest::mapping`]).
+/// [`load_test`] with `options`: with [`TestOptions::map`], the test's wireframe is aligned and
+/// mapped onto the model ([`crate::mapping::map_test`]; the table is in [`LoadedTest::mapping`]).
 ///
 /// # Errors
-/// As [`load_test`]; with mapping, a file without test node coordinates, a test node farther
-/// than the tolerance from every model node, or two test nodes on one model node (each named with
-/// its distance).
+/// As [`load_test`]; with mapping, the errors of [`crate::mapping::map_test`].
 pub fn load_test_with(
     path: &Path,
     model: &LoadedModel,
@@ -273,35 +270,35 @@ pub fn load_test_with(
         return Err(StudyError::in_file(
             path,
             "test",
-            "femu reads test modes from universal files (.unv, .uff: datasets 15/2411 and 55), JSON (.json) and CSV (.csv, .txt); this extension is none of them",
+            "femu reads test modes from universal files (.unv, .uff: datasets 15/2411 and 55 or 2414), JSON (.json) and CSV (.csv, .txt); this extension is none of them",
         ));
     }
-    let mut mapping = Vec::new();
-    let data = if has_extension(path, &["unv", "uff"]) {
+    // metres per file unit: a universal file's dataset 164, else the option, else metres
+    let (mut data, metres) = if has_extension(path, &["unv", "uff"]) {
         let u = femu_io::uff::read_uff(path)?;
-        let mut data = u.test_data(path)?;
-        if let Some(tol) = options.map_nearest {
-            // metres per file unit: the file's dataset 164, else the option, else metres
-            let metres = match (&u.units, options.test_units) {
-                (Some(_), _) => 1.0 / u.length_factor(path)?,
-                (None, Some(m)) => m,
-                (None, None) => 1.0,
-            };
-            mapping = map_nearest(&u, &mut data, model, tol, metres, path)?;
-        }
-        data
+        let data = u.test_data(path)?;
+        let metres = match (&u.units, options.test_units) {
+            (Some(_), _) => 1.0 / u.length_factor(path)?,
+            (None, Some(m)) => m,
+            (None, None) => 1.0,
+        };
+        (data, metres)
     } else if has_extension(path, &["json"]) {
-        femu_io::json::read_test_json(path)?
+        (
+            femu_io::json::read_test_json(path)?,
+            options.test_units.unwrap_or(1.0),
+        )
     } else {
-        femu_io::csv::read_test_csv(path)?
+        (
+            femu_io::csv::read_test_csv(path)?,
+            options.test_units.unwrap_or(1.0),
+        )
     };
-    if options.map_nearest.is_some() && mapping.is_empty() {
-        return Err(StudyError::in_file(
-            path,
-            "map",
-            "mapping to the nearest model node needs the test nodes' coordinates: a universal file with dataset 15 or 2411",
-        ));
-    }
+    let mapping = options
+        .map
+        .as_ref()
+        .map(|m| map_test(&mut data, model, m, metres, path))
+        .transpose()?;
     let layout = SensorLayout::new(model.model.mesh(), &model.sys.dofs, data.sensors.clone())
         .map_err(|e| StudyError::within(path, e))?;
     Ok(LoadedTest {
@@ -310,92 +307,4 @@ pub fn load_test_with(
         layout,
         mapping,
     })
-}
-
-/// One test node moved onto the model.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct NodeMapping {
-    /// The test node's label.
-    pub test: u64,
-    /// The model node it measures.
-    pub model: u64,
-    /// Their distance, m.
-    pub distance: f64,
-}
-
-/// Relabels `data`'s sensors from test nodes to the nearest model nodes (within `tol`).
-fn map_nearest(
-    u: &femu_io::uff::Universal,
-    data: &mut TestData,
-    model: &LoadedModel,
-    tol: f64,
-    metres: f64,
-    path: &Path,
-) -> Result<Vec<NodeMapping>, StudyError> {
-    if !(tol.is_finite() && tol >= 0.0) {
-        return Err(StudyError::invalid(
-            "mapping tolerance",
-            format!("{tol} m is not a non-negative distance"),
-        ));
-    }
-    let mesh = model.model.mesh();
-    let coords: std::collections::HashMap<u64, [f64; 3]> = u
-        .nodes
-        .iter()
-        .map(|n| (n.id, n.x.map(|v| v * metres)))
-        .collect();
-    let mut test_nodes: Vec<u64> = data.sensors.iter().map(|s| s.node).collect();
-    test_nodes.sort_unstable();
-    test_nodes.dedup();
-    let mut table = Vec::new();
-    let mut taken: std::collections::HashMap<u64, u64> = std::collections::HashMap::new();
-    for t in test_nodes {
-        let x = coords.get(&t).ok_or_else(|| {
-            StudyError::in_file(
-                path,
-                "map",
-                format!("test node {t} has modes but no coordinates (dataset 15 or 2411)"),
-            )
-        })?;
-        let (best, d) = (0..mesh.node_count())
-            .map(|i| {
-                let c = mesh.coords()[i];
-                let d =
-                    ((c[0] - x[0]).powi(2) + (c[1] - x[1]).powi(2) + (c[2] - x[2]).powi(2)).sqrt();
-                (i, d)
-            })
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .ok_or_else(|| StudyError::invalid("map", "the model has no nodes"))?;
-        let id = mesh.node_id(best);
-        if d > tol {
-            return Err(StudyError::in_file(
-                path,
-                "map",
-                format!(
-                    "test node {t} at ({:.6}, {:.6}, {:.6}) m is {d:.3e} m from the nearest model node ({id}), beyond the tolerance {tol:e} m",
-                    x[0], x[1], x[2]
-                ),
-            ));
-        }
-        if let Some(other) = taken.insert(id, t) {
-            return Err(StudyError::in_file(
-                path,
-                "map",
-                format!(
-                    "test nodes {other} and {t} both map to model node {id}: lower the tolerance or refine the mesh"
-                ),
-            ));
-        }
-        table.push(NodeMapping {
-            test: t,
-            model: id,
-            distance: d,
-        });
-    }
-    for s in &mut data.sensors {
-        if let Some(m) = table.iter().find(|m| m.test == s.node) {
-            s.node = m.model;
-        }
-    }
-    Ok(table)
 }

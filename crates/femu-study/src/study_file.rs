@@ -27,9 +27,10 @@ use crate::StudyError;
 use crate::estimate::{EstimateOptions, EstimateResult, estimate_with_bounds};
 use crate::expand::{ExpansionReport, expand_shapes, expanded_names};
 use crate::load::{MaterialOptions, ModelOptions, TestOptions, load_model, load_test_with};
+use crate::mapping::MapOptions;
 use crate::modes::lowest_for_test;
 use crate::removal::{removal_over_test, write_removal_study};
-use crate::report::{create_dir, write_json, write_shapes_vtu};
+use crate::report::{create_dir, write_json, write_shapes_vtu, write_text};
 use crate::updating::{UpdateStudy, UpdateStudyOptions, localise_update_check, resolve_sets};
 use femu_correlate::expansion::Method;
 use femu_correlate::{ModeSet, PairingOptions};
@@ -57,10 +58,14 @@ pub struct StudyFile {
     /// Unknown keywords of an `.inp` model are warnings instead of errors.
     #[serde(default)]
     pub lenient: bool,
-    /// A universal-file test with its own node numbering: each test node is mapped to the nearest
-    /// model node within this distance (m).
+    /// `[map]`: a test on its own wireframe, aligned and mapped onto the model
+    /// (`method = "nearest" | "interpolate"`, `tolerance` in m, `align = "auto" | "T:M,T:M,T:M"`,
+    /// `scale`).
     #[serde(default)]
-    pub map_nearest: Option<f64>,
+    pub map: Option<MapOptions>,
+    /// The unit of the test's coordinates where the file does not say: m, cm, mm, in or ft.
+    #[serde(default)]
+    pub test_units: Option<String>,
     /// Pairing settings.
     #[serde(default)]
     pub pairing: Option<PairingSection>,
@@ -205,13 +210,23 @@ pub fn run_study_file(
         &base.join(&s.test),
         &model,
         &TestOptions {
-            map_nearest: s.map_nearest,
-            test_units: None,
+            map: s.map.clone(),
+            test_units: s
+                .test_units
+                .as_deref()
+                .map(crate::load::length_unit)
+                .transpose()?,
         },
     )
     .map_err(named)?;
     create_dir(out)?;
     let mut files = Vec::new();
+    if let Some(m) = &test.mapping {
+        write_text(&out.join("mapping.txt"), &m.to_string(), &mut files)?;
+        let p = out.join("mapping.json");
+        write_json(&p, m)?;
+        files.push(p);
+    }
     let n_test = test.data.modes.len();
     // one solve serves correlation (2 n + 4 modes), estimation and the truth check (n + 10)
     let count = (2 * n_test + 4).max(n_test + 10);

@@ -241,6 +241,15 @@ impl Universal {
             shapes,
         )
         .map_err(|e| bad(e.to_string()))?;
-        Ok(crate::csv::TestData { sensors, modes })
+        // coordinates of the nodes that carry sensors, in the file's units
+        let coordinates = sensors
+            .iter()
+            .filter_map(|s| positions.get(&s.node).map(|x| (s.node, *x)))
+            .collect();
+        Ok(crate::csv::TestData {
+            sensors,
+            modes,
+            coordinates,
+        })
     }
 }
