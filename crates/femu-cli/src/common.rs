@@ -34,7 +34,12 @@ pub struct MeshOptions {
     pub map: Option<String>,
     /// With --map: the largest distance from a test node to the model, m (default 1 % of the
     /// model's bounding-box diagonal).
-    #[arg(long, global = true, value_name = "METRES")]
+    #[arg(
+        long,
+        global = true,
+        value_name = "METRES",
+        allow_negative_numbers = true
+    )]
     pub tolerance: Option<f64>,
     /// With --map: bring the test's frame onto the model's first, from pairs of test and model
     /// nodes (`101:3,102:6,103:9`, at least three) or automatically (`auto`: best fit onto the

@@ -137,6 +137,27 @@ pub(crate) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// the reference cell, or Newton fails, projected Gauss-Newton steps give the nearest point of the
 /// element instead, with its distance.
 pub fn inverse_map(kind: ElementKind, coords: &[[f64; 3]], p: [f64; 3]) -> InverseMap {
+    let (xi, converged) = newton(kind, coords, p);
+    if converged && in_reference(kind, xi, INSIDE_TOL) {
+        let (x, _) = map_point(kind, coords, xi);
+        return InverseMap {
+            xi,
+            distance: dist(x, p),
+            inside: true,
+        };
+    }
+    nearest_in_cell(kind, coords, p, xi)
+}
+
+/// The local coordinates of `p` when it lies in the element (Newton only; `None` outside).
+pub fn inverse_map_inside(kind: ElementKind, coords: &[[f64; 3]], p: [f64; 3]) -> Option<[f64; 3]> {
+    let (xi, converged) = newton(kind, coords, p);
+    (converged && in_reference(kind, xi, INSIDE_TOL)).then_some(xi)
+}
+
+/// Newton's method on `x(xi) = p` from the reference centroid: the last iterate and whether it
+/// converged.
+fn newton(kind: ElementKind, coords: &[[f64; 3]], p: [f64; 3]) -> ([f64; 3], bool) {
     let size = coords
         .iter()
         .map(|c| dist(*c, coords[0]))
@@ -161,15 +182,22 @@ pub fn inverse_map(kind: ElementKind, coords: &[[f64; 3]], p: [f64; 3]) -> Inver
             break;
         }
     }
-    if converged && in_reference(kind, xi, INSIDE_TOL) {
-        let (x, _) = map_point(kind, coords, xi);
-        return InverseMap {
-            xi,
-            distance: dist(x, p),
-            inside: true,
-        };
-    }
-    // outside (or Newton lost): the nearest point of the reference cell, projected Gauss-Newton
+    (xi, converged)
+}
+
+/// The nearest point of the element to `p` (projected Gauss-Newton from `start`, clamped).
+fn nearest_in_cell(
+    kind: ElementKind,
+    coords: &[[f64; 3]],
+    p: [f64; 3],
+    start: [f64; 3],
+) -> InverseMap {
+    let size = coords
+        .iter()
+        .map(|c| dist(*c, coords[0]))
+        .fold(0.0f64, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let xi = start;
     let mut xi = if xi.iter().all(|v| v.is_finite()) {
         clamp_to_reference(kind, xi)
     } else {
@@ -248,7 +276,7 @@ pub struct Location {
 #[derive(Debug, Clone)]
 pub(crate) struct Grid {
     lo: [f64; 3],
-    cell: f64,
+    pub(crate) cell: f64,
     dims: [usize; 3],
     start: Vec<u32>,
     items: Vec<u32>,
@@ -394,12 +422,32 @@ impl Locator {
         candidates.sort_unstable();
         candidates.dedup();
         let mut coords = Vec::new();
-        let mut best: Option<(usize, InverseMap)> = None;
-        for e in candidates {
+        candidates.retain(|&e| {
             let (lo, hi) = self.boxes[e];
-            if (0..3).any(|i| p[i] < lo[i] - tolerance || p[i] > hi[i] + tolerance) {
+            (0..3).all(|i| p[i] >= lo[i] - tolerance && p[i] <= hi[i] + tolerance)
+        });
+        // first the elements whose box holds p, by Newton alone: most points are inside one
+        for &e in &candidates {
+            let (lo, hi) = self.boxes[e];
+            if (0..3).any(|i| p[i] < lo[i] || p[i] > hi[i]) {
                 continue;
             }
+            mesh.element_coords(e, &mut coords);
+            let kind = mesh.element(e).kind;
+            if let Some(xi) = inverse_map_inside(kind, &coords, p) {
+                let mut n = vec![0.0; kind.num_nodes()];
+                kind.shape(xi, &mut n);
+                return Some(Location {
+                    element: e,
+                    xi,
+                    distance: 0.0,
+                    weights: mesh.element(e).nodes.iter().copied().zip(n).collect(),
+                });
+            }
+        }
+        // outside every element: the nearest point within the tolerance
+        let mut best: Option<(usize, InverseMap)> = None;
+        for e in candidates {
             mesh.element_coords(e, &mut coords);
             let map = inverse_map(mesh.element(e).kind, &coords, p);
             let better = match &best {
@@ -428,14 +476,27 @@ impl Locator {
     /// The node nearest `p` within `tolerance` (internal index and distance); `None` when every
     /// node is farther. Ties go to the lowest index.
     pub fn nearest_node(&self, mesh: &Mesh, p: [f64; 3], tolerance: f64) -> Option<(usize, f64)> {
-        let mut best: Option<(usize, f64)> = None;
-        self.nodes.visit(p, tolerance, |i| {
-            let d = dist(mesh.coords()[i], p);
-            if d <= tolerance && best.is_none_or(|(b, bd)| d < bd || (d == bd && i < b)) {
-                best = Some((i, d));
+        // rings of growing radius: a node found within the radius is the nearest
+        let mut radius = self.nodes.cell.min(tolerance);
+        loop {
+            let mut best: Option<(usize, f64)> = None;
+            self.nodes.visit(p, radius, |i| {
+                let d = dist(mesh.coords()[i], p);
+                if d <= radius && best.is_none_or(|(b, bd)| d < bd || (d == bd && i < b)) {
+                    best = Some((i, d));
+                }
+            });
+            if best.is_some() || radius >= tolerance {
+                return best;
             }
-        });
-        best
+            radius = (2.0 * radius).min(tolerance);
+            if radius.is_infinite() {
+                // no node within any finite ring of the grid's extent: scan
+                return (0..mesh.node_count())
+                    .map(|i| (i, dist(mesh.coords()[i], p)))
+                    .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+            }
+        }
     }
 }
 

@@ -412,3 +412,53 @@ fn json_test_modes() {
         .to_string();
     assert!(e.contains("row 5"), "{e}");
 }
+
+/// Test node coordinates in CSV (`x,y,z` after `value` or `damping`) and JSON (`"x"`, `"y"`,
+/// `"z"`): read per node; a node placed at two positions, a missing coordinate and a misplaced
+/// column are errors naming the line.
+#[test]
+fn test_coordinates_in_csv_and_json() {
+    use femu_io::csv::parse_test_csv;
+    let text = "mode,frequency_hz,node,direction,value,damping,x,y,z\n\
+                1,100,7,x,0.5,0.01,10,20,30\n\
+                1,100,7,y,0.25,0.01,10,20,30\n\
+                1,100,8,z,1.0,0.01,-5,0,2.5\n";
+    let d = parse_test_csv(text, "c.csv").unwrap();
+    assert_eq!(d.coordinates.len(), 2);
+    assert_eq!(d.coordinates[&7], [10.0, 20.0, 30.0]);
+    assert_eq!(d.coordinates[&8], [-5.0, 0.0, 2.5]);
+    let moved = text.replacen(
+        "1,100,7,y,0.25,0.01,10,20,30",
+        "1,100,7,y,0.25,0.01,10,21,30",
+        1,
+    );
+    let e = parse_test_csv(&moved, "c.csv").unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "c.csv:3: node 7 is at [10.0, 21.0, 30.0] here and at [10.0, 20.0, 30.0] on line 2"
+    );
+    let missing = text.replacen("-5,0,2.5", "-5,,2.5", 1);
+    let e = parse_test_csv(&missing, "c.csv").unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "c.csv:4: coordinate y \"\" of node 8 is not a finite number"
+    );
+    let misplaced = "mode,frequency_hz,node,direction,value,x,y,z,damping\n1,100,7,x,1,0,0,0,0\n";
+    let e = parse_test_csv(misplaced, "c.csv").unwrap_err().to_string();
+    assert!(
+        e.starts_with("c.csv:1: unknown or misplaced column \"x\""),
+        "{e}"
+    );
+    let json = r#"[{"mode": 1, "frequency_hz": 100, "node": 7, "direction": "x", "value": 0.5, "x": 1, "y": 2, "z": 3},
+                   {"mode": 1, "frequency_hz": 100, "node": 8, "direction": "z", "value": 1.0, "x": 4, "y": 5, "z": 6}]"#;
+    let j = femu_io::json::parse_test_json(json, "c.json").unwrap();
+    assert_eq!(j.coordinates[&8], [4.0, 5.0, 6.0]);
+    let half = json.replacen(r#", "x": 4, "y": 5, "z": 6"#, r#", "x": 4"#, 1);
+    let e = femu_io::json::parse_test_json(&half, "c.json")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "c.json: row 2: coordinate y \"\" of node 8 is not a finite number"
+    );
+}

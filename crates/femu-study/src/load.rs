@@ -300,7 +300,20 @@ pub fn load_test_with(
         .map(|m| map_test(&mut data, model, m, metres, path))
         .transpose()?;
     let layout = SensorLayout::new(model.model.mesh(), &model.sys.dofs, data.sensors.clone())
-        .map_err(|e| StudyError::within(path, e))?;
+        .map_err(|e| match e {
+            femu_correlate::CorrelateError::SensorOnMissingNode { .. }
+                if mapping.is_none() && !data.coordinates.is_empty() =>
+            {
+                StudyError::in_file(
+                    path,
+                    "test",
+                    format!(
+                        "{e}; the file gives its nodes' coordinates: map its own wireframe onto the model with --map nearest or --map interpolate ([map] in a study file)"
+                    ),
+                )
+            }
+            e => StudyError::within(path, e),
+        })?;
     Ok(LoadedTest {
         path: path.to_path_buf(),
         data,
