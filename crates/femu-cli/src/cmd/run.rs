@@ -18,6 +18,11 @@ use std::path::PathBuf;
 ///   young = 2.1e11
 ///   poisson = 0.3
 ///   density = 7850
+///   test_units = "mm"              # where the test file does not say
+///   [map]                          # a test on its own wireframe
+///   method = "interpolate"         # or "nearest"
+///   tolerance = 0.002              # m (default 1 % of the model's size)
+///   align = "101:3,102:6,103:9"    # test:model node pairs, or "auto"
 ///   [pairing]
 ///   mac_threshold = 0.8
 ///   [expansion]
