@@ -18,6 +18,12 @@ fn fixture(name: &str) -> PathBuf {
 fn testlab_trace_lines_with_padded_records() {
     let u = femu_io::uff::read_uff(fixture("testlab_161_164_18_15_82.uff")).unwrap();
     assert_eq!(u.nodes.len(), 36);
+    // dataset 151: record 1 "AME_Test", record 6 the program
+    let h = u.header.as_ref().unwrap();
+    assert_eq!(
+        (h.model.as_str(), h.program.as_str()),
+        ("AME_Test", "LMS Test.Lab Rev project-15A")
+    );
     // 36 coordinate systems (18), 30 of them turned; every node measures in its own system.
     // SYS1 by its points: origin (-2.4, -0.95, 0), x towards (-3.4, -0.95, -8.7e-8), xz plane
     // through (-3.4, -0.95, -1): local x = -X, y = +Y, z = -Z (to the file's 8.7e-8)
@@ -312,6 +318,12 @@ fn nx_coordinate_systems_of_2420_and_modes_of_2414() {
     let path = fixture("nx_2420_2414_beam.uff");
     let u = femu_io::uff::read_uff(&path).unwrap();
     assert_eq!(u.coordinate_systems.len(), 18);
+    assert_eq!(u.header.as_ref().unwrap().program, "NX: Correlation");
+    assert!(
+        u.warnings
+            .iter()
+            .all(|w| !w.to_string().contains("dataset 151"))
+    );
     assert_eq!(u.modes.len(), 176);
     assert_eq!(u.modes_from_2414, 176);
     assert!(u.modes.iter().all(|m| m.complex));

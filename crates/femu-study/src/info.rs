@@ -96,6 +96,13 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
                 units.description, units.code, units.factors[0]
             );
         }
+        if let Some(h) = &u.header {
+            let _ = writeln!(
+                s,
+                "header (151): model {:?}, description {:?}, written by {:?}",
+                h.model, h.description, h.program
+            );
+        }
         let _ = writeln!(
             s,
             "nodes ({}): {}",

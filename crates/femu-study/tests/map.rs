@@ -115,6 +115,21 @@ fn a_test_on_its_own_wireframe_maps_onto_the_model() {
         e.contains("test nodes 1003 and 1006 both map to model node 3"),
         "{e}"
     );
+    // a mode on a node the geometry lacks: drop node 1012's coordinates (dataset 15)
+    let lacking = test_file("lacking", |id| 1000 + id, 0.0);
+    let text = std::fs::read_to_string(&lacking).unwrap();
+    let kept: Vec<&str> = text
+        .lines()
+        .filter(|l| !(l.split_whitespace().count() == 7 && l.trim_start().starts_with("1012 ")))
+        .collect();
+    std::fs::write(&lacking, kept.join("\n") + "\n").unwrap();
+    let e = load_test_with(&lacking, &model, &nearest(1e-3))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("test node 1012 has modes but no coordinates"),
+        "{e}"
+    );
     // a CSV has no coordinates to map
     let e = load_test_with(
         &fixture("malformed", "tip_modes.csv"),

@@ -36,6 +36,17 @@ pub struct UffNode {
     pub x: [f64; 3],
 }
 
+/// Dataset 151 (header): what the file says it is and which program wrote it.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct UffHeader {
+    /// Record 1: the model file's name.
+    pub model: String,
+    /// Record 2: its description.
+    pub description: String,
+    /// Record 6 (record 3 when 6 is blank): the program that wrote the file.
+    pub program: String,
+}
+
 /// One mode of dataset 55 (test modes) or 2414 (modes another FE code computed).
 #[derive(Debug, Clone, PartialEq)]
 pub struct UffMode {
@@ -65,6 +76,8 @@ pub struct Universal {
     pub nodes_2411: bool,
     /// Dataset 2412 elements.
     pub elements: Vec<UffElement>,
+    /// The header of dataset 151, when the file has one.
+    pub header: Option<UffHeader>,
     /// Modes: test modes of dataset 55, then analysis results of dataset 2414.
     pub modes: Vec<UffMode>,
     /// How many of `modes` came from dataset 2414 (analysis results) rather than 55.

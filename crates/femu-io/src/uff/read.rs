@@ -203,6 +203,16 @@ pub fn parse_uff_bytes(bytes: &[u8], path: &Path) -> Result<Universal, IoError> 
             2412 => parse_2412(path, &body, &mut out)?,
             164 => parse_164(path, &body, &mut out)?,
             55 => parse_55(path, &body, &mut out)?,
+            151 => {
+                // free text: whatever records the writer filled
+                let rec = |i: usize| body.get(i).map_or("", |l| l.1.trim()).to_string();
+                let program = if rec(5).is_empty() { rec(2) } else { rec(5) };
+                out.header = Some(UffHeader {
+                    model: rec(0),
+                    description: rec(1),
+                    program,
+                });
+            }
             2414 => parse_2414(path, &body, &mut out)?,
             2420 => parse_2420(path, &body, &mut out)?,
             58 => {
