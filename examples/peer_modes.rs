@@ -1,10 +1,12 @@
 //! The model of the eigensolver comparison (`benches/peers/run.sh`): a steel block 2 x 1 x 1 m,
-//! clamped at x = 0, meshed with hex8, hex20 or tet10 (`n` cells across, `2n` along).
+//! clamped at x = 0, meshed with hex8, hex20 or tet10 (`n` cells across, `2n` along); or (`plate`)
+//! a free-free hex8 steel plate 1.0 x 0.6 x 0.02 m of `5n x 3n x 3` cells.
 //!
 //! - `peer_modes export KIND N COUNT DIR`: writes `DIR/model.inp` (CalculiX, `*FREQUENCY` step
 //!   with COUNT modes) and `DIR/K.mtx`, `DIR/M.mtx` (scipy).
 //! - `peer_modes solve KIND N COUNT`: assembles and solves with femu, prints one JSON line with
-//!   the frequencies, the Sturm check and where the time went.
+//!   the frequencies, the Sturm check and where the time went. `FEMU_ENGINE=slepc:R` solves with
+//!   SLEPc on `R` MPI ranks instead (`benches/scaling.sh`).
 
 use femu::io::inp::{FrequencyStep, write_inp};
 use femu::prelude::*;
@@ -12,6 +14,17 @@ use femu::sparse::eigen::{EigenOptions, Which, eigs};
 use std::time::Instant;
 
 fn model(kind: &str, n: usize) -> Result<Model, Box<dyn std::error::Error>> {
+    if kind == "plate" {
+        // a free-free hex8 steel plate 1.0 x 0.6 x 0.02 m, 5n x 3n x 3 cells (n = 33: 199k DOF)
+        let mut model = Model::new(box_mesh(&BoxSpec::new(
+            [1.0, 0.6, 0.02],
+            [5 * n, 3 * n, 3],
+            BoxCells::Hex,
+            false,
+        ))?)?;
+        model.set_material(None, Material::steel())?;
+        return Ok(model);
+    }
     let (cells, quadratic) = match kind {
         "hex8" => (BoxCells::Hex, false),
         "hex20" => (BoxCells::Hex, true),
@@ -72,6 +85,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             {
                 params.max_basis = m; // for tuning runs
             }
+            if let Some(ranks) = std::env::var("FEMU_ENGINE")
+                .ok()
+                .and_then(|v| v.strip_prefix("slepc:").and_then(|r| r.parse().ok()))
+            {
+                // SLEPc with MUMPS under MPI (benches/scaling.sh)
+                params.engine =
+                    femu::sparse::slepc::Engine::Slepc(femu::sparse::slepc::SlepcOptions {
+                        ranks,
+                        ..Default::default()
+                    });
+            }
             let modes = eigs(&sys.k, &sys.m, Which::Lowest(count), &params)?;
             let t_eigen = t.elapsed().as_secs_f64();
             let s = &modes.stats;
@@ -79,7 +103,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .frequencies_hz()
                 .iter()
                 .take(count)
-                .map(|v| format!("{v:.10e}"))
+                .map(|v| format!("{v:.15e}"))
                 .collect();
             let worst = modes
                 .residuals

@@ -214,3 +214,48 @@ pub fn write_json<T: serde::Serialize>(path: Option<&Path>, value: &T) -> Result
     }
     Ok(())
 }
+
+/// The eigensolver every eigen solve of the command uses.
+#[derive(clap::Args, Debug, Clone)]
+pub struct EngineOptions {
+    /// The eigensolver: femu's own (default) or SLEPc with MUMPS under MPI, for models whose
+    /// factor outgrows one machine (docs/SCALING.md; install with scripts/setup-slepc.sh).
+    #[arg(long, global = true, value_name = "femu|slepc", default_value = "femu")]
+    pub engine: String,
+    /// With --engine slepc: MPI ranks (mpirun -n).
+    #[arg(long, global = true, value_name = "N", default_value_t = 1)]
+    pub np: usize,
+    /// With --engine slepc: an MPI hostfile for a cluster.
+    #[arg(long, global = true, value_name = "FILE")]
+    pub hostfile: Option<std::path::PathBuf>,
+}
+
+impl EngineOptions {
+    /// Makes the chosen engine the default of every eigen solve.
+    ///
+    /// # Errors
+    /// An unknown engine, zero ranks, --np or --hostfile without --engine slepc.
+    pub fn install(&self) -> Result<(), String> {
+        use femu::sparse::slepc::{Engine, SlepcOptions, set_default_engine};
+        match self.engine.to_ascii_lowercase().as_str() {
+            "femu" => {
+                if self.np != 1 || self.hostfile.is_some() {
+                    return Err("--np and --hostfile apply with --engine slepc".into());
+                }
+                Ok(())
+            }
+            "slepc" => {
+                if self.np == 0 {
+                    return Err("--np: SLEPc needs at least one MPI rank".into());
+                }
+                set_default_engine(Engine::Slepc(SlepcOptions {
+                    ranks: self.np,
+                    hostfile: self.hostfile.clone(),
+                    ..Default::default()
+                }));
+                Ok(())
+            }
+            other => Err(format!("--engine {other:?}: expected femu or slepc")),
+        }
+    }
+}

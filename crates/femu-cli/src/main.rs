@@ -19,6 +19,8 @@ struct Cli {
     quiet: bool,
     #[command(flatten)]
     mesh: MeshOptions,
+    #[command(flatten)]
+    engine: common::EngineOptions,
     #[command(subcommand)]
     command: Command,
 }
@@ -39,6 +41,10 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let (q, mesh) = (cli.quiet, &cli.mesh);
+    if let Err(e) = cli.engine.install() {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
     let result = match &cli.command {
         Command::Estimate(a) => cmd::estimate::run(a, mesh, q),
         Command::Correlate(a) => cmd::correlate::run(a, mesh, q),

@@ -59,6 +59,9 @@ pub struct EigenOptions {
     pub ordering: Ordering,
     /// Seed of the random start vectors (results are deterministic for a seed).
     pub seed: u64,
+    /// The eigensolver: femu's own, or SLEPc under MPI ([`crate::slepc`]). The default is
+    /// femu's unless a program chose another with [`crate::slepc::set_default_engine`].
+    pub engine: crate::slepc::Engine,
 }
 
 impl Default for EigenOptions {
@@ -70,6 +73,7 @@ impl Default for EigenOptions {
             max_restarts: 60,
             ordering: Ordering::NestedDissection,
             seed: 0x5EED,
+            engine: crate::slepc::default_engine(),
         }
     }
 }
@@ -211,6 +215,41 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
+/// The 1-norm (largest column sum of magnitudes) of a CSC matrix.
+pub(crate) fn one_norm(a: &SparseMatrix) -> f64 {
+    let p = a.indptr();
+    let p = p.raw_storage();
+    (0..a.cols())
+        .map(|c| {
+            a.data()[p[c]..p[c + 1]]
+                .iter()
+                .map(|v| v.abs())
+                .sum::<f64>()
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The residual of an eigenpair `(lambda, x)` with `mx = M x`, of the kind that means something
+/// for it ([`ResidualKind`]); `k_norm`, `m_norm` are the 1-norms of `K` and `M`.
+pub(crate) fn residual_of(
+    k: &SparseMatrix,
+    (k_norm, m_norm): (f64, f64),
+    x: &[f64],
+    mx: &[f64],
+    lambda: f64,
+) -> (f64, ResidualKind) {
+    let mut kx = vec![0.0; x.len()];
+    crate::csc::mul_vec(k, x, &mut kx).expect("sizes checked");
+    let r: Vec<f64> = kx.iter().zip(mx).map(|(k, m)| k - lambda * m).collect();
+    let (rn, kn, xn) = (norm(&r), norm(&kx), norm(x));
+    if kn <= ZERO_ENERGY * k_norm * xn {
+        let scale = (k_norm + lambda.abs() * m_norm) * xn;
+        (rn / scale.max(f64::MIN_POSITIVE), ResidualKind::Backward)
+    } else {
+        (rn / kn, ResidualKind::Relative)
+    }
+}
+
 fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
@@ -298,18 +337,6 @@ impl<'a> Pencil<'a> {
         let symbolic = match symbolic {
             Ok(s) => s,
             Err(ordering) => SymbolicFactor::new(k, ordering)?,
-        };
-        let one_norm = |a: &SparseMatrix| -> f64 {
-            let p = a.indptr();
-            let p = p.raw_storage();
-            (0..a.cols())
-                .map(|c| {
-                    a.data()[p[c]..p[c + 1]]
-                        .iter()
-                        .map(|v| v.abs())
-                        .sum::<f64>()
-                })
-                .fold(0.0, f64::max)
         };
         Ok(Self {
             k,
@@ -755,7 +782,10 @@ pub fn eigs(
     which: Which,
     params: &EigenOptions,
 ) -> Result<Modes, SparseError> {
-    Pencil::new(k, m, params.ordering)?.solve(which, params)
+    match &params.engine {
+        crate::slepc::Engine::Femu => Pencil::new(k, m, params.ordering)?.solve(which, params),
+        crate::slepc::Engine::Slepc(opts) => crate::slepc::solve(k, m, which, params, opts),
+    }
 }
 
 /// Ritz values and vectors of the symmetrised projection, ordered by decreasing `|theta|`.
@@ -1147,22 +1177,13 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         let (residuals, residual_kinds): (Vec<f64>, Vec<ResidualKind>) = sel
             .iter()
             .map(|&s| {
-                let x = &self.x[s];
-                let mut kx = vec![0.0; self.n];
-                crate::csc::mul_vec(self.pencil.k, x, &mut kx).expect("sizes checked");
-                let r: Vec<f64> = kx
-                    .iter()
-                    .zip(&self.mx[s])
-                    .map(|(k, m)| k - self.values[s] * m)
-                    .collect();
-                let (rn, kn, xn) = (norm(&r), norm(&kx), norm(x));
-                if kn <= ZERO_ENERGY * self.pencil.k_norm * xn {
-                    let scale =
-                        (self.pencil.k_norm + self.values[s].abs() * self.pencil.m_norm) * xn;
-                    (rn / scale.max(f64::MIN_POSITIVE), ResidualKind::Backward)
-                } else {
-                    (rn / kn, ResidualKind::Relative)
-                }
+                residual_of(
+                    self.pencil.k,
+                    self.pencil.norms(),
+                    &self.x[s],
+                    &self.mx[s],
+                    self.values[s],
+                )
             })
             .unzip();
         Modes {

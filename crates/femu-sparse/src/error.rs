@@ -107,6 +107,22 @@ pub enum SparseError {
         /// Eigenpairs found in it.
         returned: usize,
     },
+    /// An external eigen engine is not installed or cannot start.
+    #[error("{engine} is not available: {reason}")]
+    EngineUnavailable {
+        /// The engine.
+        engine: &'static str,
+        /// What is missing, and what to install.
+        reason: String,
+    },
+    /// An external eigen engine failed (MPI, the solver, its files).
+    #[error("{engine} failed: {reason}")]
+    EngineFailed {
+        /// The engine.
+        engine: &'static str,
+        /// Its message.
+        reason: String,
+    },
     /// An iterative or dense eigensolver did not converge.
     #[error("eigensolver did not converge: {reason}")]
     NoConvergence {

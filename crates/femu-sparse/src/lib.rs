@@ -27,6 +27,7 @@ mod error;
 pub mod kkt;
 pub mod mtx;
 pub mod ordering;
+pub mod slepc;
 
 pub use error::SparseError;
 

@@ -66,6 +66,10 @@ pub struct StudyFile {
     /// The unit of the test's coordinates where the file does not say: m, cm, mm, in or ft.
     #[serde(default)]
     pub test_units: Option<String>,
+    /// `[eigen]`: the eigensolver of every solve of the study (`engine = "femu" | "slepc"`,
+    /// `ranks`, `hostfile`).
+    #[serde(default)]
+    pub eigen: Option<EigenSection>,
     /// Pairing settings.
     #[serde(default)]
     pub pairing: Option<PairingSection>,
@@ -75,6 +79,29 @@ pub struct StudyFile {
     /// Updating.
     #[serde(default)]
     pub update: Option<UpdateSection>,
+}
+
+/// `[eigen]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EigenSection {
+    /// `femu` (default) or `slepc`.
+    #[serde(default = "default_engine_name")]
+    pub engine: String,
+    /// MPI ranks for SLEPc.
+    #[serde(default = "default_ranks")]
+    pub ranks: usize,
+    /// An MPI hostfile for SLEPc (relative to the study file).
+    #[serde(default)]
+    pub hostfile: Option<PathBuf>,
+}
+
+fn default_engine_name() -> String {
+    "femu".into()
+}
+
+fn default_ranks() -> usize {
+    1
 }
 
 /// `[pairing]`.
@@ -205,6 +232,29 @@ pub fn run_study_file(
         StudyError::Io(femu_io::IoError::Io { .. }) => StudyError::within(path, e),
         e => e,
     };
+    if let Some(e) = &s.eigen {
+        use femu_sparse::slepc::{Engine, SlepcOptions, set_default_engine};
+        match e.engine.as_str() {
+            "femu" => set_default_engine(Engine::Femu),
+            "slepc" if e.ranks > 0 => set_default_engine(Engine::Slepc(SlepcOptions {
+                ranks: e.ranks,
+                hostfile: e.hostfile.as_ref().map(|h| base.join(h)),
+                ..Default::default()
+            })),
+            other => {
+                return Err(StudyError::within(
+                    path,
+                    StudyError::invalid(
+                        "[eigen]",
+                        format!(
+                            "engine {other:?} with {} ranks: expected femu, or slepc with at least one rank",
+                            e.ranks
+                        ),
+                    ),
+                ));
+            }
+        }
+    }
     let model = load_model(&base.join(&s.model), &options).map_err(named)?;
     let test = load_test_with(
         &base.join(&s.test),

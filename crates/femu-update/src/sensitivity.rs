@@ -139,6 +139,12 @@ pub fn model_modes(
     count: usize,
     params: &EigenOptions,
 ) -> Result<ModeSet, UpdateError> {
+    if let femu_sparse::slepc::Engine::Slepc(opts) = &params.engine {
+        // another engine: its own factorization, the same checked modes
+        let sys = up.matrices();
+        let modes = femu_sparse::slepc::solve(&sys.k, &sys.m, Which::Lowest(count), params, opts)?;
+        return Ok(ModeSet::from_modes(&modes));
+    }
     let symbolic = up.symbolic()?;
     let sys = up.matrices();
     let pencil = Pencil::with_symbolic(&sys.k, &sys.m, symbolic)?;

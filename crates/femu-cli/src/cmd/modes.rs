@@ -57,8 +57,16 @@ pub fn run(a: &ModesArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliErro
     pb.finish_and_clear();
     let f = &report.frequencies_hz;
     if !quiet {
+        let engine = match femu::sparse::slepc::default_engine() {
+            femu::sparse::slepc::Engine::Femu => "femu's shift-invert Lanczos".to_string(),
+            femu::sparse::slepc::Engine::Slepc(o) => format!(
+                "SLEPc Krylov-Schur with MUMPS, {} MPI rank{}",
+                o.ranks,
+                if o.ranks == 1 { "" } else { "s" }
+            ),
+        };
         println!(
-            "{} DOF, {} mass, {} modes",
+            "{} DOF, {} mass, {} modes ({engine})",
             report.dofs,
             report.mass,
             f.len()
