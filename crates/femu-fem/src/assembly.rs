@@ -332,6 +332,23 @@ impl Assembler {
                 },
             )?;
         }
+        // point masses: the 3x3 block of their node (the lumped mass keeps its diagonal; an
+        // off-diagonal coupling needs the consistent pattern)
+        for p in model.point_masses() {
+            match mass {
+                MassKind::Consistent => {
+                    let local: Vec<f64> = p.mass.iter().flatten().copied().collect();
+                    self.scatter(&[p.node], |at, l| ms.add(at, local[l]));
+                }
+                MassKind::Lumped => {
+                    for (c, f) in self.dofs.node_dofs(p.node).iter().enumerate() {
+                        if let Some(f) = f {
+                            ms.add(*f, p.mass[c][c]);
+                        }
+                    }
+                }
+            }
+        }
         Ok(())
     }
 }

@@ -1,4 +1,4 @@
-//! A model: a mesh, materials assigned to element sets, and fixed DOFs.
+//! A model: a mesh, materials assigned to element sets, fixed DOFs and point masses.
 
 use crate::FemError;
 use crate::assembly::{Assembler, MassKind, SystemMatrices};
@@ -14,6 +14,22 @@ pub struct Model {
     materials: Vec<Material>,
     element_material: Vec<Option<usize>>,
     fixed: BTreeSet<(usize, usize)>,
+    point_masses: Vec<PointMass>,
+}
+
+/// A concentrated mass on a node: sensors, shakers, attached equipment.
+///
+/// femu's nodes carry translations only, so a point mass is its 3x3 translational mass matrix
+/// (`m I` for a plain mass). A mass offset from its node moves rigidly with it: with rotations
+/// the offset would couple them to the translations, but without rotational DOFs its
+/// translational mass is unchanged by the offset, and rotational inertia has no DOF to act on
+/// (readers warn when they drop it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointMass {
+    /// Internal node index.
+    pub node: usize,
+    /// The translational mass matrix (kg), symmetric positive semi-definite.
+    pub mass: [[f64; 3]; 3],
 }
 
 impl Model {
@@ -29,6 +45,7 @@ impl Model {
             materials: Vec::new(),
             element_material: vec![None; n],
             fixed: BTreeSet::new(),
+            point_masses: Vec::new(),
         })
     }
 
@@ -119,12 +136,69 @@ impl Model {
         self.fixed.iter().copied()
     }
 
+    /// Adds a point mass `m` (kg) on node `node_id` (`m I`, the same in every direction).
+    ///
+    /// # Errors
+    /// [`FemError::UnknownNode`]; [`FemError::InvalidMaterial`] for a mass that is not positive
+    /// and finite.
+    pub fn add_point_mass(&mut self, node_id: u64, m: f64) -> Result<(), FemError> {
+        self.add_point_mass_matrix(node_id, [[m, 0.0, 0.0], [0.0, m, 0.0], [0.0, 0.0, m]])
+    }
+
+    /// Adds a point mass with a general symmetric translational mass matrix (kg).
+    ///
+    /// # Errors
+    /// [`FemError::UnknownNode`]; [`FemError::InvalidMaterial`] for a matrix that is not finite,
+    /// symmetric and positive semi-definite with a positive trace.
+    pub fn add_point_mass_matrix(
+        &mut self,
+        node_id: u64,
+        mass: [[f64; 3]; 3],
+    ) -> Result<(), FemError> {
+        let node = self
+            .mesh
+            .node_index(node_id)
+            .ok_or(FemError::UnknownNode { node: node_id })?;
+        let bad = |reason: String| FemError::InvalidMaterial {
+            name: format!("point mass on node {node_id}"),
+            reason,
+        };
+        if mass.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(bad(format!("{mass:?} is not finite")));
+        }
+        let trace = mass[0][0] + mass[1][1] + mass[2][2];
+        let scale = mass.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        for i in 0..3 {
+            for j in 0..3 {
+                if (mass[i][j] - mass[j][i]).abs() > 1e-12 * scale {
+                    return Err(bad(format!("{mass:?} is not symmetric")));
+                }
+            }
+        }
+        // positive semi-definite: the leading minors of the symmetric 3x3 (with a tolerance)
+        let m = nalgebra::Matrix3::from_fn(|i, j| mass[i][j]);
+        let low = m.symmetric_eigenvalues().min();
+        if !(trace > 0.0) || low < -1e-12 * scale {
+            return Err(bad(format!(
+                "the mass must be positive (the matrix {mass:?} has eigenvalue {low:e})"
+            )));
+        }
+        self.point_masses.push(PointMass { node, mass });
+        Ok(())
+    }
+
+    /// The point masses.
+    pub fn point_masses(&self) -> &[PointMass] {
+        &self.point_masses
+    }
+
     /// The DOF map of the current constraints.
     pub fn dof_map(&self) -> DofMap {
         DofMap::new(self.mesh.node_count(), self.fixed.iter().copied())
     }
 
-    /// Total mass `sum_e rho_e V_e` (kg).
+    /// Total mass `sum_e rho_e V_e` plus the point masses (kg; a point mass counts the mean of
+    /// its three directional masses).
     ///
     /// # Errors
     /// [`FemError::NoMaterial`] or a geometry error.
@@ -142,6 +216,10 @@ impl Model {
                 }
             })?;
             m += v * self.material_of(e)?.density;
+        }
+        // a point mass moves with its node: its mass in one direction, the mean of the three
+        for p in &self.point_masses {
+            m += (p.mass[0][0] + p.mass[1][1] + p.mass[2][2]) / 3.0;
         }
         Ok(m)
     }

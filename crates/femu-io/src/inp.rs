@@ -43,6 +43,7 @@ const READ: &[(&str, &[&str])] = &[
     ("HEADING", &[]),
     ("NODE", &["NSET", "SYSTEM"]),
     ("ELEMENT", &["TYPE", "ELSET"]),
+    ("MASS", &["ELSET"]),
     ("NSET", &["NSET", "GENERATE", "UNSORTED", "INTERNAL"]),
     ("ELSET", &["ELSET", "GENERATE", "UNSORTED", "INTERNAL"]),
     ("MATERIAL", &["NAME"]),
@@ -176,7 +177,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
         "part/instance input: flatten the deck (nodes and elements at the top level)",
     ),
     ("KINEMATIC COUPLING", "couplings are not supported yet"),
-    ("MASS", "point masses are not supported yet"),
     (
         "MEMBRANE SECTION",
         "membrane elements are not supported (solids only)",
@@ -317,6 +317,14 @@ pub struct Section {
     pub line: Location,
 }
 
+/// A `*MASS` card: the mass of every MASS element of a set.
+#[derive(Debug, Clone, PartialEq)]
+struct MassCard {
+    elset: String,
+    mass: f64,
+    line: Location,
+}
+
 /// A file and 1-based line.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Location {
@@ -337,6 +345,8 @@ pub struct InpDeck {
     pub sections: Vec<Section>,
     /// Boundary conditions in file order.
     pub boundaries: Vec<Boundary>,
+    /// Point masses: node id, mass (kg) and the `*MASS` that gave it.
+    pub point_masses: Vec<(u64, f64, Location)>,
     /// The frequency step, if any.
     pub frequency: Option<FrequencyStep>,
     /// Non-fatal findings.
@@ -527,6 +537,11 @@ fn parse_collecting(
     let mut sets: Vec<(String, bool, Vec<String>, bool, usize)> = Vec::new();
     let mut node_set_of_block: Vec<(String, Vec<u64>)> = Vec::new();
     let mut elem_set_of_block: Vec<(String, Vec<u64>)> = Vec::new();
+    // point masses: MASS elements (id, node, line index) by their ELSET, and *MASS cards
+    let mut mass_elements: Vec<(u64, u64, usize)> = Vec::new();
+    let mut mass_sets: BTreeMap<String, Vec<u64>> = BTreeMap::new();
+    let mut mass_block: Option<String> = None;
+    let mut mass_cards: Vec<MassCard> = Vec::new();
     let mut materials = BTreeMap::new();
     let mut pending: Option<PendingMaterial> = None;
     let mut sections = Vec::new();
@@ -596,6 +611,7 @@ fn parse_collecting(
             block = name.clone();
             block_params = params.clone();
             element_kind_now = None;
+            mass_block = None;
             match name.as_str() {
                 "HEADING" | "END STEP" | "STEP" => {}
                 "NODE" => {
@@ -614,12 +630,43 @@ fn parse_collecting(
                         node_set_of_block.push((s.to_ascii_uppercase(), Vec::new()));
                     }
                 }
+                "ELEMENT"
+                    if params
+                        .get("TYPE")
+                        .is_some_and(|t| t.eq_ignore_ascii_case("MASS")) =>
+                {
+                    // one-node mass elements: their mass comes from the *MASS of their set
+                    let set = params
+                        .get("ELSET")
+                        .map(|s| s.to_ascii_uppercase())
+                        .ok_or_else(|| {
+                            err(
+                                l,
+                                "*ELEMENT, TYPE=MASS needs ELSET= (the set its *MASS names)".into(),
+                            )
+                        })?;
+                    mass_sets.entry(set.clone()).or_default();
+                    mass_block = Some(set);
+                }
+                "MASS" => {
+                    let set = params
+                        .get("ELSET")
+                        .ok_or_else(|| err(l, "*MASS without ELSET=".into()))?;
+                    mass_cards.push(MassCard {
+                        elset: set.to_ascii_uppercase(),
+                        mass: f64::NAN,
+                        line: Location {
+                            path: l.path.clone(),
+                            line: l.number,
+                        },
+                    });
+                }
                 "ELEMENT" => {
                     let ty = params
                         .get("TYPE")
                         .ok_or_else(|| err(l, "*ELEMENT without TYPE=".into()))?;
                     let (kind, approx) = element_kind(ty).ok_or_else(|| {
-                        err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D20, C3D6, C3D15, C3D8R, C3D20R)"))
+                        err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS)"))
                     })?;
                     if approx {
                         warn(
@@ -753,6 +800,41 @@ fn parse_collecting(
                     .filter(|_| block_params.contains_key("NSET"))
                 {
                     last.1.push(id);
+                }
+            }
+            "ELEMENT" if mass_block.is_some() => {
+                let set = mass_block.as_ref().expect("checked");
+                let ids: Vec<u64> = f
+                    .iter()
+                    .filter(|s| !s.is_empty())
+                    .map(|s| s.parse::<u64>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| {
+                        err(
+                            l,
+                            format!("a MASS element line is an id and a node, got {t:?}"),
+                        )
+                    })?;
+                let [id, node] = ids[..] else {
+                    return Err(err(
+                        l,
+                        format!("a MASS element line is an id and a node, got {t:?}"),
+                    ));
+                };
+                mass_elements.push((id, node, li));
+                mass_sets
+                    .get_mut(set)
+                    .expect("created with the block")
+                    .push(id);
+            }
+            "MASS" => {
+                let card = mass_cards.last_mut().expect("set with the keyword");
+                if card.mass.is_nan() {
+                    card.mass = f
+                        .first()
+                        .and_then(|s| parse_f64(s))
+                        .filter(|m| *m > 0.0)
+                        .ok_or_else(|| err(l, format!("*MASS needs a positive mass, got {t:?}")))?;
                 }
             }
             "ELEMENT" => {
@@ -903,6 +985,13 @@ fn parse_collecting(
         ));
     }
     finish_material(pending.take(), &mut materials)?;
+    if let Some(c) = mass_cards.iter().find(|c| c.mass.is_nan()) {
+        return Err(IoError::Parse {
+            path: c.line.path.clone(),
+            line: c.line.line,
+            reason: "*MASS without its data line (the mass)".into(),
+        });
+    }
     let whole = |reason: String| IoError::Content {
         path: path.to_path_buf(),
         reason,
@@ -1048,11 +1137,54 @@ fn parse_collecting(
         mesh.add_element_set(name.clone(), ids)
             .map_err(|e| whole(format!("element set {name}: {e}")))?;
     }
+    // mass elements: their nodes exist, their ids are not those of solids
+    let mut point_masses = Vec::new();
+    for (id, node, li) in &mass_elements {
+        if mesh.node_index(*node).is_none() {
+            return Err(err(
+                &lines[*li],
+                format!("MASS element {id} is on node {node}, which the deck does not define"),
+            ));
+        }
+        if mesh.element_index(*id).is_some() {
+            return Err(err(
+                &lines[*li],
+                format!("MASS element {id} has the id of a solid element"),
+            ));
+        }
+    }
+    for c in &mass_cards {
+        let members = mass_sets.get(&c.elset).ok_or_else(|| {
+            let hint =
+                crate::spelling::suggestion(&c.elset, mass_sets.keys().map(String::as_str), "");
+            let solid = elem_sets.contains_key(&c.elset);
+            IoError::Parse {
+                path: c.line.path.clone(),
+                line: c.line.line,
+                reason: if solid {
+                    format!(
+                        "*MASS names element set {}, a set of solid elements: a *MASS gives the mass of the one-node elements of an *ELEMENT, TYPE=MASS set",
+                        c.elset
+                    )
+                } else {
+                    format!(
+                        "*MASS names element set {}, which no *ELEMENT, TYPE=MASS defines{hint}",
+                        c.elset
+                    )
+                },
+            }
+        })?;
+        for id in members {
+            let (_, node, _) = mass_elements.iter().find(|e| e.0 == *id).expect("listed");
+            point_masses.push((*node, c.mass, c.line.clone()));
+        }
+    }
     Ok(InpDeck {
         mesh,
         materials,
         sections,
         boundaries,
+        point_masses,
         frequency,
         warnings: std::mem::take(warnings),
         element_lines,
@@ -1155,6 +1287,38 @@ impl InpDeck {
                 line: b.line.line,
                 source,
             })?;
+        }
+        // point masses, on nodes that solid elements connect (a mass on a free node would have
+        // no stiffness; rigid links are not read yet)
+        let mut connected = vec![false; model.mesh().node_count()];
+        for el in model.mesh().elements() {
+            for n in el.nodes {
+                connected[*n] = true;
+            }
+        }
+        for (node, mass, at) in &self.point_masses {
+            let located = |reason: String| IoError::Parse {
+                path: at.path.clone(),
+                line: at.line,
+                reason,
+            };
+            let i = model.mesh().node_index(*node).ok_or_else(|| {
+                located(format!(
+                    "*MASS on node {node}, which the deck does not define"
+                ))
+            })?;
+            if !connected[i] {
+                return Err(located(format!(
+                    "*MASS on node {node}, which no solid element connects: it would have no stiffness (rigid links to it are not read yet)"
+                )));
+            }
+            model
+                .add_point_mass(*node, *mass)
+                .map_err(|source| IoError::Model {
+                    path: at.path.clone(),
+                    line: at.line,
+                    source,
+                })?;
         }
         // every element needs a material
         for e in 0..model.mesh().element_count() {
@@ -1311,6 +1475,30 @@ pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String,
             s,
             "*SOLID SECTION, ELSET=FEMU_MAT{}, MATERIAL={name}",
             i + 1
+        );
+    }
+    // point masses: one MASS element each (ids after the solids'), a *MASS per element
+    let first_id = mesh.elements().map(|e| e.id).max().unwrap_or(0) + 1;
+    for (k, p) in model.point_masses().iter().enumerate() {
+        let m = p.mass[0][0];
+        let isotropic =
+            (0..3).all(|i| (0..3).all(|j| p.mass[i][j] == if i == j { m } else { 0.0 }));
+        if !isotropic {
+            return Err(IoError::Content {
+                path: PathBuf::from("(deck being written)"),
+                reason: format!(
+                    "the point mass on node {} differs by direction ({:?}): *MASS gives one mass for all three",
+                    mesh.node_id(p.node),
+                    p.mass
+                ),
+            });
+        }
+        let id = first_id + k as u64;
+        let _ = writeln!(
+            s,
+            "*ELEMENT, TYPE=MASS, ELSET=FEMU_MASS{id}\n{id}, {}\n*MASS, ELSET=FEMU_MASS{id}\n{}",
+            mesh.node_id(p.node),
+            number_field(m)
         );
     }
     let fixed: Vec<(usize, usize)> = model.fixed_dofs().collect();

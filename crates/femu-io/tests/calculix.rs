@@ -92,3 +92,110 @@ fn hex8_and_hex20_agree_with_calculix() {
     compare([8, 2, 2], false, "hex8");
     compare([4, 1, 1], true, "hex20");
 }
+
+/// Point masses (`*ELEMENT, TYPE=MASS` and `*MASS`, written by femu) on a clamped hex8 bar: a
+/// tip mass of twice the bar's and two small sensor masses on its top face; CalculiX's
+/// eigenvalues equal femu's to 1e-6, and the deck read back has the same masses.
+#[test]
+fn point_masses_agree_with_calculix() {
+    if !ccx_available() {
+        return;
+    }
+    let mesh = box_mesh(&BoxSpec::new(
+        [0.2, 0.04, 0.02],
+        [8, 2, 2],
+        BoxCells::Hex,
+        false,
+    ))
+    .unwrap();
+    let mut model = Model::new(mesh).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+    let bar = model.total_mass().unwrap();
+    let at = |x: f64, y: f64, z: f64| -> u64 {
+        let m = model.mesh();
+        let i = (0..m.node_count())
+            .find(|&i| {
+                let c = m.coords()[i];
+                (c[0] - x).abs() < 1e-9 && (c[1] - y).abs() < 1e-9 && (c[2] - z).abs() < 1e-9
+            })
+            .unwrap();
+        m.node_id(i)
+    };
+    let (tip, s1, s2) = (
+        at(0.2, 0.02, 0.01),
+        at(0.1, 0.0, 0.02),
+        at(0.15, 0.04, 0.02),
+    );
+    model.add_point_mass(tip, 2.0 * bar).unwrap();
+    model.add_point_mass(s1, 0.01).unwrap();
+    model.add_point_mass(s2, 0.025).unwrap();
+    let dir = std::env::temp_dir().join(format!("femu-ccx-mass-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let count = 6;
+    write_inp(
+        &model,
+        Some(&FrequencyStep {
+            count,
+            shift_cycles2: None,
+        }),
+        dir.join("job.inp"),
+    )
+    .unwrap();
+    let back = femu_io::inp::read_inp(dir.join("job.inp"))
+        .unwrap()
+        .to_model()
+        .unwrap();
+    assert_eq!(back.point_masses(), model.point_masses());
+    assert!((back.total_mass().unwrap() / (3.0 * bar + 0.035) - 1.0).abs() < 1e-12);
+    let out = Command::new("ccx")
+        .arg("-i")
+        .arg("job")
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "ccx failed: {}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    let ccx = ccx_eigenvalues(&std::fs::read_to_string(dir.join("job.dat")).unwrap());
+    assert_eq!(ccx.len(), count);
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let femu = femu_sparse::eigen::eigs(
+        &sys.k,
+        &sys.m,
+        femu_sparse::eigen::Which::Lowest(count),
+        &Default::default(),
+    )
+    .unwrap();
+    // the tip mass lowers the first bending frequency well below the bare bar's
+    let bare = Model::new(model.mesh().clone())
+        .map(|mut m| {
+            m.set_material(None, Material::steel()).unwrap();
+            m.fix_set("xmin", &[0, 1, 2]).unwrap();
+            m
+        })
+        .unwrap()
+        .assemble(MassKind::Consistent)
+        .unwrap();
+    let bare1 = femu_sparse::eigen::eigs(
+        &bare.k,
+        &bare.m,
+        femu_sparse::eigen::Which::Lowest(1),
+        &Default::default(),
+    )
+    .unwrap()
+    .values[0];
+    assert!(femu.values[0] < 0.5 * bare1);
+    for (j, c) in ccx.iter().enumerate() {
+        let rel = (femu.values[j] / c - 1.0).abs();
+        assert!(
+            rel < 1e-6,
+            "mode {}: femu {} ccx {c} ({rel:.1e})",
+            j + 1,
+            femu.values[j]
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

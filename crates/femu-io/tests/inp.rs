@@ -462,3 +462,68 @@ fn test_coordinates_in_csv_and_json() {
         "c.json: row 2: coordinate y \"\" of node 8 is not a finite number"
     );
 }
+
+/// Point masses in a deck: `*ELEMENT, TYPE=MASS` with its `*MASS`, read onto the model; each
+/// mistake an error naming the line.
+#[test]
+fn point_masses_in_decks() {
+    let base = "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n5, 0, 0, 1\n6, 1, 0, 1\n7, 1, 1, 1\n8, 0, 1, 1\n9, 5, 5, 5\n*ELEMENT, TYPE=C3D8, ELSET=E\n1, 1, 2, 3, 4, 5, 6, 7, 8\n*MATERIAL, NAME=S\n*ELASTIC\n2e11, 0.3\n*DENSITY\n7800\n*SOLID SECTION, ELSET=E, MATERIAL=S\n";
+    let good =
+        format!("{base}*ELEMENT, TYPE=MASS, ELSET=PM\n101, 7\n102, 6\n*MASS, ELSET=PM\n2.5\n");
+    let model = parse_inp(&good, "m.inp").unwrap().to_model().unwrap();
+    let masses: Vec<(u64, f64)> = model
+        .point_masses()
+        .iter()
+        .map(|p| (model.mesh().node_id(p.node), p.mass[0][0]))
+        .collect();
+    assert_eq!(masses, vec![(7, 2.5), (6, 2.5)]);
+    assert!((model.total_mass().unwrap() - (7800.0 + 5.0)).abs() < 1e-9);
+    let cases: Vec<(String, &str)> = vec![
+        (
+            format!("{base}*ELEMENT, TYPE=MASS\n101, 7\n"),
+            "m.inp:19: *ELEMENT, TYPE=MASS needs ELSET= (the set its *MASS names)",
+        ),
+        (
+            format!("{base}*ELEMENT, TYPE=MASS, ELSET=PM\n101, 7\n*MASS, ELSET=PM\n"),
+            "m.inp:21: *MASS without its data line (the mass)",
+        ),
+        (
+            format!("{base}*ELEMENT, TYPE=MASS, ELSET=PM\n101, 7\n*MASS, ELSET=PM\n-1\n"),
+            "m.inp:22: *MASS needs a positive mass, got \"-1\"",
+        ),
+        (
+            format!("{base}*ELEMENT, TYPE=MASS, ELSET=PM\n101, 77\n*MASS, ELSET=PM\n1\n"),
+            "m.inp:20: MASS element 101 is on node 77, which the deck does not define",
+        ),
+        (
+            format!("{base}*ELEMENT, TYPE=MASS, ELSET=PM\n101, 7\n*MASS, ELSET=PN\n1\n"),
+            "m.inp:21: *MASS names element set PN, which no *ELEMENT, TYPE=MASS defines (did you mean PM?)",
+        ),
+        (
+            format!("{base}*ELEMENT, TYPE=MASS, ELSET=PM\n101, 7, 8\n*MASS, ELSET=PM\n1\n"),
+            "m.inp:20: a MASS element line is an id and a node, got \"101, 7, 8\"",
+        ),
+        (
+            format!("{base}*ELEMENT, TYPE=MASS, ELSET=PM\n1, 7\n*MASS, ELSET=PM\n1\n"),
+            "m.inp:20: MASS element 1 has the id of a solid element",
+        ),
+    ];
+    for (text, want) in cases {
+        let e = parse_inp(&text, "m.inp")
+            .and_then(|d| d.to_model())
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, want);
+    }
+    // a mass on a node no solid connects: no stiffness under it
+    let loose = format!("{base}*ELEMENT, TYPE=MASS, ELSET=PM\n101, 9\n*MASS, ELSET=PM\n1\n");
+    let e = parse_inp(&loose, "m.inp")
+        .unwrap()
+        .to_model()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("m.inp:21: *MASS on node 9, which no solid element connects"),
+        "{e}"
+    );
+}

@@ -347,3 +347,71 @@ fn assemble_into_reuses_storage() {
             .is_err()
     );
 }
+
+/// Point masses: a rigid translation carries the solid's mass plus every point mass, with the
+/// consistent and the lumped mass (`u^T M u = rho V + sum m`); an anisotropic mass carries its
+/// mass in each direction (`e_i^T M_p e_i`) and its coupling (`e_x^T M e_y`); bad masses are
+/// refused naming the node.
+#[test]
+fn point_masses_add_their_mass_to_rigid_motions() {
+    use femu_fem::prelude::*;
+    let mesh = box_mesh(&BoxSpec::new(
+        [0.2, 0.1, 0.05],
+        [4, 2, 1],
+        BoxCells::Hex,
+        true,
+    ))
+    .unwrap();
+    let mut model = Model::new(mesh).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    let solid = 7850.0 * 0.2 * 0.1 * 0.05;
+    model.add_point_mass(1, 0.75).unwrap();
+    model.add_point_mass(5, 0.25).unwrap();
+    let aniso = [[0.5, 0.1, 0.0], [0.1, 0.3, 0.0], [0.0, 0.0, 0.2]];
+    model.add_point_mass_matrix(7, aniso).unwrap();
+    assert!((model.total_mass().unwrap() - (solid + 1.0 + (0.5 + 0.3 + 0.2) / 3.0)).abs() < 1e-12);
+    for kind in [MassKind::Consistent, MassKind::Lumped] {
+        let sys = model.assemble(kind).unwrap();
+        let n = sys.dofs.free_count();
+        let along = |c: usize| -> Vec<f64> {
+            (0..n)
+                .map(|f| {
+                    if sys.dofs.full_of_free(f) % 3 == c {
+                        1.0
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        };
+        for c in 0..3 {
+            let u = along(c);
+            let m = femu_sparse::csc::bilinear(&sys.m, &u, &u).unwrap();
+            let want = solid + 1.0 + aniso[c][c];
+            assert!(
+                (m / want - 1.0).abs() < 1e-12,
+                "{kind:?} direction {c}: {m} vs {want}"
+            );
+        }
+        if kind == MassKind::Consistent {
+            // the coupling of the anisotropic mass: e_x^T M e_y picks it up (the solid's rigid
+            // translations are M-orthogonal)
+            let xy = femu_sparse::csc::bilinear(&sys.m, &along(0), &along(1)).unwrap();
+            assert!((xy - 0.1).abs() < 1e-12, "{xy}");
+        }
+    }
+    let e = model.add_point_mass(999, 1.0).unwrap_err().to_string();
+    assert_eq!(e, "unknown node 999");
+    let e = model.add_point_mass(2, -1.0).unwrap_err().to_string();
+    assert!(
+        e.starts_with("material \"point mass on node 2\": the mass must be positive"),
+        "{e}"
+    );
+    let e = model
+        .add_point_mass_matrix(2, [[1.0, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("is not symmetric"), "{e}");
+    let e = model.add_point_mass(2, f64::NAN).unwrap_err().to_string();
+    assert!(e.contains("is not finite"), "{e}");
+}
