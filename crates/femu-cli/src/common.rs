@@ -66,7 +66,7 @@ impl MeshOptions {
         lumped: bool,
         quiet: bool,
     ) -> Result<ModelOptions, CliError> {
-        let deck = femu::study::load::has_extension(path, &["inp"]);
+        let deck = femu::study::load::has_extension(path, &["inp", "bdf", "dat", "nas"]);
         let material = match (self.young, self.poisson, self.density) {
             (None, None, None) => None,
             // a deck has its own materials

@@ -14,6 +14,7 @@ mod error;
 pub mod gmsh;
 pub mod inp;
 pub mod json;
+pub mod nastran;
 mod spelling;
 pub mod uff;
 pub mod vtk;

@@ -77,6 +77,36 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
             "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",
             model.dof_map().free_count()
         );
+    } else if has_extension(path, &["bdf", "dat", "nas"]) {
+        let deck = femu_io::nastran::read_bdf(path, &femu_io::nastran::BdfOptions::default())?;
+        let _ = writeln!(s, "format: Nastran bulk data");
+        let model = &deck.model;
+        mesh_lines(&mut s, model.mesh());
+        let _ = writeln!(
+            s,
+            "point masses (CONM2): {}; constrained DOFs (SPC): {}",
+            model.point_masses().len(),
+            model.fixed_dofs().count()
+        );
+        if let Some((v1, v2, nd)) = deck.eigrl {
+            let _ = writeln!(
+                s,
+                "EIGRL: {} modes{}",
+                nd.map_or("all".to_string(), |n| n.to_string()),
+                match (v1, v2) {
+                    (Some(a), Some(b)) => format!(" in [{a}, {b}] Hz"),
+                    (Some(a), None) => format!(" above {a} Hz"),
+                    (None, Some(b)) => format!(" below {b} Hz"),
+                    _ => String::new(),
+                }
+            );
+        }
+        warnings.extend(deck.warnings.iter().map(ToString::to_string));
+        let _ = writeln!(
+            s,
+            "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",
+            model.dof_map().free_count()
+        );
     } else if has_extension(path, &["msh"]) {
         let g = femu_io::gmsh::read_msh(path)?;
         let _ = writeln!(s, "format: Gmsh mesh");

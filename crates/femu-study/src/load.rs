@@ -81,7 +81,7 @@ pub struct LoadedTest {
 }
 
 /// The extensions of the model files femu reads.
-pub const MODEL_EXTENSIONS: &[&str] = &["inp", "msh", "unv", "uff"];
+pub const MODEL_EXTENSIONS: &[&str] = &["inp", "bdf", "dat", "nas", "msh", "unv", "uff"];
 
 /// The extensions of the test files femu reads.
 pub const TEST_EXTENSIONS: &[&str] = &["unv", "uff", "json", "csv", "txt"];
@@ -93,7 +93,8 @@ pub fn has_extension(path: &Path, exts: &[&str]) -> bool {
         .is_some_and(|e| exts.iter().any(|x| e.eq_ignore_ascii_case(x)))
 }
 
-/// Reads a model: an Abaqus/CalculiX `.inp` deck (materials and constraints inside), or a mesh
+/// Reads a model: an Abaqus/CalculiX `.inp` deck or Nastran bulk data (`.bdf`, `.dat`, `.nas`;
+/// materials, constraints and point masses inside), or a mesh
 /// (Gmsh `.msh`, universal file `.unv`/`.uff` with datasets 2411/2412) with the material and
 /// clamped sets of `options`; then assembles `K` and `M`.
 ///
@@ -106,7 +107,7 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         return Err(StudyError::in_file(
             path,
             "model",
-            "femu reads models as Abaqus/CalculiX decks (.inp), Gmsh meshes (.msh) and universal files (.unv, .uff); the file's extension is none of them",
+            "femu reads models as Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh) and universal files (.unv, .uff); the file's extension is none of them",
         ));
     }
     let (model, frequency) = if has_extension(path, &["msh", "unv", "uff"]) {
@@ -143,6 +144,21 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
                 .map_err(|e| StudyError::within(path, e))?;
         }
         (model, None)
+    } else if has_extension(path, &["bdf", "dat", "nas"]) {
+        let deck = femu_io::nastran::read_bdf(
+            path,
+            &femu_io::nastran::BdfOptions {
+                lenient: options.lenient,
+            },
+        )?;
+        warnings.extend(deck.warnings.iter().map(|w| w.to_string()));
+        if options.material.is_some() || !options.fix.is_empty() {
+            warnings.push(format!(
+                "{}: the deck has its own materials and constraints: the given material and sets to fix are not used",
+                path.display()
+            ));
+        }
+        (deck.model, None)
     } else {
         let inp_options = femu_io::inp::InpOptions {
             lenient: options.lenient,

@@ -1,0 +1,1057 @@
+//! Nastran bulk data (`.bdf`, `.dat`, `.nas`): the solid models of automotive and aerospace
+//! correlation work.
+//!
+//! Formats: small field (8 characters), large field (`*` after the card name, 16 characters) and
+//! free field (commas), continuations with and without labels (`+`, `*`, a blank first field, a
+//! comma), implicit exponents (`7.+10`, `1.-3`), `$` comments, `INCLUDE`, the case control's
+//! `SPC =` before `BEGIN BULK`, and `ENDDATA`.
+//!
+//! Cards read: `GRID` (with its `CP` frame), `CORD2R/C/S` and `CORD1R/C/S`, `CHEXA` (8/20),
+//! `CPENTA` (6/15), `CTETRA` (4/10), `PSOLID`, `MAT1` (two of `E`, `G`, `NU`), `SPC`, `SPC1`,
+//! `SPCADD`, `CONM2` (its mass; the node has no rotations, so offset and rotational inertia are
+//! reported and dropped), `EIGRL` and `PARAM,WTMASS`. Cards that cannot change `K` and `M`
+//! (output requests, loads, other parameters) are warnings, once per card name. Cards that would
+//! change them and that femu cannot model (shells, bars, springs, rigid links, other materials,
+//! pyramids) are an error that counts them by kind; [`BdfOptions::lenient`] reads the rest with a
+//! warning that the model is then incomplete.
+
+use crate::{IoError, Warning};
+use femu_fem::element::ElementKind;
+use femu_fem::material::Material;
+use femu_fem::mesh::Mesh;
+use femu_fem::model::Model;
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+
+/// Options of the reader.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct BdfOptions {
+    /// Read a deck with cards femu cannot model (they are left out, with a warning that `K` and
+    /// `M` are incomplete) instead of refusing it.
+    pub lenient: bool,
+}
+
+/// A model read from bulk data, with what the reader noticed.
+#[derive(Debug, Clone)]
+pub struct BdfDeck {
+    /// The model: mesh, materials, constraints of the selected SPC set, point masses.
+    pub model: Model,
+    /// The modes an `EIGRL` asks for (`V1`, `V2` in Hz, `ND`), if any.
+    pub eigrl: Option<(Option<f64>, Option<f64>, Option<usize>)>,
+    /// Findings that did not stop the reading.
+    pub warnings: Vec<Warning>,
+}
+
+/// One card: its name, its fields after the name (blank = `None`), where it starts.
+#[derive(Debug, Clone)]
+struct Card {
+    name: String,
+    fields: Vec<String>,
+    path: PathBuf,
+    line: usize,
+}
+
+impl Card {
+    fn err(&self, reason: String) -> IoError {
+        IoError::Parse {
+            path: self.path.clone(),
+            line: self.line,
+            reason: format!("{} {reason}", self.name),
+        }
+    }
+
+    fn field(&self, i: usize) -> &str {
+        self.fields.get(i).map_or("", |s| s.trim())
+    }
+
+    fn int(&self, i: usize, what: &str) -> Result<Option<i64>, IoError> {
+        let t = self.field(i);
+        if t.is_empty() {
+            return Ok(None);
+        }
+        t.parse::<i64>()
+            .map(Some)
+            .map_err(|_| self.err(format!("field {} ({what}): {t:?} is not an integer", i + 2)))
+    }
+
+    fn id(&self, i: usize, what: &str) -> Result<u64, IoError> {
+        match self.int(i, what)? {
+            Some(v) if v > 0 => Ok(v as u64),
+            Some(v) => Err(self.err(format!("field {} ({what}): {v} must be positive", i + 2))),
+            None => Err(self.err(format!("field {} ({what}) is missing", i + 2))),
+        }
+    }
+
+    fn real(&self, i: usize, what: &str) -> Result<Option<f64>, IoError> {
+        let t = self.field(i);
+        if t.is_empty() {
+            return Ok(None);
+        }
+        real(t)
+            .map(Some)
+            .ok_or_else(|| self.err(format!("field {} ({what}): {t:?} is not a number", i + 2)))
+    }
+}
+
+/// A Nastran real: `1.5`, `1.5E+3`, `1.5D3`, and the implicit exponents `7.+10`, `1.-3`,
+/// `-2.5-4`. Integers are accepted where a real is expected.
+pub fn real(s: &str) -> Option<f64> {
+    let t = s.trim();
+    if let Ok(v) = t.parse::<f64>() {
+        return v.is_finite().then_some(v);
+    }
+    let t = t.replace(['D', 'd'], "E");
+    if let Ok(v) = t.parse::<f64>() {
+        return v.is_finite().then_some(v);
+    }
+    // a sign after the first character, not after an E: the exponent
+    let b = t.as_bytes();
+    let at = (1..b.len())
+        .find(|&i| (b[i] == b'+' || b[i] == b'-') && b[i - 1] != b'E' && b[i - 1] != b'e')?;
+    let v: f64 = format!("{}E{}", &t[..at], &t[at..]).parse().ok()?;
+    v.is_finite().then_some(v)
+}
+
+/// Cards that cannot change `K` or `M`: read past with a warning.
+const NO_EFFECT: &[&str] = &[
+    "PARAM", "FORCE", "MOMENT", "LOAD", "DLOAD", "RLOAD1", "RLOAD2", "TLOAD1", "TLOAD2", "TABLED1",
+    "TABLED2", "TABLED3", "TABLED4", "TABDMP1", "FREQ", "FREQ1", "FREQ2", "GRAV", "TEMP", "TEMPD",
+    "PLOAD", "PLOAD2", "PLOAD4", "EIGR", "EIGRL", "SPOINT", "DAREA", "NSM", "SET1", "DESVAR",
+    "DRESP1", "DCONSTR", "MONPNT1", "ASET", "ASET1", "OMIT", "OMIT1", "SUPORT", "SUPORT1",
+    "MDLPRM", "LSEQ", "RLOAD1", "RLOAD2",
+];
+
+/// Cards that change `K` or `M` and that femu cannot model yet, with what they are.
+const UNSUPPORTED: &[(&str, &str)] = &[
+    ("CQUAD4", "shells"),
+    ("CQUAD8", "shells"),
+    ("CTRIA3", "shells"),
+    ("CTRIA6", "shells"),
+    ("CQUADR", "shells"),
+    ("CTRIAR", "shells"),
+    ("PSHELL", "shells"),
+    ("PCOMP", "shells"),
+    ("CBAR", "beams"),
+    ("CBEAM", "beams"),
+    ("CROD", "rods"),
+    ("CONROD", "rods"),
+    ("PBAR", "beams"),
+    ("PBARL", "beams"),
+    ("PBEAM", "beams"),
+    ("PBEAML", "beams"),
+    ("PROD", "rods"),
+    ("CELAS1", "springs"),
+    ("CELAS2", "springs"),
+    ("CBUSH", "springs"),
+    ("PELAS", "springs"),
+    ("PBUSH", "springs"),
+    ("CONM1", "general mass matrices"),
+    ("CMASS1", "scalar masses"),
+    ("CMASS2", "scalar masses"),
+    ("RBE2", "rigid links"),
+    ("RBE3", "interpolation links"),
+    ("RBAR", "rigid links"),
+    ("MPC", "multipoint constraints"),
+    ("MPCADD", "multipoint constraints"),
+    ("CPYRAM", "pyramid elements"),
+    ("MAT2", "anisotropic materials"),
+    ("MAT8", "orthotropic materials"),
+    ("MAT9", "anisotropic materials"),
+    ("CORD3G", "coordinate systems"),
+    ("GENEL", "general elements"),
+    ("DMIG", "direct matrix input"),
+];
+
+/// Lines with their file and number, `INCLUDE`s expanded.
+fn load(path: &Path, depth: usize, out: &mut Vec<(PathBuf, usize, String)>) -> Result<(), IoError> {
+    if depth > 16 {
+        return Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: "INCLUDE nested more than 16 deep (an include cycle?)".into(),
+        });
+    }
+    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    let text = String::from_utf8_lossy(&bytes);
+    for (i, raw) in text.lines().enumerate() {
+        let l = raw.trim_end_matches('\r');
+        let head = l.trim_start();
+        if head.len() >= 7 && head[..7].eq_ignore_ascii_case("INCLUDE") {
+            let name = head[7..]
+                .trim()
+                .trim_matches(|c| c == '\'' || c == '"')
+                .trim();
+            let target = path.parent().unwrap_or(Path::new(".")).join(name);
+            if !target.exists() {
+                return Err(IoError::Parse {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    reason: format!("INCLUDE {name}: {} does not exist", target.display()),
+                });
+            }
+            load(&target, depth + 1, out)?;
+            continue;
+        }
+        out.push((path.to_path_buf(), i + 1, l.to_string()));
+    }
+    Ok(())
+}
+
+/// The fields of one physical line: the first (name or continuation), then the data fields
+/// (8 for small and free field, 4 for a large-field line).
+fn split(l: &str) -> (String, Vec<String>, bool) {
+    let l = match l.find('$') {
+        Some(i) => &l[..i],
+        None => l,
+    };
+    if l.contains(',') {
+        let mut t: Vec<String> = l.split(',').map(|s| s.trim().to_string()).collect();
+        let first = t.remove(0);
+        // a tenth field is the continuation label
+        if t.len() == 9 {
+            t.pop();
+        }
+        let large = first.ends_with('*');
+        return (first, t, large);
+    }
+    let chars: Vec<char> = l.chars().collect();
+    let cut = |a: usize, b: usize| -> String {
+        chars
+            .get(a.min(chars.len())..b.min(chars.len()))
+            .map(|c| c.iter().collect::<String>())
+            .unwrap_or_default()
+            .trim()
+            .to_string()
+    };
+    let first = cut(0, 8);
+    // a large-field card's name ends with '*', its continuations start with one
+    let large = first.ends_with('*') || first.starts_with('*');
+    let fields = if large {
+        (0..4).map(|k| cut(8 + 16 * k, 24 + 16 * k)).collect()
+    } else {
+        (0..8).map(|k| cut(8 + 8 * k, 16 + 8 * k)).collect()
+    };
+    (first, fields, large)
+}
+
+/// Whether a line's first field continues the card before it.
+fn is_continuation(first: &str) -> bool {
+    first.is_empty() || first.starts_with('+') || first.starts_with('*')
+}
+
+/// The cards of the bulk data, and the case control's `SPC` selection.
+fn cards(lines: &[(PathBuf, usize, String)]) -> (Vec<Card>, Option<i64>, bool) {
+    let has_begin = lines.iter().any(|(_, _, l)| {
+        l.trim_start()
+            .to_ascii_uppercase()
+            .starts_with("BEGIN BULK")
+    });
+    let mut in_bulk = !has_begin;
+    let mut spc = None;
+    let mut out: Vec<Card> = Vec::new();
+    // large-field cards hold 4 fields a line; pad each line to its width
+    for (path, number, l) in lines {
+        let t = l.trim();
+        let upper = t.to_ascii_uppercase();
+        if !in_bulk {
+            if upper.starts_with("BEGIN BULK") {
+                in_bulk = true;
+            } else if let Some(rest) = upper.strip_prefix("SPC")
+                && let Some((_, v)) = rest.split_once('=')
+            {
+                spc = v.trim().parse::<i64>().ok();
+            }
+            continue;
+        }
+        if upper.starts_with("ENDDATA") {
+            break;
+        }
+        if t.is_empty() || t.starts_with('$') {
+            continue;
+        }
+        let (first, fields, _large) = split(l);
+        if is_continuation(&first) && !out.is_empty() {
+            let card = out.last_mut().expect("checked");
+            card.fields.extend(fields);
+            continue;
+        }
+        let name = first.trim_end_matches('*').to_ascii_uppercase();
+        out.push(Card {
+            name,
+            fields,
+            path: path.clone(),
+            line: *number,
+        });
+    }
+    (out, spc, has_begin)
+}
+
+/// A coordinate system: origin, axes (columns: local axes in basic components), kind.
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    origin: [f64; 3],
+    axes: [[f64; 3]; 3],
+    kind: char,
+}
+
+impl Frame {
+    const BASIC: Self = Self {
+        origin: [0.0; 3],
+        axes: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        kind: 'R',
+    };
+
+    /// Basic position of a point given in this frame (`R`: x, y, z; `C`: r, theta deg, z; `S`:
+    /// r, theta deg from z, phi deg).
+    fn to_basic(self, c: [f64; 3]) -> [f64; 3] {
+        let local = match self.kind {
+            'C' => {
+                let t = c[1].to_radians();
+                [c[0] * t.cos(), c[0] * t.sin(), c[2]]
+            }
+            'S' => {
+                let (t, p) = (c[1].to_radians(), c[2].to_radians());
+                [
+                    c[0] * t.sin() * p.cos(),
+                    c[0] * t.sin() * p.sin(),
+                    c[0] * t.cos(),
+                ]
+            }
+            _ => c,
+        };
+        std::array::from_fn(|i| {
+            self.origin[i] + (0..3).map(|j| self.axes[i][j] * local[j]).sum::<f64>()
+        })
+    }
+
+    /// The frame through points `a` (origin), `b` (on the z axis) and `c` (in the xz plane), all
+    /// basic.
+    fn from_points(kind: char, a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Option<Self> {
+        let sub = |p: [f64; 3], q: [f64; 3]| -> [f64; 3] { std::array::from_fn(|i| p[i] - q[i]) };
+        let cross = |p: [f64; 3], q: [f64; 3]| {
+            [
+                p[1] * q[2] - p[2] * q[1],
+                p[2] * q[0] - p[0] * q[2],
+                p[0] * q[1] - p[1] * q[0],
+            ]
+        };
+        let unit = |p: [f64; 3]| {
+            let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+            (n > 1e-300).then(|| p.map(|v| v / n))
+        };
+        let ez = unit(sub(b, a))?;
+        let ey = unit(cross(ez, sub(c, a)))?;
+        let ex = cross(ey, ez);
+        Some(Self {
+            origin: a,
+            axes: std::array::from_fn(|i| [ex[i], ey[i], ez[i]]),
+            kind,
+        })
+    }
+}
+
+/// Reads a bulk data deck.
+///
+/// # Errors
+/// As [`parse_bdf`], and the file system's.
+pub fn read_bdf(path: impl AsRef<Path>, options: &BdfOptions) -> Result<BdfDeck, IoError> {
+    let mut lines = Vec::new();
+    load(path.as_ref(), 0, &mut lines)?;
+    parse_lines(&lines, path.as_ref(), options)
+}
+
+/// Parses bulk data from text (`path` names it in messages; `INCLUDE`s are not followed).
+///
+/// # Errors
+/// [`IoError::Parse`] naming the card's line: malformed fields, a GRID used but not defined, a
+/// coordinate system cycle or an unknown one, a PSOLID without its MAT1, an SPC on an unknown
+/// node, an element of a kind femu cannot model (unless lenient), an invalid material.
+pub fn parse_bdf(
+    text: &str,
+    path: impl AsRef<Path>,
+    options: &BdfOptions,
+) -> Result<BdfDeck, IoError> {
+    let path = path.as_ref();
+    let lines: Vec<(PathBuf, usize, String)> = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            (
+                path.to_path_buf(),
+                i + 1,
+                l.trim_end_matches('\r').to_string(),
+            )
+        })
+        .collect();
+    parse_lines(&lines, path, options)
+}
+
+fn parse_lines(
+    lines: &[(PathBuf, usize, String)],
+    path: &Path,
+    options: &BdfOptions,
+) -> Result<BdfDeck, IoError> {
+    let (cards, spc_selected, has_case_control) = cards(lines);
+    let mut warnings = Vec::new();
+    let warn = |warnings: &mut Vec<Warning>, c: &Card, message: String| {
+        warnings.push(Warning {
+            path: c.path.clone(),
+            line: c.line,
+            message,
+        })
+    };
+    // what cannot be modelled: counted by kind
+    let mut unsupported: BTreeMap<&str, (usize, Vec<&str>, &Card)> = BTreeMap::new();
+    let mut warned: Vec<String> = Vec::new();
+    let mut grids: Vec<&Card> = Vec::new();
+    let mut cords: Vec<&Card> = Vec::new();
+    let mut elements: Vec<&Card> = Vec::new();
+    let mut psolids: HashMap<u64, (u64, &Card)> = HashMap::new();
+    let mut mat1: HashMap<u64, &Card> = HashMap::new();
+    let mut spcs: Vec<&Card> = Vec::new();
+    let mut conm2: Vec<&Card> = Vec::new();
+    let mut wtmass = 1.0;
+    let mut eigrl = None;
+    for c in &cards {
+        match c.name.as_str() {
+            "GRID" => grids.push(c),
+            "CORD2R" | "CORD2C" | "CORD2S" | "CORD1R" | "CORD1C" | "CORD1S" => cords.push(c),
+            "CHEXA" | "CPENTA" | "CTETRA" => elements.push(c),
+            "PSOLID" => {
+                let pid = c.id(0, "PID")?;
+                let mid = c.id(1, "MID")?;
+                if psolids.insert(pid, (mid, c)).is_some() {
+                    return Err(c.err(format!("{pid} is defined twice")));
+                }
+            }
+            "MAT1" => {
+                let mid = c.id(0, "MID")?;
+                if mat1.insert(mid, c).is_some() {
+                    return Err(c.err(format!("{mid} is defined twice")));
+                }
+            }
+            "SPC" | "SPC1" | "SPCADD" => spcs.push(c),
+            "CONM2" => conm2.push(c),
+            "PARAM" if c.field(0).eq_ignore_ascii_case("WTMASS") => {
+                wtmass = c
+                    .real(1, "WTMASS")?
+                    .filter(|v| *v > 0.0)
+                    .ok_or_else(|| c.err("WTMASS needs a positive value".into()))?;
+            }
+            "EIGRL" => {
+                eigrl = Some((
+                    c.real(1, "V1")?,
+                    c.real(2, "V2")?,
+                    c.int(3, "ND")?.map(|v| v.max(0) as usize),
+                ));
+            }
+            name => {
+                if let Some((_, kind)) = UNSUPPORTED.iter().find(|(n, _)| *n == name) {
+                    let e = unsupported.entry(kind).or_insert((0, Vec::new(), c));
+                    e.0 += 1;
+                    if !e.1.contains(&name) {
+                        e.1.push(
+                            UNSUPPORTED
+                                .iter()
+                                .find(|(n, _)| *n == name)
+                                .map(|(n, _)| *n)
+                                .unwrap_or(""),
+                        );
+                    }
+                } else if !warned.contains(&c.name) {
+                    warned.push(c.name.clone());
+                    let why = if NO_EFFECT.contains(&name) {
+                        "it does not change the stiffness or the mass"
+                    } else {
+                        "femu does not know this card; check that it changes neither stiffness nor mass"
+                    };
+                    warn(
+                        &mut warnings,
+                        c,
+                        format!("{name} skipped: {why} (once per card name)"),
+                    );
+                }
+            }
+        }
+    }
+    if !unsupported.is_empty() {
+        let list: Vec<String> = unsupported
+            .iter()
+            .map(|(kind, (n, names, _))| format!("{n} {kind} ({})", names.join(", ")))
+            .collect();
+        let first = unsupported
+            .values()
+            .map(|v| v.2)
+            .min_by_key(|c| c.line)
+            .expect("non-empty");
+        let text = format!(
+            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10) with MAT1, CONM2 point masses and SPC constraints",
+            list.join(", ")
+        );
+        if options.lenient {
+            warnings.push(Warning {
+                path: first.path.clone(),
+                line: first.line,
+                message: format!(
+                    "{text}: left out (--lenient), so the model's K and M are incomplete"
+                ),
+            });
+        } else {
+            return Err(IoError::Parse {
+                path: first.path.clone(),
+                line: first.line,
+                reason: format!("{text} (--lenient reads the rest)"),
+            });
+        }
+    }
+    // coordinate systems: resolve each against its reference, detecting cycles
+    let mut frames: HashMap<i64, Frame> = HashMap::new();
+    frames.insert(0, Frame::BASIC);
+    let mut cord2: HashMap<i64, (&Card, i64)> = HashMap::new();
+    let mut cord1: Vec<(i64, char, [u64; 3], &Card)> = Vec::new();
+    for c in &cords {
+        let kind = c.name.chars().last().unwrap_or('R');
+        if c.name.starts_with("CORD2") {
+            let cid = c.id(0, "CID")? as i64;
+            let rid = c.int(1, "RID")?.unwrap_or(0);
+            if cord2.insert(cid, (c, rid)).is_some() {
+                return Err(c.err(format!("{cid} is defined twice")));
+            }
+        } else {
+            // up to two systems per card: CID G1 G2 G3
+            for k in 0..2 {
+                let base = 4 * k;
+                if c.field(base).is_empty() {
+                    continue;
+                }
+                let cid = c.id(base, "CID")? as i64;
+                let g = [
+                    c.id(base + 1, "G1")?,
+                    c.id(base + 2, "G2")?,
+                    c.id(base + 3, "G3")?,
+                ];
+                cord1.push((cid, kind, g, c));
+            }
+        }
+    }
+    let grid_of: HashMap<u64, &Card> = {
+        let mut m = HashMap::new();
+        for g in &grids {
+            let id = g.id(0, "ID")?;
+            if m.insert(id, *g).is_some() {
+                return Err(g.err(format!("{id} is defined twice")));
+            }
+        }
+        m
+    };
+    // basic positions, resolved on demand (a grid may be given in a frame defined by grids)
+    fn resolve_frame(
+        cid: i64,
+        frames: &mut HashMap<i64, Frame>,
+        cord2: &HashMap<i64, (&Card, i64)>,
+        cord1: &[(i64, char, [u64; 3], &Card)],
+        grid_of: &HashMap<u64, &Card>,
+        positions: &mut HashMap<u64, [f64; 3]>,
+        stack: &mut Vec<i64>,
+        asked_by: &Card,
+    ) -> Result<Frame, IoError> {
+        if let Some(f) = frames.get(&cid) {
+            return Ok(*f);
+        }
+        if stack.contains(&cid) {
+            return Err(asked_by.err(format!(
+                "coordinate systems refer to each other in a cycle: {}",
+                stack
+                    .iter()
+                    .chain([&cid])
+                    .map(i64::to_string)
+                    .collect::<Vec<_>>()
+                    .join(" -> ")
+            )));
+        }
+        stack.push(cid);
+        let frame = if let Some((c, rid)) = cord2.get(&cid) {
+            let reference =
+                resolve_frame(*rid, frames, cord2, cord1, grid_of, positions, stack, c)?;
+            let p = |k: usize| -> Result<[f64; 3], IoError> {
+                Ok(std::array::from_fn(|i| {
+                    c.real(2 + 3 * k + i, "point").ok().flatten().unwrap_or(0.0)
+                }))
+            };
+            for k in 2..11 {
+                c.real(k, "point")?;
+            }
+            let (a, b, cc) = (p(0)?, p(1)?, p(2)?);
+            let kind = c.name.chars().last().unwrap_or('R');
+            Frame::from_points(
+                kind,
+                reference.to_basic(a),
+                reference.to_basic(b),
+                reference.to_basic(cc),
+            )
+            .ok_or_else(|| {
+                c.err(format!(
+                    "{cid}: its points A, B, C do not define axes (coincident or collinear)"
+                ))
+            })?
+        } else if let Some((_, kind, g, c)) = cord1.iter().find(|e| e.0 == cid) {
+            let mut pts = [[0.0; 3]; 3];
+            for (k, id) in g.iter().enumerate() {
+                pts[k] = grid_position(*id, frames, cord2, cord1, grid_of, positions, stack, c)?;
+            }
+            Frame::from_points(*kind, pts[0], pts[1], pts[2]).ok_or_else(|| {
+                c.err(format!(
+                    "{cid}: its grids do not define axes (coincident or collinear)"
+                ))
+            })?
+        } else {
+            return Err(asked_by.err(format!(
+                "refers to coordinate system {cid}, which the deck does not define"
+            )));
+        };
+        stack.pop();
+        frames.insert(cid, frame);
+        Ok(frame)
+    }
+    #[allow(clippy::too_many_arguments)]
+    fn grid_position(
+        id: u64,
+        frames: &mut HashMap<i64, Frame>,
+        cord2: &HashMap<i64, (&Card, i64)>,
+        cord1: &[(i64, char, [u64; 3], &Card)],
+        grid_of: &HashMap<u64, &Card>,
+        positions: &mut HashMap<u64, [f64; 3]>,
+        stack: &mut Vec<i64>,
+        asked_by: &Card,
+    ) -> Result<[f64; 3], IoError> {
+        if let Some(p) = positions.get(&id) {
+            return Ok(*p);
+        }
+        let g = grid_of.get(&id).ok_or_else(|| {
+            asked_by.err(format!(
+                "refers to GRID {id}, which the deck does not define"
+            ))
+        })?;
+        let cp = g.int(1, "CP")?.unwrap_or(0);
+        let x: [f64; 3] = [
+            g.real(2, "X1")?.unwrap_or(0.0),
+            g.real(3, "X2")?.unwrap_or(0.0),
+            g.real(4, "X3")?.unwrap_or(0.0),
+        ];
+        let frame = resolve_frame(cp, frames, cord2, cord1, grid_of, positions, stack, g)?;
+        let p = frame.to_basic(x);
+        positions.insert(id, p);
+        Ok(p)
+    }
+    let mut positions: HashMap<u64, [f64; 3]> = HashMap::new();
+    let mut mesh = Mesh::new();
+    let mut ids: Vec<u64> = grid_of.keys().copied().collect();
+    ids.sort_unstable();
+    let mut turned_cd = 0;
+    // grids whose displacement frame is turned from the basic one: an SPC on them constrains
+    // components femu does not have
+    let mut turned: HashMap<u64, i64> = HashMap::new();
+    for id in &ids {
+        let mut stack = Vec::new();
+        let g = grid_of[id];
+        let p = grid_position(
+            *id,
+            &mut frames,
+            &cord2,
+            &cord1,
+            &grid_of,
+            &mut positions,
+            &mut stack,
+            g,
+        )?;
+        let cd = g.int(5, "CD")?.unwrap_or(0);
+        if cd != 0 {
+            turned_cd += 1;
+            let f = resolve_frame(
+                cd,
+                &mut frames,
+                &cord2,
+                &cord1,
+                &grid_of,
+                &mut positions,
+                &mut stack,
+                g,
+            )?;
+            let aligned = f.kind == 'R'
+                && (0..3).all(|i| {
+                    (0..3).all(|j| (f.axes[i][j] - f64::from(u8::from(i == j))).abs() < 1e-12)
+                });
+            if !aligned {
+                turned.insert(*id, cd);
+            }
+        }
+        mesh.add_node(*id, p).map_err(|source| IoError::Model {
+            path: g.path.clone(),
+            line: g.line,
+            source,
+        })?;
+    }
+    // elements: Nastran's node order to femu's
+    let mut element_pid: Vec<(u64, u64, &Card)> = Vec::new();
+    for c in &elements {
+        let eid = c.id(0, "EID")?;
+        let pid = c.id(1, "PID")?;
+        let nodes: Vec<u64> = (2..c.fields.len())
+            .map(|i| c.int(i, "G"))
+            .collect::<Result<Vec<_>, _>>()?
+            .into_iter()
+            .flatten()
+            .map(|v| v as u64)
+            .collect();
+        let (kind, order): (ElementKind, &[usize]) = match (c.name.as_str(), nodes.len()) {
+            ("CHEXA", 8) => (ElementKind::Hex8, &[0, 1, 2, 3, 4, 5, 6, 7]),
+            // Nastran: bottom edges, vertical edges, top edges; femu: bottom, top, vertical
+            ("CHEXA", 20) => (
+                ElementKind::Hex20,
+                &[
+                    0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 16, 17, 18, 19, 12, 13, 14, 15,
+                ],
+            ),
+            ("CPENTA", 6) => (ElementKind::Penta6, &[0, 1, 2, 3, 4, 5]),
+            ("CPENTA", 15) => (
+                ElementKind::Penta15,
+                &[0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 13, 14, 9, 10, 11],
+            ),
+            ("CTETRA", 4) => (ElementKind::Tet4, &[0, 1, 2, 3]),
+            ("CTETRA", 10) => (ElementKind::Tet10, &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9]),
+            (name, n) => {
+                return Err(c.err(format!(
+                    "{eid} has {n} grids: femu reads {} with {}",
+                    name,
+                    match name {
+                        "CHEXA" => "8 or 20",
+                        "CPENTA" => "6 or 15",
+                        _ => "4 or 10",
+                    }
+                )));
+            }
+        };
+        for g in &nodes {
+            if mesh.node_index(*g).is_none() {
+                return Err(c.err(format!(
+                    "{eid} refers to GRID {g}, which the deck does not define"
+                )));
+            }
+        }
+        let ordered: Vec<u64> = order.iter().map(|&k| nodes[k]).collect();
+        mesh.add_element(eid, kind, &ordered)
+            .map_err(|source| IoError::Model {
+                path: c.path.clone(),
+                line: c.line,
+                source,
+            })?;
+        element_pid.push((eid, pid, c));
+    }
+    if mesh.element_count() == 0 {
+        return Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: format!(
+                "the deck defines {} grids and no solid element (CHEXA, CPENTA, CTETRA)",
+                mesh.node_count()
+            ),
+        });
+    }
+    // materials by property
+    let mut by_pid: BTreeMap<u64, Vec<u64>> = BTreeMap::new();
+    for (eid, pid, _) in &element_pid {
+        by_pid.entry(*pid).or_default().push(*eid);
+    }
+    for (pid, eids) in &by_pid {
+        mesh.add_element_set(format!("PID{pid}"), eids)
+            .map_err(|e| IoError::Content {
+                path: path.to_path_buf(),
+                reason: e.to_string(),
+            })?;
+    }
+    let mut model = Model::new(mesh).map_err(|source| {
+        let line = element_pid
+            .iter()
+            .find(|(eid, _, _)| source.to_string().contains(&format!("element {eid} ")))
+            .map(|e| e.2);
+        match line {
+            Some(c) => IoError::Model {
+                path: c.path.clone(),
+                line: c.line,
+                source,
+            },
+            None => IoError::Content {
+                path: path.to_path_buf(),
+                reason: source.to_string(),
+            },
+        }
+    })?;
+    for (pid, eids) in &by_pid {
+        let first = element_pid
+            .iter()
+            .find(|e| e.0 == eids[0])
+            .expect("listed")
+            .2;
+        let (mid, pc) = psolids.get(pid).ok_or_else(|| {
+            first.err(format!(
+                "{} refers to PSOLID {pid}, which the deck does not define",
+                eids[0]
+            ))
+        })?;
+        let m = mat1.get(mid).ok_or_else(|| {
+            pc.err(format!(
+                "{pid} refers to MAT1 {mid}, which the deck does not define (femu reads MAT1)"
+            ))
+        })?;
+        let (e, g, nu) = (m.real(1, "E")?, m.real(2, "G")?, m.real(3, "NU")?);
+        let (e, nu) = match (e, g, nu) {
+            (Some(e), _, Some(nu)) => (e, nu),
+            (Some(e), Some(g), None) => (e, e / (2.0 * g) - 1.0),
+            (None, Some(g), Some(nu)) => (2.0 * g * (1.0 + nu), nu),
+            _ => return Err(m.err(format!("{mid}: two of E, G and NU are needed"))),
+        };
+        let rho = m.real(4, "RHO")?.filter(|r| *r > 0.0).ok_or_else(|| {
+            m.err(format!(
+                "{mid} has no RHO (a modal analysis needs the density)"
+            ))
+        })?;
+        let material =
+            Material::isotropic(format!("MAT1 {mid}"), e, nu, rho * wtmass).map_err(|source| {
+                IoError::Model {
+                    path: m.path.clone(),
+                    line: m.line,
+                    source,
+                }
+            })?;
+        model
+            .set_material(Some(&format!("PID{pid}")), material)
+            .map_err(|source| IoError::Model {
+                path: pc.path.clone(),
+                line: pc.line,
+                source,
+            })?;
+    }
+    // constraints: the case control's SPC set, or the only one a bulk-only file has
+    let mut sets: BTreeMap<i64, Vec<&Card>> = BTreeMap::new();
+    for c in &spcs {
+        let sid = c
+            .int(0, "SID")?
+            .ok_or_else(|| c.err("needs a set id (SID)".into()))?;
+        sets.entry(sid).or_default().push(c);
+    }
+    let chosen = match spc_selected {
+        Some(s) => Some(s),
+        None if has_case_control => {
+            if let Some(c) = spcs.first() {
+                warn(
+                    &mut warnings,
+                    c,
+                    "the case control selects no SPC set: the model is free (unconstrained)".into(),
+                );
+            }
+            None
+        }
+        None => match sets.keys().copied().collect::<Vec<_>>().as_slice() {
+            [] => None,
+            [one] => {
+                warn(
+                    &mut warnings,
+                    spcs[0],
+                    format!("no case control: the deck's only SPC set {one} is applied"),
+                );
+                Some(*one)
+            }
+            many => {
+                return Err(IoError::Parse {
+                    path: spcs[0].path.clone(),
+                    line: spcs[0].line,
+                    reason: format!(
+                        "the deck defines SPC sets {many:?} and no case control selects one (SPC = n before BEGIN BULK)"
+                    ),
+                });
+            }
+        },
+    };
+    if let Some(sid) = chosen {
+        let mut todo = vec![sid];
+        let mut seen = Vec::new();
+        while let Some(s) = todo.pop() {
+            if seen.contains(&s) {
+                continue;
+            }
+            seen.push(s);
+            let cards = sets.get(&s).cloned().unwrap_or_default();
+            if cards.is_empty() {
+                return Err(IoError::Content {
+                    path: path.to_path_buf(),
+                    reason: format!(
+                        "SPC set {s} is selected but no SPC, SPC1 or SPCADD defines it"
+                    ),
+                });
+            }
+            for c in cards {
+                let comps = |c: &Card, i: usize| -> Result<Vec<usize>, IoError> {
+                    let t = c.field(i);
+                    let mut out = Vec::new();
+                    for ch in t.chars() {
+                        match ch {
+                            '1' | '2' | '3' => out.push(ch as usize - '1' as usize),
+                            '4' | '5' | '6' | '0' => {}
+                            _ => return Err(c.err(format!("component {t:?} is not a list of 1-6"))),
+                        }
+                    }
+                    Ok(out)
+                };
+                let mut fix = |c: &Card, g: u64, comps: &[usize]| -> Result<(), IoError> {
+                    if model.mesh().node_index(g).is_none() {
+                        return Err(c.err(format!(
+                            "constrains GRID {g}, which the deck does not define"
+                        )));
+                    }
+                    if let Some(cd) = turned.get(&g).filter(|_| comps.len() < 3) {
+                        return Err(c.err(format!(
+                            "constrains components {:?} of GRID {g} in its displacement frame {cd}, which is turned from the basic frame: femu constrains basic components only (a constraint in a turned frame needs a multipoint constraint, not read yet)",
+                            comps.iter().map(|c| c + 1).collect::<Vec<_>>()
+                        )));
+                    }
+                    model
+                        .fix_nodes(&[g], comps)
+                        .map_err(|source| IoError::Model {
+                            path: c.path.clone(),
+                            line: c.line,
+                            source,
+                        })
+                };
+                match c.name.as_str() {
+                    "SPC" => {
+                        for k in 0..2 {
+                            let base = 1 + 3 * k;
+                            if c.field(base).is_empty() {
+                                continue;
+                            }
+                            let g = c.id(base, "G")?;
+                            let cs = comps(c, base + 1)?;
+                            if c.real(base + 2, "D")?.is_some_and(|d| d != 0.0) {
+                                warn(
+                                    &mut warnings,
+                                    c,
+                                    "an enforced value is read as 0 (modal analysis)".into(),
+                                );
+                            }
+                            fix(c, g, &cs)?;
+                        }
+                    }
+                    "SPC1" => {
+                        let cs = comps(c, 1)?;
+                        let rest: Vec<String> = c.fields[2..]
+                            .iter()
+                            .map(|s| s.trim().to_ascii_uppercase())
+                            .filter(|s| !s.is_empty())
+                            .collect();
+                        let mut grids_here = Vec::new();
+                        if rest.len() == 3 && rest[1] == "THRU" {
+                            let (a, b) = (rest[0].parse::<u64>(), rest[2].parse::<u64>());
+                            match (a, b) {
+                                (Ok(a), Ok(b)) if a <= b => {
+                                    grids_here.extend((a..=b).filter(|g| grid_of.contains_key(g)));
+                                }
+                                _ => return Err(c.err(format!("THRU range {rest:?} is invalid"))),
+                            }
+                        } else {
+                            for t in &rest {
+                                grids_here.push(
+                                    t.parse::<u64>()
+                                        .map_err(|_| c.err(format!("grid {t:?} is not an id")))?,
+                                );
+                            }
+                        }
+                        for g in grids_here {
+                            fix(c, g, &cs)?;
+                        }
+                    }
+                    _ => {
+                        // SPCADD SID S1 S2 ...
+                        for t in c.fields[1..]
+                            .iter()
+                            .map(|s| s.trim())
+                            .filter(|s| !s.is_empty())
+                        {
+                            todo.push(
+                                t.parse::<i64>()
+                                    .map_err(|_| c.err(format!("set {t:?} is not an id")))?,
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+    if turned_cd > 0
+        && let Some(g) = grids
+            .iter()
+            .find(|g| g.int(5, "CD").ok().flatten().unwrap_or(0) != 0)
+    {
+        warn(
+            &mut warnings,
+            g,
+            format!(
+                "{turned_cd} grids name a displacement frame (CD): femu reports displacements in the basic frame"
+            ),
+        );
+    }
+    // point masses, on grids the solids connect (a mass on a free grid would have no stiffness)
+    let mut connected = vec![false; model.mesh().node_count()];
+    for el in model.mesh().elements() {
+        for n in el.nodes {
+            connected[*n] = true;
+        }
+    }
+    for c in &conm2 {
+        let g = c.id(1, "G")?;
+        let m = c
+            .real(3, "M")?
+            .filter(|m| *m > 0.0)
+            .ok_or_else(|| c.err("needs a positive mass M".into()))?;
+        let Some(gi) = model.mesh().node_index(g) else {
+            return Err(c.err(format!("is on GRID {g}, which the deck does not define")));
+        };
+        if !connected[gi] {
+            let text = format!(
+                "{} is on GRID {g}, which no solid element connects (a rigid link to it is not modelled): it would have no stiffness",
+                c.field(0)
+            );
+            if options.lenient {
+                warn(&mut warnings, c, format!("{text}: left out"));
+                continue;
+            }
+            return Err(c.err(text));
+        }
+        let offset = (4..7).any(|i| c.real(i, "X").ok().flatten().is_some_and(|v| v != 0.0));
+        let inertia = (8..14).any(|i| c.real(i, "I").ok().flatten().is_some_and(|v| v != 0.0));
+        if offset || inertia {
+            warn(
+                &mut warnings,
+                c,
+                format!(
+                    "{}: the grid has no rotations, so its {} dropped (the translational mass is kept)",
+                    c.field(0),
+                    match (offset, inertia) {
+                        (true, true) => "offset and rotational inertia are",
+                        (true, false) => "offset is",
+                        _ => "rotational inertia is",
+                    }
+                ),
+            );
+        }
+        model
+            .add_point_mass(g, m * wtmass)
+            .map_err(|source| IoError::Model {
+                path: c.path.clone(),
+                line: c.line,
+                source,
+            })?;
+    }
+    Ok(BdfDeck {
+        model,
+        eigrl,
+        warnings,
+    })
+}

@@ -1,0 +1,393 @@
+//! Nastran bulk data: one mixed quadratic mesh (hex20, penta15, tet10; two materials) written by
+//! this test in free, small and large field formats, with continuations and implicit exponents,
+//! gives the same `K` and `M` as the mesh assembled directly; coordinate systems, SPC sets, CONM2
+//! and the cards femu cannot model; each bad deck an error naming the card and line.
+
+use femu_fem::prelude::*;
+use femu_io::nastran::{BdfOptions, parse_bdf, real};
+
+/// The node order Nastran writes: CHEXA20 has the bottom edges' mid nodes (G9-G12), then the
+/// vertical edges' (G13-G16), then the top edges' (G17-G20); femu (as Abaqus) has bottom, top,
+/// vertical. CPENTA15 likewise (G7-G9 bottom, G10-G12 vertical, G13-G15 top). CTETRA10 is the
+/// same in both.
+fn nastran_order(kind: ElementKind, femu: &[u64]) -> Vec<u64> {
+    match kind {
+        ElementKind::Hex20 => [&femu[..12], &femu[16..20], &femu[12..16]].concat(),
+        ElementKind::Penta15 => [&femu[..9], &femu[12..15], &femu[9..12]].concat(),
+        _ => femu.to_vec(),
+    }
+}
+
+fn name(kind: ElementKind) -> &'static str {
+    match kind {
+        ElementKind::Hex8 | ElementKind::Hex20 => "CHEXA",
+        ElementKind::Penta6 | ElementKind::Penta15 => "CPENTA",
+        _ => "CTETRA",
+    }
+}
+
+#[derive(Clone, Copy)]
+enum Format {
+    Free,
+    Small,
+    Large,
+}
+
+/// A number as Nastran writes it in a short field: `2.1+11`, `7850.`, `.025`.
+fn short(v: f64) -> String {
+    if v == 0.0 {
+        return "0.".into();
+    }
+    if v.abs() >= 1e6 {
+        let e = v.abs().log10().floor() as i32;
+        let m = v / 10f64.powi(e);
+        return format!("{m}+{e}");
+    }
+    let s = format!("{v}");
+    if s.contains('.') { s } else { format!("{s}.") }
+}
+
+/// One card in a format: `fields` after the name; continuations every 8 (small, free) or 4
+/// (large) fields, labelled `+C1`, `*C1`, or by a comma.
+fn card(out: &mut String, format: Format, name: &str, fields: &[String]) {
+    match format {
+        Format::Free => {
+            for (k, chunk) in fields.chunks(8).enumerate() {
+                let head = if k == 0 { name.to_string() } else { "+".into() };
+                out.push_str(&format!("{head},{}\n", chunk.join(",")));
+            }
+        }
+        Format::Small => {
+            for (k, chunk) in fields.chunks(8).enumerate() {
+                let head = if k == 0 {
+                    name.to_string()
+                } else {
+                    format!("+C{k}")
+                };
+                out.push_str(&format!("{head:<8}"));
+                for f in chunk {
+                    out.push_str(&format!("{f:>8}"));
+                }
+                out.push('\n');
+            }
+        }
+        Format::Large => {
+            for (k, chunk) in fields.chunks(4).enumerate() {
+                let head = if k == 0 {
+                    format!("{name}*")
+                } else {
+                    format!("*C{k}")
+                };
+                out.push_str(&format!("{head:<8}"));
+                for f in chunk {
+                    out.push_str(&format!("{f:>16}"));
+                }
+                out.push('\n');
+            }
+        }
+    }
+}
+
+fn plate() -> Model {
+    let spec = PlateSpec {
+        lengths: [0.06, 0.04, 0.01],
+        divisions: [6, 4, 2],
+        tet_block: [2, 2],
+        quadratic: true,
+    };
+    // coordinates rounded to the micrometre, so that an 8-character field holds each exactly
+    let generated = mixed_plate(&spec).unwrap();
+    let mut mesh = Mesh::new();
+    for i in 0..generated.node_count() {
+        let c = generated.coords()[i].map(|v| (v * 1e6).round() / 1e6);
+        mesh.add_node(generated.node_id(i), c).unwrap();
+    }
+    for el in generated.elements() {
+        let ids: Vec<u64> = el.nodes.iter().map(|n| generated.node_id(*n)).collect();
+        mesh.add_element(el.id, el.kind, &ids).unwrap();
+    }
+    let tet: Vec<u64> = generated
+        .element_set("tet")
+        .unwrap()
+        .iter()
+        .map(|e| generated.element(*e).id)
+        .collect();
+    mesh.add_element_set("tet", &tet).unwrap();
+    let mut model = Model::new(mesh).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    model
+        .set_material(
+            Some("tet"),
+            Material::isotropic("al", 70e9, 70e9 / (2.0 * 26e9) - 1.0, 2700.0).unwrap(),
+        )
+        .unwrap();
+    model
+}
+
+fn bdf(model: &Model, format: Format) -> String {
+    let mesh = model.mesh();
+    let mut s = String::from("$ written by femu's test\nSOL 103\nCEND\nBEGIN BULK\n");
+    for i in 0..mesh.node_count() {
+        let c = mesh.coords()[i];
+        let mut f = vec![mesh.node_id(i).to_string(), String::new()];
+        f.extend(c.iter().map(|v| short(*v)));
+        card(&mut s, format, "GRID", &f);
+    }
+    let tets: std::collections::BTreeSet<usize> =
+        mesh.element_set("tet").unwrap().iter().copied().collect();
+    for el in mesh.elements() {
+        let ids: Vec<u64> = el.nodes.iter().map(|n| mesh.node_id(*n)).collect();
+        let pid = if tets.contains(&el.index) { "2" } else { "1" };
+        let mut f = vec![el.id.to_string(), pid.to_string()];
+        f.extend(nastran_order(el.kind, &ids).iter().map(u64::to_string));
+        card(&mut s, format, name(el.kind), &f);
+    }
+    let strings = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    card(&mut s, format, "PSOLID", &strings(&["1", "10"]));
+    card(&mut s, format, "PSOLID", &strings(&["2", "20"]));
+    // steel by E and NU, aluminium by E and G (NU = E / 2G - 1 = 0.346)
+    card(
+        &mut s,
+        format,
+        "MAT1",
+        &strings(&["10", "2.1+11", "", ".3", "7850."]),
+    );
+    card(
+        &mut s,
+        format,
+        "MAT1",
+        &strings(&["20", "7.+10", "2.6+10", "", "2.7+3"]),
+    );
+    card(&mut s, format, "EIGRL", &strings(&["1", "", "", "10"]));
+    card(&mut s, format, "PARAM", &strings(&["POST", "-1"]));
+    s.push_str("ENDDATA\n");
+    s
+}
+
+fn max_diff(a: &femu_sparse::SparseMatrix, b: &femu_sparse::SparseMatrix) -> f64 {
+    let d = a - b;
+    d.data().iter().fold(0.0f64, |m, v| m.max(v.abs()))
+        / a.data().iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+#[test]
+fn three_formats_give_the_same_k_and_m_as_the_mesh() {
+    let model = plate();
+    let direct = model.assemble(MassKind::Consistent).unwrap();
+    for format in [Format::Free, Format::Small, Format::Large] {
+        let text = bdf(&model, format);
+        let deck = parse_bdf(&text, "p.bdf", &BdfOptions::default()).unwrap();
+        let sys = deck.model.assemble(MassKind::Consistent).unwrap();
+        assert_eq!(sys.k.rows(), direct.k.rows());
+        let (dk, dm) = (max_diff(&sys.k, &direct.k), max_diff(&sys.m, &direct.m));
+        assert!(dk < 1e-15 && dm < 1e-15, "K {dk:e}, M {dm:e}");
+        assert_eq!(deck.eigrl, Some((None, None, Some(10))));
+        // PARAM,POST is skipped with a warning, once
+        let w: Vec<String> = deck.warnings.iter().map(|w| w.message.clone()).collect();
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].starts_with("PARAM skipped"), "{w:?}");
+    }
+}
+
+#[test]
+fn implicit_exponents() {
+    assert_eq!(real("7.+10"), Some(7e10));
+    assert_eq!(real("1.-3"), Some(1e-3));
+    assert_eq!(real("-2.5-4"), Some(-2.5e-4));
+    assert_eq!(real(".5+1"), Some(5.0));
+    assert_eq!(real("1.0D+3"), Some(1000.0));
+    assert_eq!(real("3"), Some(3.0));
+    assert_eq!(real("1.2.3"), None);
+}
+
+/// A hex8 cube of side 1 in a cylindrical frame and constraints, masses and bad decks.
+const CUBE: &str = "\
+SOL 103
+CEND
+SPC = 100
+BEGIN BULK
+$ the grids of a unit cube, four of them given in cylindrical frame 5 (r, theta, z) about z
+CORD2C   5       0       0.      0.      0.      0.      0.      1.
++        1.      0.      0.
+GRID     1               0.      0.      0.
+GRID     2       5       1.      0.      0.
+GRID     3       5       1.41421356237309590.      0.
+GRID     4               0.      1.      0.
+GRID     5               0.      0.      1.
+GRID     6       5       1.      0.      1.
+GRID     7               1.      1.      1.
+GRID     8       5       1.      90.     1.
+CHEXA    1       1       1       2       3       4       5       6
++        7       8
+PSOLID   1       1
+MAT1     1       2.1+11          .3      7850.
+SPC1     100     123     1       THRU    4
+SPC      200     5       123     0.
+CONM2    10      7               2.5     0.1
+PARAM    WTMASS  1.
+ENDDATA
+";
+
+#[test]
+fn frames_constraints_and_masses() {
+    // grid 3 at r = 1.414..., theta = 0.0 (the field "1.41421356237309590." is 16 characters:
+    // r and theta touch in fixed columns)
+    let text = CUBE.replace("1.41421356237309590.      0.", "1.41421 45.     0.");
+    let deck = parse_bdf(&text, "cube.bdf", &BdfOptions::default()).unwrap();
+    let mesh = deck.model.mesh();
+    let at = |id: u64| mesh.coords()[mesh.node_index(id).unwrap()];
+    // r 1.41421 at 45 degrees: (1, 1) to 6 digits; r 1 at 90 degrees: (0, 1)
+    assert!((at(3)[0] - 1.0).abs() < 1e-5 && (at(3)[1] - 1.0).abs() < 1e-5);
+    assert!(at(8)[0].abs() < 1e-12 && (at(8)[1] - 1.0).abs() < 1e-12 && at(8)[2] == 1.0);
+    assert!((mesh.volume().unwrap() - 1.0).abs() < 1e-4);
+    // SPC = 100 selects the SPC1 (grids 1 to 4 in all three directions), not set 200
+    let fixed: Vec<(usize, usize)> = deck.model.fixed_dofs().collect();
+    assert_eq!(fixed.len(), 12);
+    assert!(fixed.iter().all(|(n, _)| mesh.node_id(*n) <= 4));
+    // CONM2 with an offset: the mass is kept, the offset reported
+    assert_eq!(deck.model.point_masses().len(), 1);
+    assert_eq!(deck.model.point_masses()[0].mass[0][0], 2.5);
+    assert!(
+        deck.warnings.iter().any(|w| w
+            .message
+            .contains("the grid has no rotations, so its offset is dropped")),
+        "{:?}",
+        deck.warnings
+    );
+    assert!(
+        (deck.model.total_mass().unwrap() - (7850.0 * mesh.volume().unwrap() + 2.5)).abs() < 1e-9
+    );
+    // WTMASS scales every mass
+    let weighted = text.replace("PARAM    WTMASS  1.", "PARAM    WTMASS  .5");
+    let half = parse_bdf(&weighted, "cube.bdf", &BdfOptions::default()).unwrap();
+    assert!(
+        (half.model.total_mass().unwrap() - 0.5 * deck.model.total_mass().unwrap()).abs() < 1e-9
+    );
+}
+
+#[test]
+fn bad_decks_name_the_card_and_line() {
+    let base = CUBE.replace("1.41421356237309590.      0.", "1.41421 45.     0.");
+    let cases: Vec<(String, &str)> = vec![
+        (
+            base.replace("+        7       8", "+        7       9"),
+            "cube.bdf:16: CHEXA 1 refers to GRID 9, which the deck does not define",
+        ),
+        (
+            base.replace("CORD2C   5       0 ", "CORD2C   5       6 ")
+                .replace("PARAM    WTMASS  1.", "CORD2R   6       5       0.      0.      0.      0.      0.      1.\n+        1.      0.      0.\nPARAM    WTMASS  1."),
+            "coordinate systems refer to each other in a cycle: 5 -> 6 -> 5",
+        ),
+        (
+            base.replace("PSOLID   1       1", "PSOLID   1       3"),
+            "cube.bdf:18: PSOLID 1 refers to MAT1 3, which the deck does not define (femu reads MAT1)",
+        ),
+        (
+            base.replace("SPC1     100     123     1       THRU    4", "SPC1     100     123     1       44"),
+            "cube.bdf:20: SPC1 constrains GRID 44, which the deck does not define",
+        ),
+        (
+            base.replace("GRID     2       5 ", "GRID     2       7 "),
+            "cube.bdf:9: GRID refers to coordinate system 7, which the deck does not define",
+        ),
+        (
+            base.replace("MAT1     1       2.1+11          .3 ", "MAT1     1       2.1+11             "),
+            "cube.bdf:19: MAT1 1: two of E, G and NU are needed",
+        ),
+        (
+            base.replace("GRID     1               0.      0.      0.", "GRID     1               0.      0.      0.      5")
+                .replace("SPC1     100     123     1       THRU    4", "SPC1     100     3       1       THRU    4"),
+            "cube.bdf:20: SPC1 constrains components [3] of GRID 1 in its displacement frame 5, which is turned from the basic frame",
+        ),
+        (
+            base.replace("SPC = 100", "SPC = 300"),
+            "SPC set 300 is selected but no SPC, SPC1 or SPCADD defines it",
+        ),
+        (
+            base.replace("PARAM    WTMASS  1.", "CQUAD4   2       1       1       2       3       4\nRBE2     3       7       123     6\nCQUAD4   4       1       5       6       7       8\nPARAM    WTMASS  1."),
+            "cube.bdf:23: the deck has cards that change the stiffness or the mass and that femu cannot model: 1 rigid links (RBE2), 2 shells (CQUAD4)",
+        ),
+    ];
+    for (text, want) in cases {
+        let e = parse_bdf(&text, "cube.bdf", &BdfOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(want), "want {want:?}\n got {e}");
+    }
+    // lenient: the rest is read, with a warning that K and M are incomplete
+    let with_shell = base.replace(
+        "PARAM    WTMASS  1.",
+        "CQUAD4   2       1       1       2       3       4\nPARAM    WTMASS  1.",
+    );
+    let deck = parse_bdf(&with_shell, "cube.bdf", &BdfOptions { lenient: true }).unwrap();
+    assert_eq!(deck.model.mesh().element_count(), 1);
+    assert!(deck.warnings.iter().any(|w| {
+        w.message
+            .ends_with("left out (--lenient), so the model's K and M are incomplete")
+    }));
+}
+
+/// pyNastran's two-tet10 example (`fixtures/nastran/pynastran/`, BSD): read as specified (the
+/// SPCADD of the case control's SPC = 10, the large-field MAT1 with implicit exponents, fields
+/// that touch; loads, tables and output cards skipped with a warning each), and compared with
+/// MSC Nastran's eigenvalues from its `.f06`. The deck has no PARAM,COUPMASS, so MSC used its
+/// lumped mass; a model of two elements is far from converged, so the mass formulation moves every
+/// eigenvalue by 10-40 %: MSC's lie between femu's with lumped and with consistent mass for all
+/// ten modes (the consistent mass gives the Rayleigh-Ritz upper bounds of its stiffness).
+#[test]
+fn pynastran_tet10_example_against_msc_nastran() {
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/nastran/pynastran/simple_example_tet10.bdf");
+    let deck = femu_io::nastran::read_bdf(&path, &BdfOptions::default()).unwrap();
+    let model = &deck.model;
+    assert_eq!(model.mesh().element_count(), 2);
+    assert_eq!(model.mesh().node_count(), 14);
+    // SPC1 123456 on grids 2128, 2260, 2488, 2551: their translations
+    assert_eq!(model.fixed_dofs().count(), 12);
+    let skipped: Vec<&str> = deck
+        .warnings
+        .iter()
+        .filter_map(|w| w.message.split(" skipped").next())
+        .collect();
+    for card in [
+        "PARAM", "FREQ1", "LSEQ", "DLOAD", "RLOAD1", "FORCE", "MOMENT", "TABLED1",
+    ] {
+        assert!(skipped.contains(&card), "{card}: {skipped:?}");
+    }
+    assert_eq!(deck.eigrl, Some((None, None, Some(10))));
+    // MAT1* 1 1.705+7 .31 / 4.14413-4 (in-lbf-s units)
+    let msc = [
+        3.007285E+11,
+        3.269210E+11,
+        4.137910E+11,
+        2.811446E+12,
+        3.164506E+12,
+        4.658380E+12,
+        9.469630E+12,
+        9.925428E+12,
+        1.096105E+13,
+        2.166837E+13,
+    ];
+    let solve = |mass| {
+        let sys = model.assemble(mass).unwrap();
+        femu_sparse::eigen::eigs(
+            &sys.k,
+            &sys.m,
+            femu_sparse::eigen::Which::Lowest(10),
+            &Default::default(),
+        )
+        .unwrap()
+        .values
+    };
+    let (lumped, consistent) = (solve(MassKind::Lumped), solve(MassKind::Consistent));
+    for j in 0..10 {
+        assert!(
+            lumped[j] < msc[j] && msc[j] < consistent[j],
+            "mode {}: lumped {:e}, MSC {:e}, consistent {:e}",
+            j + 1,
+            lumped[j],
+            msc[j],
+            consistent[j]
+        );
+    }
+}
