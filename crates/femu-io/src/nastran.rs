@@ -750,8 +750,9 @@ fn parse_lines(
         return Err(IoError::Content {
             path: path.to_path_buf(),
             reason: format!(
-                "the deck defines {} grids and no solid element (CHEXA, CPENTA, CTETRA)",
-                mesh.node_count()
+                "the deck defines {} GRID{} and no solid element (CHEXA, CPENTA, CTETRA)",
+                mesh.node_count(),
+                if mesh.node_count() == 1 { "" } else { "s" }
             ),
         });
     }
