@@ -97,8 +97,11 @@ def main(directory):
         # spectrum slicing: SLEPc counts by inertia itself; femu counts again below
         eps.setWhichEigenpairs(SLEPc.EPS.Which.ALL)
         eps.setInterval(req["lo"], req["hi"])
-        PETSc.Options().setValue("mat_mumps_icntl_13", 1)
-        PETSc.Options().setValue("mat_mumps_icntl_24", 1)
+        # the slices factor with the spectral transformation's prefix (and, in parallel, their
+        # own): exact inertia needs these MUMPS settings on every factor
+        for prefix in ("", "st_", "eps_slice_st_"):
+            PETSc.Options().setValue(prefix + "mat_mumps_icntl_13", 1)
+            PETSc.Options().setValue(prefix + "mat_mumps_icntl_24", 1)
     else:
         eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
         eps.setTarget(req["sigma"])

@@ -165,6 +165,15 @@ fn a_skipped_mode_is_caught_by_the_count() {
     for (a, b) in ours.values.iter().zip(&theirs.values) {
         assert!((a / b - 1.0).abs() < 1e-9, "{a} vs {b}");
     }
+    // every eigenvalue in a band (SLEPc's spectrum slicing), counted at both ends
+    let band = Which::Band { lo: 1e8, hi: 3e9 };
+    let ours = eigs(&sys.k, &sys.m, band, &femu_engine()).unwrap();
+    let theirs = eigs(&sys.k, &sys.m, band, &params).unwrap();
+    assert_eq!(ours.values.len(), theirs.values.len());
+    assert!(!theirs.values.is_empty() && theirs.sturm.verified());
+    for (a, b) in ours.values.iter().zip(&theirs.values) {
+        assert!((a / b - 1.0).abs() < 1e-9, "{a} vs {b}");
+    }
 }
 
 #[test]
