@@ -7,7 +7,7 @@
 //! `SPC =` before `BEGIN BULK`, and `ENDDATA`.
 //!
 //! Cards read: `GRID` (with its `CP` frame), `CORD2R/C/S` and `CORD1R/C/S`, `CHEXA` (8/20),
-//! `CPENTA` (6/15), `CTETRA` (4/10), `PSOLID`, `MAT1` (two of `E`, `G`, `NU`), `SPC`, `SPC1`,
+//! `CPENTA` (6/15), `CTETRA` (4/10), `PSOLID`, `MAT1` (two of `E`, `G`, `NU`), `MAT9`, `SPC`, `SPC1`,
 //! `SPCADD`, `CONM2` (its mass; the node has no rotations, so offset and rotational inertia are
 //! reported and dropped), `EIGRL` and `PARAM,WTMASS`. Cards that cannot change `K` and `M`
 //! (output requests, loads, other parameters) are warnings, once per card name. Cards that would
@@ -156,7 +156,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("CPYRAM", "pyramid elements"),
     ("MAT2", "anisotropic materials"),
     ("MAT8", "orthotropic materials"),
-    ("MAT9", "anisotropic materials"),
     ("CORD3G", "coordinate systems"),
     ("GENEL", "general elements"),
     ("DMIG", "direct matrix input"),
@@ -423,10 +422,10 @@ fn parse_lines(
                     return Err(c.err(format!("{pid} is defined twice")));
                 }
             }
-            "MAT1" => {
+            "MAT1" | "MAT9" => {
                 let mid = c.id(0, "MID")?;
                 if mat1.insert(mid, c).is_some() {
-                    return Err(c.err(format!("{mid} is defined twice")));
+                    return Err(c.err(format!("{mid} is defined twice (MAT1 and MAT9 share ids)")));
                 }
             }
             "SPC" | "SPC1" | "SPCADD" => spcs.push(c),
@@ -484,7 +483,7 @@ fn parse_lines(
             .min_by_key(|c| c.line)
             .expect("non-empty");
         let text = format!(
-            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10) with MAT1, CONM2 point masses and SPC constraints",
+            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10) with MAT1 or MAT9, CONM2 point masses and SPC constraints",
             list.join(", ")
         );
         if options.lenient {
@@ -799,9 +798,46 @@ fn parse_lines(
         })?;
         let m = mat1.get(mid).ok_or_else(|| {
             pc.err(format!(
-                "{pid} refers to MAT1 {mid}, which the deck does not define (femu reads MAT1)"
+                "{pid} refers to MAT1 {mid}, which the deck does not define (femu reads MAT1 and MAT9)"
             ))
         })?;
+        if m.name == "MAT9" {
+            // G11 G12 ... G66 (upper triangle by rows) relate (sx, sy, sz, txy, tyz, tzx) to the
+            // engineering strains in that order; femu's order is (11, 22, 33, 12, 13, 23)
+            let mut g = [[0.0; 6]; 6];
+            let mut k = 1;
+            for i in 0..6 {
+                for j in i..6 {
+                    let v = m.real(k, "G")?.unwrap_or(0.0);
+                    g[i][j] = v;
+                    g[j][i] = v;
+                    k += 1;
+                }
+            }
+            let from = [0, 1, 2, 3, 5, 4];
+            let d: [[f64; 6]; 6] =
+                std::array::from_fn(|i| std::array::from_fn(|j| g[from[i]][from[j]]));
+            let rho = m.real(22, "RHO")?.filter(|r| *r > 0.0).ok_or_else(|| {
+                m.err(format!(
+                    "{mid} has no RHO (a modal analysis needs the density)"
+                ))
+            })?;
+            let material = Material::anisotropic(format!("MAT9 {mid}"), d, rho * wtmass).map_err(
+                |source| IoError::Model {
+                    path: m.path.clone(),
+                    line: m.line,
+                    source,
+                },
+            )?;
+            model
+                .set_material(Some(&format!("PID{pid}")), material)
+                .map_err(|source| IoError::Model {
+                    path: pc.path.clone(),
+                    line: pc.line,
+                    source,
+                })?;
+            continue;
+        }
         let (e, g, nu) = (m.real(1, "E")?, m.real(2, "G")?, m.real(3, "NU")?);
         let (e, nu) = match (e, g, nu) {
             (Some(e), _, Some(nu)) => (e, nu),

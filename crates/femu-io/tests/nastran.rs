@@ -391,3 +391,81 @@ fn pynastran_tet10_example_against_msc_nastran() {
         );
     }
 }
+
+/// MAT9: an orthotropic material whose three shear moduli differ, written as Nastran orders its
+/// matrix (stresses `sx, sy, sz, txy, tyz, tzx`: G44 = G_xy, G55 = G_yz, G66 = G_zx), gives the
+/// same `K` as the material given to femu directly (whose order is 11, 22, 33, 12, 13, 23).
+#[test]
+fn mat9_in_nastran_order() {
+    let mesh = box_mesh(&BoxSpec::new(
+        [0.2, 0.1, 0.05],
+        [2, 2, 1],
+        BoxCells::Hex,
+        false,
+    ))
+    .unwrap();
+    let ortho = Material::orthotropic(
+        "o",
+        [150e9, 10e9, 12e9],
+        [0.3, 0.28, 0.4],
+        [5e9, 6e9, 3.5e9],
+        1600.0,
+    )
+    .unwrap();
+    let d = ortho.elasticity_matrix();
+    let mut direct = Model::new(mesh.clone()).unwrap();
+    direct.set_material(None, ortho.clone()).unwrap();
+    // femu index of each Nastran row: x, y, z, xy, yz (femu 5), zx (femu 4)
+    let femu_of = [0, 1, 2, 3, 5, 4];
+    let mut g = Vec::new();
+    for i in 0..6 {
+        for j in i..6 {
+            g.push(format!("{:e}", d[femu_of[i]][femu_of[j]]));
+        }
+    }
+    let mut deck = String::from("BEGIN BULK\n");
+    for i in 0..mesh.node_count() {
+        let c = mesh.coords()[i];
+        deck.push_str(&format!(
+            "GRID,{},,{:e},{:e},{:e}\n",
+            mesh.node_id(i),
+            c[0],
+            c[1],
+            c[2]
+        ));
+    }
+    for el in mesh.elements() {
+        let ids: Vec<String> = el
+            .nodes
+            .iter()
+            .map(|n| mesh.node_id(*n).to_string())
+            .collect();
+        deck.push_str(&format!("CHEXA,{},1,{}\n", el.id, ids[..6].join(",")));
+        deck.push_str(&format!("+,{}\n", ids[6..].join(",")));
+    }
+    deck.push_str("PSOLID,1,9\n");
+    // MAT9 MID G11..G16 / G22..G26, G33 / G34..G36, G44..G46, G55 / G56, G66, RHO
+    deck.push_str(&format!("MAT9,9,{}\n", g[..7].join(",")));
+    deck.push_str(&format!("+,{}\n", g[7..15].join(",")));
+    deck.push_str(&format!("+,{},1600.\nENDDATA\n", g[15..].join(",")));
+    let read = parse_bdf(&deck, "m9.bdf", &BdfOptions::default()).unwrap();
+    let (a, b) = (
+        read.model.assemble(MassKind::Consistent).unwrap(),
+        direct.assemble(MassKind::Consistent).unwrap(),
+    );
+    assert!(max_diff(&a.k, &b.k) < 1e-14, "{}", max_diff(&a.k, &b.k));
+    assert!(max_diff(&a.m, &b.m) < 1e-15);
+    // the swap matters: read with yz and zx exchanged, K differs
+    let mut swapped = Vec::new();
+    for i in 0..6 {
+        for j in i..6 {
+            swapped.push(format!("{:e}", d[i][j]));
+        }
+    }
+    let wrong = deck
+        .replace(&g[..7].join(","), &swapped[..7].join(","))
+        .replace(&g[7..15].join(","), &swapped[7..15].join(","))
+        .replace(&g[15..].join(","), &swapped[15..].join(","));
+    let w = parse_bdf(&wrong, "m9.bdf", &BdfOptions::default()).unwrap();
+    assert!(max_diff(&w.model.assemble(MassKind::Consistent).unwrap().k, &b.k) > 1e-3);
+}
