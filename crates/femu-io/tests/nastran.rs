@@ -280,7 +280,7 @@ fn bad_decks_name_the_card_and_line() {
         ),
         (
             base.replace("PSOLID   1       1", "PSOLID   1       3"),
-            "cube.bdf:18: PSOLID 1 refers to MAT1 3, which the deck does not define (femu reads MAT1)",
+            "cube.bdf:18: PSOLID 1 refers to MAT1 3, which the deck does not define (femu reads MAT1 and MAT9)",
         ),
         (
             base.replace("SPC1     100     123     1       THRU    4", "SPC1     100     123     1       44"),
