@@ -13,7 +13,7 @@ use std::path::PathBuf;
 #[derive(Args, Debug)]
 #[command(verbatim_doc_comment)]
 pub struct InfoArgs {
-    /// Any file femu reads: `.inp`, `.msh`, `.unv`/`.uff`, `.csv`, `.json`.
+    /// Any file femu reads: `.inp`, `.bdf`/`.dat`/`.nas`, `.msh`, `.unv`/`.uff`, `.csv`, `.json`.
     pub file: PathBuf,
 }
 

@@ -15,7 +15,8 @@ use std::path::PathBuf;
 #[derive(Args, Debug)]
 #[command(verbatim_doc_comment)]
 pub struct MatricesArgs {
-    /// The model (`.inp`, or `.msh`/`.unv` with --young, --poisson, --density, --fix).
+    /// The model (`.inp`, Nastran `.bdf`/`.dat`/`.nas`, or `.msh`/`.unv` with --young, --poisson,
+    /// --density, --fix).
     pub model: PathBuf,
     /// Output prefix.
     #[arg(long)]

@@ -17,8 +17,8 @@ use std::path::PathBuf;
 #[derive(Args, Debug)]
 #[command(verbatim_doc_comment)]
 pub struct ModesArgs {
-    /// The model: an Abaqus/CalculiX `.inp` deck, or a `.msh`/`.unv` mesh with --young,
-    /// --poisson, --density (and --fix).
+    /// The model: an Abaqus/CalculiX `.inp` deck, Nastran bulk data (`.bdf`, `.dat`, `.nas`),
+    /// or a `.msh`/`.unv` mesh with --young, --poisson, --density (and --fix).
     pub model: PathBuf,
     /// How many modes (lowest, or nearest the shift). Default: the deck's *FREQUENCY count, or 10.
     #[arg(long)]

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 /// file; unknown keys are errors.
 ///
 /// Example study.toml:
-///   model = "plate.inp"            # or a .msh/.unv with [material] and fix = ["set"]
+///   model = "plate.inp"            # or a .bdf; or a .msh/.unv with [material], fix = ["set"]
 ///   test = "test.unv"              # .unv, .csv or .json
 ///   [material]                     # mesh-only models
 ///   young = 2.1e11

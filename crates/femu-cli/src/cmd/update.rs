@@ -16,7 +16,8 @@ use std::path::PathBuf;
 #[derive(Args, Debug)]
 #[command(verbatim_doc_comment)]
 pub struct UpdateArgs {
-    /// The model (`.inp`, or `.msh`/`.unv` with --young, --poisson, --density, --fix).
+    /// The model (`.inp`, Nastran `.bdf`/`.dat`/`.nas`, or `.msh`/`.unv` with --young, --poisson,
+    /// --density, --fix).
     pub model: PathBuf,
     /// The test modes (`.unv`/`.uff`, `.json` or `.csv`).
     pub test: PathBuf,
