@@ -15,6 +15,7 @@
 //! pyramids) are an error that counts them by kind; [`BdfOptions::lenient`] reads the rest with a
 //! warning that the model is then incomplete.
 
+use crate::uff::CoordinateSystem;
 use crate::{IoError, Warning};
 use femu_fem::element::ElementKind;
 use femu_fem::material::Material;
@@ -284,67 +285,125 @@ fn cards(lines: &[(PathBuf, usize, String)]) -> (Vec<Card>, Option<i64>, bool) {
     (out, spc, has_begin)
 }
 
-/// A coordinate system: origin, axes (columns: local axes in basic components), kind.
-#[derive(Debug, Clone, Copy)]
-struct Frame {
-    origin: [f64; 3],
-    axes: [[f64; 3]; 3],
-    kind: char,
+/// The system of a `CORD` card through points `a` (origin), `b` (on the z axis) and `c` (in the xz
+/// plane), all basic; `kind` 0 rectangular, 1 cylindrical, 2 spherical. Positions in it follow
+/// [`CoordinateSystem::point_to_global`], whose cylindrical `(r, theta, z)` and spherical
+/// `(r, theta from z, phi)` in degrees are Nastran's.
+fn frame_through(kind: i64, a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Option<CoordinateSystem> {
+    let sub = |p: [f64; 3], q: [f64; 3]| -> [f64; 3] { std::array::from_fn(|i| p[i] - q[i]) };
+    let cross = |p: [f64; 3], q: [f64; 3]| {
+        [
+            p[1] * q[2] - p[2] * q[1],
+            p[2] * q[0] - p[0] * q[2],
+            p[0] * q[1] - p[1] * q[0],
+        ]
+    };
+    let unit = |p: [f64; 3]| {
+        let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        (n > 1e-300).then(|| p.map(|v| v / n))
+    };
+    let ez = unit(sub(b, a))?;
+    let ey = unit(cross(ez, sub(c, a)))?;
+    let ex = cross(ey, ez);
+    Some(CoordinateSystem {
+        name: String::new(),
+        kind,
+        origin: a,
+        axes: std::array::from_fn(|i| [ex[i], ey[i], ez[i]]),
+    })
 }
 
-impl Frame {
-    const BASIC: Self = Self {
-        origin: [0.0; 3],
-        axes: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-        kind: 'R',
-    };
+/// The kind of a `CORDxR/C/S` card: 0, 1 or 2.
+fn cord_kind(c: &Card) -> i64 {
+    match c.name.chars().last() {
+        Some('C') => 1,
+        Some('S') => 2,
+        _ => 0,
+    }
+}
 
-    /// Basic position of a point given in this frame (`R`: x, y, z; `C`: r, theta deg, z; `S`:
-    /// r, theta deg from z, phi deg).
-    fn to_basic(self, c: [f64; 3]) -> [f64; 3] {
-        let local = match self.kind {
-            'C' => {
-                let t = c[1].to_radians();
-                [c[0] * t.cos(), c[0] * t.sin(), c[2]]
+/// Coordinate systems and grid positions, resolved on demand: a system may be defined relative
+/// to another, or through grids given in a third; a cycle is an error naming it.
+struct Geometry<'a> {
+    frames: HashMap<i64, CoordinateSystem>,
+    cord2: HashMap<i64, (&'a Card, i64)>,
+    cord1: Vec<(i64, [u64; 3], &'a Card)>,
+    grid_of: HashMap<u64, &'a Card>,
+    positions: HashMap<u64, [f64; 3]>,
+    stack: Vec<i64>,
+}
+
+impl Geometry<'_> {
+    /// System `cid` in basic terms (`asked_by` names the card in errors).
+    fn frame(&mut self, cid: i64, asked_by: &Card) -> Result<CoordinateSystem, IoError> {
+        if let Some(f) = self.frames.get(&cid) {
+            return Ok(f.clone());
+        }
+        if self.stack.contains(&cid) {
+            return Err(asked_by.err(format!(
+                "coordinate systems refer to each other in a cycle: {}",
+                self.stack
+                    .iter()
+                    .chain([&cid])
+                    .map(i64::to_string)
+                    .collect::<Vec<_>>()
+                    .join(" -> ")
+            )));
+        }
+        self.stack.push(cid);
+        let frame = if let Some(&(c, rid)) = self.cord2.get(&cid) {
+            let reference = self.frame(rid, c)?;
+            let mut p = [[0.0; 3]; 3];
+            for (k, point) in p.iter_mut().enumerate() {
+                for (i, v) in point.iter_mut().enumerate() {
+                    *v = c.real(2 + 3 * k + i, "point")?.unwrap_or(0.0);
+                }
+                *point = reference.point_to_global(*point);
             }
-            'S' => {
-                let (t, p) = (c[1].to_radians(), c[2].to_radians());
-                [
-                    c[0] * t.sin() * p.cos(),
-                    c[0] * t.sin() * p.sin(),
-                    c[0] * t.cos(),
-                ]
+            frame_through(cord_kind(c), p[0], p[1], p[2]).ok_or_else(|| {
+                c.err(format!(
+                    "{cid}: its points A, B, C do not define axes (coincident or collinear)"
+                ))
+            })?
+        } else if let Some(&(_, g, c)) = self.cord1.iter().find(|e| e.0 == cid) {
+            let mut pts = [[0.0; 3]; 3];
+            for (k, id) in g.iter().enumerate() {
+                pts[k] = self.position(*id, c)?;
             }
-            _ => c,
+            frame_through(cord_kind(c), pts[0], pts[1], pts[2]).ok_or_else(|| {
+                c.err(format!(
+                    "{cid}: its grids do not define axes (coincident or collinear)"
+                ))
+            })?
+        } else {
+            return Err(asked_by.err(format!(
+                "refers to coordinate system {cid}, which the deck does not define"
+            )));
         };
-        std::array::from_fn(|i| {
-            self.origin[i] + (0..3).map(|j| self.axes[i][j] * local[j]).sum::<f64>()
-        })
+        self.stack.pop();
+        self.frames.insert(cid, frame.clone());
+        Ok(frame)
     }
 
-    /// The frame through points `a` (origin), `b` (on the z axis) and `c` (in the xz plane), all
-    /// basic.
-    fn from_points(kind: char, a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> Option<Self> {
-        let sub = |p: [f64; 3], q: [f64; 3]| -> [f64; 3] { std::array::from_fn(|i| p[i] - q[i]) };
-        let cross = |p: [f64; 3], q: [f64; 3]| {
-            [
-                p[1] * q[2] - p[2] * q[1],
-                p[2] * q[0] - p[0] * q[2],
-                p[0] * q[1] - p[1] * q[0],
-            ]
-        };
-        let unit = |p: [f64; 3]| {
-            let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-            (n > 1e-300).then(|| p.map(|v| v / n))
-        };
-        let ez = unit(sub(b, a))?;
-        let ey = unit(cross(ez, sub(c, a)))?;
-        let ex = cross(ey, ez);
-        Some(Self {
-            origin: a,
-            axes: std::array::from_fn(|i| [ex[i], ey[i], ez[i]]),
-            kind,
-        })
+    /// The basic position of GRID `id`.
+    fn position(&mut self, id: u64, asked_by: &Card) -> Result<[f64; 3], IoError> {
+        if let Some(p) = self.positions.get(&id) {
+            return Ok(*p);
+        }
+        let g = *self.grid_of.get(&id).ok_or_else(|| {
+            asked_by.err(format!(
+                "refers to GRID {id}, which the deck does not define"
+            ))
+        })?;
+        let cp = g.int(1, "CP")?.unwrap_or(0);
+        let x: [f64; 3] = [
+            g.real(2, "X1")?.unwrap_or(0.0),
+            g.real(3, "X2")?.unwrap_or(0.0),
+            g.real(4, "X3")?.unwrap_or(0.0),
+        ];
+        let p = self.frame(cp, g)?.point_to_global(x);
+        self.positions.insert(id, p);
+        Ok(p)
     }
 }
 
@@ -502,17 +561,26 @@ fn parse_lines(
             });
         }
     }
-    // coordinate systems: resolve each against its reference, detecting cycles
-    let mut frames: HashMap<i64, Frame> = HashMap::new();
-    frames.insert(0, Frame::BASIC);
-    let mut cord2: HashMap<i64, (&Card, i64)> = HashMap::new();
-    let mut cord1: Vec<(i64, char, [u64; 3], &Card)> = Vec::new();
+    // coordinate systems: resolved against their references on demand, detecting cycles
+    let basic = CoordinateSystem {
+        name: "basic".into(),
+        kind: 0,
+        origin: [0.0; 3],
+        axes: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+    };
+    let mut geometry = Geometry {
+        frames: HashMap::from([(0, basic)]),
+        cord2: HashMap::new(),
+        cord1: Vec::new(),
+        grid_of: HashMap::new(),
+        positions: HashMap::new(),
+        stack: Vec::new(),
+    };
     for c in &cords {
-        let kind = c.name.chars().last().unwrap_or('R');
         if c.name.starts_with("CORD2") {
             let cid = c.id(0, "CID")? as i64;
             let rid = c.int(1, "RID")?.unwrap_or(0);
-            if cord2.insert(cid, (c, rid)).is_some() {
+            if geometry.cord2.insert(cid, (c, rid)).is_some() {
                 return Err(c.err(format!("{cid} is defined twice")));
             }
         } else {
@@ -528,158 +596,30 @@ fn parse_lines(
                     c.id(base + 2, "G2")?,
                     c.id(base + 3, "G3")?,
                 ];
-                cord1.push((cid, kind, g, c));
+                geometry.cord1.push((cid, g, c));
             }
         }
     }
-    let grid_of: HashMap<u64, &Card> = {
-        let mut m = HashMap::new();
-        for g in &grids {
-            let id = g.id(0, "ID")?;
-            if m.insert(id, *g).is_some() {
-                return Err(g.err(format!("{id} is defined twice")));
-            }
+    for g in &grids {
+        let id = g.id(0, "ID")?;
+        if geometry.grid_of.insert(id, *g).is_some() {
+            return Err(g.err(format!("{id} is defined twice")));
         }
-        m
-    };
-    // basic positions, resolved on demand (a grid may be given in a frame defined by grids)
-    fn resolve_frame(
-        cid: i64,
-        frames: &mut HashMap<i64, Frame>,
-        cord2: &HashMap<i64, (&Card, i64)>,
-        cord1: &[(i64, char, [u64; 3], &Card)],
-        grid_of: &HashMap<u64, &Card>,
-        positions: &mut HashMap<u64, [f64; 3]>,
-        stack: &mut Vec<i64>,
-        asked_by: &Card,
-    ) -> Result<Frame, IoError> {
-        if let Some(f) = frames.get(&cid) {
-            return Ok(*f);
-        }
-        if stack.contains(&cid) {
-            return Err(asked_by.err(format!(
-                "coordinate systems refer to each other in a cycle: {}",
-                stack
-                    .iter()
-                    .chain([&cid])
-                    .map(i64::to_string)
-                    .collect::<Vec<_>>()
-                    .join(" -> ")
-            )));
-        }
-        stack.push(cid);
-        let frame = if let Some((c, rid)) = cord2.get(&cid) {
-            let reference =
-                resolve_frame(*rid, frames, cord2, cord1, grid_of, positions, stack, c)?;
-            let p = |k: usize| -> Result<[f64; 3], IoError> {
-                Ok(std::array::from_fn(|i| {
-                    c.real(2 + 3 * k + i, "point").ok().flatten().unwrap_or(0.0)
-                }))
-            };
-            for k in 2..11 {
-                c.real(k, "point")?;
-            }
-            let (a, b, cc) = (p(0)?, p(1)?, p(2)?);
-            let kind = c.name.chars().last().unwrap_or('R');
-            Frame::from_points(
-                kind,
-                reference.to_basic(a),
-                reference.to_basic(b),
-                reference.to_basic(cc),
-            )
-            .ok_or_else(|| {
-                c.err(format!(
-                    "{cid}: its points A, B, C do not define axes (coincident or collinear)"
-                ))
-            })?
-        } else if let Some((_, kind, g, c)) = cord1.iter().find(|e| e.0 == cid) {
-            let mut pts = [[0.0; 3]; 3];
-            for (k, id) in g.iter().enumerate() {
-                pts[k] = grid_position(*id, frames, cord2, cord1, grid_of, positions, stack, c)?;
-            }
-            Frame::from_points(*kind, pts[0], pts[1], pts[2]).ok_or_else(|| {
-                c.err(format!(
-                    "{cid}: its grids do not define axes (coincident or collinear)"
-                ))
-            })?
-        } else {
-            return Err(asked_by.err(format!(
-                "refers to coordinate system {cid}, which the deck does not define"
-            )));
-        };
-        stack.pop();
-        frames.insert(cid, frame);
-        Ok(frame)
     }
-    #[allow(clippy::too_many_arguments)]
-    fn grid_position(
-        id: u64,
-        frames: &mut HashMap<i64, Frame>,
-        cord2: &HashMap<i64, (&Card, i64)>,
-        cord1: &[(i64, char, [u64; 3], &Card)],
-        grid_of: &HashMap<u64, &Card>,
-        positions: &mut HashMap<u64, [f64; 3]>,
-        stack: &mut Vec<i64>,
-        asked_by: &Card,
-    ) -> Result<[f64; 3], IoError> {
-        if let Some(p) = positions.get(&id) {
-            return Ok(*p);
-        }
-        let g = grid_of.get(&id).ok_or_else(|| {
-            asked_by.err(format!(
-                "refers to GRID {id}, which the deck does not define"
-            ))
-        })?;
-        let cp = g.int(1, "CP")?.unwrap_or(0);
-        let x: [f64; 3] = [
-            g.real(2, "X1")?.unwrap_or(0.0),
-            g.real(3, "X2")?.unwrap_or(0.0),
-            g.real(4, "X3")?.unwrap_or(0.0),
-        ];
-        let frame = resolve_frame(cp, frames, cord2, cord1, grid_of, positions, stack, g)?;
-        let p = frame.to_basic(x);
-        positions.insert(id, p);
-        Ok(p)
-    }
-    let mut positions: HashMap<u64, [f64; 3]> = HashMap::new();
     let mut mesh = Mesh::new();
-    let mut ids: Vec<u64> = grid_of.keys().copied().collect();
+    let mut ids: Vec<u64> = geometry.grid_of.keys().copied().collect();
     ids.sort_unstable();
     let mut turned_cd = 0;
     // grids whose displacement frame is turned from the basic one: an SPC on them constrains
     // components femu does not have
     let mut turned: HashMap<u64, i64> = HashMap::new();
     for id in &ids {
-        let mut stack = Vec::new();
-        let g = grid_of[id];
-        let p = grid_position(
-            *id,
-            &mut frames,
-            &cord2,
-            &cord1,
-            &grid_of,
-            &mut positions,
-            &mut stack,
-            g,
-        )?;
+        let g = geometry.grid_of[id];
+        let p = geometry.position(*id, g)?;
         let cd = g.int(5, "CD")?.unwrap_or(0);
         if cd != 0 {
             turned_cd += 1;
-            let f = resolve_frame(
-                cd,
-                &mut frames,
-                &cord2,
-                &cord1,
-                &grid_of,
-                &mut positions,
-                &mut stack,
-                g,
-            )?;
-            let aligned = f.kind == 'R'
-                && (0..3).all(|i| {
-                    (0..3).all(|j| (f.axes[i][j] - f64::from(u8::from(i == j))).abs() < 1e-12)
-                });
-            if !aligned {
+            if !geometry.frame(cd, g)?.is_global_orientation() {
                 turned.insert(*id, cd);
             }
         }
@@ -988,7 +928,9 @@ fn parse_lines(
                             let (a, b) = (rest[0].parse::<u64>(), rest[2].parse::<u64>());
                             match (a, b) {
                                 (Ok(a), Ok(b)) if a <= b => {
-                                    grids_here.extend((a..=b).filter(|g| grid_of.contains_key(g)));
+                                    grids_here.extend(
+                                        (a..=b).filter(|g| geometry.grid_of.contains_key(g)),
+                                    );
                                 }
                                 _ => return Err(c.err(format!("THRU range {rest:?} is invalid"))),
                             }
