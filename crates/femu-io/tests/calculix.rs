@@ -34,16 +34,12 @@ fn ccx_eigenvalues(dat: &str) -> Vec<f64> {
         .collect()
 }
 
-fn compare(cells: [usize; 3], quadratic: bool, name: &str) {
-    let spec = BoxSpec::new([0.4, 0.1, 0.05], cells, BoxCells::Hex, quadratic);
-    let mut model = Model::new(box_mesh(&spec).unwrap()).unwrap();
-    model.set_material(None, Material::steel()).unwrap();
-    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+/// CalculiX's lowest `count` eigenvalues of `model` (written by femu with a `*FREQUENCY` step).
+fn ccx_lowest(model: &Model, count: usize, name: &str) -> Vec<f64> {
     let dir = std::env::temp_dir().join(format!("femu-ccx-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let count = 6;
     write_inp(
-        &model,
+        model,
         Some(&FrequencyStep {
             count,
             shift_cycles2: None,
@@ -64,24 +60,45 @@ fn compare(cells: [usize; 3], quadratic: bool, name: &str) {
     );
     let ccx = ccx_eigenvalues(&std::fs::read_to_string(dir.join("job.dat")).unwrap());
     assert_eq!(ccx.len(), count);
+    let _ = std::fs::remove_dir_all(&dir);
+    ccx
+}
+
+/// femu's lowest `count` eigenvalues of `model` (consistent mass).
+fn femu_lowest(model: &Model, count: usize) -> Vec<f64> {
     let sys = model.assemble(MassKind::Consistent).unwrap();
-    let femu = femu_sparse::eigen::eigs(
+    femu_sparse::eigen::eigs(
         &sys.k,
         &sys.m,
         femu_sparse::eigen::Which::Lowest(count),
         &Default::default(),
     )
-    .unwrap();
+    .unwrap()
+    .values
+}
+
+/// femu against CalculiX on `model`: the 6 lowest eigenvalues to 1e-6 relative.
+fn agree(model: &Model, name: &str) -> Vec<f64> {
+    let ccx = ccx_lowest(model, 6, name);
+    let femu = femu_lowest(model, 6);
     for (j, c) in ccx.iter().enumerate() {
-        let rel = (femu.values[j] / c - 1.0).abs();
+        let rel = (femu[j] / c - 1.0).abs();
         assert!(
             rel < 1e-6,
             "{name} mode {}: femu {} ccx {c} ({rel:.1e})",
             j + 1,
-            femu.values[j]
+            femu[j]
         );
     }
-    let _ = std::fs::remove_dir_all(&dir);
+    femu
+}
+
+fn compare(cells: [usize; 3], quadratic: bool, name: &str) {
+    let spec = BoxSpec::new([0.4, 0.1, 0.05], cells, BoxCells::Hex, quadratic);
+    let mut model = Model::new(box_mesh(&spec).unwrap()).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+    agree(&model, name);
 }
 
 #[test]
@@ -130,72 +147,17 @@ fn point_masses_agree_with_calculix() {
     model.add_point_mass(tip, 2.0 * bar).unwrap();
     model.add_point_mass(s1, 0.01).unwrap();
     model.add_point_mass(s2, 0.025).unwrap();
-    let dir = std::env::temp_dir().join(format!("femu-ccx-mass-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let count = 6;
-    write_inp(
-        &model,
-        Some(&FrequencyStep {
-            count,
-            shift_cycles2: None,
-        }),
-        dir.join("job.inp"),
-    )
-    .unwrap();
-    let back = femu_io::inp::read_inp(dir.join("job.inp"))
+    let text = femu_io::inp::inp_string(&model, None).unwrap();
+    let back = femu_io::inp::parse_inp(&text, "job.inp")
         .unwrap()
         .to_model()
         .unwrap();
     assert_eq!(back.point_masses(), model.point_masses());
     assert!((back.total_mass().unwrap() / (3.0 * bar + 0.035) - 1.0).abs() < 1e-12);
-    let out = Command::new("ccx")
-        .arg("-i")
-        .arg("job")
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "ccx failed: {}",
-        String::from_utf8_lossy(&out.stdout)
-    );
-    let ccx = ccx_eigenvalues(&std::fs::read_to_string(dir.join("job.dat")).unwrap());
-    assert_eq!(ccx.len(), count);
-    let sys = model.assemble(MassKind::Consistent).unwrap();
-    let femu = femu_sparse::eigen::eigs(
-        &sys.k,
-        &sys.m,
-        femu_sparse::eigen::Which::Lowest(count),
-        &Default::default(),
-    )
-    .unwrap();
+    let femu = agree(&model, "mass");
     // the tip mass lowers the first bending frequency well below the bare bar's
-    let bare = Model::new(model.mesh().clone())
-        .map(|mut m| {
-            m.set_material(None, Material::steel()).unwrap();
-            m.fix_set("xmin", &[0, 1, 2]).unwrap();
-            m
-        })
-        .unwrap()
-        .assemble(MassKind::Consistent)
-        .unwrap();
-    let bare1 = femu_sparse::eigen::eigs(
-        &bare.k,
-        &bare.m,
-        femu_sparse::eigen::Which::Lowest(1),
-        &Default::default(),
-    )
-    .unwrap()
-    .values[0];
-    assert!(femu.values[0] < 0.5 * bare1);
-    for (j, c) in ccx.iter().enumerate() {
-        let rel = (femu.values[j] / c - 1.0).abs();
-        assert!(
-            rel < 1e-6,
-            "mode {}: femu {} ccx {c} ({rel:.1e})",
-            j + 1,
-            femu.values[j]
-        );
-    }
-    let _ = std::fs::remove_dir_all(&dir);
+    let mut bare = Model::new(model.mesh().clone()).unwrap();
+    bare.set_material(None, Material::steel()).unwrap();
+    bare.fix_set("xmin", &[0, 1, 2]).unwrap();
+    assert!(femu[0] < 0.5 * femu_lowest(&bare, 1)[0]);
 }
