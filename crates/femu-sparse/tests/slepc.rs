@@ -191,55 +191,47 @@ fn a_missing_engine_says_what_to_install() {
     if !available() {
         return;
     }
-    // MPI failing: a launcher that is not mpirun
     let sys = femu_testkit::bar([4, 1, 1], true)
         .assemble(MassKind::Consistent)
         .unwrap();
-    let params = EigenOptions {
-        engine: Engine::Slepc(SlepcOptions {
-            mpirun: "false".into(),
+    // the error of a solve with these SLEPc options
+    let error_with = |opts: SlepcOptions| {
+        let params = EigenOptions {
+            engine: Engine::Slepc(opts),
             ..Default::default()
-        }),
-        ..Default::default()
+        };
+        eigs(&sys.k, &sys.m, Which::Lowest(2), &params)
+            .unwrap_err()
+            .to_string()
     };
-    let e = eigs(&sys.k, &sys.m, Which::Lowest(2), &params)
-        .unwrap_err()
-        .to_string();
+    // MPI failing: a launcher that is not mpirun
+    let e = error_with(SlepcOptions {
+        mpirun: "false".into(),
+        ..Default::default()
+    });
     assert!(
         e.contains("SLEPc is not available: cannot run false"),
         "{e}"
     );
     // MPI failing: a hostfile that does not exist; the launcher's own message is passed on
-    let params = EigenOptions {
-        engine: Engine::Slepc(SlepcOptions {
-            hostfile: Some("/nonexistent/hosts".into()),
-            ..Default::default()
-        }),
+    let e = error_with(SlepcOptions {
+        hostfile: Some("/nonexistent/hosts".into()),
         ..Default::default()
-    };
-    let e = eigs(&sys.k, &sys.m, Which::Lowest(2), &params)
-        .unwrap_err()
-        .to_string();
+    });
     assert!(
         e.starts_with("SLEPc failed: mpirun -n 1 exited with"),
         "{e}"
     );
     // SLEPc not converging: one restart allowed
-    let params = EigenOptions {
-        engine: Engine::Slepc(SlepcOptions {
-            petsc_options: vec![
-                "-eps_max_it".into(),
-                "1".into(),
-                "-eps_ncv".into(),
-                "8".into(),
-            ],
-            ..Default::default()
-        }),
+    let e = error_with(SlepcOptions {
+        petsc_options: vec![
+            "-eps_max_it".into(),
+            "1".into(),
+            "-eps_ncv".into(),
+            "8".into(),
+        ],
         ..Default::default()
-    };
-    let e = eigs(&sys.k, &sys.m, Which::Lowest(2), &params)
-        .unwrap_err()
-        .to_string();
+    });
     assert!(
         e.contains("SLEPc converged") && e.contains("of 6 eigenpairs in 1 iterations"),
         "{e}"
