@@ -68,6 +68,14 @@ pub struct SensorLayout {
 /// Direction components below this (relative to 1) are treated as zero.
 const COMPONENT_EPS: f64 = 1e-12;
 
+/// `row[f] += v` on a sparse row of `(free DOF, weight)` pairs.
+fn add_term(row: &mut Vec<(usize, f64)>, f: usize, v: f64) {
+    match row.iter_mut().find(|(g, _)| *g == f) {
+        Some((_, acc)) => *acc += v,
+        None => row.push((f, v)),
+    }
+}
+
 impl SensorLayout {
     /// Maps `sensors` onto the free DOFs of `dofs` (numbered as the assembled `K` and `M`).
     ///
@@ -97,22 +105,24 @@ impl SensorLayout {
                             sensor: s,
                             node: sensor.node,
                         })?;
-                let node_dofs = dofs.node_dofs(node);
                 for c in 0..3 {
                     if unit[c].abs() <= COMPONENT_EPS {
                         continue;
                     }
-                    match node_dofs[c] {
-                        Some(f) => row.push((f, unit[c])),
-                        None => {
-                            return Err(CorrelateError::SensorOnConstrainedDof {
-                                sensor: s,
-                                node: sensor.node,
-                                component: c,
-                            });
-                        }
+                    // a dependent DOF reads its row of T (a rigid link's node, say)
+                    let terms = dofs.terms(node, c);
+                    if terms.is_empty() {
+                        return Err(CorrelateError::SensorOnConstrainedDof {
+                            sensor: s,
+                            node: sensor.node,
+                            component: c,
+                        });
+                    }
+                    for &(f, w) in terms {
+                        add_term(&mut row, f, w * unit[c]);
                     }
                 }
+                row.sort_by_key(|(f, _)| *f);
             } else {
                 // between nodes: fixed DOFs read zero and drop out of the row
                 for &(id, w) in &sensor.at {
@@ -129,17 +139,13 @@ impl SensorLayout {
                             direction: d,
                         });
                     }
-                    let node_dofs = dofs.node_dofs(node);
                     for c in 0..3 {
                         let v = w * unit[c];
                         if v.abs() <= COMPONENT_EPS {
                             continue;
                         }
-                        if let Some(f) = node_dofs[c] {
-                            match row.iter_mut().find(|(g, _)| *g == f) {
-                                Some((_, acc)) => *acc += v,
-                                None => row.push((f, v)),
-                            }
+                        for &(f, t) in dofs.terms(node, c) {
+                            add_term(&mut row, f, t * v);
                         }
                     }
                 }
@@ -205,14 +211,20 @@ impl SensorLayout {
         Self::new(mesh, dofs, sensors)
     }
 
-    /// Every free DOF measured, in the order of the free DOFs: the paper's full measurement set.
+    /// Every free translational DOF measured, in the order of the free DOFs: the paper's full
+    /// measurement set (the rotations of rigid links' reference nodes, which no sensor reads, are
+    /// left out).
     pub fn full(mesh: &Mesh, dofs: &DofMap) -> Self {
         let n = dofs.free_count();
         let mut sensors = Vec::with_capacity(n);
         let mut rows = Vec::with_capacity(n);
         for f in 0..n {
-            let full = dofs.full_of_free(f);
-            sensors.push(Sensor::axis(mesh.node_id(full / 3), full % 3));
+            let (p, c) = dofs.free_dof(f);
+            let (node, rotation) = dofs.point_node(p);
+            if rotation {
+                continue;
+            }
+            sensors.push(Sensor::axis(mesh.node_id(node), c));
             rows.push(vec![(f, 1.0)]);
         }
         Self {

@@ -1,6 +1,12 @@
 //! Parallel assembly of the global stiffness `K` and mass `M` on a pattern computed once.
 //!
-//! The pattern is the node graph (nodes sharing an element) expanded to the free DOFs; it is
+//! With multipoint constraints the matrices are `K_r = T^T K T`, `M_r = T^T M T` on the free DOFs
+//! (docs/MATH.md, "Multipoint constraints"): an element whose nodes have dependent DOFs is
+//! scattered through their rows of `T`, so it reaches the points those rows name (its *effective
+//! points*); the pattern and the colouring use the effective points, so the reduced matrices are
+//! assembled directly, in parallel, on a pattern computed once (no unreduced `K` is formed).
+//!
+//! The pattern is the point graph (points sharing an element) expanded to the free DOFs; it is
 //! stored in compressed sparse column form with both triangles, rows sorted. Elements are
 //! coloured so that no two elements of a colour share a node; the elements of one colour are
 //! computed and scattered in parallel (rayon), each writing only to the columns of its own nodes,
@@ -30,7 +36,8 @@ pub enum MassKind {
 pub struct SystemMatrices {
     /// Stiffness `K` (N/m), symmetric, both triangles stored.
     pub k: SparseMatrix,
-    /// Mass `M` (kg): on the stiffness pattern (consistent) or diagonal (lumped).
+    /// Mass `M` (kg): on the stiffness pattern (consistent, or lumped with multipoint
+    /// constraints, whose `T^T M T` is not diagonal) or diagonal (lumped).
     pub m: SparseMatrix,
     /// The DOF map the matrices are numbered by.
     pub dofs: DofMap,
@@ -62,6 +69,22 @@ pub struct Assembler {
     colors: Vec<Vec<usize>>,
 }
 
+/// The points an element on `nodes` reaches through `T`: its nodes and the points of the rows of
+/// their dependent DOFs, sorted, without repeats (appended to `out` after clearing it).
+fn effective_points(dofs: &DofMap, nodes: &[usize], out: &mut Vec<usize>) {
+    out.clear();
+    out.extend_from_slice(nodes);
+    for &n in nodes {
+        if dofs.has_dependent(n) {
+            for c in 0..3 {
+                out.extend(dofs.terms(n, c).iter().map(|(f, _)| dofs.free_dof(*f).0));
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+}
+
 fn bad_jacobian(id: u64) -> impl Fn(BadJacobian) -> FemError {
     move |b| FemError::InvertedElement {
         element: id,
@@ -77,15 +100,48 @@ impl Assembler {
     /// [`FemError::NoFreeDofs`] when nothing is free.
     pub fn new(model: &Model) -> Result<Self, FemError> {
         let mesh = model.mesh();
-        let dofs = model.dof_map();
+        let dofs = model.dof_map()?;
         if dofs.free_count() == 0 {
             return Err(FemError::NoFreeDofs);
         }
-        let nn = mesh.node_count();
-        // node -> elements
+        let nn = dofs.point_count();
+        let ne_count = mesh.element_count();
+        // effective points of elements, and of point masses on nodes with dependent DOFs (these
+        // need the pattern only: they are added serially)
+        let (mut eff_ptr, mut eff) = (Vec::new(), Vec::new());
+        let mut extra: Vec<Vec<usize>> = Vec::new();
+        if dofs.has_dependents() {
+            eff_ptr.push(0);
+            let mut buf = Vec::new();
+            for el in mesh.elements() {
+                effective_points(&dofs, el.nodes, &mut buf);
+                eff.extend_from_slice(&buf);
+                eff_ptr.push(eff.len());
+            }
+            for p in model.point_masses() {
+                effective_points(&dofs, &[p.node], &mut buf);
+                extra.push(buf.clone());
+            }
+        }
+        let points_of = |e: usize| -> &[usize] {
+            if eff_ptr.is_empty() {
+                mesh.element(e).nodes
+            } else {
+                &eff[eff_ptr[e]..eff_ptr[e + 1]]
+            }
+        };
+        // point -> items (elements, then the extra point-mass sets)
+        let item_points = |i: usize| -> &[usize] {
+            if i < ne_count {
+                points_of(i)
+            } else {
+                &extra[i - ne_count]
+            }
+        };
+        let items = ne_count + extra.len();
         let mut ne_ptr = vec![0usize; nn + 1];
-        for el in mesh.elements() {
-            for n in el.nodes {
+        for i in 0..items {
+            for n in item_points(i) {
                 ne_ptr[n + 1] += 1;
             }
         }
@@ -94,19 +150,19 @@ impl Assembler {
         }
         let mut ne = vec![0usize; ne_ptr[nn]];
         let mut fill = ne_ptr.clone();
-        for el in mesh.elements() {
-            for n in el.nodes {
-                ne[fill[*n]] = el.index;
+        for i in 0..items {
+            for n in item_points(i) {
+                ne[fill[*n]] = i;
                 fill[*n] += 1;
             }
         }
-        // node graph, sorted neighbour lists (each node is its own neighbour)
+        // point graph, sorted neighbour lists (each point is its own neighbour)
         let lists: Vec<Vec<usize>> = (0..nn)
             .into_par_iter()
             .map(|b| {
                 let mut v: Vec<usize> = vec![b];
                 for e in &ne[ne_ptr[b]..ne_ptr[b + 1]] {
-                    v.extend_from_slice(mesh.element(*e).nodes);
+                    v.extend_from_slice(item_points(*e));
                 }
                 v.sort_unstable();
                 v.dedup();
@@ -138,28 +194,31 @@ impl Assembler {
                 col_ptr.push(row_idx.len());
             }
         }
-        // greedy colouring: no two elements of a colour share a node
-        let mut color_of = vec![usize::MAX; mesh.element_count()];
+        // greedy colouring: no two elements of a colour share an effective point
+        let mut color_of = vec![usize::MAX; ne_count];
         let mut stamp: Vec<usize> = Vec::new();
         let mut colors: Vec<Vec<usize>> = Vec::new();
-        for el in mesh.elements() {
-            for n in el.nodes {
+        for e in 0..ne_count {
+            for n in points_of(e) {
                 for other in &ne[ne_ptr[*n]..ne_ptr[*n + 1]] {
+                    if *other >= ne_count {
+                        continue;
+                    }
                     let c = color_of[*other];
                     if c != usize::MAX {
-                        stamp[c] = el.index + 1;
+                        stamp[c] = e + 1;
                     }
                 }
             }
             let c = (0..colors.len())
-                .find(|c| stamp[*c] != el.index + 1)
+                .find(|c| stamp[*c] != e + 1)
                 .unwrap_or_else(|| {
                     colors.push(Vec::new());
                     stamp.push(0);
                     colors.len() - 1
                 });
-            color_of[el.index] = c;
-            colors[c].push(el.index);
+            color_of[e] = c;
+            colors[c].push(e);
         }
         Ok(Self {
             dofs,
@@ -170,6 +229,48 @@ impl Assembler {
             row_idx,
             colors,
         })
+    }
+
+    /// Whether the lumped mass is stored on the stiffness pattern: with dependent DOFs, whose
+    /// `T^T M T` couples the DOFs a dependent one is made of.
+    pub fn lumped_on_pattern(&self) -> bool {
+        self.dofs.has_dependents()
+    }
+
+    /// Position of entry `(r, c)` in the pattern's values.
+    fn position(&self, r: usize, c: usize) -> usize {
+        let (lo, hi) = (self.col_ptr[c], self.col_ptr[c + 1]);
+        match self.row_idx[lo..hi].binary_search(&r) {
+            Ok(k) => lo + k,
+            Err(_) => unreachable!("rows reached through T are in the pattern"),
+        }
+    }
+
+    /// Calls `add(position, value)` for a node-diagonal (lumped) element mass: `ml[a]` on the
+    /// three translations of `nodes[a]`, through `T` when the pattern holds the lumped mass.
+    pub(crate) fn scatter_lumped(
+        &self,
+        nodes: &[usize],
+        ml: impl Fn(usize, usize) -> f64,
+        mut add: impl FnMut(usize, f64),
+    ) {
+        for (a, &n) in nodes.iter().enumerate() {
+            for i in 0..3 {
+                let v = ml(a, i);
+                if !self.lumped_on_pattern() {
+                    if let Some(f) = self.dofs.free_index(n, i) {
+                        add(f, v);
+                    }
+                    continue;
+                }
+                let t = self.dofs.terms(n, i);
+                for (s, ws) in t {
+                    for (r, wr) in t {
+                        add(self.position(*r, *s), wr * ws * v);
+                    }
+                }
+            }
+        }
     }
 
     /// The DOF map of the pattern.
@@ -187,12 +288,33 @@ impl Assembler {
         &self.colors
     }
 
-    /// Calls `add(position, local)` for every entry `(3a+i, 3b+j)` of an element matrix whose row
-    /// and column DOFs are free: `position` indexes the values of the stiffness pattern, `local`
-    /// the row-major element matrix. One walk serves `K_e` and `M_e` together.
+    /// Calls `add(position, local, weight)` for every entry `(3a+i, 3b+j)` of an element matrix
+    /// on `nodes`: `position` indexes the values of the stiffness pattern, `local` the row-major
+    /// element matrix, `weight` the product of the two DOFs' weights in `T` (1 for free DOFs;
+    /// fixed DOFs are skipped). One walk serves `K_e` and `M_e` together.
     #[inline]
-    pub(crate) fn scatter(&self, nodes: &[usize], mut add: impl FnMut(usize, usize)) {
+    pub(crate) fn scatter(&self, nodes: &[usize], mut add: impl FnMut(usize, usize, f64)) {
         let nd = 3 * nodes.len();
+        if self.dofs.has_dependents() && nodes.iter().any(|n| self.dofs.has_dependent(*n)) {
+            for (lb, &nb) in nodes.iter().enumerate() {
+                for j in 0..3 {
+                    for (s, ws) in self.dofs.terms(nb, j) {
+                        for (la, &na) in nodes.iter().enumerate() {
+                            for i in 0..3 {
+                                for (r, wr) in self.dofs.terms(na, i) {
+                                    add(
+                                        self.position(*r, *s),
+                                        (3 * la + i) * nd + 3 * lb + j,
+                                        wr * ws,
+                                    );
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            return;
+        }
         for (lb, &nb) in nodes.iter().enumerate() {
             let db = self.dofs.node_dofs(nb);
             let (lo, hi) = (self.nbr_ptr[nb], self.nbr_ptr[nb + 1]);
@@ -209,7 +331,7 @@ impl Assembler {
                     let mut rank = 0;
                     for (i, ri) in da.iter().enumerate() {
                         if ri.is_some() {
-                            add(start + rank, (3 * la + i) * nd + 3 * lb + j);
+                            add(start + rank, (3 * la + i) * nd + 3 * lb + j, 1.0);
                             rank += 1;
                         }
                     }
@@ -238,8 +360,8 @@ impl Assembler {
     pub fn assemble(&self, model: &Model, mass: MassKind) -> Result<SystemMatrices, FemError> {
         let n = self.dofs.free_count();
         let m = match mass {
-            MassKind::Consistent => self.pattern_matrix(vec![0.0; self.nnz()]),
-            MassKind::Lumped => self.diagonal_matrix(vec![0.0; n]),
+            MassKind::Lumped if !self.lumped_on_pattern() => self.diagonal_matrix(vec![0.0; n]),
+            _ => self.pattern_matrix(vec![0.0; self.nnz()]),
         };
         let mut sys = SystemMatrices {
             k: self.pattern_matrix(vec![0.0; self.nnz()]),
@@ -260,15 +382,16 @@ impl Assembler {
         ASSEMBLIES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let mesh = model.mesh();
         let n = self.dofs.free_count();
-        if model.dof_map() != self.dofs || sys.dofs != self.dofs {
+        let model_dofs = model.dof_map()?;
+        if model_dofs != self.dofs || sys.dofs != self.dofs {
             return Err(FemError::LengthMismatch {
                 what: "model DOFs against the assembler's",
                 expected: n,
-                got: model.dof_map().free_count(),
+                got: model_dofs.free_count(),
             });
         }
         let mass = sys.mass_kind;
-        let m_len = if mass == MassKind::Consistent {
+        let m_len = if mass == MassKind::Consistent || self.lumped_on_pattern() {
             self.nnz()
         } else {
             n
@@ -311,21 +434,18 @@ impl Assembler {
                             buf.me.resize(nd * nd, 0.0);
                             kernel::element_mass(el.kind, &buf.x, *rho, &mut buf.me)
                                 .map_err(bad_jacobian(el.id))?;
-                            self.scatter(el.nodes, |p, l| {
-                                ks.add(p, buf.ke[l]);
-                                ms.add(p, buf.me[l]);
+                            self.scatter(el.nodes, |p, l, w| {
+                                ks.add(p, w * buf.ke[l]);
+                                ms.add(p, w * buf.me[l]);
                             });
                         }
                         MassKind::Lumped => {
-                            self.scatter(el.nodes, |p, l| ks.add(p, buf.ke[l]));
+                            self.scatter(el.nodes, |p, l, w| ks.add(p, w * buf.ke[l]));
                             buf.ml.resize(el.kind.num_nodes(), 0.0);
                             kernel::lumped_mass(el.kind, &buf.x, *rho, &mut buf.ml)
                                 .map_err(bad_jacobian(el.id))?;
-                            for (a, node) in el.nodes.iter().enumerate() {
-                                for f in self.dofs.node_dofs(*node).iter().flatten() {
-                                    ms.add(*f, buf.ml[a]);
-                                }
-                            }
+                            let ml = &buf.ml;
+                            self.scatter_lumped(el.nodes, |a, _| ml[a], |p, v| ms.add(p, v));
                         }
                     }
                     Ok(())
@@ -338,14 +458,10 @@ impl Assembler {
             match mass {
                 MassKind::Consistent => {
                     let local: Vec<f64> = p.mass.iter().flatten().copied().collect();
-                    self.scatter(&[p.node], |at, l| ms.add(at, local[l]));
+                    self.scatter(&[p.node], |at, l, w| ms.add(at, w * local[l]));
                 }
                 MassKind::Lumped => {
-                    for (c, f) in self.dofs.node_dofs(p.node).iter().enumerate() {
-                        if let Some(f) = f {
-                            ms.add(*f, p.mass[c][c]);
-                        }
-                    }
+                    self.scatter_lumped(&[p.node], |_, c| p.mass[c][c], |at, v| ms.add(at, v));
                 }
             }
         }

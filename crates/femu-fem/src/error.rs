@@ -145,6 +145,16 @@ pub enum FemError {
         /// What is wrong.
         reason: String,
     },
+    /// A multipoint constraint that cannot be applied: a DOF made dependent twice or also fixed, a
+    /// cycle of dependencies, a term on a missing DOF (`label` names the card or keyword, its id
+    /// and where it was read).
+    #[error("constraint {label}: {reason}")]
+    Constraint {
+        /// The constraint: card or keyword, id, file and line.
+        label: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// A test wireframe that cannot be aligned onto the model.
     #[error("alignment: {reason}")]
     Alignment {

@@ -178,23 +178,32 @@ impl ParameterGroups {
         }
         let group = self.check_group(g)?;
         let mesh = model.mesh();
-        let mut dofs = Vec::with_capacity(60);
+        let dm = asm.dofs();
+        // y += alpha T_e^T A_e T_e x: gather the element's DOFs through T, multiply, scatter back
+        let mut xe = Vec::with_capacity(60);
         for &e in &group.elements {
             let nodes = mesh.element(e).nodes;
-            dofs.clear();
-            dofs.extend(nodes.iter().flat_map(|nd| asm.dofs().node_dofs(*nd)));
+            xe.clear();
+            xe.extend(nodes.iter().flat_map(|nd| {
+                (0..3).map(|c| dm.terms(*nd, c).iter().map(|(f, w)| w * x[*f]).sum::<f64>())
+            }));
             let (ke, me) = self.element_slices(e);
             let a = if mass { me } else { ke };
-            let nd = dofs.len();
-            for (r, dr) in dofs.iter().enumerate() {
-                let Some(dr) = dr else { continue };
+            let nd = xe.len();
+            for (r, nd_r) in nodes
+                .iter()
+                .flat_map(|n| (0..3).map(move |c| (*n, c)))
+                .enumerate()
+            {
+                let t = dm.terms(nd_r.0, nd_r.1);
+                if t.is_empty() {
+                    continue;
+                }
                 let row = &a[r * nd..(r + 1) * nd];
-                let s: f64 = row
-                    .iter()
-                    .zip(&dofs)
-                    .filter_map(|(v, dc)| dc.map(|c| v * x[c]))
-                    .sum();
-                y[*dr] += alpha * s;
+                let s: f64 = row.iter().zip(&xe).map(|(v, xv)| v * xv).sum();
+                for (f, w) in t {
+                    y[*f] += alpha * w * s;
+                }
             }
         }
         Ok(())
@@ -285,24 +294,22 @@ impl ParameterGroups {
                 let (ke, me) = self.element_slices(e);
                 if p[g] != 0.0 {
                     let kd = out.k.data_mut();
-                    asm.scatter(nodes, |i, l| kd[i] += p[g] * ke[l]);
+                    asm.scatter(nodes, |i, l, w| kd[i] += p[g] * w * ke[l]);
                 }
                 if q[g] != 0.0 {
                     match self.mass_kind {
                         MassKind::Consistent => {
                             let md = out.m.data_mut();
-                            asm.scatter(nodes, |i, l| md[i] += q[g] * me[l]);
+                            asm.scatter(nodes, |i, l, w| md[i] += q[g] * w * me[l]);
                         }
                         MassKind::Lumped => {
                             let nd = 3 * nodes.len();
                             let md = out.m.data_mut();
-                            for (a, node) in nodes.iter().enumerate() {
-                                for (i, f) in asm.dofs().node_dofs(*node).iter().enumerate() {
-                                    if let Some(f) = f {
-                                        md[*f] += q[g] * me[(3 * a + i) * nd + 3 * a + i];
-                                    }
-                                }
-                            }
+                            asm.scatter_lumped(
+                                nodes,
+                                |a, i| me[(3 * a + i) * nd + 3 * a + i],
+                                |f, v| md[f] += q[g] * v,
+                            );
                         }
                     }
                 }
@@ -365,7 +372,7 @@ impl ParameterGroups {
             .elements
             .iter()
             .flat_map(|&e| model.mesh().element(e).nodes.iter())
-            .flat_map(|nd| asm.dofs().node_dofs(*nd).into_iter().flatten())
+            .flat_map(|nd| (0..3).flat_map(move |c| asm.dofs().terms(*nd, c).iter().map(|t| t.0)))
             .collect();
         dofs.sort_unstable();
         dofs.dedup();
@@ -391,7 +398,7 @@ impl ParameterGroups {
         let mut v = vec![0.0; asm.nnz()];
         for &e in &group.elements {
             let ke = self.element_slices(e).0;
-            asm.scatter(model.mesh().element(e).nodes, |i, l| v[i] += ke[l]);
+            asm.scatter(model.mesh().element(e).nodes, |i, l, w| v[i] += w * ke[l]);
         }
         Ok(asm.pattern_matrix(v))
     }

@@ -1,8 +1,10 @@
-//! A model: a mesh, materials assigned to element sets, fixed DOFs and point masses.
+//! A model: a mesh, materials assigned to element sets, fixed DOFs, point masses and multipoint
+//! constraints (rigid links, weighted averages, linear equations; docs/MATH.md, "Multipoint
+//! constraints").
 
 use crate::FemError;
 use crate::assembly::{Assembler, MassKind, SystemMatrices};
-use crate::dof::DofMap;
+use crate::dof::{DofMap, LinearConstraint};
 use crate::material::Material;
 use crate::mesh::Mesh;
 use std::collections::BTreeSet;
@@ -15,6 +17,8 @@ pub struct Model {
     element_material: Vec<Option<usize>>,
     fixed: BTreeSet<(usize, usize)>,
     point_masses: Vec<PointMass>,
+    rotation_nodes: Vec<usize>,
+    constraints: Vec<LinearConstraint>,
 }
 
 /// A concentrated mass on a node: sensors, shakers, attached equipment.
@@ -46,6 +50,8 @@ impl Model {
             element_material: vec![None; n],
             fixed: BTreeSet::new(),
             point_masses: Vec::new(),
+            rotation_nodes: Vec::new(),
+            constraints: Vec::new(),
         })
     }
 
@@ -108,6 +114,32 @@ impl Model {
             })
             .collect::<Result<Vec<_>, _>>()?;
         self.fix_indices(&nodes, components)
+    }
+
+    /// Fixes rotations (components 3, 4, 5 about x, y, z) of a node that carries them (a rigid
+    /// link's reference node), as well as translations (0, 1, 2).
+    ///
+    /// # Errors
+    /// [`FemError::UnknownNode`]; [`FemError::InvalidComponent`] for a rotation of a node without
+    /// rotations.
+    pub fn fix_node_dofs(&mut self, node_id: u64, components: &[usize]) -> Result<(), FemError> {
+        let n = self.node(node_id)?;
+        for &c in components {
+            if c > 5 || (c > 2 && !self.rotation_nodes.contains(&n)) {
+                return Err(FemError::InvalidComponent {
+                    node: node_id,
+                    component: c,
+                });
+            }
+            self.fixed.insert((n, c));
+        }
+        Ok(())
+    }
+
+    fn node(&self, id: u64) -> Result<usize, FemError> {
+        self.mesh
+            .node_index(id)
+            .ok_or(FemError::UnknownNode { node: id })
     }
 
     fn fix_indices(&mut self, nodes: &[usize], components: &[usize]) -> Result<(), FemError> {
@@ -192,9 +224,360 @@ impl Model {
         &self.point_masses
     }
 
-    /// The DOF map of the current constraints.
-    pub fn dof_map(&self) -> DofMap {
-        DofMap::new(self.mesh.node_count(), self.fixed.iter().copied())
+    /// Gives node `node_id` three rotational DOFs (about x, y, z, radians; components 3, 4, 5),
+    /// which only multipoint constraints connect (solid elements have none): a rigid link's
+    /// reference node. Idempotent.
+    ///
+    /// # Errors
+    /// [`FemError::UnknownNode`].
+    pub fn add_rotations(&mut self, node_id: u64) -> Result<(), FemError> {
+        let n = self.node(node_id)?;
+        if !self.rotation_nodes.contains(&n) {
+            self.rotation_nodes.push(n);
+        }
+        Ok(())
+    }
+
+    /// The nodes with rotational DOFs (internal indices).
+    pub fn rotation_nodes(&self) -> &[usize] {
+        &self.rotation_nodes
+    }
+
+    /// Adds a linear multipoint constraint `u_dependent = sum_i w_i u_i` between DOFs given as
+    /// `(node id, component)`, components 0-2 translations, 3-5 rotations of nodes with
+    /// rotations. `label` says where it comes from (card, id, file and line) for error messages.
+    /// Conflicts (a DOF dependent twice or also fixed, cycles) are found by [`Model::dof_map`].
+    ///
+    /// # Errors
+    /// [`FemError::UnknownNode`]; [`FemError::Constraint`] for a component out of range, a
+    /// rotation of a node without rotations or a weight that is not finite.
+    pub fn add_constraint(
+        &mut self,
+        dependent: (u64, usize),
+        terms: &[((u64, usize), f64)],
+        label: &str,
+    ) -> Result<(), FemError> {
+        let dof = |(id, c): (u64, usize)| -> Result<(usize, usize), FemError> {
+            let n = self.node(id)?;
+            if c > 5 || (c > 2 && !self.rotation_nodes.contains(&n)) {
+                return Err(FemError::Constraint {
+                    label: label.into(),
+                    reason: format!(
+                        "node {id} has no DOF {} (solid nodes have translations 1-3 only; rotations belong to a rigid link's reference node)",
+                        c + 1
+                    ),
+                });
+            }
+            Ok((n, c))
+        };
+        let dependent = dof(dependent)?;
+        let mut t = Vec::with_capacity(terms.len());
+        for &(d, w) in terms {
+            if !w.is_finite() {
+                return Err(FemError::Constraint {
+                    label: label.into(),
+                    reason: format!("the weight of node {} DOF {} is {w}", d.0, d.1 + 1),
+                });
+            }
+            t.push((dof(d)?, w));
+        }
+        self.constraints.push(LinearConstraint {
+            dependent,
+            terms: t,
+            label: label.into(),
+        });
+        Ok(())
+    }
+
+    /// A rigid link (Nastran RBE2, Abaqus/CalculiX kinematic coupling): the listed translation
+    /// `components` (0, 1, 2) of every node in `nodes` follow the rigid motion of `reference`,
+    /// `u_m = u_r + theta_r x (x_m - x_r)`. The reference gets rotations ([`Model::add_rotations`]);
+    /// rotation directions that no linked node feels (all nodes on one line through the reference,
+    /// or on the reference itself) are fixed by [`Model::dof_map`], having neither stiffness nor
+    /// mass. A node listed twice, or the reference among the nodes, is skipped.
+    ///
+    /// # Errors
+    /// [`FemError::UnknownNode`]; [`FemError::Constraint`] for a component outside 0..3.
+    pub fn add_rigid_link(
+        &mut self,
+        reference: u64,
+        nodes: &[u64],
+        components: &[usize],
+        label: &str,
+    ) -> Result<(), FemError> {
+        if let Some(c) = components.iter().find(|c| **c > 2) {
+            return Err(FemError::Constraint {
+                label: label.into(),
+                reason: format!(
+                    "component {} of the linked nodes: solid nodes have translations 1-3 only",
+                    c + 1
+                ),
+            });
+        }
+        let r = self.node(reference)?;
+        self.add_rotations(reference)?;
+        let xr = self.mesh.coords()[r];
+        let mut seen = BTreeSet::new();
+        for &id in nodes {
+            let m = self.node(id)?;
+            if m == r || !seen.insert(m) {
+                continue;
+            }
+            let x = self.mesh.coords()[m];
+            let d = [x[0] - xr[0], x[1] - xr[1], x[2] - xr[2]];
+            // (theta x d)_c as coefficients of theta_x, theta_y, theta_z
+            let rot = [[0.0, d[2], -d[1]], [-d[2], 0.0, d[0]], [d[1], -d[0], 0.0]];
+            for &c in components {
+                let mut terms = vec![((reference, c), 1.0)];
+                for (j, w) in rot[c].iter().enumerate() {
+                    if *w != 0.0 {
+                        terms.push(((reference, 3 + j), *w));
+                    }
+                }
+                self.add_constraint((id, c), &terms, label)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// A weighted-average link (Nastran RBE3, Abaqus/CalculiX distributing coupling): the listed
+    /// `components` (0-2 translations; 3-5 rotations if the reference has them) of `reference`
+    /// follow the rigid motion fitted by weighted least squares to the translations of the
+    /// `nodes` (`(id, weight)`): with `x_c` the weighted centroid and `r_i = x_i - x_c`,
+    /// `t = sum w_i u_i / sum w_i`, `theta = A^+ sum w_i r_i x u_i` with
+    /// `A = sum w_i (|r_i|^2 I - r_i r_i^T)`, and `u_ref = t + theta x (x_ref - x_c)`
+    /// (docs/MATH.md). At the centroid it is the weighted average; a rigid motion of the nodes
+    /// moves the reference with it. Only the reference is constrained: the nodes keep their
+    /// stiffness and gain none.
+    ///
+    /// # Errors
+    /// [`FemError::UnknownNode`]; [`FemError::Constraint`] for no nodes, a weight that is not
+    /// positive and finite, or a component out of range.
+    pub fn add_weighted_average(
+        &mut self,
+        reference: u64,
+        components: &[usize],
+        nodes: &[(u64, f64)],
+        label: &str,
+    ) -> Result<(), FemError> {
+        let bad = |reason: String| FemError::Constraint {
+            label: label.into(),
+            reason,
+        };
+        let r = self.node(reference)?;
+        let mut idx = Vec::with_capacity(nodes.len());
+        for &(id, w) in nodes {
+            if !(w.is_finite() && w > 0.0) {
+                return Err(bad(format!(
+                    "node {id} has weight {w}: weights must be positive"
+                )));
+            }
+            let m = self.node(id)?;
+            if m == r {
+                return Err(bad(format!(
+                    "the reference node {reference} is also one of the averaged nodes"
+                )));
+            }
+            idx.push((id, m, w));
+        }
+        if idx.is_empty() {
+            return Err(bad("no nodes to average".into()));
+        }
+        let coords = self.mesh.coords();
+        let wsum: f64 = idx.iter().map(|p| p.2).sum();
+        let mut xc = [0.0; 3];
+        for &(_, m, w) in &idx {
+            for i in 0..3 {
+                xc[i] += w * coords[m][i] / wsum;
+            }
+        }
+        let rel: Vec<[f64; 3]> = idx
+            .iter()
+            .map(|&(_, m, _)| std::array::from_fn(|i| coords[m][i] - xc[i]))
+            .collect();
+        let mut a = nalgebra::Matrix3::<f64>::zeros();
+        for (&(_, _, w), ri) in idx.iter().zip(&rel) {
+            let v = nalgebra::Vector3::from(*ri);
+            a += w * (nalgebra::Matrix3::identity() * v.dot(&v) - v * v.transpose());
+        }
+        // pseudo-inverse: rotations about a line through collinear nodes are not determined
+        let eig = a.symmetric_eigen();
+        let top = eig.eigenvalues.max().max(0.0);
+        let mut a_pinv = nalgebra::Matrix3::<f64>::zeros();
+        for k in 0..3 {
+            let l = eig.eigenvalues[k];
+            if l > 1e-12 * top && top > 0.0 {
+                let v = eig.eigenvectors.column(k);
+                a_pinv += (v * v.transpose()) / l;
+            }
+        }
+        let skew = |v: &[f64; 3]| {
+            nalgebra::Matrix3::new(0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0)
+        };
+        let xr = coords[r];
+        let d = [xr[0] - xc[0], xr[1] - xc[1], xr[2] - xc[2]];
+        // theta = sum_i w_i A^+ S(r_i) u_i; u_ref = t - S(d) theta
+        let sd = skew(&d);
+        let blocks: Vec<(nalgebra::Matrix3<f64>, nalgebra::Matrix3<f64>)> = idx
+            .iter()
+            .zip(&rel)
+            .map(|(&(_, _, w), ri)| {
+                let th = w * a_pinv * skew(ri);
+                (nalgebra::Matrix3::identity() * (w / wsum) - sd * th, th)
+            })
+            .collect();
+        let scale = blocks
+            .iter()
+            .flat_map(|(b, _)| b.iter())
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        for &c in components {
+            if c > 5 || (c > 2 && !self.rotation_nodes.contains(&r)) {
+                return Err(bad(format!(
+                    "node {reference} has no DOF {} to make dependent",
+                    c + 1
+                )));
+            }
+            let mut terms = Vec::new();
+            for ((id, _, _), (bt, bth)) in idx.iter().zip(&blocks) {
+                let row = if c < 3 { bt.row(c) } else { bth.row(c - 3) };
+                for j in 0..3 {
+                    if row[j].abs() > 1e-14 * scale {
+                        terms.push(((*id, j), row[j]));
+                    }
+                }
+            }
+            self.add_constraint((reference, c), &terms, label)?;
+        }
+        Ok(())
+    }
+
+    /// The multipoint constraints as given (internal node indices).
+    pub fn constraints(&self) -> &[LinearConstraint] {
+        &self.constraints
+    }
+
+    /// Whether node `n` (internal index) appears in a multipoint constraint.
+    pub fn constrained_nodes(&self) -> Vec<bool> {
+        let mut v = vec![false; self.mesh.node_count()];
+        for c in &self.constraints {
+            v[c.dependent.0] = true;
+            for ((n, _), _) in &c.terms {
+                v[*n] = true;
+            }
+        }
+        v
+    }
+
+    /// The DOF map of the current boundary conditions and multipoint constraints.
+    ///
+    /// Rotations of a reference node that no constraint term reaches (a rigid link to nodes on
+    /// one line through it) have neither stiffness nor mass: they are fixed here (every other
+    /// direction is kept).
+    ///
+    /// # Errors
+    /// [`FemError::Constraint`]: a DOF dependent twice or also fixed, a cycle of dependencies.
+    pub fn dof_map(&self) -> Result<DofMap, FemError> {
+        let mut fixed: Vec<(usize, usize)> = self.fixed.iter().copied().collect();
+        fixed.extend(self.unreached_rotations());
+        let mut cons = self.constraints.clone();
+        cons.extend(self.null_rotation_constraints());
+        DofMap::with_constraints(
+            self.mesh.node_count(),
+            fixed,
+            &self.rotation_nodes,
+            &cons,
+            |n| self.mesh.node_id(n),
+        )
+    }
+
+    /// Per rotation node, the Gram matrix of the rotation coefficients of the constraints that use
+    /// its rotations as terms, when all three rotations are free and independent.
+    fn rotation_grams(&self) -> Vec<(usize, nalgebra::Matrix3<f64>)> {
+        let mut out = Vec::new();
+        for &n in &self.rotation_nodes {
+            let busy = (3..6).any(|c| {
+                self.fixed.contains(&(n, c))
+                    || self.constraints.iter().any(|k| k.dependent == (n, c))
+            });
+            if busy {
+                continue;
+            }
+            let mut g = nalgebra::Matrix3::<f64>::zeros();
+            for k in &self.constraints {
+                let mut a = nalgebra::Vector3::<f64>::zeros();
+                for ((m, c), w) in &k.terms {
+                    if *m == n && *c >= 3 {
+                        a[*c - 3] += w;
+                    }
+                }
+                g += a * a.transpose();
+            }
+            out.push((n, g));
+        }
+        out
+    }
+
+    /// The rotation directions nobody reaches: `(node, component)` to fix when the whole node's
+    /// rotations are unreached, else nothing (partial null spaces become constraints).
+    fn unreached_rotations(&self) -> Vec<(usize, usize)> {
+        self.rotation_grams()
+            .into_iter()
+            .filter(|(_, g)| g.iter().all(|v| *v == 0.0))
+            .flat_map(|(n, _)| [(n, 3), (n, 4), (n, 5)])
+            .collect()
+    }
+
+    /// For rotation nodes whose Gram matrix is singular but not zero: `v . theta = 0` for every
+    /// null direction `v`, solved for the largest component of an echelon form.
+    fn null_rotation_constraints(&self) -> Vec<LinearConstraint> {
+        let mut out = Vec::new();
+        for (n, g) in self.rotation_grams() {
+            let top = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if top == 0.0 {
+                continue;
+            }
+            let eig = g.symmetric_eigen();
+            let mut null: Vec<nalgebra::Vector3<f64>> = (0..3)
+                .filter(|k| eig.eigenvalues[*k] <= 1e-10 * top)
+                .map(|k| eig.eigenvectors.column(k).into_owned())
+                .collect();
+            // echelon form: each null vector eliminates one pivot component from the others
+            let mut used = [false; 3];
+            for i in 0..null.len() {
+                let Some(p) = (0..3)
+                    .filter(|c| !used[*c])
+                    .max_by(|a, b| null[i][*a].abs().total_cmp(&null[i][*b].abs()))
+                else {
+                    break;
+                };
+                used[p] = true;
+                let v = null[i] / null[i][p];
+                for (j, w) in null.iter_mut().enumerate() {
+                    if j != i {
+                        *w -= v * w[p];
+                    }
+                }
+                null[i] = v;
+            }
+            for v in &null {
+                let Some(p) = (0..3).find(|c| (v[*c] - 1.0).abs() < 1e-12 && used[*c]) else {
+                    continue;
+                };
+                let terms = (0..3)
+                    .filter(|c| *c != p && v[*c] != 0.0 && !used[*c])
+                    .map(|c| ((n, 3 + c), -v[c]))
+                    .collect();
+                out.push(LinearConstraint {
+                    dependent: (n, 3 + p),
+                    terms,
+                    label: format!(
+                        "(rotation of node {} that no linked node feels, eliminated)",
+                        self.mesh.node_id(n)
+                    ),
+                });
+            }
+        }
+        out
     }
 
     /// Total mass `sum_e rho_e V_e` plus the point masses (kg; a point mass counts the mean of

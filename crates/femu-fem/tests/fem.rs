@@ -4,6 +4,7 @@ mod fem {
     mod align;
     mod assembly;
     pub mod common;
+    mod constraints;
     mod convergence;
     mod elements;
     mod locate;

@@ -38,7 +38,7 @@ fn main() {
     for (name, model, realm, noises) in cases {
         for &noise in noises {
             let (test, sensors) = real::measure(&realm, &theta, &model, 10, noise, noise / 10.0, 7);
-            let dofs = model.dof_map();
+            let dofs = model.dof_map().unwrap();
             let layout = SensorLayout::new(model.mesh(), &dofs, sensors).unwrap();
             for (method, shapes, all) in [
                 (UpdateMethod::SbEbe, false, false),

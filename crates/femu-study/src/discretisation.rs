@@ -95,7 +95,7 @@ pub fn estimate(
     let reference = ModeSet::from_modes(&reference);
     // pair on the original nodes (the model's DOFs and the reference's, same ids), triaxial
     let nodes: Vec<u64> = (0..mesh.node_count()).map(|i| mesh.node_id(i)).collect();
-    let model_dofs = model.dof_map();
+    let model_dofs = model.dof_map()?;
     let sensors: Vec<Sensor> = nodes
         .iter()
         .flat_map(|id| (0..3).map(move |c| Sensor::axis(*id, c)))

@@ -75,7 +75,7 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
         let _ = writeln!(
             s,
             "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",
-            model.dof_map().free_count()
+            model.dof_map()?.free_count()
         );
     } else if has_extension(path, &["bdf", "dat", "nas"]) {
         let deck = femu_io::nastran::read_bdf(path, &femu_io::nastran::BdfOptions::default())?;
@@ -105,7 +105,7 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
         let _ = writeln!(
             s,
             "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",
-            model.dof_map().free_count()
+            model.dof_map()?.free_count()
         );
     } else if has_extension(path, &["msh"]) {
         let g = femu_io::gmsh::read_msh(path)?;

@@ -23,7 +23,7 @@ fn truth() -> Vec<f64> {
 
 fn run(model: &Model, realm: &Model, noise: f64, method: UpdateMethod, all: bool) -> UpdateStudy {
     let (test, sensors) = real::measure(realm, &truth(), model, 10, noise, noise / 10.0, 7);
-    let layout = SensorLayout::new(model.mesh(), &model.dof_map(), sensors).unwrap();
+    let layout = SensorLayout::new(model.mesh(), &model.dof_map().unwrap(), sensors).unwrap();
     let names = real::regions();
     let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
     let options = UpdateStudyOptions {
@@ -192,7 +192,7 @@ fn locked_model_is_said_and_never_agrees() {
 fn a_correction_away_from_the_evidence_compensates() {
     let model = real::plate([20, 7, 2], false);
     let (test, sensors) = real::measure(&model, &truth(), &model, 10, 0.0, 0.0, 7);
-    let dofs = model.dof_map();
+    let dofs = model.dof_map().unwrap();
     let layout = SensorLayout::new(model.mesh(), &dofs, sensors).unwrap();
     let names = real::regions();
     let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();

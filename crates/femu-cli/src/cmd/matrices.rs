@@ -45,12 +45,17 @@ pub fn run(a: &MatricesArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliE
     femu::sparse::mtx::write_matrix_market(&m, &sys.m, true)?;
     let mut csv = String::from("row,node,component\n");
     for f in 0..sys.dofs.free_count() {
-        let full = sys.dofs.full_of_free(f);
+        let (p, c) = sys.dofs.free_dof(f);
+        let (node, rotation) = sys.dofs.point_node(p);
         csv.push_str(&format!(
             "{},{},{}\n",
             f + 1,
-            loaded.model.mesh().node_id(full / 3),
-            ["x", "y", "z"][full % 3]
+            loaded.model.mesh().node_id(node),
+            if rotation {
+                ["rx", "ry", "rz"][c]
+            } else {
+                ["x", "y", "z"][c]
+            }
         ));
     }
     std::fs::write(&d, csv).map_err(|e| StudyError::file(&d, e))?;
