@@ -8,12 +8,17 @@
 //!
 //! Cards read: `GRID` (with its `CP` frame), `CORD2R/C/S` and `CORD1R/C/S`, `CHEXA` (8/20),
 //! `CPENTA` (6/15), `CTETRA` (4/10), `PSOLID`, `MAT1` (two of `E`, `G`, `NU`), `MAT9`, `SPC`, `SPC1`,
-//! `SPCADD`, `CONM2` (its mass; the node has no rotations, so offset and rotational inertia are
-//! reported and dropped), `EIGRL` and `PARAM,WTMASS`. Cards that cannot change `K` and `M`
-//! (output requests, loads, other parameters) are warnings, once per card name. Cards that would
-//! change them and that femu cannot model (shells, bars, springs, rigid links, other materials,
-//! pyramids) are an error that counts them by kind; [`BdfOptions::lenient`] reads the rest with a
-//! warning that the model is then incomplete.
+//! `SPCADD` (components 4-6 on rigid links' reference grids, the only grids with rotations),
+//! `CONM2` (its mass; femu's point masses act on translations, so offset and rotational inertia
+//! are reported and dropped), `RBE2` (a rigid link: its reference grid gets rotations, the
+//! translations of the dependent grids follow its rigid motion; components 4-6 of solid grids have
+//! nothing to act on), `RBE3` (the reference follows the weighted least-squares rigid motion of
+//! its grids, docs/MATH.md "Multipoint constraints"; weight groups on components 123), `EIGRL` and
+//! `PARAM,WTMASS`. Cards that cannot change `K` and `M` (output requests, loads, other
+//! parameters) are warnings, once per card name. Cards that would change them and that femu cannot
+//! model (shells, bars, springs, RBAR and MPC, other materials, pyramids) are an error that counts
+//! them by kind; [`BdfOptions::lenient`] reads the rest with a warning that the model is then
+//! incomplete.
 
 use crate::uff::CoordinateSystem;
 use crate::{IoError, Warning};
@@ -149,8 +154,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("CONM1", "general mass matrices"),
     ("CMASS1", "scalar masses"),
     ("CMASS2", "scalar masses"),
-    ("RBE2", "rigid links"),
-    ("RBE3", "interpolation links"),
     ("RBAR", "rigid links"),
     ("MPC", "multipoint constraints"),
     ("MPCADD", "multipoint constraints"),
@@ -467,6 +470,7 @@ fn parse_lines(
     let mut mat1: HashMap<u64, &Card> = HashMap::new();
     let mut spcs: Vec<&Card> = Vec::new();
     let mut conm2: Vec<&Card> = Vec::new();
+    let mut links: Vec<&Card> = Vec::new();
     let mut wtmass = 1.0;
     let mut eigrl = None;
     for c in &cards {
@@ -489,6 +493,7 @@ fn parse_lines(
             }
             "SPC" | "SPC1" | "SPCADD" => spcs.push(c),
             "CONM2" => conm2.push(c),
+            "RBE2" | "RBE3" => links.push(c),
             "PARAM" if c.field(0).eq_ignore_ascii_case("WTMASS") => {
                 wtmass = c
                     .real(1, "WTMASS")?
@@ -542,7 +547,7 @@ fn parse_lines(
             .min_by_key(|c| c.line)
             .expect("non-empty");
         let text = format!(
-            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10) with MAT1 or MAT9, CONM2 point masses and SPC constraints",
+            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10) with MAT1 or MAT9, CONM2 point masses, RBE2 and RBE3 links and SPC constraints",
             list.join(", ")
         );
         if options.lenient {
@@ -806,6 +811,7 @@ fn parse_lines(
                 source,
             })?;
     }
+    read_links(&links, &mut model, &turned, &mut warnings)?;
     // constraints: the case control's SPC set, or the only one a bulk-only file has
     let mut sets: BTreeMap<i64, Vec<&Card>> = BTreeMap::new();
     for c in &spcs {
@@ -870,19 +876,27 @@ fn parse_lines(
                     let mut out = Vec::new();
                     for ch in t.chars() {
                         match ch {
-                            '1' | '2' | '3' => out.push(ch as usize - '1' as usize),
-                            '4' | '5' | '6' | '0' => {}
+                            '1'..='6' => out.push(ch as usize - '1' as usize),
+                            '0' => {}
                             _ => return Err(c.err(format!("component {t:?} is not a list of 1-6"))),
                         }
                     }
                     Ok(out)
                 };
                 let mut fix = |c: &Card, g: u64, comps: &[usize]| -> Result<(), IoError> {
-                    if model.mesh().node_index(g).is_none() {
+                    let Some(gi) = model.mesh().node_index(g) else {
                         return Err(c.err(format!(
                             "constrains GRID {g}, which the deck does not define"
                         )));
-                    }
+                    };
+                    // rotations exist only on rigid links' reference grids
+                    let has_rotations = model.rotation_nodes().contains(&gi);
+                    let comps: Vec<usize> = comps
+                        .iter()
+                        .copied()
+                        .filter(|k| *k < 3 || has_rotations)
+                        .collect();
+                    let comps = comps.as_slice();
                     if let Some(cd) = turned.get(&g).filter(|_| comps.len() < 3) {
                         return Err(c.err(format!(
                             "constrains components {:?} of GRID {g} in its displacement frame {cd}, which is turned from the basic frame: femu constrains basic components only (a constraint in a turned frame needs a multipoint constraint, not read yet)",
@@ -890,7 +904,7 @@ fn parse_lines(
                         )));
                     }
                     model
-                        .fix_nodes(&[g], comps)
+                        .fix_node_dofs(g, comps)
                         .map_err(|source| IoError::Model {
                             path: c.path.clone(),
                             line: c.line,
@@ -976,8 +990,9 @@ fn parse_lines(
             ),
         );
     }
-    // point masses, on grids the solids connect (a mass on a free grid would have no stiffness)
-    let mut connected = vec![false; model.mesh().node_count()];
+    // point masses, on grids the solids or the links connect (a mass on a free grid would have
+    // no stiffness)
+    let mut connected = model.constrained_nodes();
     for el in model.mesh().elements() {
         for n in el.nodes {
             connected[*n] = true;
@@ -994,7 +1009,7 @@ fn parse_lines(
         };
         if !connected[gi] {
             let text = format!(
-                "{} is on GRID {g}, which no solid element connects (a rigid link to it is not modelled): it would have no stiffness",
+                "{} is on GRID {g}, which no solid element or rigid link connects: it would have no stiffness",
                 c.field(0)
             );
             if options.lenient {
@@ -1010,7 +1025,7 @@ fn parse_lines(
                 &mut warnings,
                 c,
                 format!(
-                    "{}: the grid has no rotations, so its {} dropped (the translational mass is kept)",
+                    "{}: femu's point masses act on translations, so its {} dropped (the translational mass is kept)",
                     c.field(0),
                     match (offset, inertia) {
                         (true, true) => "offset and rotational inertia are",
@@ -1028,9 +1043,194 @@ fn parse_lines(
                 source,
             })?;
     }
+    // conflicts between links and constraints, found now rather than at the first solve
+    model.dof_map().map_err(|source| IoError::Content {
+        path: path.to_path_buf(),
+        reason: source.to_string(),
+    })?;
     Ok(BdfDeck {
         model,
         eigrl,
         warnings,
     })
+}
+
+/// Components `1-6` of a field as 0-based indices.
+fn components(c: &Card, i: usize, what: &str) -> Result<Vec<usize>, IoError> {
+    let t = c.field(i);
+    let mut out = Vec::new();
+    for ch in t.chars() {
+        match ch {
+            '1'..='6' => {
+                let k = ch as usize - '1' as usize;
+                if !out.contains(&k) {
+                    out.push(k);
+                }
+            }
+            _ => {
+                return Err(c.err(format!(
+                    "field {} ({what}): {t:?} is not a list of components 1-6",
+                    i + 2
+                )));
+            }
+        }
+    }
+    if out.is_empty() {
+        return Err(c.err(format!("field {} ({what}) is missing", i + 2)));
+    }
+    Ok(out)
+}
+
+/// RBE2 (rigid links) and RBE3 (weighted averages) into the model's multipoint constraints
+/// (docs/MATH.md, "Multipoint constraints"). Reference grids of RBE2 get rotations first, so that
+/// RBE2 chains, RBE3 references with rotational components and SPCs on 4-6 find them.
+fn read_links(
+    links: &[&Card],
+    model: &mut Model,
+    turned: &HashMap<u64, i64>,
+    warnings: &mut Vec<Warning>,
+) -> Result<(), IoError> {
+    let located = |c: &Card| {
+        let c = c.clone();
+        move |source| IoError::Model {
+            path: c.path.clone(),
+            line: c.line,
+            source,
+        }
+    };
+    let grid = |model: &Model, c: &Card, g: u64| -> Result<usize, IoError> {
+        model.mesh().node_index(g).ok_or_else(|| {
+            c.err(format!(
+                "{} names GRID {g}, which the deck does not define",
+                c.field(0)
+            ))
+        })
+    };
+    for c in links.iter().filter(|c| c.name == "RBE2") {
+        let gn = c.id(1, "GN")?;
+        grid(model, c, gn)?;
+        model.add_rotations(gn).map_err(located(c))?;
+    }
+    let mut noted_rotations = false;
+    for c in links {
+        let eid = c.id(0, "EID")?;
+        let label = format!("{} {eid} ({} line {})", c.name, c.path.display(), c.line);
+        if c.name == "RBE2" {
+            let gn = c.id(1, "GN")?;
+            let cm = components(c, 2, "CM")?;
+            let mut gm = Vec::new();
+            for t in c.fields[3..].iter().map(|s| s.trim()) {
+                if t.is_empty() {
+                    continue;
+                }
+                // the optional ALPHA (and TREF) after the grids are reals
+                if t.contains('.') || t.contains(['E', 'e']) {
+                    break;
+                }
+                let g =
+                    t.parse::<u64>().ok().filter(|g| *g > 0).ok_or_else(|| {
+                        c.err(format!("{eid}: dependent grid {t:?} is not an id"))
+                    })?;
+                grid(model, c, g)?;
+                gm.push(g);
+            }
+            if gm.is_empty() {
+                return Err(c.err(format!("{eid} has no dependent grids (GMi)")));
+            }
+            let trans: Vec<usize> = cm.iter().copied().filter(|k| *k < 3).collect();
+            if trans.len() < 3
+                && let Some(g) = gm.iter().find(|g| turned.contains_key(g))
+            {
+                return Err(c.err(format!(
+                    "{eid}: components {} of GRID {g} are in its displacement frame {}, which is turned: femu links partial components in the basic frame only",
+                    c.field(2),
+                    turned[g]
+                )));
+            }
+            model
+                .add_rigid_link(gn, &gm, &trans, &label)
+                .map_err(located(c))?;
+            // rotations of dependents that carry them (another link's reference) follow GN's
+            let rot: Vec<usize> = cm.iter().copied().filter(|k| *k >= 3).collect();
+            for &g in &gm {
+                let gi = grid(model, c, g)?;
+                if model.rotation_nodes().contains(&gi) {
+                    for &k in &rot {
+                        model
+                            .add_constraint((g, k), &[((gn, k), 1.0)], &label)
+                            .map_err(located(c))?;
+                    }
+                } else if !rot.is_empty() && !noted_rotations {
+                    noted_rotations = true;
+                    warnings.push(Warning {
+                        path: c.path.clone(),
+                        line: c.line,
+                        message: format!(
+                            "RBE2 {eid}: components 4-6 of solid grids are ignored (they have no rotations; the rigid link acts on their translations)"
+                        ),
+                    });
+                }
+            }
+        } else {
+            // RBE3 EID, blank, REFGRID, REFC, then groups WTi Ci Gi,j ..., then UM / ALPHA
+            let refgrid = c.id(2, "REFGRID")?;
+            let refi = grid(model, c, refgrid)?;
+            let refc = components(c, 3, "REFC")?;
+            let mut nodes: Vec<(u64, f64)> = Vec::new();
+            let mut k = 4;
+            while k < c.fields.len() {
+                let t = c.field(k).to_ascii_uppercase();
+                if t.is_empty() {
+                    k += 1;
+                    continue;
+                }
+                if t == "UM" {
+                    return Err(c.err(format!(
+                        "{eid}: UM (other dependent DOFs) is not supported; femu makes REFGRID's REFC dependent"
+                    )));
+                }
+                if t == "ALPHA" || t == "TREF" {
+                    break;
+                }
+                let w = c.real(k, "WT")?.filter(|w| *w > 0.0).ok_or_else(|| {
+                    c.err(format!(
+                        "{eid}: field {} should be a positive weight WTi, got {t:?}",
+                        k + 2
+                    ))
+                })?;
+                let ci = components(c, k + 1, "Ci")?;
+                if !(0..3).all(|j| ci.contains(&j)) {
+                    return Err(c.err(format!(
+                        "{eid}: components {} of a weight group: femu averages all three translations (C = 123 or 123456)",
+                        c.field(k + 1)
+                    )));
+                }
+                k += 2;
+                let before = nodes.len();
+                while k < c.fields.len() {
+                    let t = c.field(k);
+                    if t.is_empty() {
+                        k += 1;
+                        continue;
+                    }
+                    if t.contains('.') || t.chars().any(|ch| ch.is_ascii_alphabetic()) {
+                        break;
+                    }
+                    let g = c.id(k, "Gi,j")?;
+                    grid(model, c, g)?;
+                    nodes.push((g, w));
+                    k += 1;
+                }
+                if nodes.len() == before {
+                    return Err(c.err(format!("{eid}: weight {w} has no grids")));
+                }
+            }
+            let has_rot = model.rotation_nodes().contains(&refi);
+            let comps: Vec<usize> = refc.iter().copied().filter(|k| *k < 3 || has_rot).collect();
+            model
+                .add_weighted_average(refgrid, &comps, &nodes, &label)
+                .map_err(located(c))?;
+        }
+    }
+    Ok(())
 }

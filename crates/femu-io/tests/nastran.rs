@@ -250,7 +250,7 @@ fn frames_constraints_and_masses() {
     assert!(
         deck.warnings.iter().any(|w| w
             .message
-            .contains("the grid has no rotations, so its offset is dropped")),
+            .contains("point masses act on translations, so its offset is dropped")),
         "{:?}",
         deck.warnings
     );
@@ -304,8 +304,8 @@ fn bad_decks_name_the_card_and_line() {
             "SPC set 300 is selected but no SPC, SPC1 or SPCADD defines it",
         ),
         (
-            base.replace("PARAM    WTMASS  1.", "CQUAD4   2       1       1       2       3       4\nRBE2     3       7       123     6\nCQUAD4   4       1       5       6       7       8\nPARAM    WTMASS  1."),
-            "cube.bdf:23: the deck has cards that change the stiffness or the mass and that femu cannot model: 1 rigid links (RBE2), 2 shells (CQUAD4)",
+            base.replace("PARAM    WTMASS  1.", "CQUAD4   2       1       1       2       3       4\nRBAR     3       7       6       123456\nCQUAD4   4       1       5       6       7       8\nPARAM    WTMASS  1."),
+            "cube.bdf:23: the deck has cards that change the stiffness or the mass and that femu cannot model: 1 rigid links (RBAR), 2 shells (CQUAD4)",
         ),
     ];
     for (text, want) in cases {
@@ -468,4 +468,96 @@ fn mat9_in_nastran_order() {
         .replace(&g[15..].join(","), &swapped[15..].join(","));
     let w = parse_bdf(&wrong, "m9.bdf", &BdfOptions::default()).unwrap();
     assert!(max_diff(&w.model.assemble(MassKind::Consistent).unwrap().k, &b.k) > 1e-3);
+}
+
+/// The cube with a rigid link (RBE2, CM 123456, its reference carrying a CONM2) from the top face
+/// to a grid above it, and an RBE3 averaging the top face into a grid beside it (free field,
+/// continuation): the deck gives the K and M of the same links made through femu's API, and bad
+/// links are errors naming the card, its id and line.
+#[test]
+fn rigid_and_interpolation_links() {
+    let base = CUBE.replace("1.41421356237309590.      0.", "1.41421 45.     0.");
+    let links = "GRID,20,,0.5,0.5,2.0\nGRID,21,,0.5,0.5,1.0\nRBE2,30,20,123456,5,6,7,8,1.-5\nCONM2,31,20,,4.\nRBE3,40,,21,123,1.0,123,5,6\n,2.,123456,7,8\nPARAM    WTMASS  1.";
+    let text = base.replace("PARAM    WTMASS  1.", links);
+    let deck = parse_bdf(&text, "cube.bdf", &BdfOptions::default()).unwrap();
+    let k = deck.model.assemble(MassKind::Consistent).unwrap();
+    // the same through the API
+    let plain = parse_bdf(
+        &base.replace(
+            "PARAM    WTMASS  1.",
+            "GRID,20,,0.5,0.5,2.0\nGRID,21,,0.5,0.5,1.0\nPARAM    WTMASS  1.",
+        ),
+        "cube.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    let mut model = plain.model.clone();
+    model
+        .add_rigid_link(20, &[5, 6, 7, 8], &[0, 1, 2], "RBE2 30")
+        .unwrap();
+    model.add_point_mass(20, 4.0).unwrap();
+    model
+        .add_weighted_average(
+            21,
+            &[0, 1, 2],
+            &[(5, 1.0), (6, 1.0), (7, 2.0), (8, 2.0)],
+            "RBE3 40",
+        )
+        .unwrap();
+    let want = model.assemble(MassKind::Consistent).unwrap();
+    assert_eq!(k.dofs.free_count(), want.dofs.free_count());
+    assert!(max_diff(&k.k, &want.k) < 1e-15 * 2.1e11);
+    assert!(max_diff(&k.m, &want.m) < 1e-15 * 7850.0);
+    // the reference of the RBE3 is dependent in all three translations
+    let i21 = deck.model.mesh().node_index(21).unwrap();
+    assert!((0..3).all(|c| k.dofs.is_dependent(i21, c)));
+    // rotations of GN exist and an SPC on 456 of GN fixes them
+    let fixed_top = text.replace(
+        "SPC1     100     123     1       THRU    4",
+        "SPC1     100     123     1       THRU    4\nSPC1     100     456     20",
+    );
+    let d = parse_bdf(&fixed_top, "cube.bdf", &BdfOptions::default()).unwrap();
+    assert_eq!(
+        d.model
+            .assemble(MassKind::Consistent)
+            .unwrap()
+            .dofs
+            .free_count(),
+        k.dofs.free_count() - 3
+    );
+    let bad: Vec<(String, &str)> = vec![
+        (
+            text.replace("RBE2,30,20,123456,5,6,7,8", "RBE2,30,20,123456,5,6,7,88"),
+            "cube.bdf:25: RBE2 30 names GRID 88, which the deck does not define",
+        ),
+        (
+            text.replace("CONM2,31,20,,4.", "CONM2,31,20,,4.\nRBE2,32,21,1,8"),
+            "constraint RBE2 32 (cube.bdf line 27): its dependent DOF, node 8 x, is already dependent in RBE2 30 (cube.bdf line 25)",
+        ),
+        (
+            text.replace(
+                "SPC1     100     123     1       THRU    4",
+                "SPC1     100     123     1       THRU    4\nSPC1     100     3       7",
+            ),
+            "constraint RBE2 30 (cube.bdf line 26): its dependent DOF, node 7 z, is also fixed",
+        ),
+        (
+            text.replace(",2.,123456,7,8", ",2.,123456,7,8,UM,21,3"),
+            "cube.bdf:27: RBE3 40: UM (other dependent DOFs) is not supported",
+        ),
+        (
+            text.replace("RBE3,40,,21,123,1.0,123,5,6", "RBE3,40,,21,123,1.0,12,5,6"),
+            "cube.bdf:27: RBE3 40: components 12 of a weight group",
+        ),
+        (
+            text.replace("CONM2,31,20,,4.", "CONM2,31,20,,4.\nRBE2,33,5,123,20"),
+            "form a cycle",
+        ),
+    ];
+    for (t, want) in bad {
+        let e = parse_bdf(&t, "cube.bdf", &BdfOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(want), "want {want:?}\n got {e}");
+    }
 }

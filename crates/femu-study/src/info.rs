@@ -84,9 +84,10 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
         mesh_lines(&mut s, model.mesh());
         let _ = writeln!(
             s,
-            "point masses (CONM2): {}; constrained DOFs (SPC): {}",
+            "point masses (CONM2): {}; constrained DOFs (SPC): {}; dependent DOFs of links (RBE2, RBE3): {}",
             model.point_masses().len(),
-            model.fixed_dofs().count()
+            model.fixed_dofs().count(),
+            model.constraints().len()
         );
         if let Some((v1, v2, nd)) = deck.eigrl {
             let _ = writeln!(

@@ -196,15 +196,16 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
     })
 }
 
-/// Nodes that belong to no element have no stiffness and no mass: left free they make `K` and `M`
-/// singular. As CalculiX does, they are left out (their DOFs are fixed), with a warning naming them.
+/// Nodes that belong to no element and no multipoint constraint have no stiffness and no mass:
+/// left free they make `K` and `M` singular. As CalculiX does, they are left out (their DOFs are fixed), with a warning naming them.
 fn leave_out_orphans(
     model: &mut Model,
     path: &Path,
     warnings: &mut Vec<String>,
 ) -> Result<(), StudyError> {
     let mesh = model.mesh();
-    let mut used = vec![false; mesh.node_count()];
+    // a node in a multipoint constraint is connected through it (a rigid link's reference)
+    let mut used = model.constrained_nodes();
     for el in mesh.elements() {
         for n in el.nodes {
             used[*n] = true;
