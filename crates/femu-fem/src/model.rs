@@ -477,10 +477,11 @@ impl Model {
     /// # Errors
     /// [`FemError::Constraint`]: a DOF dependent twice or also fixed, a cycle of dependencies.
     pub fn dof_map(&self) -> Result<DofMap, FemError> {
+        let (more_fixed, more_constraints) = self.rotation_closure();
         let mut fixed: Vec<(usize, usize)> = self.fixed.iter().copied().collect();
-        fixed.extend(self.unreached_rotations());
+        fixed.extend(more_fixed);
         let mut cons = self.constraints.clone();
-        cons.extend(self.null_rotation_constraints());
+        cons.extend(more_constraints);
         DofMap::with_constraints(
             self.mesh.node_count(),
             fixed,
@@ -488,6 +489,13 @@ impl Model {
             &cons,
             |n| self.mesh.node_id(n),
         )
+    }
+
+    /// What [`Model::dof_map`] adds for reference rotations that no linked node feels: the
+    /// rotations to fix (nothing reaches the node's rotations) and the constraints `v . theta = 0`
+    /// (some directions are reached), so that writers can state the same model.
+    pub fn rotation_closure(&self) -> (Vec<(usize, usize)>, Vec<LinearConstraint>) {
+        (self.unreached_rotations(), self.null_rotation_constraints())
     }
 
     /// Per rotation node, the Gram matrix of the rotation coefficients of the constraints that use

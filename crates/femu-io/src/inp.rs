@@ -4,8 +4,15 @@
 //! Supported keywords: `*HEADING`, `*NODE`, `*ELEMENT` (C3D4, C3D10, C3D8, C3D20, C3D6, C3D15; the
 //! reduced-integration C3D8R and C3D20R are read as full integration, with a warning), `*NSET`,
 //! `*ELSET` (lists of ids or set names, or `GENERATE`), `*MATERIAL`, `*ELASTIC` (isotropic),
-//! `*DENSITY`, `*SOLID SECTION`, `*BOUNDARY` (DOFs 1-3, zero values), `*INCLUDE`, `*STEP`,
-//! `*FREQUENCY`, `*END STEP`.
+//! `*DENSITY`, `*SOLID SECTION`, `*BOUNDARY` (DOFs 1-3, and 4-6 on coupling reference nodes;
+//! zero values), `*ELEMENT, TYPE=MASS` with `*MASS`, `*EQUATION` (node ids; the first term's DOF
+//! is dependent), `*KINEMATIC COUPLING` and `*COUPLING` with `*KINEMATIC` (rigid links: the
+//! reference node gets rotations) or `*DISTRIBUTING` (weighted averages, with the weights of a
+//! `*SURFACE, TYPE=NODE`), `*INCLUDE`, `*STEP`, `*FREQUENCY`, `*END STEP` (docs/MATH.md,
+//! "Multipoint constraints").
+//!
+//! The writer states multipoint constraints as `*EQUATION`s; the rotations of a rigid link's
+//! reference are the DOFs 1-3 of an extra node (set `FEMU_ROT`), as CalculiX's rotational nodes.
 //!
 //! The deck is checked as strictly as CalculiX and Abaqus check it, so that a typo never changes
 //! the model silently:
@@ -13,8 +20,8 @@
 //!   GENERTE`) is an error naming the nearest known spelling;
 //! - a keyword that cannot change `K` or `M` (output requests, loads, amplitudes, other steps) is
 //!   skipped with a warning;
-//! - a keyword that would change `K` or `M` and that femu cannot model (shells, beams, point masses,
-//!   springs, constraint equations, couplings, parts and instances, other materials) is an error;
+//! - a keyword that would change `K` or `M` and that femu cannot model (shells, beams, springs,
+//!   `*RIGID BODY`, `*TIE`, parts and instances, other materials) is an error;
 //! - any other keyword is unknown: an error naming the nearest known spelling (`*BOUNDRY`: did you
 //!   mean `*BOUNDARY`?), or a warning with [`InpOptions::lenient`].
 //!
@@ -72,6 +79,15 @@ const READ: &[(&str, &[&str])] = &[
         ],
     ),
     ("INCLUDE", &["INPUT"]),
+    ("EQUATION", &[]),
+    ("KINEMATIC COUPLING", &["REF NODE"]),
+    (
+        "COUPLING",
+        &["REF NODE", "SURFACE", "CONSTRAINT NAME", "INFLUENCE RADIUS"],
+    ),
+    ("KINEMATIC", &[]),
+    ("DISTRIBUTING", &["WEIGHTING METHOD"]),
+    ("SURFACE", &["NAME", "TYPE"]),
     (
         "STEP",
         &[
@@ -160,13 +176,14 @@ const UNSUPPORTED: &[(&str, &str)] = &[
         "BEAM GENERAL SECTION",
         "beam elements are not supported (solids only)",
     ),
-    ("COUPLING", "couplings are not supported yet"),
     (
         "CONTACT PAIR",
         "contact changes the stiffness and is not supported",
     ),
-    ("DISTRIBUTING COUPLING", "couplings are not supported yet"),
-    ("EQUATION", "constraint equations are not supported yet"),
+    (
+        "DISTRIBUTING COUPLING",
+        "element-based distributing coupling is not supported (use *COUPLING with *DISTRIBUTING)",
+    ),
     ("GAP", "gap elements are not supported"),
     (
         "HYPERELASTIC",
@@ -176,7 +193,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
         "INSTANCE",
         "part/instance input: flatten the deck (nodes and elements at the top level)",
     ),
-    ("KINEMATIC COUPLING", "couplings are not supported yet"),
     (
         "MEMBRANE SECTION",
         "membrane elements are not supported (solids only)",
@@ -317,6 +333,51 @@ pub struct Section {
     pub line: Location,
 }
 
+/// The nodes of a coupling: data-line targets, or a node-based `*SURFACE` by name.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LinkNodes {
+    /// Nodes and node sets.
+    Targets(Vec<Target>),
+    /// A `*SURFACE, TYPE=NODE` (upper-case name), whose lines may give weights.
+    Surface(String),
+}
+
+/// A multipoint constraint of the deck (docs/MATH.md, "Multipoint constraints").
+#[derive(Debug, Clone, PartialEq)]
+pub enum LinkKind {
+    /// `*EQUATION`: `sum_k a_k u_k = 0` over `(node, DOF 1-6, a_k)`; the first DOF is dependent.
+    Equation(Vec<(u64, usize, f64)>),
+    /// `*KINEMATIC COUPLING` or `*COUPLING` with `*KINEMATIC`: the DOFs (1-6; none listed = all)
+    /// of the nodes follow the reference node rigidly.
+    Kinematic {
+        /// Reference node id.
+        reference: u64,
+        /// The coupled nodes.
+        nodes: LinkNodes,
+        /// DOFs 1-6 (empty: all).
+        dofs: Vec<usize>,
+    },
+    /// `*COUPLING` with `*DISTRIBUTING`: the reference's DOFs follow the weighted least-squares
+    /// rigid motion of the nodes.
+    Distributing {
+        /// Reference node id.
+        reference: u64,
+        /// The surface's nodes and weights.
+        nodes: LinkNodes,
+        /// DOFs 1-6 (empty: all).
+        dofs: Vec<usize>,
+    },
+}
+
+/// A constraint and where it was defined.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InpLink {
+    /// What it is.
+    pub kind: LinkKind,
+    /// Its keyword line.
+    pub line: Location,
+}
+
 /// A `*MASS` card: the mass of every MASS element of a set.
 #[derive(Debug, Clone, PartialEq)]
 struct MassCard {
@@ -347,6 +408,10 @@ pub struct InpDeck {
     pub boundaries: Vec<Boundary>,
     /// Point masses: node id, mass (kg) and the `*MASS` that gave it.
     pub point_masses: Vec<(u64, f64, Location)>,
+    /// Multipoint constraints in file order.
+    pub links: Vec<InpLink>,
+    /// Node-based surfaces by upper-case name: targets and weights.
+    pub surfaces: BTreeMap<String, Vec<(Target, f64)>>,
     /// The frequency step, if any.
     pub frequency: Option<FrequencyStep>,
     /// Non-fatal findings.
@@ -435,6 +500,28 @@ fn keyword(line: &str) -> (String, HashMap<String, String>) {
         };
     }
     (name, params)
+}
+
+/// DOFs `first..=last` (1-6; `last` defaults to `first`), or all six when neither is given.
+fn dof_range(first: Option<&str>, last: Option<&str>) -> Result<Vec<usize>, String> {
+    let parse = |v: &str| {
+        v.parse::<usize>()
+            .ok()
+            .filter(|d| (1..=6).contains(d))
+            .ok_or_else(|| format!("DOF {v:?} is not 1-6"))
+    };
+    let first = match first.filter(|v| !v.is_empty()) {
+        Some(v) => parse(v)?,
+        None => return Ok((1..=6).collect()),
+    };
+    let last = match last.filter(|v| !v.is_empty()) {
+        Some(v) => parse(v)?,
+        None => first,
+    };
+    if last < first {
+        return Err(format!("DOF range {first}..{last} is empty"));
+    }
+    Ok((first..=last).collect())
 }
 
 fn fields(line: &str) -> Vec<&str> {
@@ -547,6 +634,12 @@ fn parse_collecting(
     let mut sections = Vec::new();
     let mut boundaries = Vec::new();
     let mut frequency = None;
+    let mut links: Vec<InpLink> = Vec::new();
+    let mut surfaces: BTreeMap<String, Vec<(Target, f64)>> = BTreeMap::new();
+    let mut surface_now: Option<String> = None;
+    let mut coupling_now: Option<(u64, String)> = None;
+    // an *EQUATION being read: number of terms, terms so far, keyword line
+    let mut equation: Option<(usize, Vec<(u64, usize, f64)>, Location)> = None;
     let mut block = String::new();
     let mut block_params: HashMap<String, String> = HashMap::new();
     let mut element_kind_now: Option<(ElementKind, usize)> = None;
@@ -593,6 +686,19 @@ fn parse_collecting(
                     "element definition cut short by a keyword".into(),
                 ));
             }
+            if let Some((n, terms, at)) = &equation
+                && terms.len() < *n
+            {
+                return Err(IoError::Parse {
+                    path: at.path.clone(),
+                    line: at.line,
+                    reason: format!(
+                        "*EQUATION announces {n} terms and gives {} before the next keyword",
+                        terms.len()
+                    ),
+                });
+            }
+            equation = None;
             seen_keyword = true;
             let (name, params) = keyword(t);
             let mut sorted: Vec<(String, String)> = params.clone().into_iter().collect();
@@ -614,6 +720,73 @@ fn parse_collecting(
             mass_block = None;
             match name.as_str() {
                 "HEADING" | "END STEP" | "STEP" => {}
+                "KINEMATIC COUPLING" | "COUPLING" => {
+                    let reference = params
+                        .get("REF NODE")
+                        .and_then(|v| v.parse::<u64>().ok())
+                        .ok_or_else(|| err(l, format!("*{name} needs REF NODE=<node id>")))?;
+                    coupling_now = None;
+                    if name == "COUPLING" {
+                        let surface = params.get("SURFACE").ok_or_else(|| {
+                            err(l, "*COUPLING needs SURFACE=<node-based surface>".into())
+                        })?;
+                        coupling_now = Some((reference, surface.to_ascii_uppercase()));
+                    }
+                }
+                "KINEMATIC" | "DISTRIBUTING" => {
+                    let (reference, surface) = coupling_now
+                        .clone()
+                        .ok_or_else(|| err(l, format!("*{name} without a *COUPLING before it")))?;
+                    if name == "DISTRIBUTING"
+                        && params
+                            .get("WEIGHTING METHOD")
+                            .is_some_and(|w| !w.eq_ignore_ascii_case("UNIFORM"))
+                    {
+                        return Err(err(
+                            l,
+                            "*DISTRIBUTING: femu weights by the surface's node weights (WEIGHTING METHOD=UNIFORM)".into(),
+                        ));
+                    }
+                    let nodes = LinkNodes::Surface(surface);
+                    let kind = if name == "KINEMATIC" {
+                        LinkKind::Kinematic {
+                            reference,
+                            nodes,
+                            dofs: Vec::new(),
+                        }
+                    } else {
+                        LinkKind::Distributing {
+                            reference,
+                            nodes,
+                            dofs: Vec::new(),
+                        }
+                    };
+                    links.push(InpLink {
+                        kind,
+                        line: Location {
+                            path: l.path.clone(),
+                            line: l.number,
+                        },
+                    });
+                }
+                "SURFACE" => {
+                    let ty = params.get("TYPE").map(|t| t.to_ascii_uppercase());
+                    if ty.as_deref() != Some("NODE") {
+                        return Err(err(
+                            l,
+                            format!(
+                                "*SURFACE, TYPE={}: femu reads node-based surfaces (TYPE=NODE) for couplings",
+                                ty.unwrap_or_else(|| "ELEMENT".into())
+                            ),
+                        ));
+                    }
+                    let name = params
+                        .get("NAME")
+                        .ok_or_else(|| err(l, "*SURFACE without NAME=".into()))?
+                        .to_ascii_uppercase();
+                    surfaces.entry(name.clone()).or_default();
+                    surface_now = Some(name);
+                }
                 "NODE" => {
                     if let Some(sys) = params
                         .get("SYSTEM")
@@ -942,14 +1115,21 @@ fn parse_collecting(
                 if first == 0 || last < first {
                     return Err(err(l, format!("DOF range {first}..{last} is invalid")));
                 }
-                if last > 3 {
-                    warn(warnings, l, "DOFs above 3 (rotations, temperature) do not exist on solid elements: ignored".into());
+                if last > 6 {
+                    warn(
+                        warnings,
+                        l,
+                        "DOFs above 6 (temperature, pressure) do not exist here: ignored".into(),
+                    );
                 }
-                if first <= 3 {
+                if last > 3 {
+                    warn(warnings, l, "DOFs 4-6 (rotations) exist only on coupling reference nodes: ignored on other nodes".into());
+                }
+                if first <= 6 {
                     boundaries.push(Boundary {
                         target,
                         first,
-                        last: last.min(3),
+                        last: last.min(6),
                         line: Location {
                             path: l.path.clone(),
                             line: l.number,
@@ -974,6 +1154,125 @@ fn parse_collecting(
                     shift_cycles2,
                 });
             }
+            "EQUATION" => {
+                let at = Location {
+                    path: l.path.clone(),
+                    line: l.number,
+                };
+                match &mut equation {
+                    None => {
+                        let n = f
+                            .first()
+                            .and_then(|v| v.parse::<usize>().ok())
+                            .filter(|n| *n > 0)
+                            .ok_or_else(|| {
+                                err(l, format!("*EQUATION needs its number of terms, got {t:?}"))
+                            })?;
+                        equation = Some((n, Vec::new(), at));
+                    }
+                    Some((n, terms, _)) => {
+                        if !f.len().is_multiple_of(3) {
+                            return Err(err(
+                                l,
+                                format!("*EQUATION terms come as node, DOF, coefficient: {t:?}"),
+                            ));
+                        }
+                        for c in f.chunks(3) {
+                            let node = c[0].parse::<u64>().map_err(|_| {
+                                err(l, format!("*EQUATION: node {:?} is not a node id (node sets are not read in equations)", c[0]))
+                            })?;
+                            let dof = c[1]
+                                .parse::<usize>()
+                                .ok()
+                                .filter(|d| (1..=6).contains(d))
+                                .ok_or_else(|| {
+                                    err(l, format!("*EQUATION: DOF {:?} is not 1-6", c[1]))
+                                })?;
+                            let a = parse_f64(c[2]).filter(|a| a.is_finite()).ok_or_else(|| {
+                                err(
+                                    l,
+                                    format!("*EQUATION: coefficient {:?} is not a number", c[2]),
+                                )
+                            })?;
+                            terms.push((node, dof, a));
+                        }
+                        if terms.len() > *n {
+                            return Err(err(
+                                l,
+                                format!("*EQUATION announces {n} terms and gives {}", terms.len()),
+                            ));
+                        }
+                        if terms.len() == *n {
+                            let (_, terms, at) = equation.take().expect("some");
+                            links.push(InpLink {
+                                kind: LinkKind::Equation(terms),
+                                line: at,
+                            });
+                        }
+                    }
+                }
+            }
+            "KINEMATIC COUPLING" => {
+                let reference = block_params
+                    .get("REF NODE")
+                    .and_then(|v| v.parse::<u64>().ok())
+                    .unwrap_or(0);
+                let target = match f.first().map(|v| v.parse::<u64>()) {
+                    Some(Ok(id)) => Target::Node(id),
+                    Some(Err(_)) => Target::Set(f[0].to_ascii_uppercase()),
+                    None => {
+                        return Err(err(
+                            l,
+                            "*KINEMATIC COUPLING needs a node or node set".into(),
+                        ));
+                    }
+                };
+                let dofs = dof_range(f.get(1).copied(), f.get(2).copied())
+                    .map_err(|reason| err(l, format!("*KINEMATIC COUPLING: {reason}")))?;
+                links.push(InpLink {
+                    kind: LinkKind::Kinematic {
+                        reference,
+                        nodes: LinkNodes::Targets(vec![target]),
+                        dofs,
+                    },
+                    line: Location {
+                        path: l.path.clone(),
+                        line: l.number,
+                    },
+                });
+            }
+            "KINEMATIC" | "DISTRIBUTING" => {
+                let more = dof_range(f.first().copied(), f.get(1).copied())
+                    .map_err(|reason| err(l, format!("*{block}: {reason}")))?;
+                if let Some(InpLink {
+                    kind: LinkKind::Kinematic { dofs, .. } | LinkKind::Distributing { dofs, .. },
+                    ..
+                }) = links.last_mut()
+                {
+                    dofs.extend(more);
+                }
+            }
+            "SURFACE" => {
+                let target = match f.first().map(|v| v.parse::<u64>()) {
+                    Some(Ok(id)) => Target::Node(id),
+                    Some(Err(_)) => Target::Set(f[0].to_ascii_uppercase()),
+                    None => continue,
+                };
+                let w = match f.get(1) {
+                    Some(v) if !v.is_empty() => parse_f64(v)
+                        .filter(|w| w.is_finite() && *w > 0.0)
+                        .ok_or_else(|| {
+                            err(
+                                l,
+                                format!("*SURFACE: weight {v:?} is not a positive number"),
+                            )
+                        })?,
+                    _ => 1.0,
+                };
+                if let Some(name) = &surface_now {
+                    surfaces.entry(name.clone()).or_default().push((target, w));
+                }
+            }
             "HEADING" | "SOLID SECTION" | "STEP" | "END STEP" => {}
             _ => {} // data of an ignored keyword
         }
@@ -983,6 +1282,16 @@ fn parse_collecting(
             &lines[element_start],
             "element definition cut short at the end of the file".into(),
         ));
+    }
+    if let Some((n, terms, at)) = &equation {
+        return Err(IoError::Parse {
+            path: at.path.clone(),
+            line: at.line,
+            reason: format!(
+                "*EQUATION announces {n} terms and gives {} before the end of the file",
+                terms.len()
+            ),
+        });
     }
     finish_material(pending.take(), &mut materials)?;
     if let Some(c) = mass_cards.iter().find(|c| c.mass.is_nan()) {
@@ -1185,6 +1494,8 @@ fn parse_collecting(
         sections,
         boundaries,
         point_masses,
+        links,
+        surfaces,
         frequency,
         warnings: std::mem::take(warnings),
         element_lines,
@@ -1260,8 +1571,33 @@ impl InpDeck {
                     source,
                 })?;
         }
+        self.apply_links(&mut model)?;
         for b in &self.boundaries {
-            let comps: Vec<usize> = (b.first - 1..b.last).collect();
+            let all: Vec<usize> = (b.first - 1..b.last).collect();
+            let comps: Vec<usize> = all.iter().copied().filter(|c| *c < 3).collect();
+            // rotations: on the nodes that have them (coupling references)
+            let rotations: Vec<usize> = all.iter().copied().filter(|c| *c >= 3).collect();
+            if !rotations.is_empty() {
+                let nodes: Vec<usize> = match &b.target {
+                    Target::Node(id) => model.mesh().node_index(*id).into_iter().collect(),
+                    Target::Set(s) => self.mesh.node_sets().get(s).cloned().unwrap_or_default(),
+                };
+                for n in nodes {
+                    if model.rotation_nodes().contains(&n) {
+                        let id = model.mesh().node_id(n);
+                        model
+                            .fix_node_dofs(id, &rotations)
+                            .map_err(|source| IoError::Model {
+                                path: b.line.path.clone(),
+                                line: b.line.line,
+                                source,
+                            })?;
+                    }
+                }
+            }
+            if comps.is_empty() {
+                continue;
+            }
             let r = match &b.target {
                 Target::Node(id) => model.fix_nodes(&[*id], &comps),
                 Target::Set(s) => {
@@ -1288,9 +1624,9 @@ impl InpDeck {
                 source,
             })?;
         }
-        // point masses, on nodes that solid elements connect (a mass on a free node would have
-        // no stiffness; rigid links are not read yet)
-        let mut connected = vec![false; model.mesh().node_count()];
+        // point masses, on nodes that solid elements or constraints connect (a mass on a free
+        // node would have no stiffness)
+        let mut connected = model.constrained_nodes();
         for el in model.mesh().elements() {
             for n in el.nodes {
                 connected[*n] = true;
@@ -1309,7 +1645,7 @@ impl InpDeck {
             })?;
             if !connected[i] {
                 return Err(located(format!(
-                    "*MASS on node {node}, which no solid element connects: it would have no stiffness (rigid links to it are not read yet)"
+                    "*MASS on node {node}, which no solid element or constraint connects: it would have no stiffness"
                 )));
             }
             model
@@ -1327,7 +1663,185 @@ impl InpDeck {
                 return Err(self.at_element(Some(id), source));
             }
         }
+        // conflicts between constraints (a DOF dependent twice or also fixed, cycles) now
+        model.dof_map().map_err(|source| IoError::Content {
+            path: self.path.clone(),
+            reason: source.to_string(),
+        })?;
         Ok(model)
+    }
+
+    /// Node ids of a target (a node, or a node set of the deck).
+    fn target_ids(&self, t: &Target, at: &Location, what: &str) -> Result<Vec<u64>, IoError> {
+        match t {
+            Target::Node(id) => Ok(vec![*id]),
+            Target::Set(s) => match self.mesh.node_sets().get(s) {
+                Some(nodes) => Ok(nodes.iter().map(|n| self.mesh.node_id(*n)).collect()),
+                None => {
+                    let hint = crate::spelling::suggestion(
+                        s,
+                        self.mesh.node_sets().keys().map(String::as_str),
+                        "",
+                    );
+                    Err(IoError::Parse {
+                        path: at.path.clone(),
+                        line: at.line,
+                        reason: format!(
+                            "{what} names {s}, which is neither a node id nor a node set of the deck{hint}"
+                        ),
+                    })
+                }
+            },
+        }
+    }
+
+    /// The coupled nodes and their weights.
+    fn link_nodes(
+        &self,
+        nodes: &LinkNodes,
+        at: &Location,
+        what: &str,
+    ) -> Result<Vec<(u64, f64)>, IoError> {
+        let mut out = Vec::new();
+        match nodes {
+            LinkNodes::Targets(ts) => {
+                for t in ts {
+                    out.extend(self.target_ids(t, at, what)?.into_iter().map(|i| (i, 1.0)));
+                }
+            }
+            LinkNodes::Surface(name) => {
+                let list = self.surfaces.get(name).ok_or_else(|| IoError::Parse {
+                    path: at.path.clone(),
+                    line: at.line,
+                    reason: format!(
+                        "{what}: surface {name} is not defined (femu reads *SURFACE, TYPE=NODE){}",
+                        crate::spelling::suggestion(
+                            name,
+                            self.surfaces.keys().map(String::as_str),
+                            ""
+                        )
+                    ),
+                })?;
+                for (t, w) in list {
+                    out.extend(self.target_ids(t, at, what)?.into_iter().map(|i| (i, *w)));
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// The deck's couplings and equations into `model`: kinematic couplings first (their
+    /// references get rotations), then distributing couplings, then equations (which may name
+    /// the references' rotations, DOFs 4-6).
+    fn apply_links(&self, model: &mut Model) -> Result<(), IoError> {
+        for pass in 0..3 {
+            for link in &self.links {
+                let at = &link.line;
+                let located = |source| IoError::Model {
+                    path: at.path.clone(),
+                    line: at.line,
+                    source,
+                };
+                match (&link.kind, pass) {
+                    (
+                        LinkKind::Kinematic {
+                            reference,
+                            nodes,
+                            dofs,
+                        },
+                        0,
+                    ) => {
+                        let label = format!(
+                            "kinematic coupling to node {reference} ({} line {})",
+                            at.path.display(),
+                            at.line
+                        );
+                        let ids = self.link_nodes(nodes, at, "*KINEMATIC COUPLING")?;
+                        let ids: Vec<u64> = ids.into_iter().map(|p| p.0).collect();
+                        let all: &[usize] = if dofs.is_empty() {
+                            &[1, 2, 3, 4, 5, 6]
+                        } else {
+                            dofs
+                        };
+                        let trans: Vec<usize> =
+                            all.iter().filter(|d| **d <= 3).map(|d| d - 1).collect();
+                        model
+                            .add_rigid_link(*reference, &ids, &trans, &label)
+                            .map_err(located)?;
+                        // coupled nodes that carry rotations follow the reference's
+                        for &id in &ids {
+                            let has = model
+                                .mesh()
+                                .node_index(id)
+                                .is_some_and(|n| model.rotation_nodes().contains(&n));
+                            if has && id != *reference {
+                                for d in all.iter().filter(|d| **d > 3) {
+                                    model
+                                        .add_constraint(
+                                            (id, d - 1),
+                                            &[((*reference, d - 1), 1.0)],
+                                            &label,
+                                        )
+                                        .map_err(located)?;
+                                }
+                            }
+                        }
+                    }
+                    (
+                        LinkKind::Distributing {
+                            reference,
+                            nodes,
+                            dofs,
+                        },
+                        1,
+                    ) => {
+                        let label = format!(
+                            "distributing coupling of node {reference} ({} line {})",
+                            at.path.display(),
+                            at.line
+                        );
+                        let pairs = self.link_nodes(nodes, at, "*DISTRIBUTING")?;
+                        let has_rot = model
+                            .mesh()
+                            .node_index(*reference)
+                            .is_some_and(|n| model.rotation_nodes().contains(&n));
+                        let all: &[usize] = if dofs.is_empty() {
+                            &[1, 2, 3, 4, 5, 6]
+                        } else {
+                            dofs
+                        };
+                        let comps: Vec<usize> = all
+                            .iter()
+                            .filter(|d| **d <= 3 || has_rot)
+                            .map(|d| d - 1)
+                            .collect();
+                        model
+                            .add_weighted_average(*reference, &comps, &pairs, &label)
+                            .map_err(located)?;
+                    }
+                    (LinkKind::Equation(terms), 2) => {
+                        let label = format!("*EQUATION ({} line {})", at.path.display(), at.line);
+                        let (n0, d0, a0) = terms[0];
+                        if a0 == 0.0 {
+                            return Err(IoError::Parse {
+                                path: at.path.clone(),
+                                line: at.line,
+                                reason: "*EQUATION: the first coefficient (of the dependent DOF) is zero".into(),
+                            });
+                        }
+                        let rest: Vec<((u64, usize), f64)> = terms[1..]
+                            .iter()
+                            .map(|(n, d, a)| ((*n, d - 1), -a / a0))
+                            .collect();
+                        model
+                            .add_constraint((n0, d0 - 1), &rest, &label)
+                            .map_err(located)?;
+                    }
+                    _ => {}
+                }
+            }
+        }
+        Ok(())
     }
 }
 
@@ -1501,11 +2015,61 @@ pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String,
             number_field(m)
         );
     }
-    let fixed: Vec<(usize, usize)> = model.fixed_dofs().collect();
+    // rotations of reference nodes: as CalculiX's rotational nodes, an extra node per reference
+    // (ids after the mesh's) whose translations 1-3 are the reference's rotations 4-6
+    let first_rot = (0..mesh.node_count())
+        .map(|i| mesh.node_id(i))
+        .max()
+        .unwrap_or(0)
+        + 1;
+    let rot_id = |n: usize| -> Option<u64> {
+        model
+            .rotation_nodes()
+            .iter()
+            .position(|r| *r == n)
+            .map(|k| first_rot + k as u64)
+    };
+    let dof = |n: usize, c: usize| -> (u64, usize) {
+        if c < 3 {
+            (mesh.node_id(n), c + 1)
+        } else {
+            (rot_id(n).expect("rotations on a rotation node"), c - 2)
+        }
+    };
+    if !model.rotation_nodes().is_empty() {
+        s.push_str("** rotational nodes: their DOFs 1-3 are the rotations of the node named\n*NODE, NSET=FEMU_ROT\n");
+        for &n in model.rotation_nodes() {
+            let x = mesh.coords()[n];
+            let _ = writeln!(
+                s,
+                "{}, {}, {}, {}\n** rotations of node {}",
+                rot_id(n).expect("listed"),
+                number_field(x[0]),
+                number_field(x[1]),
+                number_field(x[2]),
+                mesh.node_id(n)
+            );
+        }
+    }
+    let (rot_fixed, rot_constraints) = model.rotation_closure();
+    for con in model.constraints().iter().chain(&rot_constraints) {
+        let _ = writeln!(s, "** {}\n*EQUATION\n{}", con.label, 1 + con.terms.len());
+        let mut terms = vec![(dof(con.dependent.0, con.dependent.1), 1.0)];
+        terms.extend(con.terms.iter().map(|((n, c), w)| (dof(*n, *c), -w)));
+        for chunk in terms.chunks(4) {
+            let t: Vec<String> = chunk
+                .iter()
+                .map(|((id, d), a)| format!("{id}, {d}, {}", number_field(*a)))
+                .collect();
+            let _ = writeln!(s, "{}", t.join(", "));
+        }
+    }
+    let fixed: Vec<(usize, usize)> = model.fixed_dofs().chain(rot_fixed).collect();
     if !fixed.is_empty() {
         s.push_str("*BOUNDARY\n");
         for (n, c) in fixed {
-            let _ = writeln!(s, "{}, {}, {}", mesh.node_id(n), c + 1, c + 1);
+            let (id, d) = dof(n, c);
+            let _ = writeln!(s, "{id}, {d}, {d}");
         }
     }
     if let Some(step) = step {

@@ -523,7 +523,89 @@ fn point_masses_in_decks() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.starts_with("m.inp:21: *MASS on node 9, which no solid element connects"),
+        e.starts_with("m.inp:21: *MASS on node 9, which no solid element or constraint connects"),
         "{e}"
     );
+}
+
+/// Couplings and equations in a deck: a `*KINEMATIC COUPLING` of two top nodes to a reference
+/// above them (its rotation about z fixed by `*BOUNDARY` 6), a `*COUPLING` with `*DISTRIBUTING`
+/// on a weighted node surface, and an `*EQUATION` (scaled: only the ratios matter), with masses on
+/// the references; the deck gives the K and M of the same constraints made through femu's API.
+/// Bad constraints are errors naming the line.
+#[test]
+fn couplings_and_equations_in_decks() {
+    let base = "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n5, 0, 0, 1\n6, 1, 0, 1\n7, 1, 1, 1\n8, 0, 1, 1\n9, 0.5, 0.5, 3\n10, 0.2, 0.3, 1.5\n*ELEMENT, TYPE=C3D8, ELSET=E\n1, 1, 2, 3, 4, 5, 6, 7, 8\n*MATERIAL, NAME=S\n*ELASTIC\n2e11, 0.3\n*DENSITY\n7800\n*SOLID SECTION, ELSET=E, MATERIAL=S\n*NSET, NSET=TOP\n5, 6\n*BOUNDARY\n1, 1, 3\n2, 1, 3\n3, 1, 3\n4, 1, 3\n";
+    let links = "*KINEMATIC COUPLING, REF NODE=9\nTOP, 1, 3\n*BOUNDARY\n9, 6, 6\n*SURFACE, TYPE=NODE, NAME=S1\n5, 2.\n6\n7, 3.\n*COUPLING, REF NODE=10, SURFACE=S1\n*DISTRIBUTING\n1, 3\n*EQUATION\n2\n7, 3, -2., 8, 3, 1.\n*ELEMENT, TYPE=MASS, ELSET=PM\n101, 9\n102, 10\n*MASS, ELSET=PM\n1.5\n";
+    let text = format!("{base}{links}");
+    let sys = parse_inp(&text, "c.inp")
+        .unwrap()
+        .to_model()
+        .unwrap()
+        .assemble(MassKind::Consistent)
+        .unwrap();
+    let mut api = parse_inp(base, "c.inp").unwrap().to_model().unwrap();
+    api.add_rigid_link(9, &[5, 6], &[0, 1, 2], "k").unwrap();
+    api.fix_node_dofs(9, &[5]).unwrap();
+    api.add_weighted_average(10, &[0, 1, 2], &[(5, 2.0), (6, 1.0), (7, 3.0)], "d")
+        .unwrap();
+    api.add_constraint((7, 2), &[((8, 2), 0.5)], "e").unwrap();
+    api.add_point_mass(9, 1.5).unwrap();
+    api.add_point_mass(10, 1.5).unwrap();
+    let want = api.assemble(MassKind::Consistent).unwrap();
+    assert_eq!(sys.dofs, want.dofs);
+    let diff = |a: &femu_sparse::SparseMatrix, b: &femu_sparse::SparseMatrix| {
+        let (a, b) = (femu_sparse::csc::to_dense(a), femu_sparse::csc::to_dense(b));
+        (&a - &b).norm_max() / b.norm_max()
+    };
+    assert!(diff(&sys.k, &want.k) < 1e-15 && diff(&sys.m, &want.m) < 1e-15);
+    let cases: Vec<(String, &str)> = vec![
+        (
+            text.replace("7, 3, -2., 8, 3, 1.", "7, 3, -2."),
+            "c.inp:39: *EQUATION announces 2 terms and gives 1 before the next keyword",
+        ),
+        (
+            text.replace("7, 3, -2., 8, 3, 1.", "7, 3, 0., 8, 3, 1."),
+            "c.inp:39: *EQUATION: the first coefficient (of the dependent DOF) is zero",
+        ),
+        (
+            text.replace("7, 3, -2., 8, 3, 1.", "5, 3, -2., 8, 3, 1."),
+            "constraint *EQUATION (c.inp line 39): its dependent DOF, node 5 z, is already dependent in kinematic coupling to node 9 (c.inp line 28)",
+        ),
+        (
+            text.replace("7, 3, -2., 8, 3, 1.", "7, 3, -2., 8, 7, 1."),
+            "c.inp:40: *EQUATION: DOF \"7\" is not 1-6",
+        ),
+        (
+            text.replace("*SURFACE, TYPE=NODE, NAME=S1", "*SURFACE, NAME=S1"),
+            "c.inp:31: *SURFACE, TYPE=ELEMENT: femu reads node-based surfaces (TYPE=NODE) for couplings",
+        ),
+        (
+            text.replace("SURFACE=S1", "SURFACE=S2"),
+            "c.inp:36: *DISTRIBUTING: surface S2 is not defined (femu reads *SURFACE, TYPE=NODE) (did you mean S1?)",
+        ),
+        (
+            text.replace("*COUPLING, REF NODE=10, SURFACE=S1\n", ""),
+            "c.inp:35: *DISTRIBUTING without a *COUPLING before it",
+        ),
+        (
+            text.replace("*KINEMATIC COUPLING, REF NODE=9", "*KINEMATIC COUPLING"),
+            "c.inp:27: *KINEMATIC COUPLING needs REF NODE=<node id>",
+        ),
+        (
+            text.replace("TOP, 1, 3", "TOQ, 1, 3"),
+            "c.inp:28: *KINEMATIC COUPLING names TOQ, which is neither a node id nor a node set of the deck (did you mean TOP?)",
+        ),
+        (
+            text.replace("*BOUNDARY\n9, 6, 6", "*BOUNDARY\n9, 6, 6\n5, 3, 3"),
+            "its dependent DOF, node 5 z, is also fixed",
+        ),
+    ];
+    for (t, want) in cases {
+        let e = parse_inp(&t, "c.inp")
+            .and_then(|d| d.to_model())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(want), "want {want:?}\n got {e}");
+    }
 }
