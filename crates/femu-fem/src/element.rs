@@ -10,6 +10,8 @@
 //! | [`Hex20`](ElementKind::Hex20) (C3D20) | 20 | corners, mid-edges 1-2, 2-3, 3-4, 4-1, 5-6, 6-7, 7-8, 8-5, 1-5, 2-6, 3-7, 4-8 |
 //! | [`Penta6`](ElementKind::Penta6) (C3D6) | 6 | bottom triangle 1-2-3, top 4-5-6 |
 //! | [`Penta15`](ElementKind::Penta15) (C3D15) | 15 | corners, mid-edges 1-2, 2-3, 3-1, 4-5, 5-6, 6-4, 1-4, 2-5, 3-6 |
+//! | [`Pyramid5`](ElementKind::Pyramid5) | 5 | base 1-2-3-4 (counter-clockwise seen from the apex), apex 5 |
+//! | [`Pyramid13`](ElementKind::Pyramid13) | 13 | corners, mid-edges 1-2, 2-3, 3-4, 4-1, 1-5, 2-5, 3-5, 4-5 (Nastran's CPYRAM, VTK's) |
 //!
 //! Integration (the rules are exact for the undistorted element wherever noted):
 //!
@@ -21,6 +23,15 @@
 //! | hex20 | 3x3x3 Gauss (as C3D20) | 3x3x3 (exact; as C3D20) |
 //! | penta6 | 3-point triangle x 2 Gauss, degree 2 (exact) | same (exact) |
 //! | penta15 | 6-point triangle x 3 Gauss, degree 4 (exact) | same (exact) |
+//! | pyramid5 | collapsed cube 2x2x2 (exact) | collapsed cube 2x2x4 (exact) |
+//! | pyramid13 | collapsed cube 3x3x5 (exact) | same (exact) |
+//!
+//! The pyramids are Bedrosian's: the reference pyramid has the base `[-1, 1]^2` at `zeta = 0` and
+//! the apex at `zeta = 1`, and the shape functions are rational (`xi eta / (1 - zeta)`) so that
+//! they match the neighbouring hexahedra and tetrahedra on every face. On the cube
+//! `(a, b, c) in [-1, 1]^2 x [0, 1]` with `xi = a (1 - c)`, `eta = b (1 - c)`, `zeta = c`
+//! (Jacobian `(1 - c)^2`) they and their gradients are polynomials, so tensor Gauss rules on the
+//! cube integrate the undistorted element's stiffness and mass exactly (docs/MATH.md).
 //!
 //! CalculiX 2.20 under-integrates the mass of C3D4, C3D10, C3D6 and C3D15 into singular matrices;
 //! femu integrates every consistent mass exactly, so every element mass matrix is positive definite.
@@ -29,7 +40,7 @@ use crate::quadrature::{self, QuadratureRule};
 use serde::{Deserialize, Serialize};
 use std::sync::OnceLock;
 
-/// The six solid element types.
+/// The solid element types.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 pub enum ElementKind {
     /// 4-node linear tetrahedron (C3D4).
@@ -44,17 +55,55 @@ pub enum ElementKind {
     Penta6,
     /// 15-node quadratic wedge (C3D15).
     Penta15,
+    /// 5-node linear pyramid (Nastran CPYRAM, Gmsh 7; no CalculiX equivalent).
+    Pyramid5,
+    /// 13-node quadratic pyramid (Nastran CPYRAM, Gmsh 19; no CalculiX equivalent).
+    Pyramid13,
 }
 
 /// Every element kind, for loops in tests and tools.
-pub const ALL_KINDS: [ElementKind; 6] = [
+pub const ALL_KINDS: [ElementKind; 8] = [
     ElementKind::Tet4,
     ElementKind::Tet10,
     ElementKind::Hex8,
     ElementKind::Hex20,
     ElementKind::Penta6,
     ElementKind::Penta15,
+    ElementKind::Pyramid5,
+    ElementKind::Pyramid13,
 ];
+
+const PYRAMID_CORNERS: [[f64; 3]; 5] = [
+    [-1.0, -1.0, 0.0],
+    [1.0, -1.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [-1.0, 1.0, 0.0],
+    [0.0, 0.0, 1.0],
+];
+const PYRAMID_EDGES: [[usize; 2]; 8] = [
+    [0, 1],
+    [1, 2],
+    [2, 3],
+    [3, 0],
+    [0, 4],
+    [1, 4],
+    [2, 4],
+    [3, 4],
+];
+const PYRAMID_FACES: [&[usize]; 5] = [
+    &[0, 1, 2, 3],
+    &[0, 4, 1],
+    &[1, 4, 2],
+    &[2, 4, 3],
+    &[3, 4, 0],
+];
+
+/// `1 / (1 - zeta)`, zero at the apex: every term it multiplies vanishes on the pyramid's axis at
+/// least as fast, so the shape functions take their limits there.
+fn apex_inverse(zeta: f64) -> f64 {
+    let s = 1.0 - zeta;
+    if s > 1e-14 { 1.0 / s } else { 0.0 }
+}
 
 const HEX_CORNERS: [[f64; 3]; 8] = [
     [-1.0, -1.0, -1.0],
@@ -143,6 +192,8 @@ impl ElementKind {
             Self::Hex20 => 20,
             Self::Penta6 => 6,
             Self::Penta15 => 15,
+            Self::Pyramid5 => 5,
+            Self::Pyramid13 => 13,
         }
     }
 
@@ -152,12 +203,16 @@ impl ElementKind {
             Self::Tet4 | Self::Tet10 => 4,
             Self::Hex8 | Self::Hex20 => 8,
             Self::Penta6 | Self::Penta15 => 6,
+            Self::Pyramid5 | Self::Pyramid13 => 5,
         }
     }
 
     /// Whether the element has mid-edge nodes.
     pub const fn is_quadratic(self) -> bool {
-        matches!(self, Self::Tet10 | Self::Hex20 | Self::Penta15)
+        matches!(
+            self,
+            Self::Tet10 | Self::Hex20 | Self::Penta15 | Self::Pyramid13
+        )
     }
 
     /// The linear element with the same corners.
@@ -166,6 +221,7 @@ impl ElementKind {
             Self::Tet4 | Self::Tet10 => Self::Tet4,
             Self::Hex8 | Self::Hex20 => Self::Hex8,
             Self::Penta6 | Self::Penta15 => Self::Penta6,
+            Self::Pyramid5 | Self::Pyramid13 => Self::Pyramid5,
         }
     }
 
@@ -175,12 +231,16 @@ impl ElementKind {
             Self::Tet4 | Self::Tet10 => Self::Tet10,
             Self::Hex8 | Self::Hex20 => Self::Hex20,
             Self::Penta6 | Self::Penta15 => Self::Penta15,
+            Self::Pyramid5 | Self::Pyramid13 => Self::Pyramid13,
         }
     }
 
-    /// The Abaqus/CalculiX name of the fully integrated element.
+    /// The Abaqus/CalculiX name of the fully integrated element (the pyramids, which neither has,
+    /// get the names of their node counts; the deck writer refuses them).
     pub const fn abaqus_name(self) -> &'static str {
         match self {
+            Self::Pyramid5 => "C3D5",
+            Self::Pyramid13 => "C3D13",
             Self::Tet4 => "C3D4",
             Self::Tet10 => "C3D10",
             Self::Hex8 => "C3D8",
@@ -197,6 +257,7 @@ impl ElementKind {
             Self::Tet4 | Self::Tet10 => &TET_EDGES,
             Self::Hex8 | Self::Hex20 => &HEX_EDGES,
             Self::Penta6 | Self::Penta15 => &WEDGE_EDGES,
+            Self::Pyramid5 | Self::Pyramid13 => &PYRAMID_EDGES,
         }
     }
 
@@ -206,6 +267,7 @@ impl ElementKind {
             Self::Tet4 | Self::Tet10 => &TET_FACES,
             Self::Hex8 | Self::Hex20 => &HEX_FACES,
             Self::Penta6 | Self::Penta15 => &WEDGE_FACES,
+            Self::Pyramid5 | Self::Pyramid13 => &PYRAMID_FACES,
         }
     }
 
@@ -245,6 +307,7 @@ impl ElementKind {
                 [1.0, 0.0, 1.0],
                 [0.0, 1.0, 1.0],
             ],
+            Self::Pyramid5 | Self::Pyramid13 => PYRAMID_CORNERS.to_vec(),
         };
         let mut nodes = corners.clone();
         if self.is_quadratic() {
@@ -266,6 +329,7 @@ impl ElementKind {
             Self::Tet4 | Self::Tet10 => 1.0 / 6.0,
             Self::Hex8 | Self::Hex20 => 8.0,
             Self::Penta6 | Self::Penta15 => 1.0,
+            Self::Pyramid5 | Self::Pyramid13 => 4.0 / 3.0,
         }
     }
 
@@ -325,6 +389,35 @@ impl ElementKind {
                     n[9 + a] = 2.0 * l[i] * l[j] * (1.0 + z);
                     n[12 + a] = l[a] * b;
                 }
+            }
+            Self::Pyramid5 => {
+                let q = x * y * z * apex_inverse(z);
+                for (a, c) in PYRAMID_CORNERS[..4].iter().enumerate() {
+                    n[a] = 0.25 * ((1.0 + c[0] * x) * (1.0 + c[1] * y) - z + c[0] * c[1] * q);
+                }
+                n[4] = z;
+            }
+            Self::Pyramid13 => {
+                let inv = apex_inverse(z);
+                let q = x * y * z * inv;
+                for (a, c) in PYRAMID_CORNERS[..4].iter().enumerate() {
+                    let (ci, ei) = (c[0], c[1]);
+                    n[a] = 0.25
+                        * (ci * x + ei * y - 1.0)
+                        * ((1.0 + ci * x) * (1.0 + ei * y) - z + ci * ei * q);
+                    // lateral mid-edge a-apex
+                    n[9 + a] = z * (1.0 + ci * x - z) * (1.0 + ei * y - z) * inv;
+                }
+                n[4] = z * (2.0 * z - 1.0);
+                // base mid-edges 0-1 (eta = -1), 1-2 (xi = 1), 2-3 (eta = 1), 3-0 (xi = -1)
+                let along_xi =
+                    |em: f64| 0.5 * (1.0 + x - z) * (1.0 - x - z) * (1.0 + em * y - z) * inv;
+                let along_eta =
+                    |xm: f64| 0.5 * (1.0 + y - z) * (1.0 - y - z) * (1.0 + xm * x - z) * inv;
+                n[5] = along_xi(-1.0);
+                n[6] = along_eta(1.0);
+                n[7] = along_xi(1.0);
+                n[8] = along_eta(-1.0);
             }
         }
     }
@@ -444,6 +537,66 @@ impl ElementKind {
                     dn[row + 2] = -2.0 * l[a] * z;
                 }
             }
+            Self::Pyramid5 | Self::Pyramid13 => {
+                // the gradients of the rational terms have no limit at the apex: take them just
+                // below it, on the axis (only the validity check asks there)
+                let z = z.min(1.0 - 1e-9);
+                let inv = 1.0 / (1.0 - z);
+                if self == Self::Pyramid5 {
+                    for (a, c) in PYRAMID_CORNERS[..4].iter().enumerate() {
+                        let (ci, ei) = (c[0], c[1]);
+                        dn[3 * a] = 0.25 * (ci * (1.0 + ei * y) + ci * ei * y * z * inv);
+                        dn[3 * a + 1] = 0.25 * (ei * (1.0 + ci * x) + ci * ei * x * z * inv);
+                        dn[3 * a + 2] = 0.25 * (-1.0 + ci * ei * x * y * inv * inv);
+                    }
+                    dn[12..15].copy_from_slice(&[0.0, 0.0, 1.0]);
+                    return;
+                }
+                for (a, c) in PYRAMID_CORNERS[..4].iter().enumerate() {
+                    let (ci, ei) = (c[0], c[1]);
+                    let aa = ci * x + ei * y - 1.0;
+                    let bb = (1.0 + ci * x) * (1.0 + ei * y) - z + ci * ei * x * y * z * inv;
+                    let db = [
+                        ci * (1.0 + ei * y) + ci * ei * y * z * inv,
+                        ei * (1.0 + ci * x) + ci * ei * x * z * inv,
+                        -1.0 + ci * ei * x * y * inv * inv,
+                    ];
+                    let da = [ci, ei, 0.0];
+                    for k in 0..3 {
+                        dn[3 * a + k] = 0.25 * (da[k] * bb + aa * db[k]);
+                    }
+                    // lateral mid-edge a-apex: z U V / (1 - z)
+                    let (u, v) = (1.0 + ci * x - z, 1.0 + ei * y - z);
+                    let row = 3 * (9 + a);
+                    dn[row] = z * ci * v * inv;
+                    dn[row + 1] = z * u * ei * inv;
+                    dn[row + 2] = (u * v - z * v - z * u) * inv + z * u * v * inv * inv;
+                }
+                dn[12..15].copy_from_slice(&[0.0, 0.0, 4.0 * z - 1.0]);
+                // base mid-edges: P Q R / (2 (1 - z)), P Q along the edge, R across it
+                let mids: [(usize, bool, f64); 4] = [
+                    (5, true, -1.0),
+                    (6, false, 1.0),
+                    (7, true, 1.0),
+                    (8, false, -1.0),
+                ];
+                for (m, along_xi, side) in mids {
+                    let (t, o) = if along_xi { (x, y) } else { (y, x) };
+                    let (p, q, r) = (1.0 + t - z, 1.0 - t - z, 1.0 + side * o - z);
+                    let d_along = -t * r * inv;
+                    let d_across = 0.5 * p * q * side * inv;
+                    let d_z = 0.5 * (-q * r - p * r - p * q) * inv + 0.5 * p * q * r * inv * inv;
+                    let row = 3 * m;
+                    if along_xi {
+                        dn[row] = d_along;
+                        dn[row + 1] = d_across;
+                    } else {
+                        dn[row] = d_across;
+                        dn[row + 1] = d_along;
+                    }
+                    dn[row + 2] = d_z;
+                }
+            }
         }
     }
 
@@ -456,6 +609,8 @@ impl ElementKind {
             Self::Hex20 => quadrature::hex_gauss(3),
             Self::Penta6 => quadrature::wedge(2),
             Self::Penta15 => quadrature::wedge(4),
+            Self::Pyramid5 => quadrature::pyramid(2, 2),
+            Self::Pyramid13 => quadrature::pyramid(3, 5),
         }
     }
 
@@ -468,12 +623,16 @@ impl ElementKind {
             Self::Hex20 => quadrature::hex_gauss(3),
             Self::Penta6 => quadrature::wedge(2),
             Self::Penta15 => quadrature::wedge(4),
+            Self::Pyramid5 => quadrature::pyramid(2, 4),
+            Self::Pyramid13 => quadrature::pyramid(3, 5),
         }
     }
 
     /// Shape functions and gradients tabulated at the stiffness and mass rules' points, computed once.
     pub fn reference(self) -> &'static ReferenceData {
-        static CACHE: [OnceLock<ReferenceData>; 6] = [
+        static CACHE: [OnceLock<ReferenceData>; 8] = [
+            OnceLock::new(),
+            OnceLock::new(),
             OnceLock::new(),
             OnceLock::new(),
             OnceLock::new(),
@@ -501,6 +660,8 @@ impl std::fmt::Display for ElementKind {
             Self::Hex20 => "hex20",
             Self::Penta6 => "penta6",
             Self::Penta15 => "penta15",
+            Self::Pyramid5 => "pyramid5",
+            Self::Pyramid13 => "pyramid13",
         };
         f.write_str(s)
     }

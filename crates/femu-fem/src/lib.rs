@@ -1,7 +1,8 @@
 //! # femu-fem
 //!
 //! The finite element core of femu: meshes of mixed 3D solid elements with the user's ids,
-//! isoparametric elements (tet4, tet10, hex8, hex20, penta6, penta15), linear elastic materials,
+//! isoparametric elements (tet4, tet10, hex8, hex20, penta6, penta15, pyramid5, pyramid13), linear
+//! elastic materials, point masses, multipoint constraints (docs/MATH.md),
 //! DOF maps with fixed DOFs, and parallel assembly of the sparse stiffness `K` and mass `M` on a
 //! pattern computed once, with parameter groups `K(p) = K_0 + sum_g p_g K_g` for updating
 //! (docs/MATH.md, "Updating").

@@ -38,7 +38,50 @@ pub fn clamp_to_reference(kind: ElementKind, xi: [f64; 3]) -> [f64; 3] {
             let p = project_simplex(&[xi[0], xi[1]]);
             [p[0], p[1], xi[2].clamp(-1.0, 1.0)]
         }
+        ElementKind::Pyramid5 | ElementKind::Pyramid13 => project_pyramid(xi),
     }
+}
+
+/// Euclidean projection onto the reference pyramid `{0 <= zeta, |xi| <= 1 - zeta,
+/// |eta| <= 1 - zeta}` by Dykstra's alternating projections onto its five half-spaces.
+fn project_pyramid(p: [f64; 3]) -> [f64; 3] {
+    // half-spaces n . x <= h
+    const H: [([f64; 3], f64); 5] = [
+        ([0.0, 0.0, -1.0], 0.0),
+        ([1.0, 0.0, 1.0], 1.0),
+        ([-1.0, 0.0, 1.0], 1.0),
+        ([0.0, 1.0, 1.0], 1.0),
+        ([0.0, -1.0, 1.0], 1.0),
+    ];
+    let inside = |x: &[f64; 3]| {
+        H.iter()
+            .all(|(n, h)| n[0] * x[0] + n[1] * x[1] + n[2] * x[2] <= h + 1e-15)
+    };
+    if inside(&p) {
+        return p;
+    }
+    let mut x = p;
+    let mut corr = [[0.0; 3]; 5];
+    for _ in 0..500 {
+        let prev = x;
+        for (k, (n, h)) in H.iter().enumerate() {
+            let y: [f64; 3] = std::array::from_fn(|i| x[i] + corr[k][i]);
+            let v = n[0] * y[0] + n[1] * y[1] + n[2] * y[2] - h;
+            let nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+            let z: [f64; 3] = if v > 0.0 {
+                std::array::from_fn(|i| y[i] - v / nn * n[i])
+            } else {
+                y
+            };
+            corr[k] = std::array::from_fn(|i| y[i] - z[i]);
+            x = z;
+        }
+        let step = (0..3).map(|i| (x[i] - prev[i]).abs()).fold(0.0, f64::max);
+        if step < 1e-16 {
+            break;
+        }
+    }
+    x
 }
 
 /// Euclidean projection onto `{x >= 0, sum x <= 1}`.
@@ -72,6 +115,9 @@ pub fn in_reference(kind: ElementKind, xi: [f64; 3], tol: f64) -> bool {
         ElementKind::Penta6 | ElementKind::Penta15 => {
             xi[0] >= -tol && xi[1] >= -tol && xi[0] + xi[1] <= 1.0 + tol && xi[2].abs() <= 1.0 + tol
         }
+        ElementKind::Pyramid5 | ElementKind::Pyramid13 => {
+            xi[2] >= -tol && xi[0].abs() + xi[2] <= 1.0 + tol && xi[1].abs() + xi[2] <= 1.0 + tol
+        }
     }
 }
 
@@ -80,6 +126,7 @@ fn centroid(kind: ElementKind) -> [f64; 3] {
         ElementKind::Hex8 | ElementKind::Hex20 => [0.0; 3],
         ElementKind::Tet4 | ElementKind::Tet10 => [0.25; 3],
         ElementKind::Penta6 | ElementKind::Penta15 => [1.0 / 3.0, 1.0 / 3.0, 0.0],
+        ElementKind::Pyramid5 | ElementKind::Pyramid13 => [0.0, 0.0, 0.25],
     }
 }
 

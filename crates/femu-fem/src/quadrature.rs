@@ -179,6 +179,30 @@ pub fn wedge(degree: usize) -> QuadratureRule {
     rule
 }
 
+/// A pyramid rule: the collapsed cube `(a, b, c) in [-1, 1]^2 x [0, 1]`, `xi = a (1 - c)`,
+/// `eta = b (1 - c)`, `zeta = c`, with `n_ab x n_ab` Gauss points in `a, b`, `n_c` in `c`, and the
+/// Jacobian `(1 - c)^2` in the weights (exact for polynomials on the cube of degree `2 n_ab - 1`
+/// in `a` and `b` and `2 n_c - 3` in `c` before the Jacobian).
+pub fn pyramid(n_ab: usize, n_c: usize) -> QuadratureRule {
+    let (x, w) = gauss_legendre(n_ab);
+    let (t, wt) = gauss_legendre(n_c);
+    let mut rule = QuadratureRule {
+        points: Vec::new(),
+        weights: Vec::new(),
+    };
+    for (tk, wk) in t.iter().zip(&wt) {
+        let c = 0.5 * (1.0 + tk);
+        let s = 1.0 - c;
+        for (b, wb) in x.iter().zip(&w) {
+            for (a, wa) in x.iter().zip(&w) {
+                rule.points.push([a * s, b * s, c]);
+                rule.weights.push(wa * wb * 0.5 * wk * s * s);
+            }
+        }
+    }
+    rule
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

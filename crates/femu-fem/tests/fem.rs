@@ -9,4 +9,5 @@ mod fem {
     mod elements;
     mod locate;
     mod mesh;
+    mod pyramids;
 }

@@ -32,6 +32,8 @@ const HEX20: [usize; 20] = [
     0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 13, 9, 16, 18, 19, 17, 10, 12, 14, 15,
 ];
 const PRISM15: [usize; 15] = [0, 1, 2, 3, 4, 5, 6, 9, 7, 12, 14, 13, 8, 10, 11];
+/// Gmsh's 13-node pyramid numbers its mid-edges 0-1, 0-3, 0-4, 1-2, 1-4, 2-3, 2-4, 3-4.
+const PYRAMID13: [usize; 13] = [0, 1, 2, 3, 4, 5, 8, 10, 6, 7, 9, 11, 12];
 
 /// Nodes per element of a Gmsh type (0 for types femu does not know), and its femu kind.
 fn gmsh_type(t: i64) -> Option<(usize, Option<ElementKind>)> {
@@ -42,6 +44,8 @@ fn gmsh_type(t: i64) -> Option<(usize, Option<ElementKind>)> {
         17 => (20, Some(ElementKind::Hex20)),
         6 => (6, Some(ElementKind::Penta6)),
         18 => (15, Some(ElementKind::Penta15)),
+        7 => (5, Some(ElementKind::Pyramid5)),
+        19 => (13, Some(ElementKind::Pyramid13)),
         15 => (1, None),
         1 => (2, None),
         8 => (3, None),
@@ -50,7 +54,6 @@ fn gmsh_type(t: i64) -> Option<(usize, Option<ElementKind>)> {
         3 => (4, None),
         16 => (8, None),
         10 => (9, None),
-        7 => (5, None),
         _ => return None,
     })
 }
@@ -60,6 +63,7 @@ fn to_femu(kind: ElementKind, g: &[u64]) -> Vec<u64> {
         ElementKind::Tet10 => TET10.iter().map(|&i| g[i]).collect(),
         ElementKind::Hex20 => HEX20.iter().map(|&i| g[i]).collect(),
         ElementKind::Penta15 => PRISM15.iter().map(|&i| g[i]).collect(),
+        ElementKind::Pyramid13 => PYRAMID13.iter().map(|&i| g[i]).collect(),
         _ => g.to_vec(),
     }
 }

@@ -1878,6 +1878,15 @@ pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String,
         path: PathBuf::from("<model>"),
         reason,
     };
+    if let Some(e) = mesh
+        .elements()
+        .find(|e| matches!(e.kind, ElementKind::Pyramid5 | ElementKind::Pyramid13))
+    {
+        return Err(unwritable(format!(
+            "element {} is a {}: Abaqus and CalculiX have no pyramid element (write the model as VTK, or keep its Nastran deck)",
+            e.id, e.kind
+        )));
+    }
     let mut s = String::from("*HEADING\nwritten by femu\n*NODE, NSET=NALL\n");
     for i in 0..mesh.node_count() {
         let x = mesh.coords()[i];

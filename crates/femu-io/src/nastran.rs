@@ -7,7 +7,7 @@
 //! `SPC =` before `BEGIN BULK`, and `ENDDATA`.
 //!
 //! Cards read: `GRID` (with its `CP` frame), `CORD2R/C/S` and `CORD1R/C/S`, `CHEXA` (8/20),
-//! `CPENTA` (6/15), `CTETRA` (4/10), `PSOLID`, `MAT1` (two of `E`, `G`, `NU`), `MAT9`, `SPC`, `SPC1`,
+//! `CPENTA` (6/15), `CTETRA` (4/10), `CPYRAM` (5/13), `PSOLID`, `MAT1` (two of `E`, `G`, `NU`), `MAT9`, `SPC`, `SPC1`,
 //! `SPCADD` (components 4-6 on rigid links' reference grids, the only grids with rotations),
 //! `CONM2` (its mass; femu's point masses act on translations, so offset and rotational inertia
 //! are reported and dropped), `RBE2` (a rigid link: its reference grid gets rotations, the
@@ -16,7 +16,7 @@
 //! its grids, docs/MATH.md "Multipoint constraints"; weight groups on components 123), `EIGRL` and
 //! `PARAM,WTMASS`. Cards that cannot change `K` and `M` (output requests, loads, other
 //! parameters) are warnings, once per card name. Cards that would change them and that femu cannot
-//! model (shells, bars, springs, RBAR and MPC, other materials, pyramids) are an error that counts
+//! model (shells, bars, springs, RBAR and MPC, other materials) are an error that counts
 //! them by kind; [`BdfOptions::lenient`] reads the rest with a warning that the model is then
 //! incomplete.
 
@@ -157,7 +157,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("RBAR", "rigid links"),
     ("MPC", "multipoint constraints"),
     ("MPCADD", "multipoint constraints"),
-    ("CPYRAM", "pyramid elements"),
     ("MAT2", "anisotropic materials"),
     ("MAT8", "orthotropic materials"),
     ("CORD3G", "coordinate systems"),
@@ -477,7 +476,7 @@ fn parse_lines(
         match c.name.as_str() {
             "GRID" => grids.push(c),
             "CORD2R" | "CORD2C" | "CORD2S" | "CORD1R" | "CORD1C" | "CORD1S" => cords.push(c),
-            "CHEXA" | "CPENTA" | "CTETRA" => elements.push(c),
+            "CHEXA" | "CPENTA" | "CTETRA" | "CPYRAM" => elements.push(c),
             "PSOLID" => {
                 let pid = c.id(0, "PID")?;
                 let mid = c.id(1, "MID")?;
@@ -547,7 +546,7 @@ fn parse_lines(
             .min_by_key(|c| c.line)
             .expect("non-empty");
         let text = format!(
-            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10) with MAT1 or MAT9, CONM2 point masses, RBE2 and RBE3 links and SPC constraints",
+            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, CONM2 point masses, RBE2 and RBE3 links and SPC constraints",
             list.join(", ")
         );
         if options.lenient {
@@ -662,6 +661,12 @@ fn parse_lines(
             ),
             ("CTETRA", 4) => (ElementKind::Tet4, &[0, 1, 2, 3]),
             ("CTETRA", 10) => (ElementKind::Tet10, &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9]),
+            ("CPYRAM", 5) => (ElementKind::Pyramid5, &[0, 1, 2, 3, 4]),
+            // base mid-edges 1-2, 2-3, 3-4, 4-1, then 1-5, 2-5, 3-5, 4-5: femu's order
+            ("CPYRAM", 13) => (
+                ElementKind::Pyramid13,
+                &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12],
+            ),
             (name, n) => {
                 return Err(c.err(format!(
                     "{eid} has {n} grids: femu reads {} with {}",
@@ -669,6 +674,7 @@ fn parse_lines(
                     match name {
                         "CHEXA" => "8 or 20",
                         "CPENTA" => "6 or 15",
+                        "CPYRAM" => "5 or 13",
                         _ => "4 or 10",
                     }
                 )));

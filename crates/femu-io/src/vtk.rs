@@ -27,6 +27,9 @@ pub fn vtk_cell(kind: ElementKind) -> (u8, &'static [usize]) {
         // corners reversed per triangle; mid-edge nodes follow their edges:
         // VTK edges (0,1),(1,2),(2,0) of (0,2,1) are femu's (0,2),(2,1),(1,0) = mids 8, 7, 6
         ElementKind::Penta15 => (26, &[0, 2, 1, 3, 5, 4, 8, 7, 6, 11, 10, 9, 12, 14, 13]),
+        // VTK's pyramids: base normal towards the apex, mid-edges in femu's (Nastran's) order
+        ElementKind::Pyramid5 => (14, &[0, 1, 2, 3, 4]),
+        ElementKind::Pyramid13 => (27, &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12]),
     }
 }
 

@@ -454,3 +454,58 @@ fn absurd_counts_are_errors_not_allocations() {
     let e = parse_msh(&bad, Path::new("huge.msh")).unwrap_err();
     assert!(matches!(e, IoError::Parse { line: 37, .. }), "{e}");
 }
+
+/// Pyramids (Gmsh types 7 and 19): a 13-node pyramid written in Gmsh's edge order (0-1, 0-3, 0-4,
+/// 1-2, 1-4, 2-3, 2-4, 3-4, from Gmsh's `edges_pyramid`), its mid-edge nodes at the midpoints of
+/// Gmsh's edges, and a 5-node pyramid on its base: after reading, every femu mid-edge node is the
+/// midpoint of femu's edge and the volumes are the analytic `base * height / 3`.
+#[test]
+fn pyramids_in_gmsh_order() {
+    let corners = [
+        [0.0, 0.0, 0.0],
+        [2.0, 0.0, 0.0],
+        [2.0, 2.0, 0.0],
+        [0.0, 2.0, 0.0],
+        [1.0, 1.0, 1.5],
+    ];
+    let gmsh_edges = [
+        [0, 1],
+        [0, 3],
+        [0, 4],
+        [1, 2],
+        [1, 4],
+        [2, 3],
+        [2, 4],
+        [3, 4],
+    ];
+    let mut nodes: Vec<[f64; 3]> = corners.to_vec();
+    for [a, b] in gmsh_edges {
+        nodes.push(std::array::from_fn(|i| {
+            0.5 * (corners[a][i] + corners[b][i])
+        }));
+    }
+    // the linear pyramid below the base (apex at z = -1, base seen from it counter-clockwise)
+    nodes.push([1.0, 1.0, -1.0]);
+    let mut text = format!(
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n{}\n",
+        nodes.len()
+    );
+    for (i, p) in nodes.iter().enumerate() {
+        text.push_str(&format!("{} {} {} {}\n", i + 1, p[0], p[1], p[2]));
+    }
+    text.push_str("$EndNodes\n$Elements\n2\n1 19 2 1 1 1 2 3 4 5 6 7 8 9 10 11 12 13\n2 7 2 1 1 1 4 3 2 14\n$EndElements\n");
+    let g = parse_msh(&text, Path::new("pyr.msh")).unwrap();
+    let mesh = &g.mesh;
+    let e = mesh.element(0);
+    assert_eq!(e.kind, ElementKind::Pyramid13);
+    let x = |n: usize| mesh.coords()[n];
+    for (k, [a, b]) in ElementKind::Pyramid13.edges().iter().enumerate() {
+        let (pa, pb, m) = (x(e.nodes[*a]), x(e.nodes[*b]), x(e.nodes[5 + k]));
+        for i in 0..3 {
+            assert!((m[i] - 0.5 * (pa[i] + pb[i])).abs() < 1e-15, "edge {k}");
+        }
+    }
+    assert_eq!(mesh.element(1).kind, ElementKind::Pyramid5);
+    let want = 4.0 * 1.5 / 3.0 + 4.0 * 1.0 / 3.0;
+    assert!((mesh.volume().unwrap() - want).abs() < 1e-13);
+}

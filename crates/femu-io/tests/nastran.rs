@@ -561,3 +561,67 @@ fn rigid_and_interpolation_links() {
         assert!(e.contains(want), "want {want:?}\n got {e}");
     }
 }
+
+/// CPYRAM with 5 and 13 grids (Nastran's order: base mid-edges 1-2, 2-3, 3-4, 4-1, then 1-5 to
+/// 4-5): the deck's K and M equal those of the same pyramids built through femu's API, and the
+/// volume is the analytic one.
+#[test]
+fn pyramids() {
+    let corners = [
+        [0.0, 0.0, 0.0],
+        [2.0, 0.0, 0.0],
+        [2.0, 2.0, 0.0],
+        [0.0, 2.0, 0.0],
+        [1.0, 1.0, 1.5],
+    ];
+    let mut nodes: Vec<[f64; 3]> = corners.to_vec();
+    for [a, b] in ElementKind::Pyramid13.edges() {
+        nodes.push(std::array::from_fn(|i| {
+            0.5 * (corners[*a][i] + corners[*b][i])
+        }));
+    }
+    nodes.push([1.0, 1.0, -1.0]);
+    let mut text = String::from("BEGIN BULK\n");
+    for (i, p) in nodes.iter().enumerate() {
+        text.push_str(&format!("GRID,{},,{},{},{}\n", i + 1, p[0], p[1], p[2]));
+    }
+    text.push_str("CPYRAM,1,1,1,2,3,4,5,6,+\n+,7,8,9,10,11,12,13\nCPYRAM,2,1,1,4,3,2,14\nPSOLID,1,1\nMAT1,1,7.+10,,.33,2700.\nENDDATA\n");
+    let deck = parse_bdf(&text, "pyr.bdf", &BdfOptions::default()).unwrap();
+    let mut mesh = Mesh::new();
+    for (i, p) in nodes.iter().enumerate() {
+        mesh.add_node(i as u64 + 1, *p).unwrap();
+    }
+    mesh.add_element(1, ElementKind::Pyramid13, &(1..=13).collect::<Vec<u64>>())
+        .unwrap();
+    mesh.add_element(2, ElementKind::Pyramid5, &[1, 4, 3, 2, 14])
+        .unwrap();
+    assert!((mesh.volume().unwrap() - (2.0 + 4.0 / 3.0)).abs() < 1e-13);
+    let mut model = Model::new(mesh).unwrap();
+    model
+        .set_material(None, Material::isotropic("al", 7e10, 0.33, 2700.0).unwrap())
+        .unwrap();
+    let (a, b) = (
+        deck.model.assemble(MassKind::Consistent).unwrap(),
+        model.assemble(MassKind::Consistent).unwrap(),
+    );
+    assert!(max_diff(&a.k, &b.k) == 0.0 && max_diff(&a.m, &b.m) == 0.0);
+    // CalculiX has no pyramid: the deck writer says so
+    let e = femu_io::inp::inp_string(&deck.model, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("element 1 is a pyramid13: Abaqus and CalculiX have no pyramid element"),
+        "{e}"
+    );
+    let e = parse_bdf(
+        &text.replace("CPYRAM,2,1,1,4,3,2,14", "CPYRAM,2,1,1,4,3,2"),
+        "pyr.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("CPYRAM 2 has 4 grids: femu reads CPYRAM with 5 or 13"),
+        "{e}"
+    );
+}

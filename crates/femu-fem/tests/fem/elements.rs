@@ -285,7 +285,27 @@ fn quadratic_rules_are_exact_on_undistorted_elements() {
         }
         r
     };
+    let pyramid_rich = {
+        // the collapsed cube with 8 Gauss points per direction, written out here
+        let (gx, gw) = femu_fem::quadrature::gauss_legendre(8);
+        let mut r = QuadratureRule {
+            points: vec![],
+            weights: vec![],
+        };
+        for (a, wa) in gx.iter().zip(&gw) {
+            for (b, wb) in gx.iter().zip(&gw) {
+                for (t, wt) in gx.iter().zip(&gw) {
+                    let c = 0.5 * (t + 1.0);
+                    r.points.push([a * (1.0 - c), b * (1.0 - c), c]);
+                    r.weights.push(wa * wb * 0.5 * wt * (1.0 - c) * (1.0 - c));
+                }
+            }
+        }
+        r
+    };
     for (kind, rule) in [
+        (ElementKind::Pyramid13, pyramid_rich.clone()),
+        (ElementKind::Pyramid5, pyramid_rich),
         (ElementKind::Hex20, hex_gauss(5)),
         (ElementKind::Hex8, hex_gauss(4)),
         (ElementKind::Penta15, wedge_rich.clone()),
