@@ -6,6 +6,10 @@
 //! comma), implicit exponents (`7.+10`, `1.-3`), `$` comments, `INCLUDE`, the case control's
 //! `SPC =` before `BEGIN BULK`, and `ENDDATA`.
 //!
+//! Mid-side grids of quadratic solids may be blank, as Nastran allows: that edge is straight and
+//! the element varies linearly along it, which femu states with a node at the edge's midpoint tied
+//! to the average of its ends (docs/MATH.md, "Multipoint constraints").
+//!
 //! Cards read: `GRID` (with its `CP` frame), `CORD2R/C/S` and `CORD1R/C/S`, `CHEXA` (8/20),
 //! `CPENTA` (6/15), `CTETRA` (4/10), `CPYRAM` (5/13), `PSOLID`, `MAT1` (two of `E`, `G`, `NU`), `MAT9`, `SPC`, `SPC1`,
 //! `SPCADD` (components 4-6 on rigid links' reference grids, the only grids with rotations),
@@ -635,16 +639,43 @@ fn parse_lines(
     }
     // elements: Nastran's node order to femu's
     let mut element_pid: Vec<(u64, u64, &Card)> = Vec::new();
+    // blank mid-side grids: a node at the edge's midpoint, tied to the average of its ends
+    let mut next_id = ids.iter().copied().max().unwrap_or(0);
+    let mut straight: HashMap<(u64, u64), u64> = HashMap::new();
+    let mut ties: Vec<(u64, u64, u64, String)> = Vec::new();
+    let mut first_blank: Option<&Card> = None;
     for c in &elements {
         let eid = c.id(0, "EID")?;
         let pid = c.id(1, "PID")?;
-        let nodes: Vec<u64> = (2..c.fields.len())
-            .map(|i| c.int(i, "G"))
-            .collect::<Result<Vec<_>, _>>()?
-            .into_iter()
-            .flatten()
-            .map(|v| v as u64)
-            .collect();
+        let mut slots: Vec<Option<u64>> = (2..c.fields.len())
+            .map(|i| c.int(i, "G").map(|v| v.map(|v| v as u64)))
+            .collect::<Result<Vec<_>, _>>()?;
+        while slots.last().is_some_and(Option::is_none) {
+            slots.pop();
+        }
+        let (corners, full) = match c.name.as_str() {
+            "CHEXA" => (8, 20),
+            "CPENTA" => (6, 15),
+            "CPYRAM" => (5, 13),
+            _ => (4, 10),
+        };
+        // Nastran lets mid-side grids be left blank: that edge is straight and the element
+        // varies linearly along it
+        let quadratic = slots.len() > corners && slots.len() <= full;
+        if quadratic && slots[..corners].iter().any(Option::is_none) {
+            return Err(c.err(format!(
+                "{eid}: a corner grid (G1-G{corners}) is blank; only mid-side grids may be"
+            )));
+        }
+        let blanks = quadratic && (slots.len() < full || slots.iter().any(Option::is_none));
+        if blanks {
+            slots.resize(full, None);
+        }
+        let nodes: Vec<u64> = if blanks {
+            slots.iter().map(|g| g.unwrap_or(0)).collect()
+        } else {
+            slots.iter().flatten().copied().collect()
+        };
         let (kind, order): (ElementKind, &[usize]) = match (c.name.as_str(), nodes.len()) {
             ("CHEXA", 8) => (ElementKind::Hex8, &[0, 1, 2, 3, 4, 5, 6, 7]),
             // Nastran: bottom edges, vertical edges, top edges; femu: bottom, top, vertical
@@ -680,14 +711,60 @@ fn parse_lines(
                 )));
             }
         };
-        for g in &nodes {
+        for g in nodes.iter().filter(|g| **g != 0) {
             if mesh.node_index(*g).is_none() {
                 return Err(c.err(format!(
                     "{eid} refers to GRID {g}, which the deck does not define"
                 )));
             }
         }
-        let ordered: Vec<u64> = order.iter().map(|&k| nodes[k]).collect();
+        let mut ordered: Vec<u64> = order.iter().map(|&k| nodes[k]).collect();
+        if blanks {
+            let nc = kind.num_corners();
+            for m in nc..ordered.len() {
+                if ordered[m] != 0 {
+                    continue;
+                }
+                let [a, b] = kind.edges()[m - nc];
+                let (ga, gb) = (ordered[a], ordered[b]);
+                let key = (ga.min(gb), ga.max(gb));
+                let id = match straight.get(&key) {
+                    Some(id) => *id,
+                    None => {
+                        next_id += 1;
+                        while mesh.node_index(next_id).is_some() {
+                            next_id += 1;
+                        }
+                        let (pa, pb) = (
+                            mesh.coords()[mesh.node_index(ga).expect("checked")],
+                            mesh.coords()[mesh.node_index(gb).expect("checked")],
+                        );
+                        let mid: [f64; 3] = std::array::from_fn(|i| 0.5 * (pa[i] + pb[i]));
+                        mesh.add_node(next_id, mid)
+                            .map_err(|source| IoError::Model {
+                                path: c.path.clone(),
+                                line: c.line,
+                                source,
+                            })?;
+                        straight.insert(key, next_id);
+                        ties.push((
+                            next_id,
+                            ga,
+                            gb,
+                            format!(
+                                "{} {eid} ({} line {}): blank mid-side grid between GRIDs {ga} and {gb}",
+                                c.name,
+                                c.path.display(),
+                                c.line
+                            ),
+                        ));
+                        next_id
+                    }
+                };
+                ordered[m] = id;
+                first_blank.get_or_insert(c);
+            }
+        }
         mesh.add_element(eid, kind, &ordered)
             .map_err(|source| IoError::Model {
                 path: c.path.clone(),
@@ -816,6 +893,27 @@ fn parse_lines(
                 line: pc.line,
                 source,
             })?;
+    }
+    for (id, ga, gb, label) in &ties {
+        for k in 0..3 {
+            model
+                .add_constraint((*id, k), &[((*ga, k), 0.5), ((*gb, k), 0.5)], label)
+                .map_err(|source| IoError::Content {
+                    path: path.to_path_buf(),
+                    reason: source.to_string(),
+                })?;
+        }
+    }
+    if let Some(c) = first_blank {
+        warn(
+            &mut warnings,
+            c,
+            format!(
+                "{} mid-side grids are blank: those edges are straight and the elements vary linearly along them, as Nastran reads them (femu adds a node at each such midpoint, ids from {}, tied to the average of the edge's ends)",
+                ties.len(),
+                ties.first().map_or(0, |t| t.0)
+            ),
+        );
     }
     read_links(&links, &mut model, &turned, &mut warnings)?;
     // constraints: the case control's SPC set, or the only one a bulk-only file has

@@ -84,7 +84,7 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
         mesh_lines(&mut s, model.mesh());
         let _ = writeln!(
             s,
-            "point masses (CONM2): {}; constrained DOFs (SPC): {}; dependent DOFs of links (RBE2, RBE3): {}",
+            "point masses (CONM2): {}; constrained DOFs (SPC): {}; dependent DOFs (RBE2, RBE3, blank mid-side grids): {}",
             model.point_masses().len(),
             model.fixed_dofs().count(),
             model.constraints().len()
