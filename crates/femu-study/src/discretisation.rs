@@ -59,29 +59,63 @@ pub fn estimate(
     for (i, (m, _)) in by_material.iter().enumerate() {
         q.set_material(Some(&format!("__femu_discretisation_{i}")), m.clone())?;
     }
-    // constraints: the same nodes, and a mid-edge node where both ends of its edge are fixed
+    // the same point masses, rotations and multipoint constraints (node ids are kept)
+    for p in model.point_masses() {
+        q.add_point_mass_matrix(mesh.node_id(p.node), p.mass)?;
+    }
+    for n in model.rotation_nodes() {
+        q.add_rotations(mesh.node_id(*n))?;
+    }
+    let mut dependent: std::collections::HashSet<(u64, usize)> = Default::default();
+    for con in model.constraints() {
+        let (n, c) = con.dependent;
+        let terms: Vec<((u64, usize), f64)> = con
+            .terms
+            .iter()
+            .map(|((m, k), w)| ((mesh.node_id(*m), *k), *w))
+            .collect();
+        q.add_constraint((mesh.node_id(n), c), &terms, &con.label)?;
+        dependent.insert((mesh.node_id(n), c));
+    }
+    // boundary conditions: the same nodes, and a mid-edge node where both ends of its edge are
+    // fixed; a mid-edge node whose ends are both dependent follows their average (exact for a
+    // rigid link, whose motion is affine)
     let fixed: std::collections::HashSet<(u64, usize)> = model
         .fixed_dofs()
         .map(|(n, c)| (mesh.node_id(n), c))
         .collect();
     let mut extra: Vec<(u64, usize)> = Vec::new();
+    let mut ties: Vec<(u64, usize, u64, u64)> = Vec::new();
     {
         let qmesh = q.mesh();
+        let mut seen = std::collections::HashSet::new();
         for el in qmesh.elements() {
             let corners = el.kind.num_corners();
             for (k, e) in el.kind.edges().iter().enumerate() {
                 let (a, b) = (qmesh.node_id(el.nodes[e[0]]), qmesh.node_id(el.nodes[e[1]]));
                 let mid = qmesh.node_id(el.nodes[corners + k]);
+                if !seen.insert(mid) {
+                    continue;
+                }
                 for c in 0..3 {
                     if fixed.contains(&(a, c)) && fixed.contains(&(b, c)) {
                         extra.push((mid, c));
+                    } else if dependent.contains(&(a, c)) && dependent.contains(&(b, c)) {
+                        ties.push((mid, c, a, b));
                     }
                 }
             }
         }
     }
     for (id, c) in fixed.iter().chain(&extra) {
-        q.fix_nodes(&[*id], &[*c])?;
+        q.fix_node_dofs(*id, &[*c])?;
+    }
+    for (mid, c, a, b) in ties {
+        q.add_constraint(
+            (mid, c),
+            &[((a, c), 0.5), ((b, c), 0.5)],
+            &format!("(mid-edge node {mid} of the quadratic comparison mesh, between {a} and {b})"),
+        )?;
     }
     let asm = Assembler::new(&q)?;
     let sys = asm.assemble(&q, MassKind::Consistent)?;

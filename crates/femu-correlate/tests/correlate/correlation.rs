@@ -333,3 +333,51 @@ fn correlate_and_estimate_reports() {
         assert!(flo <= f_test[a.test] && f_test[a.test] <= fhi);
     }
 }
+
+/// A sensor on a node that a rigid link makes dependent reads that node's displacement, the
+/// combination `u = T z` (its row of `T`), in any direction; a sensor on a fixed DOF is an error.
+#[test]
+fn sensors_on_linked_nodes_read_the_linked_motion() {
+    use femu_correlate::SensorLayout;
+    use femu_correlate::sensors::Sensor;
+    let mut mesh = box_mesh(&BoxSpec::new(
+        [0.2, 0.1, 0.05],
+        [4, 2, 1],
+        BoxCells::Hex,
+        false,
+    ))
+    .unwrap();
+    mesh.add_node(77, [0.25, 0.05, 0.0]).unwrap();
+    let mut model = Model::new(mesh.clone()).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+    let end: Vec<u64> = mesh
+        .node_set("xmax")
+        .unwrap()
+        .iter()
+        .map(|i| mesh.node_id(*i))
+        .collect();
+    model.add_rigid_link(77, &end, &[0, 1, 2], "end").unwrap();
+    let dofs = model.dof_map().unwrap();
+    let dir = [0.3, -0.5, 0.8];
+    let layout = SensorLayout::new(
+        model.mesh(),
+        &dofs,
+        vec![Sensor::axis(end[2], 1), Sensor::new(end[5], dir)],
+    )
+    .unwrap();
+    let z: Vec<f64> = (0..dofs.free_count())
+        .map(|i| ((i * 7) % 13) as f64 - 6.0)
+        .collect();
+    let u = dofs.expand(&z).unwrap();
+    let y = layout.measure(&z).unwrap();
+    let (a, b) = (
+        mesh.node_index(end[2]).unwrap(),
+        mesh.node_index(end[5]).unwrap(),
+    );
+    let norm = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
+    let want_b: f64 = (0..3).map(|c| dir[c] / norm * u[3 * b + c]).sum();
+    assert!((y[0] - u[3 * a + 1]).abs() < 1e-12 && (y[1] - want_b).abs() < 1e-12);
+    let fixed = mesh.node_id(mesh.node_set("xmin").unwrap()[0]);
+    assert!(SensorLayout::new(model.mesh(), &dofs, vec![Sensor::axis(fixed, 0)]).is_err());
+}
