@@ -110,6 +110,13 @@ impl Assembler {
         // need the pattern only: they are added serially)
         let (mut eff_ptr, mut eff) = (Vec::new(), Vec::new());
         let mut extra: Vec<Vec<usize>> = Vec::new();
+        let mut buf = Vec::new();
+        for r in model.rigid_masses() {
+            let mut pts = vec![r.node];
+            pts.extend(dofs.rotation_point(r.node));
+            effective_points(&dofs, &pts, &mut buf);
+            extra.push(buf.clone());
+        }
         if dofs.has_dependents() {
             eff_ptr.push(0);
             let mut buf = Vec::new();
@@ -451,6 +458,19 @@ impl Assembler {
                     Ok(())
                 },
             )?;
+        }
+        // rigid masses: the 6x6 block of the node's translations and rotations (kept whole with
+        // the lumped mass too, which is then on the stiffness pattern whenever rotations exist)
+        for r in model.rigid_masses() {
+            let Some(rp) = self.dofs.rotation_point(r.node) else {
+                continue;
+            };
+            if mass == MassKind::Lumped && !self.lumped_on_pattern() {
+                self.scatter_lumped(&[r.node], |_, c| r.matrix[c][c], |at, v| ms.add(at, v));
+                continue;
+            }
+            let local: Vec<f64> = r.matrix.iter().flatten().copied().collect();
+            self.scatter(&[r.node, rp], |at, l, w| ms.add(at, w * local[l]));
         }
         // point masses: the 3x3 block of their node (the lumped mass keeps its diagonal; an
         // off-diagonal coupling needs the consistent pattern)

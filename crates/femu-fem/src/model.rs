@@ -19,6 +19,25 @@ pub struct Model {
     point_masses: Vec<PointMass>,
     rotation_nodes: Vec<usize>,
     constraints: Vec<LinearConstraint>,
+    rigid_masses: Vec<RigidMass>,
+}
+
+/// A rigid body's mass on a node that carries rotations (a rigid link's reference, where Nastran
+/// puts a CONM2 with an offset and rotational inertia): its 6x6 mass matrix on the node's
+/// translations and rotations, `[[m I, -m S(d)], [m S(d), -m S(d)^2 + J]]` for mass `m` at offset
+/// `d` with inertia `J` about its centre of gravity (`S(d)` the cross-product matrix; docs/MATH.md).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigidMass {
+    /// Internal node index (a node with rotations).
+    pub node: usize,
+    /// The mass matrix on `(u_x, u_y, u_z, theta_x, theta_y, theta_z)`.
+    pub matrix: [[f64; 6]; 6],
+    /// The mass (kg).
+    pub mass: f64,
+    /// The centre of gravity's offset from the node (m, basic frame).
+    pub offset: [f64; 3],
+    /// The inertia about the centre of gravity (kg m^2, basic axes).
+    pub inertia: [[f64; 3]; 3],
 }
 
 /// A concentrated mass on a node: sensors, shakers, attached equipment.
@@ -52,6 +71,7 @@ impl Model {
             point_masses: Vec::new(),
             rotation_nodes: Vec::new(),
             constraints: Vec::new(),
+            rigid_masses: Vec::new(),
         })
     }
 
@@ -222,6 +242,79 @@ impl Model {
     /// The point masses.
     pub fn point_masses(&self) -> &[PointMass] {
         &self.point_masses
+    }
+
+    /// Adds a rigid body of mass `m` (kg) whose centre of gravity is at `offset` (m, basic frame)
+    /// from node `node_id`, with inertia `inertia` (kg m^2, symmetric, about the centre of
+    /// gravity, basic axes), on a node that carries rotations ([`Model::add_rotations`]): its
+    /// translations and rotations both see it (see [`RigidMass`]).
+    ///
+    /// # Errors
+    /// [`FemError::UnknownNode`]; [`FemError::InvalidMaterial`] for a mass that is not positive
+    /// and finite, an inertia that is not symmetric positive semi-definite, or a node without
+    /// rotations.
+    pub fn add_rigid_mass(
+        &mut self,
+        node_id: u64,
+        m: f64,
+        offset: [f64; 3],
+        inertia: [[f64; 3]; 3],
+    ) -> Result<(), FemError> {
+        let node = self.node(node_id)?;
+        let bad = |reason: String| FemError::InvalidMaterial {
+            name: format!("rigid mass on node {node_id}"),
+            reason,
+        };
+        if !self.rotation_nodes.contains(&node) {
+            return Err(bad(
+                "the node has no rotations (only a rigid link's reference node has them)".into(),
+            ));
+        }
+        if !(m.is_finite() && m > 0.0)
+            || offset
+                .iter()
+                .chain(inertia.iter().flatten())
+                .any(|v| !v.is_finite())
+        {
+            return Err(bad(format!(
+                "mass {m}, offset {offset:?} and inertia {inertia:?} must be finite, the mass positive"
+            )));
+        }
+        let j = nalgebra::Matrix3::from_fn(|i, k| inertia[i][k]);
+        let scale = j.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        if (j - j.transpose()).iter().any(|v| v.abs() > 1e-12 * scale)
+            || j.symmetric_eigenvalues().min() < -1e-12 * scale
+        {
+            return Err(bad(format!(
+                "the inertia {inertia:?} must be symmetric positive semi-definite"
+            )));
+        }
+        let d = offset;
+        let sd = nalgebra::Matrix3::new(0.0, -d[2], d[1], d[2], 0.0, -d[0], -d[1], d[0], 0.0);
+        let tr = -m * sd;
+        let rr = -m * sd * sd + j;
+        let mut matrix = [[0.0; 6]; 6];
+        for i in 0..3 {
+            matrix[i][i] = m;
+            for k in 0..3 {
+                matrix[i][3 + k] = tr[(i, k)];
+                matrix[3 + k][i] = tr[(i, k)];
+                matrix[3 + i][3 + k] = rr[(i, k)];
+            }
+        }
+        self.rigid_masses.push(RigidMass {
+            node,
+            matrix,
+            mass: m,
+            offset,
+            inertia,
+        });
+        Ok(())
+    }
+
+    /// The rigid masses.
+    pub fn rigid_masses(&self) -> &[RigidMass] {
+        &self.rigid_masses
     }
 
     /// Gives node `node_id` three rotational DOFs (about x, y, z, radians; components 3, 4, 5),
@@ -612,6 +705,7 @@ impl Model {
         for p in &self.point_masses {
             m += (p.mass[0][0] + p.mass[1][1] + p.mass[2][2]) / 3.0;
         }
+        m += self.rigid_masses.iter().map(|r| r.mass).sum::<f64>();
         Ok(m)
     }
 

@@ -2000,9 +2000,28 @@ pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String,
             i + 1
         );
     }
-    // point masses: one MASS element each (ids after the solids'), a *MASS per element
+    // point masses: one MASS element each (ids after the solids'), a *MASS per element; a rigid
+    // mass without offset or inertia is one too
     let first_id = mesh.elements().map(|e| e.id).max().unwrap_or(0) + 1;
-    for (k, p) in model.point_masses().iter().enumerate() {
+    let mut masses: Vec<femu_fem::model::PointMass> = model.point_masses().to_vec();
+    for r in model.rigid_masses() {
+        if r.offset
+            .iter()
+            .chain(r.inertia.iter().flatten())
+            .any(|v| *v != 0.0)
+        {
+            return Err(unwritable(format!(
+                "the rigid mass on node {} has an offset or rotary inertia, which CalculiX's *MASS cannot state",
+                mesh.node_id(r.node)
+            )));
+        }
+        let m = r.mass;
+        masses.push(femu_fem::model::PointMass {
+            node: r.node,
+            mass: [[m, 0.0, 0.0], [0.0, m, 0.0], [0.0, 0.0, m]],
+        });
+    }
+    for (k, p) in masses.iter().enumerate() {
         let m = p.mass[0][0];
         let isotropic =
             (0..3).all(|i| (0..3).all(|j| p.mass[i][j] == if i == j { m } else { 0.0 }));

@@ -13,8 +13,9 @@
 //! Cards read: `GRID` (with its `CP` frame), `CORD2R/C/S` and `CORD1R/C/S`, `CHEXA` (8/20),
 //! `CPENTA` (6/15), `CTETRA` (4/10), `CPYRAM` (5/13), `PSOLID`, `MAT1` (two of `E`, `G`, `NU`), `MAT9`, `SPC`, `SPC1`,
 //! `SPCADD` (components 4-6 on rigid links' reference grids, the only grids with rotations),
-//! `CONM2` (its mass; femu's point masses act on translations, so offset and rotational inertia
-//! are reported and dropped), `RBE2` (a rigid link: its reference grid gets rotations, the
+//! `CONM2` (on an RBE2 reference grid a rigid mass with its offset, `CID` frame and inertia
+//! `[[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32, I33]]`; on a solid grid, which has no
+//! rotations, its mass, with the offset and inertia reported and dropped), `RBE2` (a rigid link: its reference grid gets rotations, the
 //! translations of the dependent grids follow its rigid motion; components 4-6 of solid grids have
 //! nothing to act on), `RBE3` (the reference follows the weighted least-squares rigid motion of
 //! its grids, docs/MATH.md "Multipoint constraints"; weight groups on components 123), `EIGRL` and
@@ -1124,12 +1125,60 @@ fn parse_lines(
         }
         let offset = (4..7).any(|i| c.real(i, "X").ok().flatten().is_some_and(|v| v != 0.0));
         let inertia = (8..14).any(|i| c.real(i, "I").ok().flatten().is_some_and(|v| v != 0.0));
+        if model.rotation_nodes().contains(&gi) {
+            // a rigid link's reference: offset and inertia act on its rotations
+            let cid = c.int(2, "CID")?.unwrap_or(0);
+            let x: [f64; 3] = [
+                c.real(4, "X1")?.unwrap_or(0.0),
+                c.real(5, "X2")?.unwrap_or(0.0),
+                c.real(6, "X3")?.unwrap_or(0.0),
+            ];
+            let xg = model.mesh().coords()[gi];
+            // Nastran's I11, I21, I22, I31, I32, I33 about the centre of gravity; the products
+            // of inertia are given as magnitudes and enter the matrix negated
+            let v = |i: usize| -> Result<f64, IoError> { Ok(c.real(i, "I")?.unwrap_or(0.0)) };
+            let local = [
+                [v(8)?, -v(9)?, -v(11)?],
+                [-v(9)?, v(10)?, -v(12)?],
+                [-v(11)?, -v(12)?, v(13)?],
+            ];
+            let (d, axes) = match cid {
+                -1 => (std::array::from_fn(|i| x[i] - xg[i]), None),
+                0 => (x, None),
+                cid => {
+                    let a = geometry.frame(cid, c)?.axes_at(xg);
+                    (
+                        std::array::from_fn(|i| (0..3).map(|j| a[i][j] * x[j]).sum()),
+                        Some(a),
+                    )
+                }
+            };
+            // inertia in basic axes: R J R^T (R's columns the frame's axes)
+            let j: [[f64; 3]; 3] = match axes {
+                None => local,
+                Some(a) => std::array::from_fn(|i| {
+                    std::array::from_fn(|k| {
+                        (0..3)
+                            .map(|p| (0..3).map(|q| a[i][p] * local[p][q] * a[k][q]).sum::<f64>())
+                            .sum()
+                    })
+                }),
+            };
+            model
+                .add_rigid_mass(g, m * wtmass, d, j.map(|r| r.map(|v| v * wtmass)))
+                .map_err(|source| IoError::Model {
+                    path: c.path.clone(),
+                    line: c.line,
+                    source,
+                })?;
+            continue;
+        }
         if offset || inertia {
             warn(
                 &mut warnings,
                 c,
                 format!(
-                    "{}: femu's point masses act on translations, so its {} dropped (the translational mass is kept)",
+                    "{}: the grid has no rotations (only RBE2 reference grids have), so its {} dropped (the translational mass is kept)",
                     c.field(0),
                     match (offset, inertia) {
                         (true, true) => "offset and rotational inertia are",

@@ -248,9 +248,9 @@ fn frames_constraints_and_masses() {
     assert_eq!(deck.model.point_masses().len(), 1);
     assert_eq!(deck.model.point_masses()[0].mass[0][0], 2.5);
     assert!(
-        deck.warnings.iter().any(|w| w
-            .message
-            .contains("point masses act on translations, so its offset is dropped")),
+        deck.warnings.iter().any(|w| w.message.contains(
+            "the grid has no rotations (only RBE2 reference grids have), so its offset is dropped"
+        )),
         "{:?}",
         deck.warnings
     );
@@ -741,4 +741,62 @@ fn pynastran_contact_model_with_pyramids_and_blank_mid_side_grids() {
         "first elastic eigenvalue {}",
         modes.values[6]
     );
+}
+
+/// CONM2 on an RBE2 reference grid keeps its offset and inertia (Nastran's products of inertia
+/// negated), in the basic frame (CID 0), as an absolute centre of gravity (CID -1) and in a frame
+/// turned 90 degrees about z (CID 5: offset and inertia rotated, `R J R^T` written out here): the
+/// deck's M equals that of `add_rigid_mass` with the basic values.
+#[test]
+fn conm2_offset_and_inertia_on_reference_grids() {
+    let base = CUBE.replace("1.41421356237309590.      0.", "1.41421 45.     0.");
+    let cases: [(&str, [f64; 3], [[f64; 3]; 3]); 3] = [
+        (
+            "CONM2,31,20,0,4.,.1,.2,-.3,,+\n+,1.,.5,2.,.1,.2,3.",
+            [0.1, 0.2, -0.3],
+            [[1.0, -0.5, -0.1], [-0.5, 2.0, -0.2], [-0.1, -0.2, 3.0]],
+        ),
+        (
+            "CONM2,31,20,-1,4.,.6,.5,2.1,,+\n+,1.,.5,2.,.1,.2,3.",
+            [0.1, 0.0, 0.1],
+            [[1.0, -0.5, -0.1], [-0.5, 2.0, -0.2], [-0.1, -0.2, 3.0]],
+        ),
+        (
+            // frame 7: x' = y, y' = -x, z' = z; local offset (.1, 0, 0) is basic (0, .1, 0);
+            // local J = [[1, -.5, 0], [-.5, 2, 0], [0, 0, 3]] is R J R^T = [[2, .5, 0], [.5, 1, 0], [0, 0, 3]]
+            "CORD2R,7,0,0.,0.,0.,0.,0.,1.,+\n+,0.,1.,0.\nCONM2,31,20,7,4.,.1,,,,+\n+,1.,.5,2.,,,3.",
+            [0.0, 0.1, 0.0],
+            [[2.0, 0.5, 0.0], [0.5, 1.0, 0.0], [0.0, 0.0, 3.0]],
+        ),
+    ];
+    for (conm2, d, j) in cases {
+        let text = base.replace(
+            "PARAM    WTMASS  1.",
+            &format!(
+                "GRID,20,,0.5,0.5,2.0\nRBE2,30,20,123456,5,6,7,8\n{conm2}\nPARAM    WTMASS  1."
+            ),
+        );
+        let deck = parse_bdf(&text, "cube.bdf", &BdfOptions::default()).unwrap();
+        let plain = parse_bdf(
+            &base.replace(
+                "PARAM    WTMASS  1.",
+                "GRID,20,,0.5,0.5,2.0\nRBE2,30,20,123456,5,6,7,8\nPARAM    WTMASS  1.",
+            ),
+            "cube.bdf",
+            &BdfOptions::default(),
+        )
+        .unwrap();
+        let mut model = plain.model.clone();
+        model.add_rigid_mass(20, 4.0, d, j).unwrap();
+        let (a, b) = (
+            deck.model.assemble(MassKind::Consistent).unwrap(),
+            model.assemble(MassKind::Consistent).unwrap(),
+        );
+        assert!(
+            max_diff(&a.m, &b.m) < 1e-12,
+            "{conm2}: {}",
+            max_diff(&a.m, &b.m)
+        );
+        assert!(max_diff(&a.k, &b.k) == 0.0);
+    }
 }

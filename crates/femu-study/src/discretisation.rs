@@ -66,6 +66,9 @@ pub fn estimate(
     for n in model.rotation_nodes() {
         q.add_rotations(mesh.node_id(*n))?;
     }
+    for r in model.rigid_masses() {
+        q.add_rigid_mass(mesh.node_id(r.node), r.mass, r.offset, r.inertia)?;
+    }
     let mut dependent: std::collections::HashSet<(u64, usize)> = Default::default();
     for con in model.constraints() {
         let (n, c) = con.dependent;

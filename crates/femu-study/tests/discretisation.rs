@@ -1,7 +1,7 @@
 //! The discretisation estimate compares a model with the same model on quadratic elements: that
-//! comparison model must carry the model's point masses and multipoint constraints. Checked
-//! against a quadratic model built here by hand (every node of the end face, mid-edge nodes
-//! included, rigidly linked to a 0.5 kg mass): the estimate's relative error of the first mode
+//! comparison model must carry the model's masses and multipoint constraints. Checked against a
+//! quadratic model built here by hand (every node of the end face, mid-edge nodes included,
+//! rigidly linked to a 0.5 kg body with an offset and rotary inertia): the estimate's relative error of the first mode
 //! equals the one computed from it.
 
 use femu_correlate::modes::ModeSet;
@@ -40,7 +40,14 @@ fn the_quadratic_comparison_keeps_masses_and_links() {
         m.fix_nodes(&clamped, &[0, 1, 2]).unwrap();
         let end: Vec<u64> = at_x(mesh, l).into_iter().filter(|id| *id != 9000).collect();
         m.add_rigid_link(9000, &end, &[0, 1, 2], "end").unwrap();
-        m.add_point_mass(9000, 0.5).unwrap();
+        // a 0.5 kg body whose centre of gravity is 1 cm further out, with rotary inertia
+        m.add_rigid_mass(
+            9000,
+            0.5,
+            [0.01, 0.0, 0.0],
+            [[1e-4, 0.0, 0.0], [0.0, 2e-4, 0.0], [0.0, 0.0, 2e-4]],
+        )
+        .unwrap();
         m
     };
     let model = build(&mesh);

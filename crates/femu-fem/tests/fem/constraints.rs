@@ -462,3 +462,65 @@ fn conflicting_constraints_are_named() {
         .to_string();
     assert!(e.contains("weights must be positive"), "{e}");
 }
+
+/// A rigid mass (mass, offset centre of gravity, full inertia tensor) on a rigid link's reference:
+/// for every rigid motion `u = t + w x x` of the linked structure its kinetic energy form is
+/// `m |t + w x x_cg|^2 + w^T J w` (written here from the definition), with consistent and lumped
+/// mass; it counts in the total mass; a node without rotations refuses it.
+#[test]
+fn rigid_masses_on_reference_nodes_have_the_rigid_body_kinetic_energy() {
+    let xr = [0.25, 0.05, 0.02];
+    let mesh = box_with([0.2, 0.1, 0.04], [4, 2, 1], false, &[(700, xr)]);
+    let mut plain = Model::new(mesh.clone()).unwrap();
+    plain.set_material(None, Material::steel()).unwrap();
+    plain
+        .add_rigid_link(700, &set_ids(&mesh, "xmax"), &[0, 1, 2], "RBE2 1")
+        .unwrap();
+    let mut model = plain.clone();
+    let (m, d) = (3.5, [0.04, -0.02, 0.07]);
+    let j = [[0.2, 0.03, -0.01], [0.03, 0.15, 0.02], [-0.01, 0.02, 0.1]];
+    model.add_rigid_mass(700, m, d, j).unwrap();
+    assert!(
+        (model.total_mass().unwrap() - plain.total_mass().unwrap() - m).abs() < 1e-12,
+        "total mass"
+    );
+    let xcg = [xr[0] + d[0], xr[1] + d[1], xr[2] + d[2]];
+    for kind in [MassKind::Consistent, MassKind::Lumped] {
+        let (a, b) = (model.assemble(kind).unwrap(), plain.assemble(kind).unwrap());
+        assert_eq!(a.dofs, b.dofs);
+        let n = a.dofs.free_count();
+        let rot = a
+            .dofs
+            .rotation_point(mesh.node_index(700).unwrap())
+            .unwrap();
+        let mut rng = super::common::Rng(11);
+        for _ in 0..4 {
+            let t = [rng.sym(), rng.sym(), rng.sym()];
+            let w = [rng.sym(), rng.sym(), rng.sym()];
+            let z: Vec<f64> = (0..n)
+                .map(|f| {
+                    let (p, c) = a.dofs.free_dof(f);
+                    if p == rot {
+                        w[c]
+                    } else {
+                        t[c] + cross(w, mesh.coords()[p])[c]
+                    }
+                })
+                .collect();
+            let e = femu_sparse::csc::bilinear(&a.m, &z, &z).unwrap()
+                - femu_sparse::csc::bilinear(&b.m, &z, &z).unwrap();
+            let v = cross(w, xcg);
+            let vt: f64 = (0..3).map(|i| (t[i] + v[i]).powi(2)).sum();
+            let jw: f64 = (0..3)
+                .map(|i| (0..3).map(|k| w[i] * j[i][k] * w[k]).sum::<f64>())
+                .sum();
+            let want = m * vt + jw;
+            assert!((e - want).abs() < 1e-12 * want, "{kind:?}: {e} vs {want}");
+        }
+    }
+    let e = model
+        .add_rigid_mass(set_ids(&mesh, "xmin")[0], 1.0, d, j)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("the node has no rotations"), "{e}");
+}
