@@ -750,7 +750,8 @@ fn pynastran_contact_model_with_pyramids_and_blank_mid_side_grids() {
 #[test]
 fn conm2_offset_and_inertia_on_reference_grids() {
     let base = CUBE.replace("1.41421356237309590.      0.", "1.41421 45.     0.");
-    let cases: [(&str, [f64; 3], [[f64; 3]; 3]); 3] = [
+    type Case<'a> = (&'a str, [f64; 3], [[f64; 3]; 3]);
+    let cases: [Case; 3] = [
         (
             "CONM2,31,20,0,4.,.1,.2,-.3,,+\n+,1.,.5,2.,.1,.2,3.",
             [0.1, 0.2, -0.3],
