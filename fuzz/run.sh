@@ -15,11 +15,11 @@ cp ../fixtures/msh/*.msh corpus/msh/ 2>/dev/null || true
 cp ../fixtures/uff/*.unv corpus/uff/ 2>/dev/null || true
 cp ../fixtures/csv/*.csv corpus/csv/ 2>/dev/null || true
 cp ../fixtures/nastran/*/*.bdf corpus/bdf/ 2>/dev/null || true
-# inputs are capped at 64 KiB (-max_len): a large fixture would make every run slow without
+# inputs are capped at 16 KiB (-max_len): a large fixture would make every run slow without
 # reaching more code, so larger seeds stay out of the corpus
-find corpus -type f -size +64k -delete
+find corpus -type f -size +16k -delete
 for t in ${FUZZ_TARGETS:-inp uff msh csv bdf}; do
   echo "== $t ($seconds s)"
-  cargo +nightly fuzz run "$t" "corpus/$t" -- -max_total_time="$seconds" -max_len=65536 -rss_limit_mb=2048 2>&1 \
+  cargo +nightly fuzz run "$t" "corpus/$t" -- -max_total_time="$seconds" -max_len=16384 -rss_limit_mb=2048 2>&1 \
     | grep -E "^#[0-9]+ *DONE|Done [0-9]+ runs|SUMMARY|panicked|ERROR" || true
 done

@@ -1,0 +1,108 @@
+"""Type stubs of femu's native module (checked by mypy in CI)."""
+
+from os import PathLike
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+import scipy.sparse
+
+_Path = Union[str, "PathLike[str]"]
+_F64 = npt.NDArray[np.float64]
+
+class FemuError(Exception):
+    """A malformed file, an invalid model or a numerical failure, in femu's words."""
+
+class Model:
+    """A finite element model read from a file, checked and assembled once."""
+
+    @property
+    def path(self) -> str: ...
+    @property
+    def free_count(self) -> int: ...
+    @property
+    def K(self) -> scipy.sparse.csc_matrix: ...
+    @property
+    def M(self) -> scipy.sparse.csc_matrix: ...
+    @property
+    def dofs(self) -> npt.NDArray[np.int64]: ...
+    @property
+    def node_ids(self) -> npt.NDArray[np.uint64]: ...
+    @property
+    def coords(self) -> _F64: ...
+    @property
+    def lumped(self) -> bool: ...
+    @property
+    def total_mass(self) -> float: ...
+    @property
+    def warnings(self) -> List[str]: ...
+    def modes(
+        self,
+        count: Optional[int] = None,
+        *,
+        shift_hz: Optional[float] = None,
+        band_hz: Optional[Tuple[float, float]] = None,
+    ) -> Modes: ...
+
+class Modes:
+    """Eigenvalues, M-normalised shapes, residuals and the Sturm proof."""
+
+    @property
+    def values(self) -> _F64: ...
+    @property
+    def frequencies_hz(self) -> _F64: ...
+    @property
+    def vectors(self) -> _F64: ...
+    @property
+    def residuals(self) -> _F64: ...
+    @property
+    def residual_kinds(self) -> List[str]: ...
+    @property
+    def sturm(self) -> Dict[str, Any]: ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def __len__(self) -> int: ...
+
+class Test:
+    """Test modes on sensors of a model."""
+
+    @staticmethod
+    def from_arrays(
+        model: Model,
+        nodes: Sequence[int],
+        directions: _F64,
+        frequencies_hz: Sequence[float],
+        shapes: _F64,
+        *,
+        damping: Optional[Sequence[float]] = None,
+    ) -> Test: ...
+    @property
+    def frequencies_hz(self) -> _F64: ...
+    @property
+    def shapes(self) -> _F64: ...
+    @property
+    def nodes(self) -> List[int]: ...
+    @property
+    def directions(self) -> _F64: ...
+    @property
+    def C(self) -> scipy.sparse.csr_matrix: ...
+    def __len__(self) -> int: ...
+
+def read_model(
+    path: _Path,
+    *,
+    lumped: bool = False,
+    lenient: bool = False,
+    young: Optional[float] = None,
+    poisson: Optional[float] = None,
+    density: Optional[float] = None,
+    fix: Optional[Sequence[str]] = None,
+) -> Model: ...
+def read_test(path: _Path, model: Model, *, test_units: Optional[float] = None) -> Test: ...
+def mac(a: _F64, b: Optional[_F64] = None) -> _F64: ...
+def expand(model: Model, test: Test, *, method: str = "dynamic") -> _F64: ...
+def estimate(
+    model: Model, test: Test, *, expansion: str = "dynamic", count: Optional[int] = None
+) -> Dict[str, Any]: ...
+def run_demo(
+    out: _Path, *, quick: bool = False, progress: Optional[Callable[[str], Any]] = None
+) -> Dict[str, Any]: ...

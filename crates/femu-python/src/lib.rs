@@ -1,0 +1,613 @@
+//! # femu-python
+//!
+//! The native module `femu._femu` behind the Python package `femu` (PyO3, one abi3 wheel for
+//! CPython 3.9 and later, built by maturin: `pip install ./crates/femu-python`). It exposes femu's
+//! workflows in Python's idiom: models read from every format femu reads, `K` and `M` as
+//! `scipy.sparse.csc_matrix`, Sturm-verified modes, test modes from files or numpy arrays, MAC
+//! matrices, expansion and the a priori estimators (docs/MATH.md; the paper's (3)-(12) and
+//! Theorems 1-4). Results convert to dictionaries (`to_dict()`, the JSON the command line writes).
+//! Long calls release the GIL. femu's errors become `femu.FemuError` with the same message, file,
+//! line, node and element.
+
+use faer::Mat;
+use femu_correlate::expansion::Method;
+use femu_correlate::{ModeSet, TestModes};
+use femu_io::csv::TestData;
+use femu_study::load::{
+    LoadedModel, LoadedTest, MaterialOptions, ModelOptions, TestOptions, load_model, load_test_with,
+};
+use femu_study::modes::{ModesOptions, ModesReport, solve_modes};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+
+create_exception!(
+    _femu,
+    FemuError,
+    PyException,
+    "An error of femu: a malformed file (its name and line), an invalid model (the node or \
+     element), a numerical failure (what and where). The message is femu's own."
+);
+
+fn err(e: impl std::fmt::Display) -> PyErr {
+    FemuError::new_err(e.to_string())
+}
+
+/// A serialisable result as a Python dict, through the JSON the command line writes.
+fn to_dict<'py>(py: Python<'py>, value: &impl serde::Serialize) -> PyResult<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(value).map_err(err)?;
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// A column-major faer matrix as a 2-D numpy array (rows x columns).
+fn mat_to_py<'py>(py: Python<'py>, m: &Mat<f64>) -> Bound<'py, PyArray2<f64>> {
+    let a = Array2::from_shape_fn((m.nrows(), m.ncols()), |(i, j)| m[(i, j)]);
+    a.into_pyarray(py)
+}
+
+fn py_to_mat(a: &PyReadonlyArray2<'_, f64>) -> Mat<f64> {
+    let v = a.as_array();
+    Mat::from_fn(v.nrows(), v.ncols(), |i, j| v[(i, j)])
+}
+
+fn method(name: &str) -> PyResult<Method> {
+    name.parse::<Method>().map_err(|e| {
+        pyo3::exceptions::PyValueError::new_err(format!(
+            "expansion {name:?}: {e} (static, dynamic, serep, min-residual, mdre-we)"
+        ))
+    })
+}
+
+/// A finite element model read from a file, checked and assembled once (`femu.read_model`).
+#[pyclass(module = "femu", name = "Model", frozen)]
+struct Model {
+    loaded: LoadedModel,
+    warnings: Vec<String>,
+}
+
+/// Reads a model: an Abaqus/CalculiX deck (`.inp`), Nastran bulk data (`.bdf`, `.dat`, `.nas`),
+/// a Gmsh mesh (`.msh`) or universal file solids (`.unv`, `.uff`). A mesh-only file needs the
+/// material (`young` Pa, `poisson`, `density` kg/m^3) and may clamp node sets (`fix`).
+#[pyfunction]
+#[pyo3(signature = (path, *, lumped=false, lenient=false, young=None, poisson=None, density=None, fix=None))]
+#[allow(clippy::too_many_arguments)]
+fn read_model(
+    py: Python<'_>,
+    path: PathBuf,
+    lumped: bool,
+    lenient: bool,
+    young: Option<f64>,
+    poisson: Option<f64>,
+    density: Option<f64>,
+    fix: Option<Vec<String>>,
+) -> PyResult<Model> {
+    let material = match (young, poisson, density) {
+        (Some(young), Some(poisson), Some(density)) => Some(MaterialOptions {
+            young,
+            poisson,
+            density,
+        }),
+        (None, None, None) => None,
+        _ => {
+            return Err(pyo3::exceptions::PyValueError::new_err(
+                "give young, poisson and density together",
+            ));
+        }
+    };
+    let options = ModelOptions {
+        material,
+        fix: fix.unwrap_or_default(),
+        lumped,
+        lenient,
+    };
+    let loaded = py.detach(|| load_model(&path, &options)).map_err(err)?;
+    let warnings = loaded.warnings.clone();
+    Ok(Model { loaded, warnings })
+}
+
+fn csc<'py>(py: Python<'py>, a: &femu_sparse::SparseMatrix) -> PyResult<Bound<'py, PyAny>> {
+    let data = a.data().to_vec().into_pyarray(py);
+    let indices: Vec<i64> = a.indices().iter().map(|v| *v as i64).collect();
+    let indptr: Vec<i64> = a.indptr().raw_storage().iter().map(|v| *v as i64).collect();
+    let shape = (a.rows(), a.cols());
+    let kind = if a.is_csc() {
+        "csc_matrix"
+    } else {
+        "csr_matrix"
+    };
+    py.import("scipy.sparse")?.getattr(kind)?.call1((
+        (data, indices.into_pyarray(py), indptr.into_pyarray(py)),
+        shape,
+    ))
+}
+
+#[pymethods]
+impl Model {
+    /// The file the model was read from.
+    #[getter]
+    fn path(&self) -> String {
+        self.loaded.path.display().to_string()
+    }
+
+    /// Number of free DOFs: the size of `K` and `M`.
+    #[getter]
+    fn free_count(&self) -> usize {
+        self.loaded.sys.dofs.free_count()
+    }
+
+    /// The stiffness `K` (N/m) on the free DOFs, a `scipy.sparse.csc_matrix` (both triangles).
+    #[getter(K)]
+    fn stiffness<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        csc(py, &self.loaded.sys.k)
+    }
+
+    /// The mass `M` (kg) on the free DOFs, a `scipy.sparse.csc_matrix`.
+    #[getter(M)]
+    fn mass<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        csc(py, &self.loaded.sys.m)
+    }
+
+    /// The DOF map: one row per free DOF, `(node id, component)`, component 0-2 for x, y, z and
+    /// 3-5 for the rotations of a rigid link's reference node.
+    #[getter]
+    fn dofs<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
+        let d = &self.loaded.sys.dofs;
+        let mesh = self.loaded.model.mesh();
+        let a = Array2::from_shape_fn((d.free_count(), 2), |(f, k)| {
+            let (p, c) = d.free_dof(f);
+            let (n, rot) = d.point_node(p);
+            if k == 0 {
+                mesh.node_id(n) as i64
+            } else {
+                (c + if rot { 3 } else { 0 }) as i64
+            }
+        });
+        a.into_pyarray(py)
+    }
+
+    /// Node ids, in the order of `coords`.
+    #[getter]
+    fn node_ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u64>> {
+        let mesh = self.loaded.model.mesh();
+        (0..mesh.node_count())
+            .map(|i| mesh.node_id(i))
+            .collect::<Vec<u64>>()
+            .into_pyarray(py)
+    }
+
+    /// Node coordinates (m), one row per node.
+    #[getter]
+    fn coords<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let x = self.loaded.model.mesh().coords();
+        Array2::from_shape_fn((x.len(), 3), |(i, k)| x[i][k]).into_pyarray(py)
+    }
+
+    /// Whether the mass matrix is lumped.
+    #[getter]
+    fn lumped(&self) -> bool {
+        self.loaded.sys.mass_kind == femu_fem::assembly::MassKind::Lumped
+    }
+
+    /// Total mass (kg): the elements' `rho V` plus point and rigid masses.
+    #[getter]
+    fn total_mass(&self) -> PyResult<f64> {
+        self.loaded.model.total_mass().map_err(err)
+    }
+
+    /// What the reader noticed and did not refuse.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
+    }
+
+    /// The lowest `count` modes, those nearest `shift_hz`, or all in `band_hz = (lo, hi)`, by
+    /// femu's shift-invert Lanczos, with the Sturm count that proves none was skipped
+    /// (docs/MATH.md, "The eigensolver's evidence"). Releases the GIL.
+    #[pyo3(signature = (count=None, *, shift_hz=None, band_hz=None))]
+    fn modes(
+        &self,
+        py: Python<'_>,
+        count: Option<usize>,
+        shift_hz: Option<f64>,
+        band_hz: Option<(f64, f64)>,
+    ) -> PyResult<Modes> {
+        let options = ModesOptions {
+            count,
+            shift_hz,
+            band_hz,
+        };
+        let (modes, report) = py
+            .detach(|| solve_modes(&self.loaded, &options))
+            .map_err(err)?;
+        Ok(Modes { modes, report })
+    }
+
+    fn __repr__(&self) -> String {
+        let mesh = self.loaded.model.mesh();
+        format!(
+            "Model({:?}, {} free DOFs, {} nodes, {} elements, {} mass)",
+            self.path(),
+            self.free_count(),
+            mesh.node_count(),
+            mesh.element_count(),
+            if self.lumped() {
+                "lumped"
+            } else {
+                "consistent"
+            }
+        )
+    }
+}
+
+/// Modes of a model: eigenvalues, M-normalised shapes, residuals and the Sturm proof.
+#[pyclass(module = "femu", name = "Modes", frozen)]
+struct Modes {
+    modes: femu_sparse::eigen::Modes,
+    report: ModesReport,
+}
+
+#[pymethods]
+impl Modes {
+    /// Eigenvalues `lambda = omega^2` (s^-2), ascending.
+    #[getter]
+    fn values<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.modes.values.clone().into_pyarray(py)
+    }
+
+    /// Natural frequencies (Hz).
+    #[getter]
+    fn frequencies_hz<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.modes.frequencies_hz().into_pyarray(py)
+    }
+
+    /// Shapes on the free DOFs, one M-normalised column per mode (`phi^T M phi = I`).
+    #[getter]
+    fn vectors<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        mat_to_py(py, &self.modes.vectors)
+    }
+
+    /// The residual of each mode: relative `||K x - lambda M x|| / ||K x||`, or the backward
+    /// error for a rigid-body mode (see `residual_kinds`).
+    #[getter]
+    fn residuals<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.modes.residuals.clone().into_pyarray(py)
+    }
+
+    /// `"relative"` or `"backward"` per mode.
+    #[getter]
+    fn residual_kinds(&self) -> Vec<&'static str> {
+        self.modes.residual_kinds.iter().map(|k| k.name()).collect()
+    }
+
+    /// The Sturm check: `count` eigenvalues in `(lower, upper]` by the inertia of
+    /// `K - upper M`, `returned` of them computed, `verified` when equal.
+    #[getter]
+    fn sturm<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = &self.modes.sturm;
+        let d = PyDict::new(py);
+        d.set_item("lower", s.lower)?;
+        d.set_item("upper", s.upper)?;
+        d.set_item("count", s.count)?;
+        d.set_item("returned", s.returned)?;
+        d.set_item("verified", s.verified())?;
+        Ok(d)
+    }
+
+    /// The summary `femu modes --json` writes, as a dict.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_dict(py, &self.report)
+    }
+
+    fn __len__(&self) -> usize {
+        self.modes.values.len()
+    }
+
+    fn __repr__(&self) -> String {
+        let f = self.modes.frequencies_hz();
+        format!(
+            "Modes({} modes, {:.4} .. {:.4} Hz, Sturm {})",
+            f.len(),
+            f.first().copied().unwrap_or(0.0),
+            f.last().copied().unwrap_or(0.0),
+            if self.modes.sturm.verified() {
+                "verified"
+            } else {
+                "NOT verified"
+            }
+        )
+    }
+}
+
+/// Test modes on sensors of a model: identified frequencies and shapes (`femu.read_test`,
+/// `femu.Test.from_arrays`).
+#[pyclass(module = "femu", name = "Test", frozen)]
+struct Test {
+    loaded: LoadedTest,
+}
+
+/// Reads test modes (`.unv`/`.uff`: datasets 15/2411 and 55 or 2414; `.json`; `.csv`) and puts
+/// their sensors on `model` (test node ids are model node ids). `test_units` gives metres per
+/// unit where the file says nothing (0.001 for millimetres).
+#[pyfunction]
+#[pyo3(signature = (path, model, *, test_units=None))]
+fn read_test(
+    py: Python<'_>,
+    path: PathBuf,
+    model: &Model,
+    test_units: Option<f64>,
+) -> PyResult<Test> {
+    let options = TestOptions {
+        map: None,
+        test_units,
+    };
+    let loaded = py
+        .detach(|| load_test_with(&path, &model.loaded, &options))
+        .map_err(err)?;
+    Ok(Test { loaded })
+}
+
+#[pymethods]
+impl Test {
+    /// Test modes from numpy: sensor `i` reads node `nodes[i]` along `directions[i]` (any
+    /// direction, normalised), `shapes[i, j]` is mode `j` at sensor `i`.
+    #[staticmethod]
+    #[pyo3(signature = (model, nodes, directions, frequencies_hz, shapes, *, damping=None))]
+    fn from_arrays(
+        model: &Model,
+        nodes: Vec<u64>,
+        directions: PyReadonlyArray2<'_, f64>,
+        frequencies_hz: Vec<f64>,
+        shapes: PyReadonlyArray2<'_, f64>,
+        damping: Option<Vec<f64>>,
+    ) -> PyResult<Test> {
+        let d = directions.as_array();
+        if d.ncols() != 3 || d.nrows() != nodes.len() {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "directions must be {} x 3 (one row per node), got {:?}",
+                nodes.len(),
+                directions.shape()
+            )));
+        }
+        let sensors: Vec<femu_correlate::sensors::Sensor> = nodes
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
+                femu_correlate::sensors::Sensor::new(*n, [d[(i, 0)], d[(i, 1)], d[(i, 2)]])
+            })
+            .collect();
+        let modes = TestModes::new(frequencies_hz, damping, py_to_mat(&shapes)).map_err(err)?;
+        let layout = femu_correlate::SensorLayout::new(
+            model.loaded.model.mesh(),
+            &model.loaded.sys.dofs,
+            sensors.clone(),
+        )
+        .map_err(err)?;
+        if layout.len() != modes.shapes.nrows() {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "shapes have {} rows for {} sensors",
+                modes.shapes.nrows(),
+                layout.len()
+            )));
+        }
+        Ok(Test {
+            loaded: LoadedTest {
+                path: PathBuf::from("<arrays>"),
+                data: TestData {
+                    sensors,
+                    modes,
+                    coordinates: Default::default(),
+                },
+                layout,
+                mapping: None,
+            },
+        })
+    }
+
+    /// Identified frequencies (Hz).
+    #[getter]
+    fn frequencies_hz<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.loaded
+            .data
+            .modes
+            .frequencies_hz
+            .clone()
+            .into_pyarray(py)
+    }
+
+    /// Shapes at the sensors, one column per mode.
+    #[getter]
+    fn shapes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        mat_to_py(py, &self.loaded.data.modes.shapes)
+    }
+
+    /// Sensor `i`: its node id.
+    #[getter]
+    fn nodes(&self) -> Vec<u64> {
+        self.loaded
+            .layout
+            .sensors()
+            .iter()
+            .map(|s| s.node)
+            .collect()
+    }
+
+    /// Sensor `i`: its unit direction.
+    #[getter]
+    fn directions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let s = self.loaded.layout.sensors();
+        Array2::from_shape_fn((s.len(), 3), |(i, k)| s[i].direction[k]).into_pyarray(py)
+    }
+
+    /// The sensor matrix `C` (sensors x free DOFs, a `scipy.sparse.csr_matrix`): `y = C x`.
+    #[getter(C)]
+    fn sensor_matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let c = self.loaded.layout.matrix();
+        csc(py, &c)
+    }
+
+    fn __len__(&self) -> usize {
+        self.loaded.data.modes.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Test({:?}, {} modes, {} sensors)",
+            self.loaded.path.display().to_string(),
+            self.loaded.data.modes.len(),
+            self.loaded.layout.len()
+        )
+    }
+}
+
+/// The MAC matrix `MAC_ij = (a_i . b_j)^2 / ((a_i . a_i)(b_j . b_j))` of the columns of `a` and
+/// `b` (docs/MATH.md, "Correlation"); `b` defaults to `a` (the auto-MAC).
+#[pyfunction]
+#[pyo3(signature = (a, b=None))]
+fn mac<'py>(
+    py: Python<'py>,
+    a: PyReadonlyArray2<'py, f64>,
+    b: Option<PyReadonlyArray2<'py, f64>>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let a = py_to_mat(&a);
+    let m = match b {
+        Some(b) => femu_correlate::correlation::mac_matrix(a.as_ref(), py_to_mat(&b).as_ref()),
+        None => femu_correlate::correlation::auto_mac(a.as_ref()),
+    }
+    .map_err(err)?;
+    Ok(mat_to_py(py, &m))
+}
+
+/// The test shapes expanded to every free DOF of `model` by `method` (`static`, `dynamic`,
+/// `serep`, `min-residual`, `mdre-we`; docs/MATH.md, "Expansion"), one column per test mode.
+/// Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (model, test, *, method="dynamic"))]
+fn expand<'py>(
+    py: Python<'py>,
+    model: &Model,
+    test: &Test,
+    method: &str,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let m = self::method(method)?;
+    let t = &test.loaded.data.modes;
+    let lambdas = t.eigenvalues();
+    let x = py
+        .detach(|| {
+            femu_study::expand::expand_shapes(
+                &model.loaded.sys,
+                &test.loaded.layout,
+                &lambdas,
+                t.shapes.as_ref(),
+                m,
+                None,
+            )
+        })
+        .map_err(err)?;
+    Ok(mat_to_py(py, &x))
+}
+
+/// The a priori estimate of the paper: the test shapes expanded (`expansion`), the model's lowest
+/// `count` modes paired with them (Table 1), and per test mode `rho_M`, `rho_2`, the frequency
+/// interval that must hold a model frequency and every bound of Theorems 1-4 in the paper's and
+/// the rigorous forms (Table 2), as a dict. Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (model, test, *, expansion="dynamic", count=None))]
+fn estimate<'py>(
+    py: Python<'py>,
+    model: &Model,
+    test: &Test,
+    expansion: &str,
+    count: Option<usize>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let m = method(expansion)?;
+    let result = py
+        .detach(|| -> Result<_, femu_study::StudyError> {
+            let t = &test.loaded.data.modes;
+            let lambdas = t.eigenvalues();
+            let x = femu_study::expand::expand_shapes(
+                &model.loaded.sys,
+                &test.loaded.layout,
+                &lambdas,
+                t.shapes.as_ref(),
+                m,
+                None,
+            )?;
+            let modes = femu_study::modes::lowest_for_test(&model.loaded, count, t.len())?;
+            femu_study::estimate::estimate_with_bounds(
+                &model.loaded.model,
+                &model.loaded.sys,
+                &test.loaded.layout,
+                t,
+                &ModeSet::from_modes(&modes),
+                x.as_ref(),
+                &femu_study::estimate::EstimateOptions {
+                    expansion: m,
+                    ..Default::default()
+                },
+            )
+        })
+        .map_err(err)?;
+    to_dict(py, &result)
+}
+
+/// The paper's plate study end to end (what `femu demo` does): a plate with a modelling error is
+/// "tested" (written as `test.unv`), correlated (Table 1), estimated (Table 2), studied under
+/// sensor removal (Figure 1), localised, updated by SB-EBE and inverse eigensensitivity and
+/// checked on held-out modes; files go to `out`. `quick` runs the smaller plate. `progress` is
+/// called with each step's name. Returns the report as a dict. Releases the GIL (the callback
+/// takes it back); an exception raised by the callback is raised when the study ends.
+#[pyfunction]
+#[pyo3(signature = (out, *, quick=false, progress=None))]
+fn run_demo<'py>(
+    py: Python<'py>,
+    out: PathBuf,
+    quick: bool,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let mut opts = if quick {
+        femu_study::demo::DemoOptions::quick()
+    } else {
+        femu_study::demo::DemoOptions::default()
+    };
+    opts.out = out;
+    let mut failed: Option<PyErr> = None;
+    let report = py
+        .detach(|| {
+            femu_study::demo::run_demo(&opts, |msg| {
+                if let Some(cb) = &progress
+                    && failed.is_none()
+                {
+                    Python::attach(|py| {
+                        if let Err(e) = cb.call1(py, (msg,)) {
+                            failed = Some(e);
+                        }
+                    });
+                }
+            })
+        })
+        .map_err(err)?;
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    to_dict(py, &report)
+}
+
+/// The Python module `femu._femu`.
+#[pymodule]
+fn _femu(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("FemuError", m.py().get_type::<FemuError>())?;
+    m.add_class::<Model>()?;
+    m.add_class::<Modes>()?;
+    m.add_class::<Test>()?;
+    m.add_function(wrap_pyfunction!(read_model, m)?)?;
+    m.add_function(wrap_pyfunction!(read_test, m)?)?;
+    m.add_function(wrap_pyfunction!(mac, m)?)?;
+    m.add_function(wrap_pyfunction!(expand, m)?)?;
+    m.add_function(wrap_pyfunction!(estimate, m)?)?;
+    m.add_function(wrap_pyfunction!(run_demo, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,206 @@
+"""femu's Python module against independent Python computations: scipy's eigsh on the exported
+K and M, MAC and rho_M in numpy, a universal file written by pyuff read back, errors with their
+messages, and dict/JSON round trips."""
+
+import json
+import os
+import pathlib
+
+import numpy as np
+import pytest
+import scipy.sparse.linalg as sla
+
+import femu
+
+ROOT = pathlib.Path(__file__).resolve().parents[3]
+
+
+def box_deck(path, nx=6, ny=3, nz=2, size=(0.3, 0.06, 0.03)):
+    """A clamped steel hex8 box written here as a CalculiX deck (node ids 1.., x fastest)."""
+    lx, ly, lz = size
+    node = lambda i, j, k: 1 + i + (nx + 1) * (j + (ny + 1) * k)
+    lines = ["*NODE"]
+    for k in range(nz + 1):
+        for j in range(ny + 1):
+            for i in range(nx + 1):
+                lines.append(f"{node(i, j, k)}, {lx * i / nx!r}, {ly * j / ny!r}, {lz * k / nz!r}")
+    lines.append("*ELEMENT, TYPE=C3D8, ELSET=ALL")
+    e = 1
+    for k in range(nz):
+        for j in range(ny):
+            for i in range(nx):
+                c = [
+                    node(i, j, k), node(i + 1, j, k), node(i + 1, j + 1, k), node(i, j + 1, k),
+                    node(i, j, k + 1), node(i + 1, j, k + 1), node(i + 1, j + 1, k + 1),
+                    node(i, j + 1, k + 1),
+                ]
+                lines.append(", ".join(str(v) for v in [e] + c))
+                e += 1
+    lines += ["*MATERIAL, NAME=STEEL", "*ELASTIC", "2.1e11, 0.3", "*DENSITY", "7850",
+              "*SOLID SECTION, ELSET=ALL, MATERIAL=STEEL", "*BOUNDARY"]
+    for k in range(nz + 1):
+        for j in range(ny + 1):
+            lines.append(f"{node(0, j, k)}, 1, 3")
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.fixture(scope="module")
+def model(tmp_path_factory):
+    return femu.read_model(box_deck(tmp_path_factory.mktemp("m") / "box.inp"))
+
+
+def test_matrices_and_modes_against_scipy(model):
+    K, M = model.K, model.M
+    n = model.free_count
+    assert K.shape == (n, n) and M.shape == (n, n)
+    assert abs(K - K.T).max() <= 1e-12 * abs(K).max()
+    assert model.dofs.shape == (n, 2)
+    # rigid translation along x carries the whole mass (the clamped face's DOFs are gone)
+    assert model.total_mass == pytest.approx(7850 * 0.3 * 0.06 * 0.03, rel=1e-12)
+    modes = model.modes(8)
+    ref = np.sort(sla.eigsh(K, k=8, M=M, sigma=0.0, which="LM")[0])
+    np.testing.assert_allclose(modes.values, ref, rtol=1e-9)
+    assert modes.sturm["verified"] and modes.sturm["count"] == 8
+    phi = modes.vectors
+    np.testing.assert_allclose(phi.T @ (M @ phi), np.eye(8), atol=1e-10)
+    assert np.all(modes.residuals < 1e-8)
+    np.testing.assert_allclose(
+        modes.frequencies_hz, np.sqrt(modes.values) / (2 * np.pi), rtol=1e-14
+    )
+
+
+def numpy_mac(a, b):
+    num = (a.T @ b) ** 2
+    return num / np.outer(np.sum(a * a, axis=0), np.sum(b * b, axis=0))
+
+
+def test_mac_against_numpy():
+    rng = np.random.default_rng(1)
+    a, b = rng.standard_normal((40, 5)), rng.standard_normal((40, 7))
+    np.testing.assert_allclose(femu.mac(a, b), numpy_mac(a, b), rtol=1e-13)
+    np.testing.assert_allclose(femu.mac(a), numpy_mac(a, a), rtol=1e-13)
+
+
+def sensor_test(model, modes, count=4, shift=1.03, noise=0.01, seed=2):
+    """Test modes at the top-face nodes in z: the model's shapes, frequencies 3 % high, noisy."""
+    ids, x = model.node_ids, model.coords
+    top = [int(i) for i, p in zip(ids, x) if abs(p[2] - 0.03) < 1e-12 and p[0] > 0]
+    dofs = {(int(n), int(c)): f for f, (n, c) in enumerate(model.dofs)}
+    rows = [dofs[(n, 2)] for n in top]
+    rng = np.random.default_rng(seed)
+    shapes = modes.vectors[rows, :count]
+    shapes = shapes + noise * np.abs(shapes).max(axis=0) * rng.standard_normal(shapes.shape)
+    freqs = shift * modes.frequencies_hz[:count]
+    dirs = np.tile([0.0, 0.0, 1.0], (len(top), 1))
+    return top, dirs, freqs, shapes
+
+
+def test_estimate_rho_m_against_numpy(model):
+    modes = model.modes(12)
+    top, dirs, freqs, shapes = sensor_test(model, modes)
+    test = femu.Test.from_arrays(model, top, dirs, list(freqs), shapes)
+    assert len(test) == 4 and test.C.shape == (len(top), model.free_count)
+    x = femu.expand(model, test, method="dynamic")
+    # the expansion reproduces the readings: C x = y
+    np.testing.assert_allclose(test.C @ x, shapes, rtol=1e-9, atol=1e-12)
+    out = femu.estimate(model, test)
+    K, M = model.K.toarray(), model.M.toarray()
+    lam = (2 * np.pi * freqs) ** 2
+    for j, row in enumerate(out["rows"]):
+        r = K @ x[:, j] - lam[j] * (M @ x[:, j])
+        rho_m = np.sqrt(r @ np.linalg.solve(M, r)) / np.sqrt(x[:, j] @ M @ x[:, j])
+        assert row["rho_m"] == pytest.approx(rho_m, rel=1e-8)
+        # Theorem 2, rigorous: a model eigenvalue within rho_M of the test's
+        gap = np.min(np.abs(modes.values - lam[j]))
+        assert gap <= rho_m * (1 + 1e-9)
+    assert json.loads(json.dumps(out)) == out
+
+
+def test_a_universal_file_written_by_pyuff(model, tmp_path):
+    pyuff = pytest.importorskip("pyuff")
+    modes = model.modes(6)
+    top, _, freqs, shapes = sensor_test(model, modes, count=3, shift=1.0, noise=0.0)
+    ids = list(model.node_ids)
+    x = model.coords
+    path = str(tmp_path / "test.unv")
+    uff = pyuff.UFF(path)
+    sel = [ids.index(n) for n in top]
+    uff.write_sets(
+        pyuff.prepare_15(
+            node_nums=top,
+            def_cs=[0] * len(top),
+            disp_cs=[0] * len(top),
+            color=[1] * len(top),
+            x=[float(x[i][0]) for i in sel],
+            y=[float(x[i][1]) for i in sel],
+            z=[float(x[i][2]) for i in sel],
+        ),
+        mode="add",
+    )
+    for k in range(3):
+        uff.write_sets(
+            pyuff.prepare_55(
+                model_type=1, analysis_type=2, data_ch=2, spec_data_type=8, data_type=2,
+                n_data_per_node=3, r1=np.zeros(len(top)), r2=np.zeros(len(top)),
+                r3=shapes[:, k], load_case=1, mode_n=k + 1, freq=float(freqs[k]),
+                modal_m=1.0, modal_damp_vis=0.0, modal_damp_his=0.0,
+                node_nums=np.array(top), id1="femu test", id2="", id3="", id4="", id5="",
+            ),
+            mode="add",
+        )
+    test = femu.read_test(path, model)
+    np.testing.assert_allclose(test.frequencies_hz, freqs, rtol=1e-6)
+    got = {(n, tuple(np.round(d, 12))): test.shapes[i] for i, (n, d) in
+           enumerate(zip(test.nodes, test.directions))}
+    for i, n in enumerate(top):
+        np.testing.assert_allclose(got[(n, (0.0, 0.0, 1.0))], shapes[i], rtol=1e-5, atol=1e-12)
+
+
+def test_errors_keep_femus_messages(tmp_path):
+    with pytest.raises(femu.FemuError, match="nope.inp"):
+        femu.read_model(tmp_path / "nope.inp")
+    bad = tmp_path / "bad.inp"
+    bad.write_text("*NODE\n1, 0, 0, 0\n*ELEMNT, TYPE=C3D8\n")
+    with pytest.raises(femu.FemuError, match=r"bad.inp:3: unknown keyword \*ELEMNT"):
+        femu.read_model(bad)
+    with pytest.raises(ValueError, match="young, poisson and density"):
+        femu.read_model(bad, young=1.0)
+
+
+def test_constraints_from_a_deck_reach_python():
+    m = femu.read_model(ROOT / "fixtures" / "inp" / "links.inp")
+    comps = set(int(c) for c in m.dofs[:, 1])
+    assert {3, 4} <= comps  # the kinematic coupling's reference rotations
+    modes = m.modes(4)
+    assert modes.sturm["verified"]
+    d = modes.to_dict()
+    assert d["sturm_verified"] and json.loads(json.dumps(d)) == d
+    assert "Model(" in repr(m) and "Sturm verified" in repr(modes)
+
+
+def test_the_example_script_runs(tmp_path):
+    import subprocess
+    import sys
+
+    script = ROOT / "examples" / "python" / "plate_question.py"
+    out = tmp_path / "demo"
+    done = subprocess.run(
+        [sys.executable, str(script), str(out), "--quick"], capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
+    for name in ["table1.png", "figure1.png", "error_map.png", "report.json", "test.unv"]:
+        assert (out / name).stat().st_size > 0, name
+    assert "does the updated model tell the truth?" in done.stdout
+
+
+def test_a_failing_progress_callback_is_raised(tmp_path):
+    seen = []
+
+    def progress(step):
+        seen.append(step)
+        raise RuntimeError("stop here")
+
+    with pytest.raises(RuntimeError, match="stop here"):
+        femu.run_demo(tmp_path / "d", quick=True, progress=progress)
+    assert len(seen) == 1
