@@ -1037,7 +1037,10 @@ fn parse_lines(
                     }
                     "SPC1" => {
                         let cs = comps(c, 1)?;
-                        let rest: Vec<String> = c.fields[2..]
+                        let rest: Vec<String> = c
+                            .fields
+                            .get(2..)
+                            .unwrap_or_default()
                             .iter()
                             .map(|s| s.trim().to_ascii_uppercase())
                             .filter(|s| !s.is_empty())
@@ -1047,9 +1050,16 @@ fn parse_lines(
                             let (a, b) = (rest[0].parse::<u64>(), rest[2].parse::<u64>());
                             match (a, b) {
                                 (Ok(a), Ok(b)) if a <= b => {
-                                    grids_here.extend(
-                                        (a..=b).filter(|g| geometry.grid_of.contains_key(g)),
-                                    );
+                                    // the defined grids in the range (not every id of it: a
+                                    // range may span billions of ids)
+                                    let mut ids: Vec<u64> = geometry
+                                        .grid_of
+                                        .keys()
+                                        .copied()
+                                        .filter(|g| (a..=b).contains(g))
+                                        .collect();
+                                    ids.sort_unstable();
+                                    grids_here.extend(ids);
                                 }
                                 _ => return Err(c.err(format!("THRU range {rest:?} is invalid"))),
                             }
@@ -1061,13 +1071,22 @@ fn parse_lines(
                                 );
                             }
                         }
+                        if rest.is_empty() {
+                            return Err(c.err("names no grid (SPC1 SID C G1 G2 ...)".into()));
+                        }
                         for g in grids_here {
                             fix(c, g, &cs)?;
                         }
                     }
                     _ => {
                         // SPCADD SID S1 S2 ...
-                        for t in c.fields[1..]
+                        if c.fields.iter().skip(1).all(|s| s.trim().is_empty()) {
+                            return Err(c.err("names no set (SPCADD SID S1 S2 ...)".into()));
+                        }
+                        for t in c
+                            .fields
+                            .get(1..)
+                            .unwrap_or_default()
                             .iter()
                             .map(|s| s.trim())
                             .filter(|s| !s.is_empty())
@@ -1272,7 +1291,13 @@ fn read_links(
             let gn = c.id(1, "GN")?;
             let cm = components(c, 2, "CM")?;
             let mut gm = Vec::new();
-            for t in c.fields[3..].iter().map(|s| s.trim()) {
+            for t in c
+                .fields
+                .get(3..)
+                .unwrap_or_default()
+                .iter()
+                .map(|s| s.trim())
+            {
                 if t.is_empty() {
                     continue;
                 }

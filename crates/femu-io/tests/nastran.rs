@@ -801,3 +801,38 @@ fn conm2_offset_and_inertia_on_reference_grids() {
         assert!(max_diff(&a.k, &b.k) == 0.0);
     }
 }
+
+/// Cards cut short, found by the fuzzer (an SPC1 with only its set id used to panic), and a THRU
+/// range spanning billions of ids: errors or the grids defined, never a panic or a hang.
+#[test]
+fn cards_cut_short_and_huge_ranges() {
+    let base = CUBE.replace("1.41421356237309590.      0.", "1.41421 45.     0.");
+    for (card, want) in [
+        ("SPC1,100", "SPC1 names no grid"),
+        ("SPCADD,100", "SPCADD names no set"),
+        (
+            "GRID,20,,0.5,0.5,2.0\nRBE2,30,20",
+            "RBE2 field 4 (CM) is missing",
+        ),
+        (
+            "GRID,20,,0.5,0.5,2.0\nRBE2,30,20,123",
+            "RBE2 30 has no dependent grids",
+        ),
+    ] {
+        let text = base.replace(
+            "PARAM    WTMASS  1.",
+            &format!("{card}\nPARAM    WTMASS  1."),
+        );
+        let e = parse_bdf(&text, "cube.bdf", &BdfOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(want), "{card}: {e}");
+    }
+    let text = base.replace(
+        "SPC1     100     123     1       THRU    4",
+        "SPC1,100,123,1,THRU,4000000000000",
+    );
+    let deck = parse_bdf(&text, "cube.bdf", &BdfOptions::default()).unwrap();
+    // every defined grid of the range: all eight
+    assert_eq!(deck.model.fixed_dofs().count(), 24);
+}
