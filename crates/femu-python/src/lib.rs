@@ -43,6 +43,54 @@ fn to_dict<'py>(py: Python<'py>, value: &impl serde::Serialize) -> PyResult<Boun
     py.import("json")?.call_method1("loads", (text,))
 }
 
+/// The payload that stops a long call at an iteration boundary (never shown: it is raised with
+/// `resume_unwind`, which skips the panic hook, and caught by [`interruptible`]).
+struct Interrupted;
+
+/// What a checkpoint passes to the Python callback: built only when there is one, with the GIL.
+type Arg<'a> = &'a dyn Fn(Python<'_>) -> PyResult<Py<PyAny>>;
+
+/// Runs `work` with the GIL released, handing it a checkpoint to call at iteration boundaries:
+/// the checkpoint takes the GIL back, checks for Ctrl-C (`KeyboardInterrupt`), calls `callback`
+/// with the iteration's value, and stops `work` when either raises; that exception is then raised
+/// to Python. Nothing of the stopped work is returned.
+fn interruptible<T: Send>(
+    py: Python<'_>,
+    callback: Option<Py<PyAny>>,
+    work: impl FnOnce(&mut dyn FnMut(Arg<'_>)) -> T + Send,
+) -> PyResult<T> {
+    let failed: std::sync::Mutex<Option<PyErr>> = std::sync::Mutex::new(None);
+    let out = py.detach(|| {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let mut checkpoint = |arg: Arg<'_>| {
+                let stop = Python::attach(|py| -> Option<PyErr> {
+                    if let Err(e) = py.check_signals() {
+                        return Some(e);
+                    }
+                    let cb = callback.as_ref()?;
+                    arg(py).and_then(|a| cb.call1(py, (a,))).err()
+                });
+                if let Some(e) = stop {
+                    if let Ok(mut f) = failed.lock() {
+                        *f = Some(e);
+                    }
+                    std::panic::resume_unwind(Box::new(Interrupted));
+                }
+            };
+            work(&mut checkpoint)
+        }))
+    });
+    match out {
+        Ok(v) => Ok(v),
+        Err(payload) if payload.is::<Interrupted>() => Err(failed
+            .into_inner()
+            .ok()
+            .flatten()
+            .unwrap_or_else(|| FemuError::new_err("interrupted"))),
+        Err(payload) => std::panic::resume_unwind(payload),
+    }
+}
+
 /// A column-major faer matrix as a 2-D numpy array (rows x columns).
 fn mat_to_py<'py>(py: Python<'py>, m: &Mat<f64>) -> Bound<'py, PyArray2<f64>> {
     let a = Array2::from_shape_fn((m.nrows(), m.ncols()), |(i, j)| m[(i, j)]);
@@ -558,8 +606,8 @@ fn estimate<'py>(
 /// "tested" (written as `test.unv`), correlated (Table 1), estimated (Table 2), studied under
 /// sensor removal (Figure 1), localised, updated by SB-EBE and inverse eigensensitivity and
 /// checked on held-out modes; files go to `out`. `quick` runs the smaller plate. `progress` is
-/// called with each step's name. Returns the report as a dict. Releases the GIL (the callback
-/// takes it back); an exception raised by the callback is raised when the study ends.
+/// called with each step's name. Returns the report as a dict. Releases the GIL; Ctrl-C, or an
+/// exception raised by `progress`, stops the study at the next step.
 #[pyfunction]
 #[pyo3(signature = (out, *, quick=false, progress=None))]
 fn run_demo<'py>(
@@ -574,26 +622,117 @@ fn run_demo<'py>(
         femu_study::demo::DemoOptions::default()
     };
     opts.out = out;
-    let mut failed: Option<PyErr> = None;
+    let report = interruptible(py, progress, |checkpoint| {
+        femu_study::demo::run_demo(&opts, |msg| {
+            checkpoint(&|py| Ok(pyo3::types::PyString::new(py, msg).into_any().unbind()))
+        })
+    })?
+    .map_err(err)?;
+    to_dict(py, &report)
+}
+
+/// Test-analysis correlation (the paper's Table 1): the model's lowest `count` modes (default
+/// twice the test modes plus 4) paired with the test modes by MAC, frequency errors, MAC, MSD and
+/// COMAC, as a dict. Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (model, test, *, count=None))]
+fn correlate<'py>(
+    py: Python<'py>,
+    model: &Model,
+    test: &Test,
+    count: Option<usize>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let t = &test.loaded.data.modes;
     let report = py
-        .detach(|| {
-            femu_study::demo::run_demo(&opts, |msg| {
-                if let Some(cb) = &progress
-                    && failed.is_none()
-                {
-                    Python::attach(|py| {
-                        if let Err(e) = cb.call1(py, (msg,)) {
-                            failed = Some(e);
-                        }
-                    });
-                }
-            })
+        .detach(|| -> Result<_, femu_study::StudyError> {
+            let modes = femu_study::modes::lowest_for_test(&model.loaded, count, t.len())?;
+            Ok(femu_correlate::correlate(
+                &ModeSet::from_modes(&modes),
+                t,
+                &test.loaded.layout,
+                &femu_correlate::PairingOptions::default(),
+            )?)
         })
         .map_err(err)?;
-    if let Some(e) = failed {
-        return Err(e);
-    }
     to_dict(py, &report)
+}
+
+/// The sensor-removal study (the paper's Figure 1): from triaxial sensors at the test's nodes,
+/// nodes removed one by one in Effective Independence order, the test shapes re-expanded (static,
+/// dynamic, minimum residual) from every set and `rho_M`, `rho_2` evaluated, as a dict of points.
+/// Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (model, test, *, expansion="dynamic"))]
+fn removal_study<'py>(
+    py: Python<'py>,
+    model: &Model,
+    test: &Test,
+    expansion: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let m = method(expansion)?;
+    let study = py
+        .detach(|| -> Result<_, femu_study::StudyError> {
+            let t = &test.loaded.data.modes;
+            let x = femu_study::expand::expand_shapes(
+                &model.loaded.sys,
+                &test.loaded.layout,
+                &t.eigenvalues(),
+                t.shapes.as_ref(),
+                m,
+                None,
+            )?;
+            femu_study::removal::removal_over_test(&model.loaded, &test.loaded, x.as_ref())
+        })
+        .map_err(err)?;
+    to_dict(py, &study)
+}
+
+/// Localisation, updating and the truth check (docs/MATH.md, "Localisation", "Updating", "The
+/// truth check"): among the element sets `sets` (stiffness corrections), the regions that explain
+/// the residues of the first `tuned` test modes are selected (or all with `all=True`) and updated
+/// by `method` (`"sbebe"`: SB-EBE; `"ies"`: inverse eigensensitivity, with the shapes when
+/// `shapes=True`); the updated model is then checked on every test mode, the held-out ones
+/// included, and judged. `progress` is called with each iteration (a dict: iteration, objective,
+/// theta, seconds). Returns the study as a dict. Releases the GIL; Ctrl-C, or an exception raised
+/// by `progress`, stops it at the next iteration.
+#[pyfunction]
+#[pyo3(signature = (model, test, sets, *, tuned, method="sbebe", all=false, shapes=false, progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn update<'py>(
+    py: Python<'py>,
+    model: &Model,
+    test: &Test,
+    sets: Vec<String>,
+    tuned: usize,
+    method: &str,
+    all: bool,
+    shapes: bool,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let m: femu_update::UpdateMethod = method.parse().map_err(|e| {
+        pyo3::exceptions::PyValueError::new_err(format!("method {method:?}: {e} (sbebe or ies)"))
+    })?;
+    let t = &test.loaded.data.modes;
+    let mut options = femu_study::updating::UpdateStudyOptions::new(tuned, t.len());
+    options.method = m;
+    options.all = all;
+    options.shapes = shapes;
+    let sets = femu_study::updating::resolve_sets(&model.loaded, &sets).map_err(err)?;
+    let refs: Vec<&str> = sets.iter().map(String::as_str).collect();
+    let study = interruptible(py, progress, |checkpoint| {
+        femu_study::updating::localise_update_check(
+            &model.loaded.model,
+            &refs,
+            &test.loaded.layout,
+            t,
+            None,
+            Some((&model.loaded.asm, &model.loaded.sys)),
+            &options,
+            |it| checkpoint(&|py| to_dict(py, it).map(Bound::unbind)),
+        )
+    })?
+    .map_err(err)?;
+    to_dict(py, &study)
 }
 
 /// The Python module `femu._femu`.
@@ -609,5 +748,8 @@ fn _femu(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(expand, m)?)?;
     m.add_function(wrap_pyfunction!(estimate, m)?)?;
     m.add_function(wrap_pyfunction!(run_demo, m)?)?;
+    m.add_function(wrap_pyfunction!(correlate, m)?)?;
+    m.add_function(wrap_pyfunction!(removal_study, m)?)?;
+    m.add_function(wrap_pyfunction!(update, m)?)?;
     Ok(())
 }

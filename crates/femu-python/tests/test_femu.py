@@ -204,3 +204,76 @@ def test_a_failing_progress_callback_is_raised(tmp_path):
     with pytest.raises(RuntimeError, match="stop here"):
         femu.run_demo(tmp_path / "d", quick=True, progress=progress)
     assert len(seen) == 1
+
+
+@pytest.fixture(scope="module")
+def plate(tmp_path_factory):
+    """The quick plate study's model and test files (the test from a plate 30 % stiffer in r3)."""
+    out = tmp_path_factory.mktemp("plate")
+    report = femu.run_demo(out, quick=True)
+    model = femu.read_model(out / "plate.inp")
+    test = femu.read_test(out / "test.unv", model)
+    return model, test, report
+
+
+def test_correlate_against_numpy(plate):
+    model, test, _ = plate
+    report = femu.correlate(model, test)
+    modes = model.modes(2 * len(test) + 4)
+    y = test.C @ modes.vectors  # the model's modes at the sensors
+    m = numpy_mac(test.shapes, y)
+    for p in report["pairing"]["pairs"]:
+        assert p["mac"] == pytest.approx(m[p["test"], p["model"]], rel=1e-10)
+        f_model = modes.frequencies_hz[p["model"]]
+        f_test = test.frequencies_hz[p["test"]]
+        assert p["frequency_error"] == pytest.approx((f_model - f_test) / f_test, rel=1e-10)
+    assert json.loads(json.dumps(report)) == report
+
+
+def test_removal_study_points(plate):
+    model, test, _ = plate
+    study = femu.removal_study(model, test)
+    nodes = study["nodes"]
+    assert set(study["removal"]) <= set(nodes) and len(nodes) > 2
+    counts = {p["nodes"] for p in study["points"]}
+    # every set from all nodes down to the smallest that still has a sensor per test mode
+    assert max(counts) == len(nodes)
+    assert 3 * min(counts) >= len(test) > 3 * (min(counts) - 1)
+    assert counts == set(range(min(counts), len(nodes) + 1))
+
+
+def test_update_finds_the_stiffer_region_and_reports_each_iteration(plate):
+    model, test, _ = plate
+    seen = []
+    sets = [f"r{i}" for i in range(10)]
+    study = femu.update(model, test, sets, tuned=4, progress=seen.append)
+    assert seen and all({"iteration", "objective", "theta"} <= set(it) for it in seen)
+    assert study["updated_sets"] == ["R3"]
+    # the test was made from a plate 30 % stiffer in r3 (with noise and the model's own mesh)
+    identified = study["result"]["theta"][0]
+    assert 0.2 < identified < 0.45, identified
+    assert study["truth_check"]["judgement"]["verdict"] in {"agrees", "inconclusive", "disagrees"}
+
+
+def test_ctrl_c_stops_a_long_call(tmp_path):
+    import signal
+    import threading
+
+    started = threading.Event()
+    steps = []
+
+    def progress(step):
+        steps.append(step)
+        started.set()
+
+    def interrupt():
+        started.wait()
+        os.kill(os.getpid(), signal.SIGINT)
+
+    t = threading.Thread(target=interrupt)
+    t.start()
+    with pytest.raises(KeyboardInterrupt):
+        femu.run_demo(tmp_path / "d", quick=True, progress=progress)
+    t.join()
+    # stopped at a step boundary, long before the study's end
+    assert 1 <= len(steps) < 6

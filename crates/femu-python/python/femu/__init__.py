@@ -19,12 +19,15 @@ from ._femu import (
     Model,
     Modes,
     Test,
+    correlate,
     estimate,
     expand,
     mac,
     read_model,
     read_test,
+    removal_study,
     run_demo,
+    update,
 )
 
 __all__ = [
@@ -32,10 +35,13 @@ __all__ = [
     "Model",
     "Modes",
     "Test",
+    "correlate",
     "estimate",
     "expand",
     "mac",
     "read_model",
     "read_test",
+    "removal_study",
     "run_demo",
+    "update",
 ]

@@ -106,3 +106,16 @@ def estimate(
 def run_demo(
     out: _Path, *, quick: bool = False, progress: Optional[Callable[[str], Any]] = None
 ) -> Dict[str, Any]: ...
+def correlate(model: Model, test: Test, *, count: Optional[int] = None) -> Dict[str, Any]: ...
+def removal_study(model: Model, test: Test, *, expansion: str = "dynamic") -> Dict[str, Any]: ...
+def update(
+    model: Model,
+    test: Test,
+    sets: Sequence[str],
+    *,
+    tuned: int,
+    method: str = "sbebe",
+    all: bool = False,
+    shapes: bool = False,
+    progress: Optional[Callable[[Dict[str, Any]], Any]] = None,
+) -> Dict[str, Any]: ...
