@@ -254,24 +254,50 @@ impl Model {
 
     /// The lowest `count` modes, those nearest `shift_hz`, or all in `band_hz = (lo, hi)`, by
     /// femu's shift-invert Lanczos, with the Sturm count that proves none was skipped
-    /// (docs/MATH.md, "The eigensolver's evidence"). Releases the GIL.
-    #[pyo3(signature = (count=None, *, shift_hz=None, band_hz=None))]
+    /// (docs/MATH.md, "The eigensolver's evidence"). `progress` is called with the number of
+    /// vectors solved so far after every block. Releases the GIL; Ctrl-C, or an exception raised
+    /// by `progress`, stops the solve at the next block.
+    #[pyo3(signature = (count=None, *, shift_hz=None, band_hz=None, progress=None))]
     fn modes(
         &self,
         py: Python<'_>,
         count: Option<usize>,
         shift_hz: Option<f64>,
         band_hz: Option<(f64, f64)>,
+        progress: Option<Py<PyAny>>,
     ) -> PyResult<Modes> {
         let options = ModesOptions {
             count,
             shift_hz,
             band_hz,
         };
-        let (modes, report) = py
-            .detach(|| solve_modes(&self.loaded, &options))
-            .map_err(err)?;
-        Ok(Modes { modes, report })
+        let stop: std::sync::Arc<std::sync::Mutex<Option<PyErr>>> = Default::default();
+        let seen = stop.clone();
+        let result = py.detach(|| {
+            femu_sparse::eigen::with_interrupt(
+                move |solved| {
+                    Python::attach(|py| {
+                        let e = py.check_signals().err().or_else(|| {
+                            progress
+                                .as_ref()
+                                .and_then(|cb| cb.call1(py, (solved,)).err())
+                        });
+                        let halt = e.is_some();
+                        if let (Some(e), Ok(mut slot)) = (e, seen.lock()) {
+                            *slot = Some(e);
+                        }
+                        halt
+                    })
+                },
+                || solve_modes(&self.loaded, &options),
+            )
+        });
+        let pending = stop.lock().ok().and_then(|mut s| s.take());
+        match (result, pending) {
+            (Ok((modes, report)), _) => Ok(Modes { modes, report }),
+            (Err(_), Some(e)) => Err(e),
+            (Err(e), None) => Err(err(e)),
+        }
     }
 
     fn __repr__(&self) -> String {

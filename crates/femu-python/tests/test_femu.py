@@ -277,3 +277,18 @@ def test_ctrl_c_stops_a_long_call(tmp_path):
     t.join()
     # stopped at a step boundary, long before the study's end
     assert 1 <= len(steps) < 6
+
+
+def test_modes_report_progress_and_stop_when_asked(model):
+    solved = []
+    modes = model.modes(8, progress=solved.append)
+    assert solved == sorted(solved) and solved[-1] >= 8 and modes.sturm["verified"]
+
+    def stop(n):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        model.modes(8, progress=stop)
+    # the hook is gone afterwards: the same solve completes
+    again = model.modes(8)
+    np.testing.assert_allclose(again.values, modes.values, rtol=1e-12)

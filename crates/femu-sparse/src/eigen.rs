@@ -569,6 +569,11 @@ impl<'a> Pencil<'a> {
             for size in [first_size, 2 * first_size, 4 * first_size] {
                 let mut probe = Lanczos::new(self, op, sigma, params);
                 guess = probe.estimate((want + 3).max(size / 2), size, &mut stats);
+                if probe.stop {
+                    return Err(SparseError::Interrupted {
+                        solved_vectors: stats.solved_vectors,
+                    });
+                }
                 op = probe.op.take().expect("the probe keeps its factor");
                 let zeros = guess.iter().filter(|v| v.abs() <= zero_like).count();
                 if zeros == 0 || zeros < guess.len() || guess.len() >= n {
@@ -808,6 +813,37 @@ fn rayleigh_ritz(
     (eig, order)
 }
 
+/// A hook of [`with_interrupt`].
+type Hook = Box<dyn FnMut(usize) -> bool>;
+
+thread_local! {
+    /// The hook of [`with_interrupt`] on this thread.
+    static INTERRUPT: std::cell::RefCell<Option<Hook>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` with `check` called at the eigensolver's iteration boundaries on this thread (after
+/// every block of solved vectors, with the number of vectors solved so far in that solve): when
+/// it returns `true` the solve stops with [`SparseError::Interrupted`]. For progress reports and
+/// Ctrl-C in bindings (the Python module); the previous hook is restored when `f` returns or
+/// panics. Solves run from other threads (inside `f`'s own parallel work) are not affected.
+pub fn with_interrupt<T>(check: impl FnMut(usize) -> bool + 'static, f: impl FnOnce() -> T) -> T {
+    struct Restore(Option<Hook>);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            let previous = self.0.take();
+            INTERRUPT.with(|c| *c.borrow_mut() = previous);
+        }
+    }
+    let previous = INTERRUPT.with(|c| c.borrow_mut().replace(Box::new(check)));
+    let _restore = Restore(previous);
+    f()
+}
+
+/// Whether the hook of [`with_interrupt`] asks to stop after `solved` vectors.
+fn interrupted(solved: usize) -> bool {
+    INTERRUPT.with(|c| c.borrow_mut().as_mut().is_some_and(|f| f(solved)))
+}
+
 struct Lanczos<'p, 'a> {
     pencil: &'p Pencil<'a>,
     /// `LDL^T` of `K - sigma M`, owned so that it can be released while the Sturm check factors
@@ -822,6 +858,8 @@ struct Lanczos<'p, 'a> {
     values: Vec<f64>,
     shifted_res: Vec<f64>,
     force_random_start: bool,
+    /// Set when the hook of [`with_interrupt`] asked to stop.
+    stop: bool,
     rng: u64,
 }
 
@@ -838,6 +876,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             values: vec![],
             shifted_res: vec![],
             force_random_start: false,
+            stop: false,
             rng: params.seed,
         }
     }
@@ -934,6 +973,10 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                 .solve_in_place(w.as_mut());
             stats.solve_seconds += t.elapsed().as_secs_f64();
             stats.solved_vectors += block;
+            if interrupted(stats.solved_vectors) {
+                self.stop = true;
+                return applied;
+            }
             let t = Instant::now();
             for j in 0..block {
                 let col: Vec<f64> = (0..self.n).map(|i| w[(i, j)]).collect();
@@ -965,6 +1008,9 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         }
         let max_basis = size.min(self.n);
         let m = self.expand(&mut basis, &mut mbasis, &mut h, 0, max_basis, stats);
+        if self.stop {
+            return Vec::new();
+        }
         let (eig, order) = rayleigh_ritz(&h, m);
         // Only the better-converged half: the trailing Ritz values of a short cycle overestimate
         // their eigenvalues by orders of magnitude.
@@ -1030,6 +1076,11 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             }
             stats.orthogonalization_seconds += t.elapsed().as_secs_f64();
             applied = self.expand(&mut basis, &mut mbasis, &mut h, applied, max_basis, stats);
+            if self.stop {
+                return Err(SparseError::Interrupted {
+                    solved_vectors: stats.solved_vectors,
+                });
+            }
             // Rayleigh-Ritz on the square part.
             let m = applied;
             let (eig, order) = rayleigh_ritz(&h, m);

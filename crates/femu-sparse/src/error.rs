@@ -123,6 +123,13 @@ pub enum SparseError {
         /// Its message.
         reason: String,
     },
+    /// A solve stopped at an iteration boundary because the caller's hook asked it to
+    /// ([`crate::eigen::with_interrupt`]: Ctrl-C in a binding, a progress callback).
+    #[error("the eigensolver was interrupted after {solved_vectors} solved vectors")]
+    Interrupted {
+        /// Vectors solved before it stopped.
+        solved_vectors: usize,
+    },
     /// An iterative or dense eigensolver did not converge.
     #[error("eigensolver did not converge: {reason}")]
     NoConvergence {

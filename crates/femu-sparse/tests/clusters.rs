@@ -412,3 +412,49 @@ fn impossible_requests_say_why() {
     let modes = case.check(Which::Lowest(n));
     assert_eq!(modes.values.len(), n);
 }
+
+/// The interrupt hook: asked to stop after the first block, the solve returns `Interrupted` with
+/// the vectors solved; a hook that never stops leaves the result as without it; the hook is gone
+/// once `with_interrupt` returns.
+#[test]
+fn a_hook_stops_the_solve_at_a_block_boundary() {
+    use femu_sparse::eigen::{EigenOptions, Which, eigs, with_interrupt};
+    let (k, m) = pencil(12, 2, false, 1);
+    let plain = eigs(&k, &m, Which::Lowest(6), &EigenOptions::default()).unwrap();
+    let calls = std::rc::Rc::new(std::cell::Cell::new(0usize));
+    let c = calls.clone();
+    let e = with_interrupt(
+        move |_| {
+            c.set(c.get() + 1);
+            true
+        },
+        || eigs(&k, &m, Which::Lowest(6), &EigenOptions::default()),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(e, femu_sparse::SparseError::Interrupted { solved_vectors } if solved_vectors > 0),
+        "{e}"
+    );
+    assert_eq!(calls.get(), 1);
+    let seen = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+    let s = seen.clone();
+    let hooked = with_interrupt(
+        move |n| {
+            s.borrow_mut().push(n);
+            false
+        },
+        || eigs(&k, &m, Which::Lowest(6), &EigenOptions::default()),
+    )
+    .unwrap();
+    let same = |a: &[f64], b: &[f64]| {
+        a.len() == b.len()
+            && a.iter()
+                .zip(b)
+                .all(|(x, y)| (x - y).abs() <= 1e-12 * y.abs().max(1.0))
+    };
+    assert!(same(&hooked.values, &plain.values));
+    assert!(!seen.borrow().is_empty());
+    assert!(seen.borrow().windows(2).all(|w| w[0] < w[1]));
+    let after = eigs(&k, &m, Which::Lowest(6), &EigenOptions::default()).unwrap();
+    assert!(same(&after.values, &plain.values));
+}
