@@ -588,7 +588,11 @@ impl Model {
     /// rotations to fix (nothing reaches the node's rotations) and the constraints `v . theta = 0`
     /// (some directions are reached), so that writers can state the same model.
     pub fn rotation_closure(&self) -> (Vec<(usize, usize)>, Vec<LinearConstraint>) {
-        (self.unreached_rotations(), self.null_rotation_constraints())
+        let grams = self.rotation_grams();
+        (
+            Self::unreached_rotations(&grams),
+            self.null_rotation_constraints(&grams),
+        )
     }
 
     /// Per rotation node, the Gram matrix of the rotation coefficients of the constraints that use
@@ -620,19 +624,22 @@ impl Model {
 
     /// The rotation directions nobody reaches: `(node, component)` to fix when the whole node's
     /// rotations are unreached, else nothing (partial null spaces become constraints).
-    fn unreached_rotations(&self) -> Vec<(usize, usize)> {
-        self.rotation_grams()
-            .into_iter()
+    fn unreached_rotations(grams: &[(usize, nalgebra::Matrix3<f64>)]) -> Vec<(usize, usize)> {
+        grams
+            .iter()
             .filter(|(_, g)| g.iter().all(|v| *v == 0.0))
-            .flat_map(|(n, _)| [(n, 3), (n, 4), (n, 5)])
+            .flat_map(|(n, _)| [(*n, 3), (*n, 4), (*n, 5)])
             .collect()
     }
 
     /// For rotation nodes whose Gram matrix is singular but not zero: `v . theta = 0` for every
     /// null direction `v`, solved for the largest component of an echelon form.
-    fn null_rotation_constraints(&self) -> Vec<LinearConstraint> {
+    fn null_rotation_constraints(
+        &self,
+        grams: &[(usize, nalgebra::Matrix3<f64>)],
+    ) -> Vec<LinearConstraint> {
         let mut out = Vec::new();
-        for (n, g) in self.rotation_grams() {
+        for &(n, g) in grams {
             let top = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             if top == 0.0 {
                 continue;

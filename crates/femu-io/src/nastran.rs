@@ -71,6 +71,15 @@ impl Card {
         }
     }
 
+    /// A model error at this card's file and line.
+    fn located(&self) -> impl FnOnce(femu_fem::FemError) -> IoError + '_ {
+        move |source| IoError::Model {
+            path: self.path.clone(),
+            line: self.line,
+            source,
+        }
+    }
+
     fn field(&self, i: usize) -> &str {
         self.fields.get(i).map_or("", |s| s.trim())
     }
@@ -632,11 +641,7 @@ fn parse_lines(
                 turned.insert(*id, cd);
             }
         }
-        mesh.add_node(*id, p).map_err(|source| IoError::Model {
-            path: g.path.clone(),
-            line: g.line,
-            source,
-        })?;
+        mesh.add_node(*id, p).map_err(g.located())?;
     }
     // elements: Nastran's node order to femu's
     let mut element_pid: Vec<(u64, u64, &Card)> = Vec::new();
@@ -741,12 +746,7 @@ fn parse_lines(
                             mesh.coords()[mesh.node_index(gb).expect("checked")],
                         );
                         let mid: [f64; 3] = std::array::from_fn(|i| 0.5 * (pa[i] + pb[i]));
-                        mesh.add_node(next_id, mid)
-                            .map_err(|source| IoError::Model {
-                                path: c.path.clone(),
-                                line: c.line,
-                                source,
-                            })?;
+                        mesh.add_node(next_id, mid).map_err(c.located())?;
                         straight.insert(key, next_id);
                         ties.push((
                             next_id,
@@ -766,12 +766,7 @@ fn parse_lines(
                 first_blank.get_or_insert(c);
             }
         }
-        mesh.add_element(eid, kind, &ordered)
-            .map_err(|source| IoError::Model {
-                path: c.path.clone(),
-                line: c.line,
-                source,
-            })?;
+        mesh.add_element(eid, kind, &ordered).map_err(c.located())?;
         element_pid.push((eid, pid, c));
     }
     if mesh.element_count() == 0 {
@@ -860,11 +855,7 @@ fn parse_lines(
             )?;
             model
                 .set_material(Some(&format!("PID{pid}")), material)
-                .map_err(|source| IoError::Model {
-                    path: pc.path.clone(),
-                    line: pc.line,
-                    source,
-                })?;
+                .map_err(pc.located())?;
             continue;
         }
         let (e, g, nu) = (m.real(1, "E")?, m.real(2, "G")?, m.real(3, "NU")?);
@@ -889,11 +880,7 @@ fn parse_lines(
             })?;
         model
             .set_material(Some(&format!("PID{pid}")), material)
-            .map_err(|source| IoError::Model {
-                path: pc.path.clone(),
-                line: pc.line,
-                source,
-            })?;
+            .map_err(pc.located())?;
     }
     for (id, ga, gb, label) in &ties {
         for k in 0..3 {
@@ -1008,13 +995,7 @@ fn parse_lines(
                             comps.iter().map(|c| c + 1).collect::<Vec<_>>()
                         )));
                     }
-                    model
-                        .fix_node_dofs(g, comps)
-                        .map_err(|source| IoError::Model {
-                            path: c.path.clone(),
-                            line: c.line,
-                            source,
-                        })
+                    model.fix_node_dofs(g, comps).map_err(c.located())
                 };
                 match c.name.as_str() {
                     "SPC" => {
@@ -1185,11 +1166,7 @@ fn parse_lines(
             };
             model
                 .add_rigid_mass(g, m * wtmass, d, j.map(|r| r.map(|v| v * wtmass)))
-                .map_err(|source| IoError::Model {
-                    path: c.path.clone(),
-                    line: c.line,
-                    source,
-                })?;
+                .map_err(c.located())?;
             continue;
         }
         if offset || inertia {
@@ -1207,13 +1184,7 @@ fn parse_lines(
                 ),
             );
         }
-        model
-            .add_point_mass(g, m * wtmass)
-            .map_err(|source| IoError::Model {
-                path: c.path.clone(),
-                line: c.line,
-                source,
-            })?;
+        model.add_point_mass(g, m * wtmass).map_err(c.located())?;
     }
     // conflicts between links and constraints, found now rather than at the first solve
     model.dof_map().map_err(|source| IoError::Content {
@@ -1262,14 +1233,6 @@ fn read_links(
     turned: &HashMap<u64, i64>,
     warnings: &mut Vec<Warning>,
 ) -> Result<(), IoError> {
-    let located = |c: &Card| {
-        let c = c.clone();
-        move |source| IoError::Model {
-            path: c.path.clone(),
-            line: c.line,
-            source,
-        }
-    };
     let grid = |model: &Model, c: &Card, g: u64| -> Result<usize, IoError> {
         model.mesh().node_index(g).ok_or_else(|| {
             c.err(format!(
@@ -1281,7 +1244,7 @@ fn read_links(
     for c in links.iter().filter(|c| c.name == "RBE2") {
         let gn = c.id(1, "GN")?;
         grid(model, c, gn)?;
-        model.add_rotations(gn).map_err(located(c))?;
+        model.add_rotations(gn).map_err(c.located())?;
     }
     let mut noted_rotations = false;
     for c in links {
@@ -1327,7 +1290,7 @@ fn read_links(
             }
             model
                 .add_rigid_link(gn, &gm, &trans, &label)
-                .map_err(located(c))?;
+                .map_err(c.located())?;
             // rotations of dependents that carry them (another link's reference) follow GN's
             let rot: Vec<usize> = cm.iter().copied().filter(|k| *k >= 3).collect();
             for &g in &gm {
@@ -1336,7 +1299,7 @@ fn read_links(
                     for &k in &rot {
                         model
                             .add_constraint((g, k), &[((gn, k), 1.0)], &label)
-                            .map_err(located(c))?;
+                            .map_err(c.located())?;
                     }
                 } else if !rot.is_empty() && !noted_rotations {
                     noted_rotations = true;
@@ -1407,7 +1370,7 @@ fn read_links(
             let comps: Vec<usize> = refc.iter().copied().filter(|k| *k < 3 || has_rot).collect();
             model
                 .add_weighted_average(refgrid, &comps, &nodes, &label)
-                .map_err(located(c))?;
+                .map_err(c.located())?;
         }
     }
     Ok(())
