@@ -159,10 +159,20 @@ fn zero_threshold(pencil: &Pencil<'_>) -> f64 {
     1e-11 * pencil.diagonal_ratio()
 }
 
+/// A Cholesky factor of `K` with a pivot below this fraction of its diagonal entry is confirmed
+/// by a Sturm count before it is trusted as definite (`1e-8`: far above the `1e-16`-`1e-12` pivots
+/// round-off leaves for the rigid-body motions of a free-free model, far below the pivots of a
+/// well-supported one).
+const SUSPECT_PIVOT_RATIO: f64 = 1e-8;
+
 impl<'a> StiffnessSolver<'a> {
     /// Factors `K` (Cholesky). When `K` is singular (a free-free or under-constrained model), its
     /// null space is found by the verified eigensolver: the Sturm count below a threshold
     /// (`1e-11 mean(K_ii / M_ii)`) gives its dimension, the eigensolver its M-orthonormal basis.
+    /// A Cholesky factorization that succeeds is not proof that `K` is definite: round-off can
+    /// keep the pivots of rigid-body motions positive (about `1e-14` of their diagonal entries).
+    /// A factor with a pivot below `1e-8` of its diagonal is trusted only when the Sturm count
+    /// finds no eigenvalue below the threshold.
     ///
     /// # Errors
     /// `K` indefinite (eigenvalues below minus the threshold), a failed factorization or
@@ -179,18 +189,26 @@ impl<'a> StiffnessSolver<'a> {
         // one ordering and symbolic analysis of K's pattern serves the Cholesky attempt and, for
         // a singular K, the Sturm counts, the null-space eigensolve and the shifted factor
         let pencil = Pencil::new(k, m, Ordering::NestedDissection)?;
+        let thr = zero_threshold(&pencil);
         match pencil.symbolic().llt(k, "K") {
-            Ok(llt) => {
+            // A pivot far below its diagonal entry: K may be singular with round-off having kept
+            // every pivot positive (a free-free model), and solving with that factor would return
+            // its null space amplified by 1 / pivot. The Sturm count decides.
+            Ok(llt)
+                if llt.min_pivot_ratio().0 >= SUSPECT_PIVOT_RATIO
+                    || pencil.count_below(thr)? == 0 =>
+            {
                 return Ok(Self {
                     k,
                     m,
                     inner: Inner::Definite(llt),
                 });
             }
-            Err(SparseError::NotPositiveDefinite { .. }) => {}
+            Ok(_)
+            | Err(SparseError::NotPositiveDefinite { .. })
+            | Err(SparseError::NumericallySingular { .. }) => {}
             Err(e) => return Err(e.into()),
         }
-        let thr = zero_threshold(&pencil);
         let negative = pencil.count_below(-thr)?;
         if negative > 0 {
             return Err(CorrelateError::Invalid {

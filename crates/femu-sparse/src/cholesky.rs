@@ -12,8 +12,9 @@ use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
-    SymmetricOrdering, factorize_symbolic_cholesky, simplicial::SimplicialLdltRef,
-    supernodal::SupernodalLdltRef,
+    SymmetricOrdering, factorize_symbolic_cholesky,
+    simplicial::SimplicialLdltRef,
+    supernodal::{SupernodalLdltRef, SupernodalLltRef},
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Side};
@@ -47,6 +48,12 @@ pub fn faer_view(a: &SparseMatrix) -> Result<SparseColMatRef<'_, usize, f64>, Sp
     );
     Ok(SparseColMatRef::new(sym, a.data()))
 }
+
+/// Below this ratio `L_jj^2 / A_jj` of a pivot to its diagonal entry, a Cholesky factorization
+/// that succeeded is declared singular to working precision (`1e-12`, about `n eps` for the
+/// models femu solves: a condition number above `1e12` leaves no correct digit in a solve, and a
+/// free-free stiffness whose rigid-body pivots round-off left positive lands near `1e-14`).
+pub const SINGULAR_PIVOT_RATIO: f64 = 1e-12;
 
 /// The symbolic analysis of a symmetric sparsity pattern: fill-reducing ordering and elimination
 /// structure. Shared (cheaply cloned) by every numeric factorization on the same pattern.
@@ -149,7 +156,10 @@ impl SymbolicFactor {
     /// Numeric `LL^T` of a symmetric positive definite matrix with this pattern.
     ///
     /// # Errors
-    /// [`SparseError::NotPositiveDefinite`] with the original index of the failing pivot.
+    /// [`SparseError::NotPositiveDefinite`] with the original index of the failing pivot;
+    /// [`SparseError::NumericallySingular`] when every pivot is positive but one is below
+    /// [`SINGULAR_PIVOT_RATIO`] of its diagonal entry (a singular matrix that round-off made look
+    /// definite: its solves would be dominated by the null space).
     pub fn llt(&self, a: &SparseMatrix, name: &'static str) -> Result<Llt, SparseError> {
         self.check(a)?;
         let view = faer_view(a)?;
@@ -177,9 +187,19 @@ impl SymbolicFactor {
                     }
                 }
             })?;
+        let (pivot_ratio, pivot_index) = min_pivot_ratio(&self.inner, &values, a);
+        if pivot_ratio < SINGULAR_PIVOT_RATIO {
+            return Err(SparseError::NumericallySingular {
+                matrix: name,
+                index: pivot_index,
+                ratio: pivot_ratio,
+            });
+        }
         Ok(Llt {
             symbolic: self.clone(),
             values,
+            pivot_ratio,
+            pivot_index,
         })
     }
 
@@ -247,6 +267,45 @@ impl SymbolicFactor {
     }
 }
 
+/// The diagonal of the factor `L` (or `D`) in elimination order.
+fn factor_diagonal(symbolic: &SymbolicCholesky<usize>, values: &[f64]) -> Vec<f64> {
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            let col_ptr = s.col_ptr();
+            // the diagonal is the first stored entry of each column of L
+            (0..s.nrows()).map(|j| values[col_ptr[j]]).collect()
+        }
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let l = SupernodalLltRef::new(s, values);
+            let mut d = Vec::with_capacity(s.nrows());
+            for k in 0..s.n_supernodes() {
+                let v = l.supernode(k).val();
+                d.extend((0..v.ncols()).map(|j| v[(j, j)]));
+            }
+            d
+        }
+    }
+}
+
+/// `min_j L_jj^2 / A_pp` over the pivots (`p` the original index of pivot `j`) and that `p`.
+fn min_pivot_ratio(
+    symbolic: &SymbolicCholesky<usize>,
+    values: &[f64],
+    a: &SparseMatrix,
+) -> (f64, usize) {
+    let diag = crate::csc::diagonal(a);
+    let perm = symbolic.perm().map(|p| p.arrays().0);
+    let mut best = (f64::INFINITY, 0);
+    for (j, l) in factor_diagonal(symbolic, values).into_iter().enumerate() {
+        let p = perm.map_or(j, |perm| perm[j]);
+        let r = l * l / diag[p];
+        if r < best.0 {
+            best = (r, p);
+        }
+    }
+    best
+}
+
 /// Signs of the pivots `D` of an `LDL^T` factor.
 fn inertia_of(symbolic: &SymbolicCholesky<usize>, values: &[f64]) -> Inertia {
     let mut inertia = Inertia {
@@ -304,6 +363,18 @@ pub trait Factorization {
 pub struct Llt {
     symbolic: SymbolicFactor,
     values: Vec<f64>,
+    pivot_ratio: f64,
+    pivot_index: usize,
+}
+
+impl Llt {
+    /// The smallest ratio `L_jj^2 / A_jj` of a pivot to its matrix diagonal, and the original
+    /// index of that pivot. It is 1 for a diagonal matrix and near the round-off (`1e-16`) when
+    /// `A` is singular in exact arithmetic and the factorization succeeded only by round-off: for
+    /// such a ratio, `A^-1 b` is dominated by the null space and means nothing.
+    pub fn min_pivot_ratio(&self) -> (f64, usize) {
+        (self.pivot_ratio, self.pivot_index)
+    }
 }
 
 /// A numeric `LDL^T` factorization and its inertia.

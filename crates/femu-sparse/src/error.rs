@@ -36,6 +36,21 @@ pub enum SparseError {
         /// Index (in the factorization's order) of the first non-positive pivot.
         index: usize,
     },
+    /// A Cholesky factorization succeeded only by round-off: a pivot fell below
+    /// [`crate::cholesky::SINGULAR_PIVOT_RATIO`] times its diagonal entry, so the matrix is
+    /// singular to working precision (a free-free stiffness, a mechanism) and its solves would be
+    /// dominated by the null space.
+    #[error(
+        "{matrix} is singular to working precision: the pivot at index {index} is {ratio:.1e} of its diagonal entry (a mechanism or an unconstrained rigid-body motion)"
+    )]
+    NumericallySingular {
+        /// Which matrix.
+        matrix: &'static str,
+        /// Original index of the smallest pivot.
+        index: usize,
+        /// `L_jj^2 / A_jj` of that pivot.
+        ratio: f64,
+    },
     /// A NaN or infinity in an input.
     #[error("{matrix} has a non-finite entry at ({row}, {col})")]
     NonFinite {

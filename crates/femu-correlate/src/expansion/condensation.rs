@@ -48,7 +48,8 @@ impl Expander<'_> {
             let symbolic = self.symbolic_oo()?;
             if lambda == 0.0 {
                 let llt = symbolic.llt(&self.k_oo, "K_oo").map_err(|e| match e {
-                    SparseError::NotPositiveDefinite { index, .. } => singular(index),
+                    SparseError::NotPositiveDefinite { index, .. }
+                    | SparseError::NumericallySingular { index, .. } => singular(index),
                     other => other.into(),
                 })?;
                 llt.solve_in_place(b.as_mut());

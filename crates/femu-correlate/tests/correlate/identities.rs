@@ -264,3 +264,65 @@ fn mass_solvers_agree_with_dense_inverse() {
         }
     }
 }
+
+/// A free-free spring chain is singular, yet round-off often leaves every Cholesky pivot
+/// positive (the last one about 1e-16 of its diagonal entry). Such a factor must not be taken as
+/// definite: its solves return the rigid-body motion amplified by 1 / pivot. The displacement
+/// residual must equal the dense spectral sum over the elastic modes
+/// `sum_j phi_j phi_j^T b / lambda_j` (docs/MATH.md's free-free convention), on every chain.
+#[test]
+fn round_off_definite_free_free_stiffness_is_treated_as_singular() {
+    use femu_sparse::SparseError;
+    use femu_sparse::cholesky::SymbolicFactor;
+    use femu_sparse::ordering::Ordering;
+    let n = 24;
+    let mut fooled = 0;
+    for seed in 1..=40u64 {
+        let mut rng = Rng(seed);
+        let mut k = Mat::<f64>::zeros(n, n);
+        for e in 0..n - 1 {
+            let s = 0.5 + 1.5 * rng.next_f64();
+            k[(e, e)] += s;
+            k[(e + 1, e + 1)] += s;
+            k[(e, e + 1)] -= s;
+            k[(e + 1, e)] -= s;
+        }
+        let m = Mat::from_fn(n, n, |i, j| if i == j { 0.5 + rng.next_f64() } else { 0.0 });
+        let (ks, ms) = (sparse(&k), sparse(&m));
+        match SymbolicFactor::new(&ks, Ordering::NestedDissection)
+            .unwrap()
+            .llt(&ks, "K")
+        {
+            Err(SparseError::NumericallySingular { ratio, .. }) => {
+                assert!(ratio < 1e-12);
+                fooled += 1;
+            }
+            Err(SparseError::NotPositiveDefinite { .. }) => {}
+            other => panic!("seed {seed}: a singular K factored as {other:?}"),
+        }
+        let solver = StiffnessSolver::new(&ks, &ms).unwrap();
+        assert_eq!(
+            solver.null_space().map(|q| q.ncols()),
+            Some(1),
+            "seed {seed}"
+        );
+        let b: Vec<f64> = (0..n).map(|_| rng.sym()).collect();
+        let y = solver.solve(one(&b)).unwrap();
+        let eig = femu_sparse::dense::generalized_symmetric_eigen(k.as_ref(), m.as_ref()).unwrap();
+        let mut reference = vec![0.0; n];
+        for j in 1..n {
+            let phi = eig.vectors.col(j);
+            let c: f64 = (0..n).map(|i| phi[i] * b[i]).sum::<f64>() / eig.values[j];
+            for (r, p) in reference.iter_mut().zip(phi.iter()) {
+                *r += c * p;
+            }
+        }
+        let err = rel(&col(&y, 0), &reference);
+        assert!(
+            err < 1e-9,
+            "seed {seed}: displacement residual off by {err:e}"
+        );
+    }
+    // the case this test is about must occur among the chains
+    assert!(fooled > 0, "no chain had round-off-positive pivots");
+}
