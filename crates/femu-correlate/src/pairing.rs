@@ -138,9 +138,16 @@ pub fn pair_modes(
     let in_window = |i: usize, j: usize| {
         window.is_none_or(|w| frequency_error(f_test[i], f_model[j]).abs() <= w)
     };
+    // MAC, less 1e-9 times the relative frequency error (at most 1): among MACs equal to within
+    // round-off (few sensors that cannot tell two modes apart) the nearer frequency wins, not
+    // whichever round-off favours
     let weight = |i: usize, j: usize| -> f64 {
         let v = mac[(i, j)];
-        if v >= thr && in_window(i, j) { v } else { 0.0 }
+        if v >= thr && in_window(i, j) {
+            v - 1e-9 * frequency_error(f_test[i], f_model[j]).abs().min(1.0)
+        } else {
+            0.0
+        }
     };
     // The Hungarian algorithm needs rows <= columns; transpose otherwise.
     let assignment: Vec<Option<usize>> = if t <= m {
