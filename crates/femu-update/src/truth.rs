@@ -178,14 +178,16 @@ impl TruthCheck {
     /// error, and the parameters for plausibility (`docs/MATH.md`, "The truth check"); stores and
     /// returns the judgement. The rules, in order:
     /// 1. no held-out mode: inconclusive;
-    /// 2. the discretisation error of a tuned mode at least half its test-analysis error:
-    ///    inconclusive (updating would fit the mesh, not the structure);
+    /// 2. each tuned mode whose discretisation error is at least half its test-analysis error is
+    ///    named (parameters fitted to such a mesh are effective values of the mesh), a caveat to
+    ///    any verdict;
     /// 3. a parameter at a bound, beyond +-50 %, or without localised evidence: compensates (a
     ///    parameter whose 95 % interval is wider than its change is named as not determined, a
     ///    caveat to any verdict);
-    /// 4. every held-out error within `3 sqrt(sigma_f^2 + d_i^2)`: agrees;
-    /// 5. held-out RMS error lower than before: model-form error;
-    /// 6. otherwise: not improved.
+    /// 4. every held-out error within `3 sigma_f`: agrees;
+    /// 5. within `3 sqrt(sigma_f^2 + d_i^2)` only: inconclusive;
+    /// 6. held-out RMS error lower than before: model-form error;
+    /// 7. otherwise: not improved.
     pub fn judge(&mut self, inputs: &JudgeInputs) -> &Judgement {
         self.judgement = judge(self, inputs);
         &self.judgement
