@@ -8,6 +8,25 @@ use femu_sparse::SparseMatrix;
 use femu_sparse::eigen::Modes;
 use std::f64::consts::PI;
 
+/// Gives each column of `shapes` a sign fixed by the shape itself: the one that makes
+/// `sum_i w_i x_i` positive, with weights `w_i = 1 + frac(0.618.. i)` that no symmetry of a
+/// structure or of a sensor grid can make vanish (a plain sum vanishes for antisymmetric shapes).
+/// An eigenvector's sign is arbitrary, decided by round-off; anything computed from shapes
+/// with noise added (a simulated test) must not depend on it.
+pub fn canonical_signs(shapes: &mut Mat<f64>) {
+    for j in 0..shapes.ncols() {
+        let s: f64 = shapes
+            .col(j)
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (1.0 + (0.618_033_988_749_894_9 * i as f64).fract()) * v)
+            .sum();
+        if s < 0.0 {
+            shapes.col_mut(j).iter_mut().for_each(|v| *v = -*v);
+        }
+    }
+}
+
 /// `lambda = (2 pi f)^2` in s^-2 from a frequency in Hz.
 pub fn eigenvalue_of_hz(f: f64) -> f64 {
     let w = 2.0 * PI * f;

@@ -129,24 +129,6 @@ fn noise(seed: &mut u64) -> f64 {
     ((*seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) * 3f64.sqrt()
 }
 
-/// Gives each column of `y` the sign that makes `sum_i w_i y_ij` positive, with fixed weights
-/// `w_i = 1 + frac(0.618.. i)` that no symmetry of the plate can make vanish. An eigenvector's
-/// sign is arbitrary (round-off decides it), and the noise added to a shape must not depend on
-/// it: otherwise a change of round-off changes the simulated test, and with it the verdict.
-fn fix_signs(y: &mut faer::Mat<f64>) {
-    for j in 0..y.ncols() {
-        let s: f64 = y
-            .col(j)
-            .iter()
-            .enumerate()
-            .map(|(i, v)| (1.0 + (0.618_033_988_749_894_9 * i as f64).fract()) * v)
-            .sum();
-        if s < 0.0 {
-            y.col_mut(j).iter_mut().for_each(|v| *v = -*v);
-        }
-    }
-}
-
 /// The plate of `spec` in steel, with ten regions along x as element sets `r0`..`r9`.
 pub fn plate_with_regions(spec: &PlateSpec) -> Result<Model, StudyError> {
     let mut mesh = mixed_plate(spec)?;
@@ -217,7 +199,8 @@ pub fn run_demo(
     let layout = SensorLayout::new(model.mesh(), &dofs, sensors)?;
     let x_true = truth.shapes.as_ref().subcols(6, opts.modes).to_owned();
     let mut y = layout.measure_all(x_true.as_ref())?;
-    fix_signs(&mut y);
+    // the noise must not depend on the arbitrary sign of an eigenvector (round-off)
+    femu_correlate::modes::canonical_signs(&mut y);
     let mut seed = 0x2545_F491_4F6C_DD1D_u64;
     for j in 0..y.ncols() {
         let peak = y.col(j).iter().fold(0.0_f64, |a, v| a.max(v.abs()));
@@ -530,37 +513,4 @@ fn markdown(r: &DemoReport, o: &DemoOptions, test: &TestModes) -> String {
         let _ = writeln!(s, "| {k} | {v:.2} |");
     }
     s
-}
-
-#[cfg(test)]
-mod tests {
-    use super::fix_signs;
-
-    /// The simulated test must not depend on the arbitrary sign of an eigenvector: flipping
-    /// columns gives the same signed shapes, also for shapes that are antisymmetric in the
-    /// reading order (mirror pairs `v, -v`), whose plain sum vanishes.
-    #[test]
-    fn fixed_signs_do_not_depend_on_the_eigenvector_sign() {
-        let mut seed = 7u64;
-        let mut y = faer::Mat::from_fn(30, 6, |i, j| {
-            if j == 5 {
-                // antisymmetric: reading 29 - i is minus reading i
-                if i < 15 {
-                    (i + 1) as f64
-                } else {
-                    -((30 - i) as f64)
-                }
-            } else {
-                super::noise(&mut seed)
-            }
-        });
-        assert_eq!(y.col(5).iter().sum::<f64>(), 0.0);
-        let mut flipped = y.clone();
-        for j in [0, 2, 5] {
-            flipped.col_mut(j).iter_mut().for_each(|v| *v = -*v);
-        }
-        fix_signs(&mut y);
-        fix_signs(&mut flipped);
-        assert_eq!(y, flipped);
-    }
 }

@@ -40,6 +40,8 @@ fn sensors(model: &Model, dofs: &femu_fem::dof::DofMap) -> SensorLayout {
 
 /// Deterministic noise: `level` times each shape's largest reading, uniform with unit variance.
 fn add_noise(shapes: &mut Mat<f64>, level: f64, mut seed: u64) {
+    // the noise must not depend on the arbitrary sign of an eigenvector
+    femu_correlate::modes::canonical_signs(shapes);
     for j in 0..shapes.ncols() {
         let peak = shapes.col(j).iter().fold(0.0_f64, |a, v| a.max(v.abs()));
         for i in 0..shapes.nrows() {

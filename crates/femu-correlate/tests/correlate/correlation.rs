@@ -381,3 +381,35 @@ fn sensors_on_linked_nodes_read_the_linked_motion() {
     let fixed = mesh.node_id(mesh.node_set("xmin").unwrap()[0]);
     assert!(SensorLayout::new(model.mesh(), &dofs, vec![Sensor::axis(fixed, 0)]).is_err());
 }
+
+/// A simulated test must not depend on the arbitrary sign of an eigenvector: flipping columns
+/// gives the same signed shapes, also for a shape antisymmetric in the reading order (mirror
+/// pairs `v, -v`), whose plain sum vanishes.
+#[test]
+fn canonical_signs_do_not_depend_on_the_eigenvector_sign() {
+    let mut rng = Rng(7);
+    let mut y = Mat::from_fn(30, 6, |i, j| {
+        if j == 5 {
+            if i < 15 {
+                (i + 1) as f64
+            } else {
+                -((30 - i) as f64)
+            }
+        } else {
+            rng.sym()
+        }
+    });
+    assert_eq!(y.col(5).iter().sum::<f64>(), 0.0);
+    let mut flipped = y.clone();
+    for j in [0, 2, 5] {
+        flipped.col_mut(j).iter_mut().for_each(|v| *v = -*v);
+    }
+    femu_correlate::modes::canonical_signs(&mut y);
+    femu_correlate::modes::canonical_signs(&mut flipped);
+    assert_eq!(y, flipped);
+    // and the sign is the one of the weighted sum, by hand for the antisymmetric shape:
+    // sum_i (1 + frac(0.618 i)) y_i over mirror pairs
+    let w = |i: usize| 1.0 + (0.618_033_988_749_894_9 * i as f64).fract();
+    let s: f64 = (0..30).map(|i| w(i) * y[(i, 5)]).sum();
+    assert!(s > 0.0);
+}

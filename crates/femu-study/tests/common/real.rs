@@ -88,6 +88,7 @@ pub fn measure(
     let layout = SensorLayout::new(real.mesh(), &up.matrices().dofs, real_sensors).unwrap();
     let shapes = modes.shapes.as_ref().subcols(6, count).to_owned();
     let mut y: Mat<f64> = layout.measure_all(shapes.as_ref()).unwrap();
+    femu_correlate::modes::canonical_signs(&mut y);
     let mut rng = femu_testkit::Rng(seed);
     for j in 0..count {
         let peak = y.col(j).iter().fold(0.0_f64, |a, v| a.max(v.abs()));
