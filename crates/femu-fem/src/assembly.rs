@@ -410,12 +410,8 @@ impl Assembler {
                 got: sys.k.nnz(),
             });
         }
-        let materials: Vec<([[f64; 6]; 6], f64)> = (0..mesh.element_count())
-            .map(|e| {
-                model
-                    .material_of(e)
-                    .map(|m| (m.elasticity_matrix(), m.density))
-            })
+        let materials: Vec<&crate::material::Material> = (0..mesh.element_count())
+            .map(|e| model.material_of(e))
             .collect::<Result<_, _>>()?;
         let kv = sys.k.data_mut();
         kv.iter_mut().for_each(|v| *v = 0.0);
@@ -429,10 +425,11 @@ impl Assembler {
                 |buf, &e| -> Result<(), FemError> {
                     let el = mesh.element(e);
                     mesh.element_coords(e, &mut buf.x);
-                    let (d, rho) = &materials[e];
+                    let material = materials[e];
+                    let rho = &material.density;
                     let nd = 3 * el.kind.num_nodes();
                     buf.ke.resize(nd * nd, 0.0);
-                    kernel::element_stiffness(el.kind, &buf.x, d, &mut buf.ke)
+                    kernel::element_stiffness_for(el.kind, &buf.x, material, &mut buf.ke)
                         .map_err(bad_jacobian(el.id))?;
                     // SAFETY of the shared writes (see `shared`): elements of one colour share no
                     // node, and an element writes only to the columns of its own nodes.
@@ -513,8 +510,7 @@ pub(crate) fn element_matrices(
     let nd = 3 * nn;
     let mut ke = vec![0.0; nd * nd];
     let mut me = vec![0.0; nd * nd];
-    kernel::element_stiffness(el.kind, &x, &mat.elasticity_matrix(), &mut ke)
-        .map_err(bad_jacobian(el.id))?;
+    kernel::element_stiffness_for(el.kind, &x, mat, &mut ke).map_err(bad_jacobian(el.id))?;
     match mass {
         MassKind::Consistent => {
             kernel::element_mass(el.kind, &x, mat.density, &mut me).map_err(bad_jacobian(el.id))?
