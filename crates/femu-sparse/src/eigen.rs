@@ -108,8 +108,11 @@ impl SturmCheck {
     }
 }
 
-/// The relative offset of a factored shift from the shift asked for (`1e-4 (sqrt 2 - 1)`).
-const SHIFT_OFFSET: f64 = 1e-4 * (std::f64::consts::SQRT_2 - 1.0);
+/// The relative offset of a factored shift from the shift asked for (`1e-3 (sqrt 2 - 1)`). At
+/// `1e-4` the eigenvalue under the shift dominated `OP` by a factor of 4,000 over its
+/// neighbours on a small square, and the solves' round-off along it held a second copy of a
+/// neighbouring double eigenvalue at a residual of `1.8e-10`, above the tolerance, for good.
+const SHIFT_OFFSET: f64 = 1e-3 * (std::f64::consts::SQRT_2 - 1.0);
 
 /// A mode is zero-energy when `||K x|| <= ZERO_ENERGY ||K||_1 ||x||`: `K x` is then round-off.
 const ZERO_ENERGY: f64 = 1e-11;
@@ -526,7 +529,7 @@ impl<'a> Pencil<'a> {
             // A shift given by the user is often a computed eigenvalue, and a band's midpoint can
             // be one: with K - sigma M singular to round-off, the solves amplify that eigenvector
             // by 1e16 and every other direction drowns in its round-off. Factor a little off it
-            // (1e-4 relative, by an irrational factor so that no eigenvalue sits there by
+            // (1e-3 relative, by an irrational factor so that no eigenvalue sits there by
             // symmetry); the modes are still chosen by their distance to the shift given.
             let scale = sigma
                 .abs()
@@ -844,6 +847,85 @@ fn interrupted(solved: usize) -> bool {
     INTERRUPT.with(|c| c.borrow_mut().as_mut().is_some_and(|f| f(solved)))
 }
 
+/// Vectors of length `n` stored one after the other (column-major, contiguous), so that a set of
+/// them is a matrix for GEMM (`faer`'s blocked, parallel kernels) and each one a slice.
+#[derive(Debug, Clone, Default)]
+struct Columns {
+    n: usize,
+    data: Vec<f64>,
+}
+
+impl Columns {
+    fn new(n: usize) -> Self {
+        Self { n, data: vec![] }
+    }
+    fn len(&self) -> usize {
+        if self.n == 0 {
+            0
+        } else {
+            self.data.len() / self.n
+        }
+    }
+    fn col(&self, j: usize) -> &[f64] {
+        &self.data[j * self.n..(j + 1) * self.n]
+    }
+    fn push(&mut self, v: &[f64]) {
+        self.data.extend_from_slice(v);
+    }
+    /// Columns `a..b` as a matrix.
+    fn range(&self, a: usize, b: usize) -> faer::MatRef<'_, f64> {
+        faer::MatRef::from_column_major_slice(&self.data[a * self.n..b * self.n], self.n, b - a)
+    }
+    fn mat(&self) -> faer::MatRef<'_, f64> {
+        self.range(0, self.len())
+    }
+    fn clear(&mut self) {
+        self.data.clear();
+    }
+    /// Keeps columns `from..` only.
+    fn drop_front(&mut self, from: usize) {
+        self.data.drain(..from * self.n);
+    }
+    /// Appends the columns of `other`.
+    fn push_all(&mut self, other: &Columns) {
+        self.data.extend_from_slice(&other.data);
+    }
+    /// Appends the columns of `a`.
+    fn extend_mat(&mut self, a: faer::MatRef<'_, f64>) {
+        self.data.reserve(a.nrows() * a.ncols());
+        for j in 0..a.ncols() {
+            self.data.extend(a.col(j).iter());
+        }
+    }
+}
+
+/// `w -= v c` with `c = mv^T w`: one pass of block classical Gram-Schmidt of the columns of `w`
+/// against the `M`-orthonormal columns of `v` (whose `M` images are `mv`), as two GEMMs; returns
+/// `c`.
+fn project_out(
+    v: faer::MatRef<'_, f64>,
+    mv: faer::MatRef<'_, f64>,
+    w: faer::MatMut<'_, f64>,
+) -> Mat<f64> {
+    use faer::Accum;
+    use faer::linalg::matmul::matmul;
+    let par = faer::get_global_parallelism();
+    let mut c = Mat::<f64>::zeros(v.ncols(), w.ncols());
+    if v.ncols() == 0 {
+        return c;
+    }
+    matmul(
+        c.as_mut(),
+        Accum::Replace,
+        mv.transpose(),
+        w.as_ref(),
+        1.0,
+        par,
+    );
+    matmul(w, Accum::Add, v, c.as_ref(), -1.0, par);
+    c
+}
+
 struct Lanczos<'p, 'a> {
     pencil: &'p Pencil<'a>,
     /// `LDL^T` of `K - sigma M`, owned so that it can be released while the Sturm check factors
@@ -853,8 +935,8 @@ struct Lanczos<'p, 'a> {
     params: EigenOptions,
     n: usize,
     /// locked eigenvectors, their M images and eigenvalues
-    x: Vec<Vec<f64>>,
-    mx: Vec<Vec<f64>>,
+    x: Columns,
+    mx: Columns,
     values: Vec<f64>,
     shifted_res: Vec<f64>,
     force_random_start: bool,
@@ -871,8 +953,8 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             sigma,
             params: params.clone(),
             n: pencil.dim(),
-            x: vec![],
-            mx: vec![],
+            x: Columns::new(pencil.dim()),
+            mx: Columns::new(pencil.dim()),
             values: vec![],
             shifted_res: vec![],
             force_random_start: false,
@@ -900,13 +982,27 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         out
     }
 
-    /// Two passes of classical Gram-Schmidt (CGS2) of `w` against the locked vectors and
-    /// `basis`, M inner products through the stored M images; returns the coefficients on `basis`.
-    fn orthogonalize(&self, w: &mut [f64], basis: &[Vec<f64>], mbasis: &[Vec<f64>]) -> Vec<f64> {
-        let nl = self.x.len();
-        let vs: Vec<&[f64]> = self.x.iter().chain(basis).map(|v| v.as_slice()).collect();
-        let mvs: Vec<&[f64]> = self.mx.iter().chain(mbasis).map(|v| v.as_slice()).collect();
-        let mut coef = vec![0.0; basis.len()];
+    /// Two passes of classical Gram-Schmidt (CGS2) of `w` against the locked vectors and the
+    /// basis columns `from..`, M inner products through the stored M images; returns the
+    /// coefficients on those basis columns.
+    fn orthogonalize_from(
+        &self,
+        w: &mut [f64],
+        basis: &Columns,
+        mbasis: &Columns,
+        from: usize,
+        locked: bool,
+    ) -> Vec<f64> {
+        let nl = if locked { self.x.len() } else { 0 };
+        let vs: Vec<&[f64]> = (0..nl)
+            .map(|j| self.x.col(j))
+            .chain((from..basis.len()).map(|j| basis.col(j)))
+            .collect();
+        let mvs: Vec<&[f64]> = (0..nl)
+            .map(|j| self.mx.col(j))
+            .chain((from..mbasis.len()).map(|j| mbasis.col(j)))
+            .collect();
+        let mut coef = vec![0.0; basis.len() - from];
         for _ in 0..2 {
             let cs: Vec<f64> = mvs.par_iter().map(|mv| dot(mv, w)).collect();
             let neg: Vec<f64> = cs.iter().map(|c| -c).collect();
@@ -916,44 +1012,93 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         coef
     }
 
+    /// CGS2 of `w` against the locked vectors and the whole basis; the coefficients on `basis`.
+    fn orthogonalize(&self, w: &mut [f64], basis: &Columns, mbasis: &Columns) -> Vec<f64> {
+        self.orthogonalize_from(w, basis, mbasis, 0, true)
+    }
+
+    /// Normalises `w` (already orthogonal to the locked vectors and the basis) and appends it;
+    /// returns its norm before normalisation, or `None` when it vanished relative to `before`
+    /// (the Krylov space is invariant).
+    fn push_normalised(
+        &self,
+        mut w: Vec<f64>,
+        before: f64,
+        basis: &mut Columns,
+        mbasis: &mut Columns,
+    ) -> Option<f64> {
+        if !(norm(&w) > 1e-10 * before) {
+            return None;
+        }
+        let mut mw = self.m_times(&w);
+        let nrm = dot(&mw, &w).max(0.0).sqrt();
+        if !(nrm > 0.0) {
+            return None;
+        }
+        w.iter_mut().for_each(|v| *v /= nrm);
+        mw.iter_mut().for_each(|v| *v /= nrm);
+        basis.push(&w);
+        mbasis.push(&mw);
+        Some(nrm)
+    }
+
     /// Appends `w` to the basis after orthogonalisation; returns (coefficients, norm before the
     /// final normalisation). A vector that vanishes (invariant subspace found) is replaced by a
     /// random one, with zero coefficient.
     fn append(
         &mut self,
         mut w: Vec<f64>,
-        basis: &mut Vec<Vec<f64>>,
-        mbasis: &mut Vec<Vec<f64>>,
+        basis: &mut Columns,
+        mbasis: &mut Columns,
     ) -> (Vec<f64>, f64) {
         // Breakdown is judged on the Euclidean norm: no extra M product per vector.
         let before = norm(&w);
         let coef = self.orthogonalize(&mut w, basis, mbasis);
-        let mut h_valid = norm(&w) > 1e-10 * before;
-        let mut tries = 0;
-        while !h_valid && tries < 5 {
-            // Breakdown: the Krylov space is invariant; continue with a fresh direction.
-            w = self.random_vector();
-            let b = norm(&w);
-            let _ = self.orthogonalize(&mut w, basis, mbasis);
-            h_valid = norm(&w) > 1e-10 * b;
-            tries += 1;
+        (coef, self.push_or_replace(w, before, basis, mbasis))
+    }
+
+    /// Pushes the orthogonalised `w`, or on breakdown a random vector orthogonalised in its
+    /// place; returns the norm of `w` (0 when replaced).
+    fn push_or_replace(
+        &mut self,
+        w: Vec<f64>,
+        before: f64,
+        basis: &mut Columns,
+        mbasis: &mut Columns,
+    ) -> f64 {
+        if let Some(nrm) = self.push_normalised(w, before, basis, mbasis) {
+            return nrm;
         }
-        let mut mw = self.m_times(&w);
-        let nrm = dot(&mw, &w).max(0.0).sqrt();
-        let h = if tries == 0 { nrm } else { 0.0 };
-        w.iter_mut().for_each(|v| *v /= nrm);
+        let mut last = Vec::new();
+        for _ in 0..5 {
+            // Breakdown: the Krylov space is invariant; continue with a fresh direction.
+            let mut r = self.random_vector();
+            let b = norm(&r);
+            let _ = self.orthogonalize(&mut r, basis, mbasis);
+            if self.push_normalised(r.clone(), b, basis, mbasis).is_some() {
+                return 0.0;
+            }
+            last = r;
+        }
+        // no independent direction found (the basis spans the space to round-off): the last one,
+        // normalised, keeps the basis and its projection the same size
+        let mut mw = self.m_times(&last);
+        let nrm = dot(&mw, &last).max(f64::MIN_POSITIVE).sqrt();
+        last.iter_mut().for_each(|v| *v /= nrm);
         mw.iter_mut().for_each(|v| *v /= nrm);
-        basis.push(w);
-        mbasis.push(mw);
-        (coef, h)
+        basis.push(&last);
+        mbasis.push(&mw);
+        0.0
     }
 
     /// Applies `OP` to the basis vectors `applied..` block by block until `max_basis` columns have
-    /// their image, extending the basis; returns the new `applied`.
+    /// their image, extending the basis; returns the new `applied`. Each block of solved vectors
+    /// is projected out of the locked vectors and the basis by GEMMs (block CGS2), then
+    /// orthonormalised within itself.
     fn expand(
         &mut self,
-        basis: &mut Vec<Vec<f64>>,
-        mbasis: &mut Vec<Vec<f64>>,
+        basis: &mut Columns,
+        mbasis: &mut Columns,
         h: &mut Vec<Vec<f64>>,
         mut applied: usize,
         max_basis: usize,
@@ -961,12 +1106,11 @@ impl<'p, 'a> Lanczos<'p, 'a> {
     ) -> usize {
         let p = self.params.block_size.max(1);
         let cap = self.n - self.values.len();
-        // Expand: apply OP block by block.
         while applied < basis.len() && applied < max_basis {
             let hi = (applied + p).min(basis.len()).min(max_basis);
             let block = hi - applied;
             let t = Instant::now();
-            let mut w = Mat::<f64>::from_fn(self.n, block, |i, j| mbasis[applied + j][i]);
+            let mut w = mbasis.range(applied, hi).to_owned();
             self.op
                 .as_ref()
                 .expect("the factor is present while iterating")
@@ -978,17 +1122,27 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                 return applied;
             }
             let t = Instant::now();
+            let before: Vec<f64> = (0..block).map(|j| w.col(j).norm_l2()).collect();
+            let len0 = basis.len();
+            // block CGS2 against the locked vectors and the basis as it stands
+            let mut coef0 = Mat::<f64>::zeros(len0, block);
+            for _ in 0..2 {
+                let _ = project_out(self.x.mat(), self.mx.mat(), w.as_mut());
+                coef0 += project_out(basis.mat(), mbasis.mat(), w.as_mut());
+            }
             for j in 0..block {
-                let col: Vec<f64> = (0..self.n).map(|i| w[(i, j)]).collect();
+                let mut col: Vec<f64> = w.col(j).iter().copied().collect();
                 let len_before = basis.len();
+                let mut coef: Vec<f64> = coef0.col(j).iter().copied().collect();
+                // CGS2 against the columns this block added (the rest is done)
+                let inner = self.orthogonalize_from(&mut col, basis, mbasis, len0, false);
+                coef.extend(inner);
                 if len_before >= cap {
-                    let mut c = col;
-                    h.push(self.orthogonalize(&mut c, basis, mbasis));
+                    h.push(coef);
                     continue;
                 }
-                let (mut coef, nrm) = self.append(col, basis, mbasis);
-                coef.resize(len_before + 1, 0.0);
-                coef[len_before] = nrm;
+                let nrm = self.push_or_replace(col, before[j], basis, mbasis);
+                coef.push(nrm);
                 h.push(coef);
             }
             applied = hi;
@@ -1001,7 +1155,8 @@ impl<'p, 'a> Lanczos<'p, 'a> {
     /// eigenvalues nearest the shift (to place a better shift), from a basis of `size` vectors.
     fn estimate(&mut self, count: usize, size: usize, stats: &mut EigenStats) -> Vec<f64> {
         let p = self.params.block_size.max(1);
-        let (mut basis, mut mbasis, mut h) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut basis, mut mbasis, mut h) =
+            (Columns::new(self.n), Columns::new(self.n), Vec::new());
         for _ in 0..p.min(self.n) {
             let r = self.random_vector();
             self.append(r, &mut basis, &mut mbasis);
@@ -1027,6 +1182,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
     /// Converged when the shifted relative residual is below `tol`, or when the backward error
     /// `||r|| / ((||K|| + |lambda| ||M||) ||x||)` is at round-off level (1e-13): rigid-body modes,
     /// with `K x` pure round-off, can only meet the latter.
+
     fn converged(&self, x: &[f64], lambda: f64) -> bool {
         let (rho, eta, relative) = self.residuals(x, lambda);
         // With the shift on (or within round-off of) an eigenvalue, `(K - sigma M) x` vanishes
@@ -1042,8 +1198,8 @@ impl<'p, 'a> Lanczos<'p, 'a> {
     /// restart), so no solve is repeated and no Krylov information is lost.
     fn run(&mut self, want: usize, stats: &mut EigenStats) -> Result<(), SparseError> {
         let p = self.params.block_size.max(1);
-        let mut basis: Vec<Vec<f64>> = Vec::new();
-        let mut mbasis: Vec<Vec<f64>> = Vec::new();
+        let mut basis = Columns::new(self.n);
+        let mut mbasis = Columns::new(self.n);
         let mut h: Vec<Vec<f64>> = Vec::new();
         let mut applied = 0;
         let mut restarts = 0;
@@ -1100,13 +1256,12 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                         .collect()
                 })
                 .collect();
-            let n = self.n;
-            let ritz = |r: usize, src: &[Vec<f64>]| -> Vec<f64> {
-                let vs: Vec<&[f64]> = src[..m].iter().map(|v| v.as_slice()).collect();
-                let cs: Vec<f64> = (0..m).map(|j| eig.eigenvectors[(j, r)]).collect();
-                let mut y = vec![0.0; n];
-                add_combination(&mut y, &vs, &cs);
-                y
+            // Ritz vectors Y = V_m S (GEMV for one, GEMM for a set)
+            let s_cols =
+                |rs: &[usize]| Mat::from_fn(m, rs.len(), |j, c| eig.eigenvectors[(j, rs[c])]);
+            let ritz = |r: usize, src: &Columns| -> Vec<f64> {
+                let y = src.range(0, m) * s_cols(&[r]);
+                y.col(0).iter().copied().collect()
             };
             let mut keep: Vec<usize> = Vec::new();
             for &r in &order {
@@ -1150,8 +1305,11 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                 .min(((need + p).max(m / 2)).min(m.saturating_sub(p).max(1)));
             let keep = &keep[..kk];
             let t = Instant::now();
-            let mut nb: Vec<Vec<f64>> = keep.iter().map(|r| ritz(*r, &basis)).collect();
-            let mut nmb: Vec<Vec<f64>> = keep.iter().map(|r| ritz(*r, &mbasis)).collect();
+            let sk = s_cols(keep);
+            let mut nb = Columns::new(self.n);
+            nb.extend_mat((basis.range(0, m) * &sk).as_ref());
+            let mut nmb = Columns::new(self.n);
+            nmb.extend_mat((mbasis.range(0, m) * &sk).as_ref());
             let mut nh: Vec<Vec<f64>> = Vec::with_capacity(kk);
             for (i, r) in keep.iter().enumerate() {
                 let mut col = vec![0.0; kk + extra];
@@ -1161,8 +1319,10 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                 }
                 nh.push(col);
             }
-            nb.extend(basis.drain(m..));
-            nmb.extend(mbasis.drain(m..));
+            basis.drop_front(m);
+            mbasis.drop_front(m);
+            nb.push_all(&basis);
+            nmb.push_all(&mbasis);
             basis = nb;
             mbasis = nmb;
             h = nh;
@@ -1174,7 +1334,8 @@ impl<'p, 'a> Lanczos<'p, 'a> {
     /// Locks a converged Ritz vector: M-orthonormalised against the locked set, eigenvalue from
     /// its Rayleigh quotient. Returns false if it was not independent of the locked vectors.
     fn lock(&mut self, mut y: Vec<f64>) -> bool {
-        let _ = self.orthogonalize(&mut y, &[], &[]);
+        let empty = Columns::new(self.n);
+        let _ = self.orthogonalize(&mut y, &empty, &empty);
         let my = self.m_times(&y);
         let nrm = dot(&my, &y).max(0.0).sqrt();
         if nrm.is_nan() || nrm <= 0.5 {
@@ -1186,8 +1347,8 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         crate::csc::mul_vec(self.pencil.k, &x, &mut kx).expect("sizes checked");
         let lambda = dot(&kx, &x);
         let rho = self.residuals(&x, lambda).0;
-        self.x.push(x);
-        self.mx.push(mx);
+        self.x.push(&x);
+        self.mx.push(&mx);
         self.values.push(lambda);
         self.shifted_res.push(rho);
         true
@@ -1224,15 +1385,15 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         stats: EigenStats,
     ) -> Modes {
         sel.sort_by(|a, b| self.values[*a].total_cmp(&self.values[*b]));
-        let vectors = Mat::from_fn(self.n, sel.len(), |i, j| self.x[sel[j]][i]);
+        let vectors = Mat::from_fn(self.n, sel.len(), |i, j| self.x.col(sel[j])[i]);
         let (residuals, residual_kinds): (Vec<f64>, Vec<ResidualKind>) = sel
             .iter()
             .map(|&s| {
                 residual_of(
                     self.pencil.k,
                     self.pencil.norms(),
-                    &self.x[s],
-                    &self.mx[s],
+                    self.x.col(s),
+                    self.mx.col(s),
                     self.values[s],
                 )
             })
