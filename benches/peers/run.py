@@ -1,12 +1,16 @@
-"""Side-by-side eigensolver comparison on one model: femu, CalculiX (*FREQUENCY) and scipy eigsh
-(shift-invert), each in its own process under /usr/bin/time for wall time and peak memory.
+"""Side-by-side eigensolver comparison on one model: femu, CalculiX (*FREQUENCY), scipy's eigsh
+(ARPACK shift-invert) with SuperLU, MKL PARDISO or CHOLMOD factors, and SLEPc (Krylov-Schur with
+MUMPS) on one and two MPI ranks, each in its own process under /usr/bin/time for wall time and
+peak memory, on the same K and M (femu's export).
 
-    python3 benches/peers/run.py KIND N [COUNT]     (KIND: hex8 | hex20 | tet10)
+    python3 benches/peers/run.py KIND N [COUNT]     (KIND: hex8 | hex20 | tet10 | plate)
 
 Prints a JSON line per tool and a summary with the ratios and the largest relative frequency
 difference against femu. `run.sh` installs the peers first. Environment: PEER_TIMEOUT (seconds,
 default 3600) stops a peer and reports a lower bound; PEERS selects peers (default
-"calculix,scipy").
+"calculix,eigsh+pardiso,eigsh+cholmod,slepc+mumps:1,slepc+mumps:2"; "eigsh+superlu" is scipy's
+default factorization). PEERS_PYTHON: the Python with scipy, pypardiso, scikit-sparse and
+threadpoolctl (run.sh makes a venv).
 """
 import json, os, re, subprocess, sys, tempfile
 
@@ -14,10 +18,15 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 EXE = os.path.join(ROOT, "target", "release", "examples", "peer_modes")
 
 
-def timed(cmd, cwd, timeout):
+# The peers' shift: 10 Hz below zero, below every wanted eigenvalue and away from the rigid-body
+# zeros of a free-free deck (femu places its own shift).
+SIGMA = -(2 * 3.141592653589793 * 10.0) ** 2
+
+
+def timed(cmd, cwd, timeout, env=None):
     """Runs cmd under /usr/bin/time -v; a run past `timeout` seconds is killed and reported with
     code None and its wall time as a lower bound."""
-    p = subprocess.Popen(["/usr/bin/time", "-v"] + cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    p = subprocess.Popen(["/usr/bin/time", "-v"] + cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     try:
         out, err = p.communicate(timeout=timeout)
         code = p.returncode
@@ -56,27 +65,59 @@ def main():
     print(json.dumps({"kind": kind, "dofs": dofs, "tool": "femu", "wall_s": femu_wall, "rss_mb": rss, **femu}), flush=True)
     print(f"{kind} {dofs} DOF: femu     wall {femu_wall:8.2f} s, peak {rss:8.0f} MB "
           f"(assembly {femu['assembly_s']} s, ordering+symbolic {femu['symbolic_s']} s, factor {femu['factor_s']} s x{femu['factorizations']}, "
-          f"solves {femu['solve_s']} s for {femu['solved_vectors']} vectors, orthogonalisation {femu['orth_s']} s), "
+          f"solves {femu['solve_s']} s for {femu['solved_vectors']} vectors, orthogonalisation {femu['orth_s']} s, "
+          f"Rayleigh-Ritz and checks {femu['ritz_s']} s, other {femu['other_s']} s), "
           f"Sturm verified {femu['sturm_verified']}", flush=True)
     ref = femu["frequencies_hz"]
-    peers = [("calculix", ["ccx", "model"]), ("scipy", [sys.executable, os.path.join(ROOT, "benches", "peers", "scipy_eigsh.py"), d, str(count)])]
-    wanted = os.environ.get("PEERS", "calculix,scipy").split(",")
+    script = lambda name: os.path.join(ROOT, "benches", "peers", name)
+    venv = os.environ.get("PEERS_PYTHON", sys.executable)
+    debian = "/usr/bin/python3"  # petsc4py and slepc4py from Debian's packages
+    sigma = str(SIGMA)
+    peers = [
+        ("calculix", ["ccx", "model"]),
+        ("eigsh+superlu", [venv, script("scipy_eigsh.py"), d, str(count), sigma, "superlu"]),
+        ("eigsh+pardiso", [venv, script("scipy_eigsh.py"), d, str(count), sigma, "pardiso"]),
+        ("eigsh+cholmod", [venv, script("scipy_eigsh.py"), d, str(count), sigma, "cholmod"]),
+        ("slepc+mumps:1", ["mpirun", "--allow-run-as-root", "--oversubscribe", "-n", "1", debian, script("slepc_eigs.py"), "solve", d, str(count), sigma]),
+        ("slepc+mumps:2", ["mpirun", "--allow-run-as-root", "--oversubscribe", "-n", "2", debian, script("slepc_eigs.py"), "solve", d, str(count), sigma]),
+    ]
+    wanted = os.environ.get("PEERS", "calculix,eigsh+pardiso,eigsh+cholmod,slepc+mumps:1,slepc+mumps:2").split(",")
+    if any(t.startswith("slepc") for t in wanted):
+        subprocess.run([debian, script("slepc_eigs.py"), "convert", d], check=True)
+    rows = [("femu", femu_wall, rss, 0.0, f"{femu['factorizations']} factorizations, {femu['solved_vectors']} solved vectors, Sturm verified {femu['sturm_verified']}")]
     for tool, cmd in peers:
         if tool not in wanted:
             continue
-        code, out, wall, rss = timed(cmd, d, limit)
+        # one BLAS thread per MPI rank, two threads otherwise (the machine has two cores)
+        env = dict(os.environ, OMP_NUM_THREADS="1" if tool == "slepc+mumps:2" else "2")
+        code, out, wall, rss = timed(cmd, d, limit, env)
         if code is None:
-            print(f"{kind} {dofs} DOF: {tool:8s} stopped after {wall:.0f} s at {rss:.0f} MB without finishing: "
-                  f"femu is more than {wall / femu_wall:.2f}x faster", flush=True)
+            print(f"{kind} {dofs} DOF: {tool:14s} stopped after {wall:.0f} s at {rss:.0f} MB without finishing", flush=True)
             continue
+        info = {}
         if tool == "calculix":
             f = ccx_frequencies(os.path.join(d, "model.dat")) if code == 0 else []
         else:
-            f = json.loads(out)["frequencies_hz"] if code == 0 else []
-        diff = max((abs(a - b) / b for a, b in zip(f, ref)), default=float("nan"))
-        print(json.dumps({"kind": kind, "dofs": dofs, "tool": tool, "wall_s": wall, "rss_mb": rss, "ok": code == 0}), flush=True)
-        print(f"{kind} {dofs} DOF: {tool:8s} wall {wall:8.2f} s, peak {rss:8.0f} MB, femu is {wall / femu_wall:.2f}x faster, "
-              f"max rel. freq. difference to femu {diff:.2e}", flush=True)
+            info = json.loads(out.strip().splitlines()[-1]) if code == 0 else {}
+            f = info.get("frequencies_hz", [])
+        diff = max((abs(a - b) / b for a, b in zip(f, ref) if b > 1e-3 * ref[-1]), default=float("nan"))
+        note = f"max rel. frequency difference to femu {diff:.1e}"
+        if info.get("applications"):
+            note += f", {info['applications']} solves"
+        if info.get("blas"):
+            note += f", BLAS: {'; '.join(info['blas'])}"
+        if code != 0 or len(f) < len(ref):
+            note = f"failed (exit {code}): {out.strip()[-300:]}"
+        print(json.dumps({"kind": kind, "dofs": dofs, "tool": tool, "wall_s": wall, "rss_mb": rss, "ok": code == 0, "max_rel_diff": diff, **{k: v for k, v in info.items() if k != "frequencies_hz"}}), flush=True)
+        rows.append((tool, wall, rss, diff, note))
+    ok = [r for r in rows[1:] if not r[4].startswith("failed")]
+    fastest = min((r[1] for r in ok), default=float("nan"))
+    print(f"\n{kind}, {dofs} DOF, {count} lowest modes (sigma {SIGMA:g} s^-2 for the peers); femu's ratio to the fastest peer: {fastest / femu_wall:.2f}x\n")
+    print("| tool | wall (s) | peak RSS (MB) | femu faster by | notes |")
+    print("|---|---|---|---|---|")
+    for tool, wall, mb, diff, note in rows:
+        print(f"| {tool} | {wall:.1f} | {mb:.0f} | {wall / femu_wall:.2f}x | {note} |")
+    print(flush=True)
 
 
 if __name__ == "__main__":

@@ -507,6 +507,7 @@ impl SlepcRun {
                 factor_seconds: self.seconds[2],
                 factorizations: 1 + usize::from(self.lower.is_some()) + 1,
                 restarts: self.iterations,
+                total_seconds: self.seconds.iter().sum(),
                 ..Default::default()
             },
         })
