@@ -15,7 +15,7 @@ venv=target/peers-venv
 [ -x $venv/bin/python ] || python3 -m venv $venv
 $venv/bin/python -c "import scipy, pypardiso, sksparse, threadpoolctl" 2>/dev/null ||
   $venv/bin/pip install -q scipy pypardiso "scikit-sparse==0.4.16" threadpoolctl  # 0.5 needs SuiteSparse 7, Debian 12 has 5.12
-export PEERS_PYTHON=$venv/bin/python
+export PEERS_PYTHON=$PWD/$venv/bin/python
 cargo build --release --example peer_modes
 sizes=("$@")
 # default: the 50k and 200k DOF cases of the clamped block and the free-free plate

@@ -48,7 +48,7 @@ f = sorted(math.sqrt(max(v, 0.0)) / (2 * math.pi) for v in vals)
 try:
     from threadpoolctl import threadpool_info
 
-    blas = sorted({f"{i['internal_api']} {i.get('version')} ({i.get('threading_layer', '-')}, {i['num_threads']} threads)" for i in threadpool_info()})
+    blas = sorted({f"{i['internal_api']} {i.get('version')} ({i['num_threads']} threads)" for i in threadpool_info() if i.get("user_api") == "blas"})
 except ImportError:
     blas = ["threadpoolctl not installed"]
 print(json.dumps({"eigen_s": dt, "applications": applications[0] or None, "blas": blas, "frequencies_hz": f}))

@@ -14,13 +14,34 @@ import petsc4py
 petsc4py.init([])
 from petsc4py import PETSc  # noqa: E402
 
-if sys.argv[1] == "convert":
-    import scipy.io
+def read_mtx(path):
+    """A MatrixMarket coordinate file (symmetric: lower triangle) as CSR arrays, with numpy only
+    (Debian's Python, which has petsc4py, has no scipy)."""
+    import numpy as np
 
+    with open(path) as f:
+        header = f.readline().lower()
+        line = f.readline()
+        while line.startswith("%"):
+            line = f.readline()
+        n, _, _ = (int(v) for v in line.split())
+        data = np.loadtxt(f, ndmin=2)
+    i, j, v = data[:, 0].astype(np.int64) - 1, data[:, 1].astype(np.int64) - 1, data[:, 2]
+    if "symmetric" in header:
+        off = i != j
+        i, j, v = np.concatenate([i, j[off]]), np.concatenate([j, i[off]]), np.concatenate([v, v[off]])
+    order = np.lexsort((j, i))
+    i, j, v = i[order], j[order], v[order]
+    indptr = np.zeros(n + 1, dtype=np.int32)
+    np.add.at(indptr, i + 1, 1)
+    return n, np.cumsum(indptr).astype(np.int32), j.astype(np.int32), v
+
+
+if sys.argv[1] == "convert":
     d = sys.argv[2]
     for name in ("K", "M"):
-        a = scipy.io.mmread(os.path.join(d, f"{name}.mtx")).tocsr()
-        m = PETSc.Mat().createAIJ(size=a.shape, csr=(a.indptr, a.indices, a.data), comm=PETSc.COMM_SELF)
+        n, indptr, indices, values = read_mtx(os.path.join(d, f"{name}.mtx"))
+        m = PETSc.Mat().createAIJ(size=(n, n), csr=(indptr, indices, values), comm=PETSc.COMM_SELF)
         v = PETSc.Viewer().createBinary(os.path.join(d, f"{name}.petsc"), "w", comm=PETSc.COMM_SELF)
         m.view(v)
         v.destroy()
