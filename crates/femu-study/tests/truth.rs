@@ -61,7 +61,7 @@ fn value(s: &UpdateStudy, name: &str) -> Option<f64> {
 
 /// The user's mesh is the real structure's (noise 0 to 2 %): inverse eigensensitivity on
 /// frequencies and shapes, localised, recovers r3 within 0.05 at every noise level and agrees;
-/// SB-EBE at 2 % noise is not judged to agree (it localises r5 first and the held-out modes get
+/// SB-EBE at 2 % noise is not judged to agree (it also softens r4 and the held-out modes get
 /// worse).
 #[test]
 fn same_mesh_at_every_noise_level() {
