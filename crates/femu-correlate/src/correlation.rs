@@ -286,3 +286,141 @@ pub fn frequency_error(f_test: f64, f_model: f64) -> f64 {
 pub fn eigenvalue_gap_hz(f_test: f64, f_model: f64) -> f64 {
     (crate::modes::eigenvalue_of_hz(f_test) - crate::modes::eigenvalue_of_hz(f_model)).abs()
 }
+
+/// Model modes whose eigenvalues are equal to this relative tolerance are one repeated
+/// eigenvalue for [`align_repeated`].
+pub const REPEATED_TOLERANCE: f64 = 1e-8;
+
+/// Turns the basis of each repeated model eigenvalue (a cluster of equal `values`, as a symmetric
+/// structure has) towards the test: any orthonormal basis of a repeated eigenvalue's eigenspace
+/// is an equally valid set of mode shapes, and the eigensolver's is decided by round-off, so a MAC
+/// against it can be anything from 0 to 1 (docs/MATH.md, "Repeated modes"). For a cluster of `k`
+/// modes with readings `Phi_c` (`s x k`), the test modes with at least half their energy in the
+/// span of `Phi_c` (at most `k`, the most first) are matched: their coefficients
+/// `r_t = Phi_c^+ y_t` in the cluster's basis, at unit norm, are replaced by their nearest
+/// orthonormal set `Q = U V^T` (the SVD `[r_t] = U S V^T`); `Phi_c` becomes `Phi_c Q`, completed
+/// by an orthonormal complement when fewer test modes than `k` match. Test modes that are
+/// eigenvectors of the same eigenvalue have orthogonal coefficients, and each is then matched
+/// exactly (MAC 1). A cluster the sensors cannot tell apart is left as it is. The result does not depend on the basis the eigensolver returned. Returns the
+/// rotated readings and, per cluster, its model modes and `Q` (apply `Q` to the full shapes to
+/// turn them the same way).
+///
+/// # Errors
+/// Mismatched sizes, or an SVD that does not converge.
+#[allow(clippy::type_complexity)]
+pub fn align_repeated(
+    values: &[f64],
+    phia: MatRef<'_, f64>,
+    test: MatRef<'_, f64>,
+) -> Result<(Mat<f64>, Vec<(Vec<usize>, Mat<f64>)>), CorrelateError> {
+    if values.len() != phia.ncols() || test.nrows() != phia.nrows() {
+        return Err(CorrelateError::DimensionMismatch {
+            what: "model readings against their eigenvalues and the test's sensors",
+            expected: phia.ncols(),
+            got: values.len(),
+        });
+    }
+    let scale = values.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    let mut out = phia.to_owned();
+    let mut turned = Vec::new();
+    let mut start = 0;
+    while start < values.len() {
+        let mut end = start + 1;
+        while end < values.len()
+            && (values[end] - values[start]).abs()
+                <= REPEATED_TOLERANCE * values[start].abs().max(1e-6 * scale)
+        {
+            end += 1;
+        }
+        let k = end - start;
+        if k >= 2 {
+            let cluster: Vec<usize> = (start..end).collect();
+            let pc = Mat::from_fn(phia.nrows(), k, |i, j| phia[(i, start + j)]);
+            if let Some(q) = procrustes_towards(pc.as_ref(), test)? {
+                let turned_pc = &pc * &q;
+                for j in 0..k {
+                    for i in 0..phia.nrows() {
+                        out[(i, start + j)] = turned_pc[(i, j)];
+                    }
+                }
+                turned.push((cluster, q));
+            }
+        }
+        start = end;
+    }
+    Ok((out, turned))
+}
+
+/// The rotation of [`align_repeated`] for one cluster, `None` when no test mode lies in its span.
+fn procrustes_towards(
+    pc: MatRef<'_, f64>,
+    test: MatRef<'_, f64>,
+) -> Result<Option<Mat<f64>>, CorrelateError> {
+    let k = pc.ncols();
+    let svd_err = |e| {
+        CorrelateError::Sparse(femu_sparse::SparseError::NoConvergence {
+            reason: format!("SVD of a repeated mode's readings: {e:?}"),
+        })
+    };
+    // an orthonormal basis of span(Phi_c) at the sensors
+    let basis = pc.thin_svd().map_err(svd_err)?;
+    let smax = (0..k).fold(0.0_f64, |m, i| m.max(basis.S()[i]));
+    if !(smax > 0.0) {
+        return Ok(None);
+    }
+    let u = basis.U();
+    let mut energy: Vec<(usize, f64)> = (0..test.ncols())
+        .filter_map(|t| {
+            let y = test.col(t);
+            let total = y.squared_norm_l2();
+            let inside = (u.transpose() * y).squared_norm_l2();
+            (total > 0.0 && inside >= 0.5 * total).then_some((t, inside / total))
+        })
+        .collect();
+    energy.sort_by(|a, b| b.1.total_cmp(&a.1));
+    energy.truncate(k);
+    energy.sort_by_key(|e| e.0);
+    let j = energy.len();
+    if j == 0 {
+        return Ok(None);
+    }
+    let smin = (0..k).fold(f64::INFINITY, |m, i| m.min(basis.S()[i]));
+    if !(smin > 1e-10 * smax) {
+        // the sensors cannot tell the cluster's modes apart: nothing to turn
+        return Ok(None);
+    }
+    // the coefficients r_t = Phi_c^+ y_t of each matched test mode in the cluster's basis, at
+    // unit norm; their nearest orthonormal set (polar factor, U V^T of its SVD) is the rotation
+    let y = Mat::from_fn(pc.nrows(), j, |i, c| test[(i, energy[c].0)]);
+    let uty = u.transpose() * &y;
+    let scaled = Mat::from_fn(k, j, |i, c| uty[(i, c)] / basis.S()[i]);
+    let mut m = basis.V() * &scaled; // k x j
+    for c in 0..j {
+        let n = m.col(c).norm_l2();
+        m.col_mut(c).iter_mut().for_each(|v| *v /= n);
+    }
+    let svd = m.thin_svd().map_err(svd_err)?;
+    let qj = svd.U() * svd.V().transpose(); // k x j, orthonormal columns
+    // complete to an orthonormal k x k by Gram-Schmidt of the unit vectors against Q_j
+    let mut cols: Vec<Vec<f64>> = (0..j)
+        .map(|c| qj.col(c).iter().copied().collect())
+        .collect();
+    for e in 0..k {
+        if cols.len() == k {
+            break;
+        }
+        let mut v: Vec<f64> = (0..k).map(|i| if i == e { 1.0 } else { 0.0 }).collect();
+        for _ in 0..2 {
+            for c in &cols {
+                let d: f64 = c.iter().zip(&v).map(|(a, b)| a * b).sum();
+                v.iter_mut().zip(c).for_each(|(x, a)| *x -= d * a);
+            }
+        }
+        let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if n > 1e-8 {
+            v.iter_mut().for_each(|x| *x /= n);
+            cols.push(v);
+        }
+    }
+    Ok(Some(Mat::from_fn(k, k, |i, c| cols[c][i])))
+}

@@ -2,7 +2,7 @@
 //! and `femu estimate` print and write.
 
 use crate::CorrelateError;
-use crate::correlation::{comac, mac_matrix, msd};
+use crate::correlation::{align_repeated, comac, mac_matrix, msd};
 use crate::estimators::{Bound, Estimator, ModelSpectrum, PairedModel, ResidualNorms, assess};
 use crate::modes::{ModeSet, TestModes};
 use crate::pairing::{Pairing, PairingOptions, pair_modes};
@@ -29,7 +29,9 @@ pub struct CorrelationReport {
     pub comac: Vec<f64>,
 }
 
-/// Correlates model modes with test modes measured on `layout`.
+/// Correlates model modes with test modes measured on `layout`. The basis of each repeated model
+/// eigenvalue is first turned towards the test ([`align_repeated`]), so that pairs, MACs and MSDs
+/// do not depend on the basis the eigensolver happened to return.
 ///
 /// # Errors
 /// Mismatched sizes (model shapes against the layout, test shapes against the sensors), zero
@@ -47,7 +49,12 @@ pub fn correlate(
             got: test.shapes.nrows(),
         });
     }
-    let phia = layout.measure_all(model.shapes.as_ref())?;
+    // a repeated eigenvalue's basis is the eigensolver's: turn it towards the test first
+    let (phia, _) = align_repeated(
+        &model.values,
+        layout.measure_all(model.shapes.as_ref())?.as_ref(),
+        test.shapes.as_ref(),
+    )?;
     let mac = mac_matrix(test.shapes.as_ref(), phia.as_ref())?;
     let f_model = model.frequencies_hz();
     let pairing = pair_modes(mac.as_ref(), &test.frequencies_hz, &f_model, options)?;

@@ -413,3 +413,68 @@ fn canonical_signs_do_not_depend_on_the_eigenvector_sign() {
     let s: f64 = (0..30).map(|i| w(i) * y[(i, 5)]).sum();
     assert!(s > 0.0);
 }
+
+/// A repeated eigenvalue (values 2, 2): the model's basis of its plane, turned by any angle, is
+/// turned back onto the test's by `align_repeated`, so each test mode of the pair has MAC 1 with
+/// one model mode whatever basis the eigensolver returned; a mode that is not repeated is left as
+/// it is; a single test mode in the plane is matched by the first mode of the cluster. Reference:
+/// the readings written by hand, MAC by its definition.
+#[test]
+fn repeated_modes_are_turned_towards_the_test() {
+    use femu_correlate::correlation::align_repeated;
+    let s = 6;
+    let a: Vec<f64> = vec![1.0, 0.5, -0.3, 0.2, 0.0, -0.7];
+    let b: Vec<f64> = vec![0.1, -0.4, 0.9, 0.3, -0.6, 0.2];
+    let c: Vec<f64> = vec![0.3, 0.3, 0.3, -0.2, 0.8, 0.1];
+    let mac = |x: &[f64], y: &[f64]| {
+        let d: f64 = x.iter().zip(y).map(|(p, q)| p * q).sum();
+        d * d / (x.iter().map(|p| p * p).sum::<f64>() * y.iter().map(|q| q * q).sum::<f64>())
+    };
+    // the test: c (mode 1), then a and b (the pair), scaled and with a sign flipped
+    let test = Mat::from_fn(s, 3, |i, j| match j {
+        0 => 2.0 * c[i],
+        1 => -3.0 * a[i],
+        _ => 0.5 * b[i],
+    });
+    let values = [1.0, 2.0, 2.0 * (1.0 + 1e-12)];
+    let mut previous: Option<Mat<f64>> = None;
+    for angle in [0.0_f64, 30.0, 45.0, 60.0, 90.0, 137.0] {
+        let (sn, cs) = angle.to_radians().sin_cos();
+        let phia = Mat::from_fn(s, 3, |i, j| match j {
+            0 => c[i],
+            1 => cs * a[i] + sn * b[i],
+            _ => -sn * a[i] + cs * b[i],
+        });
+        let (turned, clusters) = align_repeated(&values, phia.as_ref(), test.as_ref()).unwrap();
+        assert_eq!(clusters.len(), 1);
+        assert_eq!(clusters[0].0, vec![1, 2]);
+        let col = |m: &Mat<f64>, j: usize| -> Vec<f64> { m.col(j).iter().copied().collect() };
+        // the single mode is untouched, the pair matches a and b
+        assert_eq!(col(&turned, 0), c);
+        assert!(
+            (mac(&col(&turned, 1), &a) - 1.0).abs() < 1e-12,
+            "angle {angle}"
+        );
+        assert!(
+            (mac(&col(&turned, 2), &b) - 1.0).abs() < 1e-12,
+            "angle {angle}"
+        );
+        // the same readings whatever the starting basis (up to round-off)
+        if let Some(p) = &previous {
+            for j in 0..3 {
+                for i in 0..s {
+                    assert!((turned[(i, j)] - p[(i, j)]).abs() < 1e-12, "angle {angle}");
+                }
+            }
+        }
+        previous = Some(turned);
+        // one test mode in the plane (a + b, unit weights): the first mode of the pair matches it
+        let one = Mat::from_fn(s, 1, |i, _| a[i] + b[i]);
+        let (t1, _) = align_repeated(&values, phia.as_ref(), one.as_ref()).unwrap();
+        let ab: Vec<f64> = a.iter().zip(&b).map(|(p, q)| p + q).collect();
+        assert!(
+            (mac(&col(&t1, 1), &ab) - 1.0).abs() < 1e-12,
+            "angle {angle}"
+        );
+    }
+}
