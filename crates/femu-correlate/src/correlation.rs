@@ -313,11 +313,18 @@ pub fn align_repeated(
     phia: MatRef<'_, f64>,
     test: MatRef<'_, f64>,
 ) -> Result<(Mat<f64>, Vec<(Vec<usize>, Mat<f64>)>), CorrelateError> {
-    if values.len() != phia.ncols() || test.nrows() != phia.nrows() {
+    if values.len() != phia.ncols() {
         return Err(CorrelateError::DimensionMismatch {
-            what: "model readings against their eigenvalues and the test's sensors",
+            what: "model eigenvalues against their readings",
             expected: phia.ncols(),
             got: values.len(),
+        });
+    }
+    if test.nrows() != phia.nrows() {
+        return Err(CorrelateError::DimensionMismatch {
+            what: "test shapes against the model's sensors",
+            expected: phia.nrows(),
+            got: test.nrows(),
         });
     }
     let scale = values.iter().fold(0.0_f64, |m, v| m.max(v.abs()));

@@ -12,9 +12,7 @@ use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
-    SymmetricOrdering, factorize_symbolic_cholesky,
-    simplicial::SimplicialLdltRef,
-    supernodal::{SupernodalLdltRef, SupernodalLltRef},
+    SymmetricOrdering, factorize_symbolic_cholesky, supernodal::SupernodalLltRef,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Side};
@@ -267,7 +265,8 @@ impl SymbolicFactor {
     }
 }
 
-/// The diagonal of the factor `L` (or `D`) in elimination order.
+/// The diagonal of the factor `L` of an `LL^T` (or `D` of an `LDL^T`: the values are stored in
+/// the same layout) in elimination order.
 fn factor_diagonal(symbolic: &SymbolicCholesky<usize>, values: &[f64]) -> Vec<f64> {
     match symbolic.raw() {
         SymbolicCholeskyRaw::Simplicial(s) => {
@@ -313,33 +312,13 @@ fn inertia_of(symbolic: &SymbolicCholesky<usize>, values: &[f64]) -> Inertia {
         zero: 0,
         positive: 0,
     };
-    let mut count = |d: f64| {
+    for d in factor_diagonal(symbolic, values) {
         if d < 0.0 {
             inertia.negative += 1;
         } else if d == 0.0 || d.is_nan() {
             inertia.zero += 1;
         } else {
             inertia.positive += 1;
-        }
-    };
-    match symbolic.raw() {
-        SymbolicCholeskyRaw::Simplicial(s) => {
-            let l = SimplicialLdltRef::new(s, values);
-            let col_ptr = s.col_ptr();
-            let vals = l.values();
-            // The diagonal is the first stored entry of each column of L.
-            for j in 0..s.nrows() {
-                count(vals[col_ptr[j]]);
-            }
-        }
-        SymbolicCholeskyRaw::Supernodal(s) => {
-            let l = SupernodalLdltRef::new(s, values);
-            for k in 0..s.n_supernodes() {
-                let v = l.supernode(k).val();
-                for j in 0..v.ncols() {
-                    count(v[(j, j)]);
-                }
-            }
         }
     }
     inertia

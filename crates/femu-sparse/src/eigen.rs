@@ -1028,52 +1028,28 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         self.orthogonalize_from(w, basis, mbasis, 0, true)
     }
 
-    /// Normalises `w` (already orthogonal to the locked vectors and the basis) and appends it;
-    /// returns its norm before normalisation, or `None` when it vanished relative to `before`
-    /// (the Krylov space is invariant).
-    fn push_normalised(
-        &self,
-        mut w: Vec<f64>,
-        before: f64,
-        basis: &mut Columns,
-        mbasis: &mut Columns,
-    ) -> Option<f64> {
-        if !(norm(&w) > 1e-10 * before) {
+    /// The M-norm of `w` (already orthogonal to the locked vectors and the basis) with its image
+    /// `mw`, or `None` when `w` vanished relative to `before` (the Krylov space is invariant).
+    fn usable_norm(w: &[f64], mw: &[f64], before: f64) -> Option<f64> {
+        if !(norm(w) > 1e-10 * before) {
             return None;
         }
-        let mut mw = self.m_times(&w);
-        let nrm = dot(&mw, &w).max(0.0).sqrt();
-        if !(nrm > 0.0) {
-            return None;
-        }
-        w.iter_mut().for_each(|v| *v /= nrm);
-        mw.iter_mut().for_each(|v| *v /= nrm);
-        basis.push(&w);
-        mbasis.push(&mw);
-        Some(nrm)
+        let nrm = dot(mw, w).max(0.0).sqrt();
+        (nrm > 0.0).then_some(nrm)
     }
 
-    /// [`Lanczos::push_normalised`] with the `M` image of `w` given.
-    fn push_with_image(
-        &self,
+    /// Appends `w / nrm` and its image `mw / nrm`.
+    fn push_scaled(
         mut w: Vec<f64>,
         mut mw: Vec<f64>,
-        before: f64,
+        nrm: f64,
         basis: &mut Columns,
         mbasis: &mut Columns,
-    ) -> Option<f64> {
-        if !(norm(&w) > 1e-10 * before) {
-            return None;
-        }
-        let nrm = dot(&mw, &w).max(0.0).sqrt();
-        if !(nrm > 0.0) {
-            return None;
-        }
+    ) {
         w.iter_mut().for_each(|v| *v /= nrm);
         mw.iter_mut().for_each(|v| *v /= nrm);
         basis.push(&w);
         mbasis.push(&mw);
-        Some(nrm)
     }
 
     /// Appends `w` to the basis after orthogonalisation; returns (coefficients, norm before the
@@ -1088,40 +1064,41 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         // Breakdown is judged on the Euclidean norm: no extra M product per vector.
         let before = norm(&w);
         let coef = self.orthogonalize(&mut w, basis, mbasis);
-        (coef, self.push_or_replace(w, before, basis, mbasis))
+        (coef, self.push_or_replace(w, None, before, basis, mbasis))
     }
 
-    /// Pushes the orthogonalised `w`, or on breakdown a random vector orthogonalised in its
-    /// place; returns the norm of `w` (0 when replaced).
+    /// Pushes the orthogonalised `w` (with its M image `mw` when known), or on breakdown a random
+    /// vector orthogonalised in its place; returns the norm of `w` (0 when replaced).
     fn push_or_replace(
         &mut self,
         w: Vec<f64>,
+        mw: Option<Vec<f64>>,
         before: f64,
         basis: &mut Columns,
         mbasis: &mut Columns,
     ) -> f64 {
-        if let Some(nrm) = self.push_normalised(w, before, basis, mbasis) {
+        let mw = mw.unwrap_or_else(|| self.m_times(&w));
+        if let Some(nrm) = Self::usable_norm(&w, &mw, before) {
+            Self::push_scaled(w, mw, nrm, basis, mbasis);
             return nrm;
         }
-        let mut last = Vec::new();
+        let mut last = (w, mw);
         for _ in 0..5 {
             // Breakdown: the Krylov space is invariant; continue with a fresh direction.
             let mut r = self.random_vector();
             let b = norm(&r);
             let _ = self.orthogonalize(&mut r, basis, mbasis);
-            if self.push_normalised(r.clone(), b, basis, mbasis).is_some() {
+            let mr = self.m_times(&r);
+            if let Some(nrm) = Self::usable_norm(&r, &mr, b) {
+                Self::push_scaled(r, mr, nrm, basis, mbasis);
                 return 0.0;
             }
-            last = r;
+            last = (r, mr);
         }
         // no independent direction found (the basis spans the space to round-off): the last one,
         // normalised, keeps the basis and its projection the same size
-        let mut mw = self.m_times(&last);
-        let nrm = dot(&mw, &last).max(f64::MIN_POSITIVE).sqrt();
-        last.iter_mut().for_each(|v| *v /= nrm);
-        mw.iter_mut().for_each(|v| *v /= nrm);
-        basis.push(&last);
-        mbasis.push(&mw);
+        let nrm = dot(&last.1, &last.0).max(f64::MIN_POSITIVE).sqrt();
+        Self::push_scaled(last.0, last.1, nrm, basis, mbasis);
         0.0
     }
 
@@ -1182,10 +1159,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                     h.push(coef);
                     continue;
                 }
-                let nrm = match self.push_with_image(col.clone(), mcol, before[j], basis, mbasis) {
-                    Some(nrm) => nrm,
-                    None => self.push_or_replace(col, before[j], basis, mbasis),
-                };
+                let nrm = self.push_or_replace(col, Some(mcol), before[j], basis, mbasis);
                 coef.push(nrm);
                 h.push(coef);
             }
@@ -1303,9 +1277,6 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                         .collect()
                 })
                 .collect();
-            // Ritz vectors Y = V_m S (GEMV for one, GEMM for a set)
-            let s_cols =
-                |rs: &[usize]| Mat::from_fn(m, rs.len(), |j, c| eig.eigenvectors[(j, rs[c])]);
             let est_of = |r: usize| {
                 (0..extra)
                     .map(|e| coupling[e][r] * coupling[e][r])
@@ -1313,35 +1284,32 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                     .sqrt()
                     / eig.eigenvalues[r].abs().max(f64::MIN_POSITIVE)
             };
-            if !full {
-                // Before the basis is full, lock only a block's worth of pairs at once (or all
-                // that are still needed): each locking ends in a restart that rewrites the basis
-                // (two GEMMs over it), measured at 6.3 s of 27 s at 199,200 DOF when done for
-                // every pair as it converged.
-                let ready = order
-                    .iter()
-                    .take(need)
-                    .filter(|&&r| eig.eigenvalues[r] != 0.0 && est_of(r) < SCREEN * self.params.tol)
-                    .count();
-                if ready < p.min(need) {
-                    stats.ritz_seconds += t.elapsed().as_secs_f64();
-                    continue;
-                }
-            }
             // The first `need` Ritz pairs are the wanted ones. `est` only screens them; the true
             // residual decides. The shifted residual of a Ritz pair is `est` times the spread of
             // the unconverged part (measured 100 to 1,000 times `est` at 52,920 DOF), so a pair
-            // with `est` above `tol / 100` would fail the check anyway. The candidates' Ritz
-            // vectors come from one GEMM and their K and M images from one sparse product each.
+            // with `est` above `tol / 100` would fail the check anyway.
             let candidates: Vec<usize> = order
                 .iter()
                 .take(need)
                 .copied()
                 .filter(|&r| eig.eigenvalues[r] != 0.0 && est_of(r) < SCREEN * self.params.tol)
                 .collect();
+            if !full && candidates.len() < p.min(need) {
+                // Before the basis is full, lock only a block's worth of pairs at once (or all
+                // that are still needed): each locking ends in a restart that rewrites the basis
+                // (two GEMMs over it), measured at 6.3 s of 27 s at 199,200 DOF when done for
+                // every pair as it converged.
+                stats.ritz_seconds += t.elapsed().as_secs_f64();
+                continue;
+            }
+            // the candidates' Ritz vectors V_m S by one GEMM, their K and M images by one sparse
+            // product each
             let mut locked = vec![false; m];
             if !candidates.is_empty() {
-                let y = basis.range(0, m) * s_cols(&candidates);
+                let s_c = Mat::from_fn(m, candidates.len(), |j, c| {
+                    eig.eigenvectors[(j, candidates[c])]
+                });
+                let y = basis.range(0, m) * &s_c;
                 let ky = crate::csc::sym_mul_mat(self.pencil.k, y.as_ref())?;
                 let my = crate::csc::sym_mul_mat(self.pencil.m, y.as_ref())?;
                 for (c, &r) in candidates.iter().enumerate() {
