@@ -15,7 +15,7 @@ use faer::sparse::linalg::cholesky::{
     SymmetricOrdering, factorize_symbolic_cholesky, supernodal::SupernodalLltRef,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Side};
+use faer::{Conj, MatMut, Par, Side};
 use std::sync::Arc;
 
 /// A faer view of a [`SparseMatrix`] (CSC, `usize` indices): no copy.
@@ -53,11 +53,47 @@ pub fn faer_view(a: &SparseMatrix) -> Result<SparseColMatRef<'_, usize, f64>, Sp
 /// free-free stiffness whose rigid-body pivots round-off left positive lands near `1e-14`).
 pub const SINGULAR_PIVOT_RATIO: f64 = 1e-12;
 
+/// The parallelism given to faer inside one triangular solve: sequential; solves use the threads
+/// across right-hand sides instead ([`split_columns`]). Measured on two cores (docs/SCALING.md,
+/// "Threads in the sparse kernels"): 4 right-hand sides of the 199,200-DOF plate took 263 ms with
+/// faer's two threads inside, 189 ms sequential and 152 ms as two sequential solves of two.
+const KERNEL_PAR: Par = Par::Seq;
+
+/// Above this many flops per column (`flops / n`, a measure of the typical dense front), a numeric
+/// factorization gives faer the global parallelism; below it, one thread. faer walks the
+/// supernodes one after another and parallelises only inside each supernode's dense kernels,
+/// which pays only when the fronts are large. Measured on two cores (docs/SCALING.md): the
+/// 199,200-DOF plate (3.1e5 flops per column) factors in 2.2 s on one thread and 2.8 s on two;
+/// the clamped block of 52,920 DOF (8.6e5) in 1.25 s either way; that of 141,288 DOF (2.3e6) in
+/// 7.6 s on one thread and 6.4 s on two.
+const PARALLEL_FLOPS_PER_COLUMN: f64 = 1.5e6;
+
+/// Applies `solve` to the columns of `rhs` split into one contiguous chunk per rayon thread (or
+/// per column, when fewer), the chunks in parallel: each solve reads the whole factor once for
+/// its chunk, so the threads share the memory traffic instead of faer's small dense kernels.
+/// 4 right-hand sides of the 199,200-DOF plate: 152 ms (two chunks of two) against 263 ms with
+/// faer's own two threads (docs/SCALING.md).
+fn split_columns(rhs: MatMut<'_, f64>, parts: usize, solve: &(impl Fn(MatMut<'_, f64>) + Sync)) {
+    if parts <= 1 || rhs.ncols() <= 1 {
+        solve(rhs);
+        return;
+    }
+    let left = parts / 2;
+    let cut = (rhs.ncols() * left / parts).max(1);
+    let (l, r) = rhs.split_at_col_mut(cut);
+    rayon::join(
+        || split_columns(l, left, solve),
+        || split_columns(r, parts - left, solve),
+    );
+}
+
 /// The symbolic analysis of a symmetric sparsity pattern: fill-reducing ordering and elimination
 /// structure. Shared (cheaply cloned) by every numeric factorization on the same pattern.
 #[derive(Debug, Clone)]
 pub struct SymbolicFactor {
     inner: Arc<SymbolicCholesky<usize>>,
+    /// faer's parallelism for a numeric factorization (see [`PARALLEL_FLOPS_PER_COLUMN`])
+    factor_par: Par,
     n: usize,
     nnz: usize,
     ordering: Ordering,
@@ -99,12 +135,17 @@ impl SymbolicFactor {
         .map_err(|e| SparseError::Factorization {
             reason: format!("symbolic analysis: {e:?}"),
         })?;
-        Ok(Self {
+        let mut symbolic = Self {
             inner: Arc::new(inner),
+            factor_par: Par::Seq,
             n: a.rows(),
             nnz: a.nnz(),
             ordering,
-        })
+        };
+        if symbolic.flops() > PARALLEL_FLOPS_PER_COLUMN * symbolic.n.max(1) as f64 {
+            symbolic.factor_par = faer::get_global_parallelism();
+        }
+        Ok(symbolic)
     }
 
     /// Matrix dimension.
@@ -115,6 +156,36 @@ impl SymbolicFactor {
     /// Number of stored values of the factor `L` (a measure of fill).
     pub fn factor_len(&self) -> usize {
         self.inner.len_val()
+    }
+
+    /// Floating-point operations of one numeric factorization with this analysis: the classical
+    /// count `sum_j (b_j^2 + 2 b_j)` over the columns `j` of `L`, `b_j` the entries below the
+    /// diagonal of column `j` (a multiply and an add for each entry of the rank-one update of the
+    /// trailing triangle, one division per entry for the scaling), as CHOLMOD and PARDISO report
+    /// it up to lower-order terms. Factorization rates in GFLOP/s (docs/SCALING.md) divide this
+    /// count by the measured time.
+    pub fn flops(&self) -> f64 {
+        let count = |b: f64| b * b + 2.0 * b;
+        match self.inner.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                let ptr = s.col_ptr();
+                (0..s.nrows())
+                    .map(|j| count((ptr[j + 1] - ptr[j]) as f64 - 1.0))
+                    .sum()
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let (begin, end) = (s.supernode_begin(), s.supernode_end());
+                let below = s.nnz_per_super();
+                (0..s.n_supernodes())
+                    .map(|k| {
+                        let c = end[k] - begin[k];
+                        (0..c)
+                            .map(|j| count((c - 1 - j + below[k]) as f64))
+                            .sum::<f64>()
+                    })
+                    .sum()
+            }
+        }
     }
 
     /// Whether faer chose its supernodal (blocked) factorization for this pattern.
@@ -161,7 +232,7 @@ impl SymbolicFactor {
     pub fn llt(&self, a: &SparseMatrix, name: &'static str) -> Result<Llt, SparseError> {
         self.check(a)?;
         let view = faer_view(a)?;
-        let par = faer::get_global_parallelism();
+        let par = self.factor_par;
         let mut values = vec![0.0; self.inner.len_val()];
         let mut mem = MemBuffer::new(
             self.inner
@@ -232,7 +303,7 @@ impl SymbolicFactor {
             });
         }
         let view = SparseColMatRef::new(faer_view(pattern)?.symbolic(), values);
-        let par = faer::get_global_parallelism();
+        let par = self.factor_par;
         let mut values = vec![0.0; self.inner.len_val()];
         let mut mem = MemBuffer::new(
             self.inner
@@ -372,7 +443,7 @@ impl Ldlt {
 }
 
 fn scratch_solve(symbolic: &SymbolicCholesky<usize>, ncols: usize) -> MemBuffer {
-    MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(ncols, faer::get_global_parallelism()))
+    MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(ncols, KERNEL_PAR))
 }
 
 impl Factorization for Llt {
@@ -381,13 +452,15 @@ impl Factorization for Llt {
     }
     fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
         let inner = &self.symbolic.inner;
-        let mut mem = scratch_solve(inner, rhs.ncols());
-        LltRef::new(inner, &self.values).solve_in_place_with_conj(
-            Conj::No,
-            rhs,
-            faer::get_global_parallelism(),
-            MemStack::new(&mut mem),
-        );
+        split_columns(rhs, rayon::current_num_threads(), &|rhs| {
+            let mut mem = scratch_solve(inner, rhs.ncols());
+            LltRef::new(inner, &self.values).solve_in_place_with_conj(
+                Conj::No,
+                rhs,
+                KERNEL_PAR,
+                MemStack::new(&mut mem),
+            );
+        });
     }
 }
 
@@ -397,12 +470,14 @@ impl Factorization for Ldlt {
     }
     fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
         let inner = &self.symbolic.inner;
-        let mut mem = scratch_solve(inner, rhs.ncols());
-        LdltRef::new(inner, &self.values).solve_in_place_with_conj(
-            Conj::No,
-            rhs,
-            faer::get_global_parallelism(),
-            MemStack::new(&mut mem),
-        );
+        split_columns(rhs, rayon::current_num_threads(), &|rhs| {
+            let mut mem = scratch_solve(inner, rhs.ncols());
+            LdltRef::new(inner, &self.values).solve_in_place_with_conj(
+                Conj::No,
+                rhs,
+                KERNEL_PAR,
+                MemStack::new(&mut mem),
+            );
+        });
     }
 }

@@ -311,3 +311,72 @@ proptest! {
         prop_assert_eq!(pencil.count_below(shift).unwrap(), dense.iter().filter(|l| **l < shift).count());
     }
 }
+
+/// Solves of several right-hand sides at once (split over the threads in column chunks, odd
+/// counts included) give, column by column, the dense solution.
+#[test]
+fn multi_column_solves_match_dense_column_by_column() {
+    let (k, m) = random_pencil(150, 0.04, 7);
+    let sym = SymbolicFactor::new(&k, Ordering::NestedDissection).unwrap();
+    let llt = sym.llt(&k, "K").unwrap();
+    let mut a = k.clone();
+    for (v, (r, c)) in m.iter() {
+        *a.get_mut(r, c).unwrap() -= 0.9 * v;
+    }
+    let ldlt = sym.ldlt(&a, "K - sigma M").unwrap();
+    let (kd, ad) = (to_dense(&k), to_dense(&a));
+    for cols in 1..=7 {
+        let b = Mat::<f64>::from_fn(150, cols, |i, j| ((i * (j + 2)) as f64 * 0.37).sin());
+        let k_ref = kd.llt(faer::Side::Lower).unwrap().solve(&b);
+        let a_ref = ad.lblt(faer::Side::Lower).solve(&b);
+        for (f, reference, name) in [
+            (&llt as &dyn Factorization, &k_ref, "LL^T"),
+            (&ldlt as &dyn Factorization, &a_ref, "LDL^T"),
+        ] {
+            let mut x = b.clone();
+            f.solve_in_place(x.as_mut());
+            let err = (0..150)
+                .flat_map(|i| (0..cols).map(move |j| (i, j)))
+                .map(|(i, j)| (x[(i, j)] - reference[(i, j)]).abs())
+                .fold(0.0, f64::max);
+            let scale = reference.norm_max();
+            assert!(err < 1e-11 * scale, "{name}, {cols} columns: {err:e}");
+        }
+    }
+}
+
+/// The flop count of the symbolic analysis against the hand count `sum_j (b_j^2 + 2 b_j)`: a dense
+/// matrix of order `n` (column `j` has `n - 1 - j` entries below the diagonal), and a block
+/// diagonal matrix of two dense blocks (the sum of the two).
+#[test]
+fn flop_count_matches_the_hand_count() {
+    let dense = |n: usize| -> f64 {
+        (0..n)
+            .map(|j| {
+                let b = (n - 1 - j) as f64;
+                b * b + 2.0 * b
+            })
+            .sum()
+    };
+    let dense_matrix = |sizes: &[usize]| -> SparseMatrix {
+        let n: usize = sizes.iter().sum();
+        let mut t = TriMat::new((n, n));
+        let mut start = 0;
+        for &s in sizes {
+            for i in 0..s {
+                for j in 0..s {
+                    let v = if i == j { 2.0 * s as f64 } else { 1.0 };
+                    t.add_triplet(start + i, start + j, v);
+                }
+            }
+            start += s;
+        }
+        t.to_csc()
+    };
+    // n = 60: (59 * 60 * 119) / 6 + 59 * 60 = 70,210 + 3,540
+    assert_eq!(dense(60), 73_750.0);
+    let sym = SymbolicFactor::new(&dense_matrix(&[60]), Ordering::Identity).unwrap();
+    assert_eq!(sym.flops(), 73_750.0);
+    let sym = SymbolicFactor::new(&dense_matrix(&[30, 45]), Ordering::Identity).unwrap();
+    assert_eq!(sym.flops(), dense(30) + dense(45));
+}

@@ -1,0 +1,123 @@
+//! The sparse kernels under the eigensolver, with rates: the numeric `LDL^T` of `K - sigma M`
+//! (GFLOP/s from the symbolic flop count, `SymbolicFactor::flops`), a solve of 4 right-hand
+//! sides (the eigensolver's block), and faer's dense GEMM on one and on all threads (the limit
+//! the factorization's rate is compared with, measured in the same run).
+//!
+//! Models: the free-free plate and the clamped block of the peer comparison
+//! (`examples/peer_modes.rs`): `FEMU_BENCH_FACTOR=plate:16,hex8:20` (default; 47,628 and 52,920
+//! DOF), `plate:33,hex8:32` for the 200k cases. Criterion's "elem/s" are flop/s for the
+//! factorization and the GEMM, and right-hand sides per second for the solve.
+//!
+//! Run: `cargo bench --bench factor`; `bash benches/baseline.sh` compares with the committed
+//! baseline.
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use femu::prelude::*;
+use femu::sparse::cholesky::Factorization;
+use femu::sparse::eigen::Pencil;
+use femu::sparse::faer::{self, Mat, Par};
+use femu::sparse::ordering::Ordering;
+use std::time::Duration;
+
+mod common;
+
+fn model(kind: &str, n: usize) -> Model {
+    if kind == "plate" {
+        let spec = BoxSpec::new([1.0, 0.6, 0.02], [5 * n, 3 * n, 3], BoxCells::Hex, false);
+        let mut model = Model::new(box_mesh(&spec).unwrap()).unwrap();
+        model.set_material(None, Material::steel()).unwrap();
+        return model;
+    }
+    let quadratic = match kind {
+        "hex8" => false,
+        "hex20" => true,
+        other => panic!("FEMU_BENCH_FACTOR: unknown kind {other} (plate, hex8, hex20)"),
+    };
+    common::clamped(BoxSpec::new(
+        [2.0, 1.0, 1.0],
+        [2 * n, n, n],
+        BoxCells::Hex,
+        quadratic,
+    ))
+}
+
+fn cases() -> Vec<(String, usize)> {
+    let spec = std::env::var("FEMU_BENCH_FACTOR").unwrap_or_else(|_| "plate:16,hex8:20".into());
+    spec.split(',')
+        .filter_map(|c| {
+            let (kind, n) = c.split_once(':')?;
+            Some((kind.trim().to_string(), n.trim().parse().ok()?))
+        })
+        .collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let mut factor = c.benchmark_group("ldlt");
+    factor
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(5));
+    let mut systems = Vec::new();
+    for (kind, n) in cases() {
+        let sys = model(&kind, n).assemble(MassKind::Consistent).unwrap();
+        let pencil = Pencil::new(&sys.k, &sys.m, Ordering::NestedDissection).unwrap();
+        // K - sigma M at the peers' shift, 10 Hz below zero: definite, as the eigensolver's
+        let sigma = -(2.0 * std::f64::consts::PI * 10.0_f64).powi(2);
+        let symbolic = pencil.symbolic();
+        let id = format!("{kind}-{}dof", sys.k.rows());
+        println!(
+            "{id}: factor {} entries, {:.3e} flop",
+            symbolic.factor_len(),
+            symbolic.flops()
+        );
+        factor.throughput(Throughput::Elements(symbolic.flops() as u64));
+        factor.bench_function(BenchmarkId::new("numeric", &id), |b| {
+            b.iter(|| pencil.factor_shifted(sigma).unwrap())
+        });
+        systems.push((id, pencil.factor_shifted(sigma).unwrap(), sys.k.rows()));
+    }
+    factor.finish();
+
+    let mut solve = c.benchmark_group("solve");
+    solve
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(3));
+    for (id, f, n) in &systems {
+        let n = *n;
+        let mut x = Mat::<f64>::from_fn(n, 4, |i, j| ((i * 7 + j * 13) % 17) as f64 - 8.0);
+        solve.throughput(Throughput::Elements(4));
+        solve.bench_function(BenchmarkId::new("rhs4", id), |b| {
+            b.iter(|| f.solve_in_place(x.as_mut()))
+        });
+    }
+    solve.finish();
+
+    let mut gemm = c.benchmark_group("gemm");
+    gemm.sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(3));
+    let n = 1536;
+    let a = Mat::<f64>::from_fn(n, n, |i, j| ((i * 3 + j * 5) % 11) as f64);
+    let bm = Mat::<f64>::from_fn(n, n, |i, j| ((i * 7 + j * 2) % 13) as f64);
+    let mut out = Mat::<f64>::zeros(n, n);
+    gemm.throughput(Throughput::Elements(2 * (n as u64).pow(3)));
+    for (name, par) in [("one-thread", Par::Seq), ("all-threads", Par::rayon(0))] {
+        gemm.bench_function(BenchmarkId::new(name, format!("{n}")), |b| {
+            b.iter(|| {
+                faer::linalg::matmul::matmul(
+                    out.as_mut(),
+                    faer::Accum::Replace,
+                    a.as_ref(),
+                    bm.as_ref(),
+                    1.0,
+                    par,
+                )
+            })
+        });
+    }
+    gemm.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
