@@ -3,10 +3,13 @@
 //! test simulated from the block with region 3 30 % softer: its 4 lowest modes at 30 sensors (15
 //! top-surface nodes, y and z).
 //!
-//! A run with `max_iterations = 1` contains, for SB-EBE, the weighting expansion, the starting
-//! expansion with projected columns and one trial (3 factorizations of the saddle-point system per
-//! mode); for inverse eigensensitivity, the starting eigen solve and one trial (2 Sturm-checked
-//! solves of 14 modes on the reused symbolic analysis).
+//! A run with `max_iterations = 1` contains, for SB-EBE, the starting expansion with projected
+//! columns and one trial (each an `LDL^T` of `Z = K - lambda M` per mode in the sensor space, on
+//! one symbolic analysis of `K`'s pattern; docs/MATH.md, "Projected sensitivities in the sensor
+//! space"); for inverse eigensensitivity, the starting eigen solve and one trial (2 Sturm-checked
+//! solves of 14 modes on the reused symbolic analysis). Measured on 2 cores, one after the other:
+//! SB-EBE 8.1 + 8.4 s, inverse eigensensitivity 9.2 + 8.8 s (start + iteration); with the
+//! saddle-point systems SB-EBE took 41 + 79 s.
 //!
 //! `cargo bench --bench update` (`FEMU_BENCH_CELLS=nx,ny,nz` to change the size)
 

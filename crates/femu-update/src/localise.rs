@@ -310,6 +310,7 @@ pub fn localise_expanded(
         test.shapes.as_ref(),
         &w_inv,
         rule.test_error,
+        None,
         |_, xj| {
             Ok(crate::problem::dense_columns(
                 &up.group_stiffness_columns(xj)?,

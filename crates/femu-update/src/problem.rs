@@ -474,13 +474,15 @@ pub(crate) struct ProjectedExpansion {
 }
 
 /// Minimum-residual expansion in the metric `diag(w_inv)^-1` with the projected columns of
-/// `columns(j, x_j)`: measured values imposed (`test_error = None`) or expansion with test error.
+/// `columns(j, x_j)`: measured values imposed (`test_error = None`, in the sensor space on
+/// `symbolic`, the analysis of `K`'s pattern) or expansion with test error.
 pub(crate) fn expand_projected(
     exp: &Expander<'_>,
     lambdas: &[f64],
     ya: MatRef<'_, f64>,
     w_inv: &[f64],
     test_error: Option<f64>,
+    symbolic: Option<&SymbolicFactor>,
     columns: impl FnMut(usize, &[f64]) -> Result<Mat<f64>, UpdateError>,
 ) -> Result<ProjectedExpansion, UpdateError> {
     match test_error {
@@ -496,7 +498,7 @@ pub(crate) fn expand_projected(
             })
         }
         None => {
-            let (x, b) = exp.minimum_residual_projected(lambdas, ya, w_inv, columns)?;
+            let (x, b) = exp.minimum_residual_projected(lambdas, ya, w_inv, symbolic, columns)?;
             let blocks = b
                 .into_iter()
                 .map(|b| {

@@ -312,6 +312,9 @@ pub fn sb_ebe(
     let n = m0.rows();
     let w_inv = femu_sparse::csc::diagonal(&m0);
     let w: Vec<f64> = w_inv.iter().map(|v| 1.0 / v).collect();
+    // K's pattern does not change with the parameters: one symbolic analysis serves every
+    // expansion of every iteration
+    let symbolic = up.symbolic()?;
     let evaluate = |up: &UpdateModel<'_>| -> Result<State, UpdateError> {
         let sys = up.matrices();
         let exp = Expander::with_measured_dofs(&sys.k, &sys.m, &measured)?;
@@ -322,6 +325,7 @@ pub fn sb_ebe(
                 test.shapes.as_ref(),
                 &w_inv,
                 options.test_error,
+                Some(&symbolic),
                 |j, xj| Ok(dense_columns(&up.columns(xj, lambdas[j])?, n)),
             )?;
             (e.x, e.r2, Some(e.blocks))

@@ -16,6 +16,14 @@ pub struct TestErrorExpansion {
     pub projected: Vec<(Mat<f64>, Mat<f64>)>,
 }
 
+/// Tolerance of the a posteriori checks of the sensor-space projected expansion: residuals of its
+/// optimality conditions relative to the size of the terms that cancel in them (sensor values
+/// relative to the largest reading).
+const PROJECTED_CHECK_TOL: f64 = 1e-8;
+
+/// One mode's expanded shape (`n x 1`) and projected columns (`n x c`).
+type ModeExpansion = (Mat<f64>, Mat<f64>);
+
 impl Expander<'_> {
     pub(super) fn check_lambdas(
         &self,
@@ -88,9 +96,191 @@ impl Expander<'_> {
     /// These are the sensitivities of the expanded residual to a parameter when the expansion
     /// follows the parameter (Kaufman's variable projection), which SB-EBE's correction uses.
     ///
+    /// Up to [`SENSOR_SPACE_LIMIT`] measured DOFs each mode is computed in the sensor space (one
+    /// `LDL^T` of `Z` on `K`'s pattern, on `symbolic` when given, and two solves with `s`
+    /// right-hand sides; docs/MATH.md, "Projected sensitivities in the sensor space"), checked
+    /// against the optimality conditions and recomputed by
+    /// [`Expander::minimum_residual_projected_saddle_point`] when `Z` cannot be factored or the
+    /// check fails; beyond, by the saddle point.
+    ///
     /// # Errors
     /// As [`Expander::minimum_residual_diagonal`], and the callback's errors.
     pub fn minimum_residual_projected<E: From<CorrelateError>>(
+        &self,
+        lambdas: &[f64],
+        ya: MatRef<'_, f64>,
+        w_inv: &[f64],
+        symbolic: Option<&SymbolicFactor>,
+        mut columns: impl FnMut(usize, &[f64]) -> Result<Mat<f64>, E>,
+    ) -> Result<(Mat<f64>, Vec<Mat<f64>>), E> {
+        self.check_metric(w_inv)?;
+        self.check_lambdas(lambdas, ya)?;
+        if self.part.measured.len() > SENSOR_SPACE_LIMIT {
+            return self.minimum_residual_projected_saddle_point(lambdas, ya, w_inv, columns);
+        }
+        let owned;
+        let symbolic = match symbolic {
+            Some(s) => s,
+            None => {
+                owned = SymbolicFactor::new(self.k, Ordering::NestedDissection)
+                    .map_err(CorrelateError::from)?;
+                &owned
+            }
+        };
+        let n = self.k.rows();
+        let mut x = Mat::zeros(n, lambdas.len());
+        let mut projected = Vec::with_capacity(lambdas.len());
+        for j in 0..lambdas.len() {
+            let yj = ya.subcols(j, 1);
+            let (xj, pj) = match self.projected_in_sensor_space(
+                lambdas[j],
+                yj,
+                w_inv,
+                symbolic,
+                &mut |xj| columns(j, xj),
+            )? {
+                Some(r) => r,
+                None => {
+                    // Z not factorable without pivoting, or the check failed: the saddle point
+                    let mut one = |_: usize, xj: &[f64]| columns(j, xj);
+                    let (xs, mut ps) = self.minimum_residual_projected_saddle_point(
+                        &lambdas[j..=j],
+                        yj,
+                        w_inv,
+                        &mut one,
+                    )?;
+                    (xs, ps.pop().expect("one mode"))
+                }
+            };
+            x.col_mut(j).copy_from(xj.col(0));
+            projected.push(pj);
+        }
+        Ok((x, projected))
+    }
+
+    /// One mode of [`Expander::minimum_residual_projected`] in the sensor space: with `E` the unit
+    /// columns of the measured DOFs, `V = Z^-1 E`, `Q = diag(w_inv) V`, `B = Z^-1 Q` and
+    /// `G = V^T Q = E^T B`, the expansion is `x = B G^-1 y` and the `W`-orthogonal complement of
+    /// the range of `Z_{:,o}` is the range of `Q`, so `P A = Q G^-1 V^T A` (computed as the
+    /// orthogonal projection onto `W^1/2 Q` in the variables scaled by `W^1/2`, by a Householder
+    /// QR, which loses fewer digits than `G^-1` near a model eigenvalue). `None` when `Z` has a
+    /// zero pivot, `G` is not positive definite, or the result misses its optimality conditions
+    /// (`(Z W Z x)_o = 0`, `C x = y`, `(Z W P A)_o = 0`) by more than [`PROJECTED_CHECK_TOL`].
+    fn projected_in_sensor_space<E: From<CorrelateError>>(
+        &self,
+        lambda: f64,
+        y: MatRef<'_, f64>,
+        w_inv: &[f64],
+        symbolic: &SymbolicFactor,
+        columns: &mut impl FnMut(&[f64]) -> Result<Mat<f64>, E>,
+    ) -> Result<Option<ModeExpansion>, E> {
+        use faer::linalg::solvers::Solve;
+        let n = self.k.rows();
+        let meas = &self.part.measured;
+        let s = meas.len();
+        let values: Vec<f64> = self
+            .k
+            .data()
+            .iter()
+            .zip(&self.m_on_k)
+            .map(|(k, m)| k - lambda * m)
+            .collect();
+        let ldlt = match symbolic.ldlt_values(self.k, &values, "K - lambda M") {
+            Ok(f) => f,
+            Err(SparseError::Singular { .. }) => return Ok(None),
+            Err(e) => return Err(CorrelateError::from(e).into()),
+        };
+        let mut v = Mat::<f64>::zeros(n, s);
+        for (c, &d) in meas.iter().enumerate() {
+            v[(d, c)] = 1.0;
+        }
+        ldlt.solve_in_place(v.as_mut());
+        let q = Mat::from_fn(n, s, |i, c| w_inv[i] * v[(i, c)]);
+        let mut b = q.clone();
+        ldlt.solve_in_place(b.as_mut());
+        let g = v.transpose() * &q;
+        let Ok(g_llt) = g.llt(faer::Side::Lower) else {
+            return Ok(None);
+        };
+        let finite = |a: &Mat<f64>| (0..a.ncols()).all(|c| a.col(c).iter().all(|v| v.is_finite()));
+        if !finite(&b) || !finite(&v) {
+            return Ok(None);
+        }
+        let x = &b * g_llt.solve(y);
+        let xv: Vec<f64> = x.col(0).iter().copied().collect();
+        let a = columns(&xv)?;
+        if a.nrows() != n {
+            return Err(CorrelateError::DimensionMismatch {
+                what: "projected columns against K",
+                expected: n,
+                got: a.nrows(),
+            }
+            .into());
+        }
+        // P A as the orthogonal projection, in the scaled variables S = W^1/2, onto the range of
+        // S Q = diag(sqrt(w_inv)) V by a Householder QR: near an eigenvalue the columns of V are
+        // nearly parallel and G's conditioning would cost digits
+        let sq = Mat::from_fn(n, s, |i, c| w_inv[i].sqrt() * v[(i, c)]);
+        let u = sq.qr().compute_thin_Q();
+        let sa = Mat::from_fn(n, a.ncols(), |i, c| a[(i, c)] / w_inv[i].sqrt());
+        let proj = &u * (u.transpose() * &sa);
+        let pa = Mat::from_fn(n, a.ncols(), |i, c| w_inv[i].sqrt() * proj[(i, c)]);
+        // a posteriori: the optimality conditions in the original variables
+        let z_norm = (0..n)
+            .map(|c| {
+                let p = self.k.indptr();
+                let p = p.raw_storage();
+                values[p[c]..p[c + 1]].iter().map(|v| v.abs()).sum::<f64>()
+            })
+            .fold(0.0, f64::max);
+        let z_times = |u: &Mat<f64>| -> Result<Mat<f64>, CorrelateError> {
+            let (ku, mu) = (
+                sym_mul_mat(self.k, u.as_ref())?,
+                sym_mul_mat(self.m, u.as_ref())?,
+            );
+            Ok(&ku - &mu * faer::Scale(lambda))
+        };
+        // (Z u)_o must vanish, relative to the size of the terms that cancel in it: ||Z|| ||u||
+        // for u = W P A; for u = W Z x, whose Z x is itself a cancellation (x is near an
+        // eigenvector), ||Z|| max(W) ||Z|| ||x||
+        let omitted_ok = |u: &Mat<f64>, scale: &[f64]| -> Result<bool, CorrelateError> {
+            let zu = z_times(u)?;
+            Ok((0..u.ncols()).all(|c| {
+                self.part
+                    .omitted
+                    .iter()
+                    .all(|&d| zu[(d, c)].abs() <= PROJECTED_CHECK_TOL * scale[c])
+            }))
+        };
+        let zx = z_times(&x).map_err(E::from)?;
+        let wzx = Mat::from_fn(n, 1, |i, _| zx[(i, 0)] / w_inv[i]);
+        let wpa = Mat::from_fn(n, pa.ncols(), |i, c| pa[(i, c)] / w_inv[i]);
+        let w_max = w_inv.iter().fold(0.0_f64, |m, v| m.max(1.0 / v));
+        let x_scale = [z_norm * w_max * z_norm * x.norm_max()];
+        let pa_scale: Vec<f64> = (0..wpa.ncols())
+            .map(|c| z_norm * wpa.col(c).norm_max())
+            .collect();
+        let y_scale = y.norm_max().max(f64::MIN_POSITIVE);
+        let imposed = meas
+            .iter()
+            .enumerate()
+            .all(|(r, &d)| (x[(d, 0)] - y[(r, 0)]).abs() <= PROJECTED_CHECK_TOL * y_scale);
+        if !(imposed
+            && omitted_ok(&wzx, &x_scale).map_err(E::from)?
+            && omitted_ok(&wpa, &pa_scale).map_err(E::from)?)
+        {
+            return Ok(None);
+        }
+        Ok(Some((x, pa)))
+    }
+
+    /// [`Expander::minimum_residual_projected`] by the saddle-point system of size `n + n_o` per
+    /// mode (one factorization each, symbolic analysis shared by the modes): the formulation for
+    /// many sensors, and the fallback of the sensor-space one.
+    ///
+    /// # Errors
+    /// As [`Expander::minimum_residual_diagonal`], and the callback's errors.
+    pub fn minimum_residual_projected_saddle_point<E: From<CorrelateError>>(
         &self,
         lambdas: &[f64],
         ya: MatRef<'_, f64>,
