@@ -226,11 +226,14 @@ impl Expander<'_> {
         let proj = &u * (u.transpose() * &sa);
         let pa = Mat::from_fn(n, a.ncols(), |i, c| w_inv[i].sqrt() * proj[(i, c)]);
         // a posteriori: the optimality conditions in the original variables
+        let kp = self.k.indptr();
+        let kp = kp.raw_storage();
         let z_norm = (0..n)
             .map(|c| {
-                let p = self.k.indptr();
-                let p = p.raw_storage();
-                values[p[c]..p[c + 1]].iter().map(|v| v.abs()).sum::<f64>()
+                values[kp[c]..kp[c + 1]]
+                    .iter()
+                    .map(|v| v.abs())
+                    .sum::<f64>()
             })
             .fold(0.0, f64::max);
         let z_times = |u: &Mat<f64>| -> Result<Mat<f64>, CorrelateError> {
