@@ -12,23 +12,13 @@ use std::time::Duration;
 
 mod common;
 
-fn cases() -> Vec<(String, usize)> {
-    let spec = std::env::var("FEMU_BENCH_EIGEN").unwrap_or_else(|_| "hex8:20,tet10:10".into());
-    spec.split(',')
-        .filter_map(|c| {
-            let (kind, n) = c.split_once(':')?;
-            Some((kind.trim().to_string(), n.trim().parse().ok()?))
-        })
-        .collect()
-}
-
 fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("eigen_lowest20");
     group
         .sample_size(10)
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(5));
-    for (kind, n) in cases() {
+    for (kind, n) in common::cases("FEMU_BENCH_EIGEN", "hex8:20,tet10:10") {
         let (cells, quadratic) = match kind.as_str() {
             "hex8" => (BoxCells::Hex, false),
             "hex20" => (BoxCells::Hex, true),

@@ -41,16 +41,6 @@ fn model(kind: &str, n: usize) -> Model {
     ))
 }
 
-fn cases() -> Vec<(String, usize)> {
-    let spec = std::env::var("FEMU_BENCH_FACTOR").unwrap_or_else(|_| "plate:16,hex8:20".into());
-    spec.split(',')
-        .filter_map(|c| {
-            let (kind, n) = c.split_once(':')?;
-            Some((kind.trim().to_string(), n.trim().parse().ok()?))
-        })
-        .collect()
-}
-
 fn bench(c: &mut Criterion) {
     let mut factor = c.benchmark_group("ldlt");
     factor
@@ -58,7 +48,7 @@ fn bench(c: &mut Criterion) {
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(5));
     let mut systems = Vec::new();
-    for (kind, n) in cases() {
+    for (kind, n) in common::cases("FEMU_BENCH_FACTOR", "plate:16,hex8:20") {
         let sys = model(&kind, n).assemble(MassKind::Consistent).unwrap();
         let pencil = Pencil::new(&sys.k, &sys.m, Ordering::NestedDissection).unwrap();
         // K - sigma M at the peers' shift, 10 Hz below zero: definite, as the eigensolver's

@@ -28,3 +28,15 @@ pub fn cells(default: [usize; 3]) -> [usize; 3] {
         })
         .unwrap_or(default)
 }
+
+/// Model kinds and sizes `kind:n,kind:n` from the environment variable `var`, or `default`.
+#[allow(dead_code)] // not every benchmark takes a list of models
+pub fn cases(var: &str, default: &str) -> Vec<(String, usize)> {
+    let spec = std::env::var(var).unwrap_or_else(|_| default.into());
+    spec.split(',')
+        .filter_map(|c| {
+            let (kind, n) = c.split_once(':')?;
+            Some((kind.trim().to_string(), n.trim().parse().ok()?))
+        })
+        .collect()
+}

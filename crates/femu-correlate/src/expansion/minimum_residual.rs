@@ -21,6 +21,18 @@ pub struct TestErrorExpansion {
 /// relative to the largest reading).
 const PROJECTED_CHECK_TOL: f64 = 1e-8;
 
+/// The columns a projected expansion's callback returned must have one row per DOF.
+fn check_columns(a: &Mat<f64>, n: usize) -> Result<(), CorrelateError> {
+    if a.nrows() != n {
+        return Err(CorrelateError::DimensionMismatch {
+            what: "projected columns against K",
+            expected: n,
+            got: a.nrows(),
+        });
+    }
+    Ok(())
+}
+
 /// One mode's expanded shape (`n x 1`) and projected columns (`n x c`).
 type ModeExpansion = (Mat<f64>, Mat<f64>);
 
@@ -209,14 +221,7 @@ impl Expander<'_> {
         let x = &b * g_llt.solve(y);
         let xv: Vec<f64> = x.col(0).iter().copied().collect();
         let a = columns(&xv)?;
-        if a.nrows() != n {
-            return Err(CorrelateError::DimensionMismatch {
-                what: "projected columns against K",
-                expected: n,
-                got: a.nrows(),
-            }
-            .into());
-        }
+        check_columns(&a, n)?;
         // P A as the orthogonal projection, in the scaled variables S = W^1/2, onto the range of
         // S Q = diag(sqrt(w_inv)) V by a Householder QR: near an eigenvalue the columns of V are
         // nearly parallel and G's conditioning would cost digits
@@ -236,26 +241,22 @@ impl Expander<'_> {
                     .sum::<f64>()
             })
             .fold(0.0, f64::max);
-        let z_times = |u: &Mat<f64>| -> Result<Mat<f64>, CorrelateError> {
-            let (ku, mu) = (
-                sym_mul_mat(self.k, u.as_ref())?,
-                sym_mul_mat(self.m, u.as_ref())?,
-            );
-            Ok(&ku - &mu * faer::Scale(lambda))
-        };
         // (Z u)_o must vanish, relative to the size of the terms that cancel in it: ||Z|| ||u||
         // for u = W P A; for u = W Z x, whose Z x is itself a cancellation (x is near an
         // eigenvector), ||Z|| max(W) ||Z|| ||x||
         let omitted_ok = |u: &Mat<f64>, scale: &[f64]| -> Result<bool, CorrelateError> {
-            let zu = z_times(u)?;
+            let zu_o = self.z_times_on_o(&vec![lambda; u.ncols()], u.as_ref())?;
             Ok((0..u.ncols()).all(|c| {
-                self.part
-                    .omitted
+                zu_o.col(c)
                     .iter()
-                    .all(|&d| zu[(d, c)].abs() <= PROJECTED_CHECK_TOL * scale[c])
+                    .all(|v| v.abs() <= PROJECTED_CHECK_TOL * scale[c])
             }))
         };
-        let zx = z_times(&x).map_err(E::from)?;
+        let z_x = || -> Result<Mat<f64>, CorrelateError> {
+            Ok(&sym_mul_mat(self.k, x.as_ref())?
+                - &sym_mul_mat(self.m, x.as_ref())? * faer::Scale(lambda))
+        };
+        let zx = z_x()?;
         let wzx = Mat::from_fn(n, 1, |i, _| zx[(i, 0)] / w_inv[i]);
         let wpa = Mat::from_fn(n, pa.ncols(), |i, c| pa[(i, c)] / w_inv[i]);
         let w_max = w_inv.iter().fold(0.0_f64, |m, v| m.max(1.0 / v));
@@ -323,14 +324,7 @@ impl Expander<'_> {
             }
             let xj: Vec<f64> = x.col(j).iter().copied().collect();
             let a = columns(j, &xj)?;
-            if a.nrows() != n {
-                return Err(CorrelateError::DimensionMismatch {
-                    what: "projected columns against K",
-                    expected: n,
-                    got: a.nrows(),
-                }
-                .into());
-            }
+            check_columns(&a, n)?;
             let b = Mat::from_fn(
                 n + no,
                 a.ncols(),
@@ -427,14 +421,7 @@ impl Expander<'_> {
             }
             let xj: Vec<f64> = out.x.col(j).iter().copied().collect();
             let a = columns(j, &xj)?;
-            if a.nrows() != n {
-                return Err(CorrelateError::DimensionMismatch {
-                    what: "projected columns against K",
-                    expected: n,
-                    got: a.nrows(),
-                }
-                .into());
-            }
+            check_columns(&a, n)?;
             let b = Mat::from_fn(2 * n, a.ncols(), |i, c| if i < n { a[(i, c)] } else { 0.0 });
             let z = kkt
                 .solve_with(&ldlt, b.as_ref(), WHAT)
