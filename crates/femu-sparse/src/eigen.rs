@@ -561,6 +561,8 @@ impl<'a> Pencil<'a> {
         };
         stats.factor_seconds += t.elapsed().as_secs_f64();
         stats.factorizations += 1;
+        // the probe's Krylov basis, continued by the run when the shift stays
+        let mut probed = None;
         if matches!(which, Which::Lowest(_)) {
             if op.inertia().negative > 0 {
                 return Err(SparseError::NotPositiveDefinite {
@@ -591,6 +593,7 @@ impl<'a> Pencil<'a> {
                     });
                 }
                 op = probe.op.take().expect("the probe keeps its factor");
+                probed = probe.probed.take();
                 let zeros = guess.iter().filter(|v| v.abs() <= zero_like).count();
                 if zeros == 0 || zeros < guess.len() || guess.len() >= n {
                     break;
@@ -613,6 +616,7 @@ impl<'a> Pencil<'a> {
                     stats.factorizations += 1;
                     op = if candidate.inertia().negative == 0 {
                         sigma = better;
+                        probed = None;
                         candidate
                     } else {
                         drop(candidate);
@@ -643,6 +647,7 @@ impl<'a> Pencil<'a> {
         }
         let guard = if band.is_some() { 0 } else { 3.min(n - want) };
         let mut lanczos = Lanczos::new(self, op, sigma, params);
+        lanczos.probed = probed;
         let mut attempts = 0;
         loop {
             if lanczos.op.is_none() {
@@ -937,6 +942,16 @@ fn project_out(
     c
 }
 
+/// A probe's Lanczos cycle: its basis, the basis's M images, the projection `h` (as in
+/// [`Lanczos::run`]), the columns `OP` was applied to, and the random generator's state after it.
+struct Probed {
+    basis: Columns,
+    mbasis: Columns,
+    h: Vec<Vec<f64>>,
+    applied: usize,
+    rng: u64,
+}
+
 struct Lanczos<'p, 'a> {
     pencil: &'p Pencil<'a>,
     /// `LDL^T` of `K - sigma M`, owned so that it can be released while the Sturm check factors
@@ -951,6 +966,9 @@ struct Lanczos<'p, 'a> {
     values: Vec<f64>,
     shifted_res: Vec<f64>,
     force_random_start: bool,
+    /// The probe's Krylov basis, kept for [`Lanczos::run`] to continue from when the shift stays
+    /// where the probe ran.
+    probed: Option<Probed>,
     /// Set when the hook of [`with_interrupt`] asked to stop.
     stop: bool,
     rng: u64,
@@ -969,6 +987,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             values: vec![],
             shifted_res: vec![],
             force_random_start: false,
+            probed: None,
             stop: false,
             rng: params.seed,
         }
@@ -1194,6 +1213,13 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             .map(|r| self.sigma + 1.0 / eig.eigenvalues[*r])
             .collect();
         v.sort_by(f64::total_cmp);
+        self.probed = Some(Probed {
+            basis,
+            mbasis,
+            h,
+            applied: m,
+            rng: self.rng,
+        });
         v
     }
 
@@ -1205,10 +1231,16 @@ impl<'p, 'a> Lanczos<'p, 'a> {
     /// restart), so no solve is repeated and no Krylov information is lost.
     fn run(&mut self, want: usize, stats: &mut EigenStats) -> Result<(), SparseError> {
         let p = self.params.block_size.max(1);
-        let mut basis = Columns::new(self.n);
-        let mut mbasis = Columns::new(self.n);
-        let mut h: Vec<Vec<f64>> = Vec::new();
-        let mut applied = 0;
+        // Continue from the probe's Krylov basis when it ran at this shift: its solves are not
+        // repeated (a clamped model's probe was 23 of 154 solved vectors at 52,920 DOF).
+        let (mut basis, mut mbasis, mut h, mut applied) = match self.probed.take() {
+            Some(probed) => {
+                // its random vectors are not drawn again
+                self.rng = probed.rng;
+                (probed.basis, probed.mbasis, probed.h, probed.applied)
+            }
+            None => (Columns::new(self.n), Columns::new(self.n), Vec::new(), 0),
+        };
         let mut restarts = 0;
         loop {
             let need = want.saturating_sub(self.values.len());
@@ -1225,8 +1257,9 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             }
             .min(cap);
             let t = Instant::now();
-            if self.force_random_start {
-                // Missed modes: discard the basis and start afresh, deflated against the locked.
+            if self.force_random_start || applied > max_basis {
+                // Missed modes (or a probe's basis larger than this run's): discard the basis and
+                // start afresh, deflated against the locked.
                 basis.clear();
                 mbasis.clear();
                 h.clear();
