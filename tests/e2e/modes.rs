@@ -141,3 +141,65 @@ fn free_free_requests_at_or_below_the_rigid_body_count() {
         }
     }
 }
+
+/// A hinted shift (`EigenOptions::lowest_shift_hint`, an earlier solve's shift) skips the probe:
+/// two factorizations (the run and the Sturm count) instead of three on a free-free plate, with
+/// the dense solution's eigenvalues to 1e-10, also after the model changed (stiffness scaled by
+/// 0.7, as between the solves of an updating run). A hint far closer to zero than the first
+/// elastic eigenvalue (1e-9 of it), with which the run may stall, still gives the dense
+/// eigenvalues: the hint is dropped and the work of both attempts is counted.
+#[test]
+fn hinted_lowest_shift_saves_the_probe_and_stays_exact() {
+    let model = plate(false);
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let dense =
+        generalized_symmetric_eigen(to_dense(&sys.k).as_ref(), to_dense(&sys.m).as_ref()).unwrap();
+    let check = |modes: &femu::sparse::eigen::Modes, scale: f64, what: &str| {
+        assert!(modes.sturm.verified(), "{what}: {:?}", modes.sturm);
+        for j in 0..6 {
+            assert!(
+                modes.values[j].abs() < 1e-8 * dense.values[6],
+                "{what}: rigid {j}"
+            );
+        }
+        for j in 6..14 {
+            let (l, d) = (modes.values[j], scale * dense.values[j]);
+            assert!((l / d - 1.0).abs() < 1e-10, "{what} mode {j}: {l} vs {d}");
+        }
+    };
+    let plain = eigs(&sys.k, &sys.m, Which::Lowest(14), &EigenOptions::default()).unwrap();
+    check(&plain, 1.0, "no hint");
+    assert_eq!(plain.stats.factorizations, 3, "probe, run, count");
+    let hinted = EigenOptions {
+        lowest_shift_hint: Some(plain.shift),
+        ..EigenOptions::default()
+    };
+    let again = eigs(&sys.k, &sys.m, Which::Lowest(14), &hinted).unwrap();
+    check(&again, 1.0, "hinted");
+    assert_eq!(again.stats.factorizations, 2, "run and count");
+    assert_eq!(again.shift, plain.shift);
+    // the model changed: K scaled by 0.7 scales every eigenvalue by 0.7
+    let mut k = sys.k.clone();
+    k.data_mut().iter_mut().for_each(|v| *v *= 0.7);
+    let changed = eigs(&k, &sys.m, Which::Lowest(14), &hinted).unwrap();
+    check(&changed, 0.7, "changed model, old hint");
+    assert_eq!(changed.stats.factorizations, 2);
+    // a hint a billion times too close to zero
+    let poor = EigenOptions {
+        lowest_shift_hint: Some(-1e-9 * dense.values[6]),
+        ..EigenOptions::default()
+    };
+    let recovered = eigs(&sys.k, &sys.m, Which::Lowest(14), &poor).unwrap();
+    check(&recovered, 1.0, "poor hint");
+    assert!(recovered.stats.factorizations >= 2);
+    // a hint that is not a negative number is no hint
+    for bad in [f64::NAN, 0.0, 1e9] {
+        let opts = EigenOptions {
+            lowest_shift_hint: Some(bad),
+            ..EigenOptions::default()
+        };
+        let modes = eigs(&sys.k, &sys.m, Which::Lowest(14), &opts).unwrap();
+        check(&modes, 1.0, &format!("hint {bad}"));
+        assert_eq!(modes.stats.factorizations, 3, "hint {bad} ignored");
+    }
+}

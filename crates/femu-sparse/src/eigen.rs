@@ -65,6 +65,14 @@ pub struct EigenOptions {
     /// The eigensolver: femu's own, or SLEPc under MPI ([`crate::slepc`]). The default is
     /// femu's unless a program chose another with [`crate::slepc::set_default_engine`].
     pub engine: crate::slepc::Engine,
+    /// For [`Which::Lowest`]: a negative shift known to be well placed, the [`Modes::shift`] of
+    /// an earlier solve of a model that changed little since (an updating loop). The run starts
+    /// there and skips the probe that places the shift for a free-free model: one factorization
+    /// and its probe's solves fewer. A hint that is not below the spectrum, or with which the run
+    /// does not converge within 8 restarts (a shift far closer to zero than the first nonzero
+    /// eigenvalue), is dropped and the solve starts again without it. `None` (the default): no
+    /// hint.
+    pub lowest_shift_hint: Option<f64>,
 }
 
 impl Default for EigenOptions {
@@ -77,6 +85,7 @@ impl Default for EigenOptions {
             ordering: Ordering::NestedDissection,
             seed: 0x5EED,
             engine: crate::slepc::default_engine(),
+            lowest_shift_hint: None,
         }
     }
 }
@@ -116,6 +125,10 @@ impl SturmCheck {
 /// neighbours on a small square, and the solves' round-off along it held a second copy of a
 /// neighbouring double eigenvalue at a residual of `1.8e-10`, above the tolerance, for good.
 const SHIFT_OFFSET: f64 = 1e-3 * (std::f64::consts::SQRT_2 - 1.0);
+
+/// Restarts allowed to a run from a hinted shift ([`EigenOptions::lowest_shift_hint`]) before the
+/// hint is dropped: a well-placed shift needed at most 2 on the models measured (docs/SCALING.md).
+const HINTED_RESTARTS: usize = 8;
 
 /// Ritz pairs whose Krylov residual estimate is above this fraction of the tolerance are not
 /// checked for convergence.
@@ -485,13 +498,72 @@ impl<'a> Pencil<'a> {
     /// after the retries, and [`SparseError::NotPositiveDefinite`] when `K` has negative
     /// eigenvalues below the lowest-mode shift.
     pub fn solve(&self, which: Which, params: &EigenOptions) -> Result<Modes, SparseError> {
+        let hint = params
+            .lowest_shift_hint
+            .filter(|h| h.is_finite() && *h < -self.tie_tolerance(0.0));
+        if let (Which::Lowest(_), Some(hint)) = (which, hint) {
+            let started = Instant::now();
+            let hinted = EigenOptions {
+                max_restarts: params.max_restarts.min(HINTED_RESTARTS),
+                ..params.clone()
+            };
+            let mut spent = EigenStats::default();
+            match self.solve_from(which, &hinted, Some(hint), &mut spent) {
+                Err(
+                    SparseError::NotPositiveDefinite { .. } | SparseError::NoConvergence { .. },
+                ) => {
+                    // a misplaced hint: start again as if none had been given, counting the work
+                    // already done
+                    let mut modes = self.solve_from(which, params, None, &mut spent)?;
+                    modes.stats.total_seconds =
+                        self.symbolic_seconds + started.elapsed().as_secs_f64();
+                    return Ok(modes);
+                }
+                r => return r,
+            }
+        }
+        self.solve_from(which, params, None, &mut EigenStats::default())
+    }
+
+    /// [`Pencil::solve`] with the lowest-mode shift `hint` (then the probe is skipped, and a
+    /// hint not below the spectrum is [`SparseError::NotPositiveDefinite`]); the work in `spent`
+    /// (an earlier attempt's) is added to the result's statistics and `spent` holds this
+    /// attempt's on return.
+    fn solve_from(
+        &self,
+        which: Which,
+        params: &EigenOptions,
+        hint: Option<f64>,
+        spent: &mut EigenStats,
+    ) -> Result<Modes, SparseError> {
         let started = Instant::now();
-        let n = self.dim();
         let mut stats = EigenStats {
             symbolic_seconds: self.symbolic_seconds,
             factor_len: self.symbolic.factor_len(),
+            factor_seconds: spent.factor_seconds,
+            solve_seconds: spent.solve_seconds,
+            orthogonalization_seconds: spent.orthogonalization_seconds,
+            ritz_seconds: spent.ritz_seconds,
+            factorizations: spent.factorizations,
+            solved_vectors: spent.solved_vectors,
+            restarts: spent.restarts,
             ..Default::default()
         };
+        let result = self.solve_counted(which, params, hint, &mut stats, started);
+        *spent = stats;
+        result
+    }
+
+    /// The body of [`Pencil::solve_from`], its work counted in `stats` whatever the outcome.
+    fn solve_counted(
+        &self,
+        which: Which,
+        params: &EigenOptions,
+        hint: Option<f64>,
+        stats: &mut EigenStats,
+        started: Instant,
+    ) -> Result<Modes, SparseError> {
+        let n = self.dim();
         let requested = match which {
             Which::Lowest(k) => k,
             Which::Nearest { count, .. } => count,
@@ -510,7 +582,7 @@ impl<'a> Pencil<'a> {
             return self.solve(Which::Lowest(count), params);
         }
         let (mut sigma, band) = match which {
-            Which::Lowest(_) => (self.lowest_shift(), None),
+            Which::Lowest(_) => (hint.unwrap_or_else(|| self.lowest_shift()), None),
             Which::Nearest { shift, .. } => {
                 if !shift.is_finite() {
                     return Err(SparseError::InvalidRequest {
@@ -563,13 +635,14 @@ impl<'a> Pencil<'a> {
         stats.factorizations += 1;
         // the probe's Krylov basis, continued by the run when the shift stays
         let mut probed = None;
-        if matches!(which, Which::Lowest(_)) {
-            if op.inertia().negative > 0 {
-                return Err(SparseError::NotPositiveDefinite {
-                    matrix: "K (eigenvalues below the negative lowest-mode shift)",
-                    index: op.inertia().negative,
-                });
-            }
+        if matches!(which, Which::Lowest(_)) && op.inertia().negative > 0 {
+            return Err(SparseError::NotPositiveDefinite {
+                matrix: "K (eigenvalues below the negative lowest-mode shift)",
+                index: op.inertia().negative,
+            });
+        }
+        // a hinted shift is already placed: no probe
+        if matches!(which, Which::Lowest(_)) && hint.is_none() {
             // With near-zero (rigid-body) eigenvalues, place the shift at half the first clearly
             // nonzero eigenvalue, estimated by a short probe cycle at the tiny shift: K - sigma M is
             // then well conditioned even for a free-free model (condition lambda_max / |sigma|
@@ -586,7 +659,7 @@ impl<'a> Pencil<'a> {
                 .max((want + 3).min(24));
             for size in [first_size, 2 * first_size, 4 * first_size] {
                 let mut probe = Lanczos::new(self, op, sigma, params);
-                guess = probe.estimate((want + 3).max(size / 2), size, &mut stats);
+                guess = probe.estimate((want + 3).max(size / 2), size, stats);
                 if probe.stop {
                     return Err(SparseError::Interrupted {
                         solved_vectors: stats.solved_vectors,
@@ -642,7 +715,7 @@ impl<'a> Pencil<'a> {
                     count: 0,
                     returned: 0,
                 },
-                stats,
+                stats: stats.clone(),
             });
         }
         let guard = if band.is_some() { 0 } else { 3.min(n - want) };
@@ -657,7 +730,7 @@ impl<'a> Pencil<'a> {
                 stats.factor_seconds += t.elapsed().as_secs_f64();
                 stats.factorizations += 1;
             }
-            lanczos.run((want + guard).min(n), &mut stats)?;
+            lanczos.run((want + guard).min(n), stats)?;
             let (sel, check) = match band {
                 Some((lo, hi, count)) => {
                     let sel: Vec<usize> = (0..lanczos.values.len())
@@ -695,7 +768,7 @@ impl<'a> Pencil<'a> {
                 }
             };
             if check.verified() {
-                let mut modes = lanczos.finish(sel, sigma, check, requested, stats);
+                let mut modes = lanczos.finish(sel, sigma, check, requested, stats.clone());
                 modes.stats.total_seconds = self.symbolic_seconds + started.elapsed().as_secs_f64();
                 return Ok(modes);
             }

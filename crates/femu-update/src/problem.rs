@@ -93,6 +93,8 @@ pub struct UpdateModel<'m> {
     q: Vec<f64>,
     current: SystemMatrices,
     symbolic: Option<SymbolicFactor>,
+    /// The shift of the last eigen solve, the next one's hint (a model that changed little).
+    last_shift: Option<f64>,
     nominal_mass: f64,
 }
 
@@ -193,6 +195,7 @@ impl<'m> UpdateModel<'m> {
             p: vec![0.0; n_groups],
             q: vec![0.0; n_groups],
             symbolic: None,
+            last_shift: None,
             nominal_mass: model.total_mass()?,
         })
     }
@@ -368,6 +371,19 @@ impl<'m> UpdateModel<'m> {
             )?);
         }
         Ok(self.symbolic.clone().expect("just computed"))
+    }
+
+    /// The shift of the last eigen solve of this model ([`femu_sparse::eigen::Modes::shift`]),
+    /// given to the next as [`femu_sparse::eigen::EigenOptions::lowest_shift_hint`]: the parameters change little
+    /// between the solves of an updating run, so the shift placed for the first stays well
+    /// placed, and each later solve of a free-free model skips the probe and its factorization.
+    pub fn last_shift(&self) -> Option<f64> {
+        self.last_shift
+    }
+
+    /// Records the shift of an eigen solve of this model (see [`UpdateModel::last_shift`]).
+    pub fn set_last_shift(&mut self, shift: f64) {
+        self.last_shift = Some(shift);
     }
 
     /// The sensitivity columns of every parameter for one vector `x` at eigenvalue `lambda`:

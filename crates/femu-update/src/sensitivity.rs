@@ -148,7 +148,13 @@ pub fn model_modes(
     let symbolic = up.symbolic()?;
     let sys = up.matrices();
     let pencil = Pencil::with_symbolic(&sys.k, &sys.m, symbolic)?;
-    let modes = pencil.solve(Which::Lowest(count), params)?;
+    // the last solve's shift, unless the caller gave one (docs/SCALING.md, "A hinted shift")
+    let hinted = EigenOptions {
+        lowest_shift_hint: params.lowest_shift_hint.or(up.last_shift()),
+        ..params.clone()
+    };
+    let modes = pencil.solve(Which::Lowest(count), &hinted)?;
+    up.set_last_shift(modes.shift);
     Ok(ModeSet::from_modes(&modes))
 }
 
