@@ -498,63 +498,36 @@ impl<'a> Pencil<'a> {
     /// after the retries, and [`SparseError::NotPositiveDefinite`] when `K` has negative
     /// eigenvalues below the lowest-mode shift.
     pub fn solve(&self, which: Which, params: &EigenOptions) -> Result<Modes, SparseError> {
-        let hint = params
-            .lowest_shift_hint
-            .filter(|h| h.is_finite() && *h < -self.tie_tolerance(0.0));
-        if let (Which::Lowest(_), Some(hint)) = (which, hint) {
-            let started = Instant::now();
-            let hinted = EigenOptions {
-                max_restarts: params.max_restarts.min(HINTED_RESTARTS),
-                ..params.clone()
-            };
-            let mut spent = EigenStats::default();
-            match self.solve_from(which, &hinted, Some(hint), &mut spent) {
-                Err(
-                    SparseError::NotPositiveDefinite { .. } | SparseError::NoConvergence { .. },
-                ) => {
-                    // a misplaced hint: start again as if none had been given, counting the work
-                    // already done
-                    let mut modes = self.solve_from(which, params, None, &mut spent)?;
-                    modes.stats.total_seconds =
-                        self.symbolic_seconds + started.elapsed().as_secs_f64();
-                    return Ok(modes);
-                }
-                r => return r,
-            }
-        }
-        self.solve_from(which, params, None, &mut EigenStats::default())
-    }
-
-    /// [`Pencil::solve`] with the lowest-mode shift `hint` (then the probe is skipped, and a
-    /// hint not below the spectrum is [`SparseError::NotPositiveDefinite`]); the work in `spent`
-    /// (an earlier attempt's) is added to the result's statistics and `spent` holds this
-    /// attempt's on return.
-    fn solve_from(
-        &self,
-        which: Which,
-        params: &EigenOptions,
-        hint: Option<f64>,
-        spent: &mut EigenStats,
-    ) -> Result<Modes, SparseError> {
         let started = Instant::now();
         let mut stats = EigenStats {
             symbolic_seconds: self.symbolic_seconds,
             factor_len: self.symbolic.factor_len(),
-            factor_seconds: spent.factor_seconds,
-            solve_seconds: spent.solve_seconds,
-            orthogonalization_seconds: spent.orthogonalization_seconds,
-            ritz_seconds: spent.ritz_seconds,
-            factorizations: spent.factorizations,
-            solved_vectors: spent.solved_vectors,
-            restarts: spent.restarts,
             ..Default::default()
         };
-        let result = self.solve_counted(which, params, hint, &mut stats, started);
-        *spent = stats;
-        result
+        let hint = params
+            .lowest_shift_hint
+            .filter(|h| h.is_finite() && *h < -self.tie_tolerance(0.0));
+        if let (Which::Lowest(_), Some(hint)) = (which, hint) {
+            let hinted = EigenOptions {
+                max_restarts: params.max_restarts.min(HINTED_RESTARTS),
+                ..params.clone()
+            };
+            match self.solve_counted(which, &hinted, Some(hint), &mut stats, started) {
+                // a misplaced hint: start again as if none had been given; `stats` keeps the
+                // work already done
+                Err(
+                    SparseError::NotPositiveDefinite { .. } | SparseError::NoConvergence { .. },
+                ) => {}
+                r => return r,
+            }
+        }
+        self.solve_counted(which, params, None, &mut stats, started)
     }
 
-    /// The body of [`Pencil::solve_from`], its work counted in `stats` whatever the outcome.
+    /// [`Pencil::solve`] from the lowest-mode shift `hint` when given (the probe is then
+    /// skipped, and a hint not below the spectrum is [`SparseError::NotPositiveDefinite`]). The
+    /// work is added to `stats` whatever the outcome; the result's total time runs from
+    /// `started`.
     fn solve_counted(
         &self,
         which: Which,

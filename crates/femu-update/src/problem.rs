@@ -373,16 +373,16 @@ impl<'m> UpdateModel<'m> {
         Ok(self.symbolic.clone().expect("just computed"))
     }
 
-    /// The shift of the last eigen solve of this model ([`femu_sparse::eigen::Modes::shift`]),
-    /// given to the next as [`femu_sparse::eigen::EigenOptions::lowest_shift_hint`]: the parameters change little
-    /// between the solves of an updating run, so the shift placed for the first stays well
-    /// placed, and each later solve of a free-free model skips the probe and its factorization.
-    pub fn last_shift(&self) -> Option<f64> {
+    /// The shift of the last eigen solve of this model (`Modes::shift`), given to the next as
+    /// `EigenOptions::lowest_shift_hint`: the parameters change little between the solves of an
+    /// updating run, so the shift placed for the first stays well placed, and each later solve of
+    /// a free-free model skips the probe and its factorization.
+    pub(crate) fn last_shift(&self) -> Option<f64> {
         self.last_shift
     }
 
     /// Records the shift of an eigen solve of this model (see [`UpdateModel::last_shift`]).
-    pub fn set_last_shift(&mut self, shift: f64) {
+    pub(crate) fn set_last_shift(&mut self, shift: f64) {
         self.last_shift = Some(shift);
     }
 

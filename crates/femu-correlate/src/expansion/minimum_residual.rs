@@ -252,11 +252,8 @@ impl Expander<'_> {
                     .all(|v| v.abs() <= PROJECTED_CHECK_TOL * scale[c])
             }))
         };
-        let z_x = || -> Result<Mat<f64>, CorrelateError> {
-            Ok(&sym_mul_mat(self.k, x.as_ref())?
-                - &sym_mul_mat(self.m, x.as_ref())? * faer::Scale(lambda))
-        };
-        let zx = z_x()?;
+        let zx = &sym_mul_mat(self.k, x.as_ref()).map_err(CorrelateError::from)?
+            - &sym_mul_mat(self.m, x.as_ref()).map_err(CorrelateError::from)? * faer::Scale(lambda);
         let wzx = Mat::from_fn(n, 1, |i, _| zx[(i, 0)] / w_inv[i]);
         let wpa = Mat::from_fn(n, pa.ncols(), |i, c| pa[(i, c)] / w_inv[i]);
         let w_max = w_inv.iter().fold(0.0_f64, |m, v| m.max(1.0 / v));
