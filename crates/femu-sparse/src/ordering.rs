@@ -116,6 +116,14 @@ pub fn fill_reducing_ordering(
 mod metis {
     //! The one call into METIS.
     use crate::SparseError;
+    use std::sync::Mutex;
+
+    /// METIS draws its random numbers from one process-wide Mersenne twister (GKlib's `mt` and
+    /// `mti` are plain statics) and reseeds it at the start of each call. Two calls at once race
+    /// on it: each sees the other's draws, so the same graph got a different ordering, and a
+    /// different round-off downstream, depending on what else was running (docs/VERIFICATION.md,
+    /// "Determinism"). One call at a time makes every ordering a function of the graph alone.
+    static METIS: Mutex<()> = Mutex::new(());
 
     /// `METIS_NodeND` on a symmetric graph without self loops; returns `perm` (`perm[new] = old`).
     pub(super) fn node_nd(
@@ -137,6 +145,9 @@ mod metis {
         let mut iperm = vec![0i32; n];
         // SAFETY: the arrays have the lengths METIS documents (xadj n + 1, adjncy xadj[n],
         // options METIS_NOPTIONS, perm and iperm n); METIS does not keep the pointers.
+        // a panic cannot happen while the lock is held (only the C call runs), so a poisoned
+        // lock still guards nothing broken
+        let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
         let status = unsafe {
             metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
             metis_sys::METIS_NodeND(

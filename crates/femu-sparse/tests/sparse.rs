@@ -380,3 +380,38 @@ fn flop_count_matches_the_hand_count() {
     let sym = SymbolicFactor::new(&dense_matrix(&[30, 45]), Ordering::Identity).unwrap();
     assert_eq!(sym.flops(), dense(30) + dense(45));
 }
+
+/// The nested-dissection ordering is a function of the graph alone, also when orderings are
+/// computed on several threads at once. METIS's random numbers come from one process-wide
+/// generator; before the calls were serialised, concurrent orderings of the same graph differed
+/// (a sensor-space expansion near a model eigenvalue then fell back or not from run to run).
+#[test]
+fn nested_dissection_is_the_same_on_concurrent_threads() {
+    let a = laplacian_3d(10);
+    let reference = femu_sparse::ordering::fill_reducing_ordering(&a, Ordering::NestedDissection)
+        .unwrap()
+        .unwrap();
+    std::thread::scope(|s| {
+        let runs: Vec<_> = (0..4)
+            .map(|_| {
+                s.spawn(|| {
+                    (0..25)
+                        .map(|_| {
+                            femu_sparse::ordering::fill_reducing_ordering(
+                                &a,
+                                Ordering::NestedDissection,
+                            )
+                            .unwrap()
+                            .unwrap()
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        for run in runs {
+            for (fwd, inv) in run.join().unwrap() {
+                assert!(fwd == reference.0 && inv == reference.1);
+            }
+        }
+    });
+}

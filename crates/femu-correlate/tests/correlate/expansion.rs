@@ -399,33 +399,46 @@ fn sensor_space_equals_dense_formulas_on_every_set() {
     }
 }
 
-/// An exact model mode at its own eigenvalue (where `Z` is singular to round-off) is recovered
-/// in the sensor space itself, without a fallback: the a posteriori check measures residuals
-/// against the entrywise size of the terms (`|K||x| + lambda |M||x|`), since for a low mode
-/// `Z x`, and even `K x`, are far below `||K|| ||x||` (a normwise check rejected the first mode's
-/// round-off, 1.3e-7 of `||K x||`, and sent it to the saddle point).
+/// An exact model mode expanded at its own eigenvalue, where `Z` is singular to round-off.
+/// `Z^-1 E_S`'s columns are then the mode divided by a pivot of round-off size plus a bounded
+/// rest, and whether that rest survives in the dense sensor-space system depends on the pivot's
+/// last bits: at some eigenvalues a few ulps away the sensor-space solution is wrong (its
+/// conditions' residual measured up to 0.19 of the terms' size) and at most it is right to 1e-11.
+/// Whichever happens on a machine, the a posteriori check must send the wrong ones to the
+/// omitted-DOF saddle point, so every result is the mode. The checks are componentwise (residuals
+/// against `|K||x| + lambda |M||x|`): for a low mode `Z x`, and even `K x`, are far below
+/// `||K|| ||x||`, and a normwise check rejected the first mode's round-off, 1.3e-7 of `||K x||`.
 #[test]
 fn sensor_space_at_model_eigenvalues() {
     let c = case();
     let eig = full_eigen(&c.sys);
-
-    let mut space = SensorSpace::new(&c.sys.k, &c.sys.m, &c.a).unwrap();
-    let mut fallbacks = Vec::new();
+    let (mut solves, mut fallbacks) = (0, 0);
     for j in [0, 2, 4] {
         let phi = col(&eig.vectors, j);
         let ya = Mat::from_fn(c.a.len(), 1, |i, _| phi[c.a[i]]);
-        let x = space
-            .minimum_residual(&[eig.values[j]], &c.a, ya.as_ref())
-            .unwrap();
-        let w = space
-            .mdre(&[eig.values[j]], &c.a, ya.as_ref(), 1e12, 0.0)
-            .unwrap();
-        // measured: 6e-12 / 2.5e-11 (mode 1), 1.4e-12 / 1.4e-12, 1.3e-14 / 3.5e-12
-        assert!(rel(&col(&x, 0), &phi) < 1e-9, "mode {j}");
-        assert!(rel(&col(&w, 0), &phi) < 1e-9, "mode {j}");
-        fallbacks.push(space.fallbacks());
+        // the eigenvalue and its neighbours 40 ulps either side: the round-off a different CPU
+        // or BLAS kernel would make (one of these failed on the CI machine at offset 0)
+        for ulps in -40i64..=40 {
+            let lambda = f64::from_bits(eig.values[j].to_bits().wrapping_add_signed(ulps));
+            let mut space = SensorSpace::new(&c.sys.k, &c.sys.m, &c.a).unwrap();
+            let x = space
+                .minimum_residual(&[lambda], &c.a, ya.as_ref())
+                .unwrap();
+            let w = space.mdre(&[lambda], &c.a, ya.as_ref(), 1e12, 0.0).unwrap();
+            // measured here: at most 7.9e-10 (mode 5, minimum residual, 19 ulps above), 6.7e-11
+            // on mode 1, 6.9e-11 on mode 3; the fallback's results are the mode to 2e-13
+            let (ex, ew) = (rel(&col(&x, 0), &phi), rel(&col(&w, 0), &phi));
+            assert!(
+                ex < 5e-9 && ew < 5e-9,
+                "mode {j}, {ulps} ulps: {ex:e} {ew:e}"
+            );
+            solves += 2;
+            fallbacks += space.fallbacks();
+        }
     }
-    assert_eq!(fallbacks, vec![0, 0, 0], "{fallbacks:?}");
+    // measured here: 25 of 486 solves fell back, all on mode 5; most must stay in the sensor
+    // space, or the factorizations it exists to save are made anyway
+    assert!(fallbacks * 4 < solves, "{fallbacks} of {solves} fell back");
 }
 
 /// Sensors between nodes (shape-function rows found by `femu_fem::locate`) and oblique ones on
