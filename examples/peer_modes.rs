@@ -85,6 +85,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             {
                 params.max_basis = m; // for tuning runs
             }
+            if let Some(t) = std::env::var("FEMU_TOL").ok().and_then(|v| v.parse().ok()) {
+                params.tol = t; // to compare at a peer's residual
+            }
             if let Some(ranks) = std::env::var("FEMU_ENGINE")
                 .ok()
                 .and_then(|v| v.strip_prefix("slepc:").and_then(|r| r.parse().ok()))

@@ -142,55 +142,66 @@ fn free_free_requests_at_or_below_the_rigid_body_count() {
     }
 }
 
-/// A hinted shift (`EigenOptions::lowest_shift_hint`, an earlier solve's shift) skips the probe:
-/// two factorizations (the run and the Sturm count) instead of three on a free-free plate, with
-/// the dense solution's eigenvalues to 1e-10, also after the model changed (stiffness scaled by
-/// 0.7, as between the solves of an updating run). A hint far closer to zero than the first
-/// elastic eigenvalue (1e-9 of it), with which the run may stall, still gives the dense
-/// eigenvalues: the hint is dropped and the work of both attempts is counted.
+/// A free-free model factors twice when the run can stay at the tiny shift below the rigid-body
+/// modes: once it has locked them it starts afresh deflated against them (before, every free-free
+/// solve refactored at half the first elastic eigenvalue: three factorizations). On a thin plate
+/// (702 DOF, first elastic eigenvalue 3.7e4 times the tiny shift's distance from zero) the run
+/// stays; on the coarse thick plate (1.9e7 times) its rigid-body modes cannot reach a backward
+/// error of 1e-13 there, and the solve refactors as before. A hinted shift
+/// (`EigenOptions::lowest_shift_hint`, an earlier solve's shift) skips the probe. Every
+/// result has the dense solution's eigenvalues to 1e-10, also after the model changed (stiffness
+/// scaled by 0.7, as between the solves of an updating run), and with a hint far closer to zero
+/// than the first elastic eigenvalue (1e-9 of it).
 #[test]
 fn hinted_lowest_shift_saves_the_probe_and_stays_exact() {
-    let model = plate(false);
-    let sys = model.assemble(MassKind::Consistent).unwrap();
-    let dense =
-        generalized_symmetric_eigen(to_dense(&sys.k).as_ref(), to_dense(&sys.m).as_ref()).unwrap();
-    let check = |modes: &femu::sparse::eigen::Modes, scale: f64, what: &str| {
+    fn check(modes: &femu::sparse::eigen::Modes, dense: &[f64], scale: f64, what: &str) {
         assert!(modes.sturm.verified(), "{what}: {:?}", modes.sturm);
         for j in 0..6 {
-            assert!(
-                modes.values[j].abs() < 1e-8 * dense.values[6],
-                "{what}: rigid {j}"
-            );
+            assert!(modes.values[j].abs() < 1e-8 * dense[6], "{what}: rigid {j}");
         }
         for j in 6..14 {
-            let (l, d) = (modes.values[j], scale * dense.values[j]);
+            let (l, d) = (modes.values[j], scale * dense[j]);
             assert!((l / d - 1.0).abs() < 1e-10, "{what} mode {j}: {l} vs {d}");
         }
+    }
+    let spec = PlateSpec {
+        lengths: [0.12, 0.08, 0.002],
+        divisions: [12, 8, 1],
+        tet_block: [2, 2],
+        quadratic: false,
     };
+    let mut thin = Model::new(mixed_plate(&spec).unwrap()).unwrap();
+    thin.set_material(None, Material::steel()).unwrap();
+    let sys = thin.assemble(MassKind::Consistent).unwrap();
+    let dense =
+        generalized_symmetric_eigen(to_dense(&sys.k).as_ref(), to_dense(&sys.m).as_ref()).unwrap();
+    let dense = &dense.values;
     let plain = eigs(&sys.k, &sys.m, Which::Lowest(14), &EigenOptions::default()).unwrap();
-    check(&plain, 1.0, "no hint");
-    assert_eq!(plain.stats.factorizations, 3, "probe, run, count");
+    check(&plain, dense, 1.0, "no hint");
+    assert_eq!(plain.stats.factorizations, 2, "run, count");
+    // the run stayed at the tiny shift, far below the first elastic eigenvalue
+    assert!(plain.shift < 0.0 && plain.shift > -1e-3 * dense[6]);
     let hinted = EigenOptions {
         lowest_shift_hint: Some(plain.shift),
         ..EigenOptions::default()
     };
     let again = eigs(&sys.k, &sys.m, Which::Lowest(14), &hinted).unwrap();
-    check(&again, 1.0, "hinted");
+    check(&again, dense, 1.0, "hinted");
     assert_eq!(again.stats.factorizations, 2, "run and count");
     assert_eq!(again.shift, plain.shift);
     // the model changed: K scaled by 0.7 scales every eigenvalue by 0.7
     let mut k = sys.k.clone();
     k.data_mut().iter_mut().for_each(|v| *v *= 0.7);
     let changed = eigs(&k, &sys.m, Which::Lowest(14), &hinted).unwrap();
-    check(&changed, 0.7, "changed model, old hint");
+    check(&changed, dense, 0.7, "changed model, old hint");
     assert_eq!(changed.stats.factorizations, 2);
     // a hint a billion times too close to zero
     let poor = EigenOptions {
-        lowest_shift_hint: Some(-1e-9 * dense.values[6]),
+        lowest_shift_hint: Some(-1e-9 * dense[6]),
         ..EigenOptions::default()
     };
     let recovered = eigs(&sys.k, &sys.m, Which::Lowest(14), &poor).unwrap();
-    check(&recovered, 1.0, "poor hint");
+    check(&recovered, dense, 1.0, "poor hint");
     assert!(recovered.stats.factorizations >= 2);
     // a hint that is not a negative number is no hint
     for bad in [f64::NAN, 0.0, 1e9] {
@@ -199,7 +210,16 @@ fn hinted_lowest_shift_saves_the_probe_and_stays_exact() {
             ..EigenOptions::default()
         };
         let modes = eigs(&sys.k, &sys.m, Which::Lowest(14), &opts).unwrap();
-        check(&modes, 1.0, &format!("hint {bad}"));
-        assert_eq!(modes.stats.factorizations, 3, "hint {bad} ignored");
+        check(&modes, dense, 1.0, &format!("hint {bad}"));
+        assert_eq!(modes.stats.factorizations, 2, "hint {bad} ignored");
+        assert_eq!(modes.shift, plain.shift, "hint {bad} ignored");
     }
+    // the coarse thick plate: refactored at half the first elastic eigenvalue
+    let sys = plate(false).assemble(MassKind::Consistent).unwrap();
+    let dense =
+        generalized_symmetric_eigen(to_dense(&sys.k).as_ref(), to_dense(&sys.m).as_ref()).unwrap();
+    let coarse = eigs(&sys.k, &sys.m, Which::Lowest(14), &EigenOptions::default()).unwrap();
+    check(&coarse, &dense.values, 1.0, "coarse plate");
+    assert_eq!(coarse.stats.factorizations, 3, "probe, run, count");
+    assert!(coarse.shift < -0.1 * dense.values[6]);
 }
