@@ -133,7 +133,7 @@ const HINTED_RESTARTS: usize = 8;
 /// A basis built before a mode this much nearer the shift than the nearest unconverged one was
 /// locked is discarded (see [`Lanczos::run`]): `OP` amplified that mode's part of every vector by
 /// `1 / |lambda - sigma|`, and the factorization's round-off on that large part left the other
-/// Ritz vectors with a relative residual of about `eps ||K|| / |lambda - sigma|`. On a free-free
+/// Ritz vectors with a relative residual of about `eps lambda_max / |lambda - sigma|`. On a free-free
 /// plate of 47,628 DOF at the tiny shift (rigid-body modes 200 from the shift, the first elastic
 /// one 4.8e5) that was 3e-7 to 1.4e-6 for every elastic pair, which then never converged.
 const CLOSE_LOCK: f64 = 1e-2;
@@ -679,20 +679,10 @@ impl<'a> Pencil<'a> {
                 // is close to the smallest), the rigid-body modes do not reach a backward error
                 // of 1e-13 at the tiny shift: refactor at half the first elastic eigenvalue now.
                 if -2.0 * better > STAY_BELOW * sigma.abs() {
+                    // release the old factor first (peak memory: one factor)
                     drop(op);
-                    let t = Instant::now();
-                    let candidate = self.factor_shifted(better)?;
-                    stats.factorizations += 1;
-                    op = if candidate.inertia().negative == 0 {
-                        sigma = better;
-                        probed = None;
-                        candidate
-                    } else {
-                        drop(candidate);
-                        stats.factorizations += 1;
-                        self.factor_shifted(sigma)?
-                    };
-                    stats.factor_seconds += t.elapsed().as_secs_f64();
+                    (op, sigma) = self.refactor_below(better, sigma, stats)?;
+                    probed = None;
                     fallback = None;
                 }
             }
@@ -740,18 +730,8 @@ impl<'a> Pencil<'a> {
                     // both runs is counted.
                     let better = fallback.take().expect("checked");
                     drop(lanczos);
-                    let t = Instant::now();
-                    let candidate = self.factor_shifted(better)?;
-                    stats.factorizations += 1;
-                    let op = if candidate.inertia().negative == 0 {
-                        sigma = better;
-                        candidate
-                    } else {
-                        drop(candidate);
-                        stats.factorizations += 1;
-                        self.factor_shifted(sigma)?
-                    };
-                    stats.factor_seconds += t.elapsed().as_secs_f64();
+                    let op;
+                    (op, sigma) = self.refactor_below(better, sigma, stats)?;
                     lanczos = Lanczos::new(self, op, sigma, params);
                     continue;
                 }
@@ -811,6 +791,29 @@ impl<'a> Pencil<'a> {
             want = lanczos.values.len() + (check.count - check.returned);
             lanczos.force_random_start = true;
         }
+    }
+
+    /// The factor at `better` (half the first elastic eigenvalue of a free-free model) and that
+    /// shift, or, in the rare case `better` is not below the spectrum, the factor at `sigma`
+    /// again; the factorizations are counted in `stats`.
+    fn refactor_below(
+        &self,
+        better: f64,
+        sigma: f64,
+        stats: &mut EigenStats,
+    ) -> Result<(Ldlt, f64), SparseError> {
+        let t = Instant::now();
+        let candidate = self.factor_shifted(better)?;
+        stats.factorizations += 1;
+        let out = if candidate.inertia().negative == 0 {
+            (candidate, better)
+        } else {
+            drop(candidate);
+            stats.factorizations += 1;
+            (self.factor_shifted(sigma)?, sigma)
+        };
+        stats.factor_seconds += t.elapsed().as_secs_f64();
+        Ok(out)
     }
 
     /// From the locked `values`, the `requested` nearest `sigma` with any cluster at either end

@@ -143,11 +143,11 @@ mod metis {
         let mut options = vec![0i32; metis_sys::METIS_NOPTIONS as usize];
         let mut perm = vec![0i32; n];
         let mut iperm = vec![0i32; n];
+        // A panic cannot happen while the lock is held (only the C call runs), so a poisoned lock
+        // still guards nothing broken.
+        let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
         // SAFETY: the arrays have the lengths METIS documents (xadj n + 1, adjncy xadj[n],
         // options METIS_NOPTIONS, perm and iperm n); METIS does not keep the pointers.
-        // a panic cannot happen while the lock is held (only the C call runs), so a poisoned
-        // lock still guards nothing broken
-        let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
         let status = unsafe {
             metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
             metis_sys::METIS_NodeND(
