@@ -1,7 +1,8 @@
 //! What the hinted lowest-mode shift saves in an updating run: the 16 lowest modes of a free-free
 //! steel block of 52,416 DOF (ten stiffness regions, region r3 softened step by step), solved by a
-//! fresh `UpdateModel` (no hint: the probe places the shift, three factorizations) and by one that
-//! carries the last solve's shift (two), one after the other, with the eigenvalues compared.
+//! fresh `UpdateModel` (no hint: the probe, then a shift moved to half the first elastic
+//! eigenvalue, three factorizations) and by one that carries the last solve's shift (two), one
+//! after the other, with the eigenvalues compared.
 //!
 //! Run: `cargo run --release --example hinted_shift`.
 

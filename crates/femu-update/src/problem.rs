@@ -375,8 +375,9 @@ impl<'m> UpdateModel<'m> {
 
     /// The shift of the last eigen solve of this model (`Modes::shift`), given to the next as
     /// `EigenOptions::lowest_shift_hint`: the parameters change little between the solves of an
-    /// updating run, so the shift placed for the first stays well placed, and each later solve of
-    /// a free-free model skips the probe and its factorization.
+    /// updating run, so the shift placed for the first stays well placed, and each later solve
+    /// skips the probe; for a free-free model whose solve moved the shift (the 52,416-DOF block of
+    /// `examples/hinted_shift.rs`), also one factorization (docs/SCALING.md, "A hinted shift").
     pub(crate) fn last_shift(&self) -> Option<f64> {
         self.last_shift
     }
