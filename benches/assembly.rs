@@ -1,17 +1,28 @@
 //! Assembly throughput (elements per second) of K and M for hex8, hex20 and tet10 models of about
-//! 100k elements, with 1 and 2 rayon threads side by side. The pattern is built once outside the
-//! timed loop (it is reused by every later assembly); its cost is a separate benchmark.
+//! 100k elements, with 1 and 2 rayon threads side by side:
+//! - `assembly/<kind>/<dofs>/<threads>`: `Assembler::assemble`, new matrices (what a first solve
+//!   pays; at 100k hex20 elements it provisions 6.8 GB of fresh memory, which the operating
+//!   system's page faults dominate);
+//! - `reassembly/...`: `Assembler::assemble_into`, the element work into existing storage (what
+//!   every updating step and every later assembly pays);
+//! - `kernel/...`: the element kernels alone, `K_e` and the scalar consistent mass of every
+//!   element, one thread, nothing scattered.
 //!
-//! Run: `cargo bench --bench assembly`.
+//! The pattern is built once outside the timed loops (it is reused by every later assembly); its
+//! cost is a separate benchmark.
+//!
+//! Run: `cargo bench --bench assembly` (`cargo bench --bench assembly -- hex20` for one kind).
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use femu::fem::kernel;
 use femu::prelude::*;
 use std::time::Duration;
 
 mod common;
 
-fn assembly(c: &mut Criterion) {
-    let cases = [
+/// The three models of about 100k elements.
+fn cases() -> [(&'static str, BoxSpec); 3] {
+    [
         (
             "hex8",
             BoxSpec::new([1.0, 1.0, 0.8], [50, 50, 40], BoxCells::Hex, false),
@@ -24,7 +35,10 @@ fn assembly(c: &mut Criterion) {
             "hex20",
             BoxSpec::new([1.0, 1.0, 1.0], [47, 47, 46], BoxCells::Hex, true),
         ),
-    ];
+    ]
+}
+
+fn assembly(c: &mut Criterion) {
     let pools: Vec<_> = [1, 2]
         .iter()
         .map(|t| {
@@ -42,7 +56,7 @@ fn assembly(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(20));
-    for (name, spec) in cases {
+    for (name, spec) in cases() {
         let model = common::clamped(spec);
         let asm = Assembler::new(&model).unwrap();
         let ne = model.mesh().element_count() as u64;
@@ -61,6 +75,60 @@ fn assembly(c: &mut Criterion) {
             "pattern+colouring",
         );
         group.bench_function(id, |b| b.iter(|| Assembler::new(&model).unwrap()));
+    }
+    group.finish();
+}
+
+/// Re-assembly into existing matrices, and the element kernels alone (see the file's doc).
+fn reassembly(c: &mut Criterion) {
+    let pools: Vec<_> = [1, 2]
+        .iter()
+        .map(|t| {
+            (
+                *t,
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(*t)
+                    .build()
+                    .unwrap(),
+            )
+        })
+        .collect();
+    let mut group = c.benchmark_group("reassembly");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(20));
+    for (name, spec) in cases() {
+        let model = common::clamped(spec);
+        let asm = Assembler::new(&model).unwrap();
+        let mut sys = asm.assemble(&model, MassKind::Consistent).unwrap();
+        let ne = model.mesh().element_count();
+        group.throughput(Throughput::Elements(ne as u64));
+        let dofs = asm.dofs().free_count();
+        for (threads, pool) in &pools {
+            let id = BenchmarkId::new(format!("{name}/{dofs}dof"), format!("{threads}thr"));
+            group.bench_function(id, |b| {
+                b.iter(|| pool.install(|| asm.assemble_into(&model, &mut sys).unwrap()))
+            });
+        }
+        drop(sys);
+        let mesh = model.mesh();
+        let steel = Material::steel();
+        let id = BenchmarkId::new(format!("{name}/{dofs}dof"), "kernels 1thr");
+        group.bench_function(id, |b| {
+            let (mut x, mut ke, mut m) = (Vec::new(), vec![0.0; 3600], vec![0.0; 400]);
+            b.iter(|| {
+                for e in 0..ne {
+                    let kind = mesh.element(e).kind;
+                    let nn = kind.num_nodes();
+                    mesh.element_coords(e, &mut x);
+                    kernel::element_stiffness_for(kind, &x, &steel, &mut ke[..9 * nn * nn])
+                        .unwrap();
+                    kernel::scalar_mass(kind, &x, steel.density, &mut m[..nn * nn]).unwrap();
+                    std::hint::black_box((&ke, &m));
+                }
+            })
+        });
     }
     group.finish();
 }
@@ -107,5 +175,5 @@ fn linked(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, assembly, linked);
+criterion_group!(benches, assembly, reassembly, linked);
 criterion_main!(benches);

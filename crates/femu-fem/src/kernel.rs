@@ -224,41 +224,55 @@ pub fn element_stiffness_isotropic(
         let sw = (tab.rule.weights[q] * det).sqrt();
         row.iter_mut().for_each(|v| *v *= sw);
     }
-    // the upper triangle of A = G^T G, row by row (contiguous inner loop)
-    out.iter_mut().for_each(|v| *v = 0.0);
-    for i in 0..nd {
-        let a_row = &mut out[i * nd..(i + 1) * nd];
-        for q in 0..nq {
-            let g = &gs[q * nd..(q + 1) * nd];
-            let s = g[i];
-            for (o, gj) in a_row[i..].iter_mut().zip(&g[i..]) {
-                *o += s * gj;
-            }
-        }
+    // the upper triangle of A = G^T G (row-major), which is the lower triangle of the same storage
+    // read column-major: one triangular product (faer's SIMD kernels; the strict lower triangle of
+    // `out` is not written)
+    {
+        use faer::linalg::matmul::triangular::{BlockStructure, matmul};
+        let g = faer::MatRef::from_row_major_slice(&gs[..nq * nd], nq, nd);
+        let a = faer::MatMut::from_column_major_slice_mut(out, nd, nd);
+        matmul(
+            a,
+            BlockStructure::TriangularLower,
+            faer::Accum::Replace,
+            g.transpose(),
+            BlockStructure::Rectangular,
+            g,
+            BlockStructure::Rectangular,
+            1.0,
+            faer::Par::Seq,
+        );
     }
-    // K from A block by block (upper node-block triangle), then mirrored
-    let at = |out: &[f64], r: usize, c: usize| {
-        if r <= c {
-            out[r * nd + c]
-        } else {
-            out[c * nd + r]
-        }
-    };
+    // K from A block by block over the upper node-block triangle, each block written with its
+    // mirror image: a block of K needs only the same block of A, and for a < b that block lies in
+    // A's upper triangle; the lower half of a diagonal block is read from its upper half, so the
+    // diagonal blocks come out exactly symmetric.
     for a in 0..nn {
         for b in a..nn {
-            let blk: [[f64; 3]; 3] =
-                std::array::from_fn(|i| std::array::from_fn(|j| at(out, 3 * a + i, 3 * b + j)));
+            let mut blk = [[0.0; 3]; 3];
+            for (i, row) in blk.iter_mut().enumerate() {
+                for (j, v) in row.iter_mut().enumerate() {
+                    let (r, c) = (3 * a + i, 3 * b + j);
+                    *v = if r <= c {
+                        out[r * nd + c]
+                    } else {
+                        out[c * nd + r]
+                    };
+                }
+            }
             let tr = blk[0][0] + blk[1][1] + blk[2][2];
             for i in 0..3 {
                 for j in 0..3 {
-                    let v =
-                        lambda * blk[i][j] + mu * blk[j][i] + if i == j { mu * tr } else { 0.0 };
+                    let mut v = lambda * blk[i][j] + mu * blk[j][i];
+                    if i == j {
+                        v += mu * tr;
+                    }
                     out[(3 * a + i) * nd + 3 * b + j] = v;
+                    out[(3 * b + j) * nd + 3 * a + i] = v;
                 }
             }
         }
     }
-    mirror_upper_blocks(out, nn);
     Ok(())
 }
 

@@ -1,7 +1,7 @@
 //! Assembly evidence: against a dense sum of element matrices, symmetry, definiteness, mass,
 //! rigid-body modes of a free-free model, parameter groups, thread-count independence.
 
-use femu_fem::assembly::{Assembler, MassKind};
+use femu_fem::assembly::{Assembler, CHUNK_POINTS, MassKind};
 use femu_fem::generate::{BoxCells, BoxSpec, box_mesh};
 use femu_fem::groups::ParameterGroups;
 use femu_fem::kernel;
@@ -77,31 +77,57 @@ fn assembly_equals_dense_sum_of_element_matrices() {
     }
 }
 
-/// Colouring: no two elements of a colour share a node; the result does not depend on the
-/// number of threads (to round-off of the summation order, which the colouring fixes exactly).
+/// Colouring: every element is in exactly one chunk, no two chunks of a colour share a node, and
+/// a model large enough has several chunks per colour (the parallel work); the result does not
+/// depend on the number of threads, not even in round-off (the chunks fix the summation order).
 #[test]
 fn colouring_is_valid_and_thread_count_does_not_change_the_result() {
-    let model = small_plate(true);
-    let asm = Assembler::new(&model).unwrap();
-    let mut seen = vec![usize::MAX; model.mesh().node_count()];
-    for (c, color) in asm.colors().iter().enumerate() {
-        for e in color {
-            for n in model.mesh().element(*e).nodes {
-                assert_ne!(seen[*n], c, "two elements of colour {c} share node {n}");
-                seen[*n] = c;
+    let spec = BoxSpec::new([0.3, 0.2, 0.1], [12, 10, 6], BoxCells::Hex, true);
+    let mut boxed = Model::new(box_mesh(&spec).unwrap()).unwrap();
+    boxed.set_material(None, Material::steel()).unwrap();
+    boxed.fix_set("xmin", &[0, 1, 2]).unwrap();
+    for (model, many) in [(small_plate(true), false), (boxed, true)] {
+        let asm = Assembler::new(&model).unwrap();
+        let mesh = model.mesh();
+        // the colour and chunk that last touched each node
+        let mut owner = vec![(usize::MAX, usize::MAX); mesh.node_count()];
+        let mut chunk_of = vec![usize::MAX; mesh.element_count()];
+        for (c, color) in asm.colors().iter().enumerate() {
+            for &ch in color {
+                for e in asm.chunk(ch) {
+                    assert_eq!(chunk_of[e], usize::MAX, "element {e} in two chunks");
+                    chunk_of[e] = ch;
+                    for n in mesh.element(e).nodes {
+                        if owner[*n].0 == c {
+                            assert_eq!(owner[*n].1, ch, "chunks of colour {c} share node {n}");
+                        }
+                        owner[*n] = (c, ch);
+                    }
+                }
             }
         }
+        assert!(
+            chunk_of.iter().all(|c| *c != usize::MAX),
+            "an element in no chunk"
+        );
+        if many {
+            // 720 hex20 elements in chunks of the fewest elements with CHUNK_POINTS nodes (26 of
+            // 20 nodes: 28 chunks), several per colour
+            let chunks: usize = asm.colors().iter().map(Vec::len).sum();
+            assert_eq!(chunks, 720usize.div_ceil(CHUNK_POINTS.div_ceil(20)));
+            assert!(asm.colors().iter().any(|c| c.len() >= 2));
+        }
+        let run = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| asm.assemble(&model, MassKind::Consistent).unwrap())
+        };
+        let (a, b) = (run(1), run(2));
+        assert_eq!(a.k.data(), b.k.data());
+        assert_eq!(a.m.data(), b.m.data());
     }
-    let run = |threads| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| asm.assemble(&model, MassKind::Consistent).unwrap())
-    };
-    let (a, b) = (run(1), run(2));
-    assert_eq!(a.k.data(), b.k.data());
-    assert_eq!(a.m.data(), b.m.data());
 }
 
 /// u^T M u for a unit rigid translation equals rho * V summed over materials, consistent and
