@@ -1,5 +1,5 @@
 //! Modal expansion: test shapes known on the measured DOFs `a` filled in on the omitted DOFs `o`
-//! (docs/MATH.md, "Incomplete instrumentation: modal expansion"), with sparse factorizations only.
+//! (docs/MATH.md, "Expansion"), with sparse factorizations only.
 //!
 //! | method | omitted part |
 //! |---|---|
