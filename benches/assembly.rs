@@ -38,24 +38,29 @@ fn cases() -> [(&'static str, BoxSpec); 3] {
     ]
 }
 
-fn assembly(c: &mut Criterion) {
-    let pools: Vec<_> = [1, 2]
+/// Rayon pools of 1 and 2 threads, with their sizes.
+fn pools() -> Vec<(usize, rayon::ThreadPool)> {
+    [1, 2]
         .iter()
         .map(|t| {
-            (
-                *t,
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(*t)
-                    .build()
-                    .unwrap(),
-            )
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(*t).build();
+            (*t, pool.unwrap())
         })
-        .collect();
-    let mut group = c.benchmark_group("assembly");
+        .collect()
+}
+
+/// Ten samples of up to 20 s: a hex20 assembly of 100k elements takes 10-20 s.
+fn slow(group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>) {
     group
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(20));
+}
+
+fn assembly(c: &mut Criterion) {
+    let pools = pools();
+    let mut group = c.benchmark_group("assembly");
+    slow(&mut group);
     for (name, spec) in cases() {
         let model = common::clamped(spec);
         let asm = Assembler::new(&model).unwrap();
@@ -81,23 +86,9 @@ fn assembly(c: &mut Criterion) {
 
 /// Re-assembly into existing matrices, and the element kernels alone (see the file's doc).
 fn reassembly(c: &mut Criterion) {
-    let pools: Vec<_> = [1, 2]
-        .iter()
-        .map(|t| {
-            (
-                *t,
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(*t)
-                    .build()
-                    .unwrap(),
-            )
-        })
-        .collect();
+    let pools = pools();
     let mut group = c.benchmark_group("reassembly");
-    group
-        .sample_size(10)
-        .warm_up_time(Duration::from_secs(1))
-        .measurement_time(Duration::from_secs(20));
+    slow(&mut group);
     for (name, spec) in cases() {
         let model = common::clamped(spec);
         let asm = Assembler::new(&model).unwrap();

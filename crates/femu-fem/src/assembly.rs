@@ -364,52 +364,25 @@ impl Assembler {
             }
             return;
         }
-        for (lb, &nb) in nodes.iter().enumerate() {
-            let db = self.dofs.node_dofs(nb);
-            let (lo, hi) = (self.nbr_ptr[nb], self.nbr_ptr[nb + 1]);
-            for (la, &na) in nodes.iter().enumerate() {
-                let da = self.dofs.node_dofs(na);
-                let k = match self.nbrs[lo..hi].binary_search(&na) {
-                    Ok(k) => k,
-                    Err(_) => unreachable!("element nodes are neighbours in the pattern"),
-                };
-                let base = self.nbr_off[lo + k];
-                for (j, cj) in db.iter().enumerate() {
-                    let Some(c) = cj else { continue };
-                    let start = self.col_ptr[*c] + base;
-                    let mut rank = 0;
-                    for (i, ri) in da.iter().enumerate() {
-                        if ri.is_some() {
-                            add(start + rank, (3 * la + i) * nd + 3 * lb + j, 1.0);
-                            rank += 1;
-                        }
-                    }
-                }
-            }
-        }
+        self.for_each_entry(nodes, |lb, j, la, i, p| {
+            add(p, (3 * la + i) * nd + 3 * lb + j, 1.0)
+        });
     }
 
-    /// Adds an element's stiffness `ke` (row-major `3 nn` square) and, when given, its scalar
-    /// consistent mass `m` (`nn` square; `M_e[3a+i][3b+j] = m[a][b] delta_ij`) into `k` and `m`'s
-    /// values on the pattern, for an element none of whose nodes has a dependent DOF (fixed DOFs
-    /// are skipped). Both matrices must be exactly symmetric, as the kernels make them: column
-    /// `(b, j)` of the global matrix is then fed from row `3 b + j` of `ke`, read contiguously.
-    /// The neighbour offsets come from one merge of the element's sorted nodes with each column
-    /// node's sorted neighbour list, and the mass, zero off the `i = j` diagonal of each node
-    /// block, is added only there.
+    /// Calls `f(b, j, a, i, position)` for every entry `(3a+i, 3b+j)` of an element on `nodes`
+    /// none of which has a dependent DOF, both DOFs free (fixed ones are skipped), with its
+    /// position in the pattern's values, column by column. The offsets of the element's nodes in
+    /// a column come from one merge of the element's sorted nodes with the column node's sorted
+    /// neighbour list (not a binary search per node pair).
     #[inline]
-    pub(crate) fn scatter_element(
+    fn for_each_entry(
         &self,
         nodes: &[usize],
-        ke: &[f64],
-        me: Option<&[f64]>,
-        kadd: impl Fn(usize, f64),
-        madd: impl Fn(usize, f64),
+        mut f: impl FnMut(usize, usize, usize, usize, usize),
     ) {
         const MAX_NODES: usize = 20;
         let nn = nodes.len();
-        let nd = 3 * nn;
-        debug_assert!(nn <= MAX_NODES && ke.len() == nd * nd);
+        assert!(nn <= MAX_NODES, "an element of {nn} nodes");
         // local node indices in increasing global node order
         let mut order = [0usize; MAX_NODES];
         for a in 0..nn {
@@ -433,24 +406,45 @@ impl Assembler {
                 }
                 let base = self.nbr_off[lo + p];
                 let da = self.dofs.node_dofs(na);
-                let mass = me.map(|m| m[la * nn + lb]);
                 for (j, cj) in db.iter().enumerate() {
                     let Some(c) = cj else { continue };
                     let start = self.col_ptr[*c] + base;
-                    let row = &ke[(3 * lb + j) * nd + 3 * la..(3 * lb + j) * nd + 3 * la + 3];
                     let mut rank = 0;
                     for (i, ri) in da.iter().enumerate() {
                         if ri.is_some() {
-                            kadd(start + rank, row[i]);
-                            if let (true, Some(v)) = (i == j, mass) {
-                                madd(start + rank, v);
-                            }
+                            f(lb, j, la, i, start + rank);
                             rank += 1;
                         }
                     }
                 }
             }
         }
+    }
+
+    /// Adds an element's stiffness `ke` (row-major `3 nn` square) and, when given, its scalar
+    /// consistent mass `m` (`nn` square; `M_e[3a+i][3b+j] = m[a][b] delta_ij`) into `k` and `m`'s
+    /// values on the pattern, for an element none of whose nodes has a dependent DOF (fixed DOFs
+    /// are skipped). Both matrices must be exactly symmetric, as the kernels make them: column
+    /// `(b, j)` of the global matrix is then fed from row `3 b + j` of `ke`, read contiguously,
+    /// and the mass, zero off the `i = j` diagonal of each node block, is added only there.
+    #[inline]
+    pub(crate) fn scatter_element(
+        &self,
+        nodes: &[usize],
+        ke: &[f64],
+        me: Option<&[f64]>,
+        kadd: impl Fn(usize, f64),
+        madd: impl Fn(usize, f64),
+    ) {
+        let nn = nodes.len();
+        let nd = 3 * nn;
+        debug_assert_eq!(ke.len(), nd * nd);
+        self.for_each_entry(nodes, |lb, j, la, i, p| {
+            kadd(p, ke[(3 * lb + j) * nd + 3 * la + i]);
+            if let (true, Some(m)) = (i == j, me) {
+                madd(p, m[la * nn + lb]);
+            }
+        });
     }
 
     /// A matrix on the stiffness pattern with the given values.
