@@ -1,5 +1,7 @@
 //! The sparse kernels under the eigensolver, with rates: the numeric `LDL^T` of `K - sigma M`
-//! (GFLOP/s from the symbolic flop count, `SymbolicFactor::flops`), a solve of 4 right-hand
+//! (GFLOP/s from the symbolic flop count, `SymbolicFactor::flops`) by the subtree-parallel
+//! multifrontal factorization (`numeric`), by faer's left-looking one (`left-looking`) and for
+//! the inertia alone (`inertia`, the Sturm count), a solve of 4 right-hand
 //! sides (the eigensolver's block), and faer's dense GEMM on one and on all threads (the limit
 //! the factorization's rate is compared with, measured in the same run).
 //!
@@ -63,6 +65,15 @@ fn bench(c: &mut Criterion) {
         factor.throughput(Throughput::Elements(symbolic.flops() as u64));
         factor.bench_function(BenchmarkId::new("numeric", &id), |b| {
             b.iter(|| pencil.factor_shifted(sigma).unwrap())
+        });
+        // faer's left-looking factorization, which the subtree-parallel one replaced, and the
+        // inertia alone (a Sturm count: no factor kept)
+        let values = pencil.shifted_values(sigma);
+        factor.bench_function(BenchmarkId::new("left-looking", &id), |b| {
+            b.iter(|| symbolic.ldlt_left_looking(&sys.k, &values, "A").unwrap())
+        });
+        factor.bench_function(BenchmarkId::new("inertia", &id), |b| {
+            b.iter(|| pencil.count_below(sigma).unwrap())
         });
         systems.push((id, pencil.factor_shifted(sigma).unwrap(), sys.k.rows()));
     }

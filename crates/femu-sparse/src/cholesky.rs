@@ -1,5 +1,8 @@
-//! Sparse Cholesky `LL^T` and `LDL^T` factorizations (faer), with the symbolic analysis done once
-//! per sparsity pattern and reused for new values and new shifts, and the inertia of `LDL^T`.
+//! Sparse Cholesky `LL^T` and `LDL^T` factorizations, with the symbolic analysis (faer's) done
+//! once per sparsity pattern and reused for new values and new shifts, and the inertia of
+//! `LDL^T`. The numeric `LDL^T` of a supernodal analysis is femu's subtree-parallel multifrontal
+//! one (docs/SCALING.md, "A subtree-parallel factorization"), written in faer's layout so that
+//! faer's supernodal solves use it; `LL^T` and small (simplicial) analyses are faer's.
 //!
 //! By Sylvester's law of inertia, `K - sigma M = L D L^T` has as many negative pivots in `D` as
 //! the pencil `(K, M)` has eigenvalues below `sigma` (M positive definite): the Sturm count that
@@ -10,13 +13,15 @@ use crate::{SparseError, SparseMatrix};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::reborrow::Reborrow;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
     SymmetricOrdering, factorize_symbolic_cholesky, supernodal::SupernodalLltRef,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
-use std::sync::Arc;
+use rayon::prelude::*;
+use std::sync::{Arc, Mutex};
 
 /// A faer view of a [`SparseMatrix`] (CSC, `usize` indices): no copy.
 ///
@@ -59,8 +64,9 @@ pub const SINGULAR_PIVOT_RATIO: f64 = 1e-12;
 /// faer's two threads inside, 189 ms sequential and 152 ms as two sequential solves of two.
 const KERNEL_PAR: Par = Par::Seq;
 
-/// Above this many flops per column (`flops / n`, a measure of the typical dense front), a numeric
-/// factorization gives faer the global parallelism; below it, one thread. faer walks the
+/// Above this many flops per column (`flops / n`, a measure of the typical dense front), one of
+/// faer's numeric factorizations (`LL^T`, and `LDL^T` where the subtree-parallel one does not
+/// apply) gets the global parallelism; below it, one thread. faer walks the
 /// supernodes one after another and parallelises only inside each supernode's dense kernels,
 /// which pays only when the fronts are large. Measured on two cores (docs/SCALING.md): the
 /// 199,200-DOF plate (3.1e5 flops per column) factors in 2.2 s on one thread and 2.8 s on two;
@@ -97,6 +103,25 @@ pub struct SymbolicFactor {
     n: usize,
     nnz: usize,
     ordering: Ordering,
+    /// the supernodal elimination tree for the subtree-parallel `LDL^T` (`None`: faer's own)
+    tree: Option<Arc<crate::multifrontal::Tree>>,
+    /// stored entries of the lower triangle (the permuted copy's size)
+    lower_nnz: usize,
+    /// the values of the last dropped factor on this analysis, reused by the next one: fresh
+    /// memory costs a page fault per 4 KiB, 3.3 s for the 2.3 GB factor of the 209,088-DOF
+    /// block (docs/SCALING.md, "A subtree-parallel factorization")
+    spare: Arc<Spare>,
+}
+
+/// The values kept for reuse (`SymbolicFactor::spare`); its `Debug` shows their number only.
+#[derive(Default)]
+struct Spare(Mutex<Vec<f64>>);
+
+impl std::fmt::Debug for Spare {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let len = self.0.lock().map_or(0, |v| v.len());
+        write!(f, "Spare({len} values)")
+    }
 }
 
 /// The inertia of a symmetric matrix: numbers of negative, zero and positive eigenvalues.
@@ -135,9 +160,16 @@ impl SymbolicFactor {
         .map_err(|e| SparseError::Factorization {
             reason: format!("symbolic analysis: {e:?}"),
         })?;
+        let tree = match inner.raw() {
+            SymbolicCholeskyRaw::Supernodal(s) => crate::multifrontal::Tree::new(s),
+            SymbolicCholeskyRaw::Simplicial(_) => None,
+        };
         let mut symbolic = Self {
             inner: Arc::new(inner),
             factor_par: Par::Seq,
+            tree: tree.map(Arc::new),
+            lower_nnz: lower_nnz(a),
+            spare: Arc::default(),
             n: a.rows(),
             nnz: a.nnz(),
             ordering,
@@ -273,7 +305,10 @@ impl SymbolicFactor {
     }
 
     /// Numeric `LDL^T` (no pivoting) of a symmetric matrix with this pattern, for example
-    /// `K - sigma M`, with its [`Inertia`].
+    /// `K - sigma M`, with its [`Inertia`]: on a supernodal analysis by the subtree-parallel
+    /// multifrontal factorization on the rayon threads (docs/SCALING.md, "A subtree-parallel
+    /// factorization"), else by faer's. The values of the last dropped factor on this analysis
+    /// are reused: an analysis keeps one factor's memory after its factors are dropped.
     ///
     /// # Errors
     /// [`SparseError::Singular`] on an exactly zero pivot (shift on an eigenvalue), with its
@@ -294,6 +329,64 @@ impl SymbolicFactor {
         values: &[f64],
         name: &'static str,
     ) -> Result<Ldlt, SparseError> {
+        let view = self.values_view(pattern, values)?;
+        if let (SymbolicCholeskyRaw::Supernodal(s), Some(tree)) = (self.inner.raw(), &self.tree) {
+            let (values, inertia) = self.multifrontal(s, tree, view, true, name)?;
+            return Ok(Ldlt {
+                symbolic: self.clone(),
+                values,
+                inertia,
+            });
+        }
+        self.faer_ldlt(view, name)
+    }
+
+    /// The inertia of the matrix with `pattern`'s structure and the given values, as
+    /// [`SymbolicFactor::ldlt_values`] would give it, without keeping the factor: on the
+    /// subtree-parallel factorization no factor is ever allocated (one front at a time per
+    /// thread), and the values a dropped factor left for reuse are freed: a Sturm count holds
+    /// less memory than a factorization to solve with.
+    ///
+    /// # Errors
+    /// As [`SymbolicFactor::ldlt_values`].
+    pub fn inertia_values(
+        &self,
+        pattern: &SparseMatrix,
+        values: &[f64],
+        name: &'static str,
+    ) -> Result<Inertia, SparseError> {
+        let view = self.values_view(pattern, values)?;
+        if let (SymbolicCholeskyRaw::Supernodal(s), Some(tree)) = (self.inner.raw(), &self.tree) {
+            // a count ends a solve (the Sturm check): the kept values are freed first, so that
+            // its fronts do not add to them
+            if let Ok(mut spare) = self.spare.0.lock() {
+                *spare = Vec::new();
+            }
+            return Ok(self.multifrontal(s, tree, view, false, name)?.1);
+        }
+        Ok(self.faer_ldlt(view, name)?.inertia)
+    }
+
+    /// faer's own left-looking supernodal `LDL^T` (one supernode after another, threads inside
+    /// the dense kernels), which [`SymbolicFactor::ldlt_values`] replaced by the
+    /// subtree-parallel one: kept to compare the two (`benches/factor.rs`, the tests).
+    ///
+    /// # Errors
+    /// As [`SymbolicFactor::ldlt_values`].
+    pub fn ldlt_left_looking(
+        &self,
+        pattern: &SparseMatrix,
+        values: &[f64],
+        name: &'static str,
+    ) -> Result<Ldlt, SparseError> {
+        self.faer_ldlt(self.values_view(pattern, values)?, name)
+    }
+
+    fn values_view<'v>(
+        &self,
+        pattern: &'v SparseMatrix,
+        values: &'v [f64],
+    ) -> Result<SparseColMatRef<'v, usize, f64>, SparseError> {
         self.check(pattern)?;
         if values.len() != pattern.nnz() {
             return Err(SparseError::DimensionMismatch {
@@ -302,7 +395,15 @@ impl SymbolicFactor {
                 got: values.len(),
             });
         }
-        let view = SparseColMatRef::new(faer_view(pattern)?.symbolic(), values);
+        Ok(SparseColMatRef::new(faer_view(pattern)?.symbolic(), values))
+    }
+
+    /// faer's own left-looking supernodal (or simplicial) `LDL^T` of `view`.
+    fn faer_ldlt(
+        &self,
+        view: SparseColMatRef<'_, usize, f64>,
+        name: &'static str,
+    ) -> Result<Ldlt, SparseError> {
         let par = self.factor_par;
         let mut values = vec![0.0; self.inner.len_val()];
         let mut mem = MemBuffer::new(
@@ -334,6 +435,86 @@ impl SymbolicFactor {
             inertia,
         })
     }
+
+    /// The subtree-parallel multifrontal `LDL^T` of `view` on the rayon threads
+    /// (docs/SCALING.md, "A subtree-parallel factorization"): the factor in faer's supernodal
+    /// layout when `store` (else empty) and the inertia.
+    fn multifrontal(
+        &self,
+        s: &faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<usize>,
+        tree: &crate::multifrontal::Tree,
+        view: SparseColMatRef<'_, usize, f64>,
+        store: bool,
+        name: &'static str,
+    ) -> Result<(Vec<f64>, Inertia), SparseError> {
+        let n = self.n;
+        let (mut val, mut col_ptr, mut row_idx) = (
+            vec![0.0; self.lower_nnz],
+            vec![0usize; n + 1],
+            vec![0usize; self.lower_nnz],
+        );
+        let permuted;
+        let lower = match self.inner.perm() {
+            Some(perm) => {
+                let mut mem = MemBuffer::new(faer::sparse::utils::permute_self_adjoint_scratch::<
+                    usize,
+                >(n));
+                permuted = faer::sparse::utils::permute_self_adjoint_to_unsorted(
+                    &mut val,
+                    &mut col_ptr,
+                    &mut row_idx,
+                    view,
+                    perm,
+                    Side::Lower,
+                    Side::Lower,
+                    MemStack::new(&mut mem),
+                );
+                permuted.rb()
+            }
+            // the full symmetric matrix: the factorization reads its lower triangle
+            None => view,
+        };
+        let mut values = Vec::new();
+        if store {
+            let len = self.inner.len_val();
+            values = self
+                .spare
+                .0
+                .lock()
+                .ok()
+                .map(|mut spare| std::mem::take(&mut *spare))
+                .filter(|v| v.len() == len)
+                .unwrap_or_else(|| vec![0.0; len]);
+            // zeroed in order, in parallel pieces: the fronts' scattered first touches of fresh
+            // pages from two threads contend in the kernel
+            values
+                .par_chunks_mut(1 << 16)
+                .for_each(|piece| piece.fill(0.0));
+        }
+        let threads = rayon::current_num_threads();
+        let slot = store.then_some(&mut values[..]);
+        let [negative, zero, positive] = crate::multifrontal::factor(tree, s, lower, slot, threads)
+            .map_err(|k| SparseError::Singular {
+                matrix: name,
+                index: self.original_index(k),
+            })?;
+        Ok((
+            values,
+            Inertia {
+                negative,
+                zero,
+                positive,
+            },
+        ))
+    }
+}
+
+/// Stored entries on and below the diagonal of `a`.
+fn lower_nnz(a: &SparseMatrix) -> usize {
+    a.outer_iterator()
+        .enumerate()
+        .map(|(c, col)| col.indices().iter().filter(|&&r| r >= c).count())
+        .sum()
 }
 
 /// The diagonal of the factor `L` of an `LL^T` (or `D` of an `LDL^T`: the values are stored in
@@ -433,6 +614,17 @@ pub struct Ldlt {
     symbolic: SymbolicFactor,
     values: Vec<f64>,
     inertia: Inertia,
+}
+
+impl Drop for Ldlt {
+    /// Hands the values to the analysis for the next factorization (see `SymbolicFactor::spare`).
+    fn drop(&mut self) {
+        if let Ok(mut spare) = self.symbolic.spare.0.lock()
+            && spare.len() < self.values.len()
+        {
+            *spare = std::mem::take(&mut self.values);
+        }
+    }
 }
 
 impl Ldlt {

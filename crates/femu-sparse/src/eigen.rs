@@ -410,11 +410,17 @@ impl<'a> Pencil<'a> {
     /// # Errors
     /// [`SparseError::Singular`] when `sigma` is (numerically exactly) an eigenvalue.
     pub fn factor_shifted(&self, sigma: f64) -> Result<Ldlt, SparseError> {
+        self.symbolic
+            .ldlt_values(self.k, &self.shifted_values(sigma), "K - sigma M")
+    }
+
+    /// The values of `K - sigma M` on `K`'s pattern (what [`Pencil::factor_shifted`] factors).
+    pub fn shifted_values(&self, sigma: f64) -> Vec<f64> {
         let mut values = self.k.data().to_vec();
         for (pm, pk) in self.m_in_k.iter().enumerate() {
             values[*pk] -= sigma * self.m.data()[pm];
         }
-        self.symbolic.ldlt_values(self.k, &values, "K - sigma M")
+        values
     }
 
     /// `LDL^T` of `K - sigma M` with row and column `pinned` replaced by those of the identity
@@ -434,10 +440,7 @@ impl<'a> Pencil<'a> {
                 got: pinned,
             });
         }
-        let mut values = self.k.data().to_vec();
-        for (pm, pk) in self.m_in_k.iter().enumerate() {
-            values[*pk] -= sigma * self.m.data()[pm];
-        }
+        let mut values = self.shifted_values(sigma);
         let scale = self
             .k
             .get(pinned, pinned)
@@ -461,7 +464,12 @@ impl<'a> Pencil<'a> {
     /// # Errors
     /// As [`Pencil::factor_shifted`].
     pub fn count_below(&self, sigma: f64) -> Result<usize, SparseError> {
-        Ok(self.factor_shifted(sigma)?.inertia().negative)
+        // the inertia alone: no factor is kept (SymbolicFactor::inertia_values)
+        let values = self.shifted_values(sigma);
+        Ok(self
+            .symbolic
+            .inertia_values(self.k, &values, "K - sigma M")?
+            .negative)
     }
 
     /// `mean_i |K_ii| / M_ii` (terms with `M_ii <= 0` count as zero): the pencil's typical

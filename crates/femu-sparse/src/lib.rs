@@ -26,6 +26,7 @@ pub mod eigen;
 mod error;
 pub mod kkt;
 pub mod mtx;
+mod multifrontal;
 pub mod ordering;
 pub mod slepc;
 

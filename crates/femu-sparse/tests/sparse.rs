@@ -415,3 +415,101 @@ fn nested_dissection_is_the_same_on_concurrent_threads() {
         }
     });
 }
+
+/// `K - sigma I` of the 3D Laplacian on the shared analysis, by the subtree-parallel
+/// multifrontal `LDL^T` (the default) and by faer's left-looking one: the same solutions to
+/// round-off, the inertia both report equal to the analytic count of eigenvalues below `sigma`,
+/// on one and on two threads, and again after the first factor was dropped (its values are
+/// reused: a leftover of the old factor would change the solution).
+#[test]
+fn subtree_parallel_ldlt_agrees_with_left_looking_and_the_analytic_inertia() {
+    for (nn, sigma) in [(14, 0.0), (14, 1.3), (30, -0.5), (30, 0.4)] {
+        let a = laplacian_3d(nn);
+        let n = a.rows();
+        let sym = SymbolicFactor::new(&a, Ordering::NestedDissection).unwrap();
+        assert!(
+            sym.is_supernodal(),
+            "{nn}: the multifrontal path is the supernodal one"
+        );
+        let mut values = a.data().to_vec();
+        for (v, (r, c)) in values.iter_mut().zip(a.iter().map(|(_, rc)| rc)) {
+            if r == c {
+                *v -= sigma;
+            }
+        }
+        let below = laplacian_spectrum(nn, n)
+            .iter()
+            .filter(|l| **l < sigma)
+            .count();
+        let b: Vec<f64> = (0..n).map(|i| ((i * 37) % 101) as f64 - 50.0).collect();
+        let solve = |f: &dyn Factorization| {
+            let mut x = b.clone();
+            f.solve(&mut x);
+            x
+        };
+        let reference = sym.ldlt_left_looking(&a, &values, "A").unwrap();
+        assert_eq!(reference.inertia().negative, below, "{nn}, {sigma}: faer");
+        let x_ref = solve(&reference);
+        let scale = x_ref.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (first, second, count) = pool.install(|| {
+                let f = sym.ldlt_values(&a, &values, "A").unwrap();
+                let (inertia, x) = (f.inertia(), solve(&f));
+                drop(f);
+                let g = sym.ldlt_values(&a, &values, "A").unwrap();
+                let count = sym.inertia_values(&a, &values, "A").unwrap();
+                ((inertia, x), (g.inertia(), solve(&g)), count)
+            });
+            assert_eq!(
+                first.0,
+                reference.inertia(),
+                "{nn}, {sigma}, {threads} threads"
+            );
+            assert_eq!(second.0, first.0);
+            assert_eq!(count, first.0, "{nn}, {sigma}: inertia without the factor");
+            let diff = first
+                .1
+                .iter()
+                .zip(&x_ref)
+                .fold(0.0_f64, |m, (p, q)| m.max((p - q).abs()));
+            // K - sigma I is well conditioned away from its eigenvalues: both factors solve
+            // to a few ulps of the solution's size
+            assert!(diff < 1e-12 * scale, "{nn}, {sigma}, {threads}: {diff:e}");
+            assert!(
+                first.1 == second.1,
+                "{nn}, {sigma}, {threads}: reused values"
+            );
+        }
+    }
+}
+
+/// An exactly zero pivot (a zeroed row and column) is reported with its original index by both
+/// factorizations and by the inertia-only count.
+#[test]
+fn zero_pivot_is_reported_at_its_dof_by_both_factorizations() {
+    let a = laplacian_3d(14);
+    let sym = SymbolicFactor::new(&a, Ordering::NestedDissection).unwrap();
+    for dof in [0, 1234, a.rows() - 1] {
+        let values: Vec<f64> = a
+            .iter()
+            .map(|(v, (r, c))| if r == dof || c == dof { 0.0 } else { *v })
+            .collect();
+        let index = |e: SparseError| match e {
+            SparseError::Singular { index, .. } => index,
+            other => panic!("{other}"),
+        };
+        assert_eq!(index(sym.ldlt_values(&a, &values, "A").unwrap_err()), dof);
+        assert_eq!(
+            index(sym.ldlt_left_looking(&a, &values, "A").unwrap_err()),
+            dof
+        );
+        assert_eq!(
+            index(sym.inertia_values(&a, &values, "A").unwrap_err()),
+            dof
+        );
+    }
+}

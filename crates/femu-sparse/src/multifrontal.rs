@@ -1,0 +1,444 @@
+//! Subtree-parallel multifrontal `LDL^T` on faer's supernodal symbolic analysis
+//! (docs/SCALING.md, "A subtree-parallel factorization").
+//!
+//! faer's own supernodal `LDL^T` is left-looking: supernode `s` gathers the updates of all its
+//! descendants when it is factored, one supernode after another, with threads only inside the
+//! dense kernels. Here each supernode's front is factored as soon as its children's are, and its
+//! update matrix `U_s = F_bb - L_b D L_b^T` is handed to its parent (multifrontal). Supernodes in
+//! disjoint subtrees of the elimination tree share nothing, so the subtrees run on different
+//! threads; the fronts near the root, which the subtrees all wait for, use the threads inside
+//! their dense kernels instead.
+//!
+//! The factor is written in faer's supernodal layout (the first `c` columns of each front), so
+//! faer's supernodal solves use it unchanged. In exact arithmetic it is faer's factor: only the
+//! order of the additions differs.
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::ldlt::factor::{
+    LdltError, LdltRegularization, cholesky_in_place, cholesky_in_place_scratch,
+};
+use faer::linalg::matmul::triangular::{BlockStructure, matmul as triangular_matmul};
+use faer::reborrow::{Reborrow, ReborrowMut};
+use faer::sparse::SparseColMatRef;
+use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
+use faer::{Accum, MatMut, Par};
+
+/// A front whose own work is above this many flops gives faer's dense kernels every thread
+/// (below it, the threading overhead outweighs the gain).
+const PARALLEL_FRONT_FLOPS: f64 = 2e8;
+
+/// A subtree with less than `1 / SUBTREE_SHARE` of the total work per thread runs as one
+/// sequential task: enough tasks to balance two threads, few enough that a task's scratch
+/// (one index per row of the matrix) is negligible.
+const SUBTREE_SHARE: f64 = 8.0;
+
+/// The supernodal elimination tree of a symbolic analysis with a postorder of it: the subtree
+/// of `s` is `post[first[s]..=pos[s]]`, each child's subtree before its parent. (faer numbers
+/// the supernodes in a topological order, not always in postorder.)
+#[derive(Debug)]
+pub(crate) struct Tree {
+    child_ptr: Vec<usize>,
+    child: Vec<usize>,
+    roots: Vec<usize>,
+    post: Vec<usize>,
+    pos: Vec<usize>,
+    first: Vec<usize>,
+    own_flops: Vec<f64>,
+    subtree_flops: Vec<f64>,
+    total_flops: f64,
+}
+
+impl Tree {
+    /// The tree of `s`, or `None` when a supernode's parent does not follow it (not an
+    /// elimination tree: the caller keeps faer's factorization).
+    pub(crate) fn new(s: &SymbolicSupernodalCholesky<usize>) -> Option<Self> {
+        let ns = s.n_supernodes();
+        let (begin, end) = (s.supernode_begin(), s.supernode_end());
+        let (row_ptr, rows, below) = (s.col_ptr_for_row_idx(), s.row_idx(), s.nnz_per_super());
+        let mut supernode_of = vec![0; s.nrows()];
+        for k in 0..ns {
+            supernode_of[begin[k]..end[k]].fill(k);
+        }
+        let mut parent = vec![usize::MAX; ns];
+        let mut own_flops = vec![0.0; ns];
+        let mut count = vec![0usize; ns + 1];
+        let mut roots = Vec::new();
+        for k in 0..ns {
+            let (c, b) = (end[k] - begin[k], below[k]);
+            own_flops[k] = front_flops(c, b);
+            if b == 0 {
+                roots.push(k);
+                continue;
+            }
+            let p = supernode_of[rows[row_ptr[k]]];
+            if p <= k {
+                return None;
+            }
+            parent[k] = p;
+            count[p + 1] += 1;
+        }
+        let mut subtree_flops = own_flops.clone();
+        for k in 0..ns {
+            // children come before their parent: their sums are complete here
+            if parent[k] != usize::MAX {
+                subtree_flops[parent[k]] += subtree_flops[k];
+            }
+            count[k + 1] += count[k];
+        }
+        let child_ptr = count.clone();
+        let mut child = vec![0; child_ptr[ns]];
+        for k in 0..ns {
+            if parent[k] != usize::MAX {
+                let p = parent[k];
+                child[count[p]] = k;
+                count[p] += 1;
+            }
+        }
+        // postorder by depth-first search, children in increasing order
+        let (mut post, mut pos, mut first) = (Vec::with_capacity(ns), vec![0; ns], vec![0; ns]);
+        let mut walk: Vec<(usize, usize)> = Vec::new();
+        for &r in &roots {
+            walk.push((r, child_ptr[r]));
+            first[r] = post.len();
+            while let Some((k, next)) = walk.last_mut() {
+                let k = *k;
+                if *next < child_ptr[k + 1] {
+                    let c = child[*next];
+                    *next += 1;
+                    first[c] = post.len();
+                    walk.push((c, child_ptr[c]));
+                } else {
+                    pos[k] = post.len();
+                    post.push(k);
+                    walk.pop();
+                }
+            }
+        }
+        let total_flops = own_flops.iter().sum();
+        Some(Self {
+            child_ptr,
+            child,
+            roots,
+            post,
+            pos,
+            first,
+            own_flops,
+            subtree_flops,
+            total_flops,
+        })
+    }
+
+    fn children(&self, k: usize) -> &[usize] {
+        &self.child[self.child_ptr[k]..self.child_ptr[k + 1]]
+    }
+}
+
+/// Flops of one front with `c` pivots and `b` rows below them: the classical count
+/// `sum_j (b_j^2 + 2 b_j)` of `SymbolicFactor::flops` over its columns.
+fn front_flops(c: usize, b: usize) -> f64 {
+    (0..c)
+        .map(|j| {
+            let r = (c - 1 - j + b) as f64;
+            r * r + 2.0 * r
+        })
+        .sum()
+}
+
+struct Fronts<'a> {
+    tree: &'a Tree,
+    symbolic: &'a SymbolicSupernodalCholesky<usize>,
+    /// the permuted matrix, lower triangle (row indices unsorted)
+    a: SparseColMatRef<'a, usize, f64>,
+    /// whether the factor is kept (else each front's columns are scratch: the inertia only)
+    store: bool,
+    sequential_below: f64,
+    threads: usize,
+}
+
+/// Pivots of `D` by sign: negative, zero (or NaN), positive.
+pub(crate) type Signs = [usize; 3];
+
+fn add(a: Signs, b: Signs) -> Signs {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+/// The numeric `LDL^T` of the permuted lower triangle `a` on up to `threads` threads, with the
+/// signs of its pivots. With `values` (faer's supernodal layout, zeroed) the factor is stored
+/// there; without, only the signs are kept and no factor is ever held: the memory of one front
+/// at a time per thread (a Sturm count).
+///
+/// # Errors
+/// The permuted index of an exactly zero pivot.
+pub(crate) fn factor(
+    tree: &Tree,
+    symbolic: &SymbolicSupernodalCholesky<usize>,
+    a: SparseColMatRef<'_, usize, f64>,
+    values: Option<&mut [f64]>,
+    threads: usize,
+) -> Result<Signs, usize> {
+    let ns = symbolic.n_supernodes();
+    let store = values.is_some();
+    // each supernode's slot of the factor (empty when not stored), in the tree's postorder:
+    // every subtree's slots are then one contiguous run, handed to the task that factors it
+    let mut by_index: Vec<Option<&mut [f64]>> = Vec::with_capacity(ns);
+    match values {
+        Some(mut rest) => {
+            assert_eq!(rest.len(), symbolic.len_val(), "values in faer's layout");
+            let ptr = symbolic.col_ptr_for_val();
+            for k in 0..ns {
+                let (slot, tail) = rest.split_at_mut(ptr[k + 1] - ptr[k]);
+                by_index.push(Some(slot));
+                rest = tail;
+            }
+        }
+        None => by_index.resize_with(ns, || Some(&mut [][..])),
+    }
+    let mut slots: Vec<&mut [f64]> = tree
+        .post
+        .iter()
+        .map(|&k| {
+            by_index[k]
+                .take()
+                .expect("each supernode once in the postorder")
+        })
+        .collect();
+    let fronts = Fronts {
+        tree,
+        symbolic,
+        a,
+        store,
+        sequential_below: if threads > 1 {
+            tree.total_flops / (SUBTREE_SHARE * threads as f64)
+        } else {
+            f64::INFINITY
+        },
+        threads,
+    };
+    fronts
+        .forest(&tree.roots, &mut slots, 0)
+        .map(|(_, signs)| signs)
+}
+
+impl Fronts<'_> {
+    /// The subtrees of the siblings `roots` (consecutive in the postorder), in parallel halves;
+    /// their update matrices in order and their pivots' signs. `slots` are the subtrees' slots,
+    /// from postorder position `base` on.
+    fn forest(
+        &self,
+        roots: &[usize],
+        slots: &mut [&mut [f64]],
+        base: usize,
+    ) -> Result<(Vec<Vec<f64>>, Signs), usize> {
+        match roots {
+            [] => Ok((Vec::new(), [0; 3])),
+            [k] => {
+                let (u, signs) = self.subtree(*k, slots, base)?;
+                Ok((vec![u], signs))
+            }
+            _ => {
+                let mid = roots.len() / 2;
+                let cut = self.tree.first[roots[mid]];
+                let (left, right) = slots.split_at_mut(cut - base);
+                let (l, r) = rayon::join(
+                    || self.forest(&roots[..mid], left, base),
+                    || self.forest(&roots[mid..], right, cut),
+                );
+                let ((mut ul, sl), (ur, sr)) = (l?, r?);
+                ul.extend(ur);
+                Ok((ul, add(sl, sr)))
+            }
+        }
+    }
+
+    /// Factors the subtree of `k` (its slots start at postorder position `base`); returns `U_k`
+    /// and the subtree's pivots' signs.
+    fn subtree(
+        &self,
+        k: usize,
+        slots: &mut [&mut [f64]],
+        base: usize,
+    ) -> Result<(Vec<f64>, Signs), usize> {
+        let tree = self.tree;
+        let mut work = Workspace::new(self.symbolic.nrows());
+        if tree.subtree_flops[k] <= self.sequential_below {
+            let mut stack: Vec<Vec<f64>> = Vec::new();
+            let mut signs = [0; 3];
+            for (slot, &s) in slots.iter_mut().zip(&tree.post[base..=tree.pos[k]]) {
+                let kids = tree.children(s).len();
+                let updates = stack.split_off(stack.len() - kids);
+                let (u, sg) = self.front(s, slot, updates, Par::Seq, &mut work)?;
+                stack.push(u);
+                signs = add(signs, sg);
+            }
+            return Ok((stack.pop().unwrap_or_default(), signs));
+        }
+        let (below, own) = slots.split_at_mut(tree.pos[k] - base);
+        let (updates, below_signs) = self.forest(tree.children(k), below, base)?;
+        let par = if self.threads > 1 && tree.own_flops[k] > PARALLEL_FRONT_FLOPS {
+            Par::rayon(self.threads)
+        } else {
+            Par::Seq
+        };
+        let (u, signs) = self.front(k, own[0], updates, par, &mut work)?;
+        Ok((u, add(below_signs, signs)))
+    }
+
+    /// Assembles and factors the front of supernode `k` into `own` (its `c` columns of `L`,
+    /// zeroed; empty when the factor is not stored: then into scratch), adding the children's
+    /// update matrices `updates`; returns its own update matrix `U_k` (`b x b`, column-major,
+    /// lower triangle) and the signs of its pivots.
+    fn front(
+        &self,
+        k: usize,
+        own: &mut [f64],
+        updates: Vec<Vec<f64>>,
+        par: Par,
+        work: &mut Workspace,
+    ) -> Result<(Vec<f64>, Signs), usize> {
+        let s = self.symbolic;
+        let (start, end) = (s.supernode_begin()[k], s.supernode_end()[k]);
+        let pattern = |k: usize| {
+            let p = s.col_ptr_for_row_idx()[k];
+            &s.row_idx()[p..p + s.nnz_per_super()[k]]
+        };
+        let rows = pattern(k);
+        let (c, b) = (end - start, rows.len());
+        for (i, &r) in rows.iter().enumerate() {
+            work.map[r] = c + i;
+        }
+        let mut u = work.take(b * b);
+        let mut panel = Vec::new();
+        let own = if self.store {
+            own
+        } else {
+            panel = work.take((c + b) * c);
+            &mut panel[..]
+        };
+        let mut l = MatMut::from_column_major_slice_mut(own, c + b, c);
+        for j in start..end {
+            let col = l.rb_mut().col_mut(j - start).try_as_col_major_mut();
+            let col = col
+                .expect("a column of a column-major slice")
+                .as_slice_mut();
+            for (i, &v) in self.a.row_idx_of_col(j).zip(self.a.val_of_col(j)) {
+                if i >= j {
+                    col[if i < end { i - start } else { work.map[i] }] += v;
+                }
+            }
+        }
+        // extend-add: each child's pattern lies in this front, in the same order
+        for (&child, update) in self.tree.children(k).iter().zip(updates) {
+            let rows = pattern(child);
+            let bc = rows.len();
+            work.locs.clear();
+            work.locs.extend(
+                rows.iter()
+                    .map(|&r| if r < end { r - start } else { work.map[r] }),
+            );
+            for (jj, &lc) in work.locs.iter().enumerate() {
+                let from = &update[jj * bc + jj..(jj + 1) * bc];
+                let to = if lc < c {
+                    let col = l.rb_mut().col_mut(lc).try_as_col_major_mut();
+                    col.expect("a column of a column-major slice")
+                        .as_slice_mut()
+                } else {
+                    &mut u[(lc - c) * b..(lc - c + 1) * b]
+                };
+                let shift = if lc < c { 0 } else { c };
+                for (&li, &v) in work.locs[jj..].iter().zip(from) {
+                    to[li - shift] += v;
+                }
+            }
+            work.pool.push(update);
+        }
+        let (mut top, mut bottom) = l.split_at_row_mut(c);
+        let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(c, par, Default::default()));
+        cholesky_in_place(
+            top.rb_mut(),
+            LdltRegularization::default(),
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .map_err(|LdltError::ZeroPivot { index }| start + index)?;
+        let mut signs = [0; 3];
+        for j in 0..c {
+            let d = top[(j, j)];
+            signs[if d < 0.0 {
+                0
+            } else if d > 0.0 {
+                2
+            } else {
+                1
+            }] += 1;
+            for i in 0..j {
+                top[(i, j)] = 0.0;
+            }
+        }
+        if b > 0 {
+            // W = L_b D = A_b L^-T, then L_b = W D^-1; U -= L_b W^T
+            faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place(
+                top.rb(),
+                bottom.rb_mut().transpose_mut(),
+                par,
+            );
+            work.w.clear();
+            work.w.resize(b * c, 0.0);
+            let mut w = MatMut::from_column_major_slice_mut(&mut work.w, b, c);
+            w.copy_from(bottom.rb());
+            for j in 0..c {
+                let d = top[(j, j)].recip();
+                bottom.rb_mut().col_mut(j).iter_mut().for_each(|x| *x *= d);
+            }
+            triangular_matmul(
+                MatMut::from_column_major_slice_mut(&mut u, b, b),
+                BlockStructure::TriangularLower,
+                Accum::Add,
+                bottom.rb(),
+                BlockStructure::Rectangular,
+                w.rb().transpose(),
+                BlockStructure::Rectangular,
+                -1.0,
+                par,
+            );
+        }
+        if !self.store {
+            work.pool.push(panel);
+        }
+        Ok((u, signs))
+    }
+}
+
+/// One task's scratch, reused from front to front: freeing and allocating the large update
+/// matrices of every front costs the kernel a TLB shootdown on every core each time (measured:
+/// 30 % of a two-thread factorization in the kernel's inter-processor calls).
+struct Workspace {
+    /// global row -> its row in the current front
+    map: Vec<usize>,
+    /// the children's rows in the current front
+    locs: Vec<usize>,
+    /// `L_b D` of the current front
+    w: Vec<f64>,
+    /// update matrices already added to their parent, for reuse
+    pool: Vec<Vec<f64>>,
+}
+
+impl Workspace {
+    fn new(n: usize) -> Self {
+        Self {
+            map: vec![0; n],
+            locs: Vec::new(),
+            w: Vec::new(),
+            pool: Vec::new(),
+        }
+    }
+
+    /// A zeroed buffer of `len` values, the pool's largest if there is one.
+    fn take(&mut self, len: usize) -> Vec<f64> {
+        let best = (0..self.pool.len()).max_by_key(|&i| self.pool[i].capacity());
+        let mut v = best.map(|i| self.pool.swap_remove(i)).unwrap_or_default();
+        v.clear();
+        v.resize(len, 0.0);
+        v
+    }
+}
