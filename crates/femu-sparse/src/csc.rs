@@ -2,6 +2,7 @@
 
 use crate::{SparseError, SparseMatrix};
 use faer::Mat;
+use rayon::prelude::*;
 
 /// `y = A x` for a CSC or CSR matrix.
 ///
@@ -48,18 +49,46 @@ pub fn bilinear(a: &SparseMatrix, x: &[f64], y: &[f64]) -> Result<f64, SparseErr
 /// Returns `(0.0, 0, 0)` for a symmetric (or empty) matrix.
 pub fn symmetry_defect(a: &SparseMatrix) -> (f64, usize, usize) {
     let scale = a.data().iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    if scale == 0.0 {
+    if scale == 0.0 || a.rows() != a.cols() {
         return (0.0, 0, 0);
     }
-    let mut worst = (0.0, 0, 0);
-    for (v, (r, c)) in a.iter() {
-        let t = a.get(c, r).copied().unwrap_or(0.0);
-        let d = (v - t).abs() / scale;
-        if d > worst.0 {
-            worst = (d, r, c);
-        }
-    }
-    worst
+    let (ptr, idx, val) = (a.indptr(), a.indices(), a.data());
+    let ptr = ptr.raw_storage();
+    let n = a.outer_dims();
+    // The mirror of (o, i) is entry o of outer vector i. Outer vectors are walked in order, so the
+    // rows asked of one outer vector increase: one cursor per vector replaces a binary search per
+    // entry. Pieces of outer vectors run in parallel, each with its own cursors.
+    let piece = n.div_ceil(4 * rayon::current_num_threads()).max(1024);
+    (0..n.div_ceil(piece))
+        .into_par_iter()
+        .map(|p| {
+            let (lo, hi) = (p * piece, ((p + 1) * piece).min(n));
+            let mut cursor = vec![usize::MAX; n];
+            let mut worst = (0.0, 0, 0);
+            for o in lo..hi {
+                for (&i, &v) in idx[ptr[o]..ptr[o + 1]].iter().zip(&val[ptr[o]..ptr[o + 1]]) {
+                    let inner = &idx[ptr[i]..ptr[i + 1]];
+                    let c = &mut cursor[i];
+                    if *c == usize::MAX {
+                        *c = inner.partition_point(|&r| r < o);
+                    }
+                    while *c < inner.len() && inner[*c] < o {
+                        *c += 1;
+                    }
+                    let t = if *c < inner.len() && inner[*c] == o {
+                        val[ptr[i] + *c]
+                    } else {
+                        0.0
+                    };
+                    let d = (v - t).abs() / scale;
+                    if d > worst.0 {
+                        worst = if a.is_csc() { (d, i, o) } else { (d, o, i) };
+                    }
+                }
+            }
+            worst
+        })
+        .reduce(|| (0.0, 0, 0), |a, b| if b.0 > a.0 { b } else { a })
 }
 
 /// Checks that `A` is square, finite and symmetric to `tol` (relative to its largest entry).
@@ -158,7 +187,6 @@ pub fn sym_mul_rows(
     k: usize,
     y: &mut [f64],
 ) -> Result<(), SparseError> {
-    use rayon::prelude::*;
     let n = a.rows();
     if a.cols() != n || x.len() != n * k || y.len() != n * k {
         return Err(SparseError::DimensionMismatch {
