@@ -27,6 +27,9 @@ use faer::{Accum, MatMut, Par};
 /// (below it, the threading overhead outweighs the gain).
 const PARALLEL_FRONT_FLOPS: f64 = 2e8;
 
+/// Buffers a task keeps for reuse (`Workspace::give`).
+const POOL: usize = 2;
+
 /// A subtree with less than `1 / SUBTREE_SHARE` of the total work per thread runs as one
 /// sequential task: enough tasks to balance two threads, few enough that a task's scratch
 /// (one index per row of the matrix) is negligible.
@@ -259,8 +262,9 @@ impl Fronts<'_> {
         base: usize,
     ) -> Result<(Vec<f64>, Signs), usize> {
         let tree = self.tree;
-        let mut work = Workspace::new(self.symbolic.nrows());
-        if tree.subtree_flops[k] <= self.sequential_below {
+        let sequential = tree.subtree_flops[k] <= self.sequential_below;
+        let mut work = Workspace::new(self.symbolic.nrows(), sequential);
+        if sequential {
             let mut stack: Vec<Vec<f64>> = Vec::new();
             let mut signs = [0; 3];
             for (slot, &s) in slots.iter_mut().zip(&tree.post[base..=tree.pos[k]]) {
@@ -349,7 +353,7 @@ impl Fronts<'_> {
                     to[li - shift] += v;
                 }
             }
-            work.pool.push(update);
+            work.give(update);
         }
         let (mut top, mut bottom) = l.split_at_row_mut(c);
         let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(c, par, Default::default()));
@@ -403,7 +407,7 @@ impl Fronts<'_> {
             );
         }
         if !self.store {
-            work.pool.push(panel);
+            work.give(panel);
         }
         Ok((u, signs))
     }
@@ -421,15 +425,34 @@ struct Workspace {
     w: Vec<f64>,
     /// update matrices already added to their parent, for reuse
     pool: Vec<Vec<f64>>,
+    /// whether more fronts follow (a sequential task): else nothing is kept
+    reuse: bool,
 }
 
 impl Workspace {
-    fn new(n: usize) -> Self {
+    fn new(n: usize, reuse: bool) -> Self {
         Self {
             map: vec![0; n],
             locs: Vec::new(),
             w: Vec::new(),
             pool: Vec::new(),
+            reuse,
+        }
+    }
+
+    /// Keeps `v` for reuse, or frees it: a front takes at most two buffers (its update matrix,
+    /// and its columns when the factor is not stored), so the pool keeps the two largest; the
+    /// rest (a parent's children's update matrices) would only add to the peak memory.
+    fn give(&mut self, v: Vec<f64>) {
+        if !self.reuse {
+            return;
+        }
+        self.pool.push(v);
+        if self.pool.len() > POOL {
+            let smallest = (0..self.pool.len()).min_by_key(|&i| self.pool[i].capacity());
+            if let Some(i) = smallest {
+                self.pool.swap_remove(i);
+            }
         }
     }
 
