@@ -135,6 +135,35 @@ pub struct Inertia {
     pub positive: usize,
 }
 
+impl Inertia {
+    /// No pivots.
+    pub(crate) const NONE: Self = Self {
+        negative: 0,
+        zero: 0,
+        positive: 0,
+    };
+
+    /// Counts the pivot `d` (NaN counts as zero: it is no evidence of a sign).
+    pub(crate) fn count(&mut self, d: f64) {
+        if d < 0.0 {
+            self.negative += 1;
+        } else if d > 0.0 {
+            self.positive += 1;
+        } else {
+            self.zero += 1;
+        }
+    }
+
+    /// The pivots of both.
+    pub(crate) fn merged(self, other: Self) -> Self {
+        Self {
+            negative: self.negative + other.negative,
+            zero: self.zero + other.zero,
+            positive: self.positive + other.positive,
+        }
+    }
+}
+
 impl SymbolicFactor {
     /// Analyses the pattern of the symmetric matrix `a` (both triangles stored; the lower one is
     /// read) with the given fill-reducing ordering.
@@ -330,7 +359,7 @@ impl SymbolicFactor {
         name: &'static str,
     ) -> Result<Ldlt, SparseError> {
         let view = self.values_view(pattern, values)?;
-        if let (SymbolicCholeskyRaw::Supernodal(s), Some(tree)) = (self.inner.raw(), &self.tree) {
+        if let Some((s, tree)) = self.subtree_parallel() {
             let (values, inertia) = self.multifrontal(s, tree, view, true, name)?;
             return Ok(Ldlt {
                 symbolic: self.clone(),
@@ -356,7 +385,7 @@ impl SymbolicFactor {
         name: &'static str,
     ) -> Result<Inertia, SparseError> {
         let view = self.values_view(pattern, values)?;
-        if let (SymbolicCholeskyRaw::Supernodal(s), Some(tree)) = (self.inner.raw(), &self.tree) {
+        if let Some((s, tree)) = self.subtree_parallel() {
             // a count ends a solve (the Sturm check): the kept values are freed first, so that
             // its fronts do not add to them
             if let Ok(mut spare) = self.spare.0.lock() {
@@ -380,6 +409,19 @@ impl SymbolicFactor {
         name: &'static str,
     ) -> Result<Ldlt, SparseError> {
         self.faer_ldlt(self.values_view(pattern, values)?, name)
+    }
+
+    /// The supernodal analysis and its tree, when the subtree-parallel `LDL^T` applies.
+    fn subtree_parallel(
+        &self,
+    ) -> Option<(
+        &faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<usize>,
+        &crate::multifrontal::Tree,
+    )> {
+        match (self.inner.raw(), &self.tree) {
+            (SymbolicCholeskyRaw::Supernodal(s), Some(tree)) => Some((s, tree)),
+            _ => None,
+        }
     }
 
     fn values_view<'v>(
@@ -493,19 +535,13 @@ impl SymbolicFactor {
         }
         let threads = rayon::current_num_threads();
         let slot = store.then_some(&mut values[..]);
-        let [negative, zero, positive] = crate::multifrontal::factor(tree, s, lower, slot, threads)
-            .map_err(|k| SparseError::Singular {
+        let inertia = crate::multifrontal::factor(tree, s, lower, slot, threads).map_err(|k| {
+            SparseError::Singular {
                 matrix: name,
                 index: self.original_index(k),
-            })?;
-        Ok((
-            values,
-            Inertia {
-                negative,
-                zero,
-                positive,
-            },
-        ))
+            }
+        })?;
+        Ok((values, inertia))
     }
 }
 
@@ -559,19 +595,9 @@ fn min_pivot_ratio(
 
 /// Signs of the pivots `D` of an `LDL^T` factor.
 fn inertia_of(symbolic: &SymbolicCholesky<usize>, values: &[f64]) -> Inertia {
-    let mut inertia = Inertia {
-        negative: 0,
-        zero: 0,
-        positive: 0,
-    };
+    let mut inertia = Inertia::NONE;
     for d in factor_diagonal(symbolic, values) {
-        if d < 0.0 {
-            inertia.negative += 1;
-        } else if d == 0.0 || d.is_nan() {
-            inertia.zero += 1;
-        } else {
-            inertia.positive += 1;
-        }
+        inertia.count(d);
     }
     inertia
 }

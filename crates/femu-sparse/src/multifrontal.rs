@@ -13,6 +13,7 @@
 //! faer's supernodal solves use it unchanged. In exact arithmetic it is faer's factor: only the
 //! order of the additions differs.
 
+use crate::cholesky::Inertia;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{
     LdltError, LdltRegularization, cholesky_in_place, cholesky_in_place_scratch,
@@ -158,13 +159,6 @@ struct Fronts<'a> {
     threads: usize,
 }
 
-/// Pivots of `D` by sign: negative, zero (or NaN), positive.
-pub(crate) type Signs = [usize; 3];
-
-fn add(a: Signs, b: Signs) -> Signs {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
 /// The numeric `LDL^T` of the permuted lower triangle `a` on up to `threads` threads, with the
 /// signs of its pivots. With `values` (faer's supernodal layout, zeroed) the factor is stored
 /// there; without, only the signs are kept and no factor is ever held: the memory of one front
@@ -178,7 +172,7 @@ pub(crate) fn factor(
     a: SparseColMatRef<'_, usize, f64>,
     values: Option<&mut [f64]>,
     threads: usize,
-) -> Result<Signs, usize> {
+) -> Result<Inertia, usize> {
     let ns = symbolic.n_supernodes();
     let store = values.is_some();
     // each supernode's slot of the factor (empty when not stored), in the tree's postorder:
@@ -231,9 +225,9 @@ impl Fronts<'_> {
         roots: &[usize],
         slots: &mut [&mut [f64]],
         base: usize,
-    ) -> Result<(Vec<Vec<f64>>, Signs), usize> {
+    ) -> Result<(Vec<Vec<f64>>, Inertia), usize> {
         match roots {
-            [] => Ok((Vec::new(), [0; 3])),
+            [] => Ok((Vec::new(), Inertia::NONE)),
             [k] => {
                 let (u, signs) = self.subtree(*k, slots, base)?;
                 Ok((vec![u], signs))
@@ -248,7 +242,7 @@ impl Fronts<'_> {
                 );
                 let ((mut ul, sl), (ur, sr)) = (l?, r?);
                 ul.extend(ur);
-                Ok((ul, add(sl, sr)))
+                Ok((ul, sl.merged(sr)))
             }
         }
     }
@@ -260,19 +254,19 @@ impl Fronts<'_> {
         k: usize,
         slots: &mut [&mut [f64]],
         base: usize,
-    ) -> Result<(Vec<f64>, Signs), usize> {
+    ) -> Result<(Vec<f64>, Inertia), usize> {
         let tree = self.tree;
         let sequential = tree.subtree_flops[k] <= self.sequential_below;
         let mut work = Workspace::new(self.symbolic.nrows(), sequential);
         if sequential {
             let mut stack: Vec<Vec<f64>> = Vec::new();
-            let mut signs = [0; 3];
+            let mut signs = Inertia::NONE;
             for (slot, &s) in slots.iter_mut().zip(&tree.post[base..=tree.pos[k]]) {
                 let kids = tree.children(s).len();
                 let updates = stack.split_off(stack.len() - kids);
                 let (u, sg) = self.front(s, slot, updates, Par::Seq, &mut work)?;
                 stack.push(u);
-                signs = add(signs, sg);
+                signs = signs.merged(sg);
             }
             return Ok((stack.pop().unwrap_or_default(), signs));
         }
@@ -284,7 +278,7 @@ impl Fronts<'_> {
             Par::Seq
         };
         let (u, signs) = self.front(k, own[0], updates, par, &mut work)?;
-        Ok((u, add(below_signs, signs)))
+        Ok((u, below_signs.merged(signs)))
     }
 
     /// Assembles and factors the front of supernode `k` into `own` (its `c` columns of `L`,
@@ -298,7 +292,7 @@ impl Fronts<'_> {
         updates: Vec<Vec<f64>>,
         par: Par,
         work: &mut Workspace,
-    ) -> Result<(Vec<f64>, Signs), usize> {
+    ) -> Result<(Vec<f64>, Inertia), usize> {
         let s = self.symbolic;
         let (start, end) = (s.supernode_begin()[k], s.supernode_end()[k]);
         let pattern = |k: usize| {
@@ -365,16 +359,9 @@ impl Fronts<'_> {
             Default::default(),
         )
         .map_err(|LdltError::ZeroPivot { index }| start + index)?;
-        let mut signs = [0; 3];
+        let mut signs = Inertia::NONE;
         for j in 0..c {
-            let d = top[(j, j)];
-            signs[if d < 0.0 {
-                0
-            } else if d > 0.0 {
-                2
-            } else {
-                1
-            }] += 1;
+            signs.count(top[(j, j)]);
             for i in 0..j {
                 top[(i, j)] = 0.0;
             }
