@@ -15,5 +15,10 @@ fi
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 "$venv/bin/pip" install -q --upgrade pip >&2
 "$venv/bin/pip" install -q numpy scipy pytest mypy scipy-stubs pyuff matplotlib >&2
+if [ "${CI:-}" = true ]; then
+  # CI builds the package from scratch for its tests only: less optimisation, no line tables
+  # (205 s instead of 269 s on a 2-core machine); users' builds keep the release profile
+  export CARGO_PROFILE_RELEASE_OPT_LEVEL=1 CARGO_PROFILE_RELEASE_DEBUG=false
+fi
 "$venv/bin/pip" install -q ./crates/femu-python >&2
 echo "$venv/bin/python"
