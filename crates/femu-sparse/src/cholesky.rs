@@ -59,7 +59,8 @@ pub fn faer_view(a: &SparseMatrix) -> Result<SparseColMatRef<'_, usize, f64>, Sp
 pub const SINGULAR_PIVOT_RATIO: f64 = 1e-12;
 
 /// The parallelism given to faer inside one triangular solve: sequential; solves use the threads
-/// across right-hand sides instead ([`split_columns`]). Measured on two cores (docs/SCALING.md,
+/// across right-hand sides instead ([`split_columns`]), or, for an `LDL^T` of a supernodal
+/// analysis, across subtrees (docs/SCALING.md, "A subtree-parallel solve"). Measured on two cores (docs/SCALING.md,
 /// "Threads in the sparse kernels"): 4 right-hand sides of the 199,200-DOF plate took 263 ms with
 /// faer's two threads inside, 189 ms sequential and 152 ms as two sequential solves of two.
 const KERNEL_PAR: Par = Par::Seq;
@@ -686,9 +687,37 @@ impl Factorization for Ldlt {
     fn dim(&self) -> usize {
         self.symbolic.n
     }
-    fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+    fn solve_in_place(&self, mut rhs: MatMut<'_, f64>) {
         let inner = &self.symbolic.inner;
-        split_columns(rhs, rayon::current_num_threads(), &|rhs| {
+        let threads = rayon::current_num_threads();
+        if threads > 1
+            && let Some((s, tree)) = self.symbolic.subtree_parallel()
+        {
+            // every right-hand side at once, the subtrees on different threads: the factor is
+            // read once, not once per thread (docs/SCALING.md, "A subtree-parallel solve")
+            match inner.perm() {
+                Some(p) => {
+                    let fwd = p.arrays().0;
+                    let mut x = rhs.to_owned();
+                    for j in 0..x.ncols() {
+                        for (i, &f) in fwd.iter().enumerate() {
+                            x[(i, j)] = rhs[(f, j)];
+                        }
+                    }
+                    crate::multifrontal::solve(tree, s, &self.values, x.as_mut(), threads);
+                    for j in 0..x.ncols() {
+                        for (i, &f) in fwd.iter().enumerate() {
+                            rhs[(f, j)] = x[(i, j)];
+                        }
+                    }
+                }
+                None => {
+                    crate::multifrontal::solve(tree, s, &self.values, rhs, threads);
+                }
+            }
+            return;
+        }
+        split_columns(rhs, threads, &|rhs| {
             let mut mem = scratch_solve(inner, rhs.ncols());
             LdltRef::new(inner, &self.values).solve_in_place_with_conj(
                 Conj::No,

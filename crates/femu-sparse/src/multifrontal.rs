@@ -18,11 +18,15 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{
     LdltError, LdltRegularization, cholesky_in_place, cholesky_in_place_scratch,
 };
+use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{BlockStructure, matmul as triangular_matmul};
+use faer::linalg::triangular_solve::{
+    solve_unit_lower_triangular_in_place, solve_unit_upper_triangular_in_place,
+};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::SparseColMatRef;
 use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
-use faer::{Accum, MatMut, Par};
+use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 /// A front whose own work is above this many flops gives faer's dense kernels every thread
 /// (below it, the threading overhead outweighs the gain).
@@ -450,5 +454,295 @@ impl Workspace {
         v.clear();
         v.resize(len, 0.0);
         v
+    }
+}
+
+/// Solves `L D L^T x = b` in place for the permuted right-hand sides `x` (`n x k`, in the
+/// analysis's permuted order) with a factor in faer's supernodal layout, the disjoint subtrees
+/// of the elimination tree on different threads (docs/SCALING.md, "A subtree-parallel solve").
+///
+/// Each thread reads only its subtrees' part of the factor, for every right-hand side at once:
+/// where splitting the right-hand sides between threads makes each thread read the whole factor,
+/// this reads it once. The updates of a supernode to its ancestors' rows travel up the tree as
+/// small dense vectors (multifrontal), and the solution at a supernode's rows comes down to its
+/// children the same way, so the threads share nothing they write.
+pub(crate) fn solve(
+    tree: &Tree,
+    symbolic: &SymbolicSupernodalCholesky<usize>,
+    values: &[f64],
+    mut x: MatMut<'_, f64>,
+    threads: usize,
+) {
+    let (n, k) = (x.nrows(), x.ncols());
+    let ns = symbolic.n_supernodes();
+    let (begin, end) = (symbolic.supernode_begin(), symbolic.supernode_end());
+    // each supernode's rows of the solution, `c x k` column-major, in the tree's postorder
+    let mut z = vec![0.0; n * k];
+    let mut by_index: Vec<Option<&mut [f64]>> = Vec::with_capacity(ns);
+    by_index.resize_with(ns, || None);
+    {
+        let mut rest = &mut z[..];
+        for &s in &tree.post {
+            let (slot, tail) = rest.split_at_mut((end[s] - begin[s]) * k);
+            by_index[s] = Some(slot);
+            rest = tail;
+        }
+    }
+    let mut slots: Vec<&mut [f64]> = tree
+        .post
+        .iter()
+        .map(|&s| {
+            by_index[s]
+                .take()
+                .expect("each supernode once in the postorder")
+        })
+        .collect();
+    let solver = Solver {
+        tree,
+        symbolic,
+        values,
+        b: x.rb(),
+        k,
+        sequential_below: if threads > 1 {
+            tree.total_flops / (SUBTREE_SHARE * threads as f64)
+        } else {
+            f64::INFINITY
+        },
+        threads,
+    };
+    solver.forward_forest(&tree.roots, &mut slots, 0);
+    let known = tree.roots.iter().map(|_| Mat::zeros(0, k)).collect();
+    solver.backward_forest(&tree.roots, known, &mut slots, 0);
+    drop(slots);
+    // back into `x`: the slots are in postorder
+    let mut at = 0;
+    for &s in &tree.post {
+        let c = end[s] - begin[s];
+        let slot = MatRef::from_column_major_slice(&z[at..at + c * k], c, k);
+        x.rb_mut().subrows_mut(begin[s], c).copy_from(slot);
+        at += c * k;
+    }
+}
+
+struct Solver<'a> {
+    tree: &'a Tree,
+    symbolic: &'a SymbolicSupernodalCholesky<usize>,
+    values: &'a [f64],
+    /// the right-hand sides (permuted), read by the forward pass
+    b: MatRef<'a, f64>,
+    k: usize,
+    sequential_below: f64,
+    threads: usize,
+}
+
+impl Solver<'_> {
+    /// The threads for the dense kernels of a front outside the sequential subtrees: all of them
+    /// for a large one (near the root, where the subtrees wait for it), else one.
+    fn par(&self, s: usize) -> Par {
+        if self.threads > 1 && self.tree.own_flops[s] > PARALLEL_FRONT_FLOPS {
+            Par::rayon(self.threads)
+        } else {
+            Par::Seq
+        }
+    }
+
+    /// Supernode `s`'s diagonal block and the rows below it, and its pattern.
+    fn parts(&self, s: usize) -> (MatRef<'_, f64>, MatRef<'_, f64>, &[usize]) {
+        let sym = self.symbolic;
+        let c = sym.supernode_end()[s] - sym.supernode_begin()[s];
+        let p = sym.col_ptr_for_row_idx()[s];
+        let rows = &sym.row_idx()[p..p + sym.nnz_per_super()[s]];
+        let ptr = sym.col_ptr_for_val();
+        let l =
+            MatRef::from_column_major_slice(&self.values[ptr[s]..ptr[s + 1]], c + rows.len(), c);
+        let (top, bottom) = l.split_at_row(c);
+        (top, bottom, rows)
+    }
+
+    /// Where each row of `child`'s pattern lies in its parent `s`'s front (`c` pivot rows, then
+    /// its pattern), with `map` holding the pattern's positions.
+    fn locate(&self, s: usize, child: usize, map: &mut [usize], locs: &mut Vec<usize>) {
+        let sym = self.symbolic;
+        let (start, end) = (sym.supernode_begin()[s], sym.supernode_end()[s]);
+        let (_, _, rows) = self.parts(s);
+        for (i, &r) in rows.iter().enumerate() {
+            map[r] = end - start + i;
+        }
+        let (_, _, crows) = self.parts(child);
+        locs.clear();
+        locs.extend(
+            crows
+                .iter()
+                .map(|&r| if r < end { r - start } else { map[r] }),
+        );
+    }
+
+    fn forward_forest(
+        &self,
+        roots: &[usize],
+        slots: &mut [&mut [f64]],
+        base: usize,
+    ) -> Vec<Mat<f64>> {
+        match roots {
+            [] => Vec::new(),
+            [s] => vec![self.forward_subtree(*s, slots, base)],
+            _ => {
+                let mid = roots.len() / 2;
+                let cut = self.tree.first[roots[mid]];
+                let (left, right) = slots.split_at_mut(cut - base);
+                let (mut l, r) = rayon::join(
+                    || self.forward_forest(&roots[..mid], left, base),
+                    || self.forward_forest(&roots[mid..], right, cut),
+                );
+                l.extend(r);
+                l
+            }
+        }
+    }
+
+    /// `L z = b` and `z <- D^-1 z` on the subtree of `s`; returns `s`'s update to its pattern.
+    fn forward_subtree(&self, s: usize, slots: &mut [&mut [f64]], base: usize) -> Mat<f64> {
+        let tree = self.tree;
+        let mut map = vec![0; self.symbolic.nrows()];
+        if tree.subtree_flops[s] <= self.sequential_below {
+            let mut stack: Vec<Mat<f64>> = Vec::new();
+            for (slot, &t) in slots.iter_mut().zip(&tree.post[base..=tree.pos[s]]) {
+                let kids = tree.children(t).len();
+                let updates = stack.split_off(stack.len() - kids);
+                stack.push(self.forward_front(t, slot, updates, &mut map, Par::Seq));
+            }
+            return stack.pop().unwrap_or_else(|| Mat::zeros(0, self.k));
+        }
+        let (below, own) = slots.split_at_mut(tree.pos[s] - base);
+        let updates = self.forward_forest(tree.children(s), below, base);
+        self.forward_front(s, own[0], updates, &mut map, self.par(s))
+    }
+
+    fn forward_front(
+        &self,
+        s: usize,
+        slot: &mut [f64],
+        updates: Vec<Mat<f64>>,
+        map: &mut [usize],
+        par: Par,
+    ) -> Mat<f64> {
+        let (top, bottom, rows) = self.parts(s);
+        let (c, nb, k) = (top.nrows(), rows.len(), self.k);
+        let start = self.symbolic.supernode_begin()[s];
+        let mut zs = MatMut::from_column_major_slice_mut(slot, c, k);
+        zs.copy_from(self.b.subrows(start, c));
+        let mut u = Mat::<f64>::zeros(nb, k);
+        let mut locs = Vec::new();
+        for (&child, update) in self.tree.children(s).iter().zip(updates) {
+            self.locate(s, child, map, &mut locs);
+            for j in 0..k {
+                for (i, &l) in locs.iter().enumerate() {
+                    if l < c {
+                        zs[(l, j)] += update[(i, j)];
+                    } else {
+                        u[(l - c, j)] += update[(i, j)];
+                    }
+                }
+            }
+        }
+        solve_unit_lower_triangular_in_place(top, zs.rb_mut(), par);
+        if nb > 0 {
+            matmul(u.as_mut(), Accum::Add, bottom, zs.rb(), -1.0, par);
+        }
+        for i in 0..c {
+            let d = top[(i, i)].recip();
+            zs.rb_mut().row_mut(i).iter_mut().for_each(|v| *v *= d);
+        }
+        u
+    }
+
+    fn backward_forest(
+        &self,
+        roots: &[usize],
+        mut known: Vec<Mat<f64>>,
+        slots: &mut [&mut [f64]],
+        base: usize,
+    ) {
+        match roots {
+            [] => {}
+            [s] => self.backward_subtree(
+                *s,
+                known.pop().unwrap_or_else(|| Mat::zeros(0, self.k)),
+                slots,
+                base,
+            ),
+            _ => {
+                let mid = roots.len() / 2;
+                let cut = self.tree.first[roots[mid]];
+                let (left, right) = slots.split_at_mut(cut - base);
+                let known_right = known.split_off(mid);
+                rayon::join(
+                    || self.backward_forest(&roots[..mid], known, left, base),
+                    || self.backward_forest(&roots[mid..], known_right, right, cut),
+                );
+            }
+        }
+    }
+
+    /// `L^T x = z` on the subtree of `s`, given `x` at `s`'s pattern (`known`).
+    fn backward_subtree(&self, s: usize, known: Mat<f64>, slots: &mut [&mut [f64]], base: usize) {
+        let tree = self.tree;
+        let mut map = vec![0; self.symbolic.nrows()];
+        if tree.subtree_flops[s] <= self.sequential_below {
+            // parents before children: the postorder backwards
+            let order = &tree.post[base..=tree.pos[s]];
+            let mut pending: Vec<Option<Mat<f64>>> = vec![None; order.len()];
+            pending[order.len() - 1] = Some(known);
+            for (i, slot) in slots.iter_mut().enumerate().rev() {
+                let t = order[i];
+                let known = pending[i].take().expect("a parent passed it down");
+                for (child, xr) in self.backward_front(t, slot, known, &mut map, Par::Seq) {
+                    pending[tree.pos[child] - base] = Some(xr);
+                }
+            }
+            return;
+        }
+        let (below, own) = slots.split_at_mut(tree.pos[s] - base);
+        let passed = self.backward_front(s, own[0], known, &mut map, self.par(s));
+        let known = passed.into_iter().map(|(_, xr)| xr).collect();
+        self.backward_forest(tree.children(s), known, below, base);
+    }
+
+    /// `x_s = L_ss^-T (z_s - L_bs^T x_b)` in `slot`; returns each child's `x` at its pattern.
+    fn backward_front(
+        &self,
+        s: usize,
+        slot: &mut [f64],
+        known: Mat<f64>,
+        map: &mut [usize],
+        par: Par,
+    ) -> Vec<(usize, Mat<f64>)> {
+        let (top, bottom, rows) = self.parts(s);
+        let (c, k) = (top.nrows(), self.k);
+        let mut xs = MatMut::from_column_major_slice_mut(slot, c, k);
+        if !rows.is_empty() {
+            matmul(
+                xs.rb_mut(),
+                Accum::Add,
+                bottom.transpose(),
+                known.as_ref(),
+                -1.0,
+                par,
+            );
+        }
+        solve_unit_upper_triangular_in_place(top.transpose(), xs.rb_mut(), par);
+        let mut locs = Vec::new();
+        self.tree
+            .children(s)
+            .iter()
+            .map(|&child| {
+                self.locate(s, child, map, &mut locs);
+                let xr = Mat::from_fn(locs.len(), k, |i, j| {
+                    let l = locs[i];
+                    if l < c { xs[(l, j)] } else { known[(l - c, j)] }
+                });
+                (child, xr)
+            })
+            .collect()
     }
 }
