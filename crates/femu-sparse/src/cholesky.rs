@@ -65,6 +65,13 @@ pub const SINGULAR_PIVOT_RATIO: f64 = 1e-12;
 /// faer's two threads inside, 189 ms sequential and 152 ms as two sequential solves of two.
 const KERNEL_PAR: Par = Par::Seq;
 
+/// A factor with at least this many values (16 MB, beyond the last-level cache) is solved
+/// subtree-parallel on several threads (docs/SCALING.md, "A subtree-parallel solve"); a smaller
+/// one by faer's solve. Below it the solve is short and the tree's per-front work dominates:
+/// `femu-update`'s tests (small models) took 43-48 s with every factor solved subtree-parallel
+/// and 28-32 s with faer's solve.
+const SUBTREE_SOLVE_VALUES: usize = 1 << 21;
+
 /// Above this many flops per column (`flops / n`, a measure of the typical dense front), one of
 /// faer's numeric factorizations (`LL^T`, and `LDL^T` where the subtree-parallel one does not
 /// apply) gets the global parallelism; below it, one thread. faer walks the
@@ -691,6 +698,7 @@ impl Factorization for Ldlt {
         let inner = &self.symbolic.inner;
         let threads = rayon::current_num_threads();
         if threads > 1
+            && self.values.len() >= SUBTREE_SOLVE_VALUES
             && let Some((s, tree)) = self.symbolic.subtree_parallel()
         {
             // every right-hand side at once, the subtrees on different threads: the factor is

@@ -421,8 +421,8 @@ fn nested_dissection_is_the_same_on_concurrent_threads() {
 /// round-off, the inertia both report equal to the analytic count of eigenvalues below `sigma`,
 /// on one, two and three threads, and again after the first factor was dropped (its values are
 /// reused: a leftover of the old factor would change the solution). On one thread the solve is
-/// faer's supernodal one, on more femu's subtree-parallel one: both against faer's solve with
-/// faer's factor.
+/// faer's supernodal one, on more (for the 30^3 grid, whose factor is large enough) femu's
+/// subtree-parallel one: both against faer's solve with faer's factor.
 #[test]
 fn subtree_parallel_ldlt_agrees_with_left_looking_and_the_analytic_inertia() {
     for (nn, sigma) in [(14, 0.0), (14, 1.3), (30, -0.5), (30, 0.4)] {
