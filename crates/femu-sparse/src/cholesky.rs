@@ -59,10 +59,11 @@ pub fn faer_view(a: &SparseMatrix) -> Result<SparseColMatRef<'_, usize, f64>, Sp
 pub const SINGULAR_PIVOT_RATIO: f64 = 1e-12;
 
 /// The parallelism given to faer inside one triangular solve: sequential; solves use the threads
-/// across right-hand sides instead ([`split_columns`]), or, for an `LDL^T` of a supernodal
-/// analysis, across subtrees (docs/SCALING.md, "A subtree-parallel solve"). Measured on two cores (docs/SCALING.md,
-/// "Threads in the sparse kernels"): 4 right-hand sides of the 199,200-DOF plate took 263 ms with
-/// faer's two threads inside, 189 ms sequential and 152 ms as two sequential solves of two.
+/// across right-hand sides instead ([`split_columns`]), or, for a large `LDL^T` of a supernodal
+/// analysis, across subtrees (docs/SCALING.md, "A subtree-parallel solve"). Measured on two
+/// cores (docs/SCALING.md, "Threads in the sparse kernels"): 4 right-hand sides of the
+/// 199,200-DOF plate took 263 ms with faer's two threads inside, 189 ms sequential and 152 ms as
+/// two sequential solves of two.
 const KERNEL_PAR: Par = Par::Seq;
 
 /// A factor with at least this many values (16 MB, beyond the last-level cache) is solved
@@ -706,12 +707,7 @@ impl Factorization for Ldlt {
             match inner.perm() {
                 Some(p) => {
                     let fwd = p.arrays().0;
-                    let mut x = rhs.to_owned();
-                    for j in 0..x.ncols() {
-                        for (i, &f) in fwd.iter().enumerate() {
-                            x[(i, j)] = rhs[(f, j)];
-                        }
-                    }
+                    let mut x = faer::Mat::from_fn(fwd.len(), rhs.ncols(), |i, j| rhs[(fwd[i], j)]);
                     crate::multifrontal::solve(tree, s, &self.values, x.as_mut(), threads);
                     for j in 0..x.ncols() {
                         for (i, &f) in fwd.iter().enumerate() {

@@ -469,6 +469,8 @@ fn subtree_parallel_ldlt_agrees_with_left_looking_and_the_analytic_inertia() {
                 .num_threads(threads)
                 .build()
                 .unwrap();
+            // faer's factor solved on these threads (the subtree-parallel solve reads its layout)
+            let of_faer = pool.install(|| solve(&reference));
             let (first, second, count) = pool.install(|| {
                 let f = sym.ldlt_values(&a, &values, "A").unwrap();
                 let (inertia, x) = (f.inertia(), solve(&f));
@@ -494,6 +496,14 @@ fn subtree_parallel_ldlt_agrees_with_left_looking_and_the_analytic_inertia() {
             assert!(
                 diff < 100.0 * f64::EPSILON * kappa * scale,
                 "{nn}, {sigma}, {threads}: {diff:e} (kappa {kappa:e})"
+            );
+            let diff_faer = of_faer
+                .iter()
+                .zip(&x_ref)
+                .fold(0.0_f64, |m, (p, q)| m.max((p - q).abs()));
+            assert!(
+                diff_faer < 100.0 * f64::EPSILON * kappa * scale,
+                "{nn}, {sigma}, {threads}: faer's factor {diff_faer:e}"
             );
             assert!(
                 first.1 == second.1,
