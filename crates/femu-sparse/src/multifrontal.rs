@@ -139,6 +139,77 @@ impl Tree {
     fn children(&self, k: usize) -> &[usize] {
         &self.child[self.child_ptr[k]..self.child_ptr[k + 1]]
     }
+
+    /// A subtree with at most this much work runs as one sequential task on `threads` threads.
+    fn sequential_below(&self, threads: usize) -> f64 {
+        if threads > 1 {
+            self.total_flops / (SUBTREE_SHARE * threads as f64)
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// `buf` cut into one slot per supernode, `len(k)` values each, laid out in supernode order,
+    /// and the slots listed in the tree's postorder: every subtree's slots are then one
+    /// contiguous run, handed to the task that works on it.
+    fn postorder_slots<'b>(
+        &self,
+        mut buf: &'b mut [f64],
+        len: impl Fn(usize) -> usize,
+    ) -> Vec<&'b mut [f64]> {
+        let mut by_index: Vec<Option<&'b mut [f64]>> = Vec::with_capacity(self.pos.len());
+        for k in 0..self.pos.len() {
+            let (slot, tail) = buf.split_at_mut(len(k));
+            by_index.push(Some(slot));
+            buf = tail;
+        }
+        self.post
+            .iter()
+            .map(|&k| {
+                by_index[k]
+                    .take()
+                    .expect("each supernode once in the postorder")
+            })
+            .collect()
+    }
+
+    /// `leaf(i, roots[i], its slots, its first postorder position)` for the subtrees of the
+    /// siblings `roots` (consecutive in the postorder; `slots` theirs from position `base` on), in
+    /// parallel halves; the results in the order of `roots`.
+    fn forest<T: Send>(
+        &self,
+        roots: &[usize],
+        slots: &mut [&mut [f64]],
+        base: usize,
+        leaf: &(impl Fn(usize, usize, &mut [&mut [f64]], usize) -> T + Sync),
+    ) -> Vec<T> {
+        self.forest_from(0, roots, slots, base, leaf)
+    }
+
+    fn forest_from<T: Send>(
+        &self,
+        offset: usize,
+        roots: &[usize],
+        slots: &mut [&mut [f64]],
+        base: usize,
+        leaf: &(impl Fn(usize, usize, &mut [&mut [f64]], usize) -> T + Sync),
+    ) -> Vec<T> {
+        match roots {
+            [] => Vec::new(),
+            [k] => vec![leaf(offset, *k, slots, base)],
+            _ => {
+                let mid = roots.len() / 2;
+                let cut = self.first[roots[mid]];
+                let (left, right) = slots.split_at_mut(cut - base);
+                let (mut l, r) = rayon::join(
+                    || self.forest_from(offset, &roots[..mid], left, base, leaf),
+                    || self.forest_from(offset + mid, &roots[mid..], right, cut, leaf),
+                );
+                l.extend(r);
+                l
+            }
+        }
+    }
 }
 
 /// Flops of one front with `c` pivots and `b` rows below them: the classical count
@@ -177,42 +248,23 @@ pub(crate) fn factor(
     values: Option<&mut [f64]>,
     threads: usize,
 ) -> Result<Inertia, usize> {
-    let ns = symbolic.n_supernodes();
     let store = values.is_some();
-    // each supernode's slot of the factor (empty when not stored), in the tree's postorder:
-    // every subtree's slots are then one contiguous run, handed to the task that factors it
-    let mut by_index: Vec<Option<&mut [f64]>> = Vec::with_capacity(ns);
-    match values {
-        Some(mut rest) => {
-            assert_eq!(rest.len(), symbolic.len_val(), "values in faer's layout");
+    // each supernode's slot of the factor (empty when not stored), in the tree's postorder
+    let mut empty = [];
+    let mut slots = match values {
+        Some(values) => {
+            assert_eq!(values.len(), symbolic.len_val(), "values in faer's layout");
             let ptr = symbolic.col_ptr_for_val();
-            for k in 0..ns {
-                let (slot, tail) = rest.split_at_mut(ptr[k + 1] - ptr[k]);
-                by_index.push(Some(slot));
-                rest = tail;
-            }
+            tree.postorder_slots(values, |k| ptr[k + 1] - ptr[k])
         }
-        None => by_index.resize_with(ns, || Some(&mut [][..])),
-    }
-    let mut slots: Vec<&mut [f64]> = tree
-        .post
-        .iter()
-        .map(|&k| {
-            by_index[k]
-                .take()
-                .expect("each supernode once in the postorder")
-        })
-        .collect();
+        None => tree.postorder_slots(&mut empty, |_| 0),
+    };
     let fronts = Fronts {
         tree,
         symbolic,
         a,
         store,
-        sequential_below: if threads > 1 {
-            tree.total_flops / (SUBTREE_SHARE * threads as f64)
-        } else {
-            f64::INFINITY
-        },
+        sequential_below: tree.sequential_below(threads),
         threads,
     };
     fronts
@@ -230,25 +282,16 @@ impl Fronts<'_> {
         slots: &mut [&mut [f64]],
         base: usize,
     ) -> Result<(Vec<Vec<f64>>, Inertia), usize> {
-        match roots {
-            [] => Ok((Vec::new(), Inertia::NONE)),
-            [k] => {
-                let (u, signs) = self.subtree(*k, slots, base)?;
-                Ok((vec![u], signs))
-            }
-            _ => {
-                let mid = roots.len() / 2;
-                let cut = self.tree.first[roots[mid]];
-                let (left, right) = slots.split_at_mut(cut - base);
-                let (l, r) = rayon::join(
-                    || self.forest(&roots[..mid], left, base),
-                    || self.forest(&roots[mid..], right, cut),
-                );
-                let ((mut ul, sl), (ur, sr)) = (l?, r?);
-                ul.extend(ur);
-                Ok((ul, sl.merged(sr)))
-            }
+        let mut updates = Vec::with_capacity(roots.len());
+        let mut signs = Inertia::NONE;
+        for r in self.tree.forest(roots, slots, base, &|_, k, slots, base| {
+            self.subtree(k, slots, base)
+        }) {
+            let (u, sg) = r?;
+            updates.push(u);
+            signs = signs.merged(sg);
         }
+        Ok((updates, signs))
     }
 
     /// Factors the subtree of `k` (its slots start at postorder position `base`); returns `U_k`
@@ -476,47 +519,25 @@ pub(crate) fn solve(
     let (n, k) = (x.nrows(), x.ncols());
     let ns = symbolic.n_supernodes();
     let (begin, end) = (symbolic.supernode_begin(), symbolic.supernode_end());
-    // each supernode's rows of the solution, `c x k` column-major, in the tree's postorder
+    // each supernode's rows of the solution, `c x k` column-major, in supernode order
     let mut z = vec![0.0; n * k];
-    let mut by_index: Vec<Option<&mut [f64]>> = Vec::with_capacity(ns);
-    by_index.resize_with(ns, || None);
-    {
-        let mut rest = &mut z[..];
-        for &s in &tree.post {
-            let (slot, tail) = rest.split_at_mut((end[s] - begin[s]) * k);
-            by_index[s] = Some(slot);
-            rest = tail;
-        }
-    }
-    let mut slots: Vec<&mut [f64]> = tree
-        .post
-        .iter()
-        .map(|&s| {
-            by_index[s]
-                .take()
-                .expect("each supernode once in the postorder")
-        })
-        .collect();
+    let mut slots = tree.postorder_slots(&mut z, |s| (end[s] - begin[s]) * k);
     let solver = Solver {
         tree,
         symbolic,
         values,
         b: x.rb(),
         k,
-        sequential_below: if threads > 1 {
-            tree.total_flops / (SUBTREE_SHARE * threads as f64)
-        } else {
-            f64::INFINITY
-        },
+        sequential_below: tree.sequential_below(threads),
         threads,
     };
     solver.forward_forest(&tree.roots, &mut slots, 0);
-    let known = tree.roots.iter().map(|_| Mat::zeros(0, k)).collect();
-    solver.backward_forest(&tree.roots, known, &mut slots, 0);
+    let known: Vec<Mat<f64>> = tree.roots.iter().map(|_| Mat::zeros(0, k)).collect();
+    solver.backward_forest(&tree.roots, &known, &mut slots, 0);
     drop(slots);
-    // back into `x`: the slots are in postorder
+    // back into `x`
     let mut at = 0;
-    for &s in &tree.post {
+    for s in 0..ns {
         let c = end[s] - begin[s];
         let slot = MatRef::from_column_major_slice(&z[at..at + c * k], c, k);
         x.rb_mut().subrows_mut(begin[s], c).copy_from(slot);
@@ -583,21 +604,9 @@ impl Solver<'_> {
         slots: &mut [&mut [f64]],
         base: usize,
     ) -> Vec<Mat<f64>> {
-        match roots {
-            [] => Vec::new(),
-            [s] => vec![self.forward_subtree(*s, slots, base)],
-            _ => {
-                let mid = roots.len() / 2;
-                let cut = self.tree.first[roots[mid]];
-                let (left, right) = slots.split_at_mut(cut - base);
-                let (mut l, r) = rayon::join(
-                    || self.forward_forest(&roots[..mid], left, base),
-                    || self.forward_forest(&roots[mid..], right, cut),
-                );
-                l.extend(r);
-                l
-            }
-        }
+        self.tree.forest(roots, slots, base, &|_, s, slots, base| {
+            self.forward_subtree(s, slots, base)
+        })
     }
 
     /// `L z = b` and `z <- D^-1 z` on the subtree of `s`; returns `s`'s update to its pattern.
@@ -659,29 +668,13 @@ impl Solver<'_> {
     fn backward_forest(
         &self,
         roots: &[usize],
-        mut known: Vec<Mat<f64>>,
+        known: &[Mat<f64>],
         slots: &mut [&mut [f64]],
         base: usize,
     ) {
-        match roots {
-            [] => {}
-            [s] => self.backward_subtree(
-                *s,
-                known.pop().unwrap_or_else(|| Mat::zeros(0, self.k)),
-                slots,
-                base,
-            ),
-            _ => {
-                let mid = roots.len() / 2;
-                let cut = self.tree.first[roots[mid]];
-                let (left, right) = slots.split_at_mut(cut - base);
-                let known_right = known.split_off(mid);
-                rayon::join(
-                    || self.backward_forest(&roots[..mid], known, left, base),
-                    || self.backward_forest(&roots[mid..], known_right, right, cut),
-                );
-            }
-        }
+        self.tree.forest(roots, slots, base, &|i, s, slots, base| {
+            self.backward_subtree(s, known[i].clone(), slots, base)
+        });
     }
 
     /// `L^T x = z` on the subtree of `s`, given `x` at `s`'s pattern (`known`).
@@ -704,8 +697,8 @@ impl Solver<'_> {
         }
         let (below, own) = slots.split_at_mut(tree.pos[s] - base);
         let passed = self.backward_front(s, own[0], known, &mut map, self.par(s));
-        let known = passed.into_iter().map(|(_, xr)| xr).collect();
-        self.backward_forest(tree.children(s), known, below, base);
+        let known: Vec<Mat<f64>> = passed.into_iter().map(|(_, xr)| xr).collect();
+        self.backward_forest(tree.children(s), &known, below, base);
     }
 
     /// `x_s = L_ss^-T (z_s - L_bs^T x_b)` in `slot`; returns each child's `x` at its pattern.
