@@ -32,6 +32,17 @@ use faer::{Accum, Mat, MatMut, MatRef, Par};
 /// (below it, the threading overhead outweighs the gain).
 const PARALLEL_FRONT_FLOPS: f64 = 2e8;
 
+/// Columns of an update matrix computed at once (`Fronts::front`): the scratch is `b x 256`,
+/// not `b x b`.
+const UPDATE_PANEL: usize = 256;
+
+/// Where column `j` of a packed lower triangle of order `b` starts: column `j` holds its rows
+/// `j..b`, after the `b - i` entries of every column `i < j`. An update matrix is stored so,
+/// half the memory of a square one.
+fn packed_start(j: usize, b: usize) -> usize {
+    j * b - j * j.saturating_sub(1) / 2
+}
+
 /// Buffers a task keeps for reuse (`Workspace::give`).
 const POOL: usize = 2;
 
@@ -330,8 +341,8 @@ impl Fronts<'_> {
 
     /// Assembles and factors the front of supernode `k` into `own` (its `c` columns of `L`,
     /// zeroed; empty when the factor is not stored: then into scratch), adding the children's
-    /// update matrices `updates`; returns its own update matrix `U_k` (`b x b`, column-major,
-    /// lower triangle) and the signs of its pivots.
+    /// update matrices `updates`; returns its own update matrix `U_k` (its lower triangle,
+    /// packed by columns: [`packed_start`]) and the signs of its pivots.
     fn front(
         &self,
         k: usize,
@@ -351,7 +362,7 @@ impl Fronts<'_> {
         for (i, &r) in rows.iter().enumerate() {
             work.map[r] = c + i;
         }
-        let mut u = work.take(b * b);
+        let mut u = work.take(b * (b + 1) / 2);
         let mut panel = Vec::new();
         let own = if self.store {
             own
@@ -371,7 +382,8 @@ impl Fronts<'_> {
                 }
             }
         }
-        // extend-add: each child's pattern lies in this front, in the same order
+        // extend-add: each child's pattern lies in this front, in the same order, so a column
+        // of a child's update lands in one column of the front, from its diagonal down
         for (&child, update) in self.tree.children(k).iter().zip(updates) {
             let rows = pattern(child);
             let bc = rows.len();
@@ -381,17 +393,20 @@ impl Fronts<'_> {
                     .map(|&r| if r < end { r - start } else { work.map[r] }),
             );
             for (jj, &lc) in work.locs.iter().enumerate() {
-                let from = &update[jj * bc + jj..(jj + 1) * bc];
-                let to = if lc < c {
+                let from = &update[packed_start(jj, bc)..packed_start(jj + 1, bc)];
+                // the column's entries from row `base` of the front on
+                let (to, base) = if lc < c {
                     let col = l.rb_mut().col_mut(lc).try_as_col_major_mut();
-                    col.expect("a column of a column-major slice")
-                        .as_slice_mut()
+                    let col = col
+                        .expect("a column of a column-major slice")
+                        .as_slice_mut();
+                    (col, 0)
                 } else {
-                    &mut u[(lc - c) * b..(lc - c + 1) * b]
+                    let j = lc - c;
+                    (&mut u[packed_start(j, b)..packed_start(j + 1, b)], lc)
                 };
-                let shift = if lc < c { 0 } else { c };
                 for (&li, &v) in work.locs[jj..].iter().zip(from) {
-                    to[li - shift] += v;
+                    to[li - base] += v;
                 }
             }
             work.give(update);
@@ -428,17 +443,36 @@ impl Fronts<'_> {
                 let d = top[(j, j)].recip();
                 bottom.rb_mut().col_mut(j).iter_mut().for_each(|x| *x *= d);
             }
-            triangular_matmul(
-                MatMut::from_column_major_slice_mut(&mut u, b, b),
-                BlockStructure::TriangularLower,
-                Accum::Add,
-                bottom.rb(),
-                BlockStructure::Rectangular,
-                w.rb().transpose(),
-                BlockStructure::Rectangular,
-                -1.0,
-                par,
-            );
+            // by panels of columns, each computed as a lower-triangular block on top of a
+            // rectangle into scratch and subtracted from the packed `U`: no square `b x b`
+            let w = w.rb();
+            for j0 in (0..b).step_by(UPDATE_PANEL) {
+                let (width, height) = (UPDATE_PANEL.min(b - j0), b - j0);
+                work.panel.clear();
+                work.panel.resize(height * width, 0.0);
+                let mut t = MatMut::from_column_major_slice_mut(&mut work.panel, height, width);
+                let (diagonal, rest) = t.rb_mut().split_at_row_mut(width);
+                let (l_top, l_rest) = bottom.rb().subrows(j0, height).split_at_row(width);
+                let w_panel = w.subrows(j0, width).transpose();
+                triangular_matmul(
+                    diagonal,
+                    BlockStructure::TriangularLower,
+                    Accum::Replace,
+                    l_top,
+                    BlockStructure::Rectangular,
+                    w_panel,
+                    BlockStructure::Rectangular,
+                    1.0,
+                    par,
+                );
+                matmul(rest, Accum::Replace, l_rest, w_panel, 1.0, par);
+                for jj in 0..width {
+                    let j = j0 + jj;
+                    let col = &mut u[packed_start(j, b)..packed_start(j + 1, b)];
+                    let from = &work.panel[jj * height + jj..(jj + 1) * height];
+                    col.iter_mut().zip(from).for_each(|(x, v)| *x -= v);
+                }
+            }
         }
         if !self.store {
             work.give(panel);
@@ -457,6 +491,8 @@ struct Workspace {
     locs: Vec<usize>,
     /// `L_b D` of the current front
     w: Vec<f64>,
+    /// a panel of `L_b D L_b^T`, before it is subtracted from the packed update matrix
+    panel: Vec<f64>,
     /// update matrices already added to their parent, for reuse
     pool: Vec<Vec<f64>>,
     /// whether more fronts follow (a sequential task): else nothing is kept
@@ -469,6 +505,7 @@ impl Workspace {
             map: vec![0; n],
             locs: Vec::new(),
             w: Vec::new(),
+            panel: Vec::new(),
             pool: Vec::new(),
             reuse,
         }
