@@ -369,7 +369,7 @@ impl SymbolicFactor {
     ) -> Result<Ldlt, SparseError> {
         let view = self.values_view(pattern, values)?;
         if let Some((s, tree)) = self.subtree_parallel() {
-            let (values, inertia) = self.multifrontal(s, tree, view, true, name)?;
+            let (values, inertia) = self.multifrontal(s, tree, Ok(view), true, name)?;
             return Ok(Ldlt {
                 symbolic: self.clone(),
                 values,
@@ -400,9 +400,53 @@ impl SymbolicFactor {
             if let Ok(mut spare) = self.spare.0.lock() {
                 *spare = Vec::new();
             }
-            return Ok(self.multifrontal(s, tree, view, false, name)?.1);
+            return Ok(self.multifrontal(s, tree, Ok(view), false, name)?.1);
         }
         Ok(self.faer_ldlt(view, name)?.inertia)
+    }
+
+    /// [`SymbolicFactor::ldlt_values`] of `sum_t scale_t A_t` (`terms`), where `pattern` is the
+    /// analysed matrix and every `A_t` a symmetric matrix stored with both triangles whose pattern
+    /// lies inside `pattern`'s (the caller checks both: `Pencil` does for `K - sigma M`). The
+    /// subtree-parallel factorization reads the terms where they are, so neither the sum's
+    /// values nor a permuted copy of the matrix is held; faer's factorization gets `values()`,
+    /// the sum on `pattern`'s structure.
+    pub(crate) fn ldlt_sum(
+        &self,
+        pattern: &SparseMatrix,
+        terms: &[(&SparseMatrix, f64)],
+        values: impl FnOnce() -> Vec<f64>,
+        name: &'static str,
+    ) -> Result<Ldlt, SparseError> {
+        self.check(pattern)?;
+        if let Some((s, tree)) = self.subtree_parallel() {
+            let (values, inertia) = self.multifrontal(s, tree, Err(terms), true, name)?;
+            return Ok(Ldlt {
+                symbolic: self.clone(),
+                values,
+                inertia,
+            });
+        }
+        self.ldlt_values(pattern, &values(), name)
+    }
+
+    /// [`SymbolicFactor::inertia_values`] of `sum_t scale_t A_t`, as in
+    /// [`SymbolicFactor::ldlt_sum`].
+    pub(crate) fn inertia_sum(
+        &self,
+        pattern: &SparseMatrix,
+        terms: &[(&SparseMatrix, f64)],
+        values: impl FnOnce() -> Vec<f64>,
+        name: &'static str,
+    ) -> Result<Inertia, SparseError> {
+        self.check(pattern)?;
+        if let Some((s, tree)) = self.subtree_parallel() {
+            if let Ok(mut spare) = self.spare.0.lock() {
+                *spare = Vec::new();
+            }
+            return Ok(self.multifrontal(s, tree, Err(terms), false, name)?.1);
+        }
+        self.inertia_values(pattern, &values(), name)
     }
 
     /// faer's own left-looking supernodal `LDL^T` (one supernode after another, threads inside
@@ -494,36 +538,42 @@ impl SymbolicFactor {
         &self,
         s: &faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<usize>,
         tree: &crate::multifrontal::Tree,
-        view: SparseColMatRef<'_, usize, f64>,
+        view: Result<SparseColMatRef<'_, usize, f64>, &[(&SparseMatrix, f64)]>,
         store: bool,
         name: &'static str,
     ) -> Result<(Vec<f64>, Inertia), SparseError> {
         let n = self.n;
-        let (mut val, mut col_ptr, mut row_idx) = (
-            vec![0.0; self.lower_nnz],
-            vec![0usize; n + 1],
-            vec![0usize; self.lower_nnz],
-        );
+        let (mut val, mut col_ptr, mut row_idx) = (Vec::new(), Vec::new(), Vec::new());
         let permuted;
-        let lower = match self.inner.perm() {
-            Some(perm) => {
-                let mut mem = MemBuffer::new(faer::sparse::utils::permute_self_adjoint_scratch::<
-                    usize,
-                >(n));
-                permuted = faer::sparse::utils::permute_self_adjoint_to_unsorted(
-                    &mut val,
-                    &mut col_ptr,
-                    &mut row_idx,
-                    view,
-                    perm,
-                    Side::Lower,
-                    Side::Lower,
-                    MemStack::new(&mut mem),
-                );
-                permuted.rb()
-            }
-            // the full symmetric matrix: the factorization reads its lower triangle
-            None => view,
+        let entries = match (view, self.inner.perm()) {
+            // read in place: no copy
+            (Err(terms), perm) => crate::multifrontal::Entries::Sum {
+                terms: terms.to_vec(),
+                perm: perm.map(|p| p.arrays()),
+            },
+            (Ok(view), perm) => crate::multifrontal::Entries::Lower(match perm {
+                Some(perm) => {
+                    val.resize(self.lower_nnz, 0.0);
+                    col_ptr.resize(n + 1, 0usize);
+                    row_idx.resize(self.lower_nnz, 0usize);
+                    let mut mem = MemBuffer::new(
+                        faer::sparse::utils::permute_self_adjoint_scratch::<usize>(n),
+                    );
+                    permuted = faer::sparse::utils::permute_self_adjoint_to_unsorted(
+                        &mut val,
+                        &mut col_ptr,
+                        &mut row_idx,
+                        view,
+                        perm,
+                        Side::Lower,
+                        Side::Lower,
+                        MemStack::new(&mut mem),
+                    );
+                    permuted.rb()
+                }
+                // the full symmetric matrix: the factorization reads its lower triangle
+                None => view,
+            }),
         };
         let mut values = Vec::new();
         if store {
@@ -544,12 +594,13 @@ impl SymbolicFactor {
         }
         let threads = rayon::current_num_threads();
         let slot = store.then_some(&mut values[..]);
-        let inertia = crate::multifrontal::factor(tree, s, lower, slot, threads).map_err(|k| {
-            SparseError::Singular {
-                matrix: name,
-                index: self.original_index(k),
-            }
-        })?;
+        let inertia =
+            crate::multifrontal::factor(tree, s, &entries, slot, threads).map_err(|k| {
+                SparseError::Singular {
+                    matrix: name,
+                    index: self.original_index(k),
+                }
+            })?;
         Ok((values, inertia))
     }
 }

@@ -410,8 +410,14 @@ impl<'a> Pencil<'a> {
     /// # Errors
     /// [`SparseError::Singular`] when `sigma` is (numerically exactly) an eigenvalue.
     pub fn factor_shifted(&self, sigma: f64) -> Result<Ldlt, SparseError> {
-        self.symbolic
-            .ldlt_values(self.k, &self.shifted_values(sigma), "K - sigma M")
+        // K and M are read where they are (both triangles stored, M's pattern inside K's:
+        // checked in `build`)
+        self.symbolic.ldlt_sum(
+            self.k,
+            &[(self.k, 1.0), (self.m, -sigma)],
+            || self.shifted_values(sigma),
+            "K - sigma M",
+        )
     }
 
     /// The values of `K - sigma M` on `K`'s pattern (what [`Pencil::factor_shifted`] factors).
@@ -465,10 +471,14 @@ impl<'a> Pencil<'a> {
     /// As [`Pencil::factor_shifted`].
     pub fn count_below(&self, sigma: f64) -> Result<usize, SparseError> {
         // the inertia alone: no factor is kept (SymbolicFactor::inertia_values)
-        let values = self.shifted_values(sigma);
         Ok(self
             .symbolic
-            .inertia_values(self.k, &values, "K - sigma M")?
+            .inertia_sum(
+                self.k,
+                &[(self.k, 1.0), (self.m, -sigma)],
+                || self.shifted_values(sigma),
+                "K - sigma M",
+            )?
             .negative)
     }
 

@@ -234,18 +234,65 @@ fn front_flops(c: usize, b: usize) -> f64 {
         .sum()
 }
 
+/// The matrix a factorization reads, column by column in the analysis's (permuted) order.
+pub(crate) enum Entries<'a> {
+    /// A permuted copy of its lower triangle (row indices unsorted).
+    Lower(SparseColMatRef<'a, usize, f64>),
+    /// `sum_t scale_t A_t` of symmetric matrices stored with both triangles in the original order
+    /// (each pattern inside the analysed one), read where they are: column `j` of the permuted
+    /// matrix's lower triangle is column `fwd[j]` of each `A_t` at the rows `i` with
+    /// `inv[i] >= j`. No copy of the matrix, no values of the sum are ever held
+    /// (`K - sigma M` of an eigensolve: docs/SCALING.md, "Memory").
+    Sum {
+        /// `(A_t, scale_t)`
+        terms: Vec<(&'a crate::SparseMatrix, f64)>,
+        /// the ordering, `fwd[new] = old` and `inv[old] = new` (`None`: the identity)
+        perm: Option<(&'a [usize], &'a [usize])>,
+    },
+}
+
+impl Entries<'_> {
+    /// `add(i, v)` for the entries `(i, j)` with `i >= j` of column `j` (permuted indices); the
+    /// entries of a sum come one term after another.
+    fn lower_of_col(&self, j: usize, mut add: impl FnMut(usize, f64)) {
+        match self {
+            Entries::Lower(a) => {
+                for (i, &v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+                    if i >= j {
+                        add(i, v);
+                    }
+                }
+            }
+            Entries::Sum { terms, perm } => {
+                let old = perm.map_or(j, |(fwd, _)| fwd[j]);
+                for (a, scale) in terms {
+                    let ptr = a.indptr();
+                    let range = ptr.outer_inds_sz(old);
+                    let (rows, values) = (&a.indices()[range.clone()], &a.data()[range]);
+                    for (&r, &v) in rows.iter().zip(values) {
+                        let i = perm.map_or(r, |(_, inv)| inv[r]);
+                        if i >= j {
+                            add(i, scale * v);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 struct Fronts<'a> {
     tree: &'a Tree,
     symbolic: &'a SymbolicSupernodalCholesky<usize>,
-    /// the permuted matrix, lower triangle (row indices unsorted)
-    a: SparseColMatRef<'a, usize, f64>,
+    /// the matrix
+    a: &'a Entries<'a>,
     /// whether the factor is kept (else each front's columns are scratch: the inertia only)
     store: bool,
     sequential_below: f64,
     threads: usize,
 }
 
-/// The numeric `LDL^T` of the permuted lower triangle `a` on up to `threads` threads, with the
+/// The numeric `LDL^T` of the matrix `a` on up to `threads` threads, with the
 /// signs of its pivots. With `values` (faer's supernodal layout, zeroed) the factor is stored
 /// there; without, only the signs are kept and no factor is ever held: the memory of one front
 /// at a time per thread (a Sturm count).
@@ -255,7 +302,7 @@ struct Fronts<'a> {
 pub(crate) fn factor(
     tree: &Tree,
     symbolic: &SymbolicSupernodalCholesky<usize>,
-    a: SparseColMatRef<'_, usize, f64>,
+    a: &Entries<'_>,
     values: Option<&mut [f64]>,
     threads: usize,
 ) -> Result<Inertia, usize> {
@@ -376,11 +423,10 @@ impl Fronts<'_> {
             let col = col
                 .expect("a column of a column-major slice")
                 .as_slice_mut();
-            for (i, &v) in self.a.row_idx_of_col(j).zip(self.a.val_of_col(j)) {
-                if i >= j {
-                    col[if i < end { i - start } else { work.map[i] }] += v;
-                }
-            }
+            let map = &work.map;
+            self.a.lower_of_col(j, |i, v| {
+                col[if i < end { i - start } else { map[i] }] += v;
+            });
         }
         // extend-add: each child's pattern lies in this front, in the same order, so a column
         // of a child's update lands in one column of the front, from its diagonal down

@@ -422,7 +422,9 @@ fn nested_dissection_is_the_same_on_concurrent_threads() {
 /// on one, two and three threads, and again after the first factor was dropped (its values are
 /// reused: a leftover of the old factor would change the solution). On one thread the solve is
 /// faer's supernodal one, on more (for the 30^3 grid, whose factor is large enough) femu's
-/// subtree-parallel one: both against faer's solve with faer's factor.
+/// subtree-parallel one: both against faer's solve with faer's factor. The eigensolver's
+/// factorization of `K - sigma M` (`Pencil`, `M = I`), which reads `K` and `M` in place instead of
+/// their sum, gives the same inertia, count and solutions.
 #[test]
 fn subtree_parallel_ldlt_agrees_with_left_looking_and_the_analytic_inertia() {
     for (nn, sigma) in [(14, 0.0), (14, 1.3), (30, -0.5), (30, 0.4)] {
@@ -506,6 +508,24 @@ fn subtree_parallel_ldlt_agrees_with_left_looking_and_the_analytic_inertia() {
             assert!(
                 first.1 == second.1,
                 "{nn}, {sigma}, {threads}: reused values"
+            );
+            // the eigensolver's factors of K - sigma M, read from K and M where they are (here
+            // M = I, whose pattern is only the diagonal of K's)
+            let (shifted, shifted_count) = pool.install(|| {
+                let m = SparseMatrix::eye(n);
+                let pencil = Pencil::new(&a, &m, Ordering::NestedDissection).unwrap();
+                let f = pencil.factor_shifted(sigma).unwrap();
+                ((f.inertia(), solve(&f)), pencil.count_below(sigma).unwrap())
+            });
+            assert_eq!(shifted.0, reference.inertia(), "{nn}, {sigma}: K - sigma M");
+            assert_eq!(
+                shifted_count, below,
+                "{nn}, {sigma}: the count of K - sigma M"
+            );
+            let diff = largest_difference(&shifted.1);
+            assert!(
+                diff < 100.0 * f64::EPSILON * kappa * scale,
+                "{nn}, {sigma}, {threads}: K - sigma M {diff:e} (kappa {kappa:e})"
             );
         }
     }
