@@ -1018,20 +1018,37 @@ impl Columns {
     fn clear(&mut self) {
         self.data.clear();
     }
-    /// Keeps columns `from..` only.
-    fn drop_front(&mut self, from: usize) {
-        self.data.drain(..from * self.n);
-    }
-    /// Appends the columns of `other`.
-    fn push_all(&mut self, other: &Columns) {
-        self.data.extend_from_slice(&other.data);
-    }
-    /// Appends the columns of `a`.
-    fn extend_mat(&mut self, a: faer::MatRef<'_, f64>) {
-        self.data.reserve(a.nrows() * a.ncols());
-        for j in 0..a.ncols() {
-            self.data.extend(a.col(j).iter());
+    /// Replaces the first `m` columns `V` by the `k` columns `V S` (`s` is `m x k`, `k <= m`);
+    /// the columns after them follow. In place, by blocks of rows (each row of `V S` needs only
+    /// that row of `V`), on the rayon threads: no copy of the basis is held (docs/SCALING.md,
+    /// "Memory").
+    fn rotate_front(&mut self, m: usize, s: faer::MatRef<'_, f64>) {
+        fn rows(v: faer::MatMut<'_, f64>, s: faer::MatRef<'_, f64>) {
+            const ROWS: usize = 4096;
+            if v.nrows() > ROWS {
+                let half = v.nrows() / 2;
+                let (top, bottom) = v.split_at_row_mut(half);
+                rayon::join(|| rows(top, s), || rows(bottom, s));
+                return;
+            }
+            let mut t = Mat::<f64>::zeros(v.nrows(), s.ncols());
+            faer::linalg::matmul::matmul(
+                t.as_mut(),
+                faer::Accum::Replace,
+                v.as_ref(),
+                s,
+                1.0,
+                faer::Par::Seq,
+            );
+            v.subcols_mut(0, s.ncols()).copy_from(&t);
         }
+        let (n, k) = (self.n, s.ncols());
+        debug_assert!(s.nrows() == m && k <= m && m <= self.len());
+        rows(
+            faer::MatMut::from_column_major_slice_mut(&mut self.data[..m * n], n, m),
+            s,
+        );
+        self.data.drain(k * n..m * n);
     }
 }
 
@@ -1568,10 +1585,8 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         let keep = &keep[..kk];
         let extra = basis.len() - m;
         let sk = Mat::from_fn(m, kk, |j, c| eig.eigenvectors[(j, keep[c])]);
-        let mut nb = Columns::new(self.n);
-        nb.extend_mat((basis.range(0, m) * &sk).as_ref());
-        let mut nmb = Columns::new(self.n);
-        nmb.extend_mat((mbasis.range(0, m) * &sk).as_ref());
+        basis.rotate_front(m, sk.as_ref());
+        mbasis.rotate_front(m, sk.as_ref());
         let mut nh: Vec<Vec<f64>> = Vec::with_capacity(kk);
         for (i, r) in keep.iter().enumerate() {
             let mut col = vec![0.0; kk + extra];
@@ -1581,12 +1596,6 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             }
             nh.push(col);
         }
-        basis.drop_front(m);
-        mbasis.drop_front(m);
-        nb.push_all(basis);
-        nmb.push_all(mbasis);
-        *basis = nb;
-        *mbasis = nmb;
         *h = nh;
     }
 
