@@ -605,3 +605,34 @@ fn symmetry_defect_matches_the_dense_entrywise_maximum() {
         }
     }
 }
+
+/// The eigensolver reads `K` and `M` in place, so `M`'s pattern must lie inside `K`'s: an entry
+/// of `M` that `K` does not store is an error naming its column and row, not a wrong factor; a
+/// diagonal `M` (inside) is accepted, and its shifted values are `K`'s with `sigma` off the
+/// diagonal's entries, as written out here.
+#[test]
+fn mass_entries_outside_the_stiffness_pattern_are_refused() {
+    let k = laplacian_3d(4);
+    let n = k.rows();
+    let mut t = TriMat::new((n, n));
+    for i in 0..n {
+        t.add_triplet(i, i, 1.0);
+    }
+    // (0, n - 1): the grid's first and last nodes are not neighbours
+    t.add_triplet(0, n - 1, 0.1);
+    t.add_triplet(n - 1, 0, 0.1);
+    let m: SparseMatrix = t.to_csc();
+    match Pencil::new(&k, &m, Ordering::NestedDissection) {
+        Err(SparseError::DimensionMismatch { expected, got, .. }) => {
+            assert_eq!((expected, got), (0, n - 1))
+        }
+        other => panic!("{other:?}"),
+    }
+    let eye = SparseMatrix::eye(n);
+    let pencil = Pencil::new(&k, &eye, Ordering::NestedDissection).unwrap();
+    let shifted = pencil.shifted_values(2.5);
+    for ((v, (r, c)), s) in k.iter().zip(&shifted) {
+        let expected = if r == c { v - 2.5 } else { *v };
+        assert_eq!(*s, expected, "({r}, {c})");
+    }
+}
