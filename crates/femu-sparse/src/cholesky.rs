@@ -369,7 +369,7 @@ impl SymbolicFactor {
     ) -> Result<Ldlt, SparseError> {
         let view = self.values_view(pattern, values)?;
         if let Some((s, tree)) = self.subtree_parallel() {
-            let (values, inertia) = self.multifrontal(s, tree, Ok(view), true, name)?;
+            let (values, inertia) = self.multifrontal(s, tree, Input::Values(view), true, name)?;
             return Ok(Ldlt {
                 symbolic: self.clone(),
                 values,
@@ -400,7 +400,9 @@ impl SymbolicFactor {
             if let Ok(mut spare) = self.spare.0.lock() {
                 *spare = Vec::new();
             }
-            return Ok(self.multifrontal(s, tree, Ok(view), false, name)?.1);
+            return Ok(self
+                .multifrontal(s, tree, Input::Values(view), false, name)?
+                .1);
         }
         Ok(self.faer_ldlt(view, name)?.inertia)
     }
@@ -420,7 +422,7 @@ impl SymbolicFactor {
     ) -> Result<Ldlt, SparseError> {
         self.check(pattern)?;
         if let Some((s, tree)) = self.subtree_parallel() {
-            let (values, inertia) = self.multifrontal(s, tree, Err(terms), true, name)?;
+            let (values, inertia) = self.multifrontal(s, tree, Input::Sum(terms), true, name)?;
             return Ok(Ldlt {
                 symbolic: self.clone(),
                 values,
@@ -444,7 +446,9 @@ impl SymbolicFactor {
             if let Ok(mut spare) = self.spare.0.lock() {
                 *spare = Vec::new();
             }
-            return Ok(self.multifrontal(s, tree, Err(terms), false, name)?.1);
+            return Ok(self
+                .multifrontal(s, tree, Input::Sum(terms), false, name)?
+                .1);
         }
         self.inertia_values(pattern, &values(), name)
     }
@@ -531,27 +535,27 @@ impl SymbolicFactor {
         })
     }
 
-    /// The subtree-parallel multifrontal `LDL^T` of `view` on the rayon threads
+    /// The subtree-parallel multifrontal `LDL^T` of `input` on the rayon threads
     /// (docs/SCALING.md, "A subtree-parallel factorization"): the factor in faer's supernodal
     /// layout when `store` (else empty) and the inertia.
     fn multifrontal(
         &self,
         s: &faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<usize>,
         tree: &crate::multifrontal::Tree,
-        view: Result<SparseColMatRef<'_, usize, f64>, &[(&SparseMatrix, f64)]>,
+        input: Input<'_>,
         store: bool,
         name: &'static str,
     ) -> Result<(Vec<f64>, Inertia), SparseError> {
         let n = self.n;
         let (mut val, mut col_ptr, mut row_idx) = (Vec::new(), Vec::new(), Vec::new());
         let permuted;
-        let entries = match (view, self.inner.perm()) {
+        let entries = match (input, self.inner.perm()) {
             // read in place: no copy
-            (Err(terms), perm) => crate::multifrontal::Entries::Sum {
+            (Input::Sum(terms), perm) => crate::multifrontal::Entries::Sum {
                 terms: terms.to_vec(),
                 perm: perm.map(|p| p.arrays()),
             },
-            (Ok(view), perm) => crate::multifrontal::Entries::Lower(match perm {
+            (Input::Values(view), perm) => crate::multifrontal::Entries::Lower(match perm {
                 Some(perm) => {
                     val.resize(self.lower_nnz, 0.0);
                     col_ptr.resize(n + 1, 0usize);
@@ -603,6 +607,14 @@ impl SymbolicFactor {
             })?;
         Ok((values, inertia))
     }
+}
+
+/// What `SymbolicFactor::multifrontal` factors.
+enum Input<'a> {
+    /// Values on the analysed pattern (a permuted copy of its lower triangle is made).
+    Values(SparseColMatRef<'a, usize, f64>),
+    /// `sum_t scale_t A_t`, read in place (`SymbolicFactor::ldlt_sum`).
+    Sum(&'a [(&'a SparseMatrix, f64)]),
 }
 
 /// Stored entries on and below the diagonal of `a`.
