@@ -368,15 +368,10 @@ impl SymbolicFactor {
         name: &'static str,
     ) -> Result<Ldlt, SparseError> {
         let view = self.values_view(pattern, values)?;
-        if let Some((s, tree)) = self.subtree_parallel() {
-            let (values, inertia) = self.multifrontal(s, tree, Input::Values(view), true, name)?;
-            return Ok(Ldlt {
-                symbolic: self.clone(),
-                values,
-                inertia,
-            });
+        match self.multifrontal(Input::Values(view), true, name) {
+            Some(factor) => factor.map(|(values, inertia)| self.ldlt_of(values, inertia)),
+            None => self.faer_ldlt(view, name),
         }
-        self.faer_ldlt(view, name)
     }
 
     /// The inertia of the matrix with `pattern`'s structure and the given values, as
@@ -394,17 +389,10 @@ impl SymbolicFactor {
         name: &'static str,
     ) -> Result<Inertia, SparseError> {
         let view = self.values_view(pattern, values)?;
-        if let Some((s, tree)) = self.subtree_parallel() {
-            // a count ends a solve (the Sturm check): the kept values are freed first, so that
-            // its fronts do not add to them
-            if let Ok(mut spare) = self.spare.0.lock() {
-                *spare = Vec::new();
-            }
-            return Ok(self
-                .multifrontal(s, tree, Input::Values(view), false, name)?
-                .1);
+        match self.multifrontal(Input::Values(view), false, name) {
+            Some(count) => count.map(|(_, inertia)| inertia),
+            None => Ok(self.faer_ldlt(view, name)?.inertia),
         }
-        Ok(self.faer_ldlt(view, name)?.inertia)
     }
 
     /// [`SymbolicFactor::ldlt_values`] of `sum_t scale_t A_t` (`terms`), where `pattern` is the
@@ -421,15 +409,10 @@ impl SymbolicFactor {
         name: &'static str,
     ) -> Result<Ldlt, SparseError> {
         self.check(pattern)?;
-        if let Some((s, tree)) = self.subtree_parallel() {
-            let (values, inertia) = self.multifrontal(s, tree, Input::Sum(terms), true, name)?;
-            return Ok(Ldlt {
-                symbolic: self.clone(),
-                values,
-                inertia,
-            });
+        match self.multifrontal(Input::Sum(terms), true, name) {
+            Some(factor) => factor.map(|(values, inertia)| self.ldlt_of(values, inertia)),
+            None => self.ldlt_values(pattern, &values(), name),
         }
-        self.ldlt_values(pattern, &values(), name)
     }
 
     /// [`SymbolicFactor::inertia_values`] of `sum_t scale_t A_t`, as in
@@ -442,15 +425,10 @@ impl SymbolicFactor {
         name: &'static str,
     ) -> Result<Inertia, SparseError> {
         self.check(pattern)?;
-        if let Some((s, tree)) = self.subtree_parallel() {
-            if let Ok(mut spare) = self.spare.0.lock() {
-                *spare = Vec::new();
-            }
-            return Ok(self
-                .multifrontal(s, tree, Input::Sum(terms), false, name)?
-                .1);
+        match self.multifrontal(Input::Sum(terms), false, name) {
+            Some(count) => count.map(|(_, inertia)| inertia),
+            None => self.inertia_values(pattern, &values(), name),
         }
-        self.inertia_values(pattern, &values(), name)
     }
 
     /// faer's own left-looking supernodal `LDL^T` (one supernode after another, threads inside
@@ -535,10 +513,35 @@ impl SymbolicFactor {
         })
     }
 
+    /// An `LDL^T` of this analysis with its values and inertia.
+    fn ldlt_of(&self, values: Vec<f64>, inertia: Inertia) -> Ldlt {
+        Ldlt {
+            symbolic: self.clone(),
+            values,
+            inertia,
+        }
+    }
+
     /// The subtree-parallel multifrontal `LDL^T` of `input` on the rayon threads
     /// (docs/SCALING.md, "A subtree-parallel factorization"): the factor in faer's supernodal
-    /// layout when `store` (else empty) and the inertia.
+    /// layout when `store` (else empty) and the inertia; `None` when the analysis is not
+    /// supernodal with a tree (the caller then uses faer's). Without `store` (a count, which
+    /// ends a solve: the Sturm check) the values a dropped factor left for reuse are freed first,
+    /// so that the fronts do not add to them.
     fn multifrontal(
+        &self,
+        input: Input<'_>,
+        store: bool,
+        name: &'static str,
+    ) -> Option<Result<(Vec<f64>, Inertia), SparseError>> {
+        let (s, tree) = self.subtree_parallel()?;
+        if !store && let Ok(mut spare) = self.spare.0.lock() {
+            *spare = Vec::new();
+        }
+        Some(self.multifrontal_on(s, tree, input, store, name))
+    }
+
+    fn multifrontal_on(
         &self,
         s: &faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<usize>,
         tree: &crate::multifrontal::Tree,

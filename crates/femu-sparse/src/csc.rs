@@ -122,6 +122,38 @@ pub fn check_symmetric(a: &SparseMatrix, name: &'static str, tol: f64) -> Result
     Ok(())
 }
 
+/// `f(position in a's values, position in pattern's values)` for every stored entry of `a`, or
+/// [`SparseError::DimensionMismatch`] (its column and row) at the first entry of `a` that
+/// `pattern` does not store: `M` on `K`'s pattern, for `K - sigma M` formed or read entry by
+/// entry. Both in CSC with sorted row indices and the same number of columns. The eigensolver
+/// finds the positions again each time instead of keeping them (a `usize` per entry of `M`,
+/// 129 MB on the 199,200-DOF plate; docs/SCALING.md, "Memory").
+///
+/// # Errors
+/// As above.
+pub fn for_entries_within(
+    pattern: &SparseMatrix,
+    a: &SparseMatrix,
+    mut f: impl FnMut(usize, usize),
+) -> Result<(), SparseError> {
+    let (kp, mp) = (pattern.indptr(), a.indptr());
+    let (kp, mp) = (kp.raw_storage(), mp.raw_storage());
+    for c in 0..pattern.cols().min(a.cols()) {
+        let krows = &pattern.indices()[kp[c]..kp[c + 1]];
+        for (pm, &r) in (mp[c]..mp[c + 1]).zip(&a.indices()[mp[c]..mp[c + 1]]) {
+            let pos = krows
+                .binary_search(&r)
+                .map_err(|_| SparseError::DimensionMismatch {
+                    what: "pattern of M inside the pattern of K (entry of M missing from K)",
+                    expected: c,
+                    got: r,
+                })?;
+            f(pm, kp[c] + pos);
+        }
+    }
+    Ok(())
+}
+
 /// The diagonal of a square matrix (zeros where nothing is stored).
 pub fn diagonal(a: &SparseMatrix) -> Vec<f64> {
     let mut d = vec![0.0; a.rows().min(a.cols())];

@@ -362,7 +362,7 @@ impl<'a> Pencil<'a> {
             });
         }
         // M's pattern inside K's (the factorizations read both in place): checked, not stored
-        for_m_in_k(k, m, |_, _| {})?;
+        crate::csc::for_entries_within(k, m, |_, _| {})?;
         let t = Instant::now();
         let symbolic = match symbolic {
             Ok(s) => s,
@@ -406,7 +406,7 @@ impl<'a> Pencil<'a> {
     /// The values of `K - sigma M` on `K`'s pattern (what [`Pencil::factor_shifted`] factors).
     pub fn shifted_values(&self, sigma: f64) -> Vec<f64> {
         let mut values = self.k.data().to_vec();
-        for_m_in_k(self.k, self.m, |pm, pk| {
+        crate::csc::for_entries_within(self.k, self.m, |pm, pk| {
             values[pk] -= sigma * self.m.data()[pm];
         })
         .expect("M's pattern inside K's, checked by the pencil");
@@ -881,33 +881,6 @@ impl<'a> Pencil<'a> {
         });
         (sel, lower, upper)
     }
-}
-
-/// `f(position in M's values, position in K's values)` for every stored entry of `M`, or
-/// [`SparseError::DimensionMismatch`] at the first entry of `M` that `K` does not store. (The
-/// positions are found again each time instead of being kept: a `usize` per entry of `M`, 129 MB
-/// on the 199,200-DOF plate.)
-fn for_m_in_k(
-    k: &SparseMatrix,
-    m: &SparseMatrix,
-    mut f: impl FnMut(usize, usize),
-) -> Result<(), SparseError> {
-    let (kp, mp) = (k.indptr(), m.indptr());
-    let (kp, mp) = (kp.raw_storage(), mp.raw_storage());
-    for c in 0..k.cols() {
-        let krows = &k.indices()[kp[c]..kp[c + 1]];
-        for (pm, &r) in (mp[c]..mp[c + 1]).zip(&m.indices()[mp[c]..mp[c + 1]]) {
-            let pos = krows
-                .binary_search(&r)
-                .map_err(|_| SparseError::DimensionMismatch {
-                    what: "pattern of M inside the pattern of K (entry of M missing from K)",
-                    expected: c,
-                    got: r,
-                })?;
-            f(pm, kp[c] + pos);
-        }
-    }
-    Ok(())
 }
 
 /// Computes modes of `(K, M)`: a one-call front end of [`Pencil`].

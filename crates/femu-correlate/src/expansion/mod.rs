@@ -109,24 +109,8 @@ fn place(n: usize, measured: &[usize], ya: MatRef<'_, f64>) -> Mat<f64> {
 /// # Errors
 /// An entry of `M` outside `K`'s pattern.
 pub(crate) fn m_on_pattern(k: &SparseMatrix, m: &SparseMatrix) -> Result<Vec<f64>, CorrelateError> {
-    let n = k.rows();
-    let (kp, mp) = (k.indptr(), m.indptr());
-    let (kp, mp) = (kp.raw_storage(), mp.raw_storage());
     let mut m_on_k = vec![0.0; k.nnz()];
-    for c in 0..n {
-        let mrows = &m.indices()[mp[c]..mp[c + 1]];
-        let krows = &k.indices()[kp[c]..kp[c + 1]];
-        for (q, r) in mrows.iter().enumerate() {
-            let pos = krows
-                .binary_search(r)
-                .map_err(|_| SparseError::DimensionMismatch {
-                    what: "pattern of M inside the pattern of K (entry of M missing from K)",
-                    expected: c,
-                    got: *r,
-                })?;
-            m_on_k[kp[c] + pos] = m.data()[mp[c] + q];
-        }
-    }
+    femu_sparse::csc::for_entries_within(k, m, |pm, pk| m_on_k[pk] = m.data()[pm])?;
     Ok(m_on_k)
 }
 
