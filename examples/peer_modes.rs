@@ -10,7 +10,7 @@
 
 use femu::io::inp::{FrequencyStep, write_inp};
 use femu::prelude::*;
-use femu::sparse::eigen::{EigenOptions, Which, eigs};
+use femu::sparse::eigen::{EigenOptions, Which};
 use std::time::Instant;
 
 fn model(kind: &str, n: usize) -> Result<Model, Box<dyn std::error::Error>> {
@@ -99,7 +99,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         ..Default::default()
                     });
             }
-            let modes = eigs(&sys.k, &sys.m, Which::Lowest(count), &params)?;
+            let modes = sys.modes(Which::Lowest(count), &params)?;
             let t_eigen = t.elapsed().as_secs_f64();
             let s = &modes.stats;
             let f: Vec<String> = modes

@@ -373,6 +373,51 @@ impl DofMap {
         (d / 3, d % 3)
     }
 
+    /// The six rigid-body motions of the nodes at `coords` as free vectors (`free_count() x 6`):
+    /// translations along x, y, z, then rotations about axes through the centroid of the nodes,
+    /// scaled by their largest distance from it so that every column is of order one. A point
+    /// carrying rotations gets the rotation itself. At fixed DOFs the motions are simply absent,
+    /// so a vector is a null vector of `K` only where the supports and constraints allow that
+    /// motion: the eigensolver keeps the combinations that are ([`femu_sparse::eigen::NullSpaceHint`]).
+    ///
+    /// # Panics
+    /// If `coords` has fewer entries than the map's nodes.
+    pub fn rigid_body_motions(&self, coords: &[[f64; 3]]) -> faer::Mat<f64> {
+        let nodes = &coords[..self.node_count];
+        let count = nodes.len().max(1) as f64;
+        let mut c0 = [0.0; 3];
+        for x in nodes {
+            (0..3).for_each(|i| c0[i] += x[i] / count);
+        }
+        let reach = nodes
+            .iter()
+            .map(|x| (0..3).map(|i| (x[i] - c0[i]).powi(2)).sum::<f64>().sqrt())
+            .fold(0.0_f64, f64::max);
+        let scale = if reach > 0.0 { 1.0 / reach } else { 1.0 };
+        faer::Mat::from_fn(self.free_count(), 6, |f, k| {
+            let (p, c) = self.free_dof(f);
+            let (node, rotation) = self.point_node(p);
+            if k < 3 {
+                return if !rotation && c == k { 1.0 } else { 0.0 };
+            }
+            let axis = k - 3;
+            if rotation {
+                return if c == axis { scale } else { 0.0 };
+            }
+            // (e_axis x d)_c with d the node's offset from the centroid
+            let d: [f64; 3] = std::array::from_fn(|i| (nodes[node][i] - c0[i]) * scale);
+            match (axis, c) {
+                (0, 1) => -d[2],
+                (0, 2) => d[1],
+                (1, 0) => d[2],
+                (1, 2) => -d[0],
+                (2, 0) => -d[1],
+                (2, 1) => d[0],
+                _ => 0.0,
+            }
+        })
+    }
+
     /// The translations of every mesh node from a free vector `z`: `u = T z` (zeros at fixed
     /// DOFs, the constraint's combination at dependent ones), `3 * node + component`.
     ///

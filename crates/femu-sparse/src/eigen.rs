@@ -73,6 +73,45 @@ pub struct EigenOptions {
     /// the run does not converge within 8 restarts, is dropped and the solve starts again
     /// without it. `None` (the default): no hint.
     pub lowest_shift_hint: Option<f64>,
+    /// For [`Which::Lowest`]: vectors whose span is expected to hold null vectors of `K`, such as
+    /// a free structure's six rigid-body motions ([`NullSpaceHint`]). The zero-energy modes in
+    /// their span are verified and locked before the iteration starts, so the Lanczos run never
+    /// has to converge them at the tiny shift. `None` (the default): the run finds them itself.
+    pub null_space_hint: Option<NullSpaceHint>,
+}
+
+/// Candidate null vectors of `K` for [`EigenOptions::null_space_hint`]: the columns of an
+/// `n x c` matrix (`c` small), shared, not copied, between the options that hold it.
+///
+/// Nothing is assumed of them: the solver keeps only the combinations that pass the backward-error
+/// test of a converged zero-energy mode (`||K x - lambda M x|| <= 1e-13 (||K||_1 + |lambda|
+/// ||M||_1) ||x||`), so a support, a constraint or a mechanism that the candidates do not describe
+/// costs nothing but the test, and the Sturm count still proves the result complete.
+#[derive(Clone)]
+pub struct NullSpaceHint(std::sync::Arc<Mat<f64>>);
+
+impl NullSpaceHint {
+    /// The hint of the columns of `vectors`.
+    pub fn new(vectors: Mat<f64>) -> Self {
+        Self(std::sync::Arc::new(vectors))
+    }
+
+    /// The candidate vectors, one per column.
+    pub fn vectors(&self) -> faer::MatRef<'_, f64> {
+        self.0.as_ref().as_ref()
+    }
+}
+
+impl std::fmt::Debug for NullSpaceHint {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "NullSpaceHint({} x {})", self.0.nrows(), self.0.ncols())
+    }
+}
+
+impl PartialEq for NullSpaceHint {
+    fn eq(&self, other: &Self) -> bool {
+        std::sync::Arc::ptr_eq(&self.0, &other.0) || *self.0 == *other.0
+    }
 }
 
 impl Default for EigenOptions {
@@ -86,6 +125,7 @@ impl Default for EigenOptions {
             seed: 0x5EED,
             engine: crate::slepc::default_engine(),
             lowest_shift_hint: None,
+            null_space_hint: None,
         }
     }
 }
@@ -151,6 +191,11 @@ const TINY_SHIFT_RESTARTS: usize = 1;
 /// Ritz pairs whose Krylov residual estimate is above this fraction of the tolerance are not
 /// checked for convergence.
 const SCREEN: f64 = 1e-2;
+
+/// A pair is converged when its normwise backward error
+/// `||K x - lambda M x|| / ((||K||_1 + |lambda| ||M||_1) ||x||)` is below this, whatever its other
+/// residuals: a zero-energy mode can only meet this test, its `K x` being round-off.
+const BACKWARD_LOCK: f64 = 1e-13;
 
 /// A mode is zero-energy when `||K x|| <= ZERO_ENERGY ||K||_1 ||x||`: `K x` is then round-off.
 const ZERO_ENERGY: f64 = 1e-11;
@@ -544,6 +589,86 @@ impl<'a> Pencil<'a> {
         self.solve_counted(which, params, None, &mut stats, started)
     }
 
+    /// The zero-energy modes in the span of `hint`'s vectors, M-orthonormal:
+    /// the Rayleigh-Ritz pairs of `(K, M)` on that span (docs/MATH.md, "Known null vectors")
+    /// whose backward error is below [`BACKWARD_LOCK`], the test a pair locked by the iteration
+    /// meets. Combinations the supports or constraints load are not zero-energy and are dropped.
+    fn zero_energy_pairs(&self, hint: &NullSpaceHint) -> Result<Vec<Known>, SparseError> {
+        let r = hint.vectors();
+        if r.nrows() != self.dim() {
+            return Err(SparseError::InvalidRequest {
+                reason: format!(
+                    "the null-space hint has {} rows, the pencil {} DOFs",
+                    r.nrows(),
+                    self.dim()
+                ),
+            });
+        }
+        if let Some((i, j)) = (0..r.ncols())
+            .flat_map(|j| (0..r.nrows()).map(move |i| (i, j)))
+            .find(|&(i, j)| !r[(i, j)].is_finite())
+        {
+            return Err(SparseError::InvalidRequest {
+                reason: format!("the null-space hint's vector {j} is not finite at DOF {i}"),
+            });
+        }
+        let c = r.ncols();
+        if c == 0 {
+            return Ok(vec![]);
+        }
+        let kr = crate::csc::sym_mul_mat(self.k, r)?;
+        let mr = crate::csc::sym_mul_mat(self.m, r)?;
+        let (kc, mc) = (r.transpose() * &kr, r.transpose() * &mr);
+        let sym =
+            |a: &Mat<f64>| nalgebra::DMatrix::from_fn(c, c, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+        // an M-orthonormal basis B of the span (dependent candidates dropped), then the
+        // eigenpairs of B^T K_c B
+        let me = nalgebra::SymmetricEigen::new(sym(&mc));
+        let top = me.eigenvalues.iter().fold(0.0_f64, |a, v| a.max(*v));
+        let keep: Vec<usize> = (0..c)
+            .filter(|&i| me.eigenvalues[i] > 1e-12 * top)
+            .collect();
+        if keep.is_empty() {
+            return Ok(vec![]);
+        }
+        let b = nalgebra::DMatrix::from_fn(c, keep.len(), |i, j| {
+            me.eigenvectors[(i, keep[j])] / me.eigenvalues[keep[j]].sqrt()
+        });
+        let kcn = sym(&kc);
+        let proj = b.transpose() * &kcn * &b;
+        let proj = 0.5 * (&proj + proj.transpose());
+        let ke = nalgebra::SymmetricEigen::new(proj);
+        let coef = &b * &ke.eigenvectors;
+        let mut order: Vec<usize> = (0..keep.len()).collect();
+        order.sort_by(|a, b| ke.eigenvalues[*a].total_cmp(&ke.eigenvalues[*b]));
+        let mut pairs = Vec::new();
+        for j in order {
+            let cj = Mat::from_fn(c, 1, |i, _| coef[(i, j)]);
+            let col = |a: Mat<f64>| -> Vec<f64> { a.col(0).iter().copied().collect() };
+            let x = col(r * &cj);
+            let kx = col(&kr * &cj);
+            let mx = col(&mr * &cj);
+            let lambda = dot(&kx, &x) / dot(&mx, &x).max(f64::MIN_POSITIVE);
+            let res: Vec<f64> = kx.iter().zip(&mx).map(|(k, m)| k - lambda * m).collect();
+            let r_norm = norm(&res);
+            let eta = r_norm
+                / ((self.k_norm + lambda.abs() * self.m_norm) * norm(&x)).max(f64::MIN_POSITIVE);
+            if eta < BACKWARD_LOCK {
+                let (kk, km, mm) = (dot(&kx, &kx), dot(&kx, &mx), dot(&mx, &mx));
+                pairs.push(Known {
+                    x,
+                    mx,
+                    lambda,
+                    r_norm,
+                    kk,
+                    km,
+                    mm,
+                });
+            }
+        }
+        Ok(pairs)
+    }
+
     /// [`Pencil::solve`] from the lowest-mode shift `hint` when given (the probe is then
     /// skipped, and a hint not below the spectrum is [`SparseError::NotPositiveDefinite`]). The
     /// work is added to `stats` whatever the outcome; the result's total time runs from
@@ -628,6 +753,16 @@ impl<'a> Pencil<'a> {
         stats.factorizations += 1;
         // the probe's Krylov basis, continued by the run when the shift stays
         let mut probed = None;
+        // zero-energy modes given by the caller, locked before any solve
+        let mut known = match (which, &params.null_space_hint) {
+            (Which::Lowest(_), Some(h)) => {
+                let t = Instant::now();
+                let pairs = self.zero_energy_pairs(h)?;
+                stats.ritz_seconds += t.elapsed().as_secs_f64();
+                pairs
+            }
+            _ => vec![],
+        };
         if matches!(which, Which::Lowest(_)) && op.inertia().negative > 0 {
             return Err(SparseError::NotPositiveDefinite {
                 matrix: "K (eigenvalues below the negative lowest-mode shift)",
@@ -653,7 +788,7 @@ impl<'a> Pencil<'a> {
                 .max(12)
                 .max((want + 3).min(24));
             for size in [first_size, 2 * first_size, 4 * first_size] {
-                let mut probe = Lanczos::new(self, op, sigma, params);
+                let mut probe = Lanczos::new(self, op, sigma, params, &known);
                 let guess = probe.estimate((want + 3).max(size / 2), size, stats);
                 // the fallback shift: half the first clearly nonzero eigenvalue
                 fallback = guess
@@ -708,8 +843,13 @@ impl<'a> Pencil<'a> {
             });
         }
         let guard = if band.is_some() { 0 } else { 3.min(n - want) };
-        let mut lanczos = Lanczos::new(self, op, sigma, params);
+        let mut lanczos = Lanczos::new(self, op, sigma, params, &known);
         lanczos.probed = probed;
+        if fallback.is_none() {
+            // the run holds its own copy, and only a run moved to the fallback shift needs them
+            // again (19 MB at 199,200 DOF)
+            known = Vec::new();
+        }
         if fallback.is_some() {
             // measured: 0 restarts on the free-free plates of 47,628 and 199,200 DOF; a run that
             // needs more is moved to the fallback shift before it wastes many cycles
@@ -734,7 +874,7 @@ impl<'a> Pencil<'a> {
                     drop(lanczos);
                     let op;
                     (op, sigma) = self.refactor_below(better, sigma, stats)?;
-                    lanczos = Lanczos::new(self, op, sigma, params);
+                    lanczos = Lanczos::new(self, op, sigma, params, &known);
                     continue;
                 }
                 r => r?,
@@ -1002,6 +1142,15 @@ impl Columns {
     fn clear(&mut self) {
         self.data.clear();
     }
+    /// Room for `cols` columns in all, allocated at once: a vector that doubles as it grows holds
+    /// the old and the new storage together while it moves (glibc serves blocks below its mmap
+    /// threshold, which rises to 32 MB, from the heap, where a reallocation copies).
+    fn reserve(&mut self, cols: usize) {
+        let total = cols * self.n;
+        if total > self.data.capacity() {
+            self.data.reserve_exact(total - self.data.len());
+        }
+    }
     /// Replaces the first `m` columns `V` by the `k` columns `V S` (`s` is `m x k`, `k <= m`);
     /// the columns after them follow. In place, by blocks of rows (each row of `V S` needs only
     /// that row of `V`), on the rayon threads: no copy of the basis is held (docs/SCALING.md,
@@ -1063,6 +1212,28 @@ fn project_out(
     c
 }
 
+/// A zero-energy pair locked before the iteration ([`Pencil::zero_energy_pairs`]): the
+/// M-normalised vector, its M image, its Rayleigh quotient and what the shifted residual at any
+/// shift needs (`||r||` with `r = K x - lambda M x`, and the inner products of `K x` and `M x`), so
+/// that no `K` product is repeated for each Lanczos run.
+struct Known {
+    x: Vec<f64>,
+    mx: Vec<f64>,
+    lambda: f64,
+    r_norm: f64,
+    kk: f64,
+    km: f64,
+    mm: f64,
+}
+
+impl Known {
+    /// `||K x - lambda M x|| / ||(K - sigma M) x||`.
+    fn shifted_residual(&self, sigma: f64) -> f64 {
+        let s2 = self.kk - 2.0 * sigma * self.km + sigma * sigma * self.mm;
+        self.r_norm / s2.max(0.0).sqrt().max(f64::MIN_POSITIVE)
+    }
+}
+
 /// A probe's Lanczos cycle: its basis, the basis's M images, the projection `h` (as in
 /// [`Lanczos::run`]), the columns `OP` was applied to, and the random generator's state after it.
 struct Probed {
@@ -1087,6 +1258,8 @@ struct Lanczos<'p, 'a> {
     values: Vec<f64>,
     shifted_res: Vec<f64>,
     force_random_start: bool,
+    /// How many of the locked pairs were given ([`Known`]): they take no room in the basis.
+    known: usize,
     /// The probe's Krylov basis, kept for [`Lanczos::run`] to continue from when the shift stays
     /// where the probe ran.
     probed: Option<Probed>,
@@ -1096,8 +1269,15 @@ struct Lanczos<'p, 'a> {
 }
 
 impl<'p, 'a> Lanczos<'p, 'a> {
-    fn new(pencil: &'p Pencil<'a>, op: Ldlt, sigma: f64, params: &EigenOptions) -> Self {
-        Self {
+    /// A Lanczos iteration at `sigma` with the `known` zero-energy pairs locked from the start.
+    fn new(
+        pencil: &'p Pencil<'a>,
+        op: Ldlt,
+        sigma: f64,
+        params: &EigenOptions,
+        known: &[Known],
+    ) -> Self {
+        let mut lanczos = Self {
             pencil,
             op: Some(op),
             sigma,
@@ -1108,10 +1288,19 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             values: vec![],
             shifted_res: vec![],
             force_random_start: false,
+            known: 0,
             probed: None,
             stop: false,
             rng: params.seed,
+        };
+        for k in known {
+            lanczos.x.push(&k.x);
+            lanczos.mx.push(&k.mx);
+            lanczos.values.push(k.lambda);
+            lanczos.shifted_res.push(k.shifted_residual(sigma));
         }
+        lanczos.known = known.len();
+        lanczos
     }
 
     fn random_vector(&mut self) -> Vec<f64> {
@@ -1372,11 +1561,19 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             let max_basis = if self.params.max_basis > 0 {
                 self.params.max_basis
             } else {
-                // about three times the wanted count, fixed for the whole run: measured at 52,920
-                // DOF, 163 solved vectors and 2 restarts against 207 and 10 at twice the count
-                (3 * want + 2 * p).max(want + 4 * p).max(24)
+                // about three times the count the iteration must find (the given pairs are
+                // deflated, not in the basis), fixed for the whole run: measured at 52,920 DOF,
+                // 163 solved vectors and 2 restarts against 207 and 10 at twice the count; on the
+                // free-free plate of 199,200 DOF with its six rigid-body modes given, 73 solved
+                // vectors and no restart at 59 columns, 75 at 77
+                let find = want.saturating_sub(self.known);
+                (3 * find + 2 * p).max(find + 4 * p).max(24)
             }
             .min(cap);
+            // the whole basis at once (measured: 50 MB of the peak at 47,628 DOF when the basis
+            // and its images doubled from 64 to 128 columns)
+            basis.reserve(max_basis + p);
+            mbasis.reserve(max_basis + p);
             let t = Instant::now();
             if self.force_random_start || applied > max_basis {
                 // Missed modes (or a probe's basis larger than this run's): discard the basis and
@@ -1475,7 +1672,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                     // vanishes and the shifted residual cannot be small: the classical relative
                     // residual decides; rigid-body modes can only meet the backward error.
                     let converged =
-                        rho < self.params.tol || eta < 1e-13 || relative < self.params.tol;
+                        rho < self.params.tol || eta < BACKWARD_LOCK || relative < self.params.tol;
                     locked[r] = converged && self.lock_with(yc, kyc, myc);
                 }
             }

@@ -5,10 +5,11 @@
 //! eigenvalues are sums `mu_i + mu_j (+ mu_k)` of the 1D ones, so a cube's triples and sextuples and
 //! a square's pairs are exact), and its Sturm interval is recounted from the dense spectrum.
 
+use femu_sparse::SparseError;
 use femu_sparse::SparseMatrix;
 use femu_sparse::csc::to_dense;
 use femu_sparse::dense::generalized_symmetric_eigenvalues;
-use femu_sparse::eigen::{EigenOptions, Modes, ResidualKind, Which, eigs};
+use femu_sparse::eigen::{EigenOptions, Modes, NullSpaceHint, ResidualKind, Which, eigs};
 use sprs::TriMat;
 
 /// 1D linear elements on [0, 1] with `ne` elements: `(K, M)` dense, Dirichlet at both ends
@@ -192,8 +193,13 @@ impl Case {
 
     /// The checks every result must pass; returns the result for case-specific ones.
     fn check(&self, which: Which) -> Modes {
-        let modes = eigs(&self.k, &self.m, which, &EigenOptions::default())
-            .unwrap_or_else(|e| panic!("{which:?}: {e}"));
+        self.check_with(which, &EigenOptions::default())
+    }
+
+    /// [`Case::check`] with the given settings.
+    fn check_with(&self, which: Which, params: &EigenOptions) -> Modes {
+        let modes =
+            eigs(&self.k, &self.m, which, params).unwrap_or_else(|e| panic!("{which:?}: {e}"));
         let s = &modes.sturm;
         assert!(s.verified(), "{which:?}: {s:?}");
         // the inertia count is the dense count in the same interval
@@ -457,4 +463,70 @@ fn a_hook_stops_the_solve_at_a_block_boundary() {
     assert!(seen.borrow().windows(2).all(|w| w[0] < w[1]));
     let after = eigs(&k, &m, Which::Lowest(6), &EigenOptions::default()).unwrap();
     assert!(same(&after.values, &plain.values));
+}
+
+/// A null-space hint (docs/MATH.md, "Known null vectors") on the free-free cube of three
+/// components, whose null space is the three constant fields, one per component (the pencil is
+/// block diagonal by component). With those three as the hint, the zero modes are locked before
+/// the iteration: the result passes every check of [`Case::check`] against the dense spectrum,
+/// with fewer solved vectors than without the hint. A hint that holds one null vector among
+/// vectors that are not (a random field, a dependent copy) locks that one and gives the same
+/// verified result. A hint of the wrong length or with a NaN is refused.
+#[test]
+fn a_null_space_hint_locks_the_zero_modes_and_changes_no_result() {
+    let case = Case::new(4, 3, true, 3);
+    let n = case.k.rows();
+    let block = n / 3;
+    let constant = |c: usize, j: usize| if j / block == c { 1.0 } else { 0.0 };
+    let hinted = |v: faer::Mat<f64>| EigenOptions {
+        null_space_hint: Some(NullSpaceHint::new(v)),
+        ..EigenOptions::default()
+    };
+    let exact = hinted(faer::Mat::from_fn(n, 3, |j, c| constant(c, j)));
+    for count in [2, 4, 13] {
+        let plain = case.check(Which::Lowest(count));
+        let with = case.check_with(Which::Lowest(count), &exact);
+        assert_eq!(with.values.len(), plain.values.len(), "Lowest({count})");
+        assert!(
+            with.residual_kinds[..3]
+                .iter()
+                .all(|k| *k == ResidualKind::Backward)
+                && with.residuals[..3].iter().all(|r| *r < 1e-13),
+            "Lowest({count}): {:?} {:?}",
+            with.residual_kinds,
+            with.residuals
+        );
+        assert!(
+            with.stats.solved_vectors < plain.stats.solved_vectors,
+            "Lowest({count}): {} solved vectors with the hint, {} without",
+            with.stats.solved_vectors,
+            plain.stats.solved_vectors
+        );
+    }
+    // one null vector among others: a pseudo-random field and a multiple of the null vector
+    let mut rng = femu_testkit::Rng(7);
+    let noise: Vec<f64> = (0..n).map(|_| rng.sym()).collect();
+    let mixed = hinted(faer::Mat::from_fn(n, 3, |j, c| match c {
+        0 => constant(1, j),
+        1 => noise[j],
+        _ => -2.5 * constant(1, j),
+    }));
+    for count in [4, 13] {
+        case.check_with(Which::Lowest(count), &mixed);
+    }
+    // bad hints are errors, not wrong results
+    for (bad, what) in [
+        (faer::Mat::from_fn(n - 1, 1, |_, _| 1.0), "rows"),
+        (
+            faer::Mat::from_fn(n, 1, |j, _| if j == 5 { f64::NAN } else { 1.0 }),
+            "not finite at DOF 5",
+        ),
+    ] {
+        match eigs(&case.k, &case.m, Which::Lowest(4), &hinted(bad)) {
+            Err(SparseError::InvalidRequest { reason }) => {
+                assert!(reason.contains(what), "{reason}")
+            }
+            other => panic!("{what}: {other:?}"),
+        }
+    }
 }

@@ -10,7 +10,7 @@ use femu_correlate::{ModeSet, PairingOptions, Sensor, SensorLayout, pair_modes};
 use femu_fem::assembly::{Assembler, MassKind};
 use femu_fem::generate::to_quadratic;
 use femu_fem::model::Model;
-use femu_sparse::eigen::{EigenOptions, Which, eigs};
+use femu_sparse::eigen::{EigenOptions, Which};
 use serde::Serialize;
 
 /// The discretisation error of a model's modes.
@@ -123,12 +123,7 @@ pub fn estimate(
     let asm = Assembler::new(&q)?;
     let sys = asm.assemble(&q, MassKind::Consistent)?;
     let count = (modes.len() + 4).min(sys.k.rows());
-    let reference = eigs(
-        &sys.k,
-        &sys.m,
-        Which::Lowest(count),
-        &EigenOptions::default(),
-    )?;
+    let reference = sys.modes(Which::Lowest(count), &EigenOptions::default())?;
     let reference = ModeSet::from_modes(&reference);
     // pair on the original nodes (the model's DOFs and the reference's, same ids), triaxial
     let nodes: Vec<u64> = (0..mesh.node_count()).map(|i| mesh.node_id(i)).collect();

@@ -6,7 +6,7 @@ use crate::StudyError;
 use crate::load::LoadedModel;
 use femu_correlate::modes::eigenvalue_of_hz;
 use femu_fem::assembly::MassKind;
-use femu_sparse::eigen::{EigenOptions, Modes, ResidualKind, Which, eigs};
+use femu_sparse::eigen::{EigenOptions, Modes, ResidualKind, Which};
 use serde::Serialize;
 
 /// Which modes [`solve_modes`] computes.
@@ -100,7 +100,7 @@ pub fn solve_modes(
         }
         (None, None) => Which::Lowest(count),
     };
-    let modes = eigs(&sys.k, &sys.m, which, &EigenOptions::default())?;
+    let modes = sys.modes(which, &EigenOptions::default())?;
     let report = ModesReport {
         model: loaded.path.display().to_string(),
         dofs: sys.k.rows(),
@@ -164,10 +164,5 @@ pub fn lowest_for_test(
 ) -> Result<Modes, StudyError> {
     let sys = &loaded.sys;
     let count = count.unwrap_or(2 * test_modes + 4).min(sys.k.rows());
-    Ok(eigs(
-        &sys.k,
-        &sys.m,
-        Which::Lowest(count),
-        &EigenOptions::default(),
-    )?)
+    Ok(sys.modes(Which::Lowest(count), &EigenOptions::default())?)
 }

@@ -149,9 +149,10 @@ pub fn model_modes(
     let sys = up.matrices();
     let pencil = Pencil::with_symbolic(&sys.k, &sys.m, symbolic)?;
     // the last solve's shift, unless the caller gave one (docs/SCALING.md, "A hinted shift")
+    // and the model's rigid-body motions as its null-space hint
     let hinted = EigenOptions {
         lowest_shift_hint: params.lowest_shift_hint.or(up.last_shift()),
-        ..params.clone()
+        ..sys.eigen_options(params)
     };
     let modes = pencil.solve(Which::Lowest(count), &hinted)?;
     up.set_last_shift(modes.shift);

@@ -83,3 +83,32 @@ pub fn rigid_modes(x: &[[f64; 3]]) -> Vec<Vec<f64>> {
     }
     modes
 }
+
+/// The distance of `z` from the span of the columns of `basis`, relative to `|z|`: the residual of
+/// its projection on an orthonormal basis of that span (two passes of Gram-Schmidt).
+pub fn distance_from_span(basis: faer::MatRef<'_, f64>, z: &[f64]) -> f64 {
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let mut q: Vec<Vec<f64>> = Vec::new();
+    for j in 0..basis.ncols() {
+        let mut v: Vec<f64> = basis.col(j).iter().copied().collect();
+        let before = dot(&v, &v).sqrt();
+        for _ in 0..2 {
+            for u in &q {
+                let c = dot(u, &v);
+                v.iter_mut().zip(u).for_each(|(a, b)| *a -= c * b);
+            }
+        }
+        let nrm = dot(&v, &v).sqrt();
+        if nrm > 1e-10 * before {
+            q.push(v.iter().map(|a| a / nrm).collect());
+        }
+    }
+    let mut r = z.to_vec();
+    for _ in 0..2 {
+        for u in &q {
+            let c = dot(u, &r);
+            r.iter_mut().zip(u).for_each(|(a, b)| *a -= c * b);
+        }
+    }
+    dot(&r, &r).sqrt() / dot(z, z).sqrt()
+}

@@ -149,7 +149,15 @@ fn rigid_body_motions_of_a_linked_structure_have_zero_strain_energy() {
             worst < 1e-11 * knorm,
             "rigid motion {t:?} {th:?}: |Kz| {worst:e}"
         );
+        // the model's own rigid-body motions (the eigensolver's null-space hint) span it, with the
+        // reference's rotation DOFs
+        let off = super::common::distance_from_span(sys.rigid_body.vectors(), &z);
+        assert!(
+            off < 1e-13,
+            "rigid motion {t:?} {th:?}: {off:e} off the hint's span"
+        );
     }
+    assert_eq!(sys.rigid_body.vectors().ncols(), 6);
     let vals =
         generalized_symmetric_eigenvalues(to_dense(&sys.k).as_ref(), to_dense(&sys.m).as_ref())
             .unwrap();
