@@ -1682,7 +1682,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                 let s_c = Mat::from_fn(m, candidates.len(), |j, c| {
                     eig.eigenvectors[(j, candidates[c])]
                 });
-                let mut y = basis.range(0, m) * &s_c;
+                let y = basis.range(0, m) * &s_c;
                 let ky = crate::csc::sym_mul_mat(self.pencil.k, y.as_ref())?;
                 let my = crate::csc::sym_mul_mat(self.pencil.m, y.as_ref())?;
                 // Ritz vectors of a basis deflated against the locked vectors are M-orthogonal to
@@ -1690,9 +1690,11 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                 // first exact and the Gram matrix checks the second, so that a pair locks without
                 // a Gram-Schmidt of its own against every locked vector (0.43 s of a 10 s solve
                 // at 199,200 DOF). A candidate the projection moves, or a block that is not
-                // orthogonal, takes the pair-by-pair path of `lock_with`.
-                let mut clean = self.project_locked(&mut y, &my);
-                let gram = my.transpose() * &y;
+                // orthogonal, takes the pair-by-pair path of `lock_with` from the unprojected
+                // vector, whose images `ky`, `my` are.
+                let mut projected = y.clone();
+                let mut clean = self.project_locked(&mut projected, &my);
+                let gram = my.transpose() * &projected;
                 let nc = candidates.len();
                 let diag = |i: usize| gram[(i, i)].abs().sqrt();
                 if (0..nc).any(|i| (0..i).any(|j| gram[(i, j)].abs() > 1e-10 * diag(i) * diag(j))) {
@@ -1710,7 +1712,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                         rho < self.params.tol || eta < BACKWARD_LOCK || relative < self.params.tol;
                     locked[r] = converged
                         && if clean[c] {
-                            self.push_normalised(yc, kyc, myc)
+                            self.push_normalised(col(&projected), kyc, myc)
                         } else {
                             self.lock_with(yc, kyc, myc)
                         };
