@@ -782,8 +782,10 @@ impl<'a> Pencil<'a> {
         }
         // where to refactor if a free-free run at the tiny shift does not converge
         let mut fallback: Option<f64> = None;
-        // a hinted shift is already placed: no probe
-        if matches!(which, Which::Lowest(_)) && hint.is_none() {
+        // a hinted shift is already placed: no probe; nor when the given zero-energy pairs already
+        // hold every pair the run wants (the request and its guard pairs)
+        let covered = known.len() >= (want + 3).min(n);
+        if matches!(which, Which::Lowest(_)) && hint.is_none() && !covered {
             // A short first Lanczos cycle at the tiny shift (the probe), continued by the run: it
             // tells whether the lowest eigenvalues are near zero (rigid-body modes). "Near zero"
             // is relative to the tiny shift itself (1e-10 mean(K_ii / M_ii)): rigid-body

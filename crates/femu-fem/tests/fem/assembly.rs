@@ -258,7 +258,9 @@ fn free_free_plate_has_exactly_six_rigid_body_modes() {
 /// about the supported line, a combination of a rotation about the centroid and a z translation).
 /// The solve with the hint has as many zero eigenvalues as the dense spectrum, the same elastic
 /// eigenvalues, a verified Sturm count, and fewer solved vectors than the solve without it; on the
-/// clamped plate no combination is zero-energy and the result is the same as without the hint.
+/// clamped plate no combination is zero-energy and the result is the same as without the hint. On
+/// the free-free plate the lowest 3 modes need no solve at all: the six given ones hold them and
+/// their guard pairs.
 #[test]
 fn the_rigid_body_hint_finds_the_motions_the_supports_allow() {
     use femu_sparse::eigen::{EigenOptions, Which, eigs};
@@ -308,6 +310,24 @@ fn the_rigid_body_hint_finds_the_motions_the_supports_allow() {
             assert_eq!(with.values, plain.values, "{case}");
         }
     }
+    // free-free: the six given modes hold the lowest 3 and their 3 guard pairs, so no vector is
+    // solved; the zero cluster is returned whole and the Sturm count (the dense count) proves it
+    let sys = small_plate(false).assemble(MassKind::Consistent).unwrap();
+    let dense =
+        generalized_symmetric_eigenvalues(to_dense(&sys.k).as_ref(), to_dense(&sys.m).as_ref())
+            .unwrap();
+    let top = *dense.last().unwrap();
+    let modes = sys
+        .modes(Which::Lowest(3), &EigenOptions::default())
+        .unwrap();
+    assert_eq!(modes.stats.solved_vectors, 0);
+    assert_eq!(modes.values.len(), 6, "{:?}", modes.values);
+    assert!(modes.values.iter().all(|v| v.abs() < 1e-9 * top));
+    assert!(modes.sturm.verified());
+    assert_eq!(
+        modes.sturm.count,
+        dense.iter().filter(|v| **v < modes.sturm.upper).count()
+    );
 }
 
 /// Parameter groups: K(p) equals re-assembly with the group's Young's modulus scaled by (1 + p)
