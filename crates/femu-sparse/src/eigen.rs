@@ -630,35 +630,24 @@ impl<'a> Pencil<'a> {
         let kr = crate::csc::sym_mul_mat(self.k, r)?;
         let mr = crate::csc::sym_mul_mat(self.m, r)?;
         let (kc, mc) = (r.transpose() * &kr, r.transpose() * &mr);
-        let sym =
-            |a: &Mat<f64>| nalgebra::DMatrix::from_fn(c, c, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
         // an M-orthonormal basis B of the span (dependent candidates dropped), then the
-        // eigenpairs of B^T K_c B
-        let me = nalgebra::SymmetricEigen::new(sym(&mc));
-        let top = me.eigenvalues.iter().fold(0.0_f64, |a, v| a.max(*v));
-        let keep: Vec<usize> = (0..c)
-            .filter(|&i| me.eigenvalues[i] > 1e-12 * top)
-            .collect();
+        // eigenpairs of B^T K_c B, ascending
+        let (m_values, m_vectors) = crate::dense::symmetric_eigen(mc.as_ref())?;
+        let top = m_values.last().copied().unwrap_or(0.0);
+        let keep: Vec<usize> = (0..c).filter(|&i| m_values[i] > 1e-12 * top).collect();
         if keep.is_empty() {
             return Ok(vec![]);
         }
-        let b = nalgebra::DMatrix::from_fn(c, keep.len(), |i, j| {
-            me.eigenvectors[(i, keep[j])] / me.eigenvalues[keep[j]].sqrt()
+        let b = Mat::from_fn(c, keep.len(), |i, j| {
+            m_vectors[(i, keep[j])] / m_values[keep[j]].sqrt()
         });
-        let kcn = sym(&kc);
-        let proj = b.transpose() * &kcn * &b;
-        let proj = 0.5 * (&proj + proj.transpose());
-        let ke = nalgebra::SymmetricEigen::new(proj);
-        let coef = &b * &ke.eigenvectors;
-        let mut order: Vec<usize> = (0..keep.len()).collect();
-        order.sort_by(|a, b| ke.eigenvalues[*a].total_cmp(&ke.eigenvalues[*b]));
+        let (_, y) = crate::dense::symmetric_eigen((b.transpose() * &kc * &b).as_ref())?;
+        let coef = &b * &y;
+        let (x, kx, mx) = (r * &coef, &kr * &coef, &mr * &coef);
         let mut pairs = Vec::new();
-        for j in order {
-            let cj = Mat::from_fn(c, 1, |i, _| coef[(i, j)]);
-            let col = |a: Mat<f64>| -> Vec<f64> { a.col(0).iter().copied().collect() };
-            let x = col(r * &cj);
-            let kx = col(&kr * &cj);
-            let mx = col(&mr * &cj);
+        for j in 0..coef.ncols() {
+            let col = |a: &Mat<f64>| -> Vec<f64> { a.col(j).iter().copied().collect() };
+            let (x, kx, mx) = (col(&x), col(&kx), col(&mx));
             let lambda = dot(&kx, &x) / dot(&mx, &x).max(f64::MIN_POSITIVE);
             let res: Vec<f64> = kx.iter().zip(&mx).map(|(k, m)| k - lambda * m).collect();
             let r_norm = norm(&res);
@@ -784,7 +773,9 @@ impl<'a> Pencil<'a> {
         let mut fallback: Option<f64> = None;
         // a hinted shift is already placed: no probe; nor when the given zero-energy pairs already
         // hold every pair the run wants (the request and its guard pairs)
-        let covered = known.len() >= (want + 3).min(n);
+        // the pairs a run finds beyond a Lowest or Nearest request (none for a band)
+        let guard = if band.is_some() { 0 } else { 3.min(n - want) };
+        let covered = known.len() >= want + guard;
         if matches!(which, Which::Lowest(_)) && hint.is_none() && !covered {
             // A short first Lanczos cycle at the tiny shift (the probe), continued by the run: it
             // tells whether the lowest eigenvalues are near zero (rigid-body modes). "Near zero"
@@ -855,7 +846,6 @@ impl<'a> Pencil<'a> {
                 stats: stats.clone(),
             });
         }
-        let guard = if band.is_some() { 0 } else { 3.min(n - want) };
         let mut lanczos = Lanczos::new(self, op, sigma, params, &known);
         lanczos.probed = probed;
         if fallback.is_none() {
