@@ -114,7 +114,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .take(count)
                 .fold(0.0_f64, |m, r| m.max(*r));
             println!(
-                "{{\"dofs\": {}, \"assembly_s\": {t_assembly:.3}, \"eigen_s\": {t_eigen:.3}, \"symbolic_s\": {:.3}, \"factor_s\": {:.3}, \"solve_s\": {:.3}, \"orth_s\": {:.3}, \"ritz_s\": {:.3}, \"other_s\": {:.3}, \"factorizations\": {}, \"solved_vectors\": {}, \"restarts\": {}, \"factor_len\": {}, \"sturm_verified\": {}, \"max_residual\": {worst:.2e}, \"frequencies_hz\": [{}]}}",
+                "{{\"dofs\": {}, \"assembly_s\": {t_assembly:.3}, \"eigen_s\": {t_eigen:.3}, \"symbolic_s\": {:.3}, \"factor_s\": {:.3}, \"solve_s\": {:.3}, \"orth_s\": {:.3}, \"ritz_s\": {:.3}, \"other_s\": {:.3}, \"factorizations\": {}, \"solved_vectors\": {}, \"restarts\": {}, \"factor_len\": {}, \"factor_flops\": {:.4e}, \"sturm_verified\": {}, \"max_residual\": {worst:.2e}, \"frequencies_hz\": [{}]}}",
                 sys.dofs.free_count(),
                 s.symbolic_seconds,
                 s.factor_seconds,
@@ -131,6 +131,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 s.solved_vectors,
                 s.restarts,
                 s.factor_len,
+                s.factor_flops,
                 modes.sturm.verified(),
                 f.join(", ")
             );

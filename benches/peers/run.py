@@ -14,7 +14,7 @@ default 3600) stops a peer and reports a lower bound; PEERS selects peers (defau
 default factorization). PEERS_PYTHON: the Python with scipy, pypardiso, scikit-sparse and
 threadpoolctl (run.sh makes a venv).
 """
-import glob, json, os, re, subprocess, sys, tempfile
+import glob, json, os, re, shutil, subprocess, sys, tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 EXE = os.path.join(ROOT, "target", "release", "examples", "peer_modes")
@@ -64,9 +64,12 @@ def main():
     dofs = info["dofs"]
     code, out, femu_wall, rss = timed([EXE, "solve", kind, str(n), str(count)], d, limit)
     femu = json.loads(out)
+    # the factorizations' rate: the symbolic flop count of one, times their number, over their time
+    femu_rate = femu["factorizations"] * femu["factor_flops"] / femu["factor_s"] * 1e-9
     print(json.dumps({"kind": kind, "dofs": dofs, "tool": "femu", "wall_s": femu_wall, "rss_mb": rss, **femu}), flush=True)
     print(f"{kind} {dofs} DOF: femu     wall {femu_wall:8.2f} s, peak {rss:8.0f} MB "
-          f"(assembly {femu['assembly_s']} s, ordering+symbolic {femu['symbolic_s']} s, factor {femu['factor_s']} s x{femu['factorizations']}, "
+          f"(assembly {femu['assembly_s']} s, ordering+symbolic {femu['symbolic_s']} s, factor {femu['factor_s']} s x{femu['factorizations']} "
+          f"({femu_rate:.1f} GFLOP/s of {femu['factor_flops'] * 1e-9:.1f} GFLOP each), "
           f"solves {femu['solve_s']} s for {femu['solved_vectors']} vectors, orthogonalisation {femu['orth_s']} s, "
           f"Rayleigh-Ritz and checks {femu['ritz_s']} s, other {femu['other_s']} s), "
           f"Sturm verified {femu['sturm_verified']}", flush=True)
@@ -113,6 +116,13 @@ def main():
             f = info.get("frequencies_hz", [])
         diff = max((abs(a - b) / b for a, b in zip(f, ref) if b > 1e-3 * ref[-1]), default=float("nan"))
         note = f"max rel. frequency difference to femu {diff:.1e}"
+        if info.get("factor_s"):
+            note += f", factorization {info['factor_s']:.2f} s"
+        if info.get("factor_gflop"):
+            # PARDISO's numeric factorization alone, at its own flop count, beside femu's rate
+            note += (f" (numeric, {info['factor_gflop'] / info['factor_s']:.1f} GFLOP/s of its {info['factor_gflop']:.1f} GFLOP, "
+                     f"{info['factor_nnz'] / 1e6:.1f}M entries; femu {femu_rate:.1f} GFLOP/s of {femu['factor_flops'] * 1e-9:.1f}, "
+                     f"{femu['factor_len'] / 1e6:.1f}M; analysis {info['analysis_s']:.2f} s)")
         if info.get("applications"):
             note += f", {info['applications']} solves"
         if info.get("blas"):
@@ -135,6 +145,9 @@ def main():
         st = f"{solve:.1f}" if solve else "-"
         print(f"| {tool} | {wall:.1f} | {st} | {mb:.0f} | {ratio} | {sr} | {note} |")
     print(flush=True)
+    # the exported decks and matrices (about 1 GB at 200k DOF); PEERS_KEEP=1 keeps them
+    if not os.environ.get("PEERS_KEEP"):
+        shutil.rmtree(d, ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -246,6 +246,10 @@ pub struct EigenStats {
     pub restarts: usize,
     /// Values stored in each factor `L` (fill).
     pub factor_len: usize,
+    /// Floating-point operations of one numeric factorization (the symbolic count,
+    /// [`crate::cholesky::SymbolicFactor::flops`]): `factorizations * factor_flops /
+    /// factor_seconds` is the factorizations' rate.
+    pub factor_flops: f64,
 }
 
 /// Computed modes with their evidence.
@@ -578,6 +582,7 @@ impl<'a> Pencil<'a> {
         let mut stats = EigenStats {
             symbolic_seconds: self.symbolic_seconds,
             factor_len: self.symbolic.factor_len(),
+            factor_flops: self.symbolic.flops(),
             ..Default::default()
         };
         let hint = params
