@@ -234,22 +234,55 @@ pub fn sym_mul_rows(
     if k == 0 {
         return Ok(());
     }
+    match k {
+        1 => sym_mul_rows_of::<1>(a, x, y),
+        2 => sym_mul_rows_of::<2>(a, x, y),
+        3 => sym_mul_rows_of::<3>(a, x, y),
+        4 => sym_mul_rows_of::<4>(a, x, y),
+        6 => sym_mul_rows_of::<6>(a, x, y),
+        8 => sym_mul_rows_of::<8>(a, x, y),
+        _ => {
+            let (ptr, idx, val) = (a.indptr(), a.indices(), a.data());
+            let ptr = ptr.raw_storage();
+            y.par_chunks_mut(k)
+                .enumerate()
+                .with_min_len(512)
+                .for_each(|(i, row)| {
+                    row.fill(0.0);
+                    for p in ptr[i]..ptr[i + 1] {
+                        let (c, v) = (idx[p], val[p]);
+                        let xr = &x[c * k..(c + 1) * k];
+                        for (r, xv) in row.iter_mut().zip(xr) {
+                            *r += v * xv;
+                        }
+                    }
+                });
+        }
+    }
+    Ok(())
+}
+
+/// [`sym_mul_rows`] for a block width `K` known at compile time (the eigensolver's blocks, a
+/// few vectors): each entry of `A` updates `K` accumulators held in registers, where a width
+/// known only at run time loops over them. 3.1x faster for `K = 4` on the 199,200-DOF plate's
+/// `M` (docs/SCALING.md, "Sparse products by blocks of known width").
+fn sym_mul_rows_of<const K: usize>(a: &SparseMatrix, x: &[f64], y: &mut [f64]) {
     let (ptr, idx, val) = (a.indptr(), a.indices(), a.data());
     let ptr = ptr.raw_storage();
-    y.par_chunks_mut(k)
+    y.par_chunks_mut(K)
         .enumerate()
         .with_min_len(512)
         .for_each(|(i, row)| {
-            row.fill(0.0);
-            for p in ptr[i]..ptr[i + 1] {
-                let (c, v) = (idx[p], val[p]);
-                let xr = &x[c * k..(c + 1) * k];
-                for (r, xv) in row.iter_mut().zip(xr) {
-                    *r += v * xv;
+            let mut acc = [0.0; K];
+            let (lo, hi) = (ptr[i], ptr[i + 1]);
+            for (&c, &v) in idx[lo..hi].iter().zip(&val[lo..hi]) {
+                let xr: &[f64; K] = x[c * K..(c + 1) * K].try_into().expect("K values per row");
+                for r in 0..K {
+                    acc[r] += v * xr[r];
                 }
             }
+            row.copy_from_slice(&acc);
         });
-    Ok(())
 }
 
 #[cfg(test)]
@@ -304,5 +337,42 @@ mod tests {
             check_symmetric(&c, "M", 1e-12),
             Err(SparseError::NonFinite { row: 1, col: 1, .. })
         ));
+    }
+
+    /// Every block width, those with a kernel of their own (1, 2, 3, 4, 6, 8) and the others,
+    /// against the dense product computed here by hand, on a symmetric matrix with both
+    /// triangles and rows of different lengths.
+    #[test]
+    fn block_products_match_the_dense_product_for_every_width() {
+        let n = 37;
+        let mut t = TriMat::new((n, n));
+        for i in 0..n {
+            t.add_triplet(i, i, 3.0 + i as f64);
+            for j in 0..i {
+                if (i * 7 + j * 3) % 5 == 0 {
+                    let v = ((i * 13 + j * 5) % 11) as f64 - 5.0;
+                    t.add_triplet(i, j, v);
+                    t.add_triplet(j, i, v);
+                }
+            }
+        }
+        let a: SparseMatrix = t.to_csc();
+        let dense = to_dense(&a);
+        for k in 1..=10 {
+            let x = Mat::<f64>::from_fn(n, k, |i, j| ((i * 3 + j * 17) % 19) as f64 - 9.0);
+            let y = sym_mul_mat(&a, x.as_ref()).unwrap();
+            for i in 0..n {
+                for j in 0..k {
+                    let expected: f64 = (0..n).map(|c| dense[(i, c)] * x[(c, j)]).sum();
+                    assert!(
+                        (y[(i, j)] - expected).abs() <= 1e-12 * expected.abs().max(1.0),
+                        "width {k}: ({i}, {j}) {} against {expected}",
+                        y[(i, j)]
+                    );
+                }
+            }
+        }
+        let x = Mat::<f64>::zeros(n + 1, 4);
+        assert!(sym_mul_mat(&a, x.as_ref()).is_err());
     }
 }
