@@ -248,7 +248,8 @@ pub struct EigenStats {
     pub factor_len: usize,
     /// Floating-point operations of one numeric factorization (the symbolic count,
     /// [`crate::cholesky::SymbolicFactor::flops`]): `factorizations * factor_flops /
-    /// factor_seconds` is the factorizations' rate.
+    /// factor_seconds` is the factorizations' rate (0 from the SLEPc engine, whose MUMPS
+    /// analysis femu does not see).
     pub factor_flops: f64,
 }
 
