@@ -777,10 +777,10 @@ impl<'a> Pencil<'a> {
         }
         // where to refactor if a free-free run at the tiny shift does not converge
         let mut fallback: Option<f64> = None;
-        // a hinted shift is already placed: no probe; nor when the given zero-energy pairs already
-        // hold every pair the run wants (the request and its guard pairs)
         // the pairs a run finds beyond a Lowest or Nearest request (none for a band)
         let guard = if band.is_some() { 0 } else { 3.min(n - want) };
+        // a hinted shift is already placed: no probe; nor when the given zero-energy pairs already
+        // hold every pair the run wants (the request and its guard pairs)
         let covered = known.len() >= want + guard;
         if matches!(which, Which::Lowest(_)) && hint.is_none() && !covered {
             // A short first Lanczos cycle at the tiny shift (the probe), continued by the run: it
@@ -854,15 +854,14 @@ impl<'a> Pencil<'a> {
         }
         let mut lanczos = Lanczos::new(self, op, sigma, params, &known);
         lanczos.probed = probed;
-        if fallback.is_none() {
-            // the run holds its own copy, and only a run moved to the fallback shift needs them
-            // again (19 MB at 199,200 DOF)
-            known = Vec::new();
-        }
         if fallback.is_some() {
             // measured: 0 restarts on the free-free plates of 47,628 and 199,200 DOF; a run that
             // needs more is moved to the fallback shift before it wastes many cycles
             lanczos.params.max_restarts = params.max_restarts.min(TINY_SHIFT_RESTARTS);
+        } else {
+            // the run holds its own copy, and only a run moved to the fallback shift needs them
+            // again (19 MB at 199,200 DOF)
+            known = Vec::new();
         }
         let mut attempts = 0;
         loop {
@@ -1217,37 +1216,26 @@ fn project_out(
     }
     let n = w.nrows();
     let parts = rayon::current_num_threads().min(n / PROJECT_ROWS).max(1);
-    if parts > 1 {
-        let size = n.div_ceil(parts);
-        let wr = w.as_ref();
-        let partial: Vec<Mat<f64>> = (0..parts)
-            .into_par_iter()
-            .map(|p| {
-                let (lo, len) = (p * size, size.min(n - p * size));
-                let mut part = Mat::<f64>::zeros(v.ncols(), wr.ncols());
-                matmul(
-                    part.as_mut(),
-                    Accum::Replace,
-                    mv.subrows(lo, len).transpose(),
-                    wr.subrows(lo, len),
-                    1.0,
-                    faer::Par::Seq,
-                );
-                part
-            })
-            .collect();
-        for part in partial {
-            c += part;
-        }
-    } else {
-        matmul(
-            c.as_mut(),
-            Accum::Replace,
-            mv.transpose(),
-            w.as_ref(),
-            1.0,
-            par,
-        );
+    let size = n.div_ceil(parts);
+    let wr = w.as_ref();
+    let partial: Vec<Mat<f64>> = (0..parts)
+        .into_par_iter()
+        .map(|p| {
+            let (lo, len) = (p * size, size.min(n - p * size));
+            let mut part = Mat::<f64>::zeros(v.ncols(), wr.ncols());
+            matmul(
+                part.as_mut(),
+                Accum::Replace,
+                mv.subrows(lo, len).transpose(),
+                wr.subrows(lo, len),
+                1.0,
+                if parts == 1 { par } else { faer::Par::Seq },
+            );
+            part
+        })
+        .collect();
+    for part in partial {
+        c += part;
     }
     matmul(w, Accum::Add, v, c.as_ref(), -1.0, par);
     c
