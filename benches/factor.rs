@@ -1,8 +1,9 @@
 //! The sparse kernels under the eigensolver, with rates: the numeric `LDL^T` of `K - sigma M`
 //! (GFLOP/s from the symbolic flop count, `SymbolicFactor::flops`) by the subtree-parallel
 //! multifrontal factorization (`numeric`), by faer's left-looking one (`left-looking`) and for
-//! the inertia alone (`inertia`, the Sturm count), a solve of 4 right-hand
-//! sides (the eigensolver's block), and faer's dense GEMM on one and on all threads (the limit
+//! the inertia alone (`inertia`, the Sturm count), a solve of 1, 2 and 4 right-hand
+//! sides (`rhs1`, `rhs2`, `rhs4`: the eigensolver's block sizes; docs/SCALING.md, "Block size and
+//! the count of solved vectors"), and faer's dense GEMM on one and on all threads (the limit
 //! the factorization's rate is compared with, measured in the same run).
 //!
 //! Models: the free-free plate and the clamped block of the peer comparison
@@ -86,11 +87,13 @@ fn bench(c: &mut Criterion) {
         .measurement_time(Duration::from_secs(3));
     for (id, f, n) in &systems {
         let n = *n;
-        let mut x = Mat::<f64>::from_fn(n, 4, |i, j| ((i * 7 + j * 13) % 17) as f64 - 8.0);
-        solve.throughput(Throughput::Elements(4));
-        solve.bench_function(BenchmarkId::new("rhs4", id), |b| {
-            b.iter(|| f.solve_in_place(x.as_mut()))
-        });
+        for k in [1, 2, 4] {
+            let mut x = Mat::<f64>::from_fn(n, k, |i, j| ((i * 7 + j * 13) % 17) as f64 - 8.0);
+            solve.throughput(Throughput::Elements(k as u64));
+            solve.bench_function(BenchmarkId::new(format!("rhs{k}"), id), |b| {
+                b.iter(|| f.solve_in_place(x.as_mut()))
+            });
+        }
     }
     solve.finish();
 
