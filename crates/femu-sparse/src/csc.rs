@@ -195,17 +195,34 @@ pub fn sym_mul_mat(a: &SparseMatrix, x: faer::MatRef<'_, f64>) -> Result<Mat<f64
     if k == 0 || n == 0 {
         return Ok(Mat::zeros(n, k));
     }
-    // Row-major copies keep the k values of one row together in cache.
-    let mut xt = vec![0.0; n * k];
-    for j in 0..k {
-        for (i, v) in x.col(j).iter().enumerate() {
-            xt[i * k + j] = *v;
+    // Row-major copies keep the values of one row together in cache. Blocks wider than
+    // `WIDEST_KERNEL` are taken that many columns at a time, so that every piece has a kernel of
+    // known width (`A` is read once per piece).
+    let mut y = Mat::zeros(n, k);
+    let width = k.min(WIDEST_KERNEL);
+    let mut xt = vec![0.0; n * width];
+    let mut yt = vec![0.0; n * width];
+    for first in (0..k).step_by(WIDEST_KERNEL) {
+        let w = (k - first).min(WIDEST_KERNEL);
+        let (xt, yt) = (&mut xt[..n * w], &mut yt[..n * w]);
+        for j in 0..w {
+            for (i, v) in x.col(first + j).iter().enumerate() {
+                xt[i * w + j] = *v;
+            }
+        }
+        sym_mul_rows(a, xt, w, yt)?;
+        for j in 0..w {
+            for (i, v) in y.col_mut(first + j).iter_mut().enumerate() {
+                *v = yt[i * w + j];
+            }
         }
     }
-    let mut yt = vec![0.0; n * k];
-    sym_mul_rows(a, &xt, k, &mut yt)?;
-    Ok(Mat::from_fn(n, k, |i, j| yt[i * k + j]))
+    Ok(y)
 }
+
+/// The widest block [`sym_mul_rows`] has a kernel of known width for (every width up to it has
+/// one).
+const WIDEST_KERNEL: usize = 8;
 
 /// `Y = A X` for a symmetric `A` (CSC, both triangles) and `k` vectors stored row-major
 /// (`x[i * k + j]` is entry `i` of vector `j`), in parallel over rows: the kernel of
@@ -239,7 +256,9 @@ pub fn sym_mul_rows(
         2 => sym_mul_rows_of::<2>(a, x, y),
         3 => sym_mul_rows_of::<3>(a, x, y),
         4 => sym_mul_rows_of::<4>(a, x, y),
+        5 => sym_mul_rows_of::<5>(a, x, y),
         6 => sym_mul_rows_of::<6>(a, x, y),
+        7 => sym_mul_rows_of::<7>(a, x, y),
         8 => sym_mul_rows_of::<8>(a, x, y),
         _ => {
             let (ptr, idx, val) = (a.indptr(), a.indices(), a.data());
@@ -339,9 +358,10 @@ mod tests {
         ));
     }
 
-    /// Every block width, those with a kernel of their own (1, 2, 3, 4, 6, 8) and the others,
-    /// against the dense product computed here by hand, on a symmetric matrix with both
-    /// triangles and rows of different lengths.
+    /// Every block width, those with a kernel of their own (1 to 8) and the wider ones, taken 8
+    /// columns at a time by `sym_mul_mat` and in one loop by `sym_mul_rows`, against the dense
+    /// product computed here by hand, on a symmetric matrix with both triangles and rows of
+    /// different lengths.
     #[test]
     fn block_products_match_the_dense_product_for_every_width() {
         let n = 37;
@@ -358,17 +378,22 @@ mod tests {
         }
         let a: SparseMatrix = t.to_csc();
         let dense = to_dense(&a);
-        for k in 1..=10 {
+        for k in 1..=19 {
             let x = Mat::<f64>::from_fn(n, k, |i, j| ((i * 3 + j * 17) % 19) as f64 - 9.0);
             let y = sym_mul_mat(&a, x.as_ref()).unwrap();
+            let xt: Vec<f64> = (0..n * k).map(|p| x[(p / k, p % k)]).collect();
+            let mut yt = vec![f64::NAN; n * k];
+            sym_mul_rows(&a, &xt, k, &mut yt).unwrap();
             for i in 0..n {
                 for j in 0..k {
                     let expected: f64 = (0..n).map(|c| dense[(i, c)] * x[(c, j)]).sum();
-                    assert!(
-                        (y[(i, j)] - expected).abs() <= 1e-12 * expected.abs().max(1.0),
-                        "width {k}: ({i}, {j}) {} against {expected}",
-                        y[(i, j)]
-                    );
+                    for (path, got) in [("sym_mul_mat", y[(i, j)]), ("sym_mul_rows", yt[i * k + j])]
+                    {
+                        assert!(
+                            (got - expected).abs() <= 1e-12 * expected.abs().max(1.0),
+                            "{path}, width {k}: ({i}, {j}) {got} against {expected}"
+                        );
+                    }
                 }
             }
         }
