@@ -631,6 +631,22 @@ pub(crate) fn solve(
     }
 }
 
+/// Column `j` of a column-major matrix as a slice.
+fn column(m: MatRef<'_, f64>, j: usize) -> &[f64] {
+    m.col(j)
+        .try_as_col_major()
+        .expect("column-major storage")
+        .as_slice()
+}
+
+/// Column `j` of a column-major matrix as a mutable slice.
+fn column_mut(m: MatMut<'_, f64>, j: usize) -> &mut [f64] {
+    m.col_mut(j)
+        .try_as_col_major_mut()
+        .expect("column-major storage")
+        .as_slice_mut()
+}
+
 struct Solver<'a> {
     tree: &'a Tree,
     symbolic: &'a SymbolicSupernodalCholesky<usize>,
@@ -666,22 +682,29 @@ impl Solver<'_> {
         (top, bottom, rows)
     }
 
+    /// `map[r]` for each row `r` of `s`'s pattern: its place in `s`'s front (after the `c` pivot
+    /// rows), for [`Solver::locate`] of each of `s`'s children.
+    fn map_pattern(&self, s: usize, map: &mut [usize]) {
+        let (top, _, rows) = self.parts(s);
+        let c = top.nrows();
+        for (i, &r) in rows.iter().enumerate() {
+            map[r] = c + i;
+        }
+    }
+
     /// Where each row of `child`'s pattern lies in its parent `s`'s front (`c` pivot rows, then
-    /// its pattern), with `map` holding the pattern's positions.
-    fn locate(&self, s: usize, child: usize, map: &mut [usize], locs: &mut Vec<usize>) {
+    /// its pattern), with `map` holding the pattern's positions ([`Solver::map_pattern`] of `s`).
+    /// The places increase (the pattern is sorted, and its rows among `s`'s pivots come first);
+    /// returns how many of them are pivot rows.
+    fn locate(&self, s: usize, child: usize, map: &[usize], locs: &mut Vec<usize>) -> usize {
         let sym = self.symbolic;
         let (start, end) = (sym.supernode_begin()[s], sym.supernode_end()[s]);
-        let (_, _, rows) = self.parts(s);
-        for (i, &r) in rows.iter().enumerate() {
-            map[r] = end - start + i;
-        }
         let (_, _, crows) = self.parts(child);
+        let pivots = crows.partition_point(|&r| r < end);
         locs.clear();
-        locs.extend(
-            crows
-                .iter()
-                .map(|&r| if r < end { r - start } else { map[r] }),
-        );
+        locs.extend(crows[..pivots].iter().map(|&r| r - start));
+        locs.extend(crows[pivots..].iter().map(|&r| map[r]));
+        pivots
     }
 
     fn forward_forest(
@@ -728,15 +751,22 @@ impl Solver<'_> {
         zs.copy_from(self.b.subrows(start, c));
         let mut u = Mat::<f64>::zeros(nb, k);
         let mut locs = Vec::new();
+        if !updates.is_empty() {
+            self.map_pattern(s, map);
+        }
         for (&child, update) in self.tree.children(s).iter().zip(updates) {
-            self.locate(s, child, map, &mut locs);
+            let pivots = self.locate(s, child, map, &mut locs);
+            let (to_pivots, to_pattern) = locs.split_at(pivots);
             for j in 0..k {
-                for (i, &l) in locs.iter().enumerate() {
-                    if l < c {
-                        zs[(l, j)] += update[(i, j)];
-                    } else {
-                        u[(l - c, j)] += update[(i, j)];
-                    }
+                let from = column(update.as_ref(), j);
+                let (from_p, from_b) = from.split_at(pivots);
+                let zc = column_mut(zs.rb_mut(), j);
+                for (&l, &v) in to_pivots.iter().zip(from_p) {
+                    zc[l] += v;
+                }
+                let uc = column_mut(u.as_mut(), j);
+                for (&l, &v) in to_pattern.iter().zip(from_b) {
+                    uc[l - c] += v;
                 }
             }
         }
@@ -811,15 +841,26 @@ impl Solver<'_> {
         }
         solve_unit_upper_triangular_in_place(top.transpose(), xs.rb_mut(), par);
         let mut locs = Vec::new();
-        self.tree
-            .children(s)
+        let children = self.tree.children(s);
+        if !children.is_empty() {
+            self.map_pattern(s, map);
+        }
+        children
             .iter()
             .map(|&child| {
-                self.locate(s, child, map, &mut locs);
-                let xr = Mat::from_fn(locs.len(), k, |i, j| {
-                    let l = locs[i];
-                    if l < c { xs[(l, j)] } else { known[(l - c, j)] }
-                });
+                let pivots = self.locate(s, child, map, &mut locs);
+                let (from_pivots, from_pattern) = locs.split_at(pivots);
+                let mut xr = Mat::<f64>::zeros(locs.len(), k);
+                for j in 0..k {
+                    let (xc, kc) = (column(xs.rb(), j), column(known.as_ref(), j));
+                    let (to_p, to_b) = column_mut(xr.as_mut(), j).split_at_mut(pivots);
+                    for (t, &l) in to_p.iter_mut().zip(from_pivots) {
+                        *t = xc[l];
+                    }
+                    for (t, &l) in to_b.iter_mut().zip(from_pattern) {
+                        *t = kc[l - c];
+                    }
+                }
                 (child, xr)
             })
             .collect()
