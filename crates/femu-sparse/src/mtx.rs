@@ -196,10 +196,25 @@ pub fn write_matrix_market(
 mod tests {
     use super::*;
 
-    fn tmp(name: &str) -> std::path::PathBuf {
-        let d = std::env::temp_dir().join(format!("femu-mtx-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
-        d.join(name)
+    /// A directory of one test's own, removed with what it holds when the test ends (also when
+    /// it fails).
+    struct Scratch(std::path::PathBuf);
+
+    impl Scratch {
+        fn new(test: &str) -> Self {
+            let d = std::env::temp_dir().join(format!("femu-mtx-{test}-{}", std::process::id()));
+            std::fs::create_dir_all(&d).unwrap();
+            Self(d)
+        }
+        fn file(&self, name: &str) -> std::path::PathBuf {
+            self.0.join(name)
+        }
+    }
+
+    impl Drop for Scratch {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
     }
 
     #[test]
@@ -216,8 +231,9 @@ mod tests {
             t.add_triplet(r, c, v);
         }
         let a: SparseMatrix = t.to_csc();
+        let dir = Scratch::new("round-trip");
         for sym in [true, false] {
-            let p = tmp(&format!("a{sym}.mtx"));
+            let p = dir.file(&format!("a{sym}.mtx"));
             write_matrix_market(&p, &a, sym).unwrap();
             let b = read_matrix_market(&p).unwrap();
             assert_eq!(a.to_dense(), b.to_dense());
@@ -246,8 +262,9 @@ mod tests {
             ),
             ("%%MatrixMarket matrix coordinate real general\n2 x 1\n", 2),
         ];
+        let dir = Scratch::new("malformed");
         for (i, (text, line)) in cases.iter().enumerate() {
-            let p = tmp(&format!("bad{i}.mtx"));
+            let p = dir.file(&format!("bad{i}.mtx"));
             std::fs::write(&p, text).unwrap();
             match read_matrix_market(&p) {
                 Err(SparseError::Parse { line: l, .. }) => assert_eq!(l, *line, "case {i}"),
@@ -255,7 +272,7 @@ mod tests {
             }
         }
         // Fortran exponent
-        let p = tmp("d.mtx");
+        let p = dir.file("d.mtx");
         std::fs::write(
             &p,
             "%%MatrixMarket matrix coordinate real general\n1 1 1\n1 1 1.5D+03\n",
@@ -263,7 +280,7 @@ mod tests {
         .unwrap();
         assert_eq!(read_matrix_market(&p).unwrap().get(0, 0), Some(&1500.0));
         assert!(matches!(
-            read_matrix_market(tmp("missing.mtx")),
+            read_matrix_market(dir.file("missing.mtx")),
             Err(SparseError::Io { .. })
         ));
     }
