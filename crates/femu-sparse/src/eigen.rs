@@ -226,7 +226,8 @@ impl ResidualKind {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct EigenStats {
     /// Checks of the input (square, finite, symmetric, `M`'s pattern inside `K`'s) and the
-    /// 1-norms of `K` and `M`, done once by [`Pencil::new`], seconds.
+    /// 1-norms of `K` and `M`, done once by [`Pencil::new`], seconds (docs/SCALING.md, "The
+    /// block within itself, the Ritz vectors' products and the input checks").
     pub check_seconds: f64,
     /// Symbolic analyses (ordering included), seconds.
     pub symbolic_seconds: f64,
@@ -1150,7 +1151,7 @@ impl Columns {
     /// Appends a column, written on the rayon threads: the first write to the basis's reserved
     /// storage is where the operating system provides its pages (a page fault and a cleared 4 KiB
     /// page each), and page faults on different threads proceed in parallel (docs/SCALING.md,
-    /// "The block within itself, and the Ritz vectors' products").
+    /// "The block within itself, the Ritz vectors' products and the input checks").
     fn push(&mut self, v: &[f64]) {
         self.data
             .par_extend(v.par_iter().with_min_len(1 << 15).copied());
