@@ -716,11 +716,13 @@ impl Model {
         Ok(m)
     }
 
-    /// Assembles `K` and `M` (free DOFs) in one call; see [`Assembler`] to reuse the pattern.
+    /// Assembles `K` and `M` (free DOFs) in one call, with the analysis of `K`'s pattern made
+    /// beside it for the solves that follow ([`Assembler::assemble_analysed`]); see [`Assembler`]
+    /// to reuse the pattern.
     ///
     /// # Errors
     /// [`FemError::NoMaterial`], [`FemError::NoFreeDofs`] or an element geometry error.
     pub fn assemble(&self, mass: MassKind) -> Result<SystemMatrices, FemError> {
-        Assembler::new(self)?.assemble(self, mass)
+        Assembler::new(self)?.assemble_analysed(self, mass)
     }
 }

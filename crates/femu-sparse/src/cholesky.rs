@@ -8,7 +8,7 @@
 //! the pencil `(K, M)` has eigenvalues below `sigma` (M positive definite): the Sturm count that
 //! proves an eigensolver skipped no mode.
 
-use crate::ordering::{Ordering, fill_reducing_ordering};
+use crate::ordering::{Ordering, Pattern, pattern_ordering};
 use crate::{SparseError, SparseMatrix};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
@@ -116,6 +116,10 @@ pub struct SymbolicFactor {
     tree: Option<Arc<crate::multifrontal::Tree>>,
     /// stored entries of the lower triangle (the permuted copy's size)
     lower_nnz: usize,
+    /// the analysed pattern's [`Pattern::fingerprint`]
+    fingerprint: u64,
+    /// how long the ordering and the analysis took, seconds
+    seconds: f64,
     /// the values of the last dropped factor on this analysis, reused by the next one: fresh
     /// memory costs a page fault per 4 KiB, 3.3 s for the 2.3 GB factor of the 209,088-DOF
     /// block (docs/SCALING.md, "A subtree-parallel factorization")
@@ -181,21 +185,40 @@ impl SymbolicFactor {
     /// [`SparseError::DimensionMismatch`] for a non-square or CSR matrix,
     /// [`SparseError::Factorization`] if the analysis fails (out of memory).
     pub fn new(a: &SparseMatrix, ordering: Ordering) -> Result<Self, SparseError> {
-        let view = faer_view(a)?;
-        let perm = fill_reducing_ordering(a, ordering)?;
+        Self::of_pattern(Pattern::of(a)?, ordering)
+    }
+
+    /// Analyses a symmetric pattern (both triangles stored; the lower one is read) before any
+    /// values exist: an assembler's, while it assembles the values on the other threads
+    /// (docs/SCALING.md, "The analysis beside the assembly"). A pattern that is not symmetric
+    /// is analysed as its symmetric closure for the ordering.
+    ///
+    /// # Errors
+    /// [`SparseError::Factorization`] if the analysis fails (out of memory).
+    pub fn of_pattern(p: Pattern<'_>, ordering: Ordering) -> Result<Self, SparseError> {
+        let started = std::time::Instant::now();
+        let n = p.dim();
+        let perm = pattern_ordering(p, ordering)?;
         let sym_ordering = match &perm {
             Some((fwd, inv)) => {
-                SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, inv, a.rows()))
+                SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, inv, n))
             }
             None => SymmetricOrdering::Amd,
         };
-        let inner = factorize_symbolic_cholesky(
-            view.symbolic(),
-            Side::Lower,
-            sym_ordering,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| SparseError::Factorization {
+        // cannot panic: `Pattern` (or sprs) has checked the arrays as faer does
+        let view = SymbolicSparseColMatRef::new_checked(n, n, p.col_ptr(), None, p.row_idx());
+        let (inner, fingerprint) = rayon::join(
+            || {
+                factorize_symbolic_cholesky(
+                    view,
+                    Side::Lower,
+                    sym_ordering,
+                    CholeskySymbolicParams::default(),
+                )
+            },
+            || p.fingerprint(),
+        );
+        let inner = inner.map_err(|e| SparseError::Factorization {
             reason: format!("symbolic analysis: {e:?}"),
         })?;
         let tree = match inner.raw() {
@@ -206,16 +229,44 @@ impl SymbolicFactor {
             inner: Arc::new(inner),
             factor_par: Par::Seq,
             tree: tree.map(Arc::new),
-            lower_nnz: lower_nnz(a),
+            lower_nnz: p.lower_nnz(),
+            fingerprint,
+            seconds: 0.0,
             spare: Arc::default(),
-            n: a.rows(),
-            nnz: a.nnz(),
+            n,
+            nnz: p.nnz(),
             ordering,
         };
         if symbolic.flops() > PARALLEL_FLOPS_PER_COLUMN * symbolic.n.max(1) as f64 {
             symbolic.factor_par = faer::get_global_parallelism();
         }
+        symbolic.seconds = started.elapsed().as_secs_f64();
         Ok(symbolic)
+    }
+
+    /// Whether this analysis is of `a`'s pattern: same dimension, number of entries and
+    /// [`Pattern::fingerprint`]. An analysis kept beside a matrix (`SystemMatrices`) is used only
+    /// when this holds, so a matrix changed after its analysis is analysed again, not factored on
+    /// the wrong structure.
+    pub fn is_for(&self, a: &SparseMatrix) -> bool {
+        Pattern::of(a).is_ok_and(|p| {
+            p.dim() == self.n && p.nnz() == self.nnz && p.fingerprint() == self.fingerprint
+        })
+    }
+
+    /// Seconds the ordering and the analysis took (wall time of [`SymbolicFactor::of_pattern`]).
+    pub fn seconds(&self) -> f64 {
+        self.seconds
+    }
+
+    /// The same analysis with nothing kept from earlier factorizations: an analysis held beside
+    /// its matrices lends copies of itself, so that the values of a factor it reused
+    /// (`spare`, up to the size of a factor) are freed with the solve that used them.
+    pub fn detached(&self) -> Self {
+        Self {
+            spare: Arc::default(),
+            ..self.clone()
+        }
     }
 
     /// Matrix dimension.
@@ -618,14 +669,6 @@ enum Input<'a> {
     Values(SparseColMatRef<'a, usize, f64>),
     /// `sum_t scale_t A_t`, read in place (`SymbolicFactor::ldlt_sum`).
     Sum(&'a [(&'a SparseMatrix, f64)]),
-}
-
-/// Stored entries on and below the diagonal of `a`.
-fn lower_nnz(a: &SparseMatrix) -> usize {
-    a.outer_iterator()
-        .enumerate()
-        .map(|(c, col)| col.indices().iter().filter(|&&r| r >= c).count())
-        .sum()
 }
 
 /// The diagonal of the factor `L` of an `LL^T` (or `D` of an `LDL^T`: the values are stored in

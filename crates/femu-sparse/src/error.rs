@@ -69,6 +69,12 @@ pub enum SparseError {
         /// Original index of the zero pivot.
         index: usize,
     },
+    /// A sparsity pattern given by its arrays is not a valid compressed-column pattern.
+    #[error("invalid sparsity pattern: {reason}")]
+    InvalidPattern {
+        /// What is wrong, and where (the column).
+        reason: String,
+    },
     /// A factorization or ordering failed for another reason.
     #[error("factorization failed: {reason}")]
     Factorization {

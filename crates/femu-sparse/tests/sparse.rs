@@ -636,3 +636,105 @@ fn mass_entries_outside_the_stiffness_pattern_are_refused() {
         assert_eq!(*s, expected, "({r}, {c})");
     }
 }
+
+/// `a` without the entries `(r, c)` listed (their values dropped).
+fn without(a: &SparseMatrix, drop: &[(usize, usize)]) -> SparseMatrix {
+    let mut t = TriMat::new((a.rows(), a.cols()));
+    for (v, (r, c)) in a.iter() {
+        if !drop.contains(&(r, c)) {
+            t.add_triplet(r, c, *v);
+        }
+    }
+    t.to_csc()
+}
+
+/// A pattern given by its arrays is checked as sprs checks a matrix: each broken rule is an
+/// error naming what and which column, never a panic inside METIS or faer; a valid one is the
+/// matrix's own pattern (same fingerprint).
+#[test]
+fn a_pattern_from_its_arrays_is_checked() {
+    use femu_sparse::ordering::Pattern;
+    let a = laplacian_3d(3);
+    let n = a.rows();
+    let ptr = a.indptr().into_raw_storage().to_vec();
+    let idx = a.indices().to_vec();
+    let p = Pattern::new(n, &ptr, &idx).unwrap();
+    assert_eq!(p.fingerprint(), Pattern::of(&a).unwrap().fingerprint());
+    assert_eq!((p.dim(), p.nnz()), (n, a.nnz()));
+    // the 7-point stencil has (7 n - 6 * 3 * 3) entries in all (boundary faces lack neighbours),
+    // the diagonal and half of the rest on and below it
+    assert_eq!(p.lower_nnz(), n + (a.nnz() - n) / 2);
+    let message = |r: Result<Pattern<'_>, SparseError>| match r {
+        Err(SparseError::InvalidPattern { reason }) => reason,
+        other => panic!("{other:?}"),
+    };
+    assert!(message(Pattern::new(n + 1, &ptr, &idx)).contains("column pointers for"));
+    let mut shifted = ptr.clone();
+    shifted[0] = 1;
+    assert!(message(Pattern::new(n, &shifted, &idx)).contains("run from 1"));
+    let mut back = ptr.clone();
+    back[6] = back[5] - 1;
+    assert!(message(Pattern::new(n, &back, &idx)).contains("column 5 ends before it starts"));
+    let mut beyond = idx.clone();
+    beyond[ptr[4]] = n + 3;
+    let m = message(Pattern::new(n, &ptr, &beyond));
+    assert!(
+        m.contains("column 4 has row") && m.contains(&format!("{}", n + 3)),
+        "{m}"
+    );
+    let mut twice = idx.clone();
+    twice[ptr[9] + 1] = twice[ptr[9]];
+    assert!(message(Pattern::new(n, &ptr, &twice)).contains("column 9: rows"));
+}
+
+/// Nested dissection needs a symmetric graph. A pattern with an upper entry whose mirror is
+/// missing is ordered as its symmetric closure: the same permutation as the full symmetric
+/// pattern's, where no edge had to be added. And a pencil with such a `K` is refused by its
+/// checks (which run beside the analysis), not by a crash in the ordering.
+#[test]
+fn an_asymmetric_pattern_is_ordered_as_its_symmetric_closure() {
+    use femu_sparse::ordering::fill_reducing_ordering;
+    let full = laplacian_3d(6);
+    // grid neighbours (0, 1) and (7, 13): drop the entry above the diagonal of each pair
+    let half = without(&full, &[(0, 1), (7, 13)]);
+    assert_eq!(half.nnz(), full.nnz() - 2);
+    let reference = fill_reducing_ordering(&full, Ordering::NestedDissection)
+        .unwrap()
+        .unwrap();
+    let closed = fill_reducing_ordering(&half, Ordering::NestedDissection)
+        .unwrap()
+        .unwrap();
+    assert!(closed == reference);
+    let eye = SparseMatrix::eye(full.rows());
+    match Pencil::new(&half, &eye, Ordering::NestedDissection) {
+        Err(SparseError::NotSymmetric { matrix: "K", .. }) => {}
+        other => panic!("{other:?}"),
+    }
+}
+
+/// An analysis knows the pattern it was made for: new values on it are its matrix, a pattern of
+/// the same size and number of entries with one entry moved is not.
+#[test]
+fn an_analysis_knows_its_pattern() {
+    let a = laplacian_3d(5);
+    let sym = SymbolicFactor::new(&a, Ordering::NestedDissection).unwrap();
+    assert!(sym.is_for(&a));
+    let scaled = a.map(|v| 3.0 * v + 1.0);
+    assert!(sym.is_for(&scaled));
+    // move the pair (0, 1) to (0, 2): same dimension and entry count, another pattern
+    let mut moved = TriMat::new((a.rows(), a.cols()));
+    for (v, (r, c)) in without(&a, &[(0, 1), (1, 0)]).iter() {
+        moved.add_triplet(r, c, *v);
+    }
+    moved.add_triplet(0, 2, -1.0);
+    moved.add_triplet(2, 0, -1.0);
+    let moved: SparseMatrix = moved.to_csc();
+    assert_eq!(moved.nnz(), a.nnz());
+    assert!(!sym.is_for(&moved));
+    assert!(!sym.is_for(&laplacian_3d(4)));
+    assert!(sym.seconds() > 0.0);
+    // a detached copy is the same analysis
+    let copy = sym.detached();
+    assert!(copy.is_for(&a));
+    assert_eq!(copy.factor_len(), sym.factor_len());
+}

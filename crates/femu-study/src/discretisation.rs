@@ -121,7 +121,7 @@ pub fn estimate(
         )?;
     }
     let asm = Assembler::new(&q)?;
-    let sys = asm.assemble(&q, MassKind::Consistent)?;
+    let sys = asm.assemble_analysed(&q, MassKind::Consistent)?;
     let count = (modes.len() + 4).min(sys.k.rows());
     let reference = sys.modes(Which::Lowest(count), &EigenOptions::default())?;
     let reference = ModeSet::from_modes(&reference);

@@ -184,7 +184,7 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
     leave_out_orphans(&mut model, path, &mut warnings)?;
     let asm = Assembler::new(&model).map_err(|e| StudyError::within(path, e))?;
     let sys = asm
-        .assemble(&model, options.mass())
+        .assemble_analysed(&model, options.mass())
         .map_err(|e| StudyError::within(path, e))?;
     Ok(LoadedModel {
         path: path.to_path_buf(),

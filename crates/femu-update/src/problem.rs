@@ -128,7 +128,7 @@ impl<'m> UpdateModel<'m> {
         corrections: Corrections,
     ) -> Result<Self, UpdateError> {
         let asm = Assembler::new(model)?;
-        let base = asm.assemble(model, groups.mass_kind())?;
+        let base = asm.assemble_analysed(model, groups.mass_kind())?;
         Self::from_assembly(model, groups, corrections, asm, base)
     }
 
@@ -358,17 +358,18 @@ impl<'m> UpdateModel<'m> {
         Ok(())
     }
 
-    /// The symbolic analysis of `K`'s pattern, computed on first use and reused by every
-    /// eigen solve of the updating iterations.
+    /// The symbolic analysis of `K`'s pattern, reused by every eigen solve of the updating
+    /// iterations: the one made beside the nominal assembly (`SystemMatrices::analysis`), or
+    /// computed on first use.
     ///
     /// # Errors
     /// A failed analysis.
     pub fn symbolic(&mut self) -> Result<SymbolicFactor, UpdateError> {
         if self.symbolic.is_none() {
-            self.symbolic = Some(SymbolicFactor::new(
-                &self.base.k,
-                Ordering::NestedDissection,
-            )?);
+            self.symbolic = Some(match self.base.analysis() {
+                Some(made) => made,
+                None => SymbolicFactor::new(&self.base.k, Ordering::NestedDissection)?,
+            });
         }
         Ok(self.symbolic.clone().expect("just computed"))
     }

@@ -522,3 +522,56 @@ fn point_masses_add_their_mass_to_rigid_motions() {
     let e = model.add_point_mass(2, f64::NAN).unwrap_err().to_string();
     assert!(e.contains("is not finite"), "{e}");
 }
+
+/// The analysis made beside the assembly is `K`'s and is used by `SystemMatrices::modes` (no
+/// analysis time in the solve's statistics); the modes are the dense ones. A `K` replaced by one
+/// of another pattern (a coupling between two far nodes added) is analysed again by the solve,
+/// whose modes are again the dense ones of the new `K`, not a factorization on the old structure.
+#[test]
+fn the_analysis_beside_the_assembly_serves_the_matrices_it_was_made_for() {
+    use femu_sparse::SparseMatrix;
+    use femu_sparse::eigen::{EigenOptions, Which};
+    let mut model = small_plate(false);
+    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+    let mut sys = model.assemble(MassKind::Consistent).unwrap();
+    let analysis = sys.analysis().expect("made beside the assembly");
+    assert!(analysis.is_for(&sys.k) && analysis.dim() == sys.k.rows());
+    let count = 6;
+    let check = |sys: &femu_fem::assembly::SystemMatrices, given: bool| {
+        let dense =
+            generalized_symmetric_eigenvalues(to_dense(&sys.k).as_ref(), to_dense(&sys.m).as_ref())
+                .unwrap();
+        let modes = sys
+            .modes(Which::Lowest(count), &EigenOptions::default())
+            .unwrap();
+        assert!(modes.sturm.verified());
+        assert_eq!(modes.stats.symbolic_seconds == 0.0, given);
+        for j in 0..count {
+            assert!(
+                (modes.values[j] / dense[j] - 1.0).abs() < 1e-9,
+                "mode {j}: {} against {}",
+                modes.values[j],
+                dense[j]
+            );
+        }
+    };
+    check(&sys, true);
+    // a spring of 1 % of the largest diagonal entry between the first and the last free DOF
+    let n = sys.k.rows();
+    let s = 0.01
+        * (0..n)
+            .map(|i| sys.k.get(i, i).copied().unwrap_or(0.0))
+            .fold(0.0, f64::max);
+    let mut t = sprs::TriMat::new((n, n));
+    for (v, (r, c)) in sys.k.iter() {
+        t.add_triplet(r, c, *v);
+    }
+    for (r, c, v) in [(0, 0, s), (n - 1, n - 1, s), (0, n - 1, -s), (n - 1, 0, -s)] {
+        t.add_triplet(r, c, v);
+    }
+    let k: SparseMatrix = t.to_csc();
+    assert!(k.nnz() == sys.k.nnz() + 2, "the spring adds two entries");
+    sys.k = k;
+    assert!(sys.analysis().is_none());
+    check(&sys, false);
+}
