@@ -75,11 +75,11 @@ impl SystemMatrices {
     /// zero-energy modes are verified and locked before the iteration instead of converged by it
     /// (on a free-free plate of 47,628 DOF, 75 solved vectors instead of 104).
     ///
-    /// # Errors
-    /// As [`femu_sparse::eigen::eigs`].
-    ///
     /// With femu's own engine and the nested-dissection ordering, the analysis made beside the
     /// assembly ([`SystemMatrices::analysis`]) is used: the solve does no ordering of its own.
+    ///
+    /// # Errors
+    /// As [`femu_sparse::eigen::eigs`].
     pub fn modes(&self, which: Which, params: &EigenOptions) -> Result<Modes, SparseError> {
         let params = self.eigen_options(params);
         match (&params.engine, params.ordering) {
@@ -94,10 +94,9 @@ impl SystemMatrices {
     }
 
     /// The nested-dissection analysis of `k`'s pattern made by [`Assembler::assemble_analysed`]
-    /// (and [`Model::assemble`]), if `k`
-    /// still has the pattern it was made for ([`SymbolicFactor::is_for`]: `k` is a public field
-    /// and may have been replaced). The copy keeps nothing of the factorizations done with it
-    /// ([`SymbolicFactor::detached`]).
+    /// (and [`Model::assemble`]), if `k` still has the pattern it was made for
+    /// ([`SymbolicFactor::is_for`]: `k` is a public field and may have been replaced). The copy
+    /// keeps nothing of the factorizations done with it ([`SymbolicFactor::detached`]).
     pub fn analysis(&self) -> Option<SymbolicFactor> {
         self.analysis
             .as_ref()

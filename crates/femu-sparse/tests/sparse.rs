@@ -675,6 +675,10 @@ fn a_pattern_from_its_arrays_is_checked() {
     let mut back = ptr.clone();
     back[6] = back[5] - 1;
     assert!(message(Pattern::new(n, &back, &idx)).contains("column 5 ends before it starts"));
+    // a pointer beyond the rows in the middle (the last one is right)
+    let mut far = ptr.clone();
+    far[3] = idx.len() + 40;
+    assert!(message(Pattern::new(n, &far, &idx)).contains("column 2 ends at"));
     let mut beyond = idx.clone();
     beyond[ptr[4]] = n + 3;
     let m = message(Pattern::new(n, &ptr, &beyond));
