@@ -14,11 +14,11 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::reborrow::Reborrow;
+use faer::sparse::SparseColMatRef;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
     SymmetricOrdering, factorize_symbolic_cholesky, supernodal::SupernodalLltRef,
 };
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use rayon::prelude::*;
 use std::sync::{Arc, Mutex};
@@ -28,28 +28,7 @@ use std::sync::{Arc, Mutex};
 /// # Errors
 /// [`SparseError::DimensionMismatch`] if `a` is not square or not in CSC storage.
 pub fn faer_view(a: &SparseMatrix) -> Result<SparseColMatRef<'_, usize, f64>, SparseError> {
-    if !a.is_csc() {
-        return Err(SparseError::DimensionMismatch {
-            what: "CSC storage (got CSR)",
-            expected: 0,
-            got: 1,
-        });
-    }
-    if a.rows() != a.cols() {
-        return Err(SparseError::DimensionMismatch {
-            what: "square matrix",
-            expected: a.rows(),
-            got: a.cols(),
-        });
-    }
-    let sym = SymbolicSparseColMatRef::new_checked(
-        a.rows(),
-        a.cols(),
-        a.indptr().into_raw_storage(),
-        None,
-        a.indices(),
-    );
-    Ok(SparseColMatRef::new(sym, a.data()))
+    Ok(SparseColMatRef::new(Pattern::of(a)?.faer(), a.data()))
 }
 
 /// Below this ratio `L_jj^2 / A_jj` of a pivot to its diagonal entry, a Cholesky factorization
@@ -205,8 +184,7 @@ impl SymbolicFactor {
             }
             None => SymmetricOrdering::Amd,
         };
-        // cannot panic: `Pattern` (or sprs) has checked the arrays as faer does
-        let view = SymbolicSparseColMatRef::new_checked(n, n, p.col_ptr(), None, p.row_idx());
+        let view = p.faer();
         let (inner, fingerprint) = rayon::join(
             || {
                 factorize_symbolic_cholesky(

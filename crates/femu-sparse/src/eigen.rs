@@ -421,7 +421,6 @@ impl<'a> Pencil<'a> {
         m: &'a SparseMatrix,
         symbolic: Result<SymbolicFactor, Ordering>,
     ) -> Result<Self, SparseError> {
-        let symbolic_given = symbolic.is_ok();
         let started = Instant::now();
         let checks = || -> Result<(f64, f64), SparseError> {
             crate::csc::check_symmetric(k, "K", 1e-10)?;
@@ -440,16 +439,20 @@ impl<'a> Pencil<'a> {
         // The analysis reads K's pattern only (its ordering graph made symmetric), so it runs
         // beside the checks of the values, which are parallel, while the ordering is one
         // thread's work; a failed check still wins over it.
-        let (norms, symbolic) = match symbolic {
-            Ok(s) => (checks(), Ok(s)),
-            Err(ordering) => rayon::join(checks, || SymbolicFactor::new(k, ordering)),
+        let (norms, symbolic, analysed) = match symbolic {
+            Ok(s) => (checks(), Ok(s), false),
+            Err(ordering) => {
+                let (norms, s) = rayon::join(checks, || SymbolicFactor::new(k, ordering));
+                (norms, s, true)
+            }
         };
         let (k_norm, m_norm) = norms?;
         let symbolic = symbolic?;
         let both = started.elapsed().as_secs_f64();
-        let symbolic_seconds = match symbolic_given {
-            true => 0.0,
-            false => symbolic.seconds().min(both),
+        let symbolic_seconds = if analysed {
+            symbolic.seconds().min(both)
+        } else {
+            0.0
         };
         let check_seconds = both - symbolic_seconds;
         Ok(Self {

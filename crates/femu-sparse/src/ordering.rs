@@ -134,6 +134,17 @@ impl<'a> Pattern<'a> {
         self.row_idx
     }
 
+    /// faer's view of the pattern (no copy; the arrays were checked as faer checks them).
+    pub(crate) fn faer(&self) -> faer::sparse::SymbolicSparseColMatRef<'a, usize> {
+        faer::sparse::SymbolicSparseColMatRef::new_checked(
+            self.n,
+            self.n,
+            self.col_ptr,
+            None,
+            self.row_idx,
+        )
+    }
+
     /// The rows of column `j`.
     pub fn col(&self, j: usize) -> &'a [usize] {
         &self.row_idx[self.col_ptr[j]..self.col_ptr[j + 1]]
