@@ -28,6 +28,7 @@ pub mod kkt;
 pub mod mtx;
 mod multifrontal;
 pub mod ordering;
+mod skinny;
 pub mod slepc;
 
 pub use error::SparseError;

@@ -14,6 +14,7 @@
 //! order of the additions differs.
 
 use crate::cholesky::Inertia;
+use crate::skinny::{MAX_RHS, Panel};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{
     LdltError, LdltRegularization, cholesky_in_place, cholesky_in_place_scratch,
@@ -682,6 +683,15 @@ impl Solver<'_> {
         (top, bottom, rows)
     }
 
+    /// Supernode `s`'s columns of the factor, `[L11; L21]`, for the solve's own kernels.
+    fn panel(&self, s: usize) -> Panel<'_> {
+        let sym = self.symbolic;
+        let c = sym.supernode_end()[s] - sym.supernode_begin()[s];
+        let ld = c + sym.nnz_per_super()[s];
+        let ptr = sym.col_ptr_for_val();
+        Panel::new(&self.values[ptr[s]..ptr[s + 1]], ld, ld, c)
+    }
+
     /// `map[r]` for each row `r` of `s`'s pattern: its place in `s`'s front (after the `c` pivot
     /// rows), for [`Solver::locate`] of each of `s`'s children.
     fn map_pattern(&self, s: usize, map: &mut [usize]) {
@@ -747,13 +757,39 @@ impl Solver<'_> {
         let (top, bottom, rows) = self.parts(s);
         let (c, nb, k) = (top.nrows(), rows.len(), self.k);
         let start = self.symbolic.supernode_begin()[s];
+        if !updates.is_empty() {
+            self.map_pattern(s, map);
+        }
+        if k <= MAX_RHS {
+            // the front's rows of the right-hand sides in one buffer, `c + nb` per column, for
+            // the solve's own kernels (crate::skinny): the factor read once
+            let ld = c + nb;
+            let mut w = vec![0.0; ld * k];
+            for (j, wq) in w.chunks_exact_mut(ld).enumerate() {
+                wq[..c].copy_from_slice(&column(self.b, j)[start..start + c]);
+            }
+            let mut locs = Vec::new();
+            for (&child, update) in self.tree.children(s).iter().zip(updates) {
+                self.locate(s, child, map, &mut locs);
+                for (j, wq) in w.chunks_exact_mut(ld).enumerate() {
+                    for (&l, &v) in locs.iter().zip(column(update.as_ref(), j)) {
+                        wq[l] += v;
+                    }
+                }
+            }
+            crate::skinny::forward(self.panel(s), &mut w, k, par != Par::Seq);
+            for (j, wq) in w.chunks_exact(ld).enumerate() {
+                let zc = &mut slot[j * c..(j + 1) * c];
+                for (i, (z, &v)) in zc.iter_mut().zip(&wq[..c]).enumerate() {
+                    *z = v * top[(i, i)].recip();
+                }
+            }
+            return Mat::from_fn(nb, k, |i, j| w[j * ld + c + i]);
+        }
         let mut zs = MatMut::from_column_major_slice_mut(slot, c, k);
         zs.copy_from(self.b.subrows(start, c));
         let mut u = Mat::<f64>::zeros(nb, k);
         let mut locs = Vec::new();
-        if !updates.is_empty() {
-            self.map_pattern(s, map);
-        }
         for (&child, update) in self.tree.children(s).iter().zip(updates) {
             let pivots = self.locate(s, child, map, &mut locs);
             let (to_pivots, to_pattern) = locs.split_at(pivots);
@@ -827,7 +863,35 @@ impl Solver<'_> {
         par: Par,
     ) -> Vec<(usize, Mat<f64>)> {
         let (top, bottom, rows) = self.parts(s);
-        let (c, k) = (top.nrows(), self.k);
+        let (c, nb, k) = (top.nrows(), rows.len(), self.k);
+        let children = self.tree.children(s);
+        if !children.is_empty() {
+            self.map_pattern(s, map);
+        }
+        let mut locs = Vec::new();
+        if k <= MAX_RHS {
+            // as on the way up: the front's rows in one buffer for the solve's own kernels
+            let ld = c + nb;
+            let mut w = vec![0.0; ld * k];
+            for (j, wq) in w.chunks_exact_mut(ld).enumerate() {
+                wq[..c].copy_from_slice(&slot[j * c..(j + 1) * c]);
+                wq[c..].copy_from_slice(column(known.as_ref(), j));
+            }
+            crate::skinny::backward(self.panel(s), &mut w, k, par != Par::Seq);
+            for (j, wq) in w.chunks_exact(ld).enumerate() {
+                slot[j * c..(j + 1) * c].copy_from_slice(&wq[..c]);
+            }
+            return children
+                .iter()
+                .map(|&child| {
+                    self.locate(s, child, map, &mut locs);
+                    (
+                        child,
+                        Mat::from_fn(locs.len(), k, |i, j| w[j * ld + locs[i]]),
+                    )
+                })
+                .collect();
+        }
         let mut xs = MatMut::from_column_major_slice_mut(slot, c, k);
         if !rows.is_empty() {
             matmul(
@@ -840,11 +904,6 @@ impl Solver<'_> {
             );
         }
         solve_unit_upper_triangular_in_place(top.transpose(), xs.rb_mut(), par);
-        let mut locs = Vec::new();
-        let children = self.tree.children(s);
-        if !children.is_empty() {
-            self.map_pattern(s, map);
-        }
         children
             .iter()
             .map(|&child| {
