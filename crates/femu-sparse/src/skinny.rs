@@ -100,6 +100,11 @@ impl<'a> Panel<'a> {
 /// unit lower triangle of `L11` read, its diagonal and upper part not). On return `w1 = L11^-1 w1`
 /// and `w2 -= L21 w1`.
 pub(crate) fn forward(l: Panel<'_>, w: &mut [f64], k: usize, parallel: bool) {
+    forward_on(pulp::Arch::new(), l, w, k, parallel);
+}
+
+/// [`forward`] with the vector instructions of `arch`.
+fn forward_on(arch: pulp::Arch, l: Panel<'_>, w: &mut [f64], k: usize, parallel: bool) {
     let (ld, c) = (l.rows, l.cols);
     assert!(k <= MAX_RHS && w.len() == ld * k, "forward: sizes");
     for j0 in (0..c).step_by(TILE) {
@@ -119,6 +124,7 @@ pub(crate) fn forward(l: Panel<'_>, w: &mut [f64], k: usize, parallel: bool) {
             let mut below: Vec<&mut [f64]> =
                 w.chunks_exact_mut(ld).map(|wq| &mut wq[j1..]).collect();
             product(
+                arch,
                 &mut below,
                 tile,
                 &z[..k],
@@ -132,6 +138,11 @@ pub(crate) fn forward(l: Panel<'_>, w: &mut [f64], k: usize, parallel: bool) {
 /// up's result and `w2` the solution at the supernode's pattern. On return
 /// `w1 = L11^-T (w1 - L21^T w2)`.
 pub(crate) fn backward(l: Panel<'_>, w: &mut [f64], k: usize, parallel: bool) {
+    backward_on(pulp::Arch::new(), l, w, k, parallel);
+}
+
+/// [`backward`] with the vector instructions of `arch`.
+fn backward_on(arch: pulp::Arch, l: Panel<'_>, w: &mut [f64], k: usize, parallel: bool) {
     let (ld, c) = (l.rows, l.cols);
     assert!(k <= MAX_RHS && w.len() == ld * k, "backward: sizes");
     for j0 in (0..c).step_by(TILE).rev() {
@@ -142,8 +153,8 @@ pub(crate) fn backward(l: Panel<'_>, w: &mut [f64], k: usize, parallel: bool) {
             let d = if parallel && tile.rows * tile.cols >= PARALLEL_ROWS * TILE / 2 {
                 let mid = tile.cols / 2;
                 let (a, b) = rayon::join(
-                    || dots(tile.sub(0, 0, tile.rows, mid), &below),
-                    || dots(tile.sub(0, mid, tile.rows, tile.cols - mid), &below),
+                    || dots(arch, tile.sub(0, 0, tile.rows, mid), &below),
+                    || dots(arch, tile.sub(0, mid, tile.rows, tile.cols - mid), &below),
                 );
                 let mut d = a;
                 for (dq, bq) in d.iter_mut().zip(&b) {
@@ -151,7 +162,7 @@ pub(crate) fn backward(l: Panel<'_>, w: &mut [f64], k: usize, parallel: bool) {
                 }
                 d
             } else {
-                dots(tile, &below)
+                dots(arch, tile, &below)
             };
             for (q, wq) in w.chunks_exact_mut(ld).enumerate() {
                 for t in 0..j1 - j0 {
@@ -173,7 +184,13 @@ pub(crate) fn backward(l: Panel<'_>, w: &mut [f64], k: usize, parallel: bool) {
 
 /// `u[q] -= b z[q]` for each right-hand side `q` (`b`: `rows x cols`, `cols` at most [`TILE`],
 /// `u[q]` at least `rows` long); the two halves of the rows on two threads when `parallel`.
-fn product(u: &mut [&mut [f64]], b: Panel<'_>, z: &[[f64; TILE]], parallel: bool) {
+fn product(
+    arch: pulp::Arch,
+    u: &mut [&mut [f64]],
+    b: Panel<'_>,
+    z: &[[f64; TILE]],
+    parallel: bool,
+) {
     if parallel {
         let mid = b.rows / 2;
         let (mut top, mut bottom): (Vec<&mut [f64]>, Vec<&mut [f64]>) = u
@@ -185,12 +202,11 @@ fn product(u: &mut [&mut [f64]], b: Panel<'_>, z: &[[f64; TILE]], parallel: bool
             b.sub(mid, 0, b.rows - mid, b.cols),
         );
         rayon::join(
-            || product(&mut top, b0, z, false),
-            || product(&mut bottom, b1, z, false),
+            || product(arch, &mut top, b0, z, false),
+            || product(arch, &mut bottom, b1, z, false),
         );
         return;
     }
-    let arch = pulp::Arch::new();
     for (uq, zq) in u.chunks_mut(GROUP).zip(z.chunks(GROUP)) {
         match uq {
             [a, b_, c_, d] => arch.dispatch(Product {
@@ -220,9 +236,8 @@ fn product(u: &mut [&mut [f64]], b: Panel<'_>, z: &[[f64; TILE]], parallel: bool
 
 /// `b^T y[q]` for each right-hand side `q` (`b`: `rows x cols`, `cols` at most [`TILE`], `y[q]`
 /// `rows` long): `d[q][j]` for `j < cols`.
-fn dots(b: Panel<'_>, y: &[&[f64]]) -> Vec<[f64; TILE]> {
+fn dots(arch: pulp::Arch, b: Panel<'_>, y: &[&[f64]]) -> Vec<[f64; TILE]> {
     let mut d = vec![[0.0; TILE]; y.len()];
-    let arch = pulp::Arch::new();
     // four columns at once with AVX-512's 32 registers (sixteen accumulators for four
     // right-hand sides), three with AVX2's 16 (twelve); the last one or two alone
     let most = if arch.dispatch(Lanes) >= 8 { 4 } else { 3 };
@@ -397,6 +412,18 @@ mod tests {
         (data, lower, w)
     }
 
+    /// Every instruction set this machine runs, not only the one the dispatch picks: the best
+    /// (AVX-512 or AVX2), AVX2 where there is AVX-512, and the plain scalar code, so that the
+    /// kernels' paths for 32 and 16 vector registers and for none are all tested here.
+    fn archs() -> Vec<pulp::Arch> {
+        let mut archs = vec![pulp::Arch::new(), pulp::Arch::Scalar];
+        #[cfg(target_arch = "x86_64")]
+        if let Some(v3) = pulp::x86::V3::try_new() {
+            archs.push(pulp::Arch::V3(v3));
+        }
+        archs
+    }
+
     fn close(got: &[f64], want: &[f64], what: &str) {
         let scale = want.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
         for (i, (g, w)) in got.iter().zip(want).enumerate() {
@@ -418,12 +445,14 @@ mod tests {
         for &c in &[1, 2, 3, 7, 8, 9, 17, 40] {
             for &b in &[0, 1, 5, 8, 9, 16, 17, 100, 2100] {
                 for k in [1, 2, 3, 4, 5, 8] {
-                    for parallel in [false, true] {
+                    for (arch, parallel) in
+                        archs().into_iter().flat_map(|a| [(a, false), (a, true)])
+                    {
                         let ld = c + b;
                         let (data, lower, w) = supernode(c, b, k);
                         let l = Panel::new(&data, ld, ld, c);
                         let mut up = w.clone();
-                        forward(l, &mut up, k, parallel);
+                        forward_on(arch, l, &mut up, k, parallel);
                         let mut want = w.clone();
                         for q in 0..k {
                             let wq = &mut want[q * ld..(q + 1) * ld];
@@ -441,11 +470,11 @@ mod tests {
                         close(
                             &up,
                             &want,
-                            &format!("forward: c {c}, b {b}, {k} rhs, {parallel}"),
+                            &format!("forward: c {c}, b {b}, {k} rhs, {parallel}, {arch:?}"),
                         );
 
                         let mut down = w.clone();
-                        backward(l, &mut down, k, parallel);
+                        backward_on(arch, l, &mut down, k, parallel);
                         let mut want = w.clone();
                         for q in 0..k {
                             let wq = &mut want[q * ld..(q + 1) * ld];
@@ -463,7 +492,7 @@ mod tests {
                         close(
                             &down,
                             &want,
-                            &format!("backward: c {c}, b {b}, {k} rhs, {parallel}"),
+                            &format!("backward: c {c}, b {b}, {k} rhs, {parallel}, {arch:?}"),
                         );
                     }
                 }
