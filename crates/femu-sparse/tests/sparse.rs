@@ -457,6 +457,14 @@ fn subtree_parallel_ldlt_agrees_with_left_looking_and_the_analytic_inertia() {
             f.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut x, n, 3));
             x
         };
+        // and ten, more than the solve's own kernels take (faer's GEMM and triangular solves
+        // then do each supernode's work)
+        let b10: Vec<f64> = (0..10 * n).map(|i| ((i * 53) % 97) as f64 - 48.0).collect();
+        let solve10 = |f: &dyn Factorization| {
+            let mut x = b10.clone();
+            f.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut x, n, 10));
+            x
+        };
         let reference = sym.ldlt_left_looking(&a, &values, "A").unwrap();
         assert_eq!(reference.inertia().negative, below, "{nn}, {sigma}: faer");
         // faer's own supernodal solve (one thread; on more, femu's subtree-parallel solve)
@@ -465,7 +473,13 @@ fn subtree_parallel_ldlt_agrees_with_left_looking_and_the_analytic_inertia() {
             .build()
             .unwrap()
             .install(|| solve(&reference));
+        let x10_ref = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| solve10(&reference));
         let scale = x_ref.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let scale10 = x10_ref.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
         let largest_difference = |x: &[f64]| {
             x.iter()
                 .zip(&x_ref)
@@ -478,14 +492,22 @@ fn subtree_parallel_ldlt_agrees_with_left_looking_and_the_analytic_inertia() {
                 .unwrap();
             // faer's factor solved on these threads (the subtree-parallel solve reads its layout)
             let of_faer = pool.install(|| solve(&reference));
-            let (first, second, count) = pool.install(|| {
+            let (first, second, count, x10) = pool.install(|| {
                 let f = sym.ldlt_values(&a, &values, "A").unwrap();
-                let (inertia, x) = (f.inertia(), solve(&f));
+                let (inertia, x, x10) = (f.inertia(), solve(&f), solve10(&f));
                 drop(f);
                 let g = sym.ldlt_values(&a, &values, "A").unwrap();
                 let count = sym.inertia_values(&a, &values, "A").unwrap();
-                ((inertia, x), (g.inertia(), solve(&g)), count)
+                ((inertia, x), (g.inertia(), solve(&g)), count, x10)
             });
+            let diff10 = x10
+                .iter()
+                .zip(&x10_ref)
+                .fold(0.0_f64, |m, (p, q)| m.max((p - q).abs()));
+            assert!(
+                diff10 < 100.0 * f64::EPSILON * kappa * scale10,
+                "{nn}, {sigma}, {threads}: ten right-hand sides {diff10:e}"
+            );
             assert_eq!(
                 first.0,
                 reference.inertia(),
