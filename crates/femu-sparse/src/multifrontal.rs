@@ -872,10 +872,10 @@ impl Solver<'_> {
         if k <= MAX_RHS {
             // as on the way up: the front's rows in one buffer for the solve's own kernels
             let ld = c + nb;
-            let mut w = vec![0.0; ld * k];
-            for (j, wq) in w.chunks_exact_mut(ld).enumerate() {
-                wq[..c].copy_from_slice(&slot[j * c..(j + 1) * c]);
-                wq[c..].copy_from_slice(column(known.as_ref(), j));
+            let mut w = Vec::with_capacity(ld * k);
+            for j in 0..k {
+                w.extend_from_slice(&slot[j * c..(j + 1) * c]);
+                w.extend_from_slice(column(known.as_ref(), j));
             }
             crate::skinny::backward(self.panel(s), &mut w, k, par != Par::Seq);
             for (j, wq) in w.chunks_exact(ld).enumerate() {
