@@ -30,7 +30,8 @@ use serde::{Deserialize, Serialize};
 /// Which mass matrix to assemble.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum MassKind {
-    /// Consistent mass `int rho N^T N dV`, on the stiffness pattern.
+    /// Consistent mass `int rho N^T N dV`, stored where it is not exactly zero (inside the
+    /// stiffness pattern).
     #[default]
     Consistent,
     /// Lumped (diagonal) mass: row sums for linear elements, HRZ for quadratic ones.
@@ -42,8 +43,10 @@ pub enum MassKind {
 pub struct SystemMatrices {
     /// Stiffness `K` (N/m), symmetric, both triangles stored.
     pub k: SparseMatrix,
-    /// Mass `M` (kg): on the stiffness pattern (consistent, or lumped with multipoint
-    /// constraints, whose `T^T M T` is not diagonal) or diagonal (lumped).
+    /// Mass `M` (kg), its pattern inside `K`'s: consistent, the entries of the stiffness pattern
+    /// that are not exactly zero (for solids a third of them, docs/SCALING.md "Memory"); lumped,
+    /// diagonal, or on the stiffness pattern with multipoint constraints, whose `T^T M T` is not
+    /// diagonal.
     pub m: SparseMatrix,
     /// The DOF map the matrices are numbered by.
     pub dofs: DofMap,
@@ -530,6 +533,13 @@ impl Assembler {
         SparseMatrix::new_csc((n, n), self.col_ptr.clone(), rows, values)
     }
 
+    /// The matrix with `values` on this pattern, without the entries that are exactly zero off
+    /// its diagonal ([`femu_sparse::csc::without_zeros_of`]): the consistent mass.
+    pub(crate) fn without_zeros(&self, values: &[f64]) -> SparseMatrix {
+        let n = self.dofs.free_count();
+        femu_sparse::csc::without_zeros_of((n, n), &self.col_ptr, &self.row_idx, values)
+    }
+
     /// A diagonal matrix (the lumped mass) with the given diagonal.
     pub(crate) fn diagonal_matrix(&self, diag: Vec<f64>) -> SparseMatrix {
         let n = diag.len();
@@ -572,7 +582,9 @@ impl Assembler {
         let n = self.dofs.free_count();
         let m = match mass {
             MassKind::Lumped if !self.lumped_on_pattern() => self.diagonal_matrix(vec![0.0; n]),
-            _ => self.pattern_matrix(vec![0.0; self.nnz()]),
+            MassKind::Lumped => self.pattern_matrix(vec![0.0; self.nnz()]),
+            // made by assemble_into, without its zeros
+            MassKind::Consistent => self.diagonal_matrix(Vec::new()),
         };
         let mut sys = SystemMatrices {
             k: self.pattern_matrix(vec![0.0; self.nnz()]),
@@ -601,7 +613,10 @@ impl Assembler {
     }
 
     /// Re-assembles into existing matrices of this pattern (new material values, same mesh and
-    /// constraints): no allocation, no new pattern. `sys.mass_kind` selects the mass.
+    /// constraints): `K` (and a lumped `M`) in place, no new pattern. `sys.mass_kind` selects the
+    /// mass. The consistent `M` is assembled on `K`'s pattern and stored anew without its exact
+    /// zeros ([`femu_sparse::csc::without_zeros_of`]): its pattern is inside `K`'s, as the
+    /// eigensolver and the expansions require, but may differ from the one `sys.m` had.
     ///
     /// # Errors
     /// As [`Assembler::assemble`], and [`FemError::LengthMismatch`] if `sys` is not on this pattern.
@@ -618,10 +633,11 @@ impl Assembler {
             });
         }
         let mass = sys.mass_kind;
-        let m_len = if mass == MassKind::Consistent || self.lumped_on_pattern() {
-            self.nnz()
-        } else {
-            n
+        // the consistent mass is made anew (below), the lumped one written in place
+        let m_len = match mass {
+            MassKind::Consistent => sys.m.nnz(),
+            MassKind::Lumped if self.lumped_on_pattern() => self.nnz(),
+            MassKind::Lumped => n,
         };
         if sys.k.nnz() != self.nnz() || sys.m.nnz() != m_len {
             return Err(FemError::LengthMismatch {
@@ -640,7 +656,17 @@ impl Assembler {
         let kv = sys.k.data_mut();
         kv.par_chunks_mut(ZERO_CHUNK).for_each(|c| c.fill(0.0));
         let ks = shared::SharedSlice::new(kv);
-        let mv = sys.m.data_mut();
+        // The consistent mass is assembled on the stiffness pattern, then stored without the
+        // entries that are exactly zero (two thirds of them for solids: an element couples a
+        // node's x only to x; docs/SCALING.md, "Memory").
+        let mut on_pattern = Vec::new();
+        let mv = match mass {
+            MassKind::Consistent => {
+                on_pattern = vec![0.0; self.nnz()];
+                &mut on_pattern[..]
+            }
+            MassKind::Lumped => sys.m.data_mut(),
+        };
         mv.par_chunks_mut(ZERO_CHUNK).for_each(|c| c.fill(0.0));
         let ms = shared::SharedSlice::new(mv);
         for color in &self.colors {
@@ -732,6 +758,9 @@ impl Assembler {
                     self.scatter_lumped(&[p.node], |_, c| p.mass[c][c], |at, v| ms.add(at, v));
                 }
             }
+        }
+        if mass == MassKind::Consistent {
+            sys.m = self.without_zeros(&on_pattern);
         }
         Ok(())
     }

@@ -240,8 +240,9 @@ impl ParameterGroups {
     }
 
     /// Writes `K(p) = K_0 + sum_g p_g K_g` and `M(q) = M_0 + sum_g q_g M_g` into `out`, whose
-    /// matrices must have `base`'s pattern (a clone of `base` the first time, then reused: no
-    /// allocation, no new pattern).
+    /// `K` must have `base`'s pattern (a clone of `base` the first time, then reused: `K`, and a
+    /// lumped `M`, are written in place). The consistent `M(q)` is formed on `K`'s pattern and
+    /// stored anew without its exact zeros, as the assembly stores it.
     ///
     /// # Errors
     /// [`FemError::LengthMismatch`] for `p`, `q` or a pattern that is not the assembler's.
@@ -266,11 +267,14 @@ impl ParameterGroups {
                 });
             }
         }
-        for (what, a, b) in [
-            ("K pattern", &base.k, &out.k),
-            ("M pattern", &base.m, &out.m),
+        // the consistent M is made anew (below), without its zeros: its pattern may change
+        let lumped = self.mass_kind == MassKind::Lumped;
+        for (what, a, b, check) in [
+            ("K pattern", &base.k, &out.k, true),
+            ("M pattern", &base.m, &out.m, lumped),
         ] {
-            if a.nnz() != b.nnz() || a.indptr().raw_storage() != b.indptr().raw_storage() {
+            if check && (a.nnz() != b.nnz() || a.indptr().raw_storage() != b.indptr().raw_storage())
+            {
                 return Err(FemError::LengthMismatch {
                     what,
                     expected: a.nnz(),
@@ -286,7 +290,21 @@ impl ParameterGroups {
             });
         }
         out.k.data_mut().copy_from_slice(base.k.data());
-        out.m.data_mut().copy_from_slice(base.m.data());
+        // the consistent mass on K's pattern while the groups are added, then without its zeros
+        let mut m_on_k = Vec::new();
+        if lumped {
+            out.m.data_mut().copy_from_slice(base.m.data());
+        } else {
+            m_on_k = vec![0.0; base.k.nnz()];
+            femu_sparse::csc::for_entries_within(&base.k, &base.m, |pm, pk| {
+                m_on_k[pk] = base.m.data()[pm];
+            })
+            .map_err(|_| FemError::LengthMismatch {
+                what: "base mass pattern inside the stiffness pattern",
+                expected: base.k.nnz(),
+                got: base.m.nnz(),
+            })?;
+        }
         let mesh = model.mesh();
         for (g, group) in self.groups.iter().enumerate() {
             for &e in &group.elements {
@@ -299,8 +317,7 @@ impl ParameterGroups {
                 if q[g] != 0.0 {
                     match self.mass_kind {
                         MassKind::Consistent => {
-                            let md = out.m.data_mut();
-                            asm.scatter(nodes, |i, l, w| md[i] += q[g] * w * me[l]);
+                            asm.scatter(nodes, |i, l, w| m_on_k[i] += q[g] * w * me[l]);
                         }
                         MassKind::Lumped => {
                             let nd = 3 * nodes.len();
@@ -314,6 +331,9 @@ impl ParameterGroups {
                     }
                 }
             }
+        }
+        if !lumped {
+            out.m = asm.without_zeros(&m_on_k);
         }
         Ok(())
     }

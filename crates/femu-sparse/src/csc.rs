@@ -220,6 +220,78 @@ pub fn for_entries_within(
     Ok(())
 }
 
+/// The CSC matrix of the parts `(col_ptr, rows, values)` (sorted rows in each column) without
+/// its off-diagonal entries that are exactly zero: femu's consistent mass, assembled on the
+/// stiffness pattern, where an element's mass couples a node's `x` only to its neighbours' `x`,
+/// so that two thirds of that pattern are zeros for solids (docs/SCALING.md, "Memory"). The
+/// diagonal is kept whatever its value, and so is a NaN (the checks that read the matrix report
+/// it). Columns are filled in parallel.
+///
+/// # Panics
+/// If the parts are inconsistent (`col_ptr` not `cols + 1` nondecreasing offsets into `rows`
+/// and `values` of equal length): they come from a valid pattern.
+pub fn without_zeros_of(
+    shape: (usize, usize),
+    col_ptr: &[usize],
+    rows: &[usize],
+    values: &[f64],
+) -> SparseMatrix {
+    let cols = shape.1;
+    assert!(col_ptr.len() == cols + 1 && rows.len() == values.len());
+    let keep = |c: usize, q: usize| rows[q] == c || values[q] != 0.0;
+    let counts: Vec<usize> = (0..cols)
+        .into_par_iter()
+        .map(|c| (col_ptr[c]..col_ptr[c + 1]).filter(|&q| keep(c, q)).count())
+        .collect();
+    let mut ptr = Vec::with_capacity(cols + 1);
+    ptr.push(0);
+    for n in &counts {
+        ptr.push(ptr.last().copied().unwrap_or(0) + n);
+    }
+    let nnz = ptr[cols];
+    let (mut out_rows, mut out_values) = (vec![0usize; nnz], vec![0.0; nnz]);
+    // pieces of about CHUNK kept entries, each filling its own slices of the output
+    const CHUNK: usize = 1 << 16;
+    let mut pieces = Vec::new();
+    let (mut r_rest, mut v_rest) = (&mut out_rows[..], &mut out_values[..]);
+    let mut first = 0;
+    while first < cols {
+        let mut last = first + 1;
+        while last < cols && ptr[last] - ptr[first] < CHUNK {
+            last += 1;
+        }
+        let len = ptr[last] - ptr[first];
+        let (r, rr) = std::mem::take(&mut r_rest).split_at_mut(len);
+        let (v, vr) = std::mem::take(&mut v_rest).split_at_mut(len);
+        (r_rest, v_rest) = (rr, vr);
+        pieces.push((first..last, r, v));
+        first = last;
+    }
+    pieces.into_par_iter().for_each(|(range, r, v)| {
+        let mut at = 0;
+        for c in range {
+            for q in col_ptr[c]..col_ptr[c + 1] {
+                if keep(c, q) {
+                    r[at] = rows[q];
+                    v[at] = values[q];
+                    at += 1;
+                }
+            }
+        }
+    });
+    SparseMatrix::new_csc(shape, ptr, out_rows, out_values)
+}
+
+/// [`without_zeros_of`] a CSC matrix.
+///
+/// # Panics
+/// If `a` is stored by rows (CSR).
+pub fn without_zeros(a: &SparseMatrix) -> SparseMatrix {
+    assert!(a.is_csc(), "a CSC matrix");
+    let ptr = a.indptr();
+    without_zeros_of(a.shape(), ptr.raw_storage(), a.indices(), a.data())
+}
+
 /// The diagonal of a square matrix (zeros where nothing is stored).
 pub fn diagonal(a: &SparseMatrix) -> Vec<f64> {
     let mut d = vec![0.0; a.rows().min(a.cols())];
@@ -470,6 +542,49 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    /// The matrix without its off-diagonal zeros, against a filter of its entries written here:
+    /// enough entries for several parallel pieces, one column longer than a piece, zeros on the
+    /// diagonal (kept), a NaN (kept), an empty column.
+    #[test]
+    fn zeros_off_the_diagonal_are_dropped_and_nothing_else() {
+        let n = 3000;
+        let mut entries = vec![];
+        for c in 0..n {
+            if c == 17 {
+                continue; // an empty column
+            }
+            let len = if c == 5 { n } else { 100 };
+            for q in 1..len {
+                let r = (c + q * 37) % n; // never c: 37 and n coprime
+                let v = match (r * 7 + c * 3) % 4 {
+                    0 => 0.0,
+                    1 => -(q as f64) - 0.5,
+                    _ => 1.0 + r as f64,
+                };
+                entries.push((r, c, if r == 11 && c == 5 { f64::NAN } else { v }));
+            }
+            entries.push((c, c, if c % 10 == 0 { 0.0 } else { 2.0 }));
+        }
+        entries.sort_by_key(|&(r, c, _)| (c, r));
+        entries.dedup_by_key(|e| (e.0, e.1));
+        let a = from_entries(n, &entries);
+        assert_eq!(a.nnz(), entries.len(), "the zeros stored");
+        assert!(a.nnz() > 3 * (1 << 16), "several pieces of kept entries");
+        let kept: Vec<&(usize, usize, f64)> = entries
+            .iter()
+            .filter(|(r, c, v)| r == c || *v != 0.0)
+            .collect();
+        assert!(kept.len() < a.nnz() * 4 / 5, "zeros to drop");
+        let b = without_zeros(&a);
+        assert_eq!(b.shape(), (n, n));
+        assert_eq!(b.nnz(), kept.len());
+        for (q, (&&(r, c, v), (bv, (br, bc)))) in kept.iter().zip(b.iter()).enumerate() {
+            assert_eq!((br, bc), (r, c), "entry {q}");
+            assert!(*bv == v || (v.is_nan() && bv.is_nan()), "entry {q}");
+        }
+        assert!(b.get(17, 17).is_none() && b.get(20, 20) == Some(&0.0));
     }
 
     /// Every block width, those with a kernel of their own (1 to 8) and the wider ones, taken 8

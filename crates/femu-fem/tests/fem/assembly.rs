@@ -65,6 +65,22 @@ fn assembly_equals_dense_sum_of_element_matrices() {
         }
         assert_eq!(symmetry_defect(&sys.k).0, 0.0);
         assert_eq!(symmetry_defect(&sys.m).0, 0.0);
+        // The consistent mass couples a node's x only to x (M_e = m_ab delta_ij): stored, it is
+        // exactly K's entries between DOFs of one direction, a third of them, none zero (the
+        // linear elements' scalar masses m_ab are all positive).
+        let direction = |f: usize| sys.dofs.full_of_free(f) % 3;
+        let same: Vec<(usize, usize)> = sys
+            .k
+            .iter()
+            .map(|(_, (r, c))| (r, c))
+            .filter(|&(r, c)| direction(r) == direction(c))
+            .collect();
+        if !quadratic {
+            let stored: Vec<(usize, usize)> = sys.m.iter().map(|(_, rc)| rc).collect();
+            assert_eq!(stored, same);
+            assert!(sys.m.data().iter().all(|v| *v != 0.0));
+        }
+        assert!(sys.m.nnz() <= same.len() && 3 * sys.m.nnz() < sys.k.nnz() + 3 * n);
         // The pattern is the node graph: every stored column is sorted and K has no empty column.
         assert!(sys.k.indptr().raw_storage().windows(2).all(|w| w[1] > w[0]));
         // M positive definite and K positive definite once constrained (dense eigensolver).
