@@ -66,6 +66,8 @@ pub(crate) struct Tree {
     own_flops: Vec<f64>,
     subtree_flops: Vec<f64>,
     total_flops: f64,
+    /// [`Tree::places`], made by the first solve
+    places: std::sync::OnceLock<Vec<u32>>,
 }
 
 impl Tree {
@@ -145,6 +147,41 @@ impl Tree {
             own_flops,
             subtree_flops,
             total_flops,
+            places: std::sync::OnceLock::new(),
+        })
+    }
+
+    /// For every row of every supernode's pattern (faer's `row_idx` layout), its place in its
+    /// parent's front: `r - begin` for the parent's pivot rows, `c + i` for row `i` of the
+    /// parent's pattern. The solves move each child's rows to and from its parent's front by
+    /// them; found once, on the first solve, instead of through a map of all rows at every front
+    /// of every pass (the map's zeroing and look-ups were 7-8 % of a pass on the 199,200-DOF
+    /// plate). One `u32` per row index of the analysis, held with it.
+    fn places(&self, s: &SymbolicSupernodalCholesky<usize>) -> &[u32] {
+        self.places.get_or_init(|| {
+            let (begin, end) = (s.supernode_begin(), s.supernode_end());
+            let (row_ptr, rows, below) = (s.col_ptr_for_row_idx(), s.row_idx(), s.nnz_per_super());
+            let mut places = vec![0u32; rows.len()];
+            let mut map = vec![0u32; s.nrows()];
+            let place = |i: usize| u32::try_from(i).expect("a front of fewer than 2^32 rows");
+            for p in 0..s.n_supernodes() {
+                let c = end[p] - begin[p];
+                let pattern = &rows[row_ptr[p]..row_ptr[p] + below[p]];
+                for (i, &r) in pattern.iter().enumerate() {
+                    map[r] = place(c + i);
+                }
+                for &child in self.children(p) {
+                    for q in row_ptr[child]..row_ptr[child] + below[child] {
+                        let r = rows[q];
+                        places[q] = if r < end[p] {
+                            place(r - begin[p])
+                        } else {
+                            map[r]
+                        };
+                    }
+                }
+            }
+            places
         })
     }
 
@@ -617,6 +654,7 @@ pub(crate) fn solve(
         k,
         sequential_below: tree.sequential_below(threads),
         threads,
+        places: tree.places(symbolic),
     };
     solver.forward_forest(&tree.roots, &mut slots, 0);
     let known: Vec<Mat<f64>> = tree.roots.iter().map(|_| Mat::zeros(0, k)).collect();
@@ -657,6 +695,8 @@ struct Solver<'a> {
     k: usize,
     sequential_below: f64,
     threads: usize,
+    /// [`Tree::places`]
+    places: &'a [u32],
 }
 
 impl Solver<'_> {
@@ -692,29 +732,15 @@ impl Solver<'_> {
         Panel::new(&self.values[ptr[s]..ptr[s + 1]], ld, ld, c)
     }
 
-    /// `map[r]` for each row `r` of `s`'s pattern: its place in `s`'s front (after the `c` pivot
-    /// rows), for [`Solver::locate`] of each of `s`'s children.
-    fn map_pattern(&self, s: usize, map: &mut [usize]) {
-        let (top, _, rows) = self.parts(s);
-        let c = top.nrows();
-        for (i, &r) in rows.iter().enumerate() {
-            map[r] = c + i;
-        }
-    }
-
     /// Where each row of `child`'s pattern lies in its parent `s`'s front (`c` pivot rows, then
-    /// its pattern), with `map` holding the pattern's positions ([`Solver::map_pattern`] of `s`).
-    /// The places increase (the pattern is sorted, and its rows among `s`'s pivots come first);
-    /// returns how many of them are pivot rows.
-    fn locate(&self, s: usize, child: usize, map: &[usize], locs: &mut Vec<usize>) -> usize {
+    /// its pattern: [`Tree::places`]), and how many of them are pivot rows. The places increase
+    /// (the pattern is sorted, and its rows among `s`'s pivots come first).
+    fn places(&self, s: usize, child: usize) -> (usize, &[u32]) {
         let sym = self.symbolic;
-        let (start, end) = (sym.supernode_begin()[s], sym.supernode_end()[s]);
-        let (_, _, crows) = self.parts(child);
-        let pivots = crows.partition_point(|&r| r < end);
-        locs.clear();
-        locs.extend(crows[..pivots].iter().map(|&r| r - start));
-        locs.extend(crows[pivots..].iter().map(|&r| map[r]));
-        pivots
+        let c = sym.supernode_end()[s] - sym.supernode_begin()[s];
+        let p = sym.col_ptr_for_row_idx()[child];
+        let places = &self.places[p..p + sym.nnz_per_super()[child]];
+        (places.partition_point(|&l| (l as usize) < c), places)
     }
 
     fn forward_forest(
@@ -731,19 +757,19 @@ impl Solver<'_> {
     /// `L z = b` and `z <- D^-1 z` on the subtree of `s`; returns `s`'s update to its pattern.
     fn forward_subtree(&self, s: usize, slots: &mut [&mut [f64]], base: usize) -> Mat<f64> {
         let tree = self.tree;
-        let mut map = vec![0; self.symbolic.nrows()];
         if tree.subtree_flops[s] <= self.sequential_below {
             let mut stack: Vec<Mat<f64>> = Vec::new();
+            let mut w = Vec::new();
             for (slot, &t) in slots.iter_mut().zip(&tree.post[base..=tree.pos[s]]) {
                 let kids = tree.children(t).len();
                 let updates = stack.split_off(stack.len() - kids);
-                stack.push(self.forward_front(t, slot, updates, &mut map, Par::Seq));
+                stack.push(self.forward_front(t, slot, updates, &mut w, Par::Seq));
             }
             return stack.pop().unwrap_or_else(|| Mat::zeros(0, self.k));
         }
         let (below, own) = slots.split_at_mut(tree.pos[s] - base);
         let updates = self.forward_forest(tree.children(s), below, base);
-        self.forward_front(s, own[0], updates, &mut map, self.par(s))
+        self.forward_front(s, own[0], updates, &mut Vec::new(), self.par(s))
     }
 
     fn forward_front(
@@ -751,58 +777,56 @@ impl Solver<'_> {
         s: usize,
         slot: &mut [f64],
         updates: Vec<Mat<f64>>,
-        map: &mut [usize],
+        w: &mut Vec<f64>,
         par: Par,
     ) -> Mat<f64> {
         let (top, bottom, rows) = self.parts(s);
         let (c, nb, k) = (top.nrows(), rows.len(), self.k);
         let start = self.symbolic.supernode_begin()[s];
-        if !updates.is_empty() {
-            self.map_pattern(s, map);
-        }
         if k <= MAX_RHS {
             // the front's rows of the right-hand sides in one buffer, `c + nb` per column, for
             // the solve's own kernels (crate::skinny): the factor read once
             let ld = c + nb;
-            let mut w = vec![0.0; ld * k];
+            // (scratch kept from front to front of a sequential subtree)
+            w.clear();
+            w.resize(ld * k, 0.0);
             for (j, wq) in w.chunks_exact_mut(ld).enumerate() {
                 wq[..c].copy_from_slice(&column(self.b, j)[start..start + c]);
             }
-            let mut locs = Vec::new();
             for (&child, update) in self.tree.children(s).iter().zip(updates) {
-                self.locate(s, child, map, &mut locs);
+                let (_, places) = self.places(s, child);
                 for (j, wq) in w.chunks_exact_mut(ld).enumerate() {
-                    for (&l, &v) in locs.iter().zip(column(update.as_ref(), j)) {
-                        wq[l] += v;
+                    for (&l, &v) in places.iter().zip(column(update.as_ref(), j)) {
+                        wq[l as usize] += v;
                     }
                 }
             }
-            crate::skinny::forward(self.panel(s), &mut w, k, par != Par::Seq);
+            crate::skinny::forward(self.panel(s), w, k, par != Par::Seq);
             for (j, wq) in w.chunks_exact(ld).enumerate() {
                 let zc = &mut slot[j * c..(j + 1) * c];
                 for (i, (z, &v)) in zc.iter_mut().zip(&wq[..c]).enumerate() {
                     *z = v * top[(i, i)].recip();
                 }
             }
-            return Mat::from_fn(nb, k, |i, j| w[j * ld + c + i]);
+            // the update rows, copied by columns (a per-entry `Mat::from_fn` was 3 % of a pass)
+            return MatRef::from_column_major_slice_with_stride(&w[c..], nb, k, ld).to_owned();
         }
         let mut zs = MatMut::from_column_major_slice_mut(slot, c, k);
         zs.copy_from(self.b.subrows(start, c));
         let mut u = Mat::<f64>::zeros(nb, k);
-        let mut locs = Vec::new();
         for (&child, update) in self.tree.children(s).iter().zip(updates) {
-            let pivots = self.locate(s, child, map, &mut locs);
-            let (to_pivots, to_pattern) = locs.split_at(pivots);
+            let (pivots, places) = self.places(s, child);
+            let (to_pivots, to_pattern) = places.split_at(pivots);
             for j in 0..k {
                 let from = column(update.as_ref(), j);
                 let (from_p, from_b) = from.split_at(pivots);
                 let zc = column_mut(zs.rb_mut(), j);
                 for (&l, &v) in to_pivots.iter().zip(from_p) {
-                    zc[l] += v;
+                    zc[l as usize] += v;
                 }
                 let uc = column_mut(u.as_mut(), j);
                 for (&l, &v) in to_pattern.iter().zip(from_b) {
-                    uc[l - c] += v;
+                    uc[l as usize - c] += v;
                 }
             }
         }
@@ -832,23 +856,23 @@ impl Solver<'_> {
     /// `L^T x = z` on the subtree of `s`, given `x` at `s`'s pattern (`known`).
     fn backward_subtree(&self, s: usize, known: Mat<f64>, slots: &mut [&mut [f64]], base: usize) {
         let tree = self.tree;
-        let mut map = vec![0; self.symbolic.nrows()];
         if tree.subtree_flops[s] <= self.sequential_below {
             // parents before children: the postorder backwards
             let order = &tree.post[base..=tree.pos[s]];
             let mut pending: Vec<Option<Mat<f64>>> = vec![None; order.len()];
             pending[order.len() - 1] = Some(known);
+            let mut w = Vec::new();
             for (i, slot) in slots.iter_mut().enumerate().rev() {
                 let t = order[i];
                 let known = pending[i].take().expect("a parent passed it down");
-                for (child, xr) in self.backward_front(t, slot, known, &mut map, Par::Seq) {
+                for (child, xr) in self.backward_front(t, slot, known, &mut w, Par::Seq) {
                     pending[tree.pos[child] - base] = Some(xr);
                 }
             }
             return;
         }
         let (below, own) = slots.split_at_mut(tree.pos[s] - base);
-        let passed = self.backward_front(s, own[0], known, &mut map, self.par(s));
+        let passed = self.backward_front(s, own[0], known, &mut Vec::new(), self.par(s));
         let known: Vec<Mat<f64>> = passed.into_iter().map(|(_, xr)| xr).collect();
         self.backward_forest(tree.children(s), &known, below, base);
     }
@@ -859,36 +883,36 @@ impl Solver<'_> {
         s: usize,
         slot: &mut [f64],
         known: Mat<f64>,
-        map: &mut [usize],
+        w: &mut Vec<f64>,
         par: Par,
     ) -> Vec<(usize, Mat<f64>)> {
         let (top, bottom, rows) = self.parts(s);
         let (c, nb, k) = (top.nrows(), rows.len(), self.k);
         let children = self.tree.children(s);
-        if !children.is_empty() {
-            self.map_pattern(s, map);
-        }
-        let mut locs = Vec::new();
         if k <= MAX_RHS {
             // as on the way up: the front's rows in one buffer for the solve's own kernels
             let ld = c + nb;
-            let mut w = Vec::with_capacity(ld * k);
+            w.clear();
             for j in 0..k {
                 w.extend_from_slice(&slot[j * c..(j + 1) * c]);
                 w.extend_from_slice(column(known.as_ref(), j));
             }
-            crate::skinny::backward(self.panel(s), &mut w, k, par != Par::Seq);
+            crate::skinny::backward(self.panel(s), w, k, par != Par::Seq);
             for (j, wq) in w.chunks_exact(ld).enumerate() {
                 slot[j * c..(j + 1) * c].copy_from_slice(&wq[..c]);
             }
             return children
                 .iter()
                 .map(|&child| {
-                    self.locate(s, child, map, &mut locs);
-                    (
-                        child,
-                        Mat::from_fn(locs.len(), k, |i, j| w[j * ld + locs[i]]),
-                    )
+                    let (_, places) = self.places(s, child);
+                    let mut xr = Mat::<f64>::zeros(places.len(), k);
+                    for (j, wq) in w.chunks_exact(ld).enumerate() {
+                        let to = column_mut(xr.as_mut(), j);
+                        to.iter_mut()
+                            .zip(places)
+                            .for_each(|(t, &l)| *t = wq[l as usize]);
+                    }
+                    (child, xr)
                 })
                 .collect();
         }
@@ -907,17 +931,17 @@ impl Solver<'_> {
         children
             .iter()
             .map(|&child| {
-                let pivots = self.locate(s, child, map, &mut locs);
-                let (from_pivots, from_pattern) = locs.split_at(pivots);
-                let mut xr = Mat::<f64>::zeros(locs.len(), k);
+                let (pivots, places) = self.places(s, child);
+                let (from_pivots, from_pattern) = places.split_at(pivots);
+                let mut xr = Mat::<f64>::zeros(places.len(), k);
                 for j in 0..k {
                     let (xc, kc) = (column(xs.rb(), j), column(known.as_ref(), j));
                     let (to_p, to_b) = column_mut(xr.as_mut(), j).split_at_mut(pivots);
                     for (t, &l) in to_p.iter_mut().zip(from_pivots) {
-                        *t = xc[l];
+                        *t = xc[l as usize];
                     }
                     for (t, &l) in to_b.iter_mut().zip(from_pattern) {
-                        *t = kc[l - c];
+                        *t = kc[l as usize - c];
                     }
                 }
                 (child, xr)
