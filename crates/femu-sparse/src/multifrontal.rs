@@ -326,6 +326,8 @@ struct Fronts<'a> {
     a: &'a Entries<'a>,
     /// whether the factor is kept (else each front's columns are scratch: the inertia only)
     store: bool,
+    /// a Sturm count's buffers kept between its tasks ([`Recycled`])
+    recycled: Option<Recycled>,
     sequential_below: f64,
     threads: usize,
 }
@@ -360,6 +362,7 @@ pub(crate) fn factor(
         symbolic,
         a,
         store,
+        recycled: (!store).then(|| Recycled::new(symbolic.len_val() / RECYCLED_SHARE)),
         sequential_below: tree.sequential_below(threads),
         threads,
     };
@@ -400,7 +403,7 @@ impl Fronts<'_> {
     ) -> Result<(Vec<f64>, Inertia), usize> {
         let tree = self.tree;
         let sequential = tree.subtree_flops[k] <= self.sequential_below;
-        let mut work = Workspace::new(self.symbolic.nrows(), sequential);
+        let mut work = Workspace::new(self.symbolic.nrows(), sequential, self.recycled.as_ref());
         if sequential {
             let mut stack: Vec<Vec<f64>> = Vec::new();
             let mut signs = Inertia::NONE;
@@ -421,6 +424,7 @@ impl Fronts<'_> {
             Par::Seq
         };
         let (u, signs) = self.front(k, own[0], updates, par, &mut work)?;
+        work.recycle();
         Ok((u, below_signs.merged(signs)))
     }
 
@@ -519,8 +523,7 @@ impl Fronts<'_> {
                 bottom.rb_mut().transpose_mut(),
                 par,
             );
-            work.w.clear();
-            work.w.resize(b * c, 0.0);
+            work.refill_w(b * c);
             // W^T, stored `c x b` by columns: the update panels' right operands (`c x 256`) are
             // then column-major, which faer's GEMM multiplies faster than the transposed rows
             // of a `b x c` W (37 against 29 GFLOP/s on one thread, 209,088-DOF block)
@@ -535,8 +538,7 @@ impl Fronts<'_> {
             let w = w.rb();
             for j0 in (0..b).step_by(UPDATE_PANEL) {
                 let (width, height) = (UPDATE_PANEL.min(b - j0), b - j0);
-                work.panel.clear();
-                work.panel.resize(height * width, 0.0);
+                Workspace::refill(&mut work.panel, height * width, work.recycled);
                 let mut t = MatMut::from_column_major_slice_mut(&mut work.panel, height, width);
                 let (diagonal, rest) = t.rb_mut().split_at_row_mut(width);
                 let (l_top, l_rest) = bottom.rb().subrows(j0, height).split_at_row(width);
@@ -571,7 +573,7 @@ impl Fronts<'_> {
 /// One task's scratch, reused from front to front: freeing and allocating the large update
 /// matrices of every front costs the kernel a TLB shootdown on every core each time (measured:
 /// 30 % of a two-thread factorization in the kernel's inter-processor calls).
-struct Workspace {
+struct Workspace<'a> {
     /// global row -> its row in the current front
     map: Vec<usize>,
     /// the children's rows in the current front
@@ -584,10 +586,12 @@ struct Workspace {
     pool: Vec<Vec<f64>>,
     /// whether more fronts follow (a sequential task): else nothing is kept
     reuse: bool,
+    /// the Sturm count's buffers shared between tasks
+    recycled: Option<&'a Recycled>,
 }
 
-impl Workspace {
-    fn new(n: usize, reuse: bool) -> Self {
+impl<'a> Workspace<'a> {
+    fn new(n: usize, reuse: bool, recycled: Option<&'a Recycled>) -> Self {
         Self {
             map: vec![0; n],
             locs: Vec::new(),
@@ -595,6 +599,34 @@ impl Workspace {
             panel: Vec::new(),
             pool: Vec::new(),
             reuse,
+            recycled,
+        }
+    }
+
+    /// `w` zeroed to `len` values, from the recycled buffers when it is too small.
+    fn refill_w(&mut self, len: usize) {
+        Self::refill(&mut self.w, len, self.recycled);
+    }
+
+    /// `v` zeroed to `len` values, taking a recycled buffer in its place when it is too small.
+    fn refill(v: &mut Vec<f64>, len: usize, recycled: Option<&Recycled>) {
+        if v.capacity() < len
+            && let Some(r) = recycled
+            && let Some(b) = r.take(len)
+        {
+            r.give(std::mem::replace(v, b));
+        }
+        v.clear();
+        v.resize(len, 0.0);
+    }
+
+    /// This task's buffers to the recycled ones (a task outside the sequential subtrees ends).
+    fn recycle(&mut self) {
+        if let Some(r) = self.recycled {
+            for v in [std::mem::take(&mut self.w), std::mem::take(&mut self.panel)] {
+                r.give(v);
+            }
+            self.pool.drain(..).for_each(|v| r.give(v));
         }
     }
 
@@ -603,24 +635,82 @@ impl Workspace {
     /// rest (a parent's children's update matrices) would only add to the peak memory.
     fn give(&mut self, v: Vec<f64>) {
         if !self.reuse {
+            if let Some(r) = self.recycled {
+                r.give(v);
+            }
             return;
         }
         self.pool.push(v);
         if self.pool.len() > POOL {
             let smallest = (0..self.pool.len()).min_by_key(|&i| self.pool[i].capacity());
             if let Some(i) = smallest {
-                self.pool.swap_remove(i);
+                let v = self.pool.swap_remove(i);
+                if let Some(r) = self.recycled {
+                    r.give(v);
+                }
             }
         }
     }
 
-    /// A zeroed buffer of `len` values, the pool's largest if there is one.
+    /// A zeroed buffer of `len` values, the pool's largest if there is one (else a recycled
+    /// one that holds it).
     fn take(&mut self, len: usize) -> Vec<f64> {
         let best = (0..self.pool.len()).max_by_key(|&i| self.pool[i].capacity());
         let mut v = best.map(|i| self.pool.swap_remove(i)).unwrap_or_default();
-        v.clear();
-        v.resize(len, 0.0);
+        Self::refill(&mut v, len, self.recycled);
         v
+    }
+}
+
+/// A Sturm count's large buffers, kept when a front is done with them for the next fronts of any
+/// task, up to `limit` values in all (the largest kept). The fronts near the root grow from one
+/// to the next, and buffers freed to the system come back as fresh pages, each cleared by the
+/// kernel on first touch: 0.79 million page faults in the count of the 209,088-DOF block
+/// (docs/SCALING.md, "Fresh pages in the factorizations"). The count stores no factor, so its
+/// memory stays far below the run's factorization's even with these kept; the run's own
+/// factorization does not recycle (there the kept buffers would add to the command's peak).
+struct Recycled {
+    buffers: std::sync::Mutex<Vec<Vec<f64>>>,
+    limit: usize,
+}
+
+/// The recycled buffers hold at most the factor's size over this (in values).
+const RECYCLED_SHARE: usize = 4;
+
+/// Buffers below this many values are not worth keeping (the allocator reuses them anyway).
+const RECYCLED_SMALLEST: usize = 1 << 15;
+
+impl Recycled {
+    fn new(limit: usize) -> Self {
+        Self {
+            buffers: std::sync::Mutex::new(Vec::new()),
+            limit,
+        }
+    }
+
+    /// The smallest kept buffer that holds `len` values.
+    fn take(&self, len: usize) -> Option<Vec<f64>> {
+        let mut b = self.buffers.lock().unwrap_or_else(|e| e.into_inner());
+        let best = (0..b.len())
+            .filter(|&i| b[i].capacity() >= len)
+            .min_by_key(|&i| b[i].capacity())?;
+        Some(b.swap_remove(best))
+    }
+
+    /// Keeps `v` unless it is small; then drops the smallest kept buffers until the rest fit the
+    /// limit.
+    fn give(&self, v: Vec<f64>) {
+        if v.capacity() < RECYCLED_SMALLEST {
+            return;
+        }
+        let mut b = self.buffers.lock().unwrap_or_else(|e| e.into_inner());
+        b.push(v);
+        b.sort_unstable_by_key(|v| std::cmp::Reverse(v.capacity()));
+        let mut total = 0;
+        b.retain(|v| {
+            total += v.capacity();
+            total <= self.limit
+        });
     }
 }
 
