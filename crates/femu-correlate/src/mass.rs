@@ -15,33 +15,14 @@ use femu_sparse::ordering::Ordering;
 use femu_sparse::{SparseError, SparseMatrix};
 use std::borrow::Cow;
 
-/// `a` with its explicitly stored zeros removed (borrowed when it has few).
+/// `a` without the zeros stored off its diagonal ([`femu_sparse::csc::without_zeros`]),
+/// borrowed when it has few (femu's assembly stores none).
 fn without_zeros(a: &SparseMatrix) -> Cow<'_, SparseMatrix> {
     let zeros = a.data().iter().filter(|v| **v == 0.0).count();
     if zeros * 10 < a.nnz() {
         return Cow::Borrowed(a);
     }
-    let (ptr, idx, val) = (a.indptr(), a.indices(), a.data());
-    let ptr = ptr.raw_storage();
-    let mut nptr = Vec::with_capacity(ptr.len());
-    let mut nidx = Vec::with_capacity(a.nnz() - zeros);
-    let mut nval = Vec::with_capacity(a.nnz() - zeros);
-    nptr.push(0);
-    for c in 0..a.outer_dims() {
-        for p in ptr[c]..ptr[c + 1] {
-            if val[p] != 0.0 {
-                nidx.push(idx[p]);
-                nval.push(val[p]);
-            }
-        }
-        nptr.push(nidx.len());
-    }
-    let shape = (a.rows(), a.cols());
-    Cow::Owned(if a.is_csc() {
-        SparseMatrix::new_csc(shape, nptr, nidx, nval)
-    } else {
-        SparseMatrix::new(shape, nptr, nidx, nval)
-    })
+    Cow::Owned(femu_sparse::csc::without_zeros(a))
 }
 
 /// How `M^-1 r` is computed.

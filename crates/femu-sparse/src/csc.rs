@@ -236,7 +236,19 @@ pub fn without_zeros_of(
     rows: &[usize],
     values: &[f64],
 ) -> SparseMatrix {
-    let cols = shape.1;
+    let (ptr, rows, values) = kept_entries(shape.1, col_ptr, rows, values);
+    SparseMatrix::new_csc(shape, ptr, rows, values)
+}
+
+/// The compressed parts (pointers, inner indices, values) of `outer` compressed vectors without
+/// their entries that are exactly zero off the diagonal ([`without_zeros_of`]).
+fn kept_entries(
+    outer: usize,
+    col_ptr: &[usize],
+    rows: &[usize],
+    values: &[f64],
+) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
+    let cols = outer;
     assert!(col_ptr.len() == cols + 1 && rows.len() == values.len());
     let keep = |c: usize, q: usize| rows[q] == c || values[q] != 0.0;
     let counts: Vec<usize> = (0..cols)
@@ -279,17 +291,19 @@ pub fn without_zeros_of(
             }
         }
     });
-    SparseMatrix::new_csc(shape, ptr, out_rows, out_values)
+    (ptr, out_rows, out_values)
 }
 
-/// [`without_zeros_of`] a CSC matrix.
-///
-/// # Panics
-/// If `a` is stored by rows (CSR).
+/// `a` without its entries that are exactly zero off the diagonal ([`without_zeros_of`]), stored
+/// as `a` is (CSC or CSR).
 pub fn without_zeros(a: &SparseMatrix) -> SparseMatrix {
-    assert!(a.is_csc(), "a CSC matrix");
     let ptr = a.indptr();
-    without_zeros_of(a.shape(), ptr.raw_storage(), a.indices(), a.data())
+    let (ptr, idx, val) = kept_entries(a.outer_dims(), ptr.raw_storage(), a.indices(), a.data());
+    if a.is_csc() {
+        SparseMatrix::new_csc(a.shape(), ptr, idx, val)
+    } else {
+        SparseMatrix::new(a.shape(), ptr, idx, val)
+    }
 }
 
 /// The diagonal of a square matrix (zeros where nothing is stored).
@@ -585,6 +599,13 @@ mod tests {
             assert!(*bv == v || (v.is_nan() && bv.is_nan()), "entry {q}");
         }
         assert!(b.get(17, 17).is_none() && b.get(20, 20) == Some(&0.0));
+        // the same matrix stored by rows: the same entries kept, still by rows
+        let c = without_zeros(&a.to_csr());
+        assert!(c.is_csr() && c.nnz() == kept.len());
+        for (q, (&&(r, col, v), (cv, rc))) in kept.iter().zip(c.to_csc().iter()).enumerate() {
+            assert_eq!(rc, (r, col), "entry {q} by rows");
+            assert!(*cv == v || (v.is_nan() && cv.is_nan()), "entry {q} by rows");
+        }
     }
 
     /// Every block width, those with a kernel of their own (1 to 8) and the wider ones, taken 8

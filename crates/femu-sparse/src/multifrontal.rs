@@ -523,7 +523,7 @@ impl Fronts<'_> {
                 bottom.rb_mut().transpose_mut(),
                 par,
             );
-            work.refill_w(b * c);
+            Workspace::refill(&mut work.w, b * c, work.recycled);
             // W^T, stored `c x b` by columns: the update panels' right operands (`c x 256`) are
             // then column-major, which faer's GEMM multiplies faster than the transposed rows
             // of a `b x c` W (37 against 29 GFLOP/s on one thread, 209,088-DOF block)
@@ -601,11 +601,6 @@ impl<'a> Workspace<'a> {
             reuse,
             recycled,
         }
-    }
-
-    /// `w` zeroed to `len` values, from the recycled buffers when it is too small.
-    fn refill_w(&mut self, len: usize) {
-        Self::refill(&mut self.w, len, self.recycled);
     }
 
     /// `v` zeroed to `len` values, taking a recycled buffer in its place when it is too small.
