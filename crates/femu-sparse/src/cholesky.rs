@@ -630,13 +630,17 @@ impl SymbolicFactor {
         }
         let threads = rayon::current_num_threads();
         let slot = store.then_some(&mut values[..]);
-        let inertia =
-            crate::multifrontal::factor(tree, s, &entries, slot, threads).map_err(|k| {
-                SparseError::Singular {
-                    matrix: name,
-                    index: self.original_index(k),
-                }
-            })?;
+        let inertia = crate::multifrontal::factor(tree, s, &entries, slot, threads);
+        if store {
+            // the fronts' freed buffers back to the system before the factor's user allocates
+            // (an eigensolve's basis): the command's peak is then the factorization's or the
+            // basis's, not both with the allocator's kept memory on top
+            crate::multifrontal::release_free_memory();
+        }
+        let inertia = inertia.map_err(|k| SparseError::Singular {
+            matrix: name,
+            index: self.original_index(k),
+        })?;
         Ok((values, inertia))
     }
 }
