@@ -67,7 +67,11 @@ const PARALLEL_FLOPS_PER_COLUMN: f64 = 1.5e6;
 /// its chunk, so the threads share the memory traffic instead of faer's small dense kernels.
 /// 4 right-hand sides of the 199,200-DOF plate: 152 ms (two chunks of two) against 263 ms with
 /// faer's own two threads (docs/SCALING.md).
-fn split_columns(rhs: MatMut<'_, f64>, parts: usize, solve: &(impl Fn(MatMut<'_, f64>) + Sync)) {
+pub(crate) fn split_columns(
+    rhs: MatMut<'_, f64>,
+    parts: usize,
+    solve: &(impl Fn(MatMut<'_, f64>) + Sync),
+) {
     if parts <= 1 || rhs.ncols() <= 1 {
         solve(rhs);
         return;

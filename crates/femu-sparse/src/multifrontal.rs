@@ -28,6 +28,7 @@ use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::SparseColMatRef;
 use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
+use rayon::prelude::*;
 
 /// A front whose own work is above this many flops gives faer's dense kernels every thread
 /// (below it, the threading overhead outweighs the gain).
@@ -499,6 +500,7 @@ impl Fronts<'_> {
             }
             work.give(update);
         }
+        let parallel = !matches!(par, Par::Seq);
         let (mut top, mut bottom) = l.split_at_row_mut(c);
         let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(c, par, Default::default()));
         cholesky_in_place(
@@ -518,52 +520,51 @@ impl Fronts<'_> {
         }
         if b > 0 {
             // W = L_b D = A_b L^-T in the bottom rows; U -= W L_b^T by panels of columns; then
-            // L_b = W D^-1 in place
-            faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place(
-                top.rb(),
-                bottom.rb_mut().transpose_mut(),
-                par,
-            );
-            let d_inv: Vec<f64> = (0..c).map(|j| top[(j, j)].recip()).collect();
-            // by panels of columns, each computed as a lower-triangular block on top of a
-            // rectangle into scratch and subtracted from the packed `U`: no square `b x b`
-            for j0 in (0..b).step_by(UPDATE_PANEL) {
-                let (width, height) = (UPDATE_PANEL.min(b - j0), b - j0);
-                // the panel's right operand (L_b^T)[:, j0..j0 + width], `c x width` by columns
-                // (faer's GEMM multiplies a column-major right operand faster than the
-                // transposed rows of the `b x c` W: 37 against 29 GFLOP/s on one thread,
-                // 209,088-DOF block), made a panel at a time: no `c x b` copy of W is held.
-                // Each entry is the product that scales the stored L_b below, bit for bit.
-                Workspace::refill(&mut work.w, c * width, work.recycled);
-                let mut lt = MatMut::from_column_major_slice_mut(&mut work.w, c, width);
-                lt.copy_from(bottom.rb().subrows(j0, width).transpose());
-                for jj in 0..width {
-                    let col = column_mut(lt.rb_mut(), jj);
-                    col.iter_mut().zip(&d_inv).for_each(|(x, d)| *x *= d);
-                }
-                Workspace::refill(&mut work.panel, height * width, work.recycled);
-                let mut t = MatMut::from_column_major_slice_mut(&mut work.panel, height, width);
-                let (diagonal, rest) = t.rb_mut().split_at_row_mut(width);
-                let (w_top, w_rest) = bottom.rb().subrows(j0, height).split_at_row(width);
-                let lt = lt.rb();
-                triangular_matmul(
-                    diagonal,
-                    BlockStructure::TriangularLower,
-                    Accum::Replace,
-                    w_top,
-                    BlockStructure::Rectangular,
-                    lt,
-                    BlockStructure::Rectangular,
-                    1.0,
-                    par,
+            // L_b = W D^-1 in place. On a front near the root the threads share the bottom
+            // rows, and then the panels, each thread with one-thread kernels: faer's own two
+            // threads inside each kernel did 78 GFLOP/s on the triangular solve of the
+            // 209,088-DOF block's front of 1,824 x 5,148 where the rows split between two
+            // one-thread solves did 98, and 77 on a panel's GEMM where two one-thread ones do
+            // about 100 (docs/SCALING.md, "A subtree-parallel factorization").
+            let top = top.rb();
+            let solve = |rows: MatMut<'_, f64>| {
+                solve_unit_lower_triangular_in_place(top, rows, Par::Seq);
+            };
+            if parallel {
+                crate::cholesky::split_columns(
+                    bottom.rb_mut().transpose_mut(),
+                    self.threads,
+                    &solve,
                 );
-                matmul(rest, Accum::Replace, w_rest, lt, 1.0, par);
-                for jj in 0..width {
-                    let j = j0 + jj;
-                    let col = &mut u[packed_start(j, b)..packed_start(j + 1, b)];
-                    let from = &work.panel[jj * height + jj..(jj + 1) * height];
-                    col.iter_mut().zip(from).for_each(|(x, v)| *x -= v);
-                }
+            } else {
+                solve(bottom.rb_mut().transpose_mut());
+            }
+            let d_inv: Vec<f64> = (0..c).map(|j| top[(j, j)].recip()).collect();
+            // each panel's columns of the packed `U`, one piece of it
+            let mut pieces = Vec::with_capacity(b.div_ceil(UPDATE_PANEL));
+            let mut rest = &mut u[..];
+            for j0 in (0..b).step_by(UPDATE_PANEL) {
+                let width = UPDATE_PANEL.min(b - j0);
+                let (piece, r) =
+                    rest.split_at_mut(packed_start(j0 + width, b) - packed_start(j0, b));
+                pieces.push((j0, piece));
+                rest = r;
+            }
+            let w = bottom.rb();
+            let d_inv = &d_inv[..];
+            let recycled = work.recycled;
+            let update = |(lt, panel): &mut (Vec<f64>, Vec<f64>),
+                          (j0, piece): (usize, &mut [f64])| {
+                update_panel(w, d_inv, j0, piece, lt, panel, recycled);
+            };
+            if parallel {
+                pieces
+                    .into_par_iter()
+                    .for_each_init(|| (Vec::new(), Vec::new()), update);
+            } else {
+                let mut scratch = (std::mem::take(&mut work.w), std::mem::take(&mut work.panel));
+                pieces.into_iter().for_each(|p| update(&mut scratch, p));
+                (work.w, work.panel) = scratch;
             }
             for (j, d) in d_inv.iter().enumerate() {
                 column_mut(bottom.rb_mut(), j)
@@ -575,6 +576,58 @@ impl Fronts<'_> {
             work.give(panel);
         }
         Ok((u, signs))
+    }
+}
+
+/// `U -= W L_b^T` on the columns `j0..j0 + width` of a front's update matrix (`piece`: those
+/// packed columns), from `W = L_b D` (`w`, `b x c`) and `d_inv = D^-1`: computed as a
+/// lower-triangular block on top of a rectangle into scratch (`panel`) and subtracted, so that no
+/// square `b x b` is ever held. The right operand `(L_b^T)[:, j0..j0 + width]` is made into `lt`,
+/// `c x width` by columns (faer's GEMM multiplies a column-major right operand faster than the
+/// transposed rows of `W`: 37 against 29 GFLOP/s on one thread, 209,088-DOF block), a panel at a
+/// time: no `c x b` copy of `W` is held. Each of its entries is the product that scales the
+/// stored `L_b`, bit for bit.
+fn update_panel(
+    w: MatRef<'_, f64>,
+    d_inv: &[f64],
+    j0: usize,
+    piece: &mut [f64],
+    lt: &mut Vec<f64>,
+    panel: &mut Vec<f64>,
+    recycled: Option<&Recycled>,
+) {
+    let (b, c) = (w.nrows(), w.ncols());
+    let (width, height) = (UPDATE_PANEL.min(b - j0), b - j0);
+    Workspace::refill(lt, c * width, recycled);
+    let mut lt = MatMut::from_column_major_slice_mut(lt, c, width);
+    lt.copy_from(w.subrows(j0, width).transpose());
+    for jj in 0..width {
+        let col = column_mut(lt.rb_mut(), jj);
+        col.iter_mut().zip(d_inv).for_each(|(x, d)| *x *= d);
+    }
+    Workspace::refill(panel, height * width, recycled);
+    let mut t = MatMut::from_column_major_slice_mut(panel, height, width);
+    let (diagonal, rest) = t.rb_mut().split_at_row_mut(width);
+    let (w_top, w_rest) = w.subrows(j0, height).split_at_row(width);
+    let lt = lt.rb();
+    triangular_matmul(
+        diagonal,
+        BlockStructure::TriangularLower,
+        Accum::Replace,
+        w_top,
+        BlockStructure::Rectangular,
+        lt,
+        BlockStructure::Rectangular,
+        1.0,
+        Par::Seq,
+    );
+    matmul(rest, Accum::Replace, w_rest, lt, 1.0, Par::Seq);
+    let base = packed_start(j0, b);
+    for jj in 0..width {
+        let j = j0 + jj;
+        let col = &mut piece[packed_start(j, b) - base..packed_start(j + 1, b) - base];
+        let from = &panel[jj * height + jj..(jj + 1) * height];
+        col.iter_mut().zip(from).for_each(|(x, v)| *x -= v);
     }
 }
 
