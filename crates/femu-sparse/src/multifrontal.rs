@@ -30,8 +30,11 @@ use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
-/// A front whose own work is above this many flops gives faer's dense kernels every thread
-/// (below it, the threading overhead outweighs the gain).
+/// A front whose own work is above this many flops uses every thread: faer's dense `LDL^T` of
+/// its pivot block gets them all, its triangular solve's rows and its update panels are shared
+/// between them (`Fronts::front`). Below it, the threading overhead outweighs the gain; 5e7
+/// instead measured no faster on the 50k and 200k models (docs/SCALING.md, "A subtree-parallel
+/// factorization").
 const PARALLEL_FRONT_FLOPS: f64 = 2e8;
 
 /// Columns of an update matrix computed at once (`Fronts::front`): the scratch is `b x 256`,
