@@ -555,19 +555,25 @@ impl Fronts<'_> {
             }
             let w = bottom.rb();
             let d_inv = &d_inv[..];
-            let recycled = work.recycled;
-            let update = |(lt, panel): &mut (Vec<f64>, Vec<f64>),
-                          (j0, piece): (usize, &mut [f64])| {
-                update_panel(w, d_inv, j0, piece, lt, panel, recycled);
-            };
             if parallel {
-                pieces
-                    .into_par_iter()
-                    .for_each_init(|| (Vec::new(), Vec::new()), update);
+                // each thread's scratch is its own and freed when its share is done: drawn from a
+                // Sturm count's recycled buffers, it would be lost to them (no hook at that end)
+                pieces.into_par_iter().for_each_init(
+                    || (Vec::new(), Vec::new()),
+                    |(lt, panel), (j0, piece)| update_panel(w, d_inv, j0, piece, lt, panel, None),
+                );
             } else {
-                let mut scratch = (std::mem::take(&mut work.w), std::mem::take(&mut work.panel));
-                pieces.into_iter().for_each(|p| update(&mut scratch, p));
-                (work.w, work.panel) = scratch;
+                for (j0, piece) in pieces {
+                    update_panel(
+                        w,
+                        d_inv,
+                        j0,
+                        piece,
+                        &mut work.w,
+                        &mut work.panel,
+                        work.recycled,
+                    );
+                }
             }
             for (j, d) in d_inv.iter().enumerate() {
                 column_mut(bottom.rb_mut(), j)
