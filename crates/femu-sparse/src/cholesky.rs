@@ -256,9 +256,14 @@ impl SymbolicFactor {
         self.n
     }
 
-    /// Number of stored values of the factor `L` (a measure of fill).
+    /// Number of stored values of the factor `L` (a measure of fill): in femu's layout, whose
+    /// diagonal blocks store only their chunks' triangles square (docs/SCALING.md, "The factor's
+    /// layout"), where the subtree-parallel factorization applies; else in faer's.
     pub fn factor_len(&self) -> usize {
-        self.inner.len_val()
+        match &self.tree {
+            Some(tree) => tree.len_val(),
+            None => self.inner.len_val(),
+        }
     }
 
     /// Floating-point operations of one numeric factorization with this analysis: the classical
@@ -543,15 +548,18 @@ impl SymbolicFactor {
             symbolic: self.clone(),
             values,
             inertia,
+            femu_layout: false,
         })
     }
 
-    /// An `LDL^T` of this analysis with its values and inertia.
+    /// An `LDL^T` of this analysis with its values (in femu's layout: the subtree-parallel
+    /// factorization's) and inertia.
     fn ldlt_of(&self, values: Vec<f64>, inertia: Inertia) -> Ldlt {
         Ldlt {
             symbolic: self.clone(),
             values,
             inertia,
+            femu_layout: true,
         }
     }
 
@@ -617,7 +625,7 @@ impl SymbolicFactor {
         };
         let mut values = Vec::new();
         if store {
-            let len = self.inner.len_val();
+            let len = tree.len_val();
             values = self
                 .spare
                 .0
@@ -744,6 +752,9 @@ pub struct Ldlt {
     symbolic: SymbolicFactor,
     values: Vec<f64>,
     inertia: Inertia,
+    /// whether `values` are in femu's layout (chunks, docs/SCALING.md "The factor's layout"),
+    /// which only femu's solve reads, or in faer's
+    femu_layout: bool,
 }
 
 impl Drop for Ldlt {
@@ -793,17 +804,26 @@ impl Factorization for Ldlt {
     fn solve_in_place(&self, mut rhs: MatMut<'_, f64>) {
         let inner = &self.symbolic.inner;
         let threads = rayon::current_num_threads();
-        if threads > 1
-            && self.values.len() >= SUBTREE_SOLVE_VALUES
-            && let Some((s, tree)) = self.symbolic.subtree_parallel()
+        if let Some((s, tree)) = self.symbolic.subtree_parallel()
+            && (self.femu_layout || threads > 1 && self.values.len() >= SUBTREE_SOLVE_VALUES)
         {
             // every right-hand side at once, the subtrees on different threads: the factor is
-            // read once, not once per thread (docs/SCALING.md, "A subtree-parallel solve")
+            // read once, not once per thread (docs/SCALING.md, "A subtree-parallel solve"); and
+            // the only solve of femu's layout
+            let layout = if self.femu_layout {
+                tree.layout()
+            } else {
+                crate::multifrontal::Layout {
+                    width: usize::MAX,
+                    ptr: s.col_ptr_for_val(),
+                }
+            };
+            let factor = (&self.values[..], layout);
             match inner.perm() {
                 Some(p) => {
                     let fwd = p.arrays().0;
                     let mut x = faer::Mat::from_fn(fwd.len(), rhs.ncols(), |i, j| rhs[(fwd[i], j)]);
-                    crate::multifrontal::solve(tree, s, &self.values, x.as_mut(), threads);
+                    crate::multifrontal::solve(tree, s, factor, x.as_mut(), threads);
                     for j in 0..x.ncols() {
                         for (i, &f) in fwd.iter().enumerate() {
                             rhs[(f, j)] = x[(i, j)];
@@ -811,7 +831,7 @@ impl Factorization for Ldlt {
                     }
                 }
                 None => {
-                    crate::multifrontal::solve(tree, s, &self.values, rhs, threads);
+                    crate::multifrontal::solve(tree, s, factor, rhs, threads);
                 }
             }
             return;
@@ -825,5 +845,159 @@ impl Factorization for Ldlt {
                 MemStack::new(&mut mem),
             );
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::multifrontal::{Tree, Tuning};
+
+    /// The 7-point Laplacian of an `nn^3` grid (Dirichlet), and its eigenvalues: sums of three
+    /// of `4 sin^2(k pi / (2 (nn + 1)))`, `k = 1..=nn`.
+    fn laplacian_3d(nn: usize) -> (SparseMatrix, Vec<f64>) {
+        let id = |i: usize, j: usize, k: usize| i + nn * (j + nn * k);
+        let mut t = sprs::TriMat::new((nn * nn * nn, nn * nn * nn));
+        for k in 0..nn {
+            for j in 0..nn {
+                for i in 0..nn {
+                    let a = id(i, j, k);
+                    t.add_triplet(a, a, 6.0);
+                    for (di, dj, dk) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {
+                        let (i2, j2, k2) = (i + di, j + dj, k + dk);
+                        if i2 < nn && j2 < nn && k2 < nn {
+                            let b = id(i2, j2, k2);
+                            t.add_triplet(a, b, -1.0);
+                            t.add_triplet(b, a, -1.0);
+                        }
+                    }
+                }
+            }
+        }
+        let one = |k: usize| {
+            let x = (k as f64 * std::f64::consts::PI / (2.0 * (nn + 1) as f64)).sin();
+            4.0 * x * x
+        };
+        let mut spectrum = Vec::new();
+        for a in 1..=nn {
+            for b in 1..=nn {
+                for c in 1..=nn {
+                    spectrum.push(one(a) + one(b) + one(c));
+                }
+            }
+        }
+        (t.to_csc(), spectrum)
+    }
+
+    /// femu's layout in chunks, with small sizes so that a 14^3 grid's fronts take every path:
+    /// fronts factored where they are stored (at most one chunk), in a scratch copy written into
+    /// their chunks, and in their chunks a super panel at a time, on one thread or with the
+    /// chunks' updates and the update matrix's panels shared between threads. Against faer's
+    /// left-looking factorization of faer's layout (an independent code) solved by faer's own
+    /// solve: the same solutions to round-off times the condition number, for 3 right-hand
+    /// sides (the solve's own kernels) and 10 (faer's GEMM and triangular solves chunk by
+    /// chunk); the inertia equal to the analytic count of eigenvalues below the shift, with the
+    /// factor and without (a count).
+    #[test]
+    fn chunked_layouts_agree_with_faer_and_the_analytic_inertia() {
+        let (a, spectrum) = laplacian_3d(14);
+        let n = a.rows();
+        let sigma = 1.3;
+        let mut values = a.data().to_vec();
+        for (v, (_, (r, c))) in values.iter_mut().zip(a.iter()) {
+            if r == c {
+                *v -= sigma;
+            }
+        }
+        let below = spectrum.iter().filter(|l| **l < sigma).count();
+        let gap = spectrum
+            .iter()
+            .fold(f64::INFINITY, |m, l| m.min((l - sigma).abs()));
+        let kappa = (12.0 + sigma) / gap;
+        let sym = SymbolicFactor::new(&a, Ordering::NestedDissection).unwrap();
+        let SymbolicCholeskyRaw::Supernodal(s) = sym.inner.raw() else {
+            panic!("a supernodal analysis");
+        };
+        let widest = (0..s.n_supernodes())
+            .map(|k| s.supernode_end()[k] - s.supernode_begin()[k])
+            .max()
+            .unwrap();
+        assert!(widest > 32, "a front of several super panels: {widest}");
+        let rhs =
+            |k: usize| -> Vec<f64> { (0..k * n).map(|i| ((i * 37) % 101) as f64 - 50.0).collect() };
+        let reference = sym.ldlt_left_looking(&a, &values, "A").unwrap();
+        assert!(!reference.femu_layout);
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let solved = |f: &Ldlt, k: usize| {
+            let mut x = rhs(k);
+            f.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut x, n, k));
+            x
+        };
+        let want: Vec<Vec<f64>> = [3, 10]
+            .iter()
+            .map(|&k| one.install(|| solved(&reference, k)))
+            .collect();
+        let tunings = [
+            // every front above 8 pivots in chunks, a super panel at a time, threads shared
+            Tuning {
+                chunk: 8,
+                super_panel: 16,
+                scratch_front: 0,
+                parallel_front: 0.0,
+            },
+            // the same on one thread per front
+            Tuning {
+                chunk: 4,
+                super_panel: 12,
+                scratch_front: 0,
+                parallel_front: f64::INFINITY,
+            },
+            // in a scratch copy
+            Tuning {
+                chunk: 8,
+                super_panel: 16,
+                scratch_front: usize::MAX,
+                parallel_front: 0.0,
+            },
+            Tuning::DEFAULT,
+        ];
+        for tuning in tunings {
+            let mut chunked = sym.clone();
+            chunked.tree = Some(Arc::new(Tree::tuned(s, tuning).unwrap()));
+            assert!(chunked.factor_len() < sym.inner.len_val());
+            for threads in [1, 2, 3] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let (f, count) = pool.install(|| {
+                    (
+                        chunked.ldlt_values(&a, &values, "A").unwrap(),
+                        chunked.inertia_values(&a, &values, "A").unwrap(),
+                    )
+                });
+                assert!(f.femu_layout);
+                assert_eq!(f.values.len(), chunked.factor_len());
+                let what = format!("{tuning:?}, {threads} threads");
+                assert_eq!(f.inertia().negative, below, "{what}");
+                assert_eq!(f.inertia(), reference.inertia(), "{what}");
+                assert_eq!(count, f.inertia(), "{what}: the count");
+                for (k, want) in [3, 10].into_iter().zip(&want) {
+                    let got = pool.install(|| solved(&f, k));
+                    let scale = want.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+                    let diff = got
+                        .iter()
+                        .zip(want)
+                        .fold(0.0_f64, |m, (p, q)| m.max((p - q).abs()));
+                    assert!(
+                        diff < 100.0 * f64::EPSILON * kappa * scale,
+                        "{what}, {k} right-hand sides: {diff:e} of {scale:e}"
+                    );
+                }
+            }
+        }
     }
 }

@@ -41,6 +41,97 @@ const PARALLEL_FRONT_FLOPS: f64 = 2e8;
 /// not `b x b`.
 const UPDATE_PANEL: usize = 256;
 
+/// Columns of a stored factor kept together (a *chunk*, docs/SCALING.md "The factor's layout"):
+/// a supernode's columns are stored in chunks of this many, each chunk column-major from its
+/// first pivot's row down, so that of a diagonal block only the chunks' own `64 x 64` triangles
+/// are stored square. faer's layout stores every diagonal block square: 15 % of the 209,088-DOF
+/// block's factor (42.8 million of 281.1 million values) and 12 % of the 199,200-DOF plate's were
+/// their unread upper triangles; in chunks of 64 they are 3.9 and 3.4 million. Chunks of 128 or
+/// 256 would leave 6.3 or 9.6 million on the block and 5.7 or 7.1 million on the plate, whose
+/// supernodes are smaller.
+pub(crate) const CHUNK: usize = 64;
+
+/// Columns of a large front factored at once ([`Fronts::super_panels`]): a multiple of [`CHUNK`],
+/// the inner dimension of the updates of the later chunks (GEMMs of `rows x 256` by `256 x 64`).
+const SUPER_PANEL: usize = 256;
+
+/// A stored front with more pivots than [`CHUNK`] is factored in a square scratch copy and then
+/// written into its chunks when it has at most this many values (`(c + b) c`), else chunk by chunk
+/// in place ([`Fronts::super_panels`]): a scratch copy of the 209,088-DOF block's root (6,435
+/// pivots) would be 331 MB at the factorization's peak.
+const SCRATCH_FRONT: usize = 1 << 21;
+
+/// The sizes a factorization is organised by: femu's ([`Tuning::DEFAULT`]), or smaller ones with
+/// which the tests take every path on small matrices.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Tuning {
+    /// [`CHUNK`]
+    pub(crate) chunk: usize,
+    /// [`SUPER_PANEL`] (a multiple of `chunk`)
+    pub(crate) super_panel: usize,
+    /// [`SCRATCH_FRONT`]
+    pub(crate) scratch_front: usize,
+    /// [`PARALLEL_FRONT_FLOPS`]
+    pub(crate) parallel_front: f64,
+}
+
+impl Tuning {
+    /// femu's sizes.
+    pub(crate) const DEFAULT: Tuning = Tuning {
+        chunk: CHUNK,
+        super_panel: SUPER_PANEL,
+        scratch_front: SCRATCH_FRONT,
+        parallel_front: PARALLEL_FRONT_FLOPS,
+    };
+}
+
+/// Where chunk `q` of a supernode with `c` pivots and `b` rows below them starts in its storage
+/// (chunks of `w` columns: each earlier chunk `q'` holds `w` columns of `c + b - q' w` rows).
+fn chunk_start(c: usize, b: usize, w: usize, q: usize) -> usize {
+    if q == 0 {
+        0
+    } else {
+        w * (q * (c + b) - w * q * (q - 1) / 2)
+    }
+}
+
+/// The values of a supernode with `c` pivots and `b` rows below them stored in chunks of `w`.
+fn chunked_len(c: usize, b: usize, w: usize) -> usize {
+    if c == 0 {
+        return 0;
+    }
+    let last = (c - 1) / w;
+    chunk_start(c, b, w, last) + (c + b - last * w) * (c - last * w)
+}
+
+/// A stored factor's layout: each supernode `s`'s values at `ptr[s]..ptr[s + 1]`, its columns in
+/// chunks of `width` ([`CHUNK`]: femu's factorization; `usize::MAX`: one chunk, faer's layout).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Layout<'a> {
+    pub(crate) width: usize,
+    pub(crate) ptr: &'a [usize],
+}
+
+/// A supernode's columns of the factor in chunks of `w` ([`Layout`]) while its front is
+/// assembled and factored: column `j` is held from front row `(j / w) w` down.
+struct Chunks<'a> {
+    data: &'a mut [f64],
+    c: usize,
+    b: usize,
+    w: usize,
+}
+
+impl Chunks<'_> {
+    /// Column `j` and the front row its first entry is in.
+    fn col(&mut self, j: usize) -> (&mut [f64], usize) {
+        let q = j / self.w;
+        let base = q * self.w;
+        let rows = self.c + self.b - base;
+        let at = chunk_start(self.c, self.b, self.w, q) + (j - base) * rows;
+        (&mut self.data[at..at + rows], base)
+    }
+}
+
 /// Where column `j` of a packed lower triangle of order `b` starts: column `j` holds its rows
 /// `j..b`, after the `b - i` entries of every column `i < j`. An update matrix is stored so,
 /// half the memory of a square one.
@@ -72,12 +163,37 @@ pub(crate) struct Tree {
     total_flops: f64,
     /// [`Tree::places`], made by the first solve
     places: std::sync::OnceLock<Vec<u32>>,
+    /// the chunks' width of a stored factor ([`CHUNK`]), the columns of a large front factored at
+    /// once ([`SUPER_PANEL`]) and the largest front factored in a scratch copy
+    /// ([`SCRATCH_FRONT`]); smaller in the tests, so that small matrices take every path
+    chunk: usize,
+    super_panel: usize,
+    scratch_front: usize,
+    /// [`PARALLEL_FRONT_FLOPS`]
+    parallel_front: f64,
+    /// each supernode's values in femu's stored factor ([`Layout`]), in supernode order
+    val_ptr: Vec<usize>,
 }
 
 impl Tree {
     /// The tree of `s`, or `None` when a supernode's parent does not follow it (not an
     /// elimination tree: the caller keeps faer's factorization).
     pub(crate) fn new(s: &SymbolicSupernodalCholesky<usize>) -> Option<Self> {
+        Self::tuned(s, Tuning::DEFAULT)
+    }
+
+    /// [`Tree::new`] with other sizes than femu's ([`Tuning`]).
+    pub(crate) fn tuned(s: &SymbolicSupernodalCholesky<usize>, tuning: Tuning) -> Option<Self> {
+        let Tuning {
+            chunk,
+            super_panel,
+            scratch_front,
+            parallel_front,
+        } = tuning;
+        assert!(
+            chunk > 0 && super_panel % chunk == 0 && super_panel > 0,
+            "super panels of whole chunks"
+        );
         let ns = s.n_supernodes();
         let (begin, end) = (s.supernode_begin(), s.supernode_end());
         let (row_ptr, rows, below) = (s.col_ptr_for_row_idx(), s.row_idx(), s.nnz_per_super());
@@ -141,6 +257,12 @@ impl Tree {
             }
         }
         let total_flops = own_flops.iter().sum();
+        let mut val_ptr = Vec::with_capacity(ns + 1);
+        val_ptr.push(0);
+        for k in 0..ns {
+            let len = chunked_len(end[k] - begin[k], below[k], chunk);
+            val_ptr.push(val_ptr[k] + len);
+        }
         Some(Self {
             child_ptr,
             child,
@@ -152,7 +274,25 @@ impl Tree {
             subtree_flops,
             total_flops,
             places: std::sync::OnceLock::new(),
+            chunk,
+            super_panel,
+            scratch_front,
+            parallel_front,
+            val_ptr,
         })
+    }
+
+    /// The values of femu's stored factor ([`Layout`]).
+    pub(crate) fn len_val(&self) -> usize {
+        self.val_ptr.last().copied().unwrap_or(0)
+    }
+
+    /// femu's stored factor's layout: chunks of [`CHUNK`] columns.
+    pub(crate) fn layout(&self) -> Layout<'_> {
+        Layout {
+            width: self.chunk,
+            ptr: &self.val_ptr,
+        }
     }
 
     /// For every row of every supernode's pattern (faer's `row_idx` layout), its place in its
@@ -337,8 +477,8 @@ struct Fronts<'a> {
 }
 
 /// The numeric `LDL^T` of the matrix `a` on up to `threads` threads, with the
-/// signs of its pivots. With `values` (faer's supernodal layout, zeroed) the factor is stored
-/// there; without, only the signs are kept and no factor is ever held: the memory of one front
+/// signs of its pivots. With `values` (femu's layout, [`Tree::layout`], zeroed) the factor is
+/// stored there; without, only the signs are kept and no factor is ever held: the memory of one front
 /// at a time per thread (a Sturm count).
 ///
 /// # Errors
@@ -355,8 +495,8 @@ pub(crate) fn factor(
     let mut empty = [];
     let mut slots = match values {
         Some(values) => {
-            assert_eq!(values.len(), symbolic.len_val(), "values in faer's layout");
-            let ptr = symbolic.col_ptr_for_val();
+            assert_eq!(values.len(), tree.len_val(), "values in femu's layout");
+            let ptr = &tree.val_ptr;
             tree.postorder_slots(values, |k| ptr[k + 1] - ptr[k])
         }
         None => tree.postorder_slots(&mut empty, |_| 0),
@@ -422,7 +562,7 @@ impl Fronts<'_> {
         }
         let (below, own) = slots.split_at_mut(tree.pos[k] - base);
         let (updates, below_signs) = self.forest(tree.children(k), below, base)?;
-        let par = if self.threads > 1 && tree.own_flops[k] > PARALLEL_FRONT_FLOPS {
+        let par = if self.threads > 1 && tree.own_flops[k] > tree.parallel_front {
             Par::rayon(self.threads)
         } else {
             Par::Seq
@@ -432,10 +572,15 @@ impl Fronts<'_> {
         Ok((u, below_signs.merged(signs)))
     }
 
-    /// Assembles and factors the front of supernode `k` into `own` (its `c` columns of `L`,
-    /// zeroed; empty when the factor is not stored: then into scratch), adding the children's
-    /// update matrices `updates`; returns its own update matrix `U_k` (its lower triangle,
-    /// packed by columns: [`packed_start`]) and the signs of its pivots.
+    /// Assembles and factors the front of supernode `k` into `own` (its columns of `L` in femu's
+    /// layout, [`Tree::layout`], zeroed; empty when the factor is not stored: then into scratch),
+    /// adding the children's update matrices `updates`; returns its own update matrix `U_k` (its
+    /// lower triangle, packed by columns: [`packed_start`]) and the signs of its pivots.
+    ///
+    /// A front of at most [`CHUNK`] pivots is one chunk: it is factored where it is stored. A
+    /// larger one is factored in a square scratch copy written into its chunks after, or, above
+    /// [`SCRATCH_FRONT`] values, [`SUPER_PANEL`] columns at a time in its chunks
+    /// ([`Fronts::super_panels`]).
     fn front(
         &self,
         k: usize,
@@ -456,22 +601,33 @@ impl Fronts<'_> {
             work.map[r] = c + i;
         }
         let mut u = work.take(b * (b + 1) / 2);
-        let mut panel = Vec::new();
-        let own = if self.store {
-            own
-        } else {
+        let chunk = self.tree.chunk;
+        let in_chunks = self.store && c > chunk && (c + b) * c > self.tree.scratch_front;
+        let copied = self.store && c > chunk && !in_chunks;
+        let (mut panel, mut scratch) = (Vec::new(), Vec::new());
+        if copied {
+            scratch = std::mem::take(&mut work.front);
+            Workspace::refill(&mut scratch, (c + b) * c, None);
+        }
+        let front: &mut [f64] = if !self.store {
             panel = work.take((c + b) * c);
             &mut panel[..]
+        } else if copied {
+            &mut scratch[..]
+        } else {
+            &mut *own
         };
-        let mut l = MatMut::from_column_major_slice_mut(own, c + b, c);
+        let mut cols = Chunks {
+            data: front,
+            c,
+            b,
+            w: if in_chunks { chunk } else { usize::MAX },
+        };
         for j in start..end {
-            let col = l.rb_mut().col_mut(j - start).try_as_col_major_mut();
-            let col = col
-                .expect("a column of a column-major slice")
-                .as_slice_mut();
+            let (col, base) = cols.col(j - start);
             let map = &work.map;
             self.a.lower_of_col(j, |i, v| {
-                col[if i < end { i - start } else { map[i] }] += v;
+                col[if i < end { i - start } else { map[i] } - base] += v;
             });
         }
         // extend-add: each child's pattern lies in this front, in the same order, so a column
@@ -488,11 +644,7 @@ impl Fronts<'_> {
                 let from = &update[packed_start(jj, bc)..packed_start(jj + 1, bc)];
                 // the column's entries from row `base` of the front on
                 let (to, base) = if lc < c {
-                    let col = l.rb_mut().col_mut(lc).try_as_col_major_mut();
-                    let col = col
-                        .expect("a column of a column-major slice")
-                        .as_slice_mut();
-                    (col, 0)
+                    cols.col(lc)
                 } else {
                     let j = lc - c;
                     (&mut u[packed_start(j, b)..packed_start(j + 1, b)], lc)
@@ -503,6 +655,58 @@ impl Fronts<'_> {
             }
             work.give(update);
         }
+        let signs = if in_chunks {
+            self.super_panels(start, own, c, b, &mut u, par, work)?
+        } else {
+            let square = if copied {
+                &mut scratch[..]
+            } else if self.store {
+                &mut *own
+            } else {
+                &mut panel[..]
+            };
+            let signs = self.dense(
+                start,
+                MatMut::from_column_major_slice_mut(square, c + b, c),
+                &mut u,
+                par,
+                work,
+            );
+            if copied && signs.is_ok() {
+                // into the chunks: column `j` from front row `(j / chunk) chunk` down
+                let mut to = Chunks {
+                    data: own,
+                    c,
+                    b,
+                    w: chunk,
+                };
+                for (j, from) in scratch.chunks_exact(c + b).enumerate() {
+                    let (col, base) = to.col(j);
+                    col.copy_from_slice(&from[base..]);
+                }
+                work.front = scratch;
+            }
+            signs?
+        };
+        if !self.store {
+            work.give(panel);
+        }
+        Ok((u, signs))
+    }
+
+    /// The dense work of a front held square (`l`, `c + b` rows, `c` columns, assembled):
+    /// `L_11 D L_11^T` in its top, `L_b` below it, `U -= L_b D L_b^T` into `u`; the signs of the
+    /// pivots. `start` is the first pivot's index (for a zero pivot's error).
+    fn dense(
+        &self,
+        start: usize,
+        l: MatMut<'_, f64>,
+        u: &mut [f64],
+        par: Par,
+        work: &mut Workspace,
+    ) -> Result<Inertia, usize> {
+        let c = l.ncols();
+        let b = l.nrows() - c;
         let parallel = !matches!(par, Par::Seq);
         let (mut top, mut bottom) = l.split_at_row_mut(c);
         let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(c, par, Default::default()));
@@ -530,61 +734,204 @@ impl Fronts<'_> {
             // one-thread solves did 98, and 77 on a panel's GEMM where two one-thread ones do
             // about 100 (docs/SCALING.md, "A subtree-parallel factorization").
             let top = top.rb();
-            let solve = |rows: MatMut<'_, f64>| {
-                solve_unit_lower_triangular_in_place(top, rows, Par::Seq);
-            };
-            if parallel {
-                crate::cholesky::split_columns(
-                    bottom.rb_mut().transpose_mut(),
-                    self.threads,
-                    &solve,
-                );
-            } else {
-                solve(bottom.rb_mut().transpose_mut());
-            }
+            self.solve_rows(top, bottom.rb_mut(), parallel);
             let d_inv: Vec<f64> = (0..c).map(|j| top[(j, j)].recip()).collect();
-            // each panel's columns of the packed `U`, one piece of it
-            let mut pieces = Vec::with_capacity(b.div_ceil(UPDATE_PANEL));
-            let mut rest = &mut u[..];
-            for j0 in (0..b).step_by(UPDATE_PANEL) {
-                let width = UPDATE_PANEL.min(b - j0);
-                let (piece, r) =
-                    rest.split_at_mut(packed_start(j0 + width, b) - packed_start(j0, b));
-                pieces.push((j0, piece));
-                rest = r;
-            }
-            let w = bottom.rb();
-            let d_inv = &d_inv[..];
-            if parallel {
-                // each thread's scratch is its own and freed when its share is done: drawn from a
-                // Sturm count's recycled buffers, it would be lost to them (no hook at that end)
-                pieces.into_par_iter().for_each_init(
-                    || (Vec::new(), Vec::new()),
-                    |(lt, panel), (j0, piece)| update_panel(w, d_inv, j0, piece, lt, panel, None),
-                );
-            } else {
-                for (j0, piece) in pieces {
-                    update_panel(
-                        w,
-                        d_inv,
-                        j0,
-                        piece,
-                        &mut work.w,
-                        &mut work.panel,
-                        work.recycled,
-                    );
-                }
-            }
+            update_matrix(bottom.rb(), &d_inv, u, parallel, work);
             for (j, d) in d_inv.iter().enumerate() {
                 column_mut(bottom.rb_mut(), j)
                     .iter_mut()
                     .for_each(|x| *x *= d);
             }
         }
-        if !self.store {
-            work.give(panel);
+        Ok(signs)
+    }
+
+    /// `rows <- rows L^-T` for the unit lower triangle of `top`: the rows shared between the
+    /// threads when `parallel`, each part by a one-thread solve.
+    fn solve_rows(&self, top: MatRef<'_, f64>, mut rows: MatMut<'_, f64>, parallel: bool) {
+        let solve = |rows: MatMut<'_, f64>| {
+            solve_unit_lower_triangular_in_place(top, rows, Par::Seq);
+        };
+        if parallel {
+            crate::cholesky::split_columns(rows.rb_mut().transpose_mut(), self.threads, &solve);
+        } else {
+            solve(rows.transpose_mut());
         }
-        Ok((u, signs))
+    }
+
+    /// The dense work of a large stored front in its chunks (`own`, femu's layout, assembled),
+    /// [`SUPER_PANEL`] columns at a time (right-looking): the panel's columns are copied into a
+    /// scratch of their rows, their pivot block factored and the rows below solved (as
+    /// [`Fronts::dense`] does for a whole front); then every later chunk is updated by one GEMM
+    /// (`rows x 256` by `256 x 64`, the chunks on different threads near the root), `U` by the
+    /// panel's bottom rows, and the panel, scaled to `L`, written back. No square copy of the
+    /// front is held: the scratch is the panel's `c + b - j0` rows by 256.
+    #[allow(clippy::too_many_arguments)]
+    fn super_panels(
+        &self,
+        start: usize,
+        own: &mut [f64],
+        c: usize,
+        b: usize,
+        u: &mut [f64],
+        par: Par,
+        work: &mut Workspace,
+    ) -> Result<Inertia, usize> {
+        let (w, width) = (self.tree.chunk, self.tree.super_panel);
+        let parallel = !matches!(par, Par::Seq);
+        let mut signs = Inertia::NONE;
+        let mut scratch = std::mem::take(&mut work.front);
+        for j0 in (0..c).step_by(width) {
+            let wj = width.min(c - j0);
+            let rows = c + b - j0;
+            Workspace::refill(&mut scratch, rows * wj, None);
+            let mut chunks = Chunks {
+                data: &mut *own,
+                c,
+                b,
+                w,
+            };
+            for (jj, to) in scratch.chunks_exact_mut(rows).enumerate() {
+                let (col, base) = chunks.col(j0 + jj);
+                to[jj..].copy_from_slice(&col[j0 + jj - base..]);
+            }
+            let sm = MatMut::from_column_major_slice_mut(&mut scratch, rows, wj);
+            let (mut top, mut below) = sm.split_at_row_mut(wj);
+            let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(
+                wj,
+                Par::Seq,
+                Default::default(),
+            ));
+            let factored = cholesky_in_place(
+                top.rb_mut(),
+                LdltRegularization::default(),
+                Par::Seq,
+                MemStack::new(&mut mem),
+                Default::default(),
+            );
+            if let Err(LdltError::ZeroPivot { index }) = factored {
+                work.front = scratch;
+                return Err(start + j0 + index);
+            }
+            for j in 0..wj {
+                signs.count(top[(j, j)]);
+                for i in 0..j {
+                    top[(i, j)] = 0.0;
+                }
+            }
+            if rows > wj {
+                let top = top.rb();
+                self.solve_rows(top, below.rb_mut(), parallel);
+                let d_inv: Vec<f64> = (0..wj).map(|j| top[(j, j)].recip()).collect();
+                let d_inv = &d_inv[..];
+                let wr = below.rb();
+                if j0 + wj < c {
+                    // the later chunks, each a disjoint piece of `own`
+                    let first = (j0 + wj) / w;
+                    let (_, mut rest) = own.split_at_mut(chunk_start(c, b, w, first));
+                    let mut targets = Vec::new();
+                    for r in first..c.div_ceil(w) {
+                        let (cr, rr) = (w.min(c - r * w), c + b - r * w);
+                        let (t, tail) = rest.split_at_mut(rr * cr);
+                        targets.push((r, t));
+                        rest = tail;
+                    }
+                    let later = |(r, t): (usize, &mut [f64]), lt: &mut Vec<f64>| {
+                        let (cr, rr) = (w.min(c - r * w), c + b - r * w);
+                        // the chunk's rows in the panel's rows below its pivots
+                        let off = r * w - (j0 + wj);
+                        Workspace::refill(lt, wj * cr, None);
+                        let mut ltm = MatMut::from_column_major_slice_mut(lt, wj, cr);
+                        ltm.copy_from(wr.subrows(off, cr).transpose());
+                        for jj in 0..cr {
+                            let col = column_mut(ltm.rb_mut(), jj);
+                            col.iter_mut().zip(d_inv).for_each(|(x, d)| *x *= d);
+                        }
+                        matmul(
+                            MatMut::from_column_major_slice_mut(t, rr, cr),
+                            Accum::Add,
+                            wr.subrows(off, rr),
+                            ltm.rb(),
+                            -1.0,
+                            Par::Seq,
+                        );
+                    };
+                    if parallel {
+                        targets
+                            .into_par_iter()
+                            .for_each_init(Vec::new, |lt, target| later(target, lt));
+                    } else {
+                        for target in targets {
+                            later(target, &mut work.w);
+                        }
+                    }
+                }
+                if b > 0 {
+                    update_matrix(wr.subrows(rows - wj - b, b), d_inv, u, parallel, work);
+                }
+                for (j, d) in d_inv.iter().enumerate() {
+                    column_mut(below.rb_mut(), j)
+                        .iter_mut()
+                        .for_each(|x| *x *= d);
+                }
+            }
+            // back into the chunks, from each column's diagonal down (above it, in its chunk's
+            // triangle, are what the updates from earlier panels wrote: nothing reads it)
+            let mut chunks = Chunks {
+                data: &mut *own,
+                c,
+                b,
+                w,
+            };
+            for (jj, from) in scratch.chunks_exact(rows).enumerate() {
+                let (col, base) = chunks.col(j0 + jj);
+                col[j0 + jj - base..].copy_from_slice(&from[jj..]);
+            }
+        }
+        work.front = scratch;
+        Ok(signs)
+    }
+}
+
+/// `U -= W D^-1 W^T` into the packed update matrix `u` (order `b`), `W` (`b x c`) the front's
+/// bottom rows before they are scaled to `L_b`, by panels of [`UPDATE_PANEL`] columns
+/// ([`update_panel`]), the panels on different threads when `parallel`.
+fn update_matrix(
+    w: MatRef<'_, f64>,
+    d_inv: &[f64],
+    u: &mut [f64],
+    parallel: bool,
+    work: &mut Workspace,
+) {
+    let b = w.nrows();
+    // each panel's columns of the packed `U`, one piece of it
+    let mut pieces = Vec::with_capacity(b.div_ceil(UPDATE_PANEL));
+    let mut rest = u;
+    for j0 in (0..b).step_by(UPDATE_PANEL) {
+        let width = UPDATE_PANEL.min(b - j0);
+        let (piece, r) = rest.split_at_mut(packed_start(j0 + width, b) - packed_start(j0, b));
+        pieces.push((j0, piece));
+        rest = r;
+    }
+    if parallel {
+        // each thread's scratch is its own and freed when its share is done: drawn from a
+        // Sturm count's recycled buffers, it would be lost to them (no hook at that end)
+        pieces.into_par_iter().for_each_init(
+            || (Vec::new(), Vec::new()),
+            |(lt, panel), (j0, piece)| update_panel(w, d_inv, j0, piece, lt, panel, None),
+        );
+    } else {
+        for (j0, piece) in pieces {
+            update_panel(
+                w,
+                d_inv,
+                j0,
+                piece,
+                &mut work.w,
+                &mut work.panel,
+                work.recycled,
+            );
+        }
     }
 }
 
@@ -652,6 +999,9 @@ struct Workspace<'a> {
     w: Vec<f64>,
     /// a panel of `L_b D L_b^T`, before it is subtracted from the packed update matrix
     panel: Vec<f64>,
+    /// a stored front's square scratch copy, or a large front's super panel
+    /// ([`Fronts::front`])
+    front: Vec<f64>,
     /// update matrices already added to their parent, for reuse
     pool: Vec<Vec<f64>>,
     /// whether more fronts follow (a sequential task): else nothing is kept
@@ -667,6 +1017,7 @@ impl<'a> Workspace<'a> {
             locs: Vec::new(),
             w: Vec::new(),
             panel: Vec::new(),
+            front: Vec::new(),
             pool: Vec::new(),
             reuse,
             recycled,
@@ -821,7 +1172,7 @@ mod trim {
 pub(crate) fn solve(
     tree: &Tree,
     symbolic: &SymbolicSupernodalCholesky<usize>,
-    values: &[f64],
+    (values, layout): (&[f64], Layout<'_>),
     mut x: MatMut<'_, f64>,
     threads: usize,
 ) {
@@ -835,6 +1186,7 @@ pub(crate) fn solve(
         tree,
         symbolic,
         values,
+        layout,
         b: x.rb(),
         k,
         sequential_below: tree.sequential_below(threads),
@@ -875,6 +1227,8 @@ struct Solver<'a> {
     tree: &'a Tree,
     symbolic: &'a SymbolicSupernodalCholesky<usize>,
     values: &'a [f64],
+    /// where `values` holds each supernode's chunks
+    layout: Layout<'a>,
     /// the right-hand sides (permuted), read by the forward pass
     b: MatRef<'a, f64>,
     k: usize,
@@ -888,33 +1242,46 @@ impl Solver<'_> {
     /// The threads for the dense kernels of a front outside the sequential subtrees: all of them
     /// for a large one (near the root, where the subtrees wait for it), else one.
     fn par(&self, s: usize) -> Par {
-        if self.threads > 1 && self.tree.own_flops[s] > PARALLEL_FRONT_FLOPS {
+        if self.threads > 1 && self.tree.own_flops[s] > self.tree.parallel_front {
             Par::rayon(self.threads)
         } else {
             Par::Seq
         }
     }
 
-    /// Supernode `s`'s diagonal block and the rows below it, and its pattern.
-    fn parts(&self, s: usize) -> (MatRef<'_, f64>, MatRef<'_, f64>, &[usize]) {
+    /// Supernode `s`'s pivots and its pattern (the rows below them).
+    fn sizes(&self, s: usize) -> (usize, &[usize]) {
         let sym = self.symbolic;
         let c = sym.supernode_end()[s] - sym.supernode_begin()[s];
         let p = sym.col_ptr_for_row_idx()[s];
-        let rows = &sym.row_idx()[p..p + sym.nnz_per_super()[s]];
-        let ptr = sym.col_ptr_for_val();
-        let l =
-            MatRef::from_column_major_slice(&self.values[ptr[s]..ptr[s + 1]], c + rows.len(), c);
-        let (top, bottom) = l.split_at_row(c);
-        (top, bottom, rows)
+        (c, &sym.row_idx()[p..p + sym.nnz_per_super()[s]])
     }
 
-    /// Supernode `s`'s columns of the factor, `[L11; L21]`, for the solve's own kernels.
-    fn panel(&self, s: usize) -> Panel<'_> {
-        let sym = self.symbolic;
-        let c = sym.supernode_end()[s] - sym.supernode_begin()[s];
-        let ld = c + sym.nnz_per_super()[s];
-        let ptr = sym.col_ptr_for_val();
-        Panel::new(&self.values[ptr[s]..ptr[s + 1]], ld, ld, c)
+    /// Supernode `s`'s chunks: the first pivot's place in the front of each.
+    fn chunks(&self, s: usize) -> impl DoubleEndedIterator<Item = usize> + use<> {
+        let c = self.sizes(s).0;
+        let w = self.layout.width;
+        (0..c.div_ceil(w)).map(move |q| q * w)
+    }
+
+    /// The chunk of supernode `s` from front row `r0` (a multiple of the layout's width): its
+    /// columns of the factor, `[L11; L21]` from that row down.
+    fn chunk(&self, s: usize, r0: usize) -> Panel<'_> {
+        let (c, rows) = self.sizes(s);
+        let (nb, w) = (rows.len(), self.layout.width);
+        let (cols, ld) = (w.min(c - r0), c + nb - r0);
+        let at = self.layout.ptr[s] + chunk_start(c, nb, w, r0 / w);
+        Panel::new(&self.values[at..at + ld * cols], ld, ld, cols)
+    }
+
+    /// `D^-1`: the reciprocals of supernode `s`'s pivots.
+    fn d_inv(&self, s: usize) -> Vec<f64> {
+        let mut d = Vec::new();
+        for r0 in self.chunks(s) {
+            let l = self.chunk(s, r0);
+            d.extend((0..l.cols()).map(|i| l.at(i, i).recip()));
+        }
+        d
     }
 
     /// Where each row of `child`'s pattern lies in its parent `s`'s front (`c` pivot rows, then
@@ -965,9 +1332,10 @@ impl Solver<'_> {
         w: &mut Vec<f64>,
         par: Par,
     ) -> Mat<f64> {
-        let (top, bottom, rows) = self.parts(s);
-        let (c, nb, k) = (top.nrows(), rows.len(), self.k);
+        let (c, rows) = self.sizes(s);
+        let (nb, k) = (rows.len(), self.k);
         let start = self.symbolic.supernode_begin()[s];
+        let d_inv = self.d_inv(s);
         if k <= MAX_RHS {
             // the front's rows of the right-hand sides in one buffer, `c + nb` per column, for
             // the solve's own kernels (crate::skinny): the factor read once
@@ -986,11 +1354,13 @@ impl Solver<'_> {
                     }
                 }
             }
-            crate::skinny::forward(self.panel(s), w, k, par != Par::Seq);
+            for r0 in self.chunks(s) {
+                crate::skinny::forward(self.chunk(s, r0), w, (ld, r0), k, par != Par::Seq);
+            }
             for (j, wq) in w.chunks_exact(ld).enumerate() {
                 let zc = &mut slot[j * c..(j + 1) * c];
-                for (i, (z, &v)) in zc.iter_mut().zip(&wq[..c]).enumerate() {
-                    *z = v * top[(i, i)].recip();
+                for ((z, &v), d) in zc.iter_mut().zip(&wq[..c]).zip(&d_inv) {
+                    *z = v * d;
                 }
             }
             // the update rows, copied by columns (a per-entry `Mat::from_fn` was 3 % of a pass)
@@ -1015,12 +1385,23 @@ impl Solver<'_> {
                 }
             }
         }
-        solve_unit_lower_triangular_in_place(top, zs.rb_mut(), par);
-        if nb > 0 {
-            matmul(u.as_mut(), Accum::Add, bottom, zs.rb(), -1.0, par);
+        // chunk by chunk: its triangle, then the pivot rows after it and the pattern's rows
+        for r0 in self.chunks(s) {
+            let l = self.chunk(s, r0).mat();
+            let cq = l.ncols();
+            let (tri, below) = l.split_at_row(cq);
+            let (mid, bottom) = below.split_at_row(c - r0 - cq);
+            let (done, mut rest) = zs.rb_mut().split_at_row_mut(r0 + cq);
+            let mut own = done.subrows_mut(r0, cq);
+            solve_unit_lower_triangular_in_place(tri, own.rb_mut(), par);
+            if mid.nrows() > 0 {
+                matmul(rest.rb_mut(), Accum::Add, mid, own.rb(), -1.0, par);
+            }
+            if nb > 0 {
+                matmul(u.as_mut(), Accum::Add, bottom, own.rb(), -1.0, par);
+            }
         }
-        for i in 0..c {
-            let d = top[(i, i)].recip();
+        for (i, d) in d_inv.iter().enumerate() {
             zs.rb_mut().row_mut(i).iter_mut().for_each(|v| *v *= d);
         }
         u
@@ -1071,8 +1452,8 @@ impl Solver<'_> {
         w: &mut Vec<f64>,
         par: Par,
     ) -> Vec<(usize, Mat<f64>)> {
-        let (top, bottom, rows) = self.parts(s);
-        let (c, nb, k) = (top.nrows(), rows.len(), self.k);
+        let (c, rows) = self.sizes(s);
+        let (nb, k) = (rows.len(), self.k);
         let children = self.tree.children(s);
         if k <= MAX_RHS {
             // as on the way up: the front's rows in one buffer for the solve's own kernels
@@ -1082,7 +1463,9 @@ impl Solver<'_> {
                 w.extend_from_slice(&slot[j * c..(j + 1) * c]);
                 w.extend_from_slice(column(known.as_ref(), j));
             }
-            crate::skinny::backward(self.panel(s), w, k, par != Par::Seq);
+            for r0 in self.chunks(s).rev() {
+                crate::skinny::backward(self.chunk(s, r0), w, (ld, r0), k, par != Par::Seq);
+            }
             for (j, wq) in w.chunks_exact(ld).enumerate() {
                 slot[j * c..(j + 1) * c].copy_from_slice(&wq[..c]);
             }
@@ -1102,17 +1485,37 @@ impl Solver<'_> {
                 .collect();
         }
         let mut xs = MatMut::from_column_major_slice_mut(slot, c, k);
-        if !rows.is_empty() {
-            matmul(
-                xs.rb_mut(),
-                Accum::Add,
-                bottom.transpose(),
-                known.as_ref(),
-                -1.0,
-                par,
-            );
+        // chunk by chunk from the last: the pattern's rows and the pivot rows after the chunk,
+        // then its triangle
+        for r0 in self.chunks(s).rev() {
+            let l = self.chunk(s, r0).mat();
+            let cq = l.ncols();
+            let (tri, below) = l.split_at_row(cq);
+            let (mid, bottom) = below.split_at_row(c - r0 - cq);
+            let (done, rest) = xs.rb_mut().split_at_row_mut(r0 + cq);
+            let mut own = done.subrows_mut(r0, cq);
+            if nb > 0 {
+                matmul(
+                    own.rb_mut(),
+                    Accum::Add,
+                    bottom.transpose(),
+                    known.as_ref(),
+                    -1.0,
+                    par,
+                );
+            }
+            if mid.nrows() > 0 {
+                matmul(
+                    own.rb_mut(),
+                    Accum::Add,
+                    mid.transpose(),
+                    rest.rb(),
+                    -1.0,
+                    par,
+                );
+            }
+            solve_unit_upper_triangular_in_place(tri.transpose(), own, par);
         }
-        solve_unit_upper_triangular_in_place(top.transpose(), xs.rb_mut(), par);
         children
             .iter()
             .map(|&child| {

@@ -80,9 +80,19 @@ impl<'a> Panel<'a> {
         Panel::new(&self.data[c0 * self.ld + r0..], self.ld, rows, cols)
     }
 
+    /// Its columns.
+    pub(crate) fn cols(&self) -> usize {
+        self.cols
+    }
+
+    /// As a matrix view.
+    pub(crate) fn mat(&self) -> faer::MatRef<'a, f64> {
+        faer::MatRef::from_column_major_slice_with_stride(self.data, self.rows, self.cols, self.ld)
+    }
+
     /// Entry `(r, j)`.
     #[inline(always)]
-    fn at(&self, r: usize, j: usize) -> f64 {
+    pub(crate) fn at(&self, r: usize, j: usize) -> f64 {
         self.data[j * self.ld + r]
     }
 
@@ -96,22 +106,47 @@ impl<'a> Panel<'a> {
     }
 }
 
-/// The way up through one supernode: `w` holds the `k` right-hand sides' rows of its front
-/// (`ld = c + b` each, column-major, `k` at most [`MAX_RHS`]); `l` is `[L11; L21]` (`ld x c`, the
-/// unit lower triangle of `L11` read, its diagonal and upper part not). On return `w1 = L11^-1 w1`
-/// and `w2 -= L21 w1`.
-pub(crate) fn forward(l: Panel<'_>, w: &mut [f64], k: usize, parallel: bool) {
-    forward_on(pulp::Arch::new(), l, w, k, parallel);
+/// The `k` right-hand sides' rows `offset..offset + rows` of a buffer of `stride` rows each.
+fn rows_of(w: &mut [f64], stride: usize, offset: usize, rows: usize) -> Vec<&mut [f64]> {
+    w.chunks_exact_mut(stride)
+        .map(|wq| &mut wq[offset..offset + rows])
+        .collect()
+}
+
+/// The way up through one chunk of a supernode's columns (a supernode in faer's layout is one
+/// chunk): `w` holds the `k` right-hand sides' rows of the front, `stride` each (column-major,
+/// `k` at most [`MAX_RHS`]), of which the chunk's are `offset..offset + ld`; `l` is `[L11; L21]`
+/// (`ld x c`, the unit lower triangle of `L11` read, its diagonal and upper part not). On return
+/// `w1 = L11^-1 w1` and `w2 -= L21 w1` in those rows.
+pub(crate) fn forward(
+    l: Panel<'_>,
+    w: &mut [f64],
+    (stride, offset): (usize, usize),
+    k: usize,
+    parallel: bool,
+) {
+    forward_on(pulp::Arch::new(), l, w, (stride, offset), k, parallel);
 }
 
 /// [`forward`] with the vector instructions of `arch`.
-fn forward_on(arch: pulp::Arch, l: Panel<'_>, w: &mut [f64], k: usize, parallel: bool) {
+fn forward_on(
+    arch: pulp::Arch,
+    l: Panel<'_>,
+    w: &mut [f64],
+    (stride, offset): (usize, usize),
+    k: usize,
+    parallel: bool,
+) {
     let (ld, c) = (l.rows, l.cols);
-    assert!(k <= MAX_RHS && w.len() == ld * k, "forward: sizes");
+    assert!(
+        k <= MAX_RHS && w.len() == stride * k && offset + ld <= stride,
+        "forward: sizes"
+    );
+    let mut w = rows_of(w, stride, offset, ld);
     for j0 in (0..c).step_by(TILE) {
         let j1 = (j0 + TILE).min(c);
         let mut z = [[0.0; TILE]; MAX_RHS];
-        for (q, wq) in w.chunks_exact_mut(ld).enumerate() {
+        for (q, wq) in w.iter_mut().enumerate() {
             for j in j0..j1 {
                 let wj = wq[j];
                 for i in j + 1..j1 {
@@ -122,8 +157,7 @@ fn forward_on(arch: pulp::Arch, l: Panel<'_>, w: &mut [f64], k: usize, parallel:
         }
         if j1 < ld {
             let tile = l.sub(j1, j0, ld - j1, j1 - j0);
-            let mut below: Vec<&mut [f64]> =
-                w.chunks_exact_mut(ld).map(|wq| &mut wq[j1..]).collect();
+            let mut below: Vec<&mut [f64]> = w.iter_mut().map(|wq| &mut wq[j1..]).collect();
             product(
                 arch,
                 &mut below,
@@ -135,22 +169,39 @@ fn forward_on(arch: pulp::Arch, l: Panel<'_>, w: &mut [f64], k: usize, parallel:
     }
 }
 
-/// The way down through one supernode: `w` as in [`forward`], `w1` holding `D^-1` times the way
-/// up's result and `w2` the solution at the supernode's pattern. On return
+/// The way down through one chunk: `w` as in [`forward`], `w1` holding `D^-1` times the way
+/// up's result and `w2` the solution at the rows below the chunk's pivots. On return
 /// `w1 = L11^-T (w1 - L21^T w2)`.
-pub(crate) fn backward(l: Panel<'_>, w: &mut [f64], k: usize, parallel: bool) {
-    backward_on(pulp::Arch::new(), l, w, k, parallel);
+pub(crate) fn backward(
+    l: Panel<'_>,
+    w: &mut [f64],
+    (stride, offset): (usize, usize),
+    k: usize,
+    parallel: bool,
+) {
+    backward_on(pulp::Arch::new(), l, w, (stride, offset), k, parallel);
 }
 
 /// [`backward`] with the vector instructions of `arch`.
-fn backward_on(arch: pulp::Arch, l: Panel<'_>, w: &mut [f64], k: usize, parallel: bool) {
+fn backward_on(
+    arch: pulp::Arch,
+    l: Panel<'_>,
+    w: &mut [f64],
+    (stride, offset): (usize, usize),
+    k: usize,
+    parallel: bool,
+) {
     let (ld, c) = (l.rows, l.cols);
-    assert!(k <= MAX_RHS && w.len() == ld * k, "backward: sizes");
+    assert!(
+        k <= MAX_RHS && w.len() == stride * k && offset + ld <= stride,
+        "backward: sizes"
+    );
+    let mut w = rows_of(w, stride, offset, ld);
     for j0 in (0..c).step_by(TILE).rev() {
         let j1 = (j0 + TILE).min(c);
         if j1 < ld {
             let tile = l.sub(j1, j0, ld - j1, j1 - j0);
-            let below: Vec<&[f64]> = w.chunks_exact(ld).map(|wq| &wq[j1..]).collect();
+            let below: Vec<&[f64]> = w.iter().map(|wq| &wq[j1..]).collect();
             let d = if parallel && tile.rows * tile.cols >= PARALLEL_ROWS * TILE / 2 {
                 let mid = tile.cols / 2;
                 let (a, b) = rayon::join(
@@ -165,13 +216,13 @@ fn backward_on(arch: pulp::Arch, l: Panel<'_>, w: &mut [f64], k: usize, parallel
             } else {
                 dots(arch, tile, &below)
             };
-            for (q, wq) in w.chunks_exact_mut(ld).enumerate() {
+            for (q, wq) in w.iter_mut().enumerate() {
                 for t in 0..j1 - j0 {
                     wq[j0 + t] -= d[q][t];
                 }
             }
         }
-        for wq in w.chunks_exact_mut(ld) {
+        for wq in w.iter_mut() {
             for j in (j0..j1).rev() {
                 let mut s = 0.0;
                 for i in j + 1..j1 {
@@ -452,8 +503,37 @@ mod tests {
                         let ld = c + b;
                         let (data, lower, w) = supernode(c, b, k);
                         let l = Panel::new(&data, ld, ld, c);
-                        let mut up = w.clone();
-                        forward_on(arch, l, &mut up, k, parallel);
+                        // the front's rows 2.. of a buffer of ld + 3 rows per right-hand side
+                        // (a chunk's rows of a front's): the rows around them stay as they are
+                        let (stride, offset) = (ld + 3, 2);
+                        let padded = |w: &[f64]| -> Vec<f64> {
+                            let mut p = vec![7.5; stride * k];
+                            for q in 0..k {
+                                p[q * stride + offset..q * stride + offset + ld]
+                                    .copy_from_slice(&w[q * ld..(q + 1) * ld]);
+                            }
+                            p
+                        };
+                        let inner = |p: &[f64]| -> Vec<f64> {
+                            for q in 0..k {
+                                let col = &p[q * stride..(q + 1) * stride];
+                                assert!(
+                                    col[..offset]
+                                        .iter()
+                                        .chain(&col[offset + ld..])
+                                        .all(|&v| v == 7.5),
+                                    "rows outside the chunk's changed"
+                                );
+                            }
+                            (0..k)
+                                .flat_map(|q| {
+                                    p[q * stride + offset..q * stride + offset + ld].to_vec()
+                                })
+                                .collect()
+                        };
+                        let mut up = padded(&w);
+                        forward_on(arch, l, &mut up, (stride, offset), k, parallel);
+                        let up = inner(&up);
                         let mut want = w.clone();
                         for q in 0..k {
                             let wq = &mut want[q * ld..(q + 1) * ld];
@@ -474,8 +554,9 @@ mod tests {
                             &format!("forward: c {c}, b {b}, {k} rhs, {parallel}, {arch:?}"),
                         );
 
-                        let mut down = w.clone();
-                        backward_on(arch, l, &mut down, k, parallel);
+                        let mut down = padded(&w);
+                        backward_on(arch, l, &mut down, (stride, offset), k, parallel);
+                        let down = inner(&down);
                         let mut want = w.clone();
                         for q in 0..k {
                             let wq = &mut want[q * ld..(q + 1) * ld];
