@@ -37,6 +37,16 @@ use rayon::prelude::*;
 /// factorization").
 const PARALLEL_FRONT_FLOPS: f64 = 2e8;
 
+/// Before a stored factorization's front above this many flops (outside the sequential subtrees,
+/// so a few dozen fronts near the root) the allocator's free memory is given back to the system
+/// ([`release_free_memory`]): the subtrees below have freed their update matrices into glibc's
+/// arenas (150-230 MB free there on the 209,088-DOF block), and these fronts' own update matrices
+/// are the factorization's peak. Peak of that solve 3,095-3,109 MB -> 2,952-2,973 MB, the
+/// factorization's time unchanged within its spread; a threshold of 1e9 (more fronts) lowered it
+/// no further and cost the 199,200-DOF plate's factorizations 2 % (docs/SCALING.md, "Memory the
+/// allocator keeps").
+const TRIM_FRONT: f64 = 5e9;
+
 /// Columns of an update matrix computed at once (`Fronts::front`): the scratch is `b x 256`,
 /// not `b x b`.
 const UPDATE_PANEL: usize = 256;
@@ -562,6 +572,9 @@ impl Fronts<'_> {
         }
         let (below, own) = slots.split_at_mut(tree.pos[k] - base);
         let (updates, below_signs) = self.forest(tree.children(k), below, base)?;
+        if self.store && tree.own_flops[k] > TRIM_FRONT {
+            release_free_memory();
+        }
         let par = if self.threads > 1 && tree.own_flops[k] > tree.parallel_front {
             Par::rayon(self.threads)
         } else {
