@@ -314,6 +314,14 @@ fn add_combination(w: &mut [f64], vs: &[&[f64]], cs: &[f64]) {
     });
 }
 
+/// Column `j` of a column-major matrix as a slice.
+fn slice(a: &Mat<f64>, j: usize) -> &[f64] {
+    a.col(j)
+        .try_as_col_major()
+        .expect("a column of a column-major matrix")
+        .as_slice()
+}
+
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
@@ -1174,6 +1182,11 @@ impl Columns {
         self.data
             .par_extend(v.par_iter().with_min_len(1 << 15).copied());
     }
+    /// Appends `v / d` (as [`Columns::push`]).
+    fn push_divided(&mut self, v: &[f64], d: f64) {
+        self.data
+            .par_extend(v.par_iter().with_min_len(1 << 15).map(|x| x / d));
+    }
     /// Columns `a..b` as a matrix.
     fn range(&self, a: usize, b: usize) -> faer::MatRef<'_, f64> {
         faer::MatRef::from_column_major_slice(&self.data[a * self.n..b * self.n], self.n, b - a)
@@ -1757,9 +1770,9 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                 }
                 for (c, &r) in candidates.iter().enumerate() {
                     let col = |a: &Mat<f64>| -> Vec<f64> { a.col(c).iter().copied().collect() };
-                    let (yc, kyc, myc) = (col(&y), col(&ky), col(&my));
+                    let (yc, kyc, myc) = (slice(&y, c), slice(&ky, c), slice(&my, c));
                     let lambda = self.sigma + 1.0 / eig.eigenvalues[r];
-                    let (rho, eta, relative) = self.residuals_of(&yc, &kyc, &myc, lambda);
+                    let (rho, eta, relative) = self.residuals_of(yc, kyc, myc, 1.0, lambda);
                     // With the shift on (or within round-off of) an eigenvalue, `(K - sigma M) x`
                     // vanishes and the shifted residual cannot be small: the classical relative
                     // residual decides; rigid-body modes can only meet the backward error.
@@ -1767,9 +1780,9 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                         rho < self.params.tol || eta < BACKWARD_LOCK || relative < self.params.tol;
                     locked[r] = converged
                         && if clean[c] {
-                            self.push_normalised(col(&projected), kyc, myc)
+                            self.push_normalised(slice(&projected, c), kyc, myc)
                         } else {
-                            self.lock_with(yc, kyc, myc)
+                            self.lock_with(col(&y), col(&ky), col(&my))
                         };
                 }
             }
@@ -1895,7 +1908,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         if moved > 1e-10 * norm(&before) {
             return self.lock(y);
         }
-        self.push_normalised(y, ky, my)
+        self.push_normalised(&y, &ky, &my)
     }
 
     /// `w -= X c` with `c = (M X)^T w` against the locked vectors `X`, for the columns of `w`
@@ -1917,24 +1930,29 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             .collect()
     }
 
-    /// Locks `y` (M-orthogonal to the locked vectors) with its images `K y`, `M y`, normalised.
-    /// Returns false if its M-norm is below 0.5 (it was not independent of the locked vectors).
-    fn push_normalised(&mut self, y: Vec<f64>, ky: Vec<f64>, my: Vec<f64>) -> bool {
-        let nrm = dot(&my, &y).max(0.0).sqrt();
+    /// Locks `y` (M-orthogonal to the locked vectors) with its images `K y`, `M y`, normalised:
+    /// the M-normalised vector and its M image are written into the locked set directly, and the
+    /// Rayleigh quotient and residual are taken from the normalised values as they are made, with
+    /// no copies. Returns false if its M-norm is below 0.5 (it was not independent of the locked
+    /// vectors).
+    fn push_normalised(&mut self, y: &[f64], ky: &[f64], my: &[f64]) -> bool {
+        let nrm = dot(my, y).max(0.0).sqrt();
         if nrm.is_nan() || nrm <= 0.5 {
             return false;
         }
-        let x: Vec<f64> = y.iter().map(|v| v / nrm).collect();
-        let mx: Vec<f64> = my.iter().map(|v| v / nrm).collect();
-        let kx: Vec<f64> = ky.iter().map(|v| v / nrm).collect();
-        self.push_locked(x, kx, mx);
+        let lambda = ky.iter().zip(y).map(|(k, x)| (k / nrm) * (x / nrm)).sum();
+        let rho = self.residuals_of(y, ky, my, nrm, lambda).0;
+        self.x.push_divided(y, nrm);
+        self.mx.push_divided(my, nrm);
+        self.values.push(lambda);
+        self.shifted_res.push(rho);
         true
     }
 
     /// Stores a locked M-normalised vector with its images; eigenvalue from its Rayleigh quotient.
     fn push_locked(&mut self, x: Vec<f64>, kx: Vec<f64>, mx: Vec<f64>) {
         let lambda = dot(&kx, &x);
-        let rho = self.residuals_of(&x, &kx, &mx, lambda).0;
+        let rho = self.residuals_of(&x, &kx, &mx, 1.0, lambda).0;
         self.x.push(&x);
         self.mx.push(&mx);
         self.values.push(lambda);
@@ -1958,20 +1976,35 @@ impl<'p, 'a> Lanczos<'p, 'a> {
     }
 
     /// `(||K x - lambda M x|| / ||(K - sigma M) x||, backward error, ||K x - lambda M x|| / ||K x||)`
-    /// from `K x` and `M x`. A pair is converged when the first or the third is below `tol` or
-    /// the backward error is at round-off (1e-13): rigid-body modes, with `K x` pure round-off,
-    /// can only meet the latter.
-    fn residuals_of(&self, x: &[f64], kx: &[f64], mx: &[f64], lambda: f64) -> (f64, f64, f64) {
-        let r: Vec<f64> = kx.iter().zip(mx).map(|(k, m)| k - lambda * m).collect();
-        let s: Vec<f64> = kx.iter().zip(mx).map(|(k, m)| k - self.sigma * m).collect();
-        let rn = norm(&r);
+    /// from `K x` and `M x`, for `x`, `K x`, `M x` the given vectors divided by `scale` (1: as
+    /// they are), in one pass without copies. A pair is converged when the first or the third
+    /// is below `tol` or the backward error is at round-off (1e-13): rigid-body modes, with
+    /// `K x` pure round-off, can only meet the latter.
+    fn residuals_of(
+        &self,
+        x: &[f64],
+        kx: &[f64],
+        mx: &[f64],
+        scale: f64,
+        lambda: f64,
+    ) -> (f64, f64, f64) {
+        let (mut rr, mut ss, mut xx, mut kk) = (0.0, 0.0, 0.0, 0.0);
+        for ((x, k), m) in x.iter().zip(kx).zip(mx) {
+            let (x, k, m) = (x / scale, k / scale, m / scale);
+            let (r, s) = (k - lambda * m, k - self.sigma * m);
+            rr += r * r;
+            ss += s * s;
+            xx += x * x;
+            kk += k * k;
+        }
+        let (rn, sn, xn, kn) = (rr.sqrt(), ss.sqrt(), xx.sqrt(), kk.sqrt());
         let eta = rn
-            / ((self.pencil.k_norm + lambda.abs() * self.pencil.m_norm) * norm(x))
+            / ((self.pencil.k_norm + lambda.abs() * self.pencil.m_norm) * xn)
                 .max(f64::MIN_POSITIVE);
         (
-            rn / norm(&s).max(f64::MIN_POSITIVE),
+            rn / sn.max(f64::MIN_POSITIVE),
             eta,
-            rn / norm(kx).max(f64::MIN_POSITIVE),
+            rn / kn.max(f64::MIN_POSITIVE),
         )
     }
 
