@@ -1,8 +1,9 @@
 //! Sparse Cholesky `LL^T` and `LDL^T` factorizations, with the symbolic analysis (faer's) done
 //! once per sparsity pattern and reused for new values and new shifts, and the inertia of
 //! `LDL^T`. The numeric `LDL^T` of a supernodal analysis is femu's subtree-parallel multifrontal
-//! one (docs/SCALING.md, "A subtree-parallel factorization"), written in faer's layout so that
-//! faer's supernodal solves use it; `LL^T` and small (simplicial) analyses are faer's.
+//! one (docs/SCALING.md, "A subtree-parallel factorization"), stored in femu's layout (each
+//! supernode's columns in chunks of 64, docs/SCALING.md "The factor's layout") and solved by
+//! femu's subtree-parallel solve; `LL^T` and small (simplicial) analyses are faer's.
 //!
 //! By Sylvester's law of inertia, `K - sigma M = L D L^T` has as many negative pivots in `D` as
 //! the pencil `(K, M)` has eigenvalues below `sigma` (M positive definite): the Sturm count that
@@ -564,8 +565,8 @@ impl SymbolicFactor {
     }
 
     /// The subtree-parallel multifrontal `LDL^T` of `input` on the rayon threads
-    /// (docs/SCALING.md, "A subtree-parallel factorization"): the factor in faer's supernodal
-    /// layout when `store` (else empty) and the inertia; `None` when the analysis is not
+    /// (docs/SCALING.md, "A subtree-parallel factorization"): the factor in femu's layout
+    /// ([`crate::multifrontal::Layout`]) when `store` (else empty) and the inertia; `None` when the analysis is not
     /// supernodal with a tree (the caller then uses faer's). Without `store` (a count, which
     /// ends a solve: the Sturm check) the values a dropped factor left for reuse are freed first,
     /// so that the fronts do not add to them.

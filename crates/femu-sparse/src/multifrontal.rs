@@ -9,9 +9,9 @@
 //! threads; the fronts near the root, which the subtrees all wait for, use the threads inside
 //! their dense kernels instead.
 //!
-//! The factor is written in faer's supernodal layout (the first `c` columns of each front), so
-//! faer's supernodal solves use it unchanged. In exact arithmetic it is faer's factor: only the
-//! order of the additions differs.
+//! The factor is written in femu's layout: each supernode's columns (the first `c` columns of its
+//! front) in chunks of [`CHUNK`], which only [`solve`] reads (docs/SCALING.md, "The factor's
+//! layout"). In exact arithmetic it is faer's factor: only the order of the additions differs.
 
 use crate::cholesky::Inertia;
 use crate::skinny::{MAX_RHS, Panel};
@@ -1174,7 +1174,8 @@ mod trim {
 }
 
 /// Solves `L D L^T x = b` in place for the permuted right-hand sides `x` (`n x k`, in the
-/// analysis's permuted order) with a factor in faer's supernodal layout, the disjoint subtrees
+/// analysis's permuted order) with a factor in `layout` (femu's chunks, or faer's supernodal
+/// layout for a factor of faer's left-looking factorization), the disjoint subtrees
 /// of the elimination tree on different threads (docs/SCALING.md, "A subtree-parallel solve").
 ///
 /// Each thread reads only its subtrees' part of the factor, for every right-hand side at once:
