@@ -20,7 +20,7 @@ use crate::dof::DofMap;
 use crate::kernel::{self, BadJacobian};
 use crate::model::Model;
 use femu_sparse::cholesky::SymbolicFactor;
-use femu_sparse::eigen::{EigenOptions, Modes, NullSpaceHint, Pencil, Which};
+use femu_sparse::eigen::{EigenOptions, Modes, NullSpaceHint, Pencil, PencilChecks, Which};
 use femu_sparse::ordering::{Ordering, Pattern};
 use femu_sparse::slepc::Engine;
 use femu_sparse::{SparseError, SparseMatrix};
@@ -59,6 +59,9 @@ pub struct SystemMatrices {
     /// The nested-dissection analysis of `k`'s pattern, made beside the assembly of the values
     /// ([`Assembler::assemble_analysed`]); lent by [`SystemMatrices::analysis`] while it is `k`'s.
     analysis: Option<SymbolicFactor>,
+    /// The eigensolver's checks of `(k, m)`, made beside that analysis once the values were done
+    /// ([`PencilChecks`]: used only while they are `k`'s and `m`'s).
+    checks: Option<PencilChecks>,
 }
 
 impl SystemMatrices {
@@ -79,7 +82,9 @@ impl SystemMatrices {
     /// (on a free-free plate of 47,628 DOF, 75 solved vectors instead of 104).
     ///
     /// With femu's own engine and the nested-dissection ordering, the analysis made beside the
-    /// assembly ([`SystemMatrices::analysis`]) is used: the solve does no ordering of its own.
+    /// assembly ([`SystemMatrices::analysis`]) is used: the solve does no ordering of its own;
+    /// and so are the checks of `K` and `M` made beside it, while they are still `K`'s and `M`'s
+    /// (a fingerprint of both: changed matrices are checked again).
     ///
     /// # Errors
     /// As [`femu_sparse::eigen::eigs`].
@@ -87,9 +92,11 @@ impl SystemMatrices {
         let params = self.eigen_options(params);
         match (&params.engine, params.ordering) {
             (Engine::Femu, Ordering::NestedDissection) => match self.analysis() {
-                Some(symbolic) => {
-                    Pencil::with_symbolic(&self.k, &self.m, symbolic)?.solve(which, &params)
+                Some(symbolic) => match &self.checks {
+                    Some(checks) => Pencil::with_checks(&self.k, &self.m, symbolic, checks)?,
+                    None => Pencil::with_symbolic(&self.k, &self.m, symbolic)?,
                 }
+                .solve(which, &params),
                 None => femu_sparse::eigen::eigs(&self.k, &self.m, which, &params),
             },
             _ => femu_sparse::eigen::eigs(&self.k, &self.m, which, &params),
@@ -593,15 +600,21 @@ impl Assembler {
             mass_kind: mass,
             rigid_body: NullSpaceHint::new(faer::Mat::zeros(n, 0)),
             analysis: None,
+            checks: None,
         };
         // The ordering and symbolic analysis need the pattern only: one thread makes them while
-        // the others assemble the values.
+        // the others assemble the values, and then check them for the eigensolver (the analysis
+        // takes longer: 0.84 s against 0.5 s on the 199,200-DOF plate).
         if analyse {
-            let (analysis, assembled) = rayon::join(
+            let (analysis, checks) = rayon::join(
                 || self.analysis(Ordering::NestedDissection),
-                || self.assemble_into(model, &mut sys),
+                || -> Result<Option<PencilChecks>, FemError> {
+                    self.assemble_into(model, &mut sys)?;
+                    Ok(PencilChecks::of(&sys.k, &sys.m).ok())
+                },
             );
-            assembled?;
+            // checks that failed are made again, and reported, by the solve
+            sys.checks = checks?;
             // an analysis that failed (out of memory) is made again, and reported, by the solve
             sys.analysis = analysis.ok();
         } else {

@@ -764,3 +764,75 @@ fn an_analysis_knows_its_pattern() {
     assert!(copy.is_for(&a));
     assert_eq!(copy.factor_len(), sym.factor_len());
 }
+
+/// Checks made ahead of a solve (`PencilChecks`, made beside an assembly's analysis) serve only
+/// the matrices they were made on. On them the pencil has the norms the pencil's own checks find
+/// (the hand sums of absolute column values), and its modes are the dense ones; on matrices
+/// changed after the checks (one value made asymmetric, one made NaN, one bit of one value
+/// flipped, all values scaled), the fingerprint differs and the pencil is checked again: the
+/// errors with their place, the new norms. The fingerprint is the same on one and three threads.
+#[test]
+fn checks_made_ahead_serve_only_their_matrices() {
+    use femu_sparse::eigen::PencilChecks;
+    let (k, m) = random_pencil(120, 0.05, 77);
+    let hand_norm = |a: &SparseMatrix| -> f64 {
+        let d = to_dense(a);
+        (0..d.ncols())
+            .map(|j| (0..d.nrows()).map(|i| d[(i, j)].abs()).sum::<f64>())
+            .fold(0.0, f64::max)
+    };
+    let checks = PencilChecks::of(&k, &m).unwrap();
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| PencilChecks::of(&k, &m).unwrap())
+    };
+    assert_eq!(on(1), checks);
+    assert_eq!(on(3), checks);
+    let symbolic = || SymbolicFactor::new(&k, Ordering::NestedDissection).unwrap();
+    let pencil = Pencil::with_checks(&k, &m, symbolic(), &checks).unwrap();
+    let (kn, mn) = pencil.norms();
+    assert!((kn - hand_norm(&k)).abs() <= 1e-12 * kn && (mn - hand_norm(&m)).abs() <= 1e-12 * mn);
+    let modes = pencil
+        .solve(Which::Lowest(6), &EigenOptions::default())
+        .unwrap();
+    let dense = generalized_symmetric_eigen(to_dense(&k).as_ref(), to_dense(&m).as_ref()).unwrap();
+    for (l, d) in modes.values.iter().zip(&dense.values) {
+        assert!((l / d - 1.0).abs() < 1e-10, "{l} against {d}");
+    }
+    // an off-diagonal value of K changed on one side only
+    let (p, row, col) = k
+        .iter()
+        .enumerate()
+        .find(|(_, (_, (r, c)))| r > c)
+        .map(|(p, (_, (r, c)))| (p, r, c))
+        .unwrap();
+    let mut asym = k.clone();
+    asym.data_mut()[p] += 1.0;
+    assert!(!checks.are_for(&asym, &m));
+    match Pencil::with_checks(&asym, &m, symbolic(), &checks) {
+        Err(SparseError::NotSymmetric {
+            matrix: "K",
+            row: r,
+            col: c,
+            ..
+        }) => assert!((r, c) == (row, col) || (r, c) == (col, row)),
+        other => panic!("an asymmetric K after the checks: {other:?}"),
+    }
+    let mut nan = m.clone();
+    nan.data_mut()[3] = f64::NAN;
+    assert!(matches!(
+        Pencil::with_checks(&k, &nan, symbolic(), &checks),
+        Err(SparseError::NonFinite { matrix: "M", .. })
+    ));
+    let mut flipped = k.clone();
+    let last = flipped.nnz() - 1;
+    flipped.data_mut()[last] = f64::from_bits(flipped.data()[last].to_bits() ^ 1);
+    assert!(!checks.are_for(&flipped, &m));
+    let doubled = k.map(|v| 2.0 * v);
+    assert!(!checks.are_for(&doubled, &m));
+    let pencil = Pencil::with_checks(&doubled, &m, symbolic(), &checks).unwrap();
+    assert!((pencil.norms().0 - 2.0 * hand_norm(&k)).abs() <= 1e-12 * pencil.norms().0);
+}

@@ -591,3 +591,54 @@ fn the_analysis_beside_the_assembly_serves_the_matrices_it_was_made_for() {
     assert!(sys.analysis().is_none());
     check(&sys, false);
 }
+
+/// The eigensolver's checks of `K` and `M` made beside the assembly serve those matrices only:
+/// values changed after the assembly (same pattern, so the analysis still serves) are checked
+/// again by the solve, which reports a NaN put into `K` and an asymmetry put into `M` with their
+/// matrix, and solves a `K` scaled by 4 to the dense eigenvalues of the scaled pencil (4 times
+/// the first ones).
+#[test]
+fn the_checks_beside_the_assembly_serve_the_matrices_they_were_made_for() {
+    use femu_sparse::SparseError;
+    use femu_sparse::eigen::{EigenOptions, Which};
+    let mut model = small_plate(false);
+    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let opts = EigenOptions::default();
+    let dense =
+        generalized_symmetric_eigenvalues(to_dense(&sys.k).as_ref(), to_dense(&sys.m).as_ref())
+            .unwrap();
+    let first = sys.modes(Which::Lowest(4), &opts).unwrap();
+    for j in 0..4 {
+        assert!((first.values[j] / dense[j] - 1.0).abs() < 1e-9);
+    }
+    let mut nan = sys.clone();
+    nan.k.data_mut()[5] = f64::NAN;
+    assert!(nan.analysis().is_some(), "the same pattern");
+    assert!(matches!(
+        nan.modes(Which::Lowest(4), &opts),
+        Err(SparseError::NonFinite { matrix: "K", .. })
+    ));
+    let mut asym = sys.clone();
+    let p = asym
+        .m
+        .iter()
+        .position(|(_, (r, c))| r > c)
+        .expect("an entry below the diagonal");
+    asym.m.data_mut()[p] *= 1.5;
+    assert!(matches!(
+        asym.modes(Which::Lowest(4), &opts),
+        Err(SparseError::NotSymmetric { matrix: "M", .. })
+    ));
+    let mut scaled = sys.clone();
+    scaled.k.data_mut().iter_mut().for_each(|v| *v *= 4.0);
+    let modes = scaled.modes(Which::Lowest(4), &opts).unwrap();
+    for j in 0..4 {
+        assert!(
+            (modes.values[j] / (4.0 * dense[j]) - 1.0).abs() < 1e-9,
+            "mode {j}: {} against {}",
+            modes.values[j],
+            4.0 * dense[j]
+        );
+    }
+}
