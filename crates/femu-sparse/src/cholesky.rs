@@ -854,42 +854,6 @@ mod tests {
     use super::*;
     use crate::multifrontal::{Tree, Tuning};
 
-    /// The 7-point Laplacian of an `nn^3` grid (Dirichlet), and its eigenvalues: sums of three
-    /// of `4 sin^2(k pi / (2 (nn + 1)))`, `k = 1..=nn`.
-    fn laplacian_3d(nn: usize) -> (SparseMatrix, Vec<f64>) {
-        let id = |i: usize, j: usize, k: usize| i + nn * (j + nn * k);
-        let mut t = sprs::TriMat::new((nn * nn * nn, nn * nn * nn));
-        for k in 0..nn {
-            for j in 0..nn {
-                for i in 0..nn {
-                    let a = id(i, j, k);
-                    t.add_triplet(a, a, 6.0);
-                    for (di, dj, dk) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {
-                        let (i2, j2, k2) = (i + di, j + dj, k + dk);
-                        if i2 < nn && j2 < nn && k2 < nn {
-                            let b = id(i2, j2, k2);
-                            t.add_triplet(a, b, -1.0);
-                            t.add_triplet(b, a, -1.0);
-                        }
-                    }
-                }
-            }
-        }
-        let one = |k: usize| {
-            let x = (k as f64 * std::f64::consts::PI / (2.0 * (nn + 1) as f64)).sin();
-            4.0 * x * x
-        };
-        let mut spectrum = Vec::new();
-        for a in 1..=nn {
-            for b in 1..=nn {
-                for c in 1..=nn {
-                    spectrum.push(one(a) + one(b) + one(c));
-                }
-            }
-        }
-        (t.to_csc(), spectrum)
-    }
-
     /// femu's layout in chunks, with small sizes so that a 14^3 grid's fronts take every path:
     /// fronts factored where they are stored (at most one chunk), in a scratch copy written into
     /// their chunks, and in their chunks a super panel at a time, on one thread or with the
@@ -901,7 +865,10 @@ mod tests {
     /// factor and without (a count).
     #[test]
     fn chunked_layouts_agree_with_faer_and_the_analytic_inertia() {
-        let (a, spectrum) = laplacian_3d(14);
+        let (a, spectrum) = (
+            femu_testkit::laplacian_3d(14),
+            femu_testkit::laplacian_3d_spectrum(14),
+        );
         let n = a.rows();
         let sigma = 1.3;
         let mut values = a.data().to_vec();

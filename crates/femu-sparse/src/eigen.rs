@@ -19,7 +19,7 @@
 //! vectors deflated against everything found, until the count agrees.
 
 use crate::cholesky::{Factorization, Ldlt, SymbolicFactor};
-use crate::ordering::Ordering;
+use crate::ordering::{Ordering, Pattern};
 use crate::{SparseError, SparseMatrix};
 use faer::Mat;
 use rayon::prelude::*;
@@ -400,13 +400,13 @@ impl PencilChecks {
         Ok(Self {
             k_norm,
             m_norm,
-            fingerprint: fingerprint(&[k, m]),
+            fingerprint: fingerprint(k, m)?,
         })
     }
 
     /// Whether these are the checks of `(k, m)`: the same fingerprint.
     pub fn are_for(&self, k: &SparseMatrix, m: &SparseMatrix) -> bool {
-        self.fingerprint == fingerprint(&[k, m])
+        fingerprint(k, m).is_ok_and(|f| f == self.fingerprint)
     }
 }
 
@@ -427,58 +427,20 @@ fn check_pencil(k: &SparseMatrix, m: &SparseMatrix) -> Result<(f64, f64), Sparse
     Ok((one_norm(k), one_norm(m)))
 }
 
-/// A 64-bit fingerprint of sparse matrices: their shapes, storage orders, column pointers, row
-/// indices and the bits of their values, hashed in pieces of [`FINGERPRINT_PIECE`] words on the
-/// threads (four independent lanes a piece) and the pieces' hashes combined in order: the same
-/// value on any number of threads. 11 ms on two threads for the 199,200-DOF plate's `K` and `M`
-/// (17.7 million entries), against 0.13 s for the checks it stands for.
-fn fingerprint(matrices: &[&SparseMatrix]) -> u64 {
-    let mut h = matrices.len() as u64;
-    for a in matrices {
-        for x in [
-            a.rows() as u64,
-            a.cols() as u64,
-            u64::from(a.is_csc()),
-            hash_words(a.indptr().raw_storage(), |&x| x as u64),
-            hash_words(a.indices(), |&x| x as u64),
-            hash_words(a.data(), |x| x.to_bits()),
-        ] {
-            h = fingerprint_mix(h, x);
-        }
+/// A 64-bit fingerprint of `K` and `M`: each one's pattern ([`Pattern::fingerprint`]) and the
+/// bits of its values ([`crate::ordering::hash_words`]).
+///
+/// # Errors
+/// As [`Pattern::of`] (a non-square or CSR matrix).
+fn fingerprint(k: &SparseMatrix, m: &SparseMatrix) -> Result<u64, SparseError> {
+    use crate::ordering::{hash_mix, hash_words};
+    let mut h = 2;
+    for a in [k, m] {
+        h = hash_mix(h, Pattern::of(a)?.fingerprint());
+        h = hash_mix(h, hash_words(a.data(), |x| x.to_bits()));
     }
-    h
+    Ok(h)
 }
-
-/// One step of [`fingerprint`]'s hash.
-fn fingerprint_mix(h: u64, x: u64) -> u64 {
-    (h.rotate_left(23) ^ x).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-}
-
-/// [`fingerprint`]'s hash of `w` as words `word(w_i)`.
-fn hash_words<T: Sync>(w: &[T], word: impl Fn(&T) -> u64 + Sync) -> u64 {
-    w.par_chunks(FINGERPRINT_PIECE)
-        .map(|piece| {
-            let mut lanes = [1u64, 2, 3, 4];
-            let mut quads = piece.chunks_exact(4);
-            for q in &mut quads {
-                for (l, x) in lanes.iter_mut().zip(q) {
-                    *l = fingerprint_mix(*l, word(x));
-                }
-            }
-            for x in quads.remainder() {
-                lanes[0] = fingerprint_mix(lanes[0], word(x));
-            }
-            lanes
-                .iter()
-                .fold(piece.len() as u64, |h, &l| fingerprint_mix(h, l))
-        })
-        .collect::<Vec<u64>>()
-        .into_iter()
-        .fold(w.len() as u64, fingerprint_mix)
-}
-
-/// Words of a [`fingerprint`]'s piece.
-const FINGERPRINT_PIECE: usize = 1 << 16;
 
 /// A pencil `(K, M)` with the symbolic analysis of `K`'s pattern, reused for every shift.
 #[derive(Debug, Clone)]

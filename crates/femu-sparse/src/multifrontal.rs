@@ -140,6 +140,19 @@ impl Chunks<'_> {
         let at = chunk_start(self.c, self.b, self.w, q) + (j - base) * rows;
         (&mut self.data[at..at + rows], base)
     }
+
+    /// The chunks from `first` on, each a disjoint piece of the data, with its index.
+    fn from(&mut self, first: usize) -> Vec<(usize, &mut [f64])> {
+        let (c, b, w) = (self.c, self.b, self.w);
+        let (_, mut rest) = self.data.split_at_mut(chunk_start(c, b, w, first));
+        let mut pieces = Vec::new();
+        for r in first..c.div_ceil(w) {
+            let (piece, tail) = rest.split_at_mut((c + b - r * w) * w.min(c - r * w));
+            pieces.push((r, piece));
+            rest = tail;
+        }
+        pieces
+    }
 }
 
 /// Where column `j` of a packed lower triangle of order `b` starts: column `j` holds its rows
@@ -173,14 +186,9 @@ pub(crate) struct Tree {
     total_flops: f64,
     /// [`Tree::places`], made by the first solve
     places: std::sync::OnceLock<Vec<u32>>,
-    /// the chunks' width of a stored factor ([`CHUNK`]), the columns of a large front factored at
-    /// once ([`SUPER_PANEL`]) and the largest front factored in a scratch copy
-    /// ([`SCRATCH_FRONT`]); smaller in the tests, so that small matrices take every path
-    chunk: usize,
-    super_panel: usize,
-    scratch_front: usize,
-    /// [`PARALLEL_FRONT_FLOPS`]
-    parallel_front: f64,
+    /// the sizes the factorization is organised by (smaller in the tests, so that small
+    /// matrices take every path)
+    tuning: Tuning,
     /// each supernode's values in femu's stored factor ([`Layout`]), in supernode order
     val_ptr: Vec<usize>,
 }
@@ -194,14 +202,9 @@ impl Tree {
 
     /// [`Tree::new`] with other sizes than femu's ([`Tuning`]).
     pub(crate) fn tuned(s: &SymbolicSupernodalCholesky<usize>, tuning: Tuning) -> Option<Self> {
-        let Tuning {
-            chunk,
-            super_panel,
-            scratch_front,
-            parallel_front,
-        } = tuning;
+        let chunk = tuning.chunk;
         assert!(
-            chunk > 0 && super_panel % chunk == 0 && super_panel > 0,
+            chunk > 0 && tuning.super_panel.is_multiple_of(chunk) && tuning.super_panel > 0,
             "super panels of whole chunks"
         );
         let ns = s.n_supernodes();
@@ -284,10 +287,7 @@ impl Tree {
             subtree_flops,
             total_flops,
             places: std::sync::OnceLock::new(),
-            chunk,
-            super_panel,
-            scratch_front,
-            parallel_front,
+            tuning,
             val_ptr,
         })
     }
@@ -300,7 +300,7 @@ impl Tree {
     /// femu's stored factor's layout: chunks of [`CHUNK`] columns.
     pub(crate) fn layout(&self) -> Layout<'_> {
         Layout {
-            width: self.chunk,
+            width: self.tuning.chunk,
             ptr: &self.val_ptr,
         }
     }
@@ -575,7 +575,7 @@ impl Fronts<'_> {
         if self.store && tree.own_flops[k] > TRIM_FRONT {
             release_free_memory();
         }
-        let par = if self.threads > 1 && tree.own_flops[k] > tree.parallel_front {
+        let par = if self.threads > 1 && tree.own_flops[k] > tree.tuning.parallel_front {
             Par::rayon(self.threads)
         } else {
             Par::Seq
@@ -614,8 +614,8 @@ impl Fronts<'_> {
             work.map[r] = c + i;
         }
         let mut u = work.take(b * (b + 1) / 2);
-        let chunk = self.tree.chunk;
-        let in_chunks = self.store && c > chunk && (c + b) * c > self.tree.scratch_front;
+        let chunk = self.tree.tuning.chunk;
+        let in_chunks = self.store && c > chunk && (c + b) * c > self.tree.tuning.scratch_front;
         let copied = self.store && c > chunk && !in_chunks;
         let (mut panel, mut scratch) = (Vec::new(), Vec::new());
         if copied {
@@ -790,20 +790,15 @@ impl Fronts<'_> {
         par: Par,
         work: &mut Workspace,
     ) -> Result<Inertia, usize> {
-        let (w, width) = (self.tree.chunk, self.tree.super_panel);
+        let (w, width) = (self.tree.tuning.chunk, self.tree.tuning.super_panel);
         let parallel = !matches!(par, Par::Seq);
         let mut signs = Inertia::NONE;
         let mut scratch = std::mem::take(&mut work.front);
+        let mut chunks = Chunks { data: own, c, b, w };
         for j0 in (0..c).step_by(width) {
             let wj = width.min(c - j0);
             let rows = c + b - j0;
             Workspace::refill(&mut scratch, rows * wj, None);
-            let mut chunks = Chunks {
-                data: &mut *own,
-                c,
-                b,
-                w,
-            };
             for (jj, to) in scratch.chunks_exact_mut(rows).enumerate() {
                 let (col, base) = chunks.col(j0 + jj);
                 to[jj..].copy_from_slice(&col[j0 + jj - base..]);
@@ -839,16 +834,7 @@ impl Fronts<'_> {
                 let d_inv = &d_inv[..];
                 let wr = below.rb();
                 if j0 + wj < c {
-                    // the later chunks, each a disjoint piece of `own`
-                    let first = (j0 + wj) / w;
-                    let (_, mut rest) = own.split_at_mut(chunk_start(c, b, w, first));
-                    let mut targets = Vec::new();
-                    for r in first..c.div_ceil(w) {
-                        let (cr, rr) = (w.min(c - r * w), c + b - r * w);
-                        let (t, tail) = rest.split_at_mut(rr * cr);
-                        targets.push((r, t));
-                        rest = tail;
-                    }
+                    let targets = chunks.from((j0 + wj) / w);
                     let later = |(r, t): (usize, &mut [f64]), lt: &mut Vec<f64>| {
                         let (cr, rr) = (w.min(c - r * w), c + b - r * w);
                         // the chunk's rows in the panel's rows below its pivots
@@ -890,12 +876,6 @@ impl Fronts<'_> {
             }
             // back into the chunks, from each column's diagonal down (above it, in its chunk's
             // triangle, are what the updates from earlier panels wrote: nothing reads it)
-            let mut chunks = Chunks {
-                data: &mut *own,
-                c,
-                b,
-                w,
-            };
             for (jj, from) in scratch.chunks_exact(rows).enumerate() {
                 let (col, base) = chunks.col(j0 + jj);
                 col[j0 + jj - base..].copy_from_slice(&from[jj..]);
@@ -1256,7 +1236,7 @@ impl Solver<'_> {
     /// The threads for the dense kernels of a front outside the sequential subtrees: all of them
     /// for a large one (near the root, where the subtrees wait for it), else one.
     fn par(&self, s: usize) -> Par {
-        if self.threads > 1 && self.tree.own_flops[s] > self.tree.parallel_front {
+        if self.threads > 1 && self.tree.own_flops[s] > self.tree.tuning.parallel_front {
             Par::rayon(self.threads)
         } else {
             Par::Seq

@@ -106,8 +106,18 @@ impl<'a> Panel<'a> {
     }
 }
 
-/// The `k` right-hand sides' rows `offset..offset + rows` of a buffer of `stride` rows each.
-fn rows_of(w: &mut [f64], stride: usize, offset: usize, rows: usize) -> Vec<&mut [f64]> {
+/// The `k` right-hand sides' rows `offset..offset + rows` of a buffer of `stride` rows each
+/// (`k` at most [`MAX_RHS`]).
+fn rows_of(
+    w: &mut [f64],
+    (stride, offset): (usize, usize),
+    k: usize,
+    rows: usize,
+) -> Vec<&mut [f64]> {
+    assert!(
+        k <= MAX_RHS && w.len() == stride * k && offset + rows <= stride,
+        "a chunk's rows of the right-hand sides"
+    );
     w.chunks_exact_mut(stride)
         .map(|wq| &mut wq[offset..offset + rows])
         .collect()
@@ -115,17 +125,18 @@ fn rows_of(w: &mut [f64], stride: usize, offset: usize, rows: usize) -> Vec<&mut
 
 /// The way up through one chunk of a supernode's columns (a supernode in faer's layout is one
 /// chunk): `w` holds the `k` right-hand sides' rows of the front, `stride` each (column-major,
-/// `k` at most [`MAX_RHS`]), of which the chunk's are `offset..offset + ld`; `l` is `[L11; L21]`
+/// `k` at most [`MAX_RHS`]), of which the chunk's are `offset..offset + ld`
+/// (`place = (stride, offset)`); `l` is `[L11; L21]`
 /// (`ld x c`, the unit lower triangle of `L11` read, its diagonal and upper part not). On return
 /// `w1 = L11^-1 w1` and `w2 -= L21 w1` in those rows.
 pub(crate) fn forward(
     l: Panel<'_>,
     w: &mut [f64],
-    (stride, offset): (usize, usize),
+    place: (usize, usize),
     k: usize,
     parallel: bool,
 ) {
-    forward_on(pulp::Arch::new(), l, w, (stride, offset), k, parallel);
+    forward_on(pulp::Arch::new(), l, w, place, k, parallel);
 }
 
 /// [`forward`] with the vector instructions of `arch`.
@@ -133,16 +144,12 @@ fn forward_on(
     arch: pulp::Arch,
     l: Panel<'_>,
     w: &mut [f64],
-    (stride, offset): (usize, usize),
+    place: (usize, usize),
     k: usize,
     parallel: bool,
 ) {
     let (ld, c) = (l.rows, l.cols);
-    assert!(
-        k <= MAX_RHS && w.len() == stride * k && offset + ld <= stride,
-        "forward: sizes"
-    );
-    let mut w = rows_of(w, stride, offset, ld);
+    let mut w = rows_of(w, place, k, ld);
     for j0 in (0..c).step_by(TILE) {
         let j1 = (j0 + TILE).min(c);
         let mut z = [[0.0; TILE]; MAX_RHS];
@@ -175,11 +182,11 @@ fn forward_on(
 pub(crate) fn backward(
     l: Panel<'_>,
     w: &mut [f64],
-    (stride, offset): (usize, usize),
+    place: (usize, usize),
     k: usize,
     parallel: bool,
 ) {
-    backward_on(pulp::Arch::new(), l, w, (stride, offset), k, parallel);
+    backward_on(pulp::Arch::new(), l, w, place, k, parallel);
 }
 
 /// [`backward`] with the vector instructions of `arch`.
@@ -187,16 +194,12 @@ fn backward_on(
     arch: pulp::Arch,
     l: Panel<'_>,
     w: &mut [f64],
-    (stride, offset): (usize, usize),
+    place: (usize, usize),
     k: usize,
     parallel: bool,
 ) {
     let (ld, c) = (l.rows, l.cols);
-    assert!(
-        k <= MAX_RHS && w.len() == stride * k && offset + ld <= stride,
-        "backward: sizes"
-    );
-    let mut w = rows_of(w, stride, offset, ld);
+    let mut w = rows_of(w, place, k, ld);
     for j0 in (0..c).step_by(TILE).rev() {
         let j1 = (j0 + TILE).min(c);
         if j1 < ld {

@@ -45,44 +45,11 @@ fn random_pencil(n: usize, density: f64, seed: u64) -> (SparseMatrix, SparseMatr
     (kt.to_csc(), mt.to_csc())
 }
 
-/// The 7-point Laplacian on an N^3 grid with Dirichlet ends (h = 1): eigenvalues
-/// `4 sum_d sin^2(k_d pi / (2 (N + 1)))`, with multiplicities from the cube's symmetry.
-fn laplacian_3d(nn: usize) -> SparseMatrix {
-    let id = |i: usize, j: usize, k: usize| i + nn * (j + nn * k);
-    let mut t = TriMat::new((nn * nn * nn, nn * nn * nn));
-    for k in 0..nn {
-        for j in 0..nn {
-            for i in 0..nn {
-                let a = id(i, j, k);
-                t.add_triplet(a, a, 6.0);
-                for (di, dj, dk) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {
-                    let (i2, j2, k2) = (i + di, j + dj, k + dk);
-                    if i2 < nn && j2 < nn && k2 < nn {
-                        let b = id(i2, j2, k2);
-                        t.add_triplet(a, b, -1.0);
-                        t.add_triplet(b, a, -1.0);
-                    }
-                }
-            }
-        }
-    }
-    t.to_csc()
-}
+use femu_testkit::laplacian_3d;
 
+/// The lowest `count` eigenvalues of [`laplacian_3d`].
 fn laplacian_spectrum(nn: usize, count: usize) -> Vec<f64> {
-    let s = |k: usize| {
-        let x = (k as f64 * std::f64::consts::PI / (2.0 * (nn + 1) as f64)).sin();
-        4.0 * x * x
-    };
-    let mut v = Vec::new();
-    for a in 1..=nn {
-        for b in 1..=nn {
-            for c in 1..=nn {
-                v.push(s(a) + s(b) + s(c));
-            }
-        }
-    }
-    v.sort_by(f64::total_cmp);
+    let mut v = femu_testkit::laplacian_3d_spectrum(nn);
     v.truncate(count);
     v
 }

@@ -1,8 +1,52 @@
 //! Test helpers shared by femu's crates (a dev-dependency only, never published): a seeded
-//! random generator, so tests need no RNG crate and are reproducible, and the small steel models
-//! several crates test on.
+//! random generator, so tests need no RNG crate and are reproducible, the small steel models
+//! several crates test on, and the 3D Laplacian with its analytic spectrum.
 
 use femu_fem::prelude::*;
+use femu_sparse::SparseMatrix;
+
+/// The 7-point Laplacian on an `nn^3` grid with Dirichlet ends (h = 1), both triangles stored:
+/// its eigenvalues are [`laplacian_3d_spectrum`].
+pub fn laplacian_3d(nn: usize) -> SparseMatrix {
+    let id = |i: usize, j: usize, k: usize| i + nn * (j + nn * k);
+    let mut t = femu_sparse::sprs::TriMat::new((nn * nn * nn, nn * nn * nn));
+    for k in 0..nn {
+        for j in 0..nn {
+            for i in 0..nn {
+                let a = id(i, j, k);
+                t.add_triplet(a, a, 6.0);
+                for (di, dj, dk) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {
+                    let (i2, j2, k2) = (i + di, j + dj, k + dk);
+                    if i2 < nn && j2 < nn && k2 < nn {
+                        let b = id(i2, j2, k2);
+                        t.add_triplet(a, b, -1.0);
+                        t.add_triplet(b, a, -1.0);
+                    }
+                }
+            }
+        }
+    }
+    t.to_csc()
+}
+
+/// The eigenvalues of [`laplacian_3d`], ascending: `4 sum_d sin^2(k_d pi / (2 (nn + 1)))` for
+/// `k_d = 1..=nn`, with multiplicities from the cube's symmetry.
+pub fn laplacian_3d_spectrum(nn: usize) -> Vec<f64> {
+    let s = |k: usize| {
+        let x = (k as f64 * std::f64::consts::PI / (2.0 * (nn + 1) as f64)).sin();
+        4.0 * x * x
+    };
+    let mut v = Vec::with_capacity(nn * nn * nn);
+    for a in 1..=nn {
+        for b in 1..=nn {
+            for c in 1..=nn {
+                v.push(s(a) + s(b) + s(c));
+            }
+        }
+    }
+    v.sort_by(f64::total_cmp);
+    v
+}
 
 /// SplitMix64 (Steele, Lea and Flood 2014): a small deterministic generator.
 pub struct Rng(pub u64);
