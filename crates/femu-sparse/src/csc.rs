@@ -335,22 +335,44 @@ pub fn to_dense(a: &SparseMatrix) -> Mat<f64> {
 /// # Errors
 /// [`SparseError::DimensionMismatch`] if `A` is not square or `X` does not match it.
 pub fn sym_mul_mat(a: &SparseMatrix, x: faer::MatRef<'_, f64>) -> Result<Mat<f64>, SparseError> {
+    let mut y = Mat::zeros(a.rows(), x.ncols());
+    sym_mul_mat_into(a, x, y.as_mut())?;
+    Ok(y)
+}
+
+/// [`sym_mul_mat`] into the columns of `y` (`n x k`, overwritten): for a caller that keeps the
+/// products where they are used.
+///
+/// # Errors
+/// [`SparseError::DimensionMismatch`] if `A` is not square or `X`, `Y` do not match it.
+pub fn sym_mul_mat_into(
+    a: &SparseMatrix,
+    x: faer::MatRef<'_, f64>,
+    mut y: faer::MatMut<'_, f64>,
+) -> Result<(), SparseError> {
     let n = a.rows();
-    if a.cols() != n || x.nrows() != n {
+    if a.cols() != n || x.nrows() != n || y.nrows() != n || y.ncols() != x.ncols() {
         return Err(SparseError::DimensionMismatch {
-            what: "X in A X (A square, X with A's rows)",
+            what: "X and Y in Y = A X (A square, X and Y with A's rows and as many columns)",
             expected: n,
-            got: if a.cols() != n { a.cols() } else { x.nrows() },
+            got: if a.cols() != n {
+                a.cols()
+            } else if x.nrows() != n {
+                x.nrows()
+            } else if y.nrows() != n {
+                y.nrows()
+            } else {
+                y.ncols()
+            },
         });
     }
     let k = x.ncols();
     if k == 0 || n == 0 {
-        return Ok(Mat::zeros(n, k));
+        return Ok(());
     }
     // Row-major copies keep the values of one row together in cache. Blocks wider than
     // `WIDEST_KERNEL` are taken that many columns at a time, so that every piece has a kernel of
     // known width (`A` is read once per piece).
-    let mut y = Mat::zeros(n, k);
     let width = k.min(WIDEST_KERNEL);
     let mut xt = vec![0.0; n * width];
     let mut yt = vec![0.0; n * width];
@@ -364,12 +386,12 @@ pub fn sym_mul_mat(a: &SparseMatrix, x: faer::MatRef<'_, f64>) -> Result<Mat<f64
         }
         sym_mul_rows(a, xt, w, yt)?;
         for j in 0..w {
-            for (i, v) in y.col_mut(first + j).iter_mut().enumerate() {
+            for (i, v) in y.as_mut().col_mut(first + j).iter_mut().enumerate() {
                 *v = yt[i * w + j];
             }
         }
     }
-    Ok(y)
+    Ok(())
 }
 
 /// The widest block [`sym_mul_rows`] has a kernel of known width for (every width up to it has

@@ -315,6 +315,12 @@ fn add_combination(w: &mut [f64], vs: &[&[f64]], cs: &[f64]) {
     });
 }
 
+/// `w /= d`, on the rayon threads.
+fn scale_in_place(w: &mut [f64], d: f64) {
+    w.par_chunks_mut(1 << 15)
+        .for_each(|c| c.iter_mut().for_each(|v| *v /= d));
+}
+
 /// Column `j` of a column-major matrix as a slice.
 fn slice(a: &Mat<f64>, j: usize) -> &[f64] {
     a.col(j)
@@ -1267,6 +1273,32 @@ impl Columns {
         self.data
             .par_extend(v.par_iter().with_min_len(1 << 15).map(|x| x / d));
     }
+    /// Appends the columns of `a` (as [`Columns::push`]).
+    fn push_mat(&mut self, a: faer::MatRef<'_, f64>) {
+        for j in 0..a.ncols() {
+            let col = a.col(j).try_as_col_major().expect("contiguous").as_slice();
+            self.push(col);
+        }
+    }
+    /// Appends `cols` zero columns (as [`Columns::push`]).
+    fn push_zeros(&mut self, cols: usize) {
+        self.data
+            .par_extend(rayon::iter::repeat_n(0.0, cols * self.n).with_min_len(1 << 15));
+    }
+    /// Drops the columns from `cols` on.
+    fn truncate(&mut self, cols: usize) {
+        self.data.truncate(cols * self.n);
+    }
+    /// The columns before `from`, and the columns from `from` on, writable.
+    fn split_mut(&mut self, from: usize) -> (faer::MatRef<'_, f64>, faer::MatMut<'_, f64>) {
+        let n = self.n;
+        let (head, tail) = self.data.split_at_mut(from * n);
+        let cols = tail.len() / n.max(1);
+        (
+            faer::MatRef::from_column_major_slice(head, n, from),
+            faer::MatMut::from_column_major_slice_mut(tail, n, cols),
+        )
+    }
     /// Columns `a..b` as a matrix.
     fn range(&self, a: usize, b: usize) -> faer::MatRef<'_, f64> {
         faer::MatRef::from_column_major_slice(&self.data[a * self.n..b * self.n], self.n, b - a)
@@ -1482,26 +1514,25 @@ impl<'p, 'a> Lanczos<'p, 'a> {
     }
 
     /// Two passes of classical Gram-Schmidt (CGS2) of `w` against the locked vectors and the
-    /// basis columns `from..`, M inner products through the stored M images; returns the
+    /// basis columns `..upto`, M inner products through the stored M images; returns the
     /// coefficients on those basis columns.
-    fn orthogonalize_from(
+    fn orthogonalize_upto(
         &self,
         w: &mut [f64],
         basis: &Columns,
         mbasis: &Columns,
-        from: usize,
-        locked: bool,
+        upto: usize,
     ) -> Vec<f64> {
-        let nl = if locked { self.x.len() } else { 0 };
+        let nl = self.x.len();
         let vs: Vec<&[f64]> = (0..nl)
             .map(|j| self.x.col(j))
-            .chain((from..basis.len()).map(|j| basis.col(j)))
+            .chain((0..upto).map(|j| basis.col(j)))
             .collect();
         let mvs: Vec<&[f64]> = (0..nl)
             .map(|j| self.mx.col(j))
-            .chain((from..mbasis.len()).map(|j| mbasis.col(j)))
+            .chain((0..upto).map(|j| mbasis.col(j)))
             .collect();
-        let mut coef = vec![0.0; basis.len() - from];
+        let mut coef = vec![0.0; upto];
         for _ in 0..2 {
             let cs: Vec<f64> = mvs.par_iter().map(|mv| dot(mv, w)).collect();
             let neg: Vec<f64> = cs.iter().map(|c| -c).collect();
@@ -1513,7 +1544,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
 
     /// CGS2 of `w` against the locked vectors and the whole basis; the coefficients on `basis`.
     fn orthogonalize(&self, w: &mut [f64], basis: &Columns, mbasis: &Columns) -> Vec<f64> {
-        self.orthogonalize_from(w, basis, mbasis, 0, true)
+        self.orthogonalize_upto(w, basis, mbasis, basis.len())
     }
 
     /// The M-norm of `w` (already orthogonal to the locked vectors and the basis) with its image
@@ -1570,24 +1601,35 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             Self::push_scaled(w, mw, nrm, basis, mbasis);
             return nrm;
         }
-        let mut last = (w, mw);
+        let (r, mr, nrm) = self.replacement(basis, mbasis, basis.len(), (w, mw));
+        Self::push_scaled(r, mr, nrm, basis, mbasis);
+        0.0
+    }
+
+    /// On breakdown (the Krylov space is invariant): a fresh random direction orthogonalised
+    /// against the locked vectors and the basis columns `..upto`, with its M image and M-norm
+    /// (the vector and image still to be divided by it). When no independent direction is found
+    /// in five tries (the basis spans the space to round-off) the last one, so that the basis and
+    /// its projection keep their size; `last` is the vector that broke down.
+    fn replacement(
+        &mut self,
+        basis: &Columns,
+        mbasis: &Columns,
+        upto: usize,
+        mut last: (Vec<f64>, Vec<f64>),
+    ) -> (Vec<f64>, Vec<f64>, f64) {
         for _ in 0..5 {
-            // Breakdown: the Krylov space is invariant; continue with a fresh direction.
             let mut r = self.random_vector();
             let b = norm(&r);
-            let _ = self.orthogonalize(&mut r, basis, mbasis);
+            let _ = self.orthogonalize_upto(&mut r, basis, mbasis, upto);
             let mr = self.m_times(&r);
             if let Some(nrm) = Self::usable_norm(&r, &mr, b) {
-                Self::push_scaled(r, mr, nrm, basis, mbasis);
-                return 0.0;
+                return (r, mr, nrm);
             }
             last = (r, mr);
         }
-        // no independent direction found (the basis spans the space to round-off): the last one,
-        // normalised, keeps the basis and its projection the same size
         let nrm = dot(&last.1, &last.0).max(f64::MIN_POSITIVE).sqrt();
-        Self::push_scaled(last.0, last.1, nrm, basis, mbasis);
-        0.0
+        (last.0, last.1, nrm)
     }
 
     /// Applies `OP` to the basis vectors `applied..` block by block until `max_basis` columns have
@@ -1608,49 +1650,95 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         while applied < basis.len() && applied < max_basis {
             let hi = (applied + p).min(basis.len()).min(max_basis);
             let block = hi - applied;
+            let len0 = basis.len();
             let t = Instant::now();
-            let mut w = mbasis.range(applied, hi).to_owned();
+            // The block is solved where it will stay: its right-hand sides (the M images of the
+            // columns it extends) are copied into the basis's reserved columns, and everything
+            // below works there and in the M images' columns, with no copy of the block
+            // (docs/SCALING.md, "The block in place").
+            basis.push_mat(mbasis.range(applied, hi));
             self.op
                 .as_ref()
                 .expect("the factor is present while iterating")
-                .solve_in_place(w.as_mut());
+                .solve_in_place(basis.split_mut(len0).1);
             stats.solve_seconds += t.elapsed().as_secs_f64();
             stats.solved_vectors += block;
             if interrupted(stats.solved_vectors) {
+                basis.truncate(len0);
                 self.stop = true;
                 return applied;
             }
             let t = Instant::now();
-            let before: Vec<f64> = (0..block).map(|j| w.col(j).norm_l2()).collect();
-            let len0 = basis.len();
+            let (head, mut w) = basis.split_mut(len0);
+            let before: Vec<f64> = (0..block).map(|j| w.as_ref().col(j).norm_l2()).collect();
             // block CGS2 against the locked vectors and the basis as it stands
             let mut coef0 = Mat::<f64>::zeros(len0, block);
             for _ in 0..2 {
                 let _ = project_out(self.x.mat(), self.mx.mat(), w.as_mut());
-                coef0 += project_out(basis.mat(), mbasis.mat(), w.as_mut());
+                coef0 += project_out(head, mbasis.mat(), w.as_mut());
             }
             // the block's M images in one sparse product (the matrix is read once, not once per
             // vector); the in-block combinations below are applied to them as to the vectors
-            let mw = crate::csc::sym_mul_mat(self.pencil.m, w.as_ref()).expect("sizes checked");
+            mbasis.push_zeros(block);
+            crate::csc::sym_mul_mat_into(self.pencil.m, w.as_ref(), mbasis.split_mut(len0).1)
+                .expect("sizes checked");
+            // CGS2 of each column against the block's columns before it, then M-normalised
+            let mut kept = 0;
             for j in 0..block {
-                let mut col: Vec<f64> = w.col(j).iter().copied().collect();
-                let mut mcol: Vec<f64> = mw.col(j).iter().copied().collect();
-                let len_before = basis.len();
                 let mut coef: Vec<f64> = coef0.col(j).iter().copied().collect();
-                // CGS2 against the columns this block added (the rest is done)
-                let inner = self.orthogonalize_from(&mut col, basis, mbasis, len0, false);
-                let mvs: Vec<&[f64]> = (len0..len_before).map(|i| mbasis.col(i)).collect();
-                let neg: Vec<f64> = inner.iter().map(|c| -c).collect();
-                add_combination(&mut mcol, &mvs, &neg);
-                coef.extend(inner);
-                if len_before >= cap {
+                let (_, mut w) = basis.split_mut(len0);
+                let (_, mut mw) = mbasis.split_mut(len0);
+                let (done, mut rest) = w.as_mut().split_at_col_mut(j);
+                let mut inner = Mat::<f64>::zeros(kept, 1);
+                for _ in 0..2 {
+                    inner += project_out(
+                        done.as_ref().subcols(0, kept),
+                        mw.as_ref().subcols(0, kept),
+                        rest.as_mut().subcols_mut(0, 1),
+                    );
+                }
+                let (mdone, mut mrest) = mw.as_mut().split_at_col_mut(j);
+                faer::linalg::matmul::matmul(
+                    mrest.as_mut().subcols_mut(0, 1),
+                    faer::Accum::Add,
+                    mdone.as_ref().subcols(0, kept),
+                    inner.as_ref(),
+                    -1.0,
+                    faer::get_global_parallelism(),
+                );
+                coef.extend(inner.col(0).iter().copied());
+                if len0 + kept >= cap {
+                    // the basis spans the space: the column is not kept (nor any after it)
                     h.push(coef);
                     continue;
                 }
-                let nrm = self.push_or_replace(col, Some(mcol), before[j], basis, mbasis);
+                let col = rest.col_mut(0).try_as_col_major_mut().expect("contiguous");
+                let mcol = mrest.col_mut(0).try_as_col_major_mut().expect("contiguous");
+                let (col, mcol) = (col.as_slice_mut(), mcol.as_slice_mut());
+                let nrm = match Self::usable_norm(col, mcol, before[j]) {
+                    Some(nrm) => {
+                        scale_in_place(col, nrm);
+                        scale_in_place(mcol, nrm);
+                        nrm
+                    }
+                    None => {
+                        let broken = (col.to_vec(), mcol.to_vec());
+                        let (r, mr, nrm) = self.replacement(basis, mbasis, len0 + j, broken);
+                        let n = self.n;
+                        let slot = (len0 + j) * n..(len0 + j + 1) * n;
+                        basis.data[slot.clone()].copy_from_slice(&r);
+                        mbasis.data[slot.clone()].copy_from_slice(&mr);
+                        scale_in_place(&mut basis.data[slot.clone()], nrm);
+                        scale_in_place(&mut mbasis.data[slot], nrm);
+                        0.0
+                    }
+                };
                 coef.push(nrm);
                 h.push(coef);
+                kept += 1;
             }
+            basis.truncate(len0 + kept);
+            mbasis.truncate(len0 + kept);
             applied = hi;
             stats.orthogonalization_seconds += t.elapsed().as_secs_f64();
         }
