@@ -1820,6 +1820,11 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             }
             None => (Columns::new(self.n), Columns::new(self.n), Vec::new(), 0),
         };
+        // room for every pair the run locks, allocated at once: a locked set that doubled as it
+        // grew copied itself (and cleared its new pages) at each doubling, 0.1 s of the 199,200-DOF
+        // plate's Rayleigh-Ritz (docs/SCALING.md, "The locked set's room")
+        self.x.reserve(want);
+        self.mx.reserve(want);
         let mut restarts = 0;
         loop {
             let need = want.saturating_sub(self.values.len());
