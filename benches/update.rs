@@ -7,9 +7,15 @@
 //! columns and one trial (each an `LDL^T` of `Z = K - lambda M` per mode in the sensor space, on
 //! one symbolic analysis of `K`'s pattern; docs/MATH.md, "Projected sensitivities in the sensor
 //! space"); for inverse eigensensitivity, the starting eigen solve and one trial (2 Sturm-checked
-//! solves of 14 modes on the reused symbolic analysis). Measured on 2 cores, one after the other:
-//! SB-EBE 8.1 + 8.4 s, inverse eigensensitivity 9.2 + 8.8 s (start + iteration); with the
-//! saddle-point systems SB-EBE took 41 + 79 s.
+//! solves of 14 modes on the reused symbolic analysis). Measured on 2 cores, one after the other,
+//! at an earlier build: SB-EBE 8.1 + 8.4 s, inverse eigensensitivity 9.2 + 8.8 s (start +
+//! iteration); with the saddle-point systems SB-EBE took 41 + 79 s. At a later build, whose
+//! eigensolver is faster, from each iteration's `seconds` (a run of 3 iterations each, on a
+//! 2-core machine with AVX-512): SB-EBE 3.53 s to start, then 3.68 s for an iteration of one
+//! trial, 13.3 s and 41.4 s for iterations whose steps were halved until the objective fell;
+//! inverse eigensensitivity 2.56 s to start, then 2.90 s and 2.71 s for iterations of one trial,
+//! 8.56 s for one with more. An SB-EBE trial (four `LDL^T` of `Z` and their solves) now costs
+//! about 1.3 times an inverse-eigensensitivity trial (two verified solves).
 //!
 //! `cargo bench --bench update` (`FEMU_BENCH_CELLS=nx,ny,nz` to change the size)
 
