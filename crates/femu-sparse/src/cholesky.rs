@@ -566,8 +566,8 @@ impl SymbolicFactor {
 
     /// The subtree-parallel multifrontal `LDL^T` of `input` on the rayon threads
     /// (docs/SCALING.md, "A subtree-parallel factorization"): the factor in femu's layout
-    /// ([`crate::multifrontal::Layout`]) when `store` (else empty) and the inertia; `None` when the analysis is not
-    /// supernodal with a tree (the caller then uses faer's). Without `store` (a count, which
+    /// ([`crate::multifrontal::Layout`]) when `store` (else empty) and the inertia; `None` when
+    /// the analysis is not supernodal with a tree (the caller then uses faer's). Without `store` (a count, which
     /// ends a solve: the Sturm check) the values a dropped factor left for reuse are freed first,
     /// so that the fronts do not add to them.
     fn multifrontal(

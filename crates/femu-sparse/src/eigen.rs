@@ -1583,20 +1583,19 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         // Breakdown is judged on the Euclidean norm: no extra M product per vector.
         let before = norm(&w);
         let coef = self.orthogonalize(&mut w, basis, mbasis);
-        (coef, self.push_or_replace(w, None, before, basis, mbasis))
+        (coef, self.push_or_replace(w, before, basis, mbasis))
     }
 
-    /// Pushes the orthogonalised `w` (with its M image `mw` when known), or on breakdown a random
-    /// vector orthogonalised in its place; returns the norm of `w` (0 when replaced).
+    /// Pushes the orthogonalised `w` with its M image, or on breakdown a random vector
+    /// orthogonalised in its place; returns the norm of `w` (0 when replaced).
     fn push_or_replace(
         &mut self,
         w: Vec<f64>,
-        mw: Option<Vec<f64>>,
         before: f64,
         basis: &mut Columns,
         mbasis: &mut Columns,
     ) -> f64 {
-        let mw = mw.unwrap_or_else(|| self.m_times(&w));
+        let mw = self.m_times(&w);
         if let Some(nrm) = Self::usable_norm(&w, &mw, before) {
             Self::push_scaled(w, mw, nrm, basis, mbasis);
             return nrm;
@@ -1724,12 +1723,14 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                     None => {
                         let broken = (col.to_vec(), mcol.to_vec());
                         let (r, mr, nrm) = self.replacement(basis, mbasis, len0 + j, broken);
-                        let n = self.n;
-                        let slot = (len0 + j) * n..(len0 + j + 1) * n;
-                        basis.data[slot.clone()].copy_from_slice(&r);
-                        mbasis.data[slot.clone()].copy_from_slice(&mr);
-                        scale_in_place(&mut basis.data[slot.clone()], nrm);
-                        scale_in_place(&mut mbasis.data[slot], nrm);
+                        // in the broken column's place
+                        let slot = (len0 + j) * self.n..(len0 + j + 1) * self.n;
+                        for (to, from) in [(&mut basis.data, &r), (&mut mbasis.data, &mr)] {
+                            to[slot.clone()]
+                                .iter_mut()
+                                .zip(from)
+                                .for_each(|(t, v)| *t = v / nrm);
+                        }
                         0.0
                     }
                 };
@@ -2092,12 +2093,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         let c = project_out(self.x.mat(), self.mx.mat(), w.as_mut());
         (0..w.ncols())
             .map(|j| {
-                let m_norm = dot(
-                    mw.col(j).try_as_col_major().expect("contiguous").as_slice(),
-                    w.col(j).try_as_col_major().expect("contiguous").as_slice(),
-                )
-                .abs()
-                .sqrt();
+                let m_norm = dot(slice(mw, j), slice(w, j)).abs().sqrt();
                 c.col(j).norm_l2() <= 1e-10 * m_norm
             })
             .collect()
@@ -2199,7 +2195,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             .enumerate()
             .map(|(j, &s)| {
                 residual_from(
-                    kx.col(j).try_as_col_major().expect("contiguous").as_slice(),
+                    slice(&kx, j),
                     self.pencil.norms(),
                     self.x.col(s),
                     self.mx.col(s),
