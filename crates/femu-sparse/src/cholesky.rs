@@ -861,7 +861,8 @@ mod tests {
     /// left-looking factorization of faer's layout (an independent code) solved by faer's own
     /// solve: the same solutions to round-off times the condition number, for 3 right-hand
     /// sides (the solve's own kernels) and 10 (faer's GEMM and triangular solves chunk by
-    /// chunk); the inertia equal to the analytic count of eigenvalues below the shift, with the
+    /// chunk), dense and sparse (unit and zero columns, whose forward solve skips the fronts off
+    /// their paths to the root); the inertia equal to the analytic count of eigenvalues below the shift, with the
     /// factor and without (a count).
     #[test]
     fn chunked_layouts_agree_with_faer_and_the_analytic_inertia() {
@@ -891,22 +892,35 @@ mod tests {
             .max()
             .unwrap();
         assert!(widest > 32, "a front of several super panels: {widest}");
-        let rhs =
-            |k: usize| -> Vec<f64> { (0..k * n).map(|i| ((i * 37) % 101) as f64 - 50.0).collect() };
+        // dense right-hand sides, or sparse ones: unit columns spread over the grid with every
+        // third column zero (the forward solve skips the fronts off their paths to the root)
+        let rhs = |(k, sparse): (usize, bool)| -> Vec<f64> {
+            (0..k * n)
+                .map(|i| {
+                    let (j, r) = (i / n, i % n);
+                    match sparse {
+                        false => ((i * 37) % 101) as f64 - 50.0,
+                        true if j % 3 != 2 && r == (j * 7919 + 11) % n => 1.0 + j as f64,
+                        true => 0.0,
+                    }
+                })
+                .collect()
+        };
+        let cases = [(3, false), (10, false), (3, true), (10, true)];
         let reference = sym.ldlt_left_looking(&a, &values, "A").unwrap();
         assert!(!reference.femu_layout);
         let one = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .build()
             .unwrap();
-        let solved = |f: &Ldlt, k: usize| {
-            let mut x = rhs(k);
-            f.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut x, n, k));
+        let solved = |f: &Ldlt, case: (usize, bool)| {
+            let mut x = rhs(case);
+            f.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut x, n, case.0));
             x
         };
-        let want: Vec<Vec<f64>> = [3, 10]
+        let want: Vec<Vec<f64>> = cases
             .iter()
-            .map(|&k| one.install(|| solved(&reference, k)))
+            .map(|&case| one.install(|| solved(&reference, case)))
             .collect();
         let tunings = [
             // every front above 8 pivots in chunks, a super panel at a time, threads shared
@@ -953,8 +967,8 @@ mod tests {
                 assert_eq!(f.inertia().negative, below, "{what}");
                 assert_eq!(f.inertia(), reference.inertia(), "{what}");
                 assert_eq!(count, f.inertia(), "{what}: the count");
-                for (k, want) in [3, 10].into_iter().zip(&want) {
-                    let got = pool.install(|| solved(&f, k));
+                for (case, want) in cases.into_iter().zip(&want) {
+                    let got = pool.install(|| solved(&f, case));
                     let scale = want.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
                     let diff = got
                         .iter()
@@ -962,7 +976,7 @@ mod tests {
                         .fold(0.0_f64, |m, (p, q)| m.max((p - q).abs()));
                     assert!(
                         diff < 100.0 * f64::EPSILON * kappa * scale,
-                        "{what}, {k} right-hand sides: {diff:e} of {scale:e}"
+                        "{what}, right-hand sides {case:?}: {diff:e} of {scale:e}"
                     );
                 }
             }

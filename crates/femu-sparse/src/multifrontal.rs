@@ -1329,6 +1329,15 @@ impl Solver<'_> {
         let (c, rows) = self.sizes(s);
         let (nb, k) = (rows.len(), self.k);
         let start = self.symbolic.supernode_begin()[s];
+        // updates with no rows add nothing (a child without a pattern, or a zero update below)
+        let zero_b = || (0..k).all(|j| (start..start + c).all(|i| self.b[(i, j)] == 0.0));
+        if updates.iter().all(|u| u.nrows() == 0) && zero_b() {
+            // nothing reaches this front: its forward solution is zero, and so is its update (a
+            // sparse right-hand side, such as an expansion's unit columns at the sensors, solves
+            // only the fronts on its paths to the root)
+            slot.fill(0.0);
+            return Mat::zeros(0, k);
+        }
         let d_inv = self.d_inv(s);
         if k <= MAX_RHS {
             // the front's rows of the right-hand sides in one buffer, `c + nb` per column, for
@@ -1341,6 +1350,9 @@ impl Solver<'_> {
                 wq[..c].copy_from_slice(&column(self.b, j)[start..start + c]);
             }
             for (&child, update) in self.tree.children(s).iter().zip(updates) {
+                if update.nrows() == 0 {
+                    continue;
+                }
                 let (_, places) = self.places(s, child);
                 for (j, wq) in w.chunks_exact_mut(ld).enumerate() {
                     for (&l, &v) in places.iter().zip(column(update.as_ref(), j)) {
@@ -1364,6 +1376,9 @@ impl Solver<'_> {
         zs.copy_from(self.b.subrows(start, c));
         let mut u = Mat::<f64>::zeros(nb, k);
         for (&child, update) in self.tree.children(s).iter().zip(updates) {
+            if update.nrows() == 0 {
+                continue;
+            }
             let (pivots, places) = self.places(s, child);
             let (to_pivots, to_pattern) = places.split_at(pivots);
             for j in 0..k {
