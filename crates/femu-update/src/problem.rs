@@ -501,7 +501,7 @@ pub(crate) fn expand_projected(
     w_inv: &[f64],
     test_error: Option<f64>,
     symbolic: Option<&SymbolicFactor>,
-    columns: impl FnMut(usize, &[f64]) -> Result<Mat<f64>, UpdateError>,
+    columns: impl Fn(usize, &[f64]) -> Result<Mat<f64>, UpdateError> + Sync,
 ) -> Result<ProjectedExpansion, UpdateError> {
     match test_error {
         Some(gamma) => {

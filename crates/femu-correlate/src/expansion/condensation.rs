@@ -46,28 +46,27 @@ impl Expander<'_> {
             };
             let mut b = Mat::from_fn(rhs.nrows(), group.len(), |i, g| -rhs[(i, group[g])]);
             let symbolic = self.symbolic_oo()?;
+            let (k_oo, m_oo) = self.oo();
             if lambda == 0.0 {
-                let llt = symbolic.llt(&self.k_oo, "K_oo").map_err(|e| match e {
+                let llt = symbolic.llt(k_oo, "K_oo").map_err(|e| match e {
                     SparseError::NotPositiveDefinite { index, .. }
                     | SparseError::NumericallySingular { index, .. } => singular(index),
                     other => other.into(),
                 })?;
                 llt.solve_in_place(b.as_mut());
             } else {
-                let values: Vec<f64> = self
-                    .k_oo
+                let values: Vec<f64> = k_oo
                     .data()
                     .iter()
-                    .zip(&self.m_oo)
+                    .zip(m_oo)
                     .map(|(k, m)| k - lambda * m)
                     .collect();
-                let ldlt =
-                    symbolic
-                        .ldlt_values(&self.k_oo, &values, "Z_oo")
-                        .map_err(|e| match e {
-                            SparseError::Singular { index, .. } => singular(index),
-                            other => other.into(),
-                        })?;
+                let ldlt = symbolic
+                    .ldlt_values(k_oo, &values, "Z_oo")
+                    .map_err(|e| match e {
+                        SparseError::Singular { index, .. } => singular(index),
+                        other => other.into(),
+                    })?;
                 ldlt.solve_in_place(b.as_mut());
             }
             for (g, &c) in group.iter().enumerate() {

@@ -19,7 +19,7 @@ use crate::{CorrelateError, SensorLayout, SensorSpace};
 pub const SENSOR_SPACE_LIMIT: usize = 300;
 use faer::{Mat, MatRef};
 use femu_sparse::cholesky::{Factorization, SymbolicFactor};
-use femu_sparse::csc::sym_mul_mat;
+use femu_sparse::csc::{sym_mul_mat, sym_mul_mat_values_into};
 use femu_sparse::kkt::QuasiDefinite;
 use femu_sparse::ordering::Ordering;
 use femu_sparse::{SparseError, SparseMatrix};
@@ -166,12 +166,33 @@ pub struct Expander<'a> {
     /// `M`'s values on `K`'s pattern (0 where `M` stores nothing), found once: every expansion
     /// forms `Z = K - lambda M` entry by entry on that pattern
     m_on_k: Vec<f64>,
-    /// `K_oo` (CSC, both triangles) and `M_oo`'s values on its pattern
-    k_oo: SparseMatrix,
-    m_oo: Vec<f64>,
-    /// analysed on first use: only static and dynamic expansion factor `K_oo - lambda M_oo`, and
-    /// SB-EBE builds an expander per iteration for the saddle-point methods alone
+    /// `K_oo` (CSC, both triangles) and `M_oo`'s values on its pattern, built on first use: only
+    /// static and dynamic expansion use them, and SB-EBE builds an expander per trial
+    oo: std::sync::OnceLock<(SparseMatrix, Vec<f64>)>,
+    /// `K_oo`'s analysis, made on first use for the same reason
     symbolic: std::sync::OnceLock<SymbolicFactor>,
+    /// modes of projected expansions the sensor space handed to the saddle point
+    fallbacks: Counter,
+}
+
+/// A count shared by concurrent modes; a clone starts from the count so far.
+#[derive(Debug, Default)]
+struct Counter(std::sync::atomic::AtomicUsize);
+
+impl Clone for Counter {
+    fn clone(&self) -> Self {
+        Self(self.get().into())
+    }
+}
+
+impl Counter {
+    fn get(&self) -> usize {
+        self.0.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    fn add(&self) {
+        self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
 }
 
 impl<'a> Expander<'a> {
@@ -217,35 +238,22 @@ impl<'a> Expander<'a> {
             });
         }
         let m_on_k = m_on_pattern(k, m)?;
-        let kp = k.indptr();
-        let kp = kp.raw_storage();
-        let no = part.omitted.len();
-        let mut ptr = Vec::with_capacity(no + 1);
-        let mut idx = Vec::new();
-        let mut kv = Vec::new();
-        let mut mv = Vec::new();
-        ptr.push(0);
-        for &c in &part.omitted {
-            for p in kp[c]..kp[c + 1] {
-                let o = part.omitted_pos[k.indices()[p]];
-                if o != usize::MAX {
-                    idx.push(o);
-                    kv.push(k.data()[p]);
-                    mv.push(m_on_k[p]);
-                }
-            }
-            ptr.push(idx.len());
-        }
-        let k_oo = SparseMatrix::new_csc((no, no), ptr, idx, kv);
         Ok(Self {
             k,
             m,
             part,
             m_on_k,
-            k_oo,
-            m_oo: mv,
+            oo: std::sync::OnceLock::new(),
             symbolic: std::sync::OnceLock::new(),
+            fallbacks: Counter::default(),
         })
+    }
+
+    /// How many modes of [`Expander::minimum_residual_projected`] this expander computed by the
+    /// saddle point after the sensor space failed them (`Z` with a zero pivot, or a check
+    /// missed): each costs several times a sensor-space mode.
+    pub fn projected_fallbacks(&self) -> usize {
+        self.fallbacks.get()
     }
 
     /// The partition.
@@ -253,12 +261,39 @@ impl<'a> Expander<'a> {
         &self.part
     }
 
+    /// `K_oo` and `M_oo`'s values on its pattern, built on first use.
+    fn oo(&self) -> &(SparseMatrix, Vec<f64>) {
+        self.oo.get_or_init(|| {
+            let (k, part) = (self.k, &self.part);
+            let kp = k.indptr();
+            let kp = kp.raw_storage();
+            let no = part.omitted.len();
+            let mut ptr = Vec::with_capacity(no + 1);
+            let mut idx = Vec::new();
+            let mut kv = Vec::new();
+            let mut mv = Vec::new();
+            ptr.push(0);
+            for &c in &part.omitted {
+                for p in kp[c]..kp[c + 1] {
+                    let o = part.omitted_pos[k.indices()[p]];
+                    if o != usize::MAX {
+                        idx.push(o);
+                        kv.push(k.data()[p]);
+                        mv.push(self.m_on_k[p]);
+                    }
+                }
+                ptr.push(idx.len());
+            }
+            (SparseMatrix::new_csc((no, no), ptr, idx, kv), mv)
+        })
+    }
+
     /// The symbolic analysis of `K_oo`, computed on first use.
     fn symbolic_oo(&self) -> Result<&SymbolicFactor, CorrelateError> {
         if let Some(s) = self.symbolic.get() {
             return Ok(s);
         }
-        let s = SymbolicFactor::new(&self.k_oo, Ordering::NestedDissection)?;
+        let s = SymbolicFactor::new(&self.oo().0, Ordering::NestedDissection)?;
         Ok(self.symbolic.get_or_init(|| s))
     }
 
