@@ -10,14 +10,20 @@
 //! solves of 14 modes on the reused symbolic analysis). Measured on 2 cores, one after the other,
 //! at an earlier build: SB-EBE 8.1 + 8.4 s, inverse eigensensitivity 9.2 + 8.8 s (start +
 //! iteration); with the saddle-point systems SB-EBE took 41 + 79 s. At a later build, whose
-//! eigensolver is faster, from each iteration's `seconds` (a run of 3 iterations each, on a
-//! 2-core machine with AVX-512): SB-EBE 3.53 s to start, then 3.68 s for an iteration of one
-//! trial, 13.3 s and 41.4 s for iterations whose steps were halved until the objective fell;
-//! inverse eigensensitivity 2.56 s to start, then 2.90 s and 2.71 s for iterations of one trial,
-//! 8.56 s for one with more. An SB-EBE trial (four `LDL^T` of `Z` and their solves) now costs
-//! about 1.3 times an inverse-eigensensitivity trial (two verified solves).
+//! eigensolver is faster: SB-EBE 3.53 s to start, then 3.68 s for an iteration of one trial and
+//! 13.3 s, 41.4 s for the next two (near convergence the sensor-space Gram matrix lost its
+//! definiteness and modes went to the saddle point); inverse eigensensitivity 2.56 s, then
+//! 2.90 s and 2.71 s. At this build (the shape from the QR of the scaled `Z^-1 E` with one solve,
+//! the modes two at a time, a forward solve that skips what the sensors' unit columns do not
+//! reach; `FEMU_BENCH_ITERATIONS=4`, two runs): SB-EBE 2.59 and 2.62 s to start, then 2.57-2.79 s
+//! for each of three iterations of one trial, and 35 s for a fourth whose test eigenvalues equal
+//! the model's to round-off (the saddle point again); inverse eigensensitivity 2.75 and 2.68 s,
+//! then 2.52-3.03 s for iterations of one trial. Criterion's runs of the start and one iteration:
+//! SB-EBE 5.68 s, inverse eigensensitivity 5.82 s.
 //!
-//! `cargo bench --bench update` (`FEMU_BENCH_CELLS=nx,ny,nz` to change the size)
+//! `cargo bench --bench update` (`FEMU_BENCH_CELLS=nx,ny,nz` to change the size;
+//! `FEMU_BENCH_ITERATIONS=3` instead runs each method once for up to 3 iterations and prints the
+//! seconds of each, the figures above)
 
 mod common;
 
@@ -59,9 +65,66 @@ fn setup() -> (Model, SensorLayout, TestModes, Vec<String>) {
     (model, layout, test, names)
 }
 
+/// Each method once, for up to `iterations`, printing the seconds of the start and of each
+/// iteration (from the history's `seconds`).
+fn timeline(
+    model: &Model,
+    sets: &[&str],
+    layout: &SensorLayout,
+    test: &TestModes,
+    iterations: usize,
+) {
+    let update = UpdateOptions {
+        max_iterations: iterations,
+        ..Default::default()
+    };
+    let fresh = || {
+        UpdateModel::from_element_sets(model, sets, MassKind::Consistent, Corrections::Stiffness)
+            .unwrap()
+    };
+    let print = |name: &str, r: &UpdateResult| {
+        let s: Vec<String> = r
+            .history
+            .iter()
+            .map(|h| format!("{:.2}", h.seconds))
+            .collect();
+        let o: Vec<String> = r
+            .history
+            .iter()
+            .map(|h| format!("{:.6e}", h.objective))
+            .collect();
+        println!("{name}: seconds (start, iterations) {}", s.join(" "));
+        println!("{name}: objective {}", o.join(" "));
+    };
+    let opts = SbebeOptions {
+        update: update.clone(),
+        ..Default::default()
+    };
+    print(
+        "SB-EBE",
+        &sb_ebe(&mut fresh(), layout, test, &opts, |_| {}).unwrap(),
+    );
+    let opts = SensitivityOptions {
+        update: UpdateOptions {
+            tikhonov: 1e-3,
+            ..update
+        },
+        ..Default::default()
+    };
+    let r = inverse_eigensensitivity(&mut fresh(), layout, test, &opts, |_| {}).unwrap();
+    print("inverse eigensensitivity", &r);
+}
+
 fn bench(c: &mut Criterion) {
     let (model, layout, test, names) = setup();
     let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+    if let Some(n) = std::env::var("FEMU_BENCH_ITERATIONS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
+        timeline(&model, &sets, &layout, &test, n);
+        return;
+    }
     let one = UpdateOptions {
         max_iterations: 1,
         ..Default::default()
