@@ -16,8 +16,8 @@
 //! 2.90 s and 2.71 s. At this build (the shape from the QR of the scaled `Z^-1 E` with one solve,
 //! the modes two at a time, a forward solve that skips what the sensors' unit columns do not
 //! reach; `FEMU_BENCH_ITERATIONS=4`, two runs): SB-EBE 2.59 and 2.62 s to start, then 2.57-2.79 s
-//! for each of three iterations of one trial, and 35 s for a fourth whose test eigenvalues equal
-//! the model's to round-off (the saddle point again); inverse eigensensitivity 2.75 and 2.68 s,
+//! for each of three iterations of one trial, and 33-35 s for a fourth whose test eigenvalues
+//! equal the model's to round-off (the saddle point again, peak 2.1 GB); inverse eigensensitivity 2.75 and 2.68 s,
 //! then 2.52-3.03 s for iterations of one trial. Criterion's runs of the start and one iteration:
 //! SB-EBE 5.68 s, inverse eigensensitivity 5.82 s.
 //!

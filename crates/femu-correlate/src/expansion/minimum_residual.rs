@@ -128,8 +128,9 @@ impl Expander<'_> {
     /// sides and one with one; docs/MATH.md, "Projected sensitivities in the sensor space"), checked
     /// against the optimality conditions and recomputed by
     /// [`Expander::minimum_residual_projected_saddle_point`] when `Z` cannot be factored or the
-    /// check fails; beyond, by the saddle point. The modes are independent: they run concurrently,
-    /// one per thread, while their factors together take at most 1 GiB.
+    /// check fails; beyond, by the saddle point. The modes are independent: in the sensor space
+    /// they run concurrently, one per thread, while their factors together take at most 1 GiB;
+    /// the modes that need the saddle point follow, on one analysis of its pattern.
     ///
     /// # Errors
     /// As [`Expander::minimum_residual_diagonal`], and the callback's errors.
@@ -157,43 +158,54 @@ impl Expander<'_> {
             }
         };
         let n = self.k.rows();
-        let one = |j: usize| -> Result<ModeExpansion, E> {
-            let yj = ya.subcols(j, 1);
-            Ok(
-                match self.projected_in_sensor_space(lambdas[j], yj, w_inv, symbolic, &|xj| {
-                    columns(j, xj)
-                })? {
-                    Some(r) => r,
-                    None => {
-                        // Z not factorable without pivoting, or the check failed: the saddle point
-                        self.fallbacks.add();
-                        let one = |_: usize, xj: &[f64]| columns(j, xj);
-                        let (xs, mut ps) = self.minimum_residual_projected_saddle_point(
-                            &lambdas[j..=j],
-                            yj,
-                            w_inv,
-                            one,
-                        )?;
-                        (xs, ps.pop().expect("one mode"))
-                    }
-                },
-            )
+        let sensor_space = |j: usize| -> Result<Option<ModeExpansion>, E> {
+            self.projected_in_sensor_space(lambdas[j], ya.subcols(j, 1), w_inv, symbolic, &|xj| {
+                columns(j, xj)
+            })
         };
         let concurrent = rayon::current_num_threads().min(lambdas.len());
-        let modes: Vec<Result<ModeExpansion, E>> = if concurrent > 1
+        let modes: Vec<Result<Option<ModeExpansion>, E>> = if concurrent > 1
             && symbolic.factor_len() * std::mem::size_of::<f64>() * concurrent
                 <= CONCURRENT_FACTORS_BYTES
         {
-            (0..lambdas.len()).into_par_iter().map(one).collect()
+            (0..lambdas.len())
+                .into_par_iter()
+                .map(sensor_space)
+                .collect()
         } else {
-            (0..lambdas.len()).map(one).collect()
+            (0..lambdas.len()).map(sensor_space).collect()
         };
+        let modes = modes.into_iter().collect::<Result<Vec<_>, E>>()?;
+        // the modes the sensor space failed (Z not factorable without pivoting, or a check
+        // missed): the saddle point, after the others and on one symbolic analysis (its factor
+        // is several times Z's)
+        let failed: Vec<usize> = (0..modes.len()).filter(|&j| modes[j].is_none()).collect();
+        let mut saddle = None;
+        if !failed.is_empty() {
+            failed.iter().for_each(|_| self.fallbacks.add());
+            let lf: Vec<f64> = failed.iter().map(|&j| lambdas[j]).collect();
+            let yf = Mat::from_fn(ya.nrows(), failed.len(), |i, k| ya[(i, failed[k])]);
+            let one = |k: usize, xj: &[f64]| columns(failed[k], xj);
+            let (xs, ps) =
+                self.minimum_residual_projected_saddle_point(&lf, yf.as_ref(), w_inv, one)?;
+            saddle = Some((xs, ps.into_iter()));
+        }
         let mut x = Mat::zeros(n, lambdas.len());
         let mut projected = Vec::with_capacity(lambdas.len());
-        for (j, m) in modes.into_iter().enumerate() {
-            let (xj, pj) = m?;
-            x.col_mut(j).copy_from(xj.col(0));
-            projected.push(pj);
+        let mut k = 0;
+        for (j, mode) in modes.into_iter().enumerate() {
+            match (mode, &mut saddle) {
+                (Some((xj, pj)), _) => {
+                    x.col_mut(j).copy_from(xj.col(0));
+                    projected.push(pj);
+                }
+                (None, Some((xs, ps))) => {
+                    x.col_mut(j).copy_from(xs.col(k));
+                    projected.push(ps.next().expect("one per failed mode"));
+                    k += 1;
+                }
+                (None, None) => unreachable!("a failed mode has a saddle point"),
+            }
         }
         Ok((x, projected))
     }

@@ -664,6 +664,34 @@ fn projected_expansion_in_the_sensor_space_equals_dense_formulas() {
         .unwrap();
     let ep = (&p[0] - &pk[0]).norm_l2() / pk[0].norm_l2();
     assert!(ep < 1e-6, "P A at a model eigenvalue: {ep:e}");
+    // the perturbed mode beside the model eigenvalue: the sensor space takes the first, the
+    // saddle point the second, and each lands in its own column
+    let mixed = Expander::new(&c.sys.k, &c.sys.m, &c.layout).unwrap();
+    let y2 = Mat::from_fn(
+        c.a.len(),
+        2,
+        |i, j| {
+            if j == 0 { x2[c.a[i]] } else { phi[c.a[i]] }
+        },
+    );
+    let (xm, pm) = mixed
+        .minimum_residual_projected(&[l2, eig.values[2]], y2.as_ref(), &w_inv, None, cols)
+        .unwrap();
+    assert_eq!(mixed.projected_fallbacks(), 1);
+    let (x, pa) = &reference[1];
+    let (ex, ep) = (rel(&col(&xm, 0), x), (&pm[0] - pa).norm_l2() / pa.norm_l2());
+    assert!(
+        ex < 1e-10 && ep < 1e-10,
+        "beside a model eigenvalue: {ex:e} {ep:e}"
+    );
+    let (ex, ep) = (
+        rel(&col(&xm, 1), &phi),
+        (&pm[1] - &pk[0]).norm_l2() / pk[0].norm_l2(),
+    );
+    assert!(
+        ex < 1e-8 && ep < 1e-6,
+        "at the model eigenvalue: {ex:e} {ep:e}"
+    );
 }
 
 /// Near a model eigenvalue (relative offsets 1e-4 and 1e-7, where the columns of `Z^-1 E` are
