@@ -17,8 +17,8 @@
 //! the modes two at a time, a forward solve that skips what the sensors' unit columns do not
 //! reach; `FEMU_BENCH_ITERATIONS=4`, two runs): SB-EBE 2.59 and 2.62 s to start, then 2.57-2.79 s
 //! for each of three iterations of one trial, and 33-35 s for a fourth whose test eigenvalues
-//! equal the model's to round-off (the saddle point again, peak 2.1 GB); inverse eigensensitivity 2.75 and 2.68 s,
-//! then 2.52-3.03 s for iterations of one trial. Criterion's runs of the start and one iteration:
+//! equal the model's to round-off (the saddle point again, peak 2.1 GB); inverse
+//! eigensensitivity 2.75 and 2.68 s, then 2.52-3.03 s for iterations of one trial. Criterion's runs of the start and one iteration:
 //! SB-EBE 5.68 s, inverse eigensensitivity 5.82 s.
 //!
 //! `cargo bench --bench update` (`FEMU_BENCH_CELLS=nx,ny,nz` to change the size;
@@ -83,18 +83,17 @@ fn timeline(
             .unwrap()
     };
     let print = |name: &str, r: &UpdateResult| {
-        let s: Vec<String> = r
-            .history
-            .iter()
-            .map(|h| format!("{:.2}", h.seconds))
-            .collect();
-        let o: Vec<String> = r
-            .history
-            .iter()
-            .map(|h| format!("{:.6e}", h.objective))
-            .collect();
-        println!("{name}: seconds (start, iterations) {}", s.join(" "));
-        println!("{name}: objective {}", o.join(" "));
+        let each = |f: &dyn Fn(&femu::update::Iteration) -> String| {
+            r.history.iter().map(f).collect::<Vec<_>>().join(" ")
+        };
+        println!(
+            "{name}: seconds (start, iterations) {}",
+            each(&|h| format!("{:.2}", h.seconds))
+        );
+        println!(
+            "{name}: objective {}",
+            each(&|h| format!("{:.6e}", h.objective))
+        );
     };
     let opts = SbebeOptions {
         update: update.clone(),

@@ -175,37 +175,28 @@ impl Expander<'_> {
         } else {
             (0..lambdas.len()).map(sensor_space).collect()
         };
-        let modes = modes.into_iter().collect::<Result<Vec<_>, E>>()?;
+        let mut modes = modes.into_iter().collect::<Result<Vec<_>, E>>()?;
         // the modes the sensor space failed (Z not factorable without pivoting, or a check
         // missed): the saddle point, after the others and on one symbolic analysis (its factor
         // is several times Z's)
         let failed: Vec<usize> = (0..modes.len()).filter(|&j| modes[j].is_none()).collect();
-        let mut saddle = None;
         if !failed.is_empty() {
-            failed.iter().for_each(|_| self.fallbacks.add());
+            self.fallbacks.add(failed.len());
             let lf: Vec<f64> = failed.iter().map(|&j| lambdas[j]).collect();
             let yf = Mat::from_fn(ya.nrows(), failed.len(), |i, k| ya[(i, failed[k])]);
             let one = |k: usize, xj: &[f64]| columns(failed[k], xj);
             let (xs, ps) =
                 self.minimum_residual_projected_saddle_point(&lf, yf.as_ref(), w_inv, one)?;
-            saddle = Some((xs, ps.into_iter()));
+            for (k, (&j, p)) in failed.iter().zip(ps).enumerate() {
+                modes[j] = Some((xs.subcols(k, 1).to_owned(), p));
+            }
         }
         let mut x = Mat::zeros(n, lambdas.len());
         let mut projected = Vec::with_capacity(lambdas.len());
-        let mut k = 0;
         for (j, mode) in modes.into_iter().enumerate() {
-            match (mode, &mut saddle) {
-                (Some((xj, pj)), _) => {
-                    x.col_mut(j).copy_from(xj.col(0));
-                    projected.push(pj);
-                }
-                (None, Some((xs, ps))) => {
-                    x.col_mut(j).copy_from(xs.col(k));
-                    projected.push(ps.next().expect("one per failed mode"));
-                    k += 1;
-                }
-                (None, None) => unreachable!("a failed mode has a saddle point"),
-            }
+            let (xj, pj) = mode.expect("every failed mode has its saddle point");
+            x.col_mut(j).copy_from(xj.col(0));
+            projected.push(pj);
         }
         Ok((x, projected))
     }
@@ -262,18 +253,15 @@ impl Expander<'_> {
         let qr = sv.qr();
         let u = qr.compute_thin_Q();
         let r = qr.thin_R();
-        // z = R^-T y by forward substitution (R^T is lower triangular)
-        let mut z = vec![0.0; s];
-        for i in 0..s {
-            let dot: f64 = (0..i).map(|k| r[(k, i)] * z[k]).sum();
-            z[i] = (y[(i, 0)] - dot) / r[(i, i)];
-        }
-        if !z.iter().all(|v| v.is_finite()) {
+        // z = R^-T y (R^T is lower triangular)
+        let mut z = y.to_owned();
+        r.transpose().solve_lower_triangular_in_place(z.as_mut());
+        if !finite(&z) {
             return Ok(None);
         }
         // x = Z^-1 r = Z^-1 S^-1 U z: one solve
-        let uz = &u * faer::ColRef::from_slice(&z);
-        let mut x = Mat::from_fn(n, 1, |i, _| w_inv[i].sqrt() * uz[i]);
+        let uz = &u * &z;
+        let mut x = Mat::from_fn(n, 1, |i, _| w_inv[i].sqrt() * uz[(i, 0)]);
         ldlt.solve_in_place(x.as_mut());
         if !finite(&x) {
             return Ok(None);

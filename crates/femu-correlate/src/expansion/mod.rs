@@ -190,8 +190,8 @@ impl Counter {
         self.0.load(std::sync::atomic::Ordering::Relaxed)
     }
 
-    fn add(&self) {
-        self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    fn add(&self, n: usize) {
+        self.0.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
     }
 }
 
