@@ -115,7 +115,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .take(count)
                 .fold(0.0_f64, |m, r| m.max(*r));
             println!(
-                "{{\"dofs\": {}, \"assembly_s\": {t_assembly:.3}, \"analysis_s\": {:.3}, \"eigen_s\": {t_eigen:.3}, \"check_s\": {:.3}, \"symbolic_s\": {:.3}, \"factor_s\": {:.3}, \"solve_s\": {:.3}, \"orth_s\": {:.3}, \"ritz_s\": {:.3}, \"other_s\": {:.3}, \"factorizations\": {}, \"solved_vectors\": {}, \"restarts\": {}, \"factor_len\": {}, \"factor_flops\": {:.4e}, \"sturm_verified\": {}, \"max_residual\": {worst:.2e}, \"frequencies_hz\": [{}]}}",
+                "{{\"dofs\": {}, \"assembly_s\": {t_assembly:.3}, \"analysis_s\": {:.3}, \"eigen_s\": {t_eigen:.3}, \"check_s\": {:.3}, \"symbolic_s\": {:.3}, \"factor_s\": {:.3}, \"solve_s\": {:.3}, \"orth_s\": {:.3}, \"ritz_s\": {:.3}, \"other_s\": {:.3}, \"factorizations\": {}, \"solved_vectors\": {}, \"restarts\": {}, \"reorthogonalized_blocks\": {}, \"factor_len\": {}, \"factor_flops\": {:.4e}, \"sturm_verified\": {}, \"max_residual\": {worst:.2e}, \"frequencies_hz\": [{}]}}",
                 sys.dofs.free_count(),
                 sys.analysis().map_or(0.0, |a| a.seconds()),
                 s.check_seconds,
@@ -134,6 +134,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 s.factorizations,
                 s.solved_vectors,
                 s.restarts,
+                s.reorthogonalized_blocks,
                 s.factor_len,
                 s.factor_flops,
                 modes.sturm.verified(),

@@ -1,7 +1,13 @@
 """scipy's eigsh (ARPACK, shift-invert) on femu's K.mtx and M.mtx, with the factorization of
 K - sigma M by SuperLU (scipy's default), MKL PARDISO (pypardiso) or CHOLMOD (scikit-sparse):
 
-    scipy_eigsh.py DIR COUNT SIGMA [superlu|pardiso|cholmod]
+    scipy_eigsh.py DIR COUNT SIGMA [superlu|pardiso|cholmod] [residuals]
+
+With `residuals` ARPACK also returns its eigenvectors (not in a timed run), and the line gains the
+largest relative residual `||K x - lambda M x|| / ||K x||` of the modes with strain energy (femu's
+convergence measure at its shift below the spectrum) and the largest normwise backward error of
+the zero-energy ones, to compare the solvers' work at the same residual (FEMU_TOL in
+examples/peer_modes.rs).
 
 Prints one JSON line: the frequencies, the time of the eigensolve (factorization included) and of
 the numeric factorization alone (PARDISO: with its analysis time, its factor's entries and its
@@ -64,8 +70,27 @@ else:
     else:
         raise SystemExit(f"unknown solver {solver}")
     opinv = sla.LinearOperator((n, n), matvec=solve, dtype=np.float64)
-vals = sla.eigsh(K, k=k, M=M, sigma=sigma, which="LM", OPinv=opinv, return_eigenvectors=False)
+residuals = len(sys.argv) > 5 and sys.argv[5] == "residuals"
+out = sla.eigsh(K, k=k, M=M, sigma=sigma, which="LM", OPinv=opinv, return_eigenvectors=residuals)
 dt = time.perf_counter() - t
+if residuals:
+    vals, vecs = out
+    # the 1-norms of K and M (largest absolute column sums), as femu's backward error takes them
+    k1 = abs(K).sum(axis=0).max()
+    m1 = abs(M).sum(axis=0).max()
+    rel, backward = [], []
+    for j, lam in enumerate(vals):
+        x = vecs[:, j]
+        kx, mx = K @ x, M @ x
+        r = np.linalg.norm(kx - lam * mx)
+        if np.linalg.norm(kx) <= 1e-11 * k1 * np.linalg.norm(x):
+            backward.append(r / ((k1 + abs(lam) * m1) * np.linalg.norm(x)))
+        else:
+            rel.append(r / np.linalg.norm(kx))
+    extra["max_relative_residual"] = max(rel, default=None)
+    extra["max_backward_error"] = max(backward, default=None)
+else:
+    vals = out
 f = sorted(math.sqrt(max(v, 0.0)) / (2 * math.pi) for v in vals)
 try:
     from threadpoolctl import threadpool_info

@@ -252,6 +252,10 @@ pub struct EigenStats {
     pub solved_vectors: usize,
     /// Restarts of the Lanczos iteration.
     pub restarts: usize,
+    /// Blocks of solved vectors whose single pass of Gram-Schmidt against the basis removed more
+    /// than half of a column's squared M-norm, and that were projected a second time
+    /// (docs/MATH.md, "Selective reorthogonalisation").
+    pub reorthogonalized_blocks: usize,
     /// Values stored in each factor `L` (fill).
     pub factor_len: usize,
     /// Floating-point operations of one numeric factorization (the symbolic count,
@@ -1403,6 +1407,69 @@ fn project_out(
 /// The fewest rows of a thread's part of the coefficients in [`project_out`].
 const PROJECT_ROWS: usize = 4096;
 
+/// Projects the block `w` out of the locked vectors `x` and the basis `v` (M-orthonormal, with
+/// their M images), and writes `M w` into `mw`; returns the coefficients on `v` (`v.ncols() x
+/// w.ncols()`) and whether a second pass was needed.
+///
+/// First the Lanczos recurrence: one pass of block classical Gram-Schmidt against the columns
+/// `lo..` of `v`, the only ones that hold a large part of `OP V_j` ([`coupled_from`]). Then one
+/// pass against `x` and all of `v`, which removes what the recurrence's round-off and the lost
+/// orthogonality left. That pass is repeated only where it removed more than the fraction `1 -
+/// REORTHOGONALIZE^2` of a column's squared M-norm (the criterion of Daniel, Gragg, Kaufman and
+/// Stewart, with ARPACK's constant); where it removed less, Kahan and Parlett's bound makes the
+/// column orthogonal to working precision (docs/MATH.md, "Selective reorthogonalisation"). The
+/// squared M-norm before the pass is the one after it plus the squared coefficients removed
+/// (Pythagoras in the M inner product), so the test costs no product beyond `M w`.
+fn project_block(
+    m: &SparseMatrix,
+    (x, mx): (faer::MatRef<'_, f64>, faer::MatRef<'_, f64>),
+    (v, mv): (faer::MatRef<'_, f64>, faer::MatRef<'_, f64>),
+    lo: usize,
+    mut w: faer::MatMut<'_, f64>,
+    mut mw: faer::MatMut<'_, f64>,
+) -> (Mat<f64>, bool) {
+    let len = v.ncols();
+    let mut coef = Mat::<f64>::zeros(len, w.ncols());
+    let local = project_out(
+        v.subcols(lo, len - lo),
+        mv.subcols(lo, len - lo),
+        w.as_mut(),
+    );
+    coef.subrows_mut(lo, len - lo).copy_from(&local);
+    let on_locked = project_out(x, mx, w.as_mut());
+    let on_basis = project_out(v, mv, w.as_mut());
+    coef += &on_basis;
+    crate::csc::sym_mul_mat_into(m, w.as_ref(), mw.as_mut()).expect("sizes checked");
+    let again = (0..w.ncols()).any(|j| {
+        let kept = mw.as_ref().col(j).transpose() * w.as_ref().col(j);
+        let gone = on_locked.col(j).squared_norm_l2() + on_basis.col(j).squared_norm_l2();
+        !(kept >= REORTHOGONALIZE * REORTHOGONALIZE * (kept + gone))
+    });
+    if again {
+        let _ = project_out(x, mx, w.as_mut());
+        coef += project_out(v, mv, w.as_mut());
+        crate::csc::sym_mul_mat_into(m, w.as_ref(), mw.as_mut()).expect("sizes checked");
+    }
+    (coef, again)
+}
+
+/// A block's single pass of Gram-Schmidt against the basis is repeated when a column keeps less
+/// than this fraction of its M-norm (ARPACK's `0.717`, about `1 / sqrt(2)`): Kahan and Parlett's
+/// "twice is enough" bound then no longer makes one pass orthogonal to working precision.
+const REORTHOGONALIZE: f64 = 0.717;
+
+/// The first basis column whose stored projection couples it to the columns `applied..hi` about
+/// to be expanded (`h[i][j]` nonzero, `i < applied <= j`), or `applied` when none does. By the
+/// symmetry of the projection, `v_i^T M OP v_j = h[i][j]`, and `v_i^T M OP v_j = 0` where `v_j`
+/// was made after `OP v_i` was (it is orthogonal to everything `OP v_i` spans): columns before
+/// the returned one hold only round-off of `OP V_j` (docs/MATH.md, "Selective
+/// reorthogonalisation"). After a thick restart the Ritz vectors all couple to the block: 0.
+fn coupled_from(h: &[Vec<f64>], applied: usize, hi: usize) -> usize {
+    (0..applied.min(h.len()))
+        .find(|&i| (applied..hi).any(|j| h[i].get(j).is_some_and(|v| *v != 0.0)))
+        .unwrap_or(applied)
+}
+
 /// A zero-energy pair locked before the iteration ([`Pencil::zero_energy_pairs`]): the
 /// M-normalised vector, its M image, its Rayleigh quotient and what the shifted residual at any
 /// shift needs (`||r||` with `r = K x - lambda M x`, and the inner products of `K x` and `M x`), so
@@ -1670,17 +1737,21 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             let t = Instant::now();
             let (head, mut w) = basis.split_mut(len0);
             let before: Vec<f64> = (0..block).map(|j| w.as_ref().col(j).norm_l2()).collect();
-            // block CGS2 against the locked vectors and the basis as it stands
-            let mut coef0 = Mat::<f64>::zeros(len0, block);
-            for _ in 0..2 {
-                let _ = project_out(self.x.mat(), self.mx.mat(), w.as_mut());
-                coef0 += project_out(head, mbasis.mat(), w.as_mut());
-            }
-            // the block's M images in one sparse product (the matrix is read once, not once per
-            // vector); the in-block combinations below are applied to them as to the vectors
+            // the block against the locked vectors and the basis (the recurrence's columns, one
+            // pass against all, a second only where needed), with its M images in the images'
+            // reserved columns
+            let lo = coupled_from(h, applied, hi);
             mbasis.push_zeros(block);
-            crate::csc::sym_mul_mat_into(self.pencil.m, w.as_ref(), mbasis.split_mut(len0).1)
-                .expect("sizes checked");
+            let (mhead, mw) = mbasis.split_mut(len0);
+            let (coef0, again) = project_block(
+                self.pencil.m,
+                (self.x.mat(), self.mx.mat()),
+                (head, mhead),
+                lo,
+                w.as_mut(),
+                mw,
+            );
+            stats.reorthogonalized_blocks += usize::from(again);
             // CGS2 of each column against the block's columns before it, then M-normalised
             let mut kept = 0;
             for j in 0..block {
@@ -2253,6 +2324,98 @@ mod tests {
             for b in 0..k {
                 let expected = w0[(i, b)] - (0..m).map(|a| v[(i, a)] * c[(a, b)]).sum::<f64>();
                 assert!((w[(i, b)] - expected).abs() <= 1e-12 * w0[(i, b)].abs().max(1.0));
+            }
+        }
+    }
+
+    /// [`project_block`] with a diagonal `M` (not the identity), two locked columns and eight basis
+    /// columns, M-orthonormal by construction (disjoint supports, each scaled here to unit
+    /// M-norm), the local pass on the last two. A block nearly in the span of the basis (`1e-8`
+    /// of it outside, as near an invariant subspace) loses about `eps / 1e-8` of orthogonality in
+    /// one pass: the test must ask for the second pass and end orthogonal to working precision.
+    /// A block whose large part lies on the local columns passes with one. In both, the
+    /// coefficients are the M inner products computed here by hand and `mw` is `M w`.
+    #[test]
+    fn project_block_reprojects_only_when_one_pass_cannot_be_orthogonal() {
+        let (n, classes) = (3 * PROJECT_ROWS + 17, 10);
+        let mdiag: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64).collect();
+        let mut t = sprs::TriMat::new((n, n));
+        for (i, d) in mdiag.iter().enumerate() {
+            t.add_triplet(i, i, *d);
+        }
+        let m: SparseMatrix = t.to_csc();
+        // column c of the ten lives on the rows i with i % 10 == c, with unit M-norm
+        let unit: Vec<f64> = (0..classes)
+            .map(|c| {
+                let s: f64 = (0..n).filter(|i| i % classes == c).map(|i| mdiag[i]).sum();
+                1.0 / s.sqrt()
+            })
+            .collect();
+        let cols = |from: usize, k: usize| {
+            Mat::<f64>::from_fn(n, k, |i, j| {
+                if i % classes == from + j {
+                    unit[from + j]
+                } else {
+                    0.0
+                }
+            })
+        };
+        let images =
+            |a: &Mat<f64>| Mat::<f64>::from_fn(a.nrows(), a.ncols(), |i, j| mdiag[i] * a[(i, j)]);
+        let (x, v) = (cols(0, 2), cols(2, 8));
+        let (mx, mv) = (images(&x), images(&v));
+        let generic = |i: usize, j: usize| ((i as f64) * 0.37 + (j as f64) * 1.3).sin();
+        for (outside, on_all, expect_again) in [(1e-8, true, true), (1.0, false, false)] {
+            // w0 = V C + X D + outside R: C on every basis column, or only on the local two
+            let w0 = Mat::<f64>::from_fn(n, 3, |i, j| {
+                let mut s = outside * generic(i, j);
+                for a in 0..8 {
+                    if on_all || a >= 6 {
+                        s += (1.0 + a as f64 + 3.0 * j as f64) * v[(i, a)];
+                    }
+                }
+                s + 0.5 * x[(i, 0)] - 0.25 * x[(i, 1)]
+            });
+            let mut w = w0.clone();
+            let mut mw = Mat::<f64>::zeros(n, 3);
+            let (coef, again) = project_block(
+                &m,
+                (x.as_ref(), mx.as_ref()),
+                (v.as_ref(), mv.as_ref()),
+                6,
+                w.as_mut(),
+                mw.as_mut(),
+            );
+            assert_eq!(again, expect_again, "outside {outside:e}");
+            for j in 0..3 {
+                let m_norm = (0..n)
+                    .map(|i| mdiag[i] * w[(i, j)] * w[(i, j)])
+                    .sum::<f64>()
+                    .sqrt();
+                let scale = (0..n)
+                    .map(|i| mdiag[i] * w0[(i, j)] * w0[(i, j)])
+                    .sum::<f64>()
+                    .sqrt();
+                for (name, basis) in [("locked", &x), ("basis", &v)] {
+                    for a in 0..basis.ncols() {
+                        let ip: f64 = (0..n).map(|i| basis[(i, a)] * mdiag[i] * w[(i, j)]).sum();
+                        assert!(
+                            ip.abs() <= 1e-14 * m_norm,
+                            "outside {outside:e}: column {j} against {name} {a}: {ip:e} of {m_norm:e}"
+                        );
+                    }
+                }
+                for a in 0..8 {
+                    let exact: f64 = (0..n).map(|i| v[(i, a)] * mdiag[i] * w0[(i, j)]).sum();
+                    assert!(
+                        (coef[(a, j)] - exact).abs() <= 1e-13 * scale,
+                        "outside {outside:e}: coefficient ({a}, {j}) {} against {exact}",
+                        coef[(a, j)]
+                    );
+                }
+                for i in 0..n {
+                    assert!((mw[(i, j)] - mdiag[i] * w[(i, j)]).abs() <= 1e-15 * scale);
+                }
             }
         }
     }
