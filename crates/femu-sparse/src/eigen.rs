@@ -252,8 +252,8 @@ pub struct EigenStats {
     pub solved_vectors: usize,
     /// Restarts of the Lanczos iteration.
     pub restarts: usize,
-    /// Blocks of solved vectors whose single pass of Gram-Schmidt against the basis removed more
-    /// than half of a column's squared M-norm, and that were projected a second time
+    /// Blocks of solved vectors in which a column kept less than `0.717` of its M-norm in the
+    /// single pass of Gram-Schmidt against the basis, and that were projected a second time
     /// (docs/MATH.md, "Selective reorthogonalisation").
     pub reorthogonalized_blocks: usize,
     /// Values stored in each factor `L` (fill).
