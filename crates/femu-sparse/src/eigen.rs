@@ -1327,28 +1327,9 @@ impl Columns {
     /// that row of `V`), on the rayon threads: no copy of the basis is held (docs/SCALING.md,
     /// "Memory").
     fn rotate_front(&mut self, m: usize, s: faer::MatRef<'_, f64>) {
-        fn rows(v: faer::MatMut<'_, f64>, s: faer::MatRef<'_, f64>) {
-            const ROWS: usize = 4096;
-            if v.nrows() > ROWS {
-                let half = v.nrows() / 2;
-                let (top, bottom) = v.split_at_row_mut(half);
-                rayon::join(|| rows(top, s), || rows(bottom, s));
-                return;
-            }
-            let mut t = Mat::<f64>::zeros(v.nrows(), s.ncols());
-            faer::linalg::matmul::matmul(
-                t.as_mut(),
-                faer::Accum::Replace,
-                v.as_ref(),
-                s,
-                1.0,
-                faer::Par::Seq,
-            );
-            v.subcols_mut(0, s.ncols()).copy_from(&t);
-        }
         let (n, k) = (self.n, s.ncols());
         debug_assert!(s.nrows() == m && k <= m && m <= self.len());
-        rows(
+        right_multiply_in_place(
             faer::MatMut::from_column_major_slice_mut(&mut self.data[..m * n], n, m),
             s,
         );
@@ -1358,53 +1339,164 @@ impl Columns {
 
 /// `w -= v c` with `c = mv^T w`: one pass of block classical Gram-Schmidt of the columns of `w`
 /// against the `M`-orthonormal columns of `v` (whose `M` images are `mv`), as two GEMMs; returns
-/// `c`.
-///
-/// faer's GEMM does not split the long inner dimension of `mv^T w` (`n` rows against a few
-/// columns) between threads, so the rows are split here, [`PROJECT_ROWS`] or more per thread,
-/// each part's coefficients computed on one thread and the parts added in order (the same sum
-/// for the same number of threads). Coefficients of the 199,200-DOF plate's 20-mode solve
-/// 0.27-0.28 s -> 0.15-0.17 s (docs/SCALING.md, "Sparse products by blocks of known width").
+/// `c` (by [`inner_products`]).
 fn project_out(
     v: faer::MatRef<'_, f64>,
     mv: faer::MatRef<'_, f64>,
     w: faer::MatMut<'_, f64>,
 ) -> Mat<f64> {
+    if v.ncols() == 0 {
+        return Mat::<f64>::zeros(0, w.ncols());
+    }
+    let c = inner_products(mv, w.as_ref());
+    let par = faer::get_global_parallelism();
+    faer::linalg::matmul::matmul(w, faer::Accum::Add, v, c.as_ref(), -1.0, par);
+    c
+}
+
+/// `a^T b` for two tall matrices of `n` rows and a few columns.
+///
+/// faer's GEMM does not split the long inner dimension (`n` rows against a few columns) between
+/// threads, so the rows are split here, [`PROJECT_ROWS`] or more per thread, each part's
+/// products computed on one thread and the parts added in order (the same sum for the same
+/// number of threads). Coefficients of the 199,200-DOF plate's 20-mode solve 0.27-0.28 s ->
+/// 0.15-0.17 s (docs/SCALING.md, "Sparse products by blocks of known width").
+fn inner_products(a: faer::MatRef<'_, f64>, b: faer::MatRef<'_, f64>) -> Mat<f64> {
     use faer::Accum;
     use faer::linalg::matmul::matmul;
     let par = faer::get_global_parallelism();
-    let mut c = Mat::<f64>::zeros(v.ncols(), w.ncols());
-    if v.ncols() == 0 {
-        return c;
-    }
-    let n = w.nrows();
+    let n = b.nrows();
     let parts = rayon::current_num_threads().min(n / PROJECT_ROWS).max(1);
     let size = n.div_ceil(parts);
-    let wr = w.as_ref();
     let partial: Vec<Mat<f64>> = (0..parts)
         .into_par_iter()
         .map(|p| {
             let (lo, len) = (p * size, size.min(n - p * size));
-            let mut part = Mat::<f64>::zeros(v.ncols(), wr.ncols());
+            let mut part = Mat::<f64>::zeros(a.ncols(), b.ncols());
             matmul(
                 part.as_mut(),
                 Accum::Replace,
-                mv.subrows(lo, len).transpose(),
-                wr.subrows(lo, len),
+                a.subrows(lo, len).transpose(),
+                b.subrows(lo, len),
                 1.0,
                 if parts == 1 { par } else { faer::Par::Seq },
             );
             part
         })
         .collect();
+    let mut c = Mat::<f64>::zeros(a.ncols(), b.ncols());
     for part in partial {
         c += part;
     }
-    matmul(w, Accum::Add, v, c.as_ref(), -1.0, par);
     c
 }
 
-/// The fewest rows of a thread's part of the coefficients in [`project_out`].
+/// `v <- v s` in place (`s` is `m x k` for `v`'s `m` columns, `k <= m`; the result is the first
+/// `k` columns of `v`), by blocks of rows on the rayon threads: each row of `v s` needs only that
+/// row of `v`, so no second copy of `v` is held.
+fn right_multiply_in_place(v: faer::MatMut<'_, f64>, s: faer::MatRef<'_, f64>) {
+    const ROWS: usize = 4096;
+    if v.nrows() > ROWS {
+        let half = v.nrows() / 2;
+        let (top, bottom) = v.split_at_row_mut(half);
+        rayon::join(
+            || right_multiply_in_place(top, s),
+            || right_multiply_in_place(bottom, s),
+        );
+        return;
+    }
+    let mut t = Mat::<f64>::zeros(v.nrows(), s.ncols());
+    faer::linalg::matmul::matmul(
+        t.as_mut(),
+        faer::Accum::Replace,
+        v.as_ref(),
+        s,
+        1.0,
+        faer::Par::Seq,
+    );
+    v.subcols_mut(0, s.ncols()).copy_from(&t);
+}
+
+/// The upper triangular `R` with `R^T R = g` (`g` symmetric, the mean of its two triangles), or
+/// `None` when a pivot is not above `rel^2` times its diagonal entry of `g` (the column is
+/// dependent on the ones before it to that measure) or `g` is not finite.
+fn small_cholesky(g: &Mat<f64>, rel: f64) -> Option<Mat<f64>> {
+    let k = g.nrows();
+    let mut r = Mat::<f64>::zeros(k, k);
+    for j in 0..k {
+        let d = g[(j, j)] - (0..j).map(|i| r[(i, j)] * r[(i, j)]).sum::<f64>();
+        if !(g[(j, j)] > 0.0 && g[(j, j)].is_finite() && d > rel * rel * g[(j, j)]) {
+            return None;
+        }
+        r[(j, j)] = d.sqrt();
+        for c in j + 1..k {
+            let e =
+                0.5 * (g[(j, c)] + g[(c, j)]) - (0..j).map(|i| r[(i, j)] * r[(i, c)]).sum::<f64>();
+            r[(j, c)] = e / r[(j, j)];
+        }
+    }
+    Some(r)
+}
+
+/// The inverse of an upper triangular matrix with a nonzero diagonal.
+fn upper_inverse(r: &Mat<f64>) -> Mat<f64> {
+    let k = r.nrows();
+    let mut inv = Mat::<f64>::zeros(k, k);
+    for c in 0..k {
+        inv[(c, c)] = 1.0 / r[(c, c)];
+        for i in (0..c).rev() {
+            let s: f64 = (i + 1..=c).map(|l| r[(i, l)] * inv[(l, c)]).sum();
+            inv[(i, c)] = -s / r[(i, i)];
+        }
+    }
+    inv
+}
+
+/// M-orthonormalises the columns of a block `w` (already M-orthogonal to the basis and the
+/// locked vectors) with their `M` images `mw` by Cholesky QR, twice (CholQR2): `G = mw^T w`,
+/// `G = R^T R`, `w <- w R^-1`, `mw <- mw R^-1` (the images follow by linearity, no sparse
+/// product), then once more. Returns the upper triangular `R` of `w = Q R` (the product of the
+/// two passes'), which holds the coefficients a Gram-Schmidt of each column against the ones
+/// before it would find (docs/MATH.md, "Selective reorthogonalisation").
+///
+/// `None`, with `w` and `mw` as they were, when the block is near dependence: a column whose
+/// Euclidean norm fell below `1e-8` of its norm before the projection (`before`), or whose part
+/// independent of the columns before it is below `1e-5` of its M-norm. CholQR2 is accurate to
+/// round-off for blocks conditioned below about `1e7`; those nearer breakdown take the
+/// vector-by-vector path, which replaces a vanished column by a random one.
+fn cholesky_qr2(
+    mut w: faer::MatMut<'_, f64>,
+    mut mw: faer::MatMut<'_, f64>,
+    before: &[f64],
+) -> Option<Mat<f64>> {
+    let k = w.ncols();
+    if (0..k).any(|j| !(w.as_ref().col(j).norm_l2() > 1e-8 * before[j])) {
+        return None;
+    }
+    let g = inner_products(mw.as_ref(), w.as_ref());
+    let r1 = small_cholesky(&g, 1e-5)?;
+    let inv1 = upper_inverse(&r1);
+    right_multiply_in_place(w.as_mut(), inv1.as_ref());
+    right_multiply_in_place(mw.as_mut(), inv1.as_ref());
+    let g2 = inner_products(mw.as_ref(), w.as_ref());
+    match small_cholesky(&g2, 0.5) {
+        Some(r2) => {
+            let inv2 = upper_inverse(&r2);
+            right_multiply_in_place(w.as_mut(), inv2.as_ref());
+            right_multiply_in_place(mw.as_mut(), inv2.as_ref());
+            Some(&r2 * &r1)
+        }
+        None => {
+            // not reached after a first pass that met its bound (`g2` is then the identity to
+            // about 1e-6); undone all the same, for the vector-by-vector path
+            right_multiply_in_place(w, r1.as_ref());
+            right_multiply_in_place(mw, r1.as_ref());
+            None
+        }
+    }
+}
+
+/// The fewest rows of a thread's part in [`inner_products`].
 const PROJECT_ROWS: usize = 4096;
 
 /// Projects the block `w` out of the locked vectors `x` and the basis `v` (M-orthonormal, with
@@ -1700,8 +1792,8 @@ impl<'p, 'a> Lanczos<'p, 'a> {
 
     /// Applies `OP` to the basis vectors `applied..` block by block until `max_basis` columns have
     /// their image, extending the basis; returns the new `applied`. Each block of solved vectors
-    /// is projected out of the locked vectors and the basis by GEMMs (block CGS2), then
-    /// orthonormalised within itself.
+    /// is projected out of the locked vectors and the basis by GEMMs ([`project_block`]), then
+    /// orthonormalised within itself ([`cholesky_qr2`], or column by column near dependence).
     fn expand(
         &mut self,
         basis: &mut Columns,
@@ -1752,7 +1844,26 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                 mw,
             );
             stats.reorthogonalized_blocks += usize::from(again);
-            // CGS2 of each column against the block's columns before it, then M-normalised
+            // the block within itself: by CholQR2 when it is well conditioned and fits
+            let qr = if len0 + block <= cap {
+                let (_, w) = basis.split_mut(len0);
+                let (_, mw) = mbasis.split_mut(len0);
+                cholesky_qr2(w, mw, &before)
+            } else {
+                None
+            };
+            if let Some(r) = qr {
+                for j in 0..block {
+                    let mut coef: Vec<f64> = coef0.col(j).iter().copied().collect();
+                    coef.extend((0..=j).map(|i| r[(i, j)]));
+                    h.push(coef);
+                }
+                applied = hi;
+                stats.orthogonalization_seconds += t.elapsed().as_secs_f64();
+                continue;
+            }
+            // near dependence: CGS2 of each column against the block's columns before it, then
+            // M-normalised, a vanished column replaced
             let mut kept = 0;
             for j in 0..block {
                 let mut coef: Vec<f64> = coef0.col(j).iter().copied().collect();
@@ -2296,6 +2407,99 @@ mod tests {
     /// [`project_out`] on more rows than one thread's part (so that, with two or more threads,
     /// the coefficients are summed from parts): against the coefficients `v^T w` and the
     /// projected block computed here by hand, with `M = I` (`mv = v`).
+    fn gram_schmidt_m(w: &Mat<f64>, m: &[f64]) -> (Mat<f64>, Mat<f64>) {
+        let (n, k) = (w.nrows(), w.ncols());
+        let mut q = w.clone();
+        let mut r = Mat::<f64>::zeros(k, k);
+        let m_dot = |a: &Mat<f64>, i: usize, b: &Mat<f64>, j: usize| -> f64 {
+            (0..n).map(|p| a[(p, i)] * m[p] * b[(p, j)]).sum()
+        };
+        for j in 0..k {
+            // modified Gram-Schmidt, twice
+            for _ in 0..2 {
+                for i in 0..j {
+                    let c = m_dot(&q, i, &q, j);
+                    r[(i, j)] += c;
+                    for p in 0..n {
+                        q[(p, j)] -= c * q[(p, i)];
+                    }
+                }
+            }
+            let nrm = m_dot(&q, j, &q, j).sqrt();
+            r[(j, j)] = nrm;
+            for p in 0..n {
+                q[(p, j)] /= nrm;
+            }
+        }
+        (q, r)
+    }
+
+    /// [`cholesky_qr2`] against the Gram-Schmidt above: the same `R` and `Q`, `Q` M-orthonormal
+    /// to round-off and its images `M Q`, on blocks conditioned from about 1 to about 1e4 (rows
+    /// split between threads); and a dependent or vanished column declined with the block left
+    /// as it was.
+    #[test]
+    fn cholesky_qr2_matches_an_m_gram_schmidt_and_declines_dependent_blocks() {
+        let (n, k) = (2 * PROJECT_ROWS + 9, 4);
+        let m: Vec<f64> = (0..n).map(|i| 1.0 + (i % 7) as f64 * 0.5).collect();
+        let images = |w: &Mat<f64>| Mat::<f64>::from_fn(n, w.ncols(), |i, j| m[i] * w[(i, j)]);
+        for closeness in [1.0, 1e-2, 1e-4] {
+            let mut w = Mat::<f64>::from_fn(n, k, |i, j| {
+                ((i * 5 + j * 13 + (i * j) % 11) % 17) as f64 - 8.0
+            });
+            // the last column near the first: the block's condition grows as 1 / closeness
+            for i in 0..n {
+                w[(i, k - 1)] = w[(i, 0)] + closeness * w[(i, k - 1)];
+            }
+            let (q_ref, r_ref) = gram_schmidt_m(&w, &m);
+            let before: Vec<f64> = (0..k).map(|j| w.col(j).norm_l2()).collect();
+            let mut q = w.clone();
+            let mut mq = images(&w);
+            let r =
+                cholesky_qr2(q.as_mut(), mq.as_mut(), &before).expect("a well-conditioned block");
+            let scale = r_ref[(0, 0)];
+            for i in 0..k {
+                for j in 0..k {
+                    let expected = if i <= j { r_ref[(i, j)] } else { 0.0 };
+                    assert!(
+                        (r[(i, j)] - expected).abs() <= 1e-12 * scale,
+                        "closeness {closeness}: R[{i}, {j}] = {} against {expected}",
+                        r[(i, j)]
+                    );
+                }
+            }
+            let exact_images = images(&q);
+            for j in 0..k {
+                for i in 0..k {
+                    let g: f64 = (0..n).map(|p| q[(p, i)] * m[p] * q[(p, j)]).sum();
+                    let expected = if i == j { 1.0 } else { 0.0 };
+                    assert!(
+                        (g - expected).abs() <= 1e-13,
+                        "closeness {closeness}: (Q^T M Q)[{i}, {j}] = {g}"
+                    );
+                }
+                for p in 0..n {
+                    // Q agrees with the Gram-Schmidt's to the block's condition times round-off
+                    assert!((q[(p, j)] - q_ref[(p, j)]).abs() <= 1e-15 / closeness * 1e3);
+                    assert!((mq[(p, j)] - exact_images[(p, j)]).abs() <= 1e-13);
+                }
+            }
+        }
+        // a dependent column, and a column that vanished in the projection: declined, untouched
+        let w = Mat::<f64>::from_fn(n, k, |i, j| match j {
+            2 => 2.0 * ((i % 13) as f64 - 6.0) - ((i % 5) as f64),
+            0 => (i % 13) as f64 - 6.0,
+            1 => -((i % 5) as f64),
+            _ => ((i * 7) % 3) as f64,
+        });
+        for before in [vec![1.0; k], vec![1.0, 1.0, 1.0, 1e12]] {
+            let (mut q, mut mq) = (w.clone(), images(&w));
+            let mq0 = mq.clone();
+            assert!(cholesky_qr2(q.as_mut(), mq.as_mut(), &before).is_none());
+            assert!(q == w && mq == mq0);
+        }
+    }
+
     #[test]
     fn project_out_matches_the_hand_computed_projection() {
         let (n, m, k) = (3 * PROJECT_ROWS + 17, 7, 4);
