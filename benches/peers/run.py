@@ -9,7 +9,11 @@ Prints a JSON line per tool and a table: wall time of the whole command (femu as
 model; the peers read K and M from MatrixMarket files, which at 200k DOF takes seconds), the time
 of the eigensolve alone (factorizations included, as each tool reports it), peak memory, the
 ratios to femu's, and the largest relative frequency difference against femu. `run.sh` installs the peers first. Environment: PEER_TIMEOUT (seconds,
-default 3600) stops a peer and reports a lower bound; PEERS selects peers (default
+default 3600) stops a peer and reports a lower bound; PEER_ROUNDS (default 1) runs femu and every
+peer that many times, one after the other in rounds, and reports each tool's median time, its
+range, its largest peak, and the fastest peer's ratio to femu within each round (median and
+range): on a machine whose times move by tens of per cent from run to run, one round's ratio
+is good to about 0.1-0.2; PEERS selects peers (default
 "calculix,eigsh+pardiso,eigsh+cholmod,slepc+mumps:1,slepc+mumps:2"; "eigsh+superlu" is scipy's
 default factorization). PEERS_PYTHON: the Python with scipy, pypardiso, scikit-sparse and
 threadpoolctl (run.sh makes a venv).
@@ -62,19 +66,7 @@ def main():
     d = tempfile.mkdtemp(prefix=f"femu-peers-{kind}-{n}-")
     info = json.loads(subprocess.run([EXE, "export", kind, str(n), str(count), d], capture_output=True, text=True, check=True).stdout)
     dofs = info["dofs"]
-    code, out, femu_wall, rss = timed([EXE, "solve", kind, str(n), str(count)], d, limit)
-    femu = json.loads(out)
-    # the factorizations' rate: the symbolic flop count of one, times their number, over their time
-    femu_rate = femu["factorizations"] * femu["factor_flops"] / femu["factor_s"] * 1e-9
-    print(json.dumps({"kind": kind, "dofs": dofs, "tool": "femu", "wall_s": femu_wall, "rss_mb": rss, **femu}), flush=True)
-    print(f"{kind} {dofs} DOF: femu     wall {femu_wall:8.2f} s, peak {rss:8.0f} MB "
-          f"(assembly {femu['assembly_s']} s with the ordering+symbolic analysis beside it ({femu.get('analysis_s', 0)} s), input checks {femu.get('check_s', 0)} s, "
-          f"ordering+symbolic in the solve {femu['symbolic_s']} s, factor {femu['factor_s']} s x{femu['factorizations']} "
-          f"({femu_rate:.1f} GFLOP/s of {femu['factor_flops'] * 1e-9:.1f} GFLOP each), "
-          f"solves {femu['solve_s']} s for {femu['solved_vectors']} vectors, orthogonalisation {femu['orth_s']} s, "
-          f"Rayleigh-Ritz and checks {femu['ritz_s']} s, other {femu['other_s']} s), "
-          f"Sturm verified {femu['sturm_verified']}", flush=True)
-    ref = femu["frequencies_hz"]
+    rounds = max(1, int(os.environ.get("PEER_ROUNDS", "1")))
     script = lambda name: os.path.join(ROOT, "benches", "peers", name)
     venv = os.environ.get("PEERS_PYTHON", sys.executable)
     debian = "/usr/bin/python3"  # petsc4py and slepc4py from Debian's packages
@@ -96,55 +88,104 @@ def main():
             petsc_env[var] = versions[-1]
     if any(t.startswith("slepc") for t in wanted):
         subprocess.run([debian, script("slepc_eigs.py"), "convert", d], check=True, env=dict(os.environ, **petsc_env))
-    rows = [("femu", femu_wall, rss, femu["eigen_s"], f"{femu['factorizations']} factorizations, {femu['solved_vectors']} solved vectors, Sturm verified {femu['sturm_verified']}")]
-    for tool, cmd in peers:
-        if tool not in wanted:
-            continue
-        # one BLAS thread per MPI rank, two threads otherwise (the machine has two cores)
-        threads = "1" if tool == "slepc+mumps:2" else "2"
-        env = dict(os.environ, OMP_NUM_THREADS=threads, OPENBLAS_NUM_THREADS=threads, MKL_NUM_THREADS=threads)
-        if tool.startswith("slepc"):
-            env.update(petsc_env)
-        code, out, wall, rss = timed(cmd, d, limit, env)
-        if code is None:
-            print(f"{kind} {dofs} DOF: {tool:14s} stopped after {wall:.0f} s at {rss:.0f} MB without finishing", flush=True)
-            continue
-        info = {}
-        if tool == "calculix":
-            f = ccx_frequencies(os.path.join(d, "model.dat")) if code == 0 else []
+    # runs[tool] = [(wall, rss, eigensolve, note)], one per round; femu first in every round
+    runs = {}
+    ref = None
+    for r in range(rounds):
+        code, out, femu_wall, rss = timed([EXE, "solve", kind, str(n), str(count)], d, limit)
+        femu = json.loads(out)
+        # the factorizations' rate: the symbolic flop count of one, times their number, over their time
+        femu_rate = femu["factorizations"] * femu["factor_flops"] / femu["factor_s"] * 1e-9
+        print(json.dumps({"kind": kind, "dofs": dofs, "tool": "femu", "round": r + 1, "wall_s": femu_wall, "rss_mb": rss, **femu}), flush=True)
+        print(f"{kind} {dofs} DOF: femu     wall {femu_wall:8.2f} s, peak {rss:8.0f} MB "
+              f"(assembly {femu['assembly_s']} s with the ordering+symbolic analysis beside it ({femu.get('analysis_s', 0)} s), input checks {femu.get('check_s', 0)} s, "
+              f"ordering+symbolic in the solve {femu['symbolic_s']} s, factor {femu['factor_s']} s x{femu['factorizations']} "
+              f"({femu_rate:.1f} GFLOP/s of {femu['factor_flops'] * 1e-9:.1f} GFLOP each), "
+              f"solves {femu['solve_s']} s for {femu['solved_vectors']} vectors, orthogonalisation {femu['orth_s']} s, "
+              f"Rayleigh-Ritz and checks {femu['ritz_s']} s, other {femu['other_s']} s), "
+              f"Sturm verified {femu['sturm_verified']}", flush=True)
+        if ref is None:
+            ref = femu["frequencies_hz"]
         else:
-            info = json.loads(out.strip().splitlines()[-1]) if code == 0 else {}
-            f = info.get("frequencies_hz", [])
-        diff = max((abs(a - b) / b for a, b in zip(f, ref) if b > 1e-3 * ref[-1]), default=float("nan"))
-        note = f"max rel. frequency difference to femu {diff:.1e}"
-        if info.get("factor_s"):
-            note += f", factorization {info['factor_s']:.2f} s"
-        if info.get("factor_gflop"):
-            # PARDISO's numeric factorization alone, at its own flop count, beside femu's rate
-            note += (f" (numeric, {info['factor_gflop'] / info['factor_s']:.1f} GFLOP/s of its {info['factor_gflop']:.1f} GFLOP, "
-                     f"{info['factor_nnz'] / 1e6:.1f}M entries; femu {femu_rate:.1f} GFLOP/s of {femu['factor_flops'] * 1e-9:.1f}, "
-                     f"{femu['factor_len'] / 1e6:.1f}M; analysis {info['analysis_s']:.2f} s)")
-        if info.get("applications"):
-            note += f", {info['applications']} solves"
-        if info.get("blas"):
-            note += f", BLAS: {'; '.join(info['blas'])}"
-        if code != 0 or len(f) < len(ref):
-            note = f"failed (exit {code}): {out.strip()[-300:]}"
-        print(json.dumps({"kind": kind, "dofs": dofs, "tool": tool, "wall_s": wall, "rss_mb": rss, "ok": code == 0, "max_rel_diff": diff, **{k: v for k, v in info.items() if k != "frequencies_hz"}}), flush=True)
-        rows.append((tool, wall, rss, info.get("eigen_s"), note))
-    ok = [r for r in rows[1:] if not r[4].startswith("failed")]
-    fastest = min((r[1] for r in ok), default=float("nan"))
-    fastest_solve = min((r[3] for r in ok if r[3]), default=float("nan"))
+            moved = max(abs(a - b) / b for a, b in zip(femu["frequencies_hz"], ref) if b > 1e-3 * ref[-1])
+            if moved > 1e-12:
+                print(f"femu's frequencies in round {r + 1} differ from round 1's by {moved:.1e}", flush=True)
+        runs.setdefault("femu", []).append((femu_wall, rss, femu["eigen_s"], f"{femu['factorizations']} factorizations, {femu['solved_vectors']} solved vectors, Sturm verified {femu['sturm_verified']}"))
+        for tool, cmd in peers:
+            if tool not in wanted:
+                continue
+            # one BLAS thread per MPI rank, two threads otherwise (the machine has two cores)
+            threads = "1" if tool == "slepc+mumps:2" else "2"
+            env = dict(os.environ, OMP_NUM_THREADS=threads, OPENBLAS_NUM_THREADS=threads, MKL_NUM_THREADS=threads)
+            if tool.startswith("slepc"):
+                env.update(petsc_env)
+            code, out, wall, rss = timed(cmd, d, limit, env)
+            if code is None:
+                print(f"{kind} {dofs} DOF: {tool:14s} stopped after {wall:.0f} s at {rss:.0f} MB without finishing", flush=True)
+                runs.setdefault(tool, []).append((wall, rss, None, f"failed (stopped after {wall:.0f} s, a lower bound)"))
+                continue
+            info = {}
+            if tool == "calculix":
+                f = ccx_frequencies(os.path.join(d, "model.dat")) if code == 0 else []
+            else:
+                info = json.loads(out.strip().splitlines()[-1]) if code == 0 else {}
+                f = info.get("frequencies_hz", [])
+            diff = max((abs(a - b) / b for a, b in zip(f, ref) if b > 1e-3 * ref[-1]), default=float("nan"))
+            note = f"max rel. frequency difference to femu {diff:.1e}"
+            if info.get("factor_s"):
+                note += f", factorization {info['factor_s']:.2f} s"
+            if info.get("factor_gflop"):
+                # PARDISO's numeric factorization alone, at its own flop count, beside femu's rate
+                note += (f" (numeric, {info['factor_gflop'] / info['factor_s']:.1f} GFLOP/s of its {info['factor_gflop']:.1f} GFLOP, "
+                         f"{info['factor_nnz'] / 1e6:.1f}M entries; femu {femu_rate:.1f} GFLOP/s of {femu['factor_flops'] * 1e-9:.1f}, "
+                         f"{femu['factor_len'] / 1e6:.1f}M; analysis {info['analysis_s']:.2f} s)")
+            if info.get("applications"):
+                note += f", {info['applications']} solves"
+            if info.get("blas"):
+                note += f", BLAS: {'; '.join(info['blas'])}"
+            if code != 0 or len(f) < len(ref):
+                note = f"failed (exit {code}): {out.strip()[-300:]}"
+            print(json.dumps({"kind": kind, "dofs": dofs, "tool": tool, "round": r + 1, "wall_s": wall, "rss_mb": rss, "ok": code == 0, "max_rel_diff": diff, **{k: v for k, v in info.items() if k != "frequencies_hz"}}), flush=True)
+            runs.setdefault(tool, []).append((wall, rss, info.get("eigen_s"), note))
+    median = lambda xs: sorted(xs)[len(xs) // 2] if len(xs) % 2 else 0.5 * sum(sorted(xs)[len(xs) // 2 - 1:len(xs) // 2 + 1])
+    good = {t: [x for x in v if not x[3].startswith("failed")] for t, v in runs.items()}
+    # the fastest peer over femu within each round (a peer that failed or stopped in a round is
+    # left out of that round)
+    ratios, solve_ratios = [], []
+    for r in range(rounds):
+        femu_r = runs["femu"][r]
+        peer_r = [v[r] for t, v in runs.items() if t != "femu" and len(v) > r and not v[r][3].startswith("failed")]
+        if peer_r:
+            ratios.append(min(x[0] for x in peer_r) / femu_r[0])
+            solves = [x[2] for x in peer_r if x[2]]
+            if solves:
+                solve_ratios.append(min(solves) / femu_r[2])
+    spread = lambda xs: f" (median of {len(xs)} rounds, {min(xs):.2f}-{max(xs):.2f})" if len(xs) > 1 else ""
+    fmt = lambda xs: f"{median(xs):.2f}x{spread(xs)}" if xs else "nan"
     print(f"\n{kind}, {dofs} DOF, {count} lowest modes (sigma {SIGMA:g} s^-2 for the peers); fastest peer / femu: "
-          f"{fastest / femu_wall:.2f}x in wall time, {fastest_solve / femu['eigen_s']:.2f}x in eigensolve time\n")
+          f"{fmt(ratios)} in wall time, {fmt(solve_ratios)} in eigensolve time\n")
     print("| tool | wall (s) | eigensolve (s) | peak RSS (MB) | wall / femu's | eigensolve / femu's | notes |")
     print("|---|---|---|---|---|---|---|")
-    for tool, wall, mb, solve, note in rows:
-        failed = note.startswith("failed")
-        ratio = "-" if failed else f"{wall / femu_wall:.2f}"
-        sr = f"{solve / femu['eigen_s']:.2f}" if solve and not failed else "-"
+    femu_wall = median([x[0] for x in good["femu"]])
+    femu_solve = median([x[2] for x in good["femu"]])
+    for tool, all_runs in runs.items():
+        ok_runs = good[tool]
+        if not ok_runs:
+            print(f"| {tool} | - | - | - | - | - | {all_runs[0][3]} |")
+            continue
+        wall = median([x[0] for x in ok_runs])
+        mb = max(x[1] for x in ok_runs)
+        solves = [x[2] for x in ok_runs if x[2]]
+        solve = median(solves) if solves else None
+        note = ok_runs[0][3]
+        if len(ok_runs) > 1:
+            walls = [x[0] for x in ok_runs]
+            note += f"; wall {min(walls):.{2 if max(walls) < 10 else 1}f}-{max(walls):.{2 if max(walls) < 10 else 1}f} s over {len(ok_runs)} rounds"
+        if len(ok_runs) < len(all_runs):
+            note += f"; {len(all_runs) - len(ok_runs)} round(s) failed"
+        sr = f"{solve / femu_solve:.2f}" if solve else "-"
         st = f"{solve:.1f}" if solve else "-"
-        print(f"| {tool} | {wall:.1f} | {st} | {mb:.0f} | {ratio} | {sr} | {note} |")
+        print(f"| {tool} | {wall:.1f} | {st} | {mb:.0f} | {wall / femu_wall:.2f} | {sr} | {note} |")
     print(flush=True)
     # the exported decks and matrices (about 1 GB at 200k DOF); PEERS_KEEP=1 keeps them
     if not os.environ.get("PEERS_KEEP"):
