@@ -1854,80 +1854,98 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             } else {
                 None
             };
-            if let Some(r) = qr {
-                for j in 0..block {
-                    let mut coef: Vec<f64> = coef0.col(j).iter().copied().collect();
-                    coef.extend((0..=j).map(|i| r[(i, j)]));
-                    h.push(coef);
-                }
-                applied = hi;
-                stats.orthogonalization_seconds += t.elapsed().as_secs_f64();
-                continue;
-            }
-            // near dependence: CGS2 of each column against the block's columns before it, then
-            // M-normalised, a vanished column replaced
-            let mut kept = 0;
-            for j in 0..block {
-                let mut coef: Vec<f64> = coef0.col(j).iter().copied().collect();
-                let (_, mut w) = basis.split_mut(len0);
-                let (_, mut mw) = mbasis.split_mut(len0);
-                let (done, mut rest) = w.as_mut().split_at_col_mut(j);
-                let mut inner = Mat::<f64>::zeros(kept, 1);
-                for _ in 0..2 {
-                    inner += project_out(
-                        done.as_ref().subcols(0, kept),
-                        mw.as_ref().subcols(0, kept),
-                        rest.as_mut().subcols_mut(0, 1),
-                    );
-                }
-                let (mdone, mut mrest) = mw.as_mut().split_at_col_mut(j);
-                faer::linalg::matmul::matmul(
-                    mrest.as_mut().subcols_mut(0, 1),
-                    faer::Accum::Add,
-                    mdone.as_ref().subcols(0, kept),
-                    inner.as_ref(),
-                    -1.0,
-                    faer::get_global_parallelism(),
-                );
-                coef.extend(inner.col(0).iter().copied());
-                if len0 + kept >= cap {
-                    // the basis spans the space: the column is not kept (nor any after it)
-                    h.push(coef);
-                    continue;
-                }
-                let col = rest.col_mut(0).try_as_col_major_mut().expect("contiguous");
-                let mcol = mrest.col_mut(0).try_as_col_major_mut().expect("contiguous");
-                let (col, mcol) = (col.as_slice_mut(), mcol.as_slice_mut());
-                let nrm = match Self::usable_norm(col, mcol, before[j]) {
-                    Some(nrm) => {
-                        scale_in_place(col, nrm);
-                        scale_in_place(mcol, nrm);
-                        nrm
+            match qr {
+                Some(r) => {
+                    for j in 0..block {
+                        let mut coef: Vec<f64> = coef0.col(j).iter().copied().collect();
+                        coef.extend((0..=j).map(|i| r[(i, j)]));
+                        h.push(coef);
                     }
-                    None => {
-                        let broken = (col.to_vec(), mcol.to_vec());
-                        let (r, mr, nrm) = self.replacement(basis, mbasis, len0 + j, broken);
-                        // in the broken column's place
-                        let slot = (len0 + j) * self.n..(len0 + j + 1) * self.n;
-                        for (to, from) in [(&mut basis.data, &r), (&mut mbasis.data, &mr)] {
-                            to[slot.clone()]
-                                .iter_mut()
-                                .zip(from)
-                                .for_each(|(t, v)| *t = v / nrm);
-                        }
-                        0.0
-                    }
-                };
-                coef.push(nrm);
-                h.push(coef);
-                kept += 1;
+                }
+                None => self.orthonormalise_by_columns(basis, mbasis, h, &coef0, &before),
             }
-            basis.truncate(len0 + kept);
-            mbasis.truncate(len0 + kept);
             applied = hi;
             stats.orthogonalization_seconds += t.elapsed().as_secs_f64();
         }
         applied
+    }
+
+    /// The block in the basis's columns from `len0 = coef0.nrows()` on (projected out of the
+    /// locked vectors and the basis with coefficients `coef0`, its Euclidean norms before that
+    /// `before`), near dependence: each column Gram-Schmidted twice against the block's columns
+    /// before it and M-normalised, a vanished column replaced by a random one
+    /// ([`Lanczos::replacement`]), a column beyond the space's dimension dropped; each column's
+    /// coefficients pushed to `h`. The path of a block that [`cholesky_qr2`] declines.
+    fn orthonormalise_by_columns(
+        &mut self,
+        basis: &mut Columns,
+        mbasis: &mut Columns,
+        h: &mut Vec<Vec<f64>>,
+        coef0: &Mat<f64>,
+        before: &[f64],
+    ) {
+        let (len0, block) = (coef0.nrows(), coef0.ncols());
+        let cap = self.n - self.values.len();
+        // near dependence: CGS2 of each column against the block's columns before it, then
+        // M-normalised, a vanished column replaced
+        let mut kept = 0;
+        for j in 0..block {
+            let mut coef: Vec<f64> = coef0.col(j).iter().copied().collect();
+            let (_, mut w) = basis.split_mut(len0);
+            let (_, mut mw) = mbasis.split_mut(len0);
+            let (done, mut rest) = w.as_mut().split_at_col_mut(j);
+            let mut inner = Mat::<f64>::zeros(kept, 1);
+            for _ in 0..2 {
+                inner += project_out(
+                    done.as_ref().subcols(0, kept),
+                    mw.as_ref().subcols(0, kept),
+                    rest.as_mut().subcols_mut(0, 1),
+                );
+            }
+            let (mdone, mut mrest) = mw.as_mut().split_at_col_mut(j);
+            faer::linalg::matmul::matmul(
+                mrest.as_mut().subcols_mut(0, 1),
+                faer::Accum::Add,
+                mdone.as_ref().subcols(0, kept),
+                inner.as_ref(),
+                -1.0,
+                faer::get_global_parallelism(),
+            );
+            coef.extend(inner.col(0).iter().copied());
+            if len0 + kept >= cap {
+                // the basis spans the space: the column is not kept (nor any after it)
+                h.push(coef);
+                continue;
+            }
+            let col = rest.col_mut(0).try_as_col_major_mut().expect("contiguous");
+            let mcol = mrest.col_mut(0).try_as_col_major_mut().expect("contiguous");
+            let (col, mcol) = (col.as_slice_mut(), mcol.as_slice_mut());
+            let nrm = match Self::usable_norm(col, mcol, before[j]) {
+                Some(nrm) => {
+                    scale_in_place(col, nrm);
+                    scale_in_place(mcol, nrm);
+                    nrm
+                }
+                None => {
+                    let broken = (col.to_vec(), mcol.to_vec());
+                    let (r, mr, nrm) = self.replacement(basis, mbasis, len0 + j, broken);
+                    // in the broken column's place
+                    let slot = (len0 + j) * self.n..(len0 + j + 1) * self.n;
+                    for (to, from) in [(&mut basis.data, &r), (&mut mbasis.data, &mr)] {
+                        to[slot.clone()]
+                            .iter_mut()
+                            .zip(from)
+                            .for_each(|(t, v)| *t = v / nrm);
+                    }
+                    0.0
+                }
+            };
+            coef.push(nrm);
+            h.push(coef);
+            kept += 1;
+        }
+        basis.truncate(len0 + kept);
+        mbasis.truncate(len0 + kept);
     }
 
     /// One Lanczos cycle from random vectors, no locking: rough estimates of the `count`
@@ -2406,9 +2424,8 @@ impl<'p, 'a> Lanczos<'p, 'a> {
 mod tests {
     use super::*;
 
-    /// [`project_out`] on more rows than one thread's part (so that, with two or more threads,
-    /// the coefficients are summed from parts): against the coefficients `v^T w` and the
-    /// projected block computed here by hand, with `M = I` (`mv = v`).
+    /// `R` and `Q` of `w = Q R` by modified Gram-Schmidt, twice, in the M inner product of the
+    /// diagonal `m`: the reference for [`cholesky_qr2`].
     fn gram_schmidt_m(w: &Mat<f64>, m: &[f64]) -> (Mat<f64>, Mat<f64>) {
         let (n, k) = (w.nrows(), w.ncols());
         let mut q = w.clone();
@@ -2438,8 +2455,8 @@ mod tests {
 
     /// [`cholesky_qr2`] against the Gram-Schmidt above: the same `R` and `Q`, `Q` M-orthonormal
     /// to round-off and its images `M Q`, on blocks conditioned from about 1 to about 1e4 (rows
-    /// split between threads); and a dependent or vanished column declined with the block left
-    /// as it was.
+    /// split between threads); and a dependent column, a vanished one and one that kept only 1e-6
+    /// of its norm through the projection declined with the block left as it was.
     #[test]
     fn cholesky_qr2_matches_an_m_gram_schmidt_and_declines_dependent_blocks() {
         let (n, k) = (2 * PROJECT_ROWS + 9, 4);
@@ -2513,6 +2530,9 @@ mod tests {
         }
     }
 
+    /// [`project_out`] on more rows than one thread's part (so that, with two or more threads,
+    /// the coefficients are summed from parts): against the coefficients `v^T w` and the
+    /// projected block computed here by hand, with `M = I` (`mv = v`).
     #[test]
     fn project_out_matches_the_hand_computed_projection() {
         let (n, m, k) = (3 * PROJECT_ROWS + 17, 7, 4);
