@@ -798,12 +798,14 @@ impl Fronts<'_> {
         for j0 in (0..c).step_by(width) {
             let wj = width.min(c - j0);
             let rows = c + b - j0;
-            Workspace::refill(&mut scratch, rows * wj, None);
-            for (jj, to) in scratch.chunks_exact_mut(rows).enumerate() {
+            // each column from its diagonal down: above it, nothing is read (the pivot block's
+            // factorization reads its lower triangle; its upper is zeroed below)
+            let panel = Workspace::room(&mut scratch, rows * wj, None);
+            for (jj, to) in panel.chunks_exact_mut(rows).enumerate() {
                 let (col, base) = chunks.col(j0 + jj);
                 to[jj..].copy_from_slice(&col[j0 + jj - base..]);
             }
-            let sm = MatMut::from_column_major_slice_mut(&mut scratch, rows, wj);
+            let sm = MatMut::from_column_major_slice_mut(panel, rows, wj);
             let (mut top, mut below) = sm.split_at_row_mut(wj);
             let mut mem = MemBuffer::new(cholesky_in_place_scratch::<f64>(
                 wj,
@@ -839,7 +841,7 @@ impl Fronts<'_> {
                         let (cr, rr) = (w.min(c - r * w), c + b - r * w);
                         // the chunk's rows in the panel's rows below its pivots
                         let off = r * w - (j0 + wj);
-                        Workspace::refill(lt, wj * cr, None);
+                        let lt = Workspace::room(lt, wj * cr, None);
                         let mut ltm = MatMut::from_column_major_slice_mut(lt, wj, cr);
                         ltm.copy_from(wr.subrows(off, cr).transpose());
                         for jj in 0..cr {
@@ -876,7 +878,7 @@ impl Fronts<'_> {
             }
             // back into the chunks, from each column's diagonal down (above it, in its chunk's
             // triangle, are what the updates from earlier panels wrote: nothing reads it)
-            for (jj, from) in scratch.chunks_exact(rows).enumerate() {
+            for (jj, from) in scratch[..rows * wj].chunks_exact(rows).enumerate() {
                 let (col, base) = chunks.col(j0 + jj);
                 col[j0 + jj - base..].copy_from_slice(&from[jj..]);
             }
@@ -947,14 +949,15 @@ fn update_panel(
 ) {
     let (b, c) = (w.nrows(), w.ncols());
     let (width, height) = (UPDATE_PANEL.min(b - j0), b - j0);
-    Workspace::refill(lt, c * width, recycled);
+    let lt = Workspace::room(lt, c * width, recycled);
     let mut lt = MatMut::from_column_major_slice_mut(lt, c, width);
     lt.copy_from(w.subrows(j0, width).transpose());
     for jj in 0..width {
         let col = column_mut(lt.rb_mut(), jj);
         col.iter_mut().zip(d_inv).for_each(|(x, d)| *x *= d);
     }
-    Workspace::refill(panel, height * width, recycled);
+    // the strict upper triangle of the panel's top is neither written nor read
+    let panel = Workspace::room(panel, height * width, recycled);
     let mut t = MatMut::from_column_major_slice_mut(panel, height, width);
     let (diagonal, rest) = t.rb_mut().split_at_row_mut(width);
     let (w_top, w_rest) = w.subrows(j0, height).split_at_row(width);
@@ -1027,6 +1030,24 @@ impl<'a> Workspace<'a> {
         }
         v.clear();
         v.resize(len, 0.0);
+    }
+
+    /// The first `len` values of `v`, grown to hold them (taking a recycled buffer in its place
+    /// when it is too small) but not cleared: for scratch that every caller overwrites before it
+    /// reads it. Clearing it as [`Workspace::refill`] does was 3 % of the samples of a
+    /// factorization of the 52,920-DOF block (the update panels' `L_b^T` and products,
+    /// docs/SCALING.md, "Scratch not cleared").
+    fn room<'v>(v: &'v mut Vec<f64>, len: usize, recycled: Option<&Recycled>) -> &'v mut [f64] {
+        if v.capacity() < len
+            && let Some(r) = recycled
+            && let Some(b) = r.take(len)
+        {
+            r.give(std::mem::replace(v, b));
+        }
+        if v.len() < len {
+            v.resize(len, 0.0);
+        }
+        &mut v[..len]
     }
 
     /// This task's buffers to the recycled ones (a task outside the sequential subtrees ends).
