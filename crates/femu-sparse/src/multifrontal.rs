@@ -613,7 +613,8 @@ impl Fronts<'_> {
         for (i, &r) in rows.iter().enumerate() {
             work.map[r] = c + i;
         }
-        let mut u = work.take(b * (b + 1) / 2);
+        // written whole by the front's update (`U = -L_b D L_b^T`), the children's parts added after
+        let mut u = work.take_uncleared(b * (b + 1) / 2);
         let chunk = self.tree.tuning.chunk;
         let in_chunks = self.store && c > chunk && (c + b) * c > self.tree.tuning.scratch_front;
         let copied = self.store && c > chunk && !in_chunks;
@@ -643,31 +644,17 @@ impl Fronts<'_> {
                 col[if i < end { i - start } else { map[i] } - base] += v;
             });
         }
-        // extend-add: each child's pattern lies in this front, in the same order, so a column
-        // of a child's update lands in one column of the front, from its diagonal down
-        for (&child, update) in self.tree.children(k).iter().zip(updates) {
-            let rows = pattern(child);
-            let bc = rows.len();
-            work.locs.clear();
-            work.locs.extend(
-                rows.iter()
-                    .map(|&r| if r < end { r - start } else { work.map[r] }),
-            );
-            for (jj, &lc) in work.locs.iter().enumerate() {
-                let from = &update[packed_start(jj, bc)..packed_start(jj + 1, bc)];
-                // the column's entries from row `base` of the front on
-                let (to, base) = if lc < c {
-                    cols.col(lc)
-                } else {
-                    let j = lc - c;
-                    (&mut u[packed_start(j, b)..packed_start(j + 1, b)], lc)
-                };
-                for (&li, &v) in work.locs[jj..].iter().zip(from) {
+        // extend-add, the pivots' columns first: each child's pattern lies in this front, in
+        // the same order, so a column of a child's update lands in one column of the front, from
+        // its diagonal down
+        self.extend_add(k, &updates, work, |lc, locs, from| {
+            if lc < c {
+                let (to, base) = cols.col(lc);
+                for (&li, &v) in locs.iter().zip(from) {
                     to[li - base] += v;
                 }
             }
-            work.give(update);
-        }
+        });
         let signs = if in_chunks {
             self.super_panels(start, own, c, b, &mut u, par, work)?
         } else {
@@ -701,10 +688,55 @@ impl Fronts<'_> {
             }
             signs?
         };
+        // the children's parts of the update matrix, added to `-L_b D L_b^T`
+        self.extend_add(k, &updates, work, |lc, locs, from| {
+            if lc >= c {
+                let j = lc - c;
+                let to = &mut u[packed_start(j, b)..packed_start(j + 1, b)];
+                for (&li, &v) in locs.iter().zip(from) {
+                    to[li - lc] += v;
+                }
+            }
+        });
+        for update in updates {
+            work.give(update);
+        }
         if !self.store {
             work.give(panel);
         }
         Ok((u, signs))
+    }
+
+    /// Hands each column of the children's update matrices `updates` (in the order of `k`'s
+    /// children) to `add(lc, rows, values)`: the front column `lc` it lands in, the front rows of
+    /// its entries (from its diagonal down, increasing) and their values. Rows map through
+    /// `work.map` as [`Fronts::front`] set it for `k`.
+    fn extend_add(
+        &self,
+        k: usize,
+        updates: &[Vec<f64>],
+        work: &mut Workspace,
+        mut add: impl FnMut(usize, &[usize], &[f64]),
+    ) {
+        let s = self.symbolic;
+        let (start, end) = (s.supernode_begin()[k], s.supernode_end()[k]);
+        for (&child, update) in self.tree.children(k).iter().zip(updates) {
+            let p = s.col_ptr_for_row_idx()[child];
+            let rows = &s.row_idx()[p..p + s.nnz_per_super()[child]];
+            let bc = rows.len();
+            work.locs.clear();
+            work.locs.extend(
+                rows.iter()
+                    .map(|&r| if r < end { r - start } else { work.map[r] }),
+            );
+            for (jj, &lc) in work.locs.iter().enumerate() {
+                add(
+                    lc,
+                    &work.locs[jj..],
+                    &update[packed_start(jj, bc)..packed_start(jj + 1, bc)],
+                );
+            }
+        }
     }
 
     /// The dense work of a front held square (`l`, `c + b` rows, `c` columns, assembled):
@@ -749,7 +781,7 @@ impl Fronts<'_> {
             let top = top.rb();
             self.solve_rows(top, bottom.rb_mut(), parallel);
             let d_inv: Vec<f64> = (0..c).map(|j| top[(j, j)].recip()).collect();
-            update_matrix(bottom.rb(), &d_inv, u, parallel, work);
+            update_matrix(bottom.rb(), &d_inv, u, true, parallel, work);
             for (j, d) in d_inv.iter().enumerate() {
                 column_mut(bottom.rb_mut(), j)
                     .iter_mut()
@@ -868,7 +900,15 @@ impl Fronts<'_> {
                     }
                 }
                 if b > 0 {
-                    update_matrix(wr.subrows(rows - wj - b, b), d_inv, u, parallel, work);
+                    let first = j0 == 0;
+                    update_matrix(
+                        wr.subrows(rows - wj - b, b),
+                        d_inv,
+                        u,
+                        first,
+                        parallel,
+                        work,
+                    );
                 }
                 for (j, d) in d_inv.iter().enumerate() {
                     column_mut(below.rb_mut(), j)
@@ -888,13 +928,15 @@ impl Fronts<'_> {
     }
 }
 
-/// `U -= W D^-1 W^T` into the packed update matrix `u` (order `b`), `W` (`b x c`) the front's
-/// bottom rows before they are scaled to `L_b`, by panels of [`UPDATE_PANEL`] columns
-/// ([`update_panel`]), the panels on different threads when `parallel`.
+/// `U -= W D^-1 W^T` into the packed update matrix `u` (order `b`), or `U = -W D^-1 W^T` when
+/// `first` (what `u` held is not read), `W` (`b x c`) the front's bottom rows before they are
+/// scaled to `L_b`, by panels of [`UPDATE_PANEL`] columns ([`update_panel`]), the panels on
+/// different threads when `parallel`.
 fn update_matrix(
     w: MatRef<'_, f64>,
     d_inv: &[f64],
     u: &mut [f64],
+    first: bool,
     parallel: bool,
     work: &mut Workspace,
 ) {
@@ -913,14 +955,16 @@ fn update_matrix(
         // Sturm count's recycled buffers, it would be lost to them (no hook at that end)
         pieces.into_par_iter().for_each_init(
             || (Vec::new(), Vec::new()),
-            |(lt, panel), (j0, piece)| update_panel(w, d_inv, j0, piece, lt, panel, None),
+            |(lt, panel), (j0, piece)| {
+                update_panel(w, d_inv, (j0, first), piece, lt, panel, None);
+            },
         );
     } else {
         for (j0, piece) in pieces {
             update_panel(
                 w,
                 d_inv,
-                j0,
+                (j0, first),
                 piece,
                 &mut work.w,
                 &mut work.panel,
@@ -930,8 +974,8 @@ fn update_matrix(
     }
 }
 
-/// `U -= W L_b^T` on the columns `j0..j0 + width` of a front's update matrix (`piece`: those
-/// packed columns), from `W = L_b D` (`w`, `b x c`) and `d_inv = D^-1`: computed as a
+/// `U -= W L_b^T` (or `U = -W L_b^T` when `first`) on the columns `j0..j0 + width` of a front's
+/// update matrix (`piece`: those packed columns), from `W = L_b D` (`w`, `b x c`) and `d_inv = D^-1`: computed as a
 /// lower-triangular block on top of a rectangle into scratch (`panel`) and subtracted, so that no
 /// square `b x b` is ever held. The right operand `(L_b^T)[:, j0..j0 + width]` is made into `lt`,
 /// `c x width` by columns (faer's GEMM multiplies a column-major right operand faster than the
@@ -941,7 +985,7 @@ fn update_matrix(
 fn update_panel(
     w: MatRef<'_, f64>,
     d_inv: &[f64],
-    j0: usize,
+    (j0, first): (usize, bool),
     piece: &mut [f64],
     lt: &mut Vec<f64>,
     panel: &mut Vec<f64>,
@@ -979,7 +1023,11 @@ fn update_panel(
         let j = j0 + jj;
         let col = &mut piece[packed_start(j, b) - base..packed_start(j + 1, b) - base];
         let from = &panel[jj * height + jj..(jj + 1) * height];
-        col.iter_mut().zip(from).for_each(|(x, v)| *x -= v);
+        if first {
+            col.iter_mut().zip(from).for_each(|(x, v)| *x = -v);
+        } else {
+            col.iter_mut().zip(from).for_each(|(x, v)| *x -= v);
+        }
     }
 }
 
@@ -1085,10 +1133,24 @@ impl<'a> Workspace<'a> {
     /// A zeroed buffer of `len` values, the pool's largest if there is one (else a recycled
     /// one that holds it).
     fn take(&mut self, len: usize) -> Vec<f64> {
-        let best = (0..self.pool.len()).max_by_key(|&i| self.pool[i].capacity());
-        let mut v = best.map(|i| self.pool.swap_remove(i)).unwrap_or_default();
+        let mut v = self.largest();
         Self::refill(&mut v, len, self.recycled);
         v
+    }
+
+    /// [`Workspace::take`] without clearing: `len` values as earlier fronts left them, for a
+    /// buffer written whole before it is read.
+    fn take_uncleared(&mut self, len: usize) -> Vec<f64> {
+        let mut v = self.largest();
+        Self::room(&mut v, len, self.recycled);
+        v.truncate(len);
+        v
+    }
+
+    /// The pool's largest buffer, or an empty one.
+    fn largest(&mut self) -> Vec<f64> {
+        let best = (0..self.pool.len()).max_by_key(|&i| self.pool[i].capacity());
+        best.map(|i| self.pool.swap_remove(i)).unwrap_or_default()
     }
 }
 
