@@ -42,10 +42,11 @@ const PARALLEL_FRONT_FLOPS: f64 = 2e8;
 /// ([`release_free_memory`]): the subtrees below have freed their update matrices into glibc's
 /// arenas (150-230 MB free there on the 209,088-DOF block), and these fronts' own update matrices
 /// are the factorization's peak. Peak of that solve 3,095-3,109 MB -> 2,952-2,973 MB, the
-/// factorization's time unchanged within its spread; a threshold of 1e9 (more fronts) lowered it
-/// no further and cost the 199,200-DOF plate's factorizations 2 % (docs/SCALING.md, "Memory the
-/// allocator keeps").
-const TRIM_FRONT: f64 = 5e9;
+/// factorization's time unchanged within its spread. On the 52,920-DOF block no front was above
+/// the first threshold (5e9); at 2e8 (the fronts that use every thread, eight there) its peak fell
+/// by 14-49 MB in four alternated pairs, for 15 ms of trims, the others' within their spread
+/// (docs/SCALING.md, "Memory the allocator keeps").
+const TRIM_FRONT: f64 = PARALLEL_FRONT_FLOPS;
 
 /// Columns of an update matrix computed at once (`Fronts::front`): the scratch is `b x 256`,
 /// not `b x b`.
