@@ -1096,6 +1096,10 @@ impl<'a> Workspace<'a> {
         if v.len() < len {
             v.resize(len, 0.0);
         }
+        if cfg!(debug_assertions) {
+            // what a caller would read before writing it shows in every test (as NaN)
+            v[..len].fill(f64::NAN);
+        }
         &mut v[..len]
     }
 
