@@ -591,6 +591,11 @@ impl Fronts<'_> {
     /// adding the children's update matrices `updates`; returns its own update matrix `U_k` (its
     /// lower triangle, packed by columns: [`packed_start`]) and the signs of its pivots.
     ///
+    /// The children's columns that land in the front's pivots' columns are added before the
+    /// pivots are factored; `U_k = -L_b D L_b^T` is then written whole (no cleared buffer) and
+    /// the children's columns that land in it added after: the parts of `F_bb` play no part in
+    /// the pivots' factorization (docs/SCALING.md, "Scratch not cleared").
+    ///
     /// A front of at most [`CHUNK`] pivots is one chunk: it is factored where it is stored. A
     /// larger one is factored in a square scratch copy written into its chunks after, or, above
     /// [`SCRATCH_FRONT`] values, [`SUPER_PANEL`] columns at a time in its chunks
@@ -741,8 +746,8 @@ impl Fronts<'_> {
     }
 
     /// The dense work of a front held square (`l`, `c + b` rows, `c` columns, assembled):
-    /// `L_11 D L_11^T` in its top, `L_b` below it, `U -= L_b D L_b^T` into `u`; the signs of the
-    /// pivots. `start` is the first pivot's index (for a zero pivot's error).
+    /// `L_11 D L_11^T` in its top, `L_b` below it, `U = -L_b D L_b^T` written into `u` (the
+    /// children's parts are added after, [`Fronts::front`]); the signs of the pivots. `start` is the first pivot's index (for a zero pivot's error).
     fn dense(
         &self,
         start: usize,
@@ -976,8 +981,8 @@ fn update_matrix(
 }
 
 /// `U -= W L_b^T` (or `U = -W L_b^T` when `first`) on the columns `j0..j0 + width` of a front's
-/// update matrix (`piece`: those packed columns), from `W = L_b D` (`w`, `b x c`) and `d_inv = D^-1`: computed as a
-/// lower-triangular block on top of a rectangle into scratch (`panel`) and subtracted, so that no
+/// update matrix (`piece`: those packed columns), from `W = L_b D` (`w`, `b x c`) and
+/// `d_inv = D^-1`: computed as a lower-triangular block on top of a rectangle into scratch (`panel`) and subtracted, so that no
 /// square `b x b` is ever held. The right operand `(L_b^T)[:, j0..j0 + width]` is made into `lt`,
 /// `c x width` by columns (faer's GEMM multiplies a column-major right operand faster than the
 /// transposed rows of `W`: 37 against 29 GFLOP/s on one thread, 209,088-DOF block), a panel at a
