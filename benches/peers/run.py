@@ -18,7 +18,7 @@ is good to about 0.1-0.2; PEERS selects peers (default
 default factorization). PEERS_PYTHON: the Python with scipy, pypardiso, scikit-sparse and
 threadpoolctl (run.sh makes a venv).
 """
-import glob, json, os, re, shutil, subprocess, sys, tempfile
+import glob, json, os, re, shutil, statistics, subprocess, sys, tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 EXE = os.path.join(ROOT, "target", "release", "examples", "peer_modes")
@@ -147,7 +147,6 @@ def main():
                 note = f"failed (exit {code}): {out.strip()[-300:]}"
             print(json.dumps({"kind": kind, "dofs": dofs, "tool": tool, "round": r + 1, "wall_s": wall, "rss_mb": rss, "ok": code == 0, "max_rel_diff": diff, **{k: v for k, v in info.items() if k != "frequencies_hz"}}), flush=True)
             runs.setdefault(tool, []).append((wall, rss, info.get("eigen_s"), note))
-    median = lambda xs: sorted(xs)[len(xs) // 2] if len(xs) % 2 else 0.5 * sum(sorted(xs)[len(xs) // 2 - 1:len(xs) // 2 + 1])
     good = {t: [x for x in v if not x[3].startswith("failed")] for t, v in runs.items()}
     # the fastest peer over femu within each round (a peer that failed or stopped in a round is
     # left out of that round)
@@ -161,22 +160,22 @@ def main():
             if solves:
                 solve_ratios.append(min(solves) / femu_r[2])
     spread = lambda xs: f" (median of {len(xs)} rounds, {min(xs):.2f}-{max(xs):.2f})" if len(xs) > 1 else ""
-    fmt = lambda xs: f"{median(xs):.2f}x{spread(xs)}" if xs else "nan"
+    fmt = lambda xs: f"{statistics.median(xs):.2f}x{spread(xs)}" if xs else "nan"
     print(f"\n{kind}, {dofs} DOF, {count} lowest modes (sigma {SIGMA:g} s^-2 for the peers); fastest peer / femu: "
           f"{fmt(ratios)} in wall time, {fmt(solve_ratios)} in eigensolve time\n")
     print("| tool | wall (s) | eigensolve (s) | peak RSS (MB) | wall / femu's | eigensolve / femu's | notes |")
     print("|---|---|---|---|---|---|---|")
-    femu_wall = median([x[0] for x in good["femu"]])
-    femu_solve = median([x[2] for x in good["femu"]])
+    femu_wall = statistics.median([x[0] for x in good["femu"]])
+    femu_solve = statistics.median([x[2] for x in good["femu"]])
     for tool, all_runs in runs.items():
         ok_runs = good[tool]
         if not ok_runs:
             print(f"| {tool} | - | - | - | - | - | {all_runs[0][3]} |")
             continue
-        wall = median([x[0] for x in ok_runs])
+        wall = statistics.median([x[0] for x in ok_runs])
         mb = max(x[1] for x in ok_runs)
         solves = [x[2] for x in ok_runs if x[2]]
-        solve = median(solves) if solves else None
+        solve = statistics.median(solves) if solves else None
         note = ok_runs[0][3]
         if len(ok_runs) > 1:
             walls = [x[0] for x in ok_runs]

@@ -1076,14 +1076,19 @@ impl<'a> Workspace<'a> {
 
     /// `v` zeroed to `len` values, taking a recycled buffer in its place when it is too small.
     fn refill(v: &mut Vec<f64>, len: usize, recycled: Option<&Recycled>) {
+        Self::hold(v, len, recycled);
+        v.clear();
+        v.resize(len, 0.0);
+    }
+
+    /// `v`, or a recycled buffer in its place when `v` cannot hold `len` values and one can.
+    fn hold(v: &mut Vec<f64>, len: usize, recycled: Option<&Recycled>) {
         if v.capacity() < len
             && let Some(r) = recycled
             && let Some(b) = r.take(len)
         {
             r.give(std::mem::replace(v, b));
         }
-        v.clear();
-        v.resize(len, 0.0);
     }
 
     /// The first `len` values of `v`, grown to hold them (taking a recycled buffer in its place
@@ -1092,12 +1097,7 @@ impl<'a> Workspace<'a> {
     /// factorization of the 52,920-DOF block (the update panels' `L_b^T` and products,
     /// docs/SCALING.md, "Scratch not cleared").
     fn room<'v>(v: &'v mut Vec<f64>, len: usize, recycled: Option<&Recycled>) -> &'v mut [f64] {
-        if v.capacity() < len
-            && let Some(r) = recycled
-            && let Some(b) = r.take(len)
-        {
-            r.give(std::mem::replace(v, b));
-        }
+        Self::hold(v, len, recycled);
         if v.len() < len {
             v.resize(len, 0.0);
         }
