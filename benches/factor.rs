@@ -3,7 +3,9 @@
 //! multifrontal factorization (`numeric`), by faer's left-looking one (`left-looking`) and for
 //! the inertia alone (`inertia`, the Sturm count), a solve of 1, 2 and 4 right-hand
 //! sides (`rhs1`, `rhs2`, `rhs4`: the eigensolver's block sizes; docs/SCALING.md, "Block size and
-//! the count of solved vectors"), and faer's dense GEMM on one and on all threads (the limit
+//! the count of solved vectors"), the product `M X` for 1, 4 and 20 vectors (`sym_mul_mat`,
+//! bytes of `M` read per second; docs/SCALING.md, "Sparse products by blocks of known width"),
+//! and faer's dense GEMM on one and on all threads (the limit
 //! the factorization's rate is compared with, measured in the same run).
 //!
 //! Models: the free-free plate and the clamped block of the peer comparison
@@ -76,7 +78,7 @@ fn bench(c: &mut Criterion) {
         factor.bench_function(BenchmarkId::new("inertia", &id), |b| {
             b.iter(|| pencil.count_below(sigma).unwrap())
         });
-        systems.push((id, pencil.factor_shifted(sigma).unwrap(), sys.k.rows()));
+        systems.push((id, pencil.factor_shifted(sigma).unwrap(), sys.m.clone()));
     }
     factor.finish();
 
@@ -85,8 +87,8 @@ fn bench(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(3));
-    for (id, f, n) in &systems {
-        let n = *n;
+    for (id, f, m) in &systems {
+        let n = m.rows();
         for k in [1, 2, 4] {
             let mut x = Mat::<f64>::from_fn(n, k, |i, j| ((i * 7 + j * 13) % 17) as f64 - 8.0);
             solve.throughput(Throughput::Elements(k as u64));
@@ -96,6 +98,27 @@ fn bench(c: &mut Criterion) {
         }
     }
     solve.finish();
+
+    // `M X` for the blocks the eigensolver multiplies (its block of 4, the 20 Ritz vectors);
+    // "B/s" are the bytes of `M`'s values and row indices read per product
+    let mut product = c.benchmark_group("sym_mul_mat");
+    product
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2));
+    for (id, _, m) in &systems {
+        let n = m.rows();
+        let bytes = (m.nnz() * (size_of::<f64>() + size_of::<usize>())) as u64;
+        for k in [1, 4, 20] {
+            let x = Mat::<f64>::from_fn(n, k, |i, j| ((i * 7 + j * 13) % 17) as f64 - 8.0);
+            let mut y = Mat::<f64>::zeros(n, k);
+            product.throughput(Throughput::Bytes(bytes * k.div_ceil(8) as u64));
+            product.bench_function(BenchmarkId::new(format!("cols{k}"), id), |b| {
+                b.iter(|| femu::sparse::csc::sym_mul_mat_into(m, x.as_ref(), y.as_mut()).unwrap())
+            });
+        }
+    }
+    product.finish();
 
     let mut gemm = c.benchmark_group("gemm");
     gemm.sample_size(10)

@@ -364,7 +364,52 @@ pub fn sym_mul_mat_values_into(
     a: &SparseMatrix,
     values: &[f64],
     x: faer::MatRef<'_, f64>,
+    y: faer::MatMut<'_, f64>,
+) -> Result<(), SparseError> {
+    check_block(a, values, x, y.as_ref())?;
+    block_product(a, values, x, y, false);
+    Ok(())
+}
+
+/// [`sym_mul_mat_into`] that also returns, from the same pass, `Y^T X` (`k x k`) and the squared
+/// Euclidean norms of `X`'s columns: for the eigensolver, whose block's Gram matrix `(M W)^T W`
+/// is the next thing it needs (docs/SCALING.md, "Orthogonalisation by leaves of rows"). The
+/// sums are added in a tree fixed by the number of rows (the same for any number of threads).
+/// Blocks wider than eight vectors take a second pass for them.
+///
+/// # Errors
+/// [`SparseError::DimensionMismatch`] if `A` is not square or `X`, `Y` do not match it.
+pub fn sym_mul_mat_gram_into(
+    a: &SparseMatrix,
+    x: faer::MatRef<'_, f64>,
     mut y: faer::MatMut<'_, f64>,
+) -> Result<(Mat<f64>, Vec<f64>), SparseError> {
+    check_block(a, a.data(), x, y.as_ref())?;
+    let k = x.ncols();
+    if let Some(sums) = block_product(a, a.data(), x, y.as_mut(), true) {
+        let g = Mat::<f64>::from_fn(k, k, |r, c| sums[r * k + c]);
+        return Ok((g, sums[k * k..].to_vec()));
+    }
+    let mut g = Mat::<f64>::zeros(k, k);
+    faer::linalg::matmul::matmul(
+        g.as_mut(),
+        faer::Accum::Replace,
+        y.as_ref().transpose(),
+        x,
+        1.0,
+        faer::get_global_parallelism(),
+    );
+    let squares = (0..k).map(|j| x.col(j).squared_norm_l2()).collect();
+    Ok((g, squares))
+}
+
+/// The checks of [`sym_mul_mat_values_into`]: one value per stored entry, `A` square, `X` and
+/// `Y` with `A`'s rows and as many columns.
+fn check_block(
+    a: &SparseMatrix,
+    values: &[f64],
+    x: faer::MatRef<'_, f64>,
+    y: faer::MatRef<'_, f64>,
 ) -> Result<(), SparseError> {
     let n = a.rows();
     if values.len() != a.nnz() {
@@ -389,32 +434,149 @@ pub fn sym_mul_mat_values_into(
             },
         });
     }
-    let k = x.ncols();
-    if k == 0 || n == 0 {
-        return Ok(());
-    }
-    // Row-major copies keep the values of one row together in cache. Blocks wider than
-    // `WIDEST_KERNEL` are taken that many columns at a time, so that every piece has a kernel of
-    // known width (`A` is read once per piece).
-    let width = k.min(WIDEST_KERNEL);
-    let mut xt = vec![0.0; n * width];
-    let mut yt = vec![0.0; n * width];
-    for first in (0..k).step_by(WIDEST_KERNEL) {
-        let w = (k - first).min(WIDEST_KERNEL);
-        let (xt, yt) = (&mut xt[..n * w], &mut yt[..n * w]);
-        for j in 0..w {
-            for (i, v) in x.col(first + j).iter().enumerate() {
-                xt[i * w + j] = *v;
-            }
-        }
-        rows_with(a, values, xt, w, yt);
-        for j in 0..w {
-            for (i, v) in y.as_mut().col_mut(first + j).iter_mut().enumerate() {
-                *v = yt[i * w + j];
-            }
-        }
-    }
     Ok(())
+}
+
+/// `Y = A X` (sizes checked by the callers); with `gram` and at most `WIDEST_KERNEL` columns,
+/// also the sums of [`sym_mul_mat_gram_into`] (`Y^T X` row by row, then the squared norms).
+fn block_product(
+    a: &SparseMatrix,
+    values: &[f64],
+    x: faer::MatRef<'_, f64>,
+    mut y: faer::MatMut<'_, f64>,
+    gram: bool,
+) -> Option<Vec<f64>> {
+    let (n, k) = (a.rows(), x.ncols());
+    let gram = gram && k <= WIDEST_KERNEL;
+    if k == 0 || n == 0 {
+        return gram.then(|| vec![0.0; k * k + k]);
+    }
+    // Each piece of the block is copied row-major (the values of one row of `X` together, so
+    // that an entry of `A` reads them from one cache line), on the rayon threads; the products
+    // are written straight into `Y`'s columns. Blocks wider than `WIDEST_KERNEL` are taken that
+    // many columns at a time, so that every piece has a kernel of known width (`A` is read once
+    // per piece).
+    let owned_x = (x.row_stride() != 1).then(|| x.to_owned());
+    let x = owned_x.as_ref().map_or(x, |o| o.as_ref());
+    let mut owned_y = (y.row_stride() != 1).then(|| Mat::<f64>::zeros(n, k));
+    let (ptr, idx) = (a.indptr(), a.indices());
+    let ptr = ptr.raw_storage();
+    let mut xt = vec![0.0; if k > 1 { n * k.min(WIDEST_KERNEL) } else { 0 }];
+    let mut sums = None;
+    {
+        let mut out = match &mut owned_y {
+            Some(o) => o.as_mut(),
+            None => y.as_mut(),
+        };
+        for first in (0..k).step_by(WIDEST_KERNEL) {
+            let w = (k - first).min(WIDEST_KERNEL);
+            let xs: Vec<&[f64]> = (first..first + w)
+                .map(|j| {
+                    x.col(j)
+                        .try_as_col_major()
+                        .expect("unit row stride")
+                        .as_slice()
+                })
+                .collect();
+            const ROWS: usize = 1024;
+            let xt = if w == 1 {
+                xs[0]
+            } else {
+                let xt = &mut xt[..n * w];
+                xt.par_chunks_mut(w * ROWS)
+                    .enumerate()
+                    .for_each(|(c, chunk)| {
+                        for (i, row) in chunk.chunks_exact_mut(w).enumerate() {
+                            for (v, col) in row.iter_mut().zip(&xs) {
+                                *v = col[c * ROWS + i];
+                            }
+                        }
+                    });
+                &xt[..]
+            };
+            let part = out.as_mut().subcols_mut(first, w);
+            let a = (ptr, idx, values);
+            sums = match w {
+                1 => sym_mul_rows_into_cols::<1>(a, xt, 0, part, gram),
+                2 => sym_mul_rows_into_cols::<2>(a, xt, 0, part, gram),
+                3 => sym_mul_rows_into_cols::<3>(a, xt, 0, part, gram),
+                4 => sym_mul_rows_into_cols::<4>(a, xt, 0, part, gram),
+                5 => sym_mul_rows_into_cols::<5>(a, xt, 0, part, gram),
+                6 => sym_mul_rows_into_cols::<6>(a, xt, 0, part, gram),
+                7 => sym_mul_rows_into_cols::<7>(a, xt, 0, part, gram),
+                _ => sym_mul_rows_into_cols::<8>(a, xt, 0, part, gram),
+            };
+        }
+    }
+    if let Some(o) = owned_y {
+        y.copy_from(&o);
+    }
+    sums
+}
+
+/// The rows `first..` of `Y = A X` for a symmetric `A` (its column pointers, row indices and
+/// values; CSC with both triangles, so column `i` serves as row `i`) and `K` vectors stored
+/// row-major in `xt`, into the column-major `y` (`K` columns), by halves of the rows on the
+/// rayon threads down to 4096 rows. Each entry of `A` updates `K` accumulators held in registers
+/// (docs/SCALING.md, "Sparse products by blocks of known width"); the sums are added in the
+/// order of [`sym_mul_rows`], so the two give the same bits. With `gram`, also these rows' part
+/// of `Y^T X` (row by row) and of the squared norms of `X`'s columns, the halves' parts added.
+fn sym_mul_rows_into_cols<const K: usize>(
+    (ptr, idx, val): (&[usize], &[usize], &[f64]),
+    xt: &[f64],
+    first: usize,
+    y: faer::MatMut<'_, f64>,
+    gram: bool,
+) -> Option<Vec<f64>> {
+    const LEAF: usize = 4096;
+    let rows = y.nrows();
+    if rows > LEAF {
+        let half = rows / 2;
+        let (top, bottom) = y.split_at_row_mut(half);
+        let (a, b) = rayon::join(
+            || sym_mul_rows_into_cols::<K>((ptr, idx, val), xt, first, top, gram),
+            || sym_mul_rows_into_cols::<K>((ptr, idx, val), xt, first + half, bottom, gram),
+        );
+        return a.zip(b).map(|(mut a, b)| {
+            a.iter_mut().zip(b).for_each(|(a, b)| *a += b);
+            a
+        });
+    }
+    let mut out: Vec<&mut [f64]> = y
+        .col_iter_mut()
+        .map(|c| {
+            c.try_as_col_major_mut()
+                .expect("unit row stride")
+                .as_slice_mut()
+        })
+        .collect();
+    let mut g = [[0.0; K]; K];
+    let mut squares = [0.0; K];
+    for i in 0..rows {
+        let mut acc = [0.0; K];
+        let (lo, hi) = (ptr[first + i], ptr[first + i + 1]);
+        for (&c, &v) in idx[lo..hi].iter().zip(&val[lo..hi]) {
+            let xr: &[f64; K] = xt[c * K..(c + 1) * K].try_into().expect("K values per row");
+            for r in 0..K {
+                acc[r] += v * xr[r];
+            }
+        }
+        for (o, a) in out.iter_mut().zip(acc) {
+            o[i] = a;
+        }
+        if gram {
+            let own: &[f64; K] = xt[(first + i) * K..(first + i + 1) * K]
+                .try_into()
+                .expect("K values per row");
+            for r in 0..K {
+                for c in 0..K {
+                    g[r][c] += acc[r] * own[c];
+                }
+                squares[r] += own[r] * own[r];
+            }
+        }
+    }
+    gram.then(|| g.iter().flatten().chain(&squares).copied().collect())
 }
 
 /// The widest block [`sym_mul_rows`] has a kernel of known width for (every width up to it has
@@ -654,6 +816,72 @@ mod tests {
             assert_eq!(rc, (r, col), "entry {q} by rows");
             assert!(*cv == v || (v.is_nan() && cv.is_nan()), "entry {q} by rows");
         }
+    }
+
+    /// [`sym_mul_mat_gram_into`] on more rows than one leaf (so that the halves' sums are
+    /// added), for widths with a kernel (1, 4, 8) and a wider one (11, the second pass), with
+    /// `X` as a column-major block and as a strided view: `Y = A X`, `Y^T X` and the squared
+    /// norms against sums over the band written here.
+    #[test]
+    fn block_product_with_its_gram_matches_the_sums_by_hand() {
+        let n = 9001;
+        // a symmetric band: a_ii = 4 + i % 3, a_ij = -1 / (1 + |i - j|) for 0 < |i - j| <= 3
+        let entry = |i: usize, j: usize| {
+            let d = i.abs_diff(j);
+            if d == 0 {
+                4.0 + (i % 3) as f64
+            } else {
+                -1.0 / (1.0 + d as f64)
+            }
+        };
+        let mut t = TriMat::new((n, n));
+        for i in 0..n {
+            for j in i.saturating_sub(3)..(i + 4).min(n) {
+                t.add_triplet(i, j, entry(i, j));
+            }
+        }
+        let a: SparseMatrix = t.to_csc();
+        for k in [1, 4, 8, 11] {
+            let value = |i: usize, j: usize| ((i * 7 + j * 5) % 23) as f64 - 11.0;
+            let x = Mat::<f64>::from_fn(n, k, value);
+            let strided = Mat::<f64>::from_fn(k, n, |j, i| value(i, j));
+            let y_ref = Mat::<f64>::from_fn(n, k, |i, j| {
+                (i.saturating_sub(3)..(i + 4).min(n))
+                    .map(|c| entry(i, c) * x[(c, j)])
+                    .sum()
+            });
+            for (form, xv) in [("columns", x.as_ref()), ("strided", strided.transpose())] {
+                let mut y = Mat::<f64>::from_fn(n, k, |_, _| f64::NAN);
+                let (g, squares) = sym_mul_mat_gram_into(&a, xv, y.as_mut()).unwrap();
+                for i in 0..n {
+                    for j in 0..k {
+                        let e = y_ref[(i, j)];
+                        assert!(
+                            (y[(i, j)] - e).abs() <= 1e-13 * e.abs().max(1.0),
+                            "{form} {k}"
+                        );
+                    }
+                }
+                for r in 0..k {
+                    let sq: f64 = (0..n).map(|i| x[(i, r)] * x[(i, r)]).sum();
+                    assert!(
+                        (squares[r] - sq).abs() <= 1e-12 * sq,
+                        "{form} {k}: norm {r}"
+                    );
+                    for c in 0..k {
+                        let expected: f64 = (0..n).map(|i| y_ref[(i, r)] * x[(i, c)]).sum();
+                        let scale: f64 = (0..n).map(|i| (y_ref[(i, r)] * x[(i, c)]).abs()).sum();
+                        assert!(
+                            (g[(r, c)] - expected).abs() <= 1e-13 * scale,
+                            "{form} {k}: G[{r}, {c}] = {} against {expected}",
+                            g[(r, c)]
+                        );
+                    }
+                }
+            }
+        }
+        let (x, mut y) = (Mat::<f64>::zeros(n, 2), Mat::<f64>::zeros(n, 3));
+        assert!(sym_mul_mat_gram_into(&a, x.as_ref(), y.as_mut()).is_err());
     }
 
     /// Every block width, those with a kernel of their own (1 to 8) and the wider ones, taken 8
