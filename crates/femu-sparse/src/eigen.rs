@@ -1405,15 +1405,13 @@ fn right_multiply_in_place(v: faer::MatMut<'_, f64>, s: faer::MatRef<'_, f64>) {
         );
         return;
     }
+    right_multiply_rows(v, s);
+}
+
+/// [`right_multiply_in_place`] on the calling thread, through a copy of the product.
+fn right_multiply_rows(v: faer::MatMut<'_, f64>, s: faer::MatRef<'_, f64>) {
     let mut t = Mat::<f64>::zeros(v.nrows(), s.ncols());
-    faer::linalg::matmul::matmul(
-        t.as_mut(),
-        faer::Accum::Replace,
-        v.as_ref(),
-        s,
-        1.0,
-        faer::Par::Seq,
-    );
+    leaf_product(t.as_mut(), false, v.as_ref(), s, 1.0);
     v.subcols_mut(0, s.ncols()).copy_from(&t);
 }
 
@@ -1452,12 +1450,87 @@ fn upper_inverse(r: &Mat<f64>) -> Mat<f64> {
     inv
 }
 
+/// The fewest rows of a leaf of [`fold_rows`] (a leaf has fewer than twice as many): a block of
+/// four columns and its images take 128 to 256 KiB there, so that the several steps of one pass
+/// find the leaf's rows of the block in the core's cache while the basis streams past once.
+const LEAF_ROWS: usize = 2048;
+
+/// `leaf(first, w_rows, mw_rows)` over the rows of a block `w` and of its images `mw`, cut into
+/// leaves of [`LEAF_ROWS`] to `2 LEAF_ROWS` rows (`first` is a leaf's first row), on the rayon
+/// threads; the leaves' matrices are added in a tree fixed by the number of rows, so the sums are
+/// the same for any number of threads. One such pass reads each row of the block once for all
+/// its steps (docs/SCALING.md, "Orthogonalisation by leaves of rows").
+fn fold_rows(
+    first: usize,
+    w: faer::MatMut<'_, f64>,
+    mw: faer::MatMut<'_, f64>,
+    leaf: &(impl Fn(usize, faer::MatMut<'_, f64>, faer::MatMut<'_, f64>) -> Vec<Mat<f64>> + Sync),
+) -> Vec<Mat<f64>> {
+    let rows = w.nrows();
+    if rows < 2 * LEAF_ROWS {
+        return leaf(first, w, mw);
+    }
+    let half = rows / (2 * LEAF_ROWS) * LEAF_ROWS;
+    let (wt, wb) = w.split_at_row_mut(half);
+    let (mt, mb) = mw.split_at_row_mut(half);
+    let (mut a, b) = rayon::join(
+        || fold_rows(first, wt, mt, leaf),
+        || fold_rows(first + half, wb, mb, leaf),
+    );
+    for (a, b) in a.iter_mut().zip(b) {
+        *a += b;
+    }
+    a
+}
+
+/// `dst (= or +=) alpha a b` on the calling thread (a leaf of [`fold_rows`]).
+fn leaf_product(
+    dst: faer::MatMut<'_, f64>,
+    add: bool,
+    a: faer::MatRef<'_, f64>,
+    b: faer::MatRef<'_, f64>,
+    alpha: f64,
+) {
+    let accum = if add {
+        faer::Accum::Add
+    } else {
+        faer::Accum::Replace
+    };
+    faer::linalg::matmul::matmul(dst, accum, a, b, alpha, faer::Par::Seq);
+}
+
+/// The Euclidean norms of the columns of `w` (a leaf of [`fold_rows`]), squared, as a row.
+fn leaf_squared_norms(w: faer::MatRef<'_, f64>) -> Mat<f64> {
+    Mat::<f64>::from_fn(1, w.ncols(), |_, j| {
+        let col = w.col(j).try_as_col_major().expect("contiguous");
+        let mut lanes = [0.0; 8];
+        let chunks = col.as_slice().chunks_exact(8);
+        let tail: f64 = chunks.remainder().iter().map(|x| x * x).sum();
+        for c in chunks {
+            for (l, x) in lanes.iter_mut().zip(c) {
+                *l += x * x;
+            }
+        }
+        lanes.iter().sum::<f64>() + tail
+    })
+}
+
+/// The Gram matrix `G = mw^T w` of a block (already M-orthogonal to the basis and the locked
+/// vectors) with its images `mw`, and its columns' Euclidean norms: what [`cholesky_qr2`] starts
+/// from, summed in the pass that makes `mw` ([`crate::csc::sym_mul_mat_gram_into`]).
+struct Gram {
+    g: Mat<f64>,
+    norms: Vec<f64>,
+}
+
 /// M-orthonormalises the columns of a block `w` (already M-orthogonal to the basis and the
 /// locked vectors) with their `M` images `mw` by Cholesky QR, twice (CholQR2): `G = mw^T w`,
 /// `G = R^T R`, `w <- w R^-1`, `mw <- mw R^-1` (the images follow by linearity, no sparse
 /// product), then once more. Returns the upper triangular `R` of `w = Q R` (the product of the
 /// two passes'), which holds the coefficients a Gram-Schmidt of each column against the ones
-/// before it would find (docs/MATH.md, "Selective reorthogonalisation").
+/// before it would find (docs/MATH.md, "Selective reorthogonalisation"). `gram` is the block's
+/// [`Gram`] (from its projection's `M` product); the first pass's `R^-1` and the second's Gram
+/// matrix are one pass over the rows ([`fold_rows`]), the second's `R^-1` another.
 ///
 /// `None`, with `w` and `mw` as they were, when the block is near dependence: a column whose
 /// Euclidean norm fell below `1e-5` of its norm before the projection (`before`), or whose part
@@ -1470,40 +1543,49 @@ fn cholesky_qr2(
     mut w: faer::MatMut<'_, f64>,
     mut mw: faer::MatMut<'_, f64>,
     before: &[f64],
+    gram: &Gram,
 ) -> Option<Mat<f64>> {
     let k = w.ncols();
-    if (0..k).any(|j| !(w.as_ref().col(j).norm_l2() > 1e-5 * before[j])) {
+    if (0..k).any(|j| !(gram.norms[j] > 1e-5 * before[j])) {
         return None;
     }
-    let g = inner_products(mw.as_ref(), w.as_ref());
-    let r1 = small_cholesky(&g, 1e-5)?;
+    let r1 = small_cholesky(&gram.g, 1e-5)?;
     let inv1 = upper_inverse(&r1);
-    right_multiply_in_place(w.as_mut(), inv1.as_ref());
-    right_multiply_in_place(mw.as_mut(), inv1.as_ref());
-    let g2 = inner_products(mw.as_ref(), w.as_ref());
-    match small_cholesky(&g2, 0.5) {
-        Some(r2) => {
-            let inv2 = upper_inverse(&r2);
-            right_multiply_in_place(w.as_mut(), inv2.as_ref());
-            right_multiply_in_place(mw.as_mut(), inv2.as_ref());
-            Some(&r2 * &r1)
-        }
-        None => {
-            // not reached after a first pass that met its bound (`g2` is then the identity to
-            // about 1e-6); undone all the same, for the vector-by-vector path
-            right_multiply_in_place(w, r1.as_ref());
-            right_multiply_in_place(mw, r1.as_ref());
-            None
-        }
-    }
+    let g2 = fold_rows(0, w.as_mut(), mw.as_mut(), &|_, mut w, mut mw| {
+        right_multiply_rows(w.as_mut(), inv1.as_ref());
+        right_multiply_rows(mw.as_mut(), inv1.as_ref());
+        let mut g = Mat::<f64>::zeros(k, k);
+        leaf_product(g.as_mut(), false, mw.as_ref().transpose(), w.as_ref(), 1.0);
+        vec![g]
+    });
+    let (r, s) = match small_cholesky(&g2[0], 0.5) {
+        Some(r2) => (Some(&r2 * &r1), upper_inverse(&r2)),
+        // not reached after a first pass that met its bound (`g2` is then the identity to about
+        // 1e-6); undone all the same, for the vector-by-vector path
+        None => (None, r1),
+    };
+    let _ = fold_rows(0, w, mw, &|_, w, mw| {
+        right_multiply_rows(w, s.as_ref());
+        right_multiply_rows(mw, s.as_ref());
+        vec![]
+    });
+    r
 }
 
 /// The fewest rows of a thread's part in [`inner_products`].
 const PROJECT_ROWS: usize = 4096;
 
+/// A block projected by [`project_block`]: its coefficients on the basis, whether a second pass
+/// was needed, its columns' Euclidean norms before the projection, and its [`Gram`] after.
+struct Projected {
+    coef: Mat<f64>,
+    again: bool,
+    before: Vec<f64>,
+    gram: Gram,
+}
+
 /// Projects the block `w` out of the locked vectors `x` and the basis `v` (M-orthonormal, with
-/// their M images), and writes `M w` into `mw`; returns the coefficients on `v` (`v.ncols() x
-/// w.ncols()`) and whether a second pass was needed.
+/// their M images), and writes `M w` into `mw`.
 ///
 /// First the Lanczos recurrence: one pass of block classical Gram-Schmidt against the columns
 /// `lo..` of `v`, the only ones that hold a large part of `OP V_j` ([`coupled_from`]). Then one
@@ -1514,6 +1596,11 @@ const PROJECT_ROWS: usize = 4096;
 /// column orthogonal to working precision (docs/MATH.md, "Selective reorthogonalisation"). The
 /// squared M-norm before the pass is the one after it plus the squared coefficients removed
 /// (Pythagoras in the M inner product), so the test costs no product beyond `M w`.
+///
+/// The steps that need only a row of the block are fused by rows ([`fold_rows`]): the
+/// recurrence's coefficients with the norms before; the recurrence's subtraction with the full
+/// pass's coefficients; the full pass's subtraction. The block's [`Gram`] is summed in the pass
+/// that makes `M w` (docs/SCALING.md, "Orthogonalisation by leaves of rows").
 fn project_block(
     m: &SparseMatrix,
     (x, mx): (faer::MatRef<'_, f64>, faer::MatRef<'_, f64>),
@@ -1521,30 +1608,82 @@ fn project_block(
     lo: usize,
     mut w: faer::MatMut<'_, f64>,
     mut mw: faer::MatMut<'_, f64>,
-) -> (Mat<f64>, bool) {
-    let len = v.ncols();
-    let mut coef = Mat::<f64>::zeros(len, w.ncols());
-    let local = project_out(
-        v.subcols(lo, len - lo),
-        mv.subcols(lo, len - lo),
-        w.as_mut(),
-    );
-    coef.subrows_mut(lo, len - lo).copy_from(&local);
-    let on_locked = project_out(x, mx, w.as_mut());
-    let on_basis = project_out(v, mv, w.as_mut());
-    coef += &on_basis;
-    crate::csc::sym_mul_mat_into(m, w.as_ref(), mw.as_mut()).expect("sizes checked");
-    let again = (0..w.ncols()).any(|j| {
-        let kept = mw.as_ref().col(j).transpose() * w.as_ref().col(j);
-        let gone = on_locked.col(j).squared_norm_l2() + on_basis.col(j).squared_norm_l2();
-        !(kept >= REORTHOGONALIZE * REORTHOGONALIZE * (kept + gone))
-    });
-    if again {
-        let _ = project_out(x, mx, w.as_mut());
-        coef += project_out(v, mv, w.as_mut());
-        crate::csc::sym_mul_mat_into(m, w.as_ref(), mw.as_mut()).expect("sizes checked");
+) -> Projected {
+    let (len, k) = (v.ncols(), w.ncols());
+    let local = len - lo;
+    fn rows(a: faer::MatRef<'_, f64>, first: usize, count: usize) -> faer::MatRef<'_, f64> {
+        a.subrows(first, count)
     }
-    (coef, again)
+    // the recurrence's coefficients and the norms before
+    let first = fold_rows(0, w.as_mut(), mw.as_mut(), &|r, w, _| {
+        let mut c = Mat::<f64>::zeros(local, k);
+        let mvl = rows(mv, r, w.nrows()).subcols(lo, local);
+        leaf_product(c.as_mut(), false, mvl.transpose(), w.as_ref(), 1.0);
+        vec![c, leaf_squared_norms(w.as_ref())]
+    });
+    let before: Vec<f64> = (0..k).map(|j| first[1][(0, j)].sqrt()).collect();
+    let mut coef = Mat::<f64>::zeros(len, k);
+    coef.subrows_mut(lo, local).copy_from(&first[0]);
+    // one pass against the locked vectors and the whole basis (after the recurrence's, in the
+    // same pass over the rows), twice where the first removed too much
+    let mut recurrence = Some(&first[0]);
+    let mut again = false;
+    let gram = loop {
+        let sums = fold_rows(0, w.as_mut(), mw.as_mut(), &|r, mut w, _| {
+            let n = w.nrows();
+            if let Some(c) = recurrence {
+                let vl = rows(v, r, n).subcols(lo, local);
+                leaf_product(w.as_mut(), true, vl, c.as_ref(), -1.0);
+            }
+            let mut cv = Mat::<f64>::zeros(len, k);
+            let mut cx = Mat::<f64>::zeros(x.ncols(), k);
+            leaf_product(
+                cv.as_mut(),
+                false,
+                rows(mv, r, n).transpose(),
+                w.as_ref(),
+                1.0,
+            );
+            leaf_product(
+                cx.as_mut(),
+                false,
+                rows(mx, r, n).transpose(),
+                w.as_ref(),
+                1.0,
+            );
+            vec![cv, cx]
+        });
+        let (on_basis, on_locked) = (&sums[0], &sums[1]);
+        let _ = fold_rows(0, w.as_mut(), mw.as_mut(), &|r, mut w, _| {
+            let n = w.nrows();
+            leaf_product(w.as_mut(), true, rows(v, r, n), on_basis.as_ref(), -1.0);
+            leaf_product(w.as_mut(), true, rows(x, r, n), on_locked.as_ref(), -1.0);
+            vec![]
+        });
+        coef += on_basis;
+        let (g, squares) =
+            crate::csc::sym_mul_mat_gram_into(m, w.as_ref(), mw.as_mut()).expect("sizes checked");
+        let gram = Gram {
+            g,
+            norms: squares.iter().map(|s| s.sqrt()).collect(),
+        };
+        let short = (0..k).any(|j| {
+            let kept = gram.g[(j, j)];
+            let gone = on_locked.col(j).squared_norm_l2() + on_basis.col(j).squared_norm_l2();
+            !(kept >= REORTHOGONALIZE * REORTHOGONALIZE * (kept + gone))
+        });
+        if again || !short {
+            break gram;
+        }
+        again = true;
+        recurrence = None;
+    };
+    Projected {
+        coef,
+        again,
+        before,
+        gram,
+    }
 }
 
 /// A block's single pass of Gram-Schmidt against the basis is repeated when a column keeps less
@@ -1830,14 +1969,13 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             }
             let t = Instant::now();
             let (head, mut w) = basis.split_mut(len0);
-            let before: Vec<f64> = (0..block).map(|j| w.as_ref().col(j).norm_l2()).collect();
             // the block against the locked vectors and the basis (the recurrence's columns, one
             // pass against all, a second only where needed), with its M images in the images'
             // reserved columns
             let lo = coupled_from(h, applied, hi);
             mbasis.push_zeros(block);
             let (mhead, mw) = mbasis.split_mut(len0);
-            let (coef0, again) = project_block(
+            let projected = project_block(
                 self.pencil.m,
                 (self.x.mat(), self.mx.mat()),
                 (head, mhead),
@@ -1845,15 +1983,16 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                 w.as_mut(),
                 mw,
             );
-            stats.reorthogonalized_blocks += usize::from(again);
+            stats.reorthogonalized_blocks += usize::from(projected.again);
             // the block within itself: by CholQR2 when it is well conditioned and fits
             let qr = if len0 + block <= cap {
                 let (_, w) = basis.split_mut(len0);
                 let (_, mw) = mbasis.split_mut(len0);
-                cholesky_qr2(w, mw, &before)
+                cholesky_qr2(w, mw, &projected.before, &projected.gram)
             } else {
                 None
             };
+            let (coef0, before) = (&projected.coef, &projected.before);
             match qr {
                 Some(r) => {
                     for j in 0..block {
@@ -1862,7 +2001,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                         h.push(coef);
                     }
                 }
-                None => self.orthonormalise_by_columns(basis, mbasis, h, &coef0, &before),
+                None => self.orthonormalise_by_columns(basis, mbasis, h, coef0, before),
             }
             applied = hi;
             stats.orthogonalization_seconds += t.elapsed().as_secs_f64();
@@ -2431,6 +2570,17 @@ impl<'p, 'a> Lanczos<'p, 'a> {
 mod tests {
     use super::*;
 
+    /// `mw^T w` and the Euclidean norms of `w`'s columns, summed here entry by entry.
+    fn gram_of(w: &Mat<f64>, mw: &Mat<f64>) -> Gram {
+        let (n, k) = (w.nrows(), w.ncols());
+        Gram {
+            g: Mat::<f64>::from_fn(k, k, |a, b| (0..n).map(|i| mw[(i, a)] * w[(i, b)]).sum()),
+            norms: (0..k)
+                .map(|j| (0..n).map(|i| w[(i, j)] * w[(i, j)]).sum::<f64>().sqrt())
+                .collect(),
+        }
+    }
+
     /// `R` and `Q` of `w = Q R` by modified Gram-Schmidt, twice, in the M inner product of the
     /// diagonal `m`: the reference for [`cholesky_qr2`].
     fn gram_schmidt_m(w: &Mat<f64>, m: &[f64]) -> (Mat<f64>, Mat<f64>) {
@@ -2481,8 +2631,9 @@ mod tests {
             let before: Vec<f64> = (0..k).map(|j| w.col(j).norm_l2()).collect();
             let mut q = w.clone();
             let mut mq = images(&w);
-            let r =
-                cholesky_qr2(q.as_mut(), mq.as_mut(), &before).expect("a well-conditioned block");
+            let gram = gram_of(&q, &mq);
+            let r = cholesky_qr2(q.as_mut(), mq.as_mut(), &before, &gram)
+                .expect("a well-conditioned block");
             let scale = r_ref[(0, 0)];
             for i in 0..k {
                 for j in 0..k {
@@ -2496,6 +2647,12 @@ mod tests {
             }
             let exact_images = images(&q);
             for j in 0..k {
+                // the images follow by linearity, so they carry round-off times the block's
+                // condition (about 1 / closeness); measured about one eps of the column's largest
+                // image entry times that
+                let scale = (0..n)
+                    .map(|p| exact_images[(p, j)].abs())
+                    .fold(0.0, f64::max);
                 for i in 0..k {
                     let g: f64 = (0..n).map(|p| q[(p, i)] * m[p] * q[(p, j)]).sum();
                     let expected = if i == j { 1.0 } else { 0.0 };
@@ -2507,7 +2664,11 @@ mod tests {
                 for p in 0..n {
                     // Q agrees with the Gram-Schmidt's to the block's condition times round-off
                     assert!((q[(p, j)] - q_ref[(p, j)]).abs() <= 1e-15 / closeness * 1e3);
-                    assert!((mq[(p, j)] - exact_images[(p, j)]).abs() <= 1e-13);
+                    let err = (mq[(p, j)] - exact_images[(p, j)]).abs();
+                    assert!(
+                        err <= 8.0 * f64::EPSILON * scale / closeness,
+                        "image ({p}, {j})"
+                    );
                 }
             }
         }
@@ -2520,7 +2681,8 @@ mod tests {
         before[k - 1] *= 1e6;
         let (mut q, mut mq) = (w.clone(), images(&w));
         let mq0 = mq.clone();
-        assert!(cholesky_qr2(q.as_mut(), mq.as_mut(), &before).is_none());
+        let gram = gram_of(&q, &mq);
+        assert!(cholesky_qr2(q.as_mut(), mq.as_mut(), &before, &gram).is_none());
         assert!(q == w && mq == mq0);
         // a dependent column, and a column that vanished in the projection: declined, untouched
         let w = Mat::<f64>::from_fn(n, k, |i, j| match j {
@@ -2532,7 +2694,8 @@ mod tests {
         for before in [vec![1.0; k], vec![1.0, 1.0, 1.0, 1e12]] {
             let (mut q, mut mq) = (w.clone(), images(&w));
             let mq0 = mq.clone();
-            assert!(cholesky_qr2(q.as_mut(), mq.as_mut(), &before).is_none());
+            let gram = gram_of(&q, &mq);
+            assert!(cholesky_qr2(q.as_mut(), mq.as_mut(), &before, &gram).is_none());
             assert!(q == w && mq == mq0);
         }
     }
@@ -2622,7 +2785,12 @@ mod tests {
             });
             let mut w = w0.clone();
             let mut mw = Mat::<f64>::zeros(n, 3);
-            let (coef, again) = project_block(
+            let Projected {
+                coef,
+                again,
+                before,
+                gram,
+            } = project_block(
                 &m,
                 (x.as_ref(), mx.as_ref()),
                 (v.as_ref(), mv.as_ref()),
@@ -2631,6 +2799,22 @@ mod tests {
                 mw.as_mut(),
             );
             assert_eq!(again, expect_again, "outside {outside:e}");
+            // the norms before, and the Gram matrix and norms after, against sums written here
+            for j in 0..3 {
+                let b: f64 = (0..n).map(|i| w0[(i, j)] * w0[(i, j)]).sum::<f64>().sqrt();
+                assert!((before[j] - b).abs() <= 1e-14 * b, "norm before {j}");
+                let a: f64 = (0..n).map(|i| w[(i, j)] * w[(i, j)]).sum::<f64>().sqrt();
+                assert!((gram.norms[j] - a).abs() <= 1e-13 * a, "norm after {j}");
+                for c in 0..3 {
+                    let g: f64 = (0..n).map(|i| mdiag[i] * w[(i, j)] * w[(i, c)]).sum();
+                    let scale = gram.g[(j, j)].max(gram.g[(c, c)]);
+                    assert!(
+                        (gram.g[(j, c)] - g).abs() <= 1e-13 * scale,
+                        "outside {outside:e}: G[{j}, {c}] = {} against {g}",
+                        gram.g[(j, c)]
+                    );
+                }
+            }
             for j in 0..3 {
                 let m_norm = (0..n)
                     .map(|i| mdiag[i] * w[(i, j)] * w[(i, j)])
