@@ -517,9 +517,9 @@ fn block_product(
 /// The rows `first..` of `Y = A X` for a symmetric `A` (its column pointers, row indices and
 /// values; CSC with both triangles, so column `i` serves as row `i`) and `K` vectors stored
 /// row-major in `xt`, into the column-major `y` (`K` columns), by halves of the rows on the
-/// rayon threads down to 4096 rows. Each entry of `A` updates `K` accumulators held in registers
-/// (docs/SCALING.md, "Sparse products by blocks of known width"); the sums are added in the
-/// order of [`sym_mul_rows`], so the two give the same bits. With `gram`, also these rows' part
+/// rayon threads down to 4096 rows, each row by [`row_sums`] (docs/SCALING.md, "Sparse products
+/// by blocks of known width"), as [`sym_mul_rows`] does: the two give the same bits. With
+/// `gram`, also these rows' part
 /// of `Y^T X` (row by row) and of the squared norms of `X`'s columns, the halves' parts added.
 fn sym_mul_rows_into_cols<const K: usize>(
     (ptr, idx, val): (&[usize], &[usize], &[f64]),
@@ -553,14 +553,7 @@ fn sym_mul_rows_into_cols<const K: usize>(
     let mut g = [[0.0; K]; K];
     let mut squares = [0.0; K];
     for i in 0..rows {
-        let mut acc = [0.0; K];
-        let (lo, hi) = (ptr[first + i], ptr[first + i + 1]);
-        for (&c, &v) in idx[lo..hi].iter().zip(&val[lo..hi]) {
-            let xr: &[f64; K] = xt[c * K..(c + 1) * K].try_into().expect("K values per row");
-            for r in 0..K {
-                acc[r] += v * xr[r];
-            }
-        }
+        let acc = row_sums::<K>((ptr, idx, val), xt, first + i);
         for (o, a) in out.iter_mut().zip(acc) {
             o[i] = a;
         }
@@ -577,6 +570,27 @@ fn sym_mul_rows_into_cols<const K: usize>(
         }
     }
     gram.then(|| g.iter().flatten().chain(&squares).copied().collect())
+}
+
+/// Row `i` of `A X` for a symmetric `A` (its column pointers, row indices and values; column `i`
+/// serves as row `i`) and `K` vectors stored row-major in `x`: each entry of `A` updates `K`
+/// accumulators held in registers, in the order the entries are stored. The one loop of both
+/// kernels, [`sym_mul_rows_of`] and [`sym_mul_rows_into_cols`], so that they give the same bits.
+#[inline(always)]
+fn row_sums<const K: usize>(
+    (ptr, idx, val): (&[usize], &[usize], &[f64]),
+    x: &[f64],
+    i: usize,
+) -> [f64; K] {
+    let mut acc = [0.0; K];
+    let (lo, hi) = (ptr[i], ptr[i + 1]);
+    for (&c, &v) in idx[lo..hi].iter().zip(&val[lo..hi]) {
+        let xr: &[f64; K] = x[c * K..(c + 1) * K].try_into().expect("K values per row");
+        for r in 0..K {
+            acc[r] += v * xr[r];
+        }
+    }
+    acc
 }
 
 /// The widest block [`sym_mul_rows`] has a kernel of known width for (every width up to it has
@@ -654,15 +668,7 @@ fn sym_mul_rows_of<const K: usize>(a: &SparseMatrix, val: &[f64], x: &[f64], y: 
         .enumerate()
         .with_min_len(512)
         .for_each(|(i, row)| {
-            let mut acc = [0.0; K];
-            let (lo, hi) = (ptr[i], ptr[i + 1]);
-            for (&c, &v) in idx[lo..hi].iter().zip(&val[lo..hi]) {
-                let xr: &[f64; K] = x[c * K..(c + 1) * K].try_into().expect("K values per row");
-                for r in 0..K {
-                    acc[r] += v * xr[r];
-                }
-            }
-            row.copy_from_slice(&acc);
+            row.copy_from_slice(&row_sums::<K>((ptr, idx, val), x, i));
         });
 }
 

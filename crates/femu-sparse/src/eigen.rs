@@ -1611,13 +1611,10 @@ fn project_block(
 ) -> Projected {
     let (len, k) = (v.ncols(), w.ncols());
     let local = len - lo;
-    fn rows(a: faer::MatRef<'_, f64>, first: usize, count: usize) -> faer::MatRef<'_, f64> {
-        a.subrows(first, count)
-    }
     // the recurrence's coefficients and the norms before
     let first = fold_rows(0, w.as_mut(), mw.as_mut(), &|r, w, _| {
         let mut c = Mat::<f64>::zeros(local, k);
-        let mvl = rows(mv, r, w.nrows()).subcols(lo, local);
+        let mvl = mv.subrows(r, w.nrows()).subcols(lo, local);
         leaf_product(c.as_mut(), false, mvl.transpose(), w.as_ref(), 1.0);
         vec![c, leaf_squared_norms(w.as_ref())]
     });
@@ -1632,7 +1629,7 @@ fn project_block(
         let sums = fold_rows(0, w.as_mut(), mw.as_mut(), &|r, mut w, _| {
             let n = w.nrows();
             if let Some(c) = recurrence {
-                let vl = rows(v, r, n).subcols(lo, local);
+                let vl = v.subrows(r, n).subcols(lo, local);
                 leaf_product(w.as_mut(), true, vl, c.as_ref(), -1.0);
             }
             let mut cv = Mat::<f64>::zeros(len, k);
@@ -1640,14 +1637,14 @@ fn project_block(
             leaf_product(
                 cv.as_mut(),
                 false,
-                rows(mv, r, n).transpose(),
+                mv.subrows(r, n).transpose(),
                 w.as_ref(),
                 1.0,
             );
             leaf_product(
                 cx.as_mut(),
                 false,
-                rows(mx, r, n).transpose(),
+                mx.subrows(r, n).transpose(),
                 w.as_ref(),
                 1.0,
             );
@@ -1656,8 +1653,8 @@ fn project_block(
         let (on_basis, on_locked) = (&sums[0], &sums[1]);
         let _ = fold_rows(0, w.as_mut(), mw.as_mut(), &|r, mut w, _| {
             let n = w.nrows();
-            leaf_product(w.as_mut(), true, rows(v, r, n), on_basis.as_ref(), -1.0);
-            leaf_product(w.as_mut(), true, rows(x, r, n), on_locked.as_ref(), -1.0);
+            leaf_product(w.as_mut(), true, v.subrows(r, n), on_basis.as_ref(), -1.0);
+            leaf_product(w.as_mut(), true, x.subrows(r, n), on_locked.as_ref(), -1.0);
             vec![]
         });
         coef += on_basis;
