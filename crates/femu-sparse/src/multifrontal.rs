@@ -38,15 +38,17 @@ use rayon::prelude::*;
 const PARALLEL_FRONT_FLOPS: f64 = 2e8;
 
 /// Before a stored factorization's front above this many flops (outside the sequential subtrees,
-/// so a few dozen fronts near the root) the allocator's free memory is given back to the system
+/// so a few fronts near the root) the allocator's free memory is given back to the system
 /// ([`release_free_memory`]): the subtrees below have freed their update matrices into glibc's
 /// arenas (150-230 MB free there on the 209,088-DOF block), and these fronts' own update matrices
 /// are the factorization's peak. Peak of that solve 3,095-3,109 MB -> 2,952-2,973 MB, the
-/// factorization's time unchanged within its spread. On the 52,920-DOF block no front was above
-/// the first threshold (5e9); at 2e8 (the fronts that use every thread, eight there) its peak fell
-/// by 14-49 MB in four alternated pairs, for 15 ms of trims, the others' within their spread
-/// (docs/SCALING.md, "Memory the allocator keeps").
-const TRIM_FRONT: f64 = PARALLEL_FRONT_FLOPS;
+/// factorization's time unchanged within its spread. Memory given back comes back as fresh pages,
+/// a page fault each: on the 47,628-DOF plate, whose largest fronts are of 2e8-4e8 flops and
+/// whose peak is its iteration's, trims before them took the run's factorization from 35 to
+/// 60 thousand faults and its time up by a tenth, the peak unchanged; the 52,920-DOF block's
+/// eight and the 199,200-DOF plate's ten largest fronts are above 1e9 (docs/SCALING.md, "Memory
+/// the allocator keeps").
+const TRIM_FRONT: f64 = 1e9;
 
 /// Columns of an update matrix computed at once (`Fronts::front`): the scratch is `b x 256`,
 /// not `b x b`.
@@ -788,6 +790,10 @@ impl Fronts<'_> {
             self.solve_rows(top, bottom.rb_mut(), parallel);
             let d_inv: Vec<f64> = (0..c).map(|j| top[(j, j)].recip()).collect();
             update_matrix(bottom.rb(), &d_inv, u, true, parallel, work);
+            if !self.store {
+                // a Sturm count keeps no factor: `L_b` itself is never read
+                return Ok(signs);
+            }
             for (j, d) in d_inv.iter().enumerate() {
                 column_mut(bottom.rb_mut(), j)
                     .iter_mut()
