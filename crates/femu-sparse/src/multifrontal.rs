@@ -748,8 +748,10 @@ impl Fronts<'_> {
     }
 
     /// The dense work of a front held square (`l`, `c + b` rows, `c` columns, assembled):
-    /// `L_11 D L_11^T` in its top, `L_b` below it, `U = -L_b D L_b^T` written into `u` (the
-    /// children's parts are added after, [`Fronts::front`]); the signs of the pivots. `start` is the first pivot's index (for a zero pivot's error).
+    /// `L_11 D L_11^T` in its top, `L_b` below it (in a Sturm count, which stores no factor,
+    /// `W = L_b D` is left there unscaled), `U = -L_b D L_b^T` written into `u` (the children's
+    /// parts are added after, [`Fronts::front`]); the signs of the pivots. `start` is the first
+    /// pivot's index (for a zero pivot's error).
     fn dense(
         &self,
         start: usize,
