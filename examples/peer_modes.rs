@@ -8,6 +8,13 @@
 //!   the frequencies, the Sturm check and where the time went (`assembly_s` includes the ordering
 //!   and symbolic analysis made beside it, whose own time is `analysis_s`). `FEMU_ENGINE=slepc:R` solves with
 //!   SLEPc on `R` MPI ranks instead (`benches/scaling.sh`).
+//! - `peer_modes factor KIND N REPS`: the numeric factorization of `K - sigma M` alone at the
+//!   peers' shift (10 Hz below zero) with the analysis the eigensolver uses, `REPS` stored
+//!   factorizations then `REPS` Sturm counts (no factor kept), one after the other; prints their
+//!   times and the analysis's flop count. `export` writes that analysis's permutation to
+//!   `DIR/ordering.txt` (the original index of each pivot, one per line, from 0), so that
+//!   `benches/peers/pardiso_factor.py` factors the same `L` with PARDISO
+//!   (docs/SCALING.md, "PARDISO's flop count").
 
 use femu::io::inp::{FrequencyStep, write_inp};
 use femu::prelude::*;
@@ -43,9 +50,26 @@ fn model(kind: &str, n: usize) -> Result<Model, Box<dyn std::error::Error>> {
     Ok(model)
 }
 
+/// The pencil of the model's matrices with the analysis its eigensolve uses (the one made beside
+/// the assembly).
+fn pencil(
+    sys: &SystemMatrices,
+) -> Result<femu::sparse::eigen::Pencil<'_>, Box<dyn std::error::Error>> {
+    use femu::sparse::eigen::Pencil;
+    Ok(match sys.analysis() {
+        Some(symbolic) => Pencil::with_symbolic(&sys.k, &sys.m, symbolic)?,
+        None => Pencil::new(
+            &sys.k,
+            &sys.m,
+            femu::sparse::ordering::Ordering::NestedDissection,
+        )?,
+    })
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: peer_modes (export KIND N COUNT DIR | solve KIND N COUNT)";
+    let usage =
+        "usage: peer_modes (export KIND N COUNT DIR | solve KIND N COUNT | factor KIND N REPS)";
     if args.len() < 5 {
         return Err(usage.into());
     }
@@ -65,6 +89,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             write_inp(&model, Some(&step), dir.join("model.inp"))?;
             femu::sparse::mtx::write_matrix_market(dir.join("K.mtx"), &sys.k, true)?;
             femu::sparse::mtx::write_matrix_market(dir.join("M.mtx"), &sys.m, true)?;
+            let pencil = pencil(&sys)?;
+            if let Some(fwd) = pencil.symbolic().permutation() {
+                let lines: Vec<String> = fwd.iter().map(|i| i.to_string()).collect();
+                std::fs::write(dir.join("ordering.txt"), lines.join("\n") + "\n")?;
+            }
             println!(
                 "{{\"dofs\": {}, \"elements\": {}}}",
                 sys.dofs.free_count(),
@@ -139,6 +168,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 s.factor_flops,
                 modes.sturm.verified(),
                 f.join(", ")
+            );
+        }
+        "factor" => {
+            let pencil = pencil(&sys)?;
+            // the peers' shift (benches/peers/run.py): 10 Hz below zero
+            let sigma = -(2.0 * std::f64::consts::PI * 10.0_f64).powi(2);
+            let time = |f: &dyn Fn() -> Result<(), femu::sparse::SparseError>| {
+                (0..count)
+                    .map(|_| {
+                        let t = Instant::now();
+                        f().map(|()| format!("{:.4}", t.elapsed().as_secs_f64()))
+                    })
+                    .collect::<Result<Vec<_>, _>>()
+            };
+            let stored = time(&|| pencil.factor_shifted(sigma).map(drop))?;
+            let counts = time(&|| pencil.count_below(sigma).map(drop))?;
+            println!(
+                "{{\"dofs\": {}, \"factor_len\": {}, \"factor_flops\": {:.6e}, \"factor_s\": [{}], \"count_s\": [{}]}}",
+                sys.dofs.free_count(),
+                pencil.symbolic().factor_len(),
+                pencil.symbolic().flops(),
+                stored.join(", "),
+                counts.join(", ")
             );
         }
         _ => return Err(usage.into()),

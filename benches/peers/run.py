@@ -16,7 +16,10 @@ range): on a machine whose times move by tens of per cent from run to run, one r
 is good to about 0.1-0.2; PEERS selects peers (default
 "calculix,eigsh+pardiso,eigsh+cholmod,slepc+mumps:1,slepc+mumps:2"; "eigsh+superlu" is scipy's
 default factorization). PEERS_PYTHON: the Python with scipy, pypardiso, scikit-sparse and
-threadpoolctl (run.sh makes a venv).
+threadpoolctl (run.sh makes a venv). PEER_FACTOR=R (default 0: off) also times the numeric
+factorization alone in every round, R times each: femu's stored factorization and Sturm count
+(`peer_modes factor`) and PARDISO's with its own ordering and with femu's
+(`pardiso_factor.py`), and prints their rates at one flop count, femu's, on the same factor.
 """
 import glob, json, os, re, shutil, statistics, subprocess, sys, tempfile
 
@@ -59,6 +62,34 @@ def ccx_frequencies(dat):
     return f
 
 
+def factor_table(kind, dofs, factor_runs):
+    """The numeric factorizations of every round: the first of each kind and the median of the
+    others, pooled over the rounds; rates at femu's flop count of its factor, which PARDISO
+    factors too when given femu's ordering (its own ordering's factor is about as large; its rate
+    there is at its own count scaled by the ratio of the two counts on femu's ordering)."""
+    femu_flops = factor_runs[0][0]["factor_flops"]
+    rest = lambda lists: statistics.median([t for ts in lists for t in ts[1:]] or [t for ts in lists for t in ts])
+    firsts = lambda lists: f"{min(ts[0] for ts in lists):.3f}-{max(ts[0] for ts in lists):.3f}"
+    p0 = factor_runs[0][1]
+    scale = femu_flops * 1e-9 / p0["femu_ordering"]["factor_gflop"]
+    dense = p0["dense"]
+    print(f"\n{kind}, {dofs} DOF: the numeric factorization of K - sigma M alone, {len(factor_runs)} round(s) of "
+          f"{len(factor_runs[0][0]['factor_s'])}; rates at femu's count of its factor ({femu_flops * 1e-9:.3f} GFLOP). "
+          f"PARDISO counts {p0['femu_ordering']['factor_gflop']:.3f} GFLOP for the same factor ({1 / scale:.3f}x) and "
+          f"{dense['pardiso_gflop']:.3f} for a dense {dense['n']} x {dense['n']} matrix whose classical count is {dense['classical_gflop']:.3f}\n")
+    print("| factorization | entries | its flop count (GFLOP) | first (s) | the others, median (s) | GFLOP/s at femu's count |")
+    print("|---|---|---|---|---|---|")
+    for name, times, entries, gflop, flops in (
+        ("femu, stored", [f["factor_s"] for f, _ in factor_runs], factor_runs[0][0]["factor_len"], femu_flops * 1e-9, femu_flops * 1e-9),
+        ("femu, Sturm count (no factor kept)", [f["count_s"] for f, _ in factor_runs], factor_runs[0][0]["factor_len"], femu_flops * 1e-9, femu_flops * 1e-9),
+        ("PARDISO, femu's ordering", [p["femu_ordering"]["factor_s"] for _, p in factor_runs], p0["femu_ordering"]["factor_nnz"], p0["femu_ordering"]["factor_gflop"], femu_flops * 1e-9),
+        ("PARDISO, its own ordering", [p["own"]["factor_s"] for _, p in factor_runs], p0["own"]["factor_nnz"], p0["own"]["factor_gflop"], p0["own"]["factor_gflop"] * scale),
+    ):
+        t = rest(times)
+        print(f"| {name} | {entries / 1e6:.2f}M | {gflop:.3f} | {firsts(times)} | {t:.3f} | {flops / t:.1f} |")
+    print(flush=True)
+
+
 def main():
     kind, n = sys.argv[1], int(sys.argv[2])
     count = int(sys.argv[3]) if len(sys.argv) > 3 else 20
@@ -91,6 +122,8 @@ def main():
     # runs[tool] = [(wall, rss, eigensolve, note)], one per round; femu first in every round
     runs = {}
     ref = None
+    factor_reps = int(os.environ.get("PEER_FACTOR", "0"))
+    factor_runs = []
     for r in range(rounds):
         code, out, femu_wall, rss = timed([EXE, "solve", kind, str(n), str(count)], d, limit)
         femu = json.loads(out)
@@ -147,6 +180,14 @@ def main():
                 note = f"failed (exit {code}): {out.strip()[-300:]}"
             print(json.dumps({"kind": kind, "dofs": dofs, "tool": tool, "round": r + 1, "wall_s": wall, "rss_mb": rss, "ok": code == 0, "max_rel_diff": diff, **{k: v for k, v in info.items() if k != "frequencies_hz"}}), flush=True)
             runs.setdefault(tool, []).append((wall, rss, info.get("eigen_s"), note))
+        if factor_reps:
+            env = dict(os.environ, OMP_NUM_THREADS="2", MKL_NUM_THREADS="2")
+            femu_f = json.loads(subprocess.run([EXE, "factor", kind, str(n), str(factor_reps)], cwd=d, capture_output=True, text=True, check=True).stdout)
+            pardiso_f = json.loads(subprocess.run([venv, script("pardiso_factor.py"), d, sigma, str(factor_reps)], cwd=d, capture_output=True, text=True, check=True, env=env).stdout.strip().splitlines()[-1])
+            print(json.dumps({"kind": kind, "dofs": dofs, "tool": "factorization", "round": r + 1, "femu": femu_f, "pardiso": pardiso_f}), flush=True)
+            factor_runs.append((femu_f, pardiso_f))
+    if factor_runs:
+        factor_table(kind, dofs, factor_runs)
     good = {t: [x for x in v if not x[3].startswith("failed")] for t, v in runs.items()}
     # the fastest peer over femu within each round (a peer that failed or stopped in a round is
     # left out of that round)

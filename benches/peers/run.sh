@@ -5,7 +5,8 @@
 #   bash benches/peers/run.sh [SIZES...]   e.g. "hex8:20 tet10:10" (default: the clamped hex8 block
 #   and the free-free hex8 plate at 50k and 200k DOF; 600k (hex8:46, tet10:23) takes about an hour
 #   with CalculiX: time-box it with PEER_TIMEOUT=1800; PEERS selects peers and PEER_ROUNDS=R runs
-#   every tool R times in rounds (medians and the per-round ratios), see run.py; the
+#   every tool R times in rounds (medians and the per-round ratios), PEER_FACTOR=R times the
+#   numeric factorizations alone, femu's and PARDISO's on femu's ordering, see run.py; the
 #   exported matrices are removed after each model unless PEERS_KEEP=1)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
