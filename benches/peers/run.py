@@ -62,6 +62,14 @@ def ccx_frequencies(dat):
     return f
 
 
+def json_of(cmd, cwd, env=None):
+    """The last line of cmd's output as JSON; a failure stops the run with the command's error."""
+    p = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, env=env)
+    if p.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed (exit {p.returncode}): {p.stderr.strip()[-500:]}")
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
 def factor_table(kind, dofs, factor_runs):
     """The numeric factorizations of every round: the first of each kind and the median of the
     others, pooled over the rounds; rates at femu's flop count of its factor, which PARDISO
@@ -182,8 +190,8 @@ def main():
             runs.setdefault(tool, []).append((wall, rss, info.get("eigen_s"), note))
         if factor_reps:
             env = dict(os.environ, OMP_NUM_THREADS="2", MKL_NUM_THREADS="2")
-            femu_f = json.loads(subprocess.run([EXE, "factor", kind, str(n), str(factor_reps)], cwd=d, capture_output=True, text=True, check=True).stdout)
-            pardiso_f = json.loads(subprocess.run([venv, script("pardiso_factor.py"), d, sigma, str(factor_reps)], cwd=d, capture_output=True, text=True, check=True, env=env).stdout.strip().splitlines()[-1])
+            femu_f = json_of([EXE, "factor", kind, str(n), str(factor_reps)], d)
+            pardiso_f = json_of([venv, script("pardiso_factor.py"), d, sigma, str(factor_reps)], d, env)
             print(json.dumps({"kind": kind, "dofs": dofs, "tool": "factorization", "round": r + 1, "femu": femu_f, "pardiso": pardiso_f}), flush=True)
             factor_runs.append((femu_f, pardiso_f))
     if factor_runs:
@@ -202,8 +210,8 @@ def main():
                 solve_ratios.append(min(solves) / femu_r[2])
     spread = lambda xs: f" (median of {len(xs)} rounds, {min(xs):.2f}-{max(xs):.2f})" if len(xs) > 1 else ""
     fmt = lambda xs: f"{statistics.median(xs):.2f}x{spread(xs)}" if xs else "nan"
-    print(f"\n{kind}, {dofs} DOF, {count} lowest modes (sigma {SIGMA:g} s^-2 for the peers); fastest peer / femu: "
-          f"{fmt(ratios)} in wall time, {fmt(solve_ratios)} in eigensolve time\n")
+    against = f"fastest peer / femu: {fmt(ratios)} in wall time, {fmt(solve_ratios)} in eigensolve time" if ratios else "no peer ran"
+    print(f"\n{kind}, {dofs} DOF, {count} lowest modes (sigma {SIGMA:g} s^-2 for the peers); {against}\n")
     print("| tool | wall (s) | eigensolve (s) | peak RSS (MB) | wall / femu's | eigensolve / femu's | notes |")
     print("|---|---|---|---|---|---|---|")
     femu_wall = statistics.median([x[0] for x in good["femu"]])
