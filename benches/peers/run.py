@@ -107,7 +107,8 @@ def main():
     dofs = info["dofs"]
     rounds = max(1, int(os.environ.get("PEER_ROUNDS", "1")))
     script = lambda name: os.path.join(ROOT, "benches", "peers", name)
-    venv = os.environ.get("PEERS_PYTHON", sys.executable)
+    # absolute: the tools run in the export directory
+    venv = os.path.abspath(os.environ.get("PEERS_PYTHON", sys.executable))
     debian = "/usr/bin/python3"  # petsc4py and slepc4py from Debian's packages
     sigma = str(SIGMA)
     peers = [
