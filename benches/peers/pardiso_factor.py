@@ -7,10 +7,10 @@ same L and their rates can be taken at one flop count:
 For each ordering: the analysis (phase 11), then REPS numeric factorizations (phase 22) one after
 the other (the first of its own ordering touches fresh memory, the others may reuse what MKL
 kept), PARDISO's count of the factor's entries (iparm 18) and of its flops (iparm 19). Last,
-PARDISO's flop count of a dense 1000 x 1000
-SPD matrix against the classical count `sum_j (b_j^2 + 2 b_j)` femu reports (`b_j` the entries below
-the diagonal of column j): PARDISO counts more for the same elimination (docs/SCALING.md,
-"PARDISO's flop count"). Prints one JSON line.
+PARDISO's flop count of a dense 1000 x 1000 SPD matrix against the classical count
+`sum_j (b_j^2 + 2 b_j)` femu reports (`b_j` the entries below the diagonal of column j): PARDISO
+counts more for the same elimination (docs/SCALING.md, "PARDISO's flop count"). Prints one JSON
+line.
 """
 import json, sys, time
 import numpy as np

@@ -299,8 +299,8 @@ impl SymbolicFactor {
 
     /// The fill-reducing permutation the analysis factors with: entry `k` is the original index
     /// of the `k`-th pivot (`fwd[new] = old`, the ordering chosen by [`Ordering`] and the
-    /// elimination tree's postorder); `None` for the identity. Another solver given this permutation factors
-    /// the same `L` (docs/SCALING.md, "PARDISO's flop count").
+    /// elimination tree's postorder); `None` for the identity. Another solver given this
+    /// permutation factors the same `L` (docs/SCALING.md, "PARDISO's flop count").
     pub fn permutation(&self) -> Option<&[usize]> {
         self.inner.perm().map(|p| p.arrays().0)
     }
@@ -333,10 +333,7 @@ impl SymbolicFactor {
             SymbolicCholeskyRaw::Simplicial(_) => k.saturating_sub(1),
             SymbolicCholeskyRaw::Supernodal(_) => k,
         };
-        match self.inner.perm() {
-            Some(p) => p.arrays().0[k],
-            None => k,
-        }
+        self.permutation().map_or(k, |fwd| fwd[k])
     }
 
     /// Numeric `LL^T` of a symmetric positive definite matrix with this pattern.
@@ -828,9 +825,8 @@ impl Factorization for Ldlt {
                 }
             };
             let factor = (&self.values[..], layout);
-            match inner.perm() {
-                Some(p) => {
-                    let fwd = p.arrays().0;
+            match self.symbolic.permutation() {
+                Some(fwd) => {
                     let mut x = faer::Mat::from_fn(fwd.len(), rhs.ncols(), |i, j| rhs[(fwd[i], j)]);
                     crate::multifrontal::solve(tree, s, factor, x.as_mut(), threads);
                     for j in 0..x.ncols() {
