@@ -105,6 +105,58 @@ fn modes_json_matches_dense_reference() {
     for key in ["eigenvalues", "residuals"] {
         assert_eq!(v[key].as_array().unwrap().len(), 4);
     }
+    // where the eigensolve's time went: two factorizations (the run's and the Sturm count's),
+    // the vectors solved, phases that add up to the whole
+    let e = &v["eigensolver"];
+    assert_eq!(e["block_size"], 4);
+    assert_eq!(e["factorizations"], 2, "{e}");
+    assert!(e["solved_vectors"].as_u64().unwrap() >= 4, "{e}");
+    let secs = |k: &str| e[k].as_f64().unwrap();
+    let phases: f64 = [
+        "check_seconds",
+        "symbolic_seconds",
+        "factor_seconds",
+        "solve_seconds",
+        "orthogonalization_seconds",
+        "ritz_seconds",
+        "other_seconds",
+    ]
+    .iter()
+    .map(|k| secs(k))
+    .sum();
+    assert!((phases - secs("total_seconds")).abs() < 1e-9, "{e}");
+    assert!(stdout.contains("Eigensolver: 2 factorizations"), "{stdout}");
+    // other block sizes, the narrowest and the widest (wider than the 24-DOF model's basis):
+    // the same modes, to the dense reference
+    for block in ["1", "64"] {
+        let out = femu()
+            .args([
+                "modes",
+                fixture("two_hex.inp").to_str().unwrap(),
+                "--block-size",
+                block,
+                "--json",
+                json.to_str().unwrap(),
+            ])
+            .assert()
+            .success();
+        let stdout = String::from_utf8(out.get_output().stdout.clone()).unwrap();
+        assert!(
+            stdout.contains(&format!("in blocks of {block} ")),
+            "{stdout}"
+        );
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(v["eigensolver"]["block_size"].to_string(), block);
+        for (j, fj) in v["frequencies_hz"].as_array().unwrap().iter().enumerate() {
+            let reference = eig.values[j].sqrt() / (2.0 * std::f64::consts::PI);
+            let fj = fj.as_f64().unwrap();
+            assert!(
+                (fj / reference - 1.0).abs() < 1e-10,
+                "block {block}, mode {j}: {fj} vs {reference}"
+            );
+        }
+    }
     // a band from just above the first mode to just above the fourth, quiet: nothing on stdout;
     // the count of modes in it comes from the dense reference
     let lo = f[0] * 1.001;
@@ -165,6 +217,15 @@ fn bad_input_fails_with_a_message() {
         .args(["modes", deck.to_str().unwrap(), "--shift", "-5"])
         .assert()
         .failure();
+    for (block, says) in [("0", "block size 0"), ("65", "between 1 and 64")] {
+        let err = stderr_of_failure(&["modes", deck.to_str().unwrap(), "--block-size", block]);
+        assert!(err.contains(says), "{block}: {err}");
+    }
+    femu()
+        .args(["modes", deck.to_str().unwrap(), "--block-size", "-1"])
+        .assert()
+        .failure()
+        .code(2);
     femu()
         .args([
             "modes",

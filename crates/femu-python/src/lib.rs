@@ -255,21 +255,25 @@ impl Model {
     /// The lowest `count` modes, those nearest `shift_hz`, or all in `band_hz = (lo, hi)`, by
     /// femu's shift-invert Lanczos, with the Sturm count that proves none was skipped
     /// (docs/MATH.md, "The eigensolver's evidence"). `progress` is called with the number of
-    /// vectors solved so far after every block. Releases the GIL; Ctrl-C, or an exception raised
-    /// by `progress`, stops the solve at the next block.
-    #[pyo3(signature = (count=None, *, shift_hz=None, band_hz=None, progress=None))]
+    /// vectors solved so far after every block. `block_size` vectors are solved together (the
+    /// default 4; docs/SCALING.md, "Block size and the count of solved vectors"), and
+    /// `to_dict()["eigensolver"]` says where the time went. Releases the GIL; Ctrl-C, or an
+    /// exception raised by `progress`, stops the solve at the next block.
+    #[pyo3(signature = (count=None, *, shift_hz=None, band_hz=None, block_size=None, progress=None))]
     fn modes(
         &self,
         py: Python<'_>,
         count: Option<usize>,
         shift_hz: Option<f64>,
         band_hz: Option<(f64, f64)>,
+        block_size: Option<usize>,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Modes> {
         let options = ModesOptions {
             count,
             shift_hz,
             band_hz,
+            block_size,
         };
         let stop: std::sync::Arc<std::sync::Mutex<Option<PyErr>>> = Default::default();
         let seen = stop.clone();

@@ -70,6 +70,19 @@ def test_matrices_and_modes_against_scipy(model):
     )
 
 
+def test_block_size_changes_the_work_not_the_modes(model):
+    K, M = model.K, model.M
+    ref = np.sort(sla.eigsh(K, k=8, M=M, sigma=0.0, which="LM")[0])
+    for block in (1, 2, 8):
+        modes = model.modes(8, block_size=block)
+        np.testing.assert_allclose(modes.values, ref, rtol=1e-9)
+        e = modes.to_dict()["eigensolver"]
+        assert e["block_size"] == block and e["factorizations"] == 2
+        assert e["solved_vectors"] >= 8
+    with pytest.raises(femu.FemuError, match="block size 0"):
+        model.modes(8, block_size=0)
+
+
 def numpy_mac(a, b):
     num = (a.T @ b) ** 2
     return num / np.outer(np.sum(a * a, axis=0), np.sum(b * b, axis=0))

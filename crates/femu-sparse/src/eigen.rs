@@ -698,13 +698,15 @@ impl<'a> Pencil<'a> {
     ///
     /// # Errors
     /// [`SparseError::TooManyModes`] for a count above the dimension,
-    /// [`SparseError::InvalidRequest`] for a non-finite shift or an empty band,
+    /// [`SparseError::InvalidRequest`] for a non-finite shift, an empty band, a block size
+    /// outside `1..=`[`MAX_BLOCK`] or a tolerance outside `(0, 1)`,
     /// [`SparseError::NoConvergence`] (with the number converged) after `max_restarts`,
     /// [`SparseError::SturmMismatch`] when the count by inertia and the pairs found still disagree
     /// after the retries, and [`SparseError::NotPositiveDefinite`] when `K` has negative
     /// eigenvalues below the lowest-mode shift.
     pub fn solve(&self, which: Which, params: &EigenOptions) -> Result<Modes, SparseError> {
         let started = Instant::now();
+        check_options(params)?;
         let mut stats = EigenStats {
             check_seconds: self.check_seconds,
             symbolic_seconds: self.symbolic_seconds,
@@ -1193,6 +1195,36 @@ pub fn eigs(
         crate::slepc::Engine::Femu => Pencil::new(k, m, params.ordering)?.solve(which, params),
         crate::slepc::Engine::Slepc(opts) => crate::slepc::solve(k, m, which, params, opts),
     }
+}
+
+/// The widest block [`EigenOptions::block_size`] may ask for. The basis holds about twice as
+/// many columns as the blocks are wide beyond the wanted pairs (`Lanczos::basis_size`), so a
+/// block of thousands would ask for terabytes on a large model; and beyond a few vectors a
+/// wider block only adds vectors: 4 is the fastest measured (docs/SCALING.md, "Block size and
+/// the count of solved vectors").
+pub const MAX_BLOCK: usize = 64;
+
+/// The settings no solve can run with, refused before any work: a block size outside
+/// `1..=MAX_BLOCK`, a tolerance that is not in `(0, 1)` (NaN included).
+fn check_options(params: &EigenOptions) -> Result<(), SparseError> {
+    if !(1..=MAX_BLOCK).contains(&params.block_size) {
+        return Err(SparseError::InvalidRequest {
+            reason: format!(
+                "block size {}: it must be between 1 and {MAX_BLOCK} (the default is 4)",
+                params.block_size
+            ),
+        });
+    }
+    if !(params.tol > 0.0 && params.tol < 1.0) {
+        return Err(SparseError::InvalidRequest {
+            reason: format!(
+                "tolerance {}: it must be a relative residual between 0 and 1 (the default is \
+                 1e-10)",
+                params.tol
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// Ritz values and vectors of the symmetrised projection, ordered by decreasing `|theta|`.

@@ -6,7 +6,7 @@ use faer::linalg::solvers::Solve;
 use femu_sparse::cholesky::{Factorization, SymbolicFactor};
 use femu_sparse::csc::to_dense;
 use femu_sparse::dense::{generalized_symmetric_eigen, generalized_symmetric_eigenvalues};
-use femu_sparse::eigen::{EigenOptions, Pencil, Which, eigs};
+use femu_sparse::eigen::{EigenOptions, MAX_BLOCK, Pencil, Which, eigs};
 use femu_sparse::ordering::Ordering;
 use femu_sparse::{SparseError, SparseMatrix};
 use proptest::prelude::*;
@@ -228,6 +228,39 @@ fn eigensolver_matches_dense_on_random_pencils() {
     }
 }
 
+/// Settings no solve can run with are refused, each by name, before any work: a block size of 0
+/// or above `MAX_BLOCK` (a block of 100,000 asked the allocator for 152 GB on a 47,628-DOF
+/// plate), and a tolerance that is not a relative residual in `(0, 1)`.
+#[test]
+fn impossible_eigensolver_settings_are_refused() {
+    let a = laplacian_3d(4);
+    let m = SparseMatrix::eye(64);
+    let cases = [
+        (0, 1e-10, "block size 0"),
+        (MAX_BLOCK + 1, 1e-10, "block size 65"),
+        (100_000, 1e-10, "block size 100000"),
+        (4, 0.0, "tolerance 0"),
+        (4, -1e-8, "tolerance -0.00000001"),
+        (4, 1.0, "tolerance 1"),
+        (4, f64::NAN, "tolerance NaN"),
+        (4, f64::INFINITY, "tolerance inf"),
+    ];
+    for (block_size, tol, what) in cases {
+        let params = EigenOptions {
+            block_size,
+            tol,
+            ..EigenOptions::default()
+        };
+        match eigs(&a, &m, Which::Lowest(3), &params) {
+            Err(e @ SparseError::InvalidRequest { .. }) => {
+                let text = e.to_string();
+                assert!(text.contains(what), "{what}: {text}");
+            }
+            other => panic!("{what}: expected InvalidRequest, got {other:?}"),
+        }
+    }
+}
+
 /// The 3D Laplacian (M = I) has highly repeated eigenvalues (the cube's symmetry: multiplicities
 /// 1, 3, 3, 3, 6, ...). All copies among the lowest 20 are found, to 1e-10 of the analytic values.
 #[test]
@@ -235,7 +268,9 @@ fn repeated_eigenvalues_of_the_3d_laplacian_are_all_found() {
     let nn = 9;
     let a = laplacian_3d(nn);
     let m = SparseMatrix::eye(nn * nn * nn);
-    for block_size in [1, 4] {
+    // 1, the default 4, and the widest allowed (`MAX_BLOCK`, wider than the basis a run for 20
+    // pairs would otherwise hold)
+    for block_size in [1, 4, MAX_BLOCK] {
         let params = EigenOptions {
             block_size,
             ..EigenOptions::default()

@@ -53,7 +53,7 @@ pub mod prelude {
     pub use crate::load::{
         LoadedModel, LoadedTest, MaterialOptions, ModelOptions, load_model, load_test,
     };
-    pub use crate::modes::{ModesOptions, ModesReport, solve_modes};
+    pub use crate::modes::{EigenReport, ModesOptions, ModesReport, solve_modes};
     pub use crate::removal::{RemovalOptions, RemovalStudy, removal_study};
     pub use crate::study_file::{StudyFile, StudyRun, run_study_file};
     pub use crate::updating::{UpdateStudy, UpdateStudyOptions, localise_update_check};

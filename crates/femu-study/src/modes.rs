@@ -6,7 +6,8 @@ use crate::StudyError;
 use crate::load::LoadedModel;
 use femu_correlate::modes::eigenvalue_of_hz;
 use femu_fem::assembly::MassKind;
-use femu_sparse::eigen::{EigenOptions, Modes, ResidualKind, Which};
+use femu_sparse::eigen::{EigenOptions, EigenStats, Modes, ResidualKind, Which};
+use femu_sparse::slepc::Engine;
 use serde::Serialize;
 
 /// Which modes [`solve_modes`] computes.
@@ -18,6 +19,112 @@ pub struct ModesOptions {
     pub shift_hz: Option<f64>,
     /// Every mode between two frequencies, Hz.
     pub band_hz: Option<(f64, f64)>,
+    /// Right-hand sides the eigensolver solves together ([`EigenOptions::block_size`]; `None`:
+    /// its default, 4). Wider blocks read the factor fewer times per vector and need more
+    /// vectors: on this project's 50k-DOF benchmarks blocks of 4 solved 74 and 131 vectors where
+    /// blocks of 2 solved 53 and 99 (ARPACK: 53 and 100) and took 6-21 % longer
+    /// (docs/SCALING.md, "Block size and the count of solved vectors").
+    pub block_size: Option<usize>,
+}
+
+/// Where an eigensolve's time went and how much work it did ([`EigenStats`], what `femu modes
+/// --json` writes under `eigensolver`). The phases' seconds and `other_seconds` add up to
+/// `total_seconds` (docs/SCALING.md, "The block within itself, the Ritz vectors' products and
+/// the input checks").
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EigenReport {
+    /// Right-hand sides solved together (`None`: SLEPc's iteration, [`Engine::Slepc`], whose
+    /// solves femu does not count).
+    pub block_size: Option<usize>,
+    /// Numeric factorizations (the run's and the Sturm count's; more if a hinted or probed shift
+    /// was moved, or a count disagreed).
+    pub factorizations: usize,
+    /// Vectors solved with `K - sigma M` (ARPACK's "operator applications").
+    pub solved_vectors: usize,
+    /// Restarts of the Lanczos iteration.
+    pub restarts: usize,
+    /// Values stored in the factor `L`.
+    pub factor_entries: usize,
+    /// Floating-point operations of one numeric factorization (the symbolic count), GFLOP.
+    pub factor_gflop: f64,
+    /// Checks of the input, s.
+    pub check_seconds: f64,
+    /// Ordering and symbolic analysis made by the solve (0 when made beside the assembly), s.
+    pub symbolic_seconds: f64,
+    /// Numeric factorizations, s.
+    pub factor_seconds: f64,
+    /// Triangular solves, s.
+    pub solve_seconds: f64,
+    /// Orthogonalisation and `M` products, s.
+    pub orthogonalization_seconds: f64,
+    /// Rayleigh-Ritz, convergence checks, locking, restarts and the final residuals, s.
+    pub ritz_seconds: f64,
+    /// The rest: shift placement, random start vectors, bookkeeping, s.
+    pub other_seconds: f64,
+    /// The whole eigensolve, s.
+    pub total_seconds: f64,
+}
+
+impl EigenReport {
+    /// The report of a solve's statistics `s`, whose blocks were `block_size` wide (`None`:
+    /// SLEPc's solve).
+    pub fn new(s: &EigenStats, block_size: Option<usize>) -> Self {
+        let phases = s.check_seconds
+            + s.symbolic_seconds
+            + s.factor_seconds
+            + s.solve_seconds
+            + s.orthogonalization_seconds
+            + s.ritz_seconds;
+        Self {
+            block_size,
+            factorizations: s.factorizations,
+            solved_vectors: s.solved_vectors,
+            restarts: s.restarts,
+            factor_entries: s.factor_len,
+            factor_gflop: s.factor_flops * 1e-9,
+            check_seconds: s.check_seconds,
+            symbolic_seconds: s.symbolic_seconds,
+            factor_seconds: s.factor_seconds,
+            solve_seconds: s.solve_seconds,
+            orthogonalization_seconds: s.orthogonalization_seconds,
+            ritz_seconds: s.ritz_seconds,
+            other_seconds: (s.total_seconds - phases).max(0.0),
+            total_seconds: s.total_seconds,
+        }
+    }
+
+    /// One line for a terminal: `2 factorizations 0.39 s, 74 vectors solved in blocks of 4
+    /// 0.50 s, ...`.
+    pub fn summary(&self) -> String {
+        let plural = if self.factorizations == 1 { "" } else { "s" };
+        match self.block_size {
+            Some(block) => format!(
+                "{} factorization{plural} {:.2} s ({:.1} million entries, {:.1} GFLOP each), {} \
+                 vectors solved in blocks of {block} {:.2} s, orthogonalisation {:.2} s, \
+                 Rayleigh-Ritz {:.2} s, checks and analysis {:.2} s, other {:.2} s; {:.2} s in all",
+                self.factorizations,
+                self.factor_seconds,
+                self.factor_entries as f64 * 1e-6,
+                self.factor_gflop,
+                self.solved_vectors,
+                self.solve_seconds,
+                self.orthogonalization_seconds,
+                self.ritz_seconds,
+                self.check_seconds + self.symbolic_seconds,
+                self.other_seconds,
+                self.total_seconds
+            ),
+            None => format!(
+                "SLEPc's iteration {:.2} s, {} Sturm factorization{plural} {:.2} s, analysis \
+                 {:.2} s; {:.2} s in all",
+                self.solve_seconds,
+                self.factorizations,
+                self.factor_seconds,
+                self.symbolic_seconds,
+                self.total_seconds
+            ),
+        }
+    }
 }
 
 /// The summary of a modes run (what `femu modes --json` writes).
@@ -53,6 +160,8 @@ pub struct ModesReport {
     pub notes: Vec<String>,
     /// Wall time of the solve, s.
     pub seconds: f64,
+    /// Where the eigensolve's time went.
+    pub eigensolver: EigenReport,
 }
 
 /// Solves for the modes `options` asks for.
@@ -100,7 +209,12 @@ pub fn solve_modes(
         }
         (None, None) => Which::Lowest(count),
     };
-    let modes = sys.modes(which, &EigenOptions::default())?;
+    let mut eigen = EigenOptions::default();
+    if let Some(b) = options.block_size {
+        // checked by the eigensolver (1 to `MAX_BLOCK`)
+        eigen.block_size = b;
+    }
+    let modes = sys.modes(which, &eigen)?;
     let report = ModesReport {
         model: loaded.path.display().to_string(),
         dofs: sys.k.rows(),
@@ -119,6 +233,10 @@ pub fn solve_modes(
         sturm_upper: modes.sturm.upper,
         notes: notes(&modes, matches!(which, Which::Band { .. })),
         seconds: start.elapsed().as_secs_f64(),
+        eigensolver: EigenReport::new(
+            &modes.stats,
+            matches!(eigen.engine, Engine::Femu).then_some(eigen.block_size),
+        ),
     };
     Ok((modes, report))
 }

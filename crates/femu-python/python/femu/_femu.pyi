@@ -42,6 +42,7 @@ class Model:
         *,
         shift_hz: Optional[float] = None,
         band_hz: Optional[Tuple[float, float]] = None,
+        block_size: Optional[int] = None,
         progress: Optional[Callable[[int], Any]] = None,
     ) -> Modes: ...
 
