@@ -223,7 +223,7 @@ impl ResidualKind {
 }
 
 /// Where the time went and how much work was done.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct EigenStats {
     /// Checks of the input (square, finite, symmetric, `M`'s pattern inside `K`'s) and the
     /// 1-norms of `K` and `M`, done once by [`Pencil::new`], seconds (docs/SCALING.md, "The

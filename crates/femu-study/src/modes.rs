@@ -27,42 +27,21 @@ pub struct ModesOptions {
     pub block_size: Option<usize>,
 }
 
-/// Where an eigensolve's time went and how much work it did ([`EigenStats`], what `femu modes
-/// --json` writes under `eigensolver`). The phases' seconds and `other_seconds` add up to
-/// `total_seconds` (docs/SCALING.md, "The block within itself, the Ritz vectors' products and
-/// the input checks").
+/// Where an eigensolve's time went and how much work it did: [`EigenStats`] with the block size
+/// and the time outside the phases (what `femu modes --json` writes under `eigensolver`, the
+/// statistics' fields beside `block_size` and `other_seconds`). The phases' seconds and
+/// `other_seconds` add up to `total_seconds` (docs/SCALING.md, "The block within itself, the Ritz
+/// vectors' products and the input checks").
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EigenReport {
     /// Right-hand sides solved together (`None`: SLEPc's iteration, [`Engine::Slepc`], whose
     /// solves femu does not count).
     pub block_size: Option<usize>,
-    /// Numeric factorizations (the run's and the Sturm count's; more if a hinted or probed shift
-    /// was moved, or a count disagreed).
-    pub factorizations: usize,
-    /// Vectors solved with `K - sigma M` (ARPACK's "operator applications").
-    pub solved_vectors: usize,
-    /// Restarts of the Lanczos iteration.
-    pub restarts: usize,
-    /// Values stored in the factor `L`.
-    pub factor_entries: usize,
-    /// Floating-point operations of one numeric factorization (the symbolic count), GFLOP.
-    pub factor_gflop: f64,
-    /// Checks of the input, s.
-    pub check_seconds: f64,
-    /// Ordering and symbolic analysis made by the solve (0 when made beside the assembly), s.
-    pub symbolic_seconds: f64,
-    /// Numeric factorizations, s.
-    pub factor_seconds: f64,
-    /// Triangular solves, s.
-    pub solve_seconds: f64,
-    /// Orthogonalisation and `M` products, s.
-    pub orthogonalization_seconds: f64,
-    /// Rayleigh-Ritz, convergence checks, locking, restarts and the final residuals, s.
-    pub ritz_seconds: f64,
-    /// The rest: shift placement, random start vectors, bookkeeping, s.
+    /// The solve's statistics.
+    #[serde(flatten)]
+    pub stats: EigenStats,
+    /// What the phases leave out: shift placement, random start vectors, bookkeeping, s.
     pub other_seconds: f64,
-    /// The whole eigensolve, s.
-    pub total_seconds: f64,
 }
 
 impl EigenReport {
@@ -77,51 +56,41 @@ impl EigenReport {
             + s.ritz_seconds;
         Self {
             block_size,
-            factorizations: s.factorizations,
-            solved_vectors: s.solved_vectors,
-            restarts: s.restarts,
-            factor_entries: s.factor_len,
-            factor_gflop: s.factor_flops * 1e-9,
-            check_seconds: s.check_seconds,
-            symbolic_seconds: s.symbolic_seconds,
-            factor_seconds: s.factor_seconds,
-            solve_seconds: s.solve_seconds,
-            orthogonalization_seconds: s.orthogonalization_seconds,
-            ritz_seconds: s.ritz_seconds,
+            stats: s.clone(),
             other_seconds: (s.total_seconds - phases).max(0.0),
-            total_seconds: s.total_seconds,
         }
     }
 
     /// One line for a terminal: `2 factorizations 0.39 s, 74 vectors solved in blocks of 4
     /// 0.50 s, ...`.
     pub fn summary(&self) -> String {
-        let plural = if self.factorizations == 1 { "" } else { "s" };
+        let s = &self.stats;
+        let plural = if s.factorizations == 1 { "" } else { "s" };
         match self.block_size {
             Some(block) => format!(
                 "{} factorization{plural} {:.2} s ({:.1} million entries, {:.1} GFLOP each), {} \
                  vectors solved in blocks of {block} {:.2} s, orthogonalisation {:.2} s, \
                  Rayleigh-Ritz {:.2} s, checks and analysis {:.2} s, other {:.2} s; {:.2} s in all",
-                self.factorizations,
-                self.factor_seconds,
-                self.factor_entries as f64 * 1e-6,
-                self.factor_gflop,
-                self.solved_vectors,
-                self.solve_seconds,
-                self.orthogonalization_seconds,
-                self.ritz_seconds,
-                self.check_seconds + self.symbolic_seconds,
+                s.factorizations,
+                s.factor_seconds,
+                s.factor_len as f64 * 1e-6,
+                s.factor_flops * 1e-9,
+                s.solved_vectors,
+                s.solve_seconds,
+                s.orthogonalization_seconds,
+                s.ritz_seconds,
+                s.check_seconds + s.symbolic_seconds,
                 self.other_seconds,
-                self.total_seconds
+                s.total_seconds
             ),
             None => format!(
                 "SLEPc's iteration {:.2} s, {} Sturm factorization{plural} {:.2} s, analysis \
                  {:.2} s; {:.2} s in all",
-                self.solve_seconds,
-                self.factorizations,
-                self.factor_seconds,
-                self.symbolic_seconds,
-                self.total_seconds
+                s.solve_seconds,
+                s.factorizations,
+                s.factor_seconds,
+                s.symbolic_seconds,
+                s.total_seconds
             ),
         }
     }
