@@ -153,13 +153,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 s.solve_seconds,
                 s.orthogonalization_seconds,
                 s.ritz_seconds,
-                s.total_seconds
-                    - s.check_seconds
-                    - s.symbolic_seconds
-                    - s.factor_seconds
-                    - s.solve_seconds
-                    - s.orthogonalization_seconds
-                    - s.ritz_seconds,
+                s.other_seconds(),
                 s.factorizations,
                 s.solved_vectors,
                 s.restarts,

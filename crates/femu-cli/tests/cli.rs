@@ -125,6 +125,8 @@ fn modes_json_matches_dense_reference() {
     .map(|k| secs(k))
     .sum();
     assert!((phases - secs("total_seconds")).abs() < 1e-9, "{e}");
+    // no two phases' clocks overlap
+    assert!(secs("other_seconds") >= 0.0, "{e}");
     assert!(stdout.contains("Eigensolver: 2 factorizations"), "{stdout}");
     // other block sizes, the narrowest and the widest (wider than the 24-DOF model's basis):
     // the same modes, to the dense reference

@@ -265,6 +265,21 @@ pub struct EigenStats {
     pub factor_flops: f64,
 }
 
+impl EigenStats {
+    /// The time of the solve outside its phases (shift placement, random start vectors,
+    /// bookkeeping): `total_seconds` less the phases' seconds. Negative only if two phases'
+    /// clocks overlapped, which would be an accounting error.
+    pub fn other_seconds(&self) -> f64 {
+        self.total_seconds
+            - self.check_seconds
+            - self.symbolic_seconds
+            - self.factor_seconds
+            - self.solve_seconds
+            - self.orthogonalization_seconds
+            - self.ritz_seconds
+    }
+}
+
 /// Computed modes with their evidence.
 #[derive(Debug, Clone)]
 pub struct Modes {
@@ -1207,11 +1222,12 @@ pub const MAX_BLOCK: usize = 64;
 /// The settings no solve can run with, refused before any work: a block size outside
 /// `1..=MAX_BLOCK`, a tolerance that is not in `(0, 1)` (NaN included).
 fn check_options(params: &EigenOptions) -> Result<(), SparseError> {
+    let default = EigenOptions::default();
     if !(1..=MAX_BLOCK).contains(&params.block_size) {
         return Err(SparseError::InvalidRequest {
             reason: format!(
-                "block size {}: it must be between 1 and {MAX_BLOCK} (the default is 4)",
-                params.block_size
+                "block size {}: it must be between 1 and {MAX_BLOCK} (the default is {})",
+                params.block_size, default.block_size
             ),
         });
     }
@@ -1219,8 +1235,8 @@ fn check_options(params: &EigenOptions) -> Result<(), SparseError> {
         return Err(SparseError::InvalidRequest {
             reason: format!(
                 "tolerance {}: it must be a relative residual between 0 and 1 (the default is \
-                 1e-10)",
-                params.tol
+                 {:e})",
+                params.tol, default.tol
             ),
         });
     }

@@ -40,7 +40,7 @@ pub struct EigenReport {
     /// The solve's statistics.
     #[serde(flatten)]
     pub stats: EigenStats,
-    /// What the phases leave out: shift placement, random start vectors, bookkeeping, s.
+    /// What the phases leave out ([`EigenStats::other_seconds`]), s.
     pub other_seconds: f64,
 }
 
@@ -48,16 +48,10 @@ impl EigenReport {
     /// The report of a solve's statistics `s`, whose blocks were `block_size` wide (`None`:
     /// SLEPc's solve).
     pub fn new(s: &EigenStats, block_size: Option<usize>) -> Self {
-        let phases = s.check_seconds
-            + s.symbolic_seconds
-            + s.factor_seconds
-            + s.solve_seconds
-            + s.orthogonalization_seconds
-            + s.ritz_seconds;
         Self {
             block_size,
             stats: s.clone(),
-            other_seconds: (s.total_seconds - phases).max(0.0),
+            other_seconds: s.other_seconds(),
         }
     }
 
@@ -178,11 +172,12 @@ pub fn solve_modes(
         }
         (None, None) => Which::Lowest(count),
     };
-    let mut eigen = EigenOptions::default();
-    if let Some(b) = options.block_size {
-        // checked by the eigensolver (1 to `MAX_BLOCK`)
-        eigen.block_size = b;
-    }
+    let default = EigenOptions::default();
+    // checked by the eigensolver (1 to `MAX_BLOCK`)
+    let eigen = EigenOptions {
+        block_size: options.block_size.unwrap_or(default.block_size),
+        ..default
+    };
     let modes = sys.modes(which, &eigen)?;
     let report = ModesReport {
         model: loaded.path.display().to_string(),
