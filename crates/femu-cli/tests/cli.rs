@@ -58,24 +58,20 @@ fn modes_json_matches_dense_reference() {
     std::fs::create_dir_all(&dir).unwrap();
     let json = dir.join("modes.json");
     let vtu = dir.join("modes.vtu");
-    let out = femu()
-        .args([
-            "modes",
-            fixture("two_hex.inp").to_str().unwrap(),
-            "--json",
-            json.to_str().unwrap(),
-            "--vtu",
-            vtu.to_str().unwrap(),
-        ])
-        .assert()
-        .success();
-    let stdout = String::from_utf8(out.get_output().stdout.clone()).unwrap();
+    let deck = fixture("two_hex.inp");
+    let stdout = stdout_of_success(&[
+        "modes",
+        deck.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+        "--vtu",
+        vtu.to_str().unwrap(),
+    ]);
     assert!(
         stdout.contains("| 4 |") && stdout.contains("verified"),
         "{stdout}"
     );
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v = json_of(&json);
     assert_eq!(v["dofs"], 24);
     let vtu_text = std::fs::read_to_string(&vtu).unwrap();
     assert_eq!(vtu_text.matches("Name=\"model mode ").count(), 4);
@@ -131,24 +127,19 @@ fn modes_json_matches_dense_reference() {
     // other block sizes, the narrowest and the widest (wider than the 24-DOF model's basis):
     // the same modes, to the dense reference
     for block in ["1", "64"] {
-        let out = femu()
-            .args([
-                "modes",
-                fixture("two_hex.inp").to_str().unwrap(),
-                "--block-size",
-                block,
-                "--json",
-                json.to_str().unwrap(),
-            ])
-            .assert()
-            .success();
-        let stdout = String::from_utf8(out.get_output().stdout.clone()).unwrap();
+        let stdout = stdout_of_success(&[
+            "modes",
+            deck.to_str().unwrap(),
+            "--block-size",
+            block,
+            "--json",
+            json.to_str().unwrap(),
+        ]);
         assert!(
             stdout.contains(&format!("in blocks of {block} ")),
             "{stdout}"
         );
-        let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let v = json_of(&json);
         assert_eq!(v["eigensolver"]["block_size"].to_string(), block);
         for (j, fj) in v["frequencies_hz"].as_array().unwrap().iter().enumerate() {
             let reference = eig.values[j].sqrt() / (2.0 * std::f64::consts::PI);
@@ -170,22 +161,18 @@ fn modes_json_matches_dense_reference() {
         .collect();
     let expected = hz.iter().filter(|x| **x >= lo && **x <= hi).count();
     assert!(expected >= 2);
-    let out = femu()
-        .args([
-            "--quiet",
-            "modes",
-            fixture("two_hex.inp").to_str().unwrap(),
-            "--band",
-            &lo.to_string(),
-            &hi.to_string(),
-            "--json",
-            json.to_str().unwrap(),
-        ])
-        .assert()
-        .success();
-    assert!(out.get_output().stdout.is_empty());
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let stdout = stdout_of_success(&[
+        "--quiet",
+        "modes",
+        deck.to_str().unwrap(),
+        "--band",
+        &lo.to_string(),
+        &hi.to_string(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(stdout.is_empty(), "{stdout}");
+    let v = json_of(&json);
     assert_eq!(v["frequencies_hz"].as_array().unwrap().len(), expected);
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -251,6 +238,17 @@ fn stderr_of_failure(args: &[&str]) -> String {
     String::from_utf8_lossy(&out.get_output().stderr).into_owned()
 }
 
+/// What `femu args` printed on stdout, asserting that it succeeded.
+fn stdout_of_success(args: &[&str]) -> String {
+    let out = femu().args(args).assert().success();
+    String::from_utf8(out.get_output().stdout.clone()).unwrap()
+}
+
+/// A JSON file a command wrote.
+fn json_of(path: impl AsRef<std::path::Path>) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
 /// `femu correlate`: a CSV "test" made of the model's own modes 1-3 (listed 2, 1, 3, frequencies
 /// 1 % low) measured at the free end pairs back onto them with MAC 1 and the error +1/0.99 - 1
 /// (the test's frequency is 1 % below the model's), the repeated pair 1-2 included.
@@ -269,20 +267,15 @@ fn correlate_pairs_the_model_with_itself() {
     let csv = dir.join("test.csv");
     std::fs::write(&csv, femu_io::csv::test_csv_string(&sensors, &test)).unwrap();
     let json = dir.join("corr.json");
-    let out = femu()
-        .args([
-            "correlate",
-            deck.to_str().unwrap(),
-            csv.to_str().unwrap(),
-            "--json",
-            json.to_str().unwrap(),
-        ])
-        .assert()
-        .success();
-    let stdout = String::from_utf8_lossy(&out.get_output().stdout).into_owned();
+    let stdout = stdout_of_success(&[
+        "correlate",
+        deck.to_str().unwrap(),
+        csv.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
     assert!(stdout.contains("| test | f test (Hz)"), "{stdout}");
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v = json_of(&json);
     let pairs = v["pairing"]["pairs"].as_array().unwrap();
     // modes 1 and 2 are a repeated pair (square section): the model's basis of the pair's plane
     // is the eigensolver's, decided by round-off; correlation turns it towards the test
@@ -307,8 +300,7 @@ fn correlate_pairs_the_model_with_itself() {
         ])
         .assert()
         .success();
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v = json_of(&json);
     let list = v.as_array().unwrap();
     assert_eq!(list.len(), 3);
     for a in list {
@@ -361,20 +353,16 @@ fn correlate_pairs_the_model_with_itself() {
 #[test]
 fn demo_then_update_from_its_files() {
     let dir = std::env::temp_dir().join(format!("femu-cli-demo-{}", std::process::id()));
-    let out = femu()
-        .args([
-            "demo",
-            "--quick",
-            "--shape-noise",
-            "0",
-            "--frequency-noise",
-            "0",
-            "--out",
-            dir.to_str().unwrap(),
-        ])
-        .assert()
-        .success();
-    let stdout = String::from_utf8(out.get_output().stdout.clone()).unwrap();
+    let stdout = stdout_of_success(&[
+        "demo",
+        "--quick",
+        "--shape-noise",
+        "0",
+        "--frequency-noise",
+        "0",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
     assert!(
         stdout.contains("Does the updated model tell the truth? yes"),
         "{stdout}"
@@ -406,8 +394,7 @@ fn demo_then_update_from_its_files() {
         ])
         .assert()
         .success();
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v = json_of(&json);
     assert_eq!(v["result"]["names"][0], "k:R3");
     let p = v["result"]["theta"][0].as_f64().unwrap();
     // six stored digits in the UFF and 14 in the deck: 1e-5 (measured 5e-7)
@@ -463,7 +450,7 @@ fn steel_modes(
     args.extend(extra);
     args.extend(["--json", json.to_str().unwrap(), "--quiet"]);
     femu().args(&args).assert().success();
-    serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
+    json_of(json)
 }
 
 /// `femu modes` on a Gmsh mesh with the material and clamp from the command line: the JSON
@@ -539,8 +526,7 @@ fn expand_recovers_a_model_mode() {
         ])
         .assert()
         .success();
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v = json_of(&json);
     let rho = v["rho_m"][0].as_f64().unwrap();
     assert!(rho < 1e-6 * modes.values[2], "{rho}");
     assert!(vtu.exists() && study.join("study.csv").exists() && study.join("study.svg").exists());
@@ -602,9 +588,7 @@ fn run_a_study_file() {
     ] {
         assert!(out.join(f).exists(), "{f}");
     }
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("correlation.json")).unwrap())
-            .unwrap();
+    let v = json_of(out.join("correlation.json"));
     assert_eq!(v["pairing"]["pairs"].as_array().unwrap().len(), 1);
     std::fs::write(
         dir.join("bad.toml"),
