@@ -8,7 +8,8 @@ DIR holds K.petsc and M.petsc (PETSc binary AIJ, written by femu), request.json:
   {"kind": "lowest", "count": n, "sigma": s} | {"kind": "nearest", "count": n, "sigma": s}
   | {"kind": "band", "lo": a, "hi": b}, with "tol", "extra" (eigenpairs beyond the count, to find
   a gap above), "max_it", "ncv" (0: SLEPc's choice);
-and receives result.json (eigenvalues, the counted interval and its count by inertia, timings)
+and receives result.json (eigenvalues, the counted interval and its count by inertia, the solves
+made and the entries of MUMPS's factor, timings)
 and vectors.bin (the eigenvectors, float64 little-endian, one after another), or error.json.
 """
 
@@ -110,9 +111,20 @@ def main(directory):
         eps.setDimensions(nev=nev, ncv=ncv)
     eps.setTolerances(tol=req["tol"], max_it=req["max_it"])
     eps.setFromOptions()
+    # PETSc's log counts the shift-and-invert's solves (one KSPSolve per vector)
+    PETSc.Log.begin()
+    solves = PETSc.Log.Event("KSPSolve")
+    solves_before = solves.getPerfInfo()["count"]
     t1 = time.perf_counter()
     eps.solve()
     t_solve = time.perf_counter() - t1
+    solved = int(solves.getPerfInfo()["count"] - solves_before)
+    factor_entries = None
+    if kind != "band":
+        # the entries of MUMPS's factor of K - sigma M (INFOG(29), in millions when negative);
+        # spectrum slicing factors by its own sub-solvers, whose factors are not reported
+        infog29 = ksp.getPC().getFactorMatrix().getMumpsInfog(29)
+        factor_entries = infog29 if infog29 >= 0 else -infog29 * 1000000
     nconv = eps.getConverged()
     its = eps.getIterationNumber()
     want = req.get("count", 0) + req.get("extra", 0) if kind != "band" else 0
@@ -152,6 +164,8 @@ def main(directory):
             "ends": ends,
             "counts": [None if c is None else list(c) for c in counts],
             "iterations": its,
+            "solved": solved,
+            "factor_entries": factor_entries,
             "converged": nconv,
             "ranks": COMM.getSize(),
             "seconds": {"load": t_load, "solve": t_solve, "count": t_count},

@@ -248,7 +248,8 @@ pub struct EigenStats {
     pub total_seconds: f64,
     /// Numeric factorizations done (the solve shift and the Sturm checks).
     pub factorizations: usize,
-    /// Vectors solved with `K - sigma M`.
+    /// Vectors solved with `K - sigma M` (from the SLEPc engine, the solves of its
+    /// shift-and-invert as PETSc counts them).
     pub solved_vectors: usize,
     /// Restarts of the Lanczos iteration.
     pub restarts: usize,
@@ -256,7 +257,8 @@ pub struct EigenStats {
     /// single pass of Gram-Schmidt against the basis, and that were projected a second time
     /// (docs/MATH.md, "Selective reorthogonalisation").
     pub reorthogonalized_blocks: usize,
-    /// Values stored in each factor `L` (fill).
+    /// Values stored in each factor `L` (fill); from the SLEPc engine, the entries of MUMPS's
+    /// factor (its `INFOG(29)`), or 0 for a band, which SLEPc factors by slices.
     pub factor_len: usize,
     /// Floating-point operations of one numeric factorization (the symbolic count,
     /// [`crate::cholesky::SymbolicFactor::flops`]): `factorizations * factor_flops /

@@ -106,6 +106,11 @@ pub struct SlepcRun {
     pub below: (Option<usize>, usize),
     /// Outer iterations of Krylov-Schur.
     pub iterations: usize,
+    /// Vectors solved with `K - sigma M` (PETSc's count of its `KSPSolve`s in the solve).
+    pub solved_vectors: usize,
+    /// Entries of MUMPS's factor of `K - sigma M` (its `INFOG(29)`); `None` for a band, which
+    /// SLEPc factors by slices in its own sub-solvers.
+    pub factor_entries: Option<usize>,
     /// Seconds: reading the matrices, the solve, the counts (the driver's clocks).
     pub seconds: [f64; 3],
     /// Versions, `petsc x.y.z / slepc x.y.z`.
@@ -407,6 +412,8 @@ fn run_in(
             count(1).ok_or_else(|| failed("the result has no count".into()))?,
         ),
         iterations: r["iterations"].as_u64().unwrap_or(0) as usize,
+        solved_vectors: r["solved"].as_u64().unwrap_or(0) as usize,
+        factor_entries: r["factor_entries"].as_u64().map(|e| e as usize),
         seconds: [
             r["seconds"]["load"].as_f64().unwrap_or(0.0),
             r["seconds"]["solve"].as_f64().unwrap_or(0.0),
@@ -507,6 +514,8 @@ impl SlepcRun {
                 factor_seconds: self.seconds[2],
                 factorizations: 1 + usize::from(self.lower.is_some()) + 1,
                 restarts: self.iterations,
+                solved_vectors: self.solved_vectors,
+                factor_len: self.factor_entries.unwrap_or(0),
                 total_seconds: self.seconds.iter().sum(),
                 ..Default::default()
             },

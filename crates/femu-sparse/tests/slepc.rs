@@ -1,6 +1,7 @@
 //! SLEPc (Krylov-Schur, shift-and-invert, MUMPS) under MPI against femu's own eigensolver on
 //! small solid models, clamped and free-free, hex8 and tet10, with 2 ranks: the same eigenvalues
-//! and vectors to 1e-9, the same count by inertia; a skipped mode is caught by the count; a
+//! and vectors to 1e-9, the same count by inertia, the solves and the factor's entries SLEPc reports
+//! within what they must be; a skipped mode is caught by the count; a
 //! missing engine says what to install. `.ci/run` installs SLEPc and sets `FEMU_REQUIRE_SLEPC=1`,
 //! so in CI a missing SLEPc is a failure; elsewhere the tests say they were skipped.
 
@@ -63,12 +64,22 @@ fn agree(sys: &SystemMatrices, count: usize, name: &str) {
     assert_eq!(ours.values.len(), theirs.values.len(), "{name}");
     assert!(theirs.sturm.verified(), "{name}: {:?}", theirs.sturm);
     assert_eq!(theirs.sturm.count, ours.values.len(), "{name}");
+    // the work SLEPc reports: a solve for each vector of its basis, which holds the pairs it
+    // converged; a factor holding at least the lower triangle of K - sigma M (the pattern of `L`
+    // contains the permuted matrix's, M's pattern inside K's) and at most the dense triangle
+    let (n, s) = (sys.k.rows(), &theirs.stats);
+    assert!(s.solved_vectors >= theirs.values.len(), "{name}: {s:?}");
+    assert!(
+        (sys.k.nnz() + n) / 2 <= s.factor_len && s.factor_len <= n * (n + 1) / 2,
+        "{name}: {} entries in MUMPS's factor of a {n} x {n} matrix with {} stored",
+        s.factor_len,
+        sys.k.nnz()
+    );
     let scale = ours.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     for (j, (a, b)) in ours.values.iter().zip(&theirs.values).enumerate() {
         assert!((a - b).abs() <= 1e-9 * scale, "{name} mode {j}: {a} vs {b}");
     }
     // M-inner products between the two sets: block-diagonal orthogonal on repeated eigenvalues
-    let n = sys.k.rows();
     let mut mphi = faer::Mat::<f64>::zeros(n, theirs.values.len());
     for j in 0..theirs.values.len() {
         let x: Vec<f64> = (0..n).map(|i| theirs.vectors[(i, j)]).collect();
@@ -171,6 +182,12 @@ fn a_skipped_mode_is_caught_by_the_count() {
     let theirs = eigs(&sys.k, &sys.m, band, &params).unwrap();
     assert_eq!(ours.values.len(), theirs.values.len());
     assert!(!theirs.values.is_empty() && theirs.sturm.verified());
+    // its solves counted, its slices' factors not reported
+    let s = &theirs.stats;
+    assert!(
+        s.solved_vectors >= theirs.values.len() && s.factor_len == 0,
+        "{s:?}"
+    );
     for (a, b) in ours.values.iter().zip(&theirs.values) {
         assert!((a / b - 1.0).abs() < 1e-9, "{a} vs {b}");
     }

@@ -78,9 +78,18 @@ impl EigenReport {
                 s.total_seconds
             ),
             None => format!(
-                "SLEPc's iteration {:.2} s, {} Sturm factorization{plural} {:.2} s, analysis \
-                 {:.2} s; {:.2} s in all",
+                "SLEPc's iteration {:.2} s ({} vectors solved{}), {} Sturm factorization{plural} \
+                 {:.2} s, analysis {:.2} s; {:.2} s in all",
                 s.solve_seconds,
+                s.solved_vectors,
+                if s.factor_len > 0 {
+                    format!(
+                        ", {:.1} million entries in MUMPS's factor",
+                        s.factor_len as f64 * 1e-6
+                    )
+                } else {
+                    String::new()
+                },
                 s.factorizations,
                 s.factor_seconds,
                 s.symbolic_seconds,
