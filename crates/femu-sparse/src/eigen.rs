@@ -1611,11 +1611,12 @@ fn cholesky_qr2(
     });
     // the second pass only where the first left the block short of working precision: with
     // `G2` (the first pass's measure of what it left) the identity to `SECOND_QR`, `R2` is the
-    // identity to about that, and `R2^-1` would move no entry of `w` by more
+    // identity to about that, and `R2^-1` would move no entry of `w` by more (a NaN is kept, so
+    // that it fails the test and the second pass's Cholesky declines the block)
     let off = (0..k)
         .flat_map(|j| (0..k).map(move |i| (i, j)))
         .map(|(i, j)| (g2[0][(i, j)] - if i == j { 1.0 } else { 0.0 }).abs())
-        .fold(0.0f64, f64::max);
+        .fold(0.0f64, |m, e| if e.is_nan() || e > m { e } else { m });
     if off <= SECOND_QR {
         return Some(r1);
     }
