@@ -2678,8 +2678,9 @@ mod tests {
     /// [`cholesky_qr2`] against the Gram-Schmidt above: the same `R` and `Q`, `Q` M-orthonormal
     /// to round-off and its images `M Q`, on blocks conditioned from about 1 to about 1e4 (rows
     /// split between threads; the best conditioned takes one pass, its Gram matrix after it the
-    /// identity to 6.7e-16, the others two, theirs 7.5e-11 and 2.3e-7 from it); and a dependent column, a vanished one and one that kept only 1e-6
-    /// of its norm through the projection declined with the block left as it was.
+    /// identity to 6.7e-16, the others two, theirs 7.5e-11 and 2.3e-7 from it); and a dependent
+    /// column, a vanished one and one that kept only 1e-6 of its norm through the projection
+    /// declined with the block left as it was.
     #[test]
     fn cholesky_qr2_matches_an_m_gram_schmidt_and_declines_dependent_blocks() {
         let (n, k) = (2 * PROJECT_ROWS + 9, 4);

@@ -1,8 +1,8 @@
 //! SLEPc (Krylov-Schur, shift-and-invert, MUMPS) under MPI against femu's own eigensolver on
 //! small solid models, clamped and free-free, hex8 and tet10, with 2 ranks: the same eigenvalues
-//! and vectors to 1e-9, the same count by inertia, the solves and the factor's entries SLEPc reports
-//! within what they must be; a skipped mode is caught by the count; a
-//! missing engine says what to install. `.ci/run` installs SLEPc and sets `FEMU_REQUIRE_SLEPC=1`,
+//! and vectors to 1e-9, the same count by inertia, the solves and the factor's entries SLEPc
+//! reports within what they must be; a skipped mode is caught by the count; a missing engine says
+//! what to install. `.ci/run` installs SLEPc and sets `FEMU_REQUIRE_SLEPC=1`,
 //! so in CI a missing SLEPc is a failure; elsewhere the tests say they were skipped.
 
 use femu_fem::prelude::*;
