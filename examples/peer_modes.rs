@@ -15,6 +15,9 @@
 //!   `DIR/ordering.txt` (the original index of each pivot, one per line, from 0), so that
 //!   `benches/peers/pardiso_factor.py` factors the same `L` with PARDISO
 //!   (docs/SCALING.md, "PARDISO's flop count").
+//! - `peer_modes gemm [N [REPS]]`: faer's dense `N x N` GEMM on all threads (default 1536, 10
+//!   repetitions after a warm-up), its best and median GFLOP/s: the GEMM limit a factorization's
+//!   rate is set against.
 
 use femu::io::inp::{FrequencyStep, write_inp};
 use femu::prelude::*;
@@ -66,10 +69,59 @@ fn pencil(
     })
 }
 
+/// The dense GEMM limit of the goal "within 3x of the dense GEMM limit" (docs/SCALING.md): faer's
+/// product of two `n x n` matrices on all threads, `reps` times after one warm-up, printed as one
+/// JSON line with the best and the median rate (`2 n^3` flops each). `benches/peers/run.py` runs
+/// it in every round beside femu's solve, so that a factorization's rate is set against the limit
+/// the machine reached that minute (this machine's two-thread rate was measured at 61 and at
+/// 127 GFLOP/s ten minutes apart).
+fn gemm(n: usize, reps: usize) -> Result<(), Box<dyn std::error::Error>> {
+    if n == 0 || reps == 0 {
+        return Err("gemm: N and REPS must be positive".into());
+    }
+    let a = faer::Mat::<f64>::from_fn(n, n, |i, j| ((i * 3 + j * 5) % 11) as f64 - 5.0);
+    let b = faer::Mat::<f64>::from_fn(n, n, |i, j| ((i * 7 + j * 2) % 13) as f64 - 6.0);
+    let mut c = faer::Mat::<f64>::zeros(n, n);
+    let mut rates = Vec::with_capacity(reps);
+    for rep in 0..=reps {
+        let t = Instant::now();
+        faer::linalg::matmul::matmul(
+            c.as_mut(),
+            faer::Accum::Replace,
+            a.as_ref(),
+            b.as_ref(),
+            1.0,
+            faer::Par::rayon(0),
+        );
+        let seconds = t.elapsed().as_secs_f64();
+        if rep > 0 {
+            rates.push(2.0 * (n as f64).powi(3) / seconds * 1e-9);
+        }
+    }
+    // one entry against its sum by hand: the product was computed, not optimised away
+    let check: f64 = (0..n).map(|k| a[(n - 1, k)] * b[(k, 0)]).sum();
+    if (c[(n - 1, 0)] - check).abs() > 1e-9 * check.abs().max(1.0) {
+        return Err(format!("gemm: entry (n-1, 0) is {}, by hand {check}", c[(n - 1, 0)]).into());
+    }
+    rates.sort_by(f64::total_cmp);
+    println!(
+        "{{\"n\": {n}, \"threads\": {}, \"gflops_best\": {:.1}, \"gflops_median\": {:.1}}}",
+        rayon::current_num_threads(),
+        rates[rates.len() - 1],
+        rates[rates.len() / 2]
+    );
+    Ok(())
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let usage =
-        "usage: peer_modes (export KIND N COUNT DIR | solve KIND N COUNT | factor KIND N REPS)";
+    let usage = "usage: peer_modes (export KIND N COUNT DIR | solve KIND N COUNT | factor KIND N \
+                 REPS | gemm [N [REPS]])";
+    if args.get(1).map(String::as_str) == Some("gemm") {
+        let n = args.get(2).map_or(Ok(1536), |a| a.parse())?;
+        let reps = args.get(3).map_or(Ok(10), |a| a.parse())?;
+        return gemm(n, reps);
+    }
     if args.len() < 5 {
         return Err(usage.into());
     }

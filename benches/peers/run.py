@@ -16,7 +16,9 @@ range): on a machine whose times move by tens of per cent from run to run, one r
 is good to about 0.1-0.2; PEERS selects peers (default
 "calculix,eigsh+pardiso,eigsh+cholmod,slepc+mumps:1,slepc+mumps:2"; "eigsh+superlu" is scipy's
 default factorization). PEERS_PYTHON: the Python with scipy, pypardiso, scikit-sparse and
-threadpoolctl (run.sh makes a venv). PEER_FACTOR=R (default 0: off) also times the numeric
+threadpoolctl (run.sh makes a venv). After femu's solve in every round, `peer_modes gemm` measures
+faer's dense GEMM on all threads, and femu's factorization rate is reported against it (the goal
+"within 3x of the dense GEMM limit"). PEER_FACTOR=R (default 0: off) also times the numeric
 factorization alone in every round, R times each: femu's stored factorization and Sturm count
 (`peer_modes factor`) and PARDISO's with its own ordering and with femu's
 (`pardiso_factor.py`), and prints their rates at one flop count, femu's, on the same factor.
@@ -133,16 +135,22 @@ def main():
     ref = None
     factor_reps = int(os.environ.get("PEER_FACTOR", "0"))
     factor_runs = []
+    # the GEMM limit over femu's factorization rate, one per round
+    gemm_gaps = []
     for r in range(rounds):
         code, out, femu_wall, rss = timed([EXE, "solve", kind, str(n), str(count)], d, limit)
         femu = json.loads(out)
         # the factorizations' rate: the symbolic flop count of one, times their number, over their time
         femu_rate = femu["factorizations"] * femu["factor_flops"] / femu["factor_s"] * 1e-9
-        print(json.dumps({"kind": kind, "dofs": dofs, "tool": "femu", "round": r + 1, "wall_s": femu_wall, "rss_mb": rss, **femu}), flush=True)
+        # the dense GEMM limit of this minute (faer's, on all threads): the goal sets the
+        # factorization's rate against it, and this machine's limit moves by up to 2x
+        gemm = json_of([EXE, "gemm"], d)["gflops_best"]
+        print(json.dumps({"kind": kind, "dofs": dofs, "tool": "femu", "round": r + 1, "wall_s": femu_wall, "rss_mb": rss, "gemm_gflops": gemm, **femu}), flush=True)
         print(f"{kind} {dofs} DOF: femu     wall {femu_wall:8.2f} s, peak {rss:8.0f} MB "
               f"(assembly {femu['assembly_s']} s with the ordering+symbolic analysis beside it ({femu.get('analysis_s', 0)} s), input checks {femu.get('check_s', 0)} s, "
               f"ordering+symbolic in the solve {femu['symbolic_s']} s, factor {femu['factor_s']} s x{femu['factorizations']} "
-              f"({femu_rate:.1f} GFLOP/s of {femu['factor_flops'] * 1e-9:.1f} GFLOP each), "
+              f"({femu_rate:.1f} GFLOP/s of {femu['factor_flops'] * 1e-9:.1f} GFLOP each, {gemm / femu_rate:.1f}x below "
+              f"the GEMM limit of {gemm:.0f} GFLOP/s measured after it), "
               f"solves {femu['solve_s']} s for {femu['solved_vectors']} vectors, orthogonalisation {femu['orth_s']} s, "
               f"Rayleigh-Ritz and checks {femu['ritz_s']} s, other {femu['other_s']} s), "
               f"Sturm verified {femu['sturm_verified']}", flush=True)
@@ -153,6 +161,7 @@ def main():
             if moved > 1e-12:
                 print(f"femu's frequencies in round {r + 1} differ from round 1's by {moved:.1e}", flush=True)
         runs.setdefault("femu", []).append((femu_wall, rss, femu["eigen_s"], f"{femu['factorizations']} factorizations, {femu['solved_vectors']} solved vectors, Sturm verified {femu['sturm_verified']}"))
+        gemm_gaps.append(gemm / femu_rate)
         for tool, cmd in peers:
             if tool not in wanted:
                 continue
@@ -227,6 +236,8 @@ def main():
         solves = [x[2] for x in ok_runs if x[2]]
         solve = statistics.median(solves) if solves else None
         note = ok_runs[0][3]
+        if tool == "femu" and gemm_gaps:
+            note += f", factorization {min(gemm_gaps):.1f}-{max(gemm_gaps):.1f}x below the GEMM limit"
         if len(ok_runs) > 1:
             walls = [x[0] for x in ok_runs]
             note += f"; wall {min(walls):.{2 if max(walls) < 10 else 1}f}-{max(walls):.{2 if max(walls) < 10 else 1}f} s over {len(ok_runs)} rounds"
