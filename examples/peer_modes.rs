@@ -117,15 +117,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let usage = "usage: peer_modes (export KIND N COUNT DIR | solve KIND N COUNT | factor KIND N \
                  REPS | gemm [N [REPS]])";
+    // the whole number at `args[i]` (named `name` in the error), or `default` when it is absent
+    let number = |i: usize, name: &str, default: Option<usize>| match (args.get(i), default) {
+        (Some(a), _) => a
+            .parse::<usize>()
+            .map_err(|e| format!("{name} {a:?} is not a whole number ({e}); {usage}")),
+        (None, Some(d)) => Ok(d),
+        (None, None) => Err(usage.to_string()),
+    };
     if args.get(1).map(String::as_str) == Some("gemm") {
-        let n = args.get(2).map_or(Ok(1536), |a| a.parse())?;
-        let reps = args.get(3).map_or(Ok(10), |a| a.parse())?;
-        return gemm(n, reps);
+        return gemm(number(2, "N", Some(1536))?, number(3, "REPS", Some(10))?);
     }
     if args.len() < 5 {
         return Err(usage.into());
     }
-    let (kind, n, count): (&str, usize, usize) = (&args[2], args[3].parse()?, args[4].parse()?);
+    let (kind, n, count): (&str, usize, usize) = (
+        &args[2],
+        number(3, "N", None)?,
+        number(4, "COUNT (REPS of factor)", None)?,
+    );
     let t = Instant::now();
     let model = model(kind, n)?;
     let sys = model.assemble(MassKind::Consistent)?;

@@ -145,11 +145,12 @@ def main():
         # the dense GEMM limit of this minute (faer's, on all threads): the goal sets the
         # factorization's rate against it, and this machine's limit moves by up to 2x
         gemm = json_of([EXE, "gemm"], d)["gflops_best"]
+        gemm_gaps.append(gemm / femu_rate)
         print(json.dumps({"kind": kind, "dofs": dofs, "tool": "femu", "round": r + 1, "wall_s": femu_wall, "rss_mb": rss, "gemm_gflops": gemm, **femu}), flush=True)
         print(f"{kind} {dofs} DOF: femu     wall {femu_wall:8.2f} s, peak {rss:8.0f} MB "
               f"(assembly {femu['assembly_s']} s with the ordering+symbolic analysis beside it ({femu.get('analysis_s', 0)} s), input checks {femu.get('check_s', 0)} s, "
               f"ordering+symbolic in the solve {femu['symbolic_s']} s, factor {femu['factor_s']} s x{femu['factorizations']} "
-              f"({femu_rate:.1f} GFLOP/s of {femu['factor_flops'] * 1e-9:.1f} GFLOP each, {gemm / femu_rate:.1f}x below "
+              f"({femu_rate:.1f} GFLOP/s of {femu['factor_flops'] * 1e-9:.1f} GFLOP each, {gemm_gaps[-1]:.1f}x below "
               f"the GEMM limit of {gemm:.0f} GFLOP/s measured after it), "
               f"solves {femu['solve_s']} s for {femu['solved_vectors']} vectors, orthogonalisation {femu['orth_s']} s, "
               f"Rayleigh-Ritz and checks {femu['ritz_s']} s, other {femu['other_s']} s), "
@@ -161,7 +162,6 @@ def main():
             if moved > 1e-12:
                 print(f"femu's frequencies in round {r + 1} differ from round 1's by {moved:.1e}", flush=True)
         runs.setdefault("femu", []).append((femu_wall, rss, femu["eigen_s"], f"{femu['factorizations']} factorizations, {femu['solved_vectors']} solved vectors, Sturm verified {femu['sturm_verified']}"))
-        gemm_gaps.append(gemm / femu_rate)
         for tool, cmd in peers:
             if tool not in wanted:
                 continue
