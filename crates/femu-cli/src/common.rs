@@ -1,61 +1,71 @@
 //! What several subcommands share: the model options, the progress spinner, warnings.
 
 use clap::Args;
-use femu::study::load::{LoadedModel, MaterialOptions, ModelOptions};
+use femu::sparse::eigen::EigenOptions;
+use femu::study::load::{LengthUnit, LoadedModel, MaterialOptions, ModelOptions};
+use femu::study::mapping::{Align, MapMethod};
+use femu::study::study_file::EngineName;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::Path;
 use std::time::Duration;
 
 use crate::error::CliError;
 
-/// Material and constraints of a mesh-only model (`.msh`, `.unv`); an `.inp` deck has its own.
+/// Material and constraints of a mesh-only model (`.msh`, `.unv`), and how a deck is read: the
+/// arguments of every command that reads a model.
 #[derive(Args, Debug, Clone, Default)]
-pub struct MeshOptions {
+#[command(next_help_heading = "Model")]
+pub struct ModelArgs {
     /// Mesh-only models (Gmsh `.msh`, universal file `.unv` with datasets 2411/2412): Young's
     /// modulus in Pa (with --poisson and --density).
-    #[arg(long, global = true, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true)]
     pub young: Option<f64>,
     /// Mesh-only models: Poisson's ratio.
-    #[arg(long, global = true, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true)]
     pub poisson: Option<f64>,
     /// Mesh-only models: density in kg/m^3.
-    #[arg(long, global = true, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true)]
     pub density: Option<f64>,
     /// Mesh-only models: a node set (Gmsh physical group) to clamp; repeat for several.
-    #[arg(long, global = true)]
+    #[arg(long)]
     pub fix: Vec<String>,
     /// `.inp` decks: unknown keywords are warnings instead of errors (unknown parameters of known
     /// keywords stay errors).
-    #[arg(long, global = true)]
+    #[arg(long)]
     pub lenient: bool,
+}
+
+/// How a test is placed on the model: the arguments of every command that reads a test.
+#[derive(Args, Debug, Clone, Default)]
+#[command(next_help_heading = "Test")]
+pub struct TestArgs {
     /// A test on its own wireframe (its node labels and coordinates): map every test node onto
     /// the model, to the nearest FE node or interpolated inside an element.
-    #[arg(long, global = true, value_name = "nearest|interpolate")]
-    pub map: Option<String>,
+    #[arg(long, value_enum)]
+    pub map: Option<MapMethod>,
     /// With --map: the largest distance from a test node to the model, m (default 1 % of the
     /// model's bounding-box diagonal).
-    #[arg(
-        long,
-        global = true,
-        value_name = "METRES",
-        allow_negative_numbers = true
-    )]
+    #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
     pub tolerance: Option<f64>,
     /// With --map: bring the test's frame onto the model's first, from pairs of test and model
     /// nodes (`101:3,102:6,103:9`, at least three) or automatically (`auto`: best fit onto the
     /// model's surface).
-    #[arg(long, global = true, value_name = "PAIRS|auto")]
-    pub align: Option<String>,
+    #[arg(long, value_name = "PAIRS|auto", value_parser = parse_align)]
+    pub align: Option<Align>,
     /// With --align: fit a uniform scale too.
-    #[arg(long, global = true)]
+    #[arg(long)]
     pub align_scale: bool,
     /// The unit of a test file's coordinates when it does not say (CSV, JSON, a universal file
-    /// without dataset 164): m, cm, mm, in or ft.
-    #[arg(long, global = true, value_name = "UNIT")]
-    pub test_units: Option<String>,
+    /// without dataset 164).
+    #[arg(long, value_enum, value_name = "UNIT")]
+    pub test_units: Option<LengthUnit>,
 }
 
-impl MeshOptions {
+fn parse_align(s: &str) -> Result<Align, String> {
+    s.parse::<Align>().map_err(|e| e.to_string())
+}
+
+impl ModelArgs {
     /// The model options, with `lumped` mass or not.
     ///
     /// # Errors
@@ -139,7 +149,7 @@ pub fn warn(quiet: bool, warnings: &[String]) {
 /// As [`femu::study::load::load_model`].
 pub fn load_model(
     path: &Path,
-    mesh: &MeshOptions,
+    mesh: &ModelArgs,
     lumped: bool,
     quiet: bool,
     pb: &ProgressBar,
@@ -157,27 +167,22 @@ pub fn load_model(
 pub fn load_test(
     path: &Path,
     loaded: &LoadedModel,
-    mesh: &MeshOptions,
+    args: &TestArgs,
     quiet: bool,
 ) -> Result<femu::study::load::LoadedTest, CliError> {
-    use femu::study::mapping::{Align, MapOptions};
-    let map = match &mesh.map {
-        Some(m) => Some(MapOptions {
-            method: m.parse()?,
-            tolerance: mesh.tolerance,
-            align: mesh
-                .align
-                .as_deref()
-                .map(str::parse)
-                .transpose()?
-                .unwrap_or(Align::None),
-            scale: mesh.align_scale,
+    use femu::study::mapping::MapOptions;
+    let map = match args.map {
+        Some(method) => Some(MapOptions {
+            method,
+            tolerance: args.tolerance,
+            align: args.align.clone().unwrap_or(Align::None),
+            scale: args.align_scale,
         }),
         None => {
             let unused: Vec<String> = [
-                ("--tolerance", mesh.tolerance.is_some()),
-                ("--align", mesh.align.is_some()),
-                ("--align-scale", mesh.align_scale),
+                ("--tolerance", args.tolerance.is_some()),
+                ("--align", args.align.is_some()),
+                ("--align-scale", args.align_scale),
             ]
             .iter()
             .filter(|(_, given)| *given)
@@ -191,11 +196,7 @@ pub fn load_test(
     };
     let options = femu::study::load::TestOptions {
         map,
-        test_units: mesh
-            .test_units
-            .as_deref()
-            .map(femu::study::load::length_unit)
-            .transpose()?,
+        test_units: args.test_units.map(LengthUnit::metres),
     };
     let test = femu::study::load::load_test_with(path, loaded, &options)?;
     if !quiet && let Some(m) = &test.mapping {
@@ -215,47 +216,35 @@ pub fn write_json<T: serde::Serialize>(path: Option<&Path>, value: &T) -> Result
     Ok(())
 }
 
-/// The eigensolver every eigen solve of the command uses.
+/// The eigensolver every eigen solve of the command uses: the arguments of every command that
+/// solves for modes.
 #[derive(clap::Args, Debug, Clone)]
-pub struct EngineOptions {
+#[command(next_help_heading = "Eigensolver")]
+pub struct EngineArgs {
     /// The eigensolver: femu's own (default) or SLEPc with MUMPS under MPI, for models whose
     /// factor outgrows one machine (docs/SCALING.md; install with scripts/setup-slepc.sh).
-    #[arg(long, global = true, value_name = "femu|slepc", default_value = "femu")]
-    pub engine: String,
+    #[arg(long, value_enum, default_value = "femu")]
+    pub engine: EngineName,
     /// With --engine slepc: MPI ranks (mpirun -n).
-    #[arg(long, global = true, value_name = "N", default_value_t = 1)]
+    #[arg(long, value_name = "N", default_value_t = 1)]
     pub np: usize,
     /// With --engine slepc: an MPI hostfile for a cluster.
-    #[arg(long, global = true, value_name = "FILE")]
+    #[arg(long, value_name = "FILE")]
     pub hostfile: Option<std::path::PathBuf>,
 }
 
-impl EngineOptions {
-    /// Makes the chosen engine the default of every eigen solve.
+impl EngineArgs {
+    /// The eigensolver settings the arguments ask for, passed down to every solve of the command.
     ///
     /// # Errors
-    /// An unknown engine, zero ranks, --np or --hostfile without --engine slepc.
-    pub fn install(&self) -> Result<(), String> {
-        use femu::sparse::slepc::{Engine, SlepcOptions, set_default_engine};
-        match self.engine.to_ascii_lowercase().as_str() {
-            "femu" => {
-                if self.np != 1 || self.hostfile.is_some() {
-                    return Err("--np and --hostfile apply with --engine slepc".into());
-                }
-                Ok(())
-            }
-            "slepc" => {
-                if self.np == 0 {
-                    return Err("--np: SLEPc needs at least one MPI rank".into());
-                }
-                set_default_engine(Engine::Slepc(SlepcOptions {
-                    ranks: self.np,
-                    hostfile: self.hostfile.clone(),
-                    ..Default::default()
-                }));
-                Ok(())
-            }
-            other => Err(format!("--engine {other:?}: expected femu or slepc")),
-        }
+    /// Zero ranks, --np or --hostfile without --engine slepc.
+    pub fn eigen(&self) -> Result<EigenOptions, CliError> {
+        femu::study::study_file::engine_options(self.engine, self.np, self.hostfile.clone())
+            .map_err(|_| {
+                CliError::Usage(match self.engine {
+                    EngineName::Femu => "--np and --hostfile apply with --engine slepc".into(),
+                    EngineName::Slepc => "--np: SLEPc needs at least one MPI rank".into(),
+                })
+            })
     }
 }

@@ -7,7 +7,6 @@ mod common;
 mod error;
 
 use clap::{Parser, Subcommand};
-use common::MeshOptions;
 use std::process::ExitCode;
 
 /// femu: finite element model updating and test-analysis correlation.
@@ -17,10 +16,8 @@ struct Cli {
     /// No progress and no table on stdout (errors still go to stderr).
     #[arg(long, global = true)]
     quiet: bool,
-    #[command(flatten)]
-    mesh: MeshOptions,
-    #[command(flatten)]
-    engine: common::EngineOptions,
+    // the model, test and eigensolver arguments belong to the subcommands that use them
+    // (`common::{ModelArgs, TestArgs, EngineArgs}`): a flag a command cannot use is refused by name
     #[command(subcommand)]
     command: Command,
 }
@@ -40,21 +37,17 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let (q, mesh) = (cli.quiet, &cli.mesh);
-    if let Err(e) = cli.engine.install() {
-        eprintln!("error: {e}");
-        return ExitCode::FAILURE;
-    }
+    let q = cli.quiet;
     let result = match &cli.command {
-        Command::Estimate(a) => cmd::estimate::run(a, mesh, q),
-        Command::Correlate(a) => cmd::correlate::run(a, mesh, q),
-        Command::Modes(a) => cmd::modes::run(a, mesh, q),
-        Command::Expand(a) => cmd::expand::run(a, mesh, q),
+        Command::Estimate(a) => cmd::estimate::run(a, q),
+        Command::Correlate(a) => cmd::correlate::run(a, q),
+        Command::Modes(a) => cmd::modes::run(a, q),
+        Command::Expand(a) => cmd::expand::run(a, q),
         Command::Info(a) => cmd::info::run(a),
-        Command::Matrices(a) => cmd::matrices::run(a, mesh, q),
+        Command::Matrices(a) => cmd::matrices::run(a, q),
         Command::Run(a) => cmd::run::run(a, q),
         Command::Demo(a) => cmd::demo::run(a, q),
-        Command::Update(a) => cmd::update::run(a, mesh, q),
+        Command::Update(a) => cmd::update::run(a, q),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

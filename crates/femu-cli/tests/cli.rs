@@ -699,3 +699,58 @@ fn modes_of_binary_msh_and_unv_agree() {
     assert!(stderr.contains("nope"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A flag a command cannot use is refused by name, before anything runs: the model, test and
+/// eigensolver arguments belong to the commands that read a model, a test or solve (a study file
+/// has its own model, material and engine; `info` solves nothing; `matrices` reads no test).
+#[test]
+fn flags_a_command_cannot_use_are_refused_by_name() {
+    let deck = fixture("two_hex.inp");
+    let deck = deck.to_str().unwrap();
+    for (args, flag) in [
+        (vec!["run", "study.toml", "--young", "1"], "--young"),
+        (vec!["run", "study.toml", "--engine", "slepc"], "--engine"),
+        (vec!["run", "study.toml", "--map", "nearest"], "--map"),
+        (vec!["demo", "--quick", "--fix", "bottom"], "--fix"),
+        (vec!["info", deck, "--lenient"], "--lenient"),
+        (vec!["info", deck, "--np", "2"], "--np"),
+        (
+            vec!["matrices", deck, "--out", "k", "--map", "nearest"],
+            "--map",
+        ),
+        (vec!["modes", deck, "--test-units", "mm"], "--test-units"),
+    ] {
+        // clap's usage error: exit 2, the flag named, nothing run
+        let out = femu().args(&args).assert().failure().code(2);
+        let stderr = String::from_utf8_lossy(&out.get_output().stderr);
+        assert!(
+            stderr.contains(&format!("unexpected argument '{flag}'")),
+            "{args:?}: {stderr}"
+        );
+    }
+    // typed values: an unknown engine, mapping or unit names the accepted ones
+    for (args, accepted) in [
+        (
+            vec!["modes", deck, "--engine", "arpack"],
+            "[possible values: femu, slepc]",
+        ),
+        (
+            vec!["correlate", deck, "t.csv", "--map", "closest"],
+            "[possible values: nearest, interpolate]",
+        ),
+        (
+            vec!["estimate", deck, "t.csv", "--test-units", "yd"],
+            "[possible values: m, cm, mm, in, ft]",
+        ),
+    ] {
+        let out = femu().args(&args).assert().failure().code(2);
+        let stderr = String::from_utf8_lossy(&out.get_output().stderr);
+        assert!(stderr.contains(accepted), "{args:?}: {stderr}");
+    }
+    // the engine's settings that femu's own engine would ignore
+    let stderr = stderr_of_failure(&["modes", deck, "--np", "2"]);
+    assert!(
+        stderr.contains("--np and --hostfile apply with --engine slepc"),
+        "{stderr}"
+    );
+}

@@ -110,7 +110,7 @@ fn lenient_reads_unknown_keywords_only() {
     let ok = Command::cargo_bin("femu")
         .unwrap()
         .current_dir(&dir)
-        .args(["--lenient", "modes", "typo_boundary.inp", "--count", "2"])
+        .args(["modes", "typo_boundary.inp", "--count", "2", "--lenient"])
         .output()
         .unwrap();
     assert!(ok.status.success());
@@ -125,7 +125,7 @@ fn lenient_reads_unknown_keywords_only() {
     let err = Command::cargo_bin("femu")
         .unwrap()
         .current_dir(&dir)
-        .args(["--lenient", "modes", "typo_generate.inp"])
+        .args(["modes", "typo_generate.inp", "--lenient"])
         .output()
         .unwrap();
     assert_eq!(err.status.code(), Some(1));
@@ -134,7 +134,7 @@ fn lenient_reads_unknown_keywords_only() {
     let err = Command::cargo_bin("femu")
         .unwrap()
         .current_dir(&dir)
-        .args(["--lenient", "modes", "typo_element.inp"])
+        .args(["modes", "typo_element.inp", "--lenient"])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&err.stderr);

@@ -115,15 +115,6 @@ impl SystemMatrices {
     }
 }
 
-static ASSEMBLIES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-
-/// How many global assemblies of `K` and `M` from element matrices ([`Assembler::assemble`],
-/// [`Assembler::assemble_into`]) this process has done: a diagnostic for workflows that must
-/// assemble a model once (a counter, not a timer, so tests can assert it).
-pub fn assemblies_so_far() -> usize {
-    ASSEMBLIES.load(std::sync::atomic::Ordering::Relaxed)
-}
-
 /// The sparsity pattern and element colouring of a model, computed once and reused for every
 /// assembly with new values (updating iterations, parameter groups).
 #[derive(Debug, Clone)]
@@ -140,6 +131,9 @@ pub struct Assembler {
     chunk_ptr: Vec<usize>,
     /// Lists of chunks; the chunks of one colour share no effective point.
     colors: Vec<Vec<usize>>,
+    /// Global assemblies made on this pattern, shared by the assembler's clones
+    /// ([`Assembler::assemblies`]).
+    assemblies: std::sync::Arc<std::sync::atomic::AtomicUsize>,
 }
 
 /// How many element nodes (counted with repetition) a chunk of the colouring holds at least: a
@@ -176,6 +170,15 @@ fn bad_jacobian(id: u64) -> impl Fn(BadJacobian) -> FemError {
 }
 
 impl Assembler {
+    /// How many global assemblies of `K` and `M` from element matrices ([`Assembler::assemble`],
+    /// [`Assembler::assemble_into`]) this assembler and its clones have made: a diagnostic for
+    /// workflows that must assemble a model once (a counter, not a timer, so tests can assert
+    /// it). Clones share the count: an updating model built on a workflow's assembler counts
+    /// there.
+    pub fn assemblies(&self) -> usize {
+        self.assemblies.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
     /// Computes the pattern of `model`'s free DOFs and the element colouring.
     ///
     /// # Errors
@@ -336,6 +339,7 @@ impl Assembler {
             row_idx,
             chunk_ptr,
             colors,
+            assemblies: Default::default(),
         })
     }
 
@@ -634,7 +638,8 @@ impl Assembler {
     /// # Errors
     /// As [`Assembler::assemble`], and [`FemError::LengthMismatch`] if `sys` is not on this pattern.
     pub fn assemble_into(&self, model: &Model, sys: &mut SystemMatrices) -> Result<(), FemError> {
-        ASSEMBLIES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.assemblies
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let mesh = model.mesh();
         let n = self.dofs.free_count();
         let model_dofs = model.dof_map()?;

@@ -269,11 +269,15 @@ impl Model {
         block_size: Option<usize>,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Modes> {
+        let defaults = femu_sparse::eigen::EigenOptions::default();
         let options = ModesOptions {
             count,
             shift_hz,
             band_hz,
-            block_size,
+            eigen: femu_sparse::eigen::EigenOptions {
+                block_size: block_size.unwrap_or(defaults.block_size),
+                ..defaults
+            },
         };
         let stop: std::sync::Arc<std::sync::Mutex<Option<PyErr>>> = Default::default();
         let seen = stop.clone();
@@ -593,43 +597,38 @@ fn expand<'py>(
 /// interval that must hold a model frequency and every bound of Theorems 1-4 in the paper's and
 /// the rigorous forms (Table 2), as a dict. Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (model, test, *, expansion="dynamic", count=None))]
+#[pyo3(signature = (model, test, *, expansion="dynamic", count=None, mac_threshold=0.8, max_frequency_error=None))]
 fn estimate<'py>(
     py: Python<'py>,
     model: &Model,
     test: &Test,
     expansion: &str,
     count: Option<usize>,
+    mac_threshold: f64,
+    max_frequency_error: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let m = method(expansion)?;
+    let options = femu_study::estimate::EstimateOptions {
+        expansion: method(expansion)?,
+        pairing: pairing(mac_threshold, max_frequency_error),
+        count,
+        eigen: Default::default(),
+    };
     let result = py
-        .detach(|| -> Result<_, femu_study::StudyError> {
-            let t = &test.loaded.data.modes;
-            let lambdas = t.eigenvalues();
-            let x = femu_study::expand::expand_shapes(
-                &model.loaded.sys,
-                &test.loaded.layout,
-                &lambdas,
-                t.shapes.as_ref(),
-                m,
-                None,
-            )?;
-            let modes = femu_study::modes::lowest_for_test(&model.loaded, count, t.len())?;
-            femu_study::estimate::estimate_with_bounds(
-                &model.loaded.model,
-                &model.loaded.sys,
-                &test.loaded.layout,
-                t,
-                &ModeSet::from_modes(&modes),
-                x.as_ref(),
-                &femu_study::estimate::EstimateOptions {
-                    expansion: m,
-                    ..Default::default()
-                },
-            )
+        .detach(|| {
+            femu_study::estimate::estimate_loaded(&model.loaded, &test.loaded, &options, |_| {})
         })
         .map_err(err)?;
-    to_dict(py, &result)
+    to_dict(py, &result.result)
+}
+
+/// The pairing settings of `correlate` and `estimate`: the one definition of the command line's
+/// and the study file's (a frequency error in percent).
+fn pairing(mac_threshold: f64, max_frequency_error: Option<f64>) -> femu_correlate::PairingOptions {
+    femu_study::study_file::PairingSection {
+        mac_threshold,
+        max_frequency_error,
+    }
+    .options()
 }
 
 /// The paper's plate study end to end (what `femu demo` does): a plate with a modelling error is
@@ -665,22 +664,30 @@ fn run_demo<'py>(
 /// twice the test modes plus 4) paired with the test modes by MAC, frequency errors, MAC, MSD and
 /// COMAC, as a dict. Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (model, test, *, count=None))]
+#[pyo3(signature = (model, test, *, count=None, mac_threshold=0.8, max_frequency_error=None))]
 fn correlate<'py>(
     py: Python<'py>,
     model: &Model,
     test: &Test,
     count: Option<usize>,
+    mac_threshold: f64,
+    max_frequency_error: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let t = &test.loaded.data.modes;
+    let options = pairing(mac_threshold, max_frequency_error);
     let report = py
         .detach(|| -> Result<_, femu_study::StudyError> {
-            let modes = femu_study::modes::lowest_for_test(&model.loaded, count, t.len())?;
+            let modes = femu_study::modes::lowest_for_test(
+                &model.loaded,
+                count,
+                t.len(),
+                &Default::default(),
+            )?;
             Ok(femu_correlate::correlate(
                 &ModeSet::from_modes(&modes),
                 t,
                 &test.loaded.layout,
-                &femu_correlate::PairingOptions::default(),
+                &options,
             )?)
         })
         .map_err(err)?;
@@ -719,45 +726,55 @@ fn removal_study<'py>(
 
 /// Localisation, updating and the truth check (docs/MATH.md, "Localisation", "Updating", "The
 /// truth check"): among the element sets `sets` (stiffness corrections), the regions that explain
-/// the residues of the first `tuned` test modes are selected (or all with `all=True`) and updated
-/// by `method` (`"sbebe"`: SB-EBE; `"ies"`: inverse eigensensitivity, with the shapes when
-/// `shapes=True`); the updated model is then checked on every test mode, the held-out ones
-/// included, and judged. `progress` is called with each iteration (a dict: iteration, objective,
+/// the residues of the first `tuned` test modes (default: all but the last third, as `femu update`
+/// and study files) are selected (or all with `all=True`) and updated by `method` (`"sbebe"`:
+/// SB-EBE; `"ies"`: inverse eigensensitivity, with the shapes when `shapes=True`); the updated
+/// model is then checked on every test mode, the held-out ones included, and judged against the
+/// test's uncertainty (`frequency_uncertainty`, `shape_uncertainty`, percent) and the model's
+/// discretisation error (`discretisation=False` skips its estimate). `test_error` is SB-EBE's
+/// trust in the shapes (default 1e-3). `progress` is called with each iteration (a dict: iteration, objective,
 /// theta, seconds). Returns the study as a dict. Releases the GIL; Ctrl-C, or an exception raised
 /// by `progress`, stops it at the next iteration.
 #[pyfunction]
-#[pyo3(signature = (model, test, sets, *, tuned, method="sbebe", all=false, shapes=false, progress=None))]
+#[pyo3(signature = (model, test, sets, *, tuned=None, method="sbebe", all=false, shapes=false, frequency_uncertainty=None, shape_uncertainty=None, test_error=None, discretisation=true, progress=None))]
 #[allow(clippy::too_many_arguments)]
 fn update<'py>(
     py: Python<'py>,
     model: &Model,
     test: &Test,
     sets: Vec<String>,
-    tuned: usize,
+    tuned: Option<usize>,
     method: &str,
     all: bool,
     shapes: bool,
+    frequency_uncertainty: Option<f64>,
+    shape_uncertainty: Option<f64>,
+    test_error: Option<f64>,
+    discretisation: bool,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let m: femu_update::UpdateMethod = method.parse().map_err(|e| {
         pyo3::exceptions::PyValueError::new_err(format!("method {method:?}: {e} (sbebe or ies)"))
     })?;
-    let t = &test.loaded.data.modes;
-    let mut options = femu_study::updating::UpdateStudyOptions::new(tuned, t.len());
-    options.method = m;
-    options.all = all;
-    options.shapes = shapes;
-    let sets = femu_study::updating::resolve_sets(&model.loaded, &sets).map_err(err)?;
-    let refs: Vec<&str> = sets.iter().map(String::as_str).collect();
+    // the request of `femu update` and of a study file's [update], with their defaults
+    let request = femu_study::updating::UpdateRequest {
+        sets,
+        tuned,
+        method: m,
+        all,
+        frequency_uncertainty,
+        shape_uncertainty,
+        shapes,
+        test_error,
+        discretisation,
+    };
     let study = interruptible(py, progress, |checkpoint| {
-        femu_study::updating::localise_update_check(
-            &model.loaded.model,
-            &refs,
-            &test.loaded.layout,
-            t,
+        femu_study::updating::update_loaded(
+            &model.loaded,
+            &test.loaded,
+            &request,
+            &Default::default(),
             None,
-            Some((&model.loaded.asm, &model.loaded.sys)),
-            &options,
             |it| checkpoint(&|py| to_dict(py, it).map(Bound::unbind)),
         )
     })?

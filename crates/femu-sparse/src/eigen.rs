@@ -62,8 +62,7 @@ pub struct EigenOptions {
     pub ordering: Ordering,
     /// Seed of the random start vectors (results are deterministic for a seed).
     pub seed: u64,
-    /// The eigensolver: femu's own, or SLEPc under MPI ([`crate::slepc`]). The default is
-    /// femu's unless a program chose another with [`crate::slepc::set_default_engine`].
+    /// The eigensolver: femu's own (the default), or SLEPc under MPI ([`crate::slepc`]).
     pub engine: crate::slepc::Engine,
     /// For [`Which::Lowest`]: a negative shift known to be well placed, the [`Modes::shift`] of
     /// an earlier solve of a model that changed little since (an updating loop). The run starts
@@ -123,7 +122,7 @@ impl Default for EigenOptions {
             max_restarts: 60,
             ordering: Ordering::NestedDissection,
             seed: 0x5EED,
-            engine: crate::slepc::default_engine(),
+            engine: crate::slepc::Engine::Femu,
             lowest_shift_hint: None,
             null_space_hint: None,
         }

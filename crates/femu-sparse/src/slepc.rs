@@ -10,8 +10,8 @@
 //! [`Modes`] as its own solver, with the count in [`SturmCheck`]: a count that disagrees with the
 //! pairs returned is [`SparseError::SturmMismatch`], never a result.
 //!
-//! Select it with [`EigenOptions::engine`] (every eigen solve of femu takes it), or for a whole
-//! program with [`set_default_engine`].
+//! Select it with [`EigenOptions::engine`]: every eigen solve of femu takes it, and every workflow
+//! carries the [`EigenOptions`] its solves use (there is no process-wide default to set).
 
 use crate::eigen::{EigenOptions, EigenStats, Modes, SturmCheck, Which, one_norm, residual_of};
 use crate::{SparseError, SparseMatrix};
@@ -70,25 +70,6 @@ pub enum Engine {
     Femu,
     /// SLEPc with MUMPS under MPI.
     Slepc(SlepcOptions),
-}
-
-static DEFAULT_ENGINE: std::sync::RwLock<Option<Engine>> = std::sync::RwLock::new(None);
-
-/// Makes `engine` the one of [`EigenOptions::default`] for the rest of the program (a command
-/// line's `--engine`): the estimators, expansion and updating then solve with it too.
-pub fn set_default_engine(engine: Engine) {
-    if let Ok(mut e) = DEFAULT_ENGINE.write() {
-        *e = Some(engine);
-    }
-}
-
-/// The engine [`EigenOptions::default`] takes.
-pub fn default_engine() -> Engine {
-    DEFAULT_ENGINE
-        .read()
-        .ok()
-        .and_then(|e| e.clone())
-        .unwrap_or_default()
 }
 
 /// The driver's raw answer: the eigenpairs SLEPc converged and the counts by inertia.

@@ -29,13 +29,14 @@ pub struct DiscretisationEstimate {
 
 /// Estimates the discretisation error of the first modes of `model` (`modes`, the model's own
 /// modes, consistent mass). `None` when the mesh is already quadratic (nothing cheaper to compare
-/// with; said by the callers).
+/// with; said by the callers). The reference is solved with `eigen`.
 ///
 /// # Errors
 /// Building or solving the quadratic model.
 pub fn estimate(
     model: &Model,
     modes: &ModeSet,
+    eigen: &EigenOptions,
 ) -> Result<Option<DiscretisationEstimate>, StudyError> {
     let mesh = model.mesh();
     if mesh.elements().all(|e| e.kind.is_quadratic()) {
@@ -123,7 +124,7 @@ pub fn estimate(
     let asm = Assembler::new(&q)?;
     let sys = asm.assemble_analysed(&q, MassKind::Consistent)?;
     let count = (modes.len() + 4).min(sys.k.rows());
-    let reference = sys.modes(Which::Lowest(count), &EigenOptions::default())?;
+    let reference = sys.modes(Which::Lowest(count), eigen)?;
     let reference = ModeSet::from_modes(&reference);
     // pair on the original nodes (the model's DOFs and the reference's, same ids), triaxial
     let nodes: Vec<u64> = (0..mesh.node_count()).map(|i| mesh.node_id(i)).collect();

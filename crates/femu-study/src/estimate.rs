@@ -4,7 +4,10 @@
 //! 1-4 of the paper, (26)-(29)) with what it bounds. The paper's Table 2 is its summary.
 
 use crate::StudyError;
-use faer::MatRef;
+use crate::expand::expand_shapes;
+use crate::load::{LoadedModel, LoadedTest};
+use crate::modes::lowest_for_test;
+use faer::{Mat, MatRef};
 use femu_correlate::expansion::Method;
 use femu_correlate::{
     Assessment, BoundKind, CorrelationReport, Form, ModeSet, ModelSpectrum, PairingOptions,
@@ -12,15 +15,25 @@ use femu_correlate::{
 };
 use femu_fem::assembly::SystemMatrices;
 use femu_fem::model::Model;
+use femu_sparse::eigen::EigenOptions;
 use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
 
-/// Settings of [`estimate_with_bounds`].
+/// Settings of the estimate workflow ([`estimate_loaded`], [`expand_and_estimate`]): one
+/// definition, and one set of defaults, for `femu estimate`, study files, the demo and Python.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct EstimateOptions {
     /// How the measured shapes are expanded (default dynamic).
     pub expansion: Method,
     /// Pairing of test and model modes.
     pub pairing: PairingOptions,
+    /// Model modes solved for the comparison by [`estimate_loaded`] (default: twice the test
+    /// modes plus 4, at most the model's DOFs).
+    #[serde(default)]
+    pub count: Option<usize>,
+    /// The eigensolver of the model's modes.
+    #[serde(skip)]
+    pub eigen: EigenOptions,
 }
 
 impl Default for EstimateOptions {
@@ -28,8 +41,91 @@ impl Default for EstimateOptions {
         Self {
             expansion: Method::Dynamic,
             pairing: PairingOptions::default(),
+            count: None,
+            eigen: EigenOptions::default(),
         }
     }
+}
+
+/// What [`estimate_loaded`] computed: the model's modes, the expanded test shapes (full length,
+/// one column per test mode) and the estimate.
+#[derive(Debug, Clone)]
+pub struct EstimateRun {
+    /// The model's lowest modes, with their Sturm proof.
+    pub modes: ModeSet,
+    /// The test shapes expanded by [`EstimateOptions::expansion`].
+    pub expanded: Mat<f64>,
+    /// Tables 1 and 2 and every bound.
+    pub result: EstimateResult,
+}
+
+/// The estimate workflow on a loaded model and test: the model's lowest modes
+/// ([`EstimateOptions::count`], solved with [`EstimateOptions::eigen`]), then
+/// [`expand_and_estimate`]. `progress` receives one line per step.
+///
+/// # Errors
+/// The eigensolver's, the expansion's and the estimators' errors.
+pub fn estimate_loaded(
+    model: &LoadedModel,
+    test: &LoadedTest,
+    options: &EstimateOptions,
+    mut progress: impl FnMut(&str),
+) -> Result<EstimateRun, StudyError> {
+    let n_test = test.data.modes.len();
+    progress(&format!(
+        "solving for the model's modes ({} DOF)",
+        model.sys.k.rows()
+    ));
+    let modes = ModeSet::from_modes(&lowest_for_test(
+        model,
+        options.count,
+        n_test,
+        &options.eigen,
+    )?);
+    progress(&format!(
+        "expanding {n_test} test modes ({}) and estimating",
+        options.expansion
+    ));
+    let (expanded, result) = expand_and_estimate(
+        &model.model,
+        &model.sys,
+        &test.layout,
+        &test.data.modes,
+        &modes,
+        options,
+    )?;
+    Ok(EstimateRun {
+        modes,
+        expanded,
+        result,
+    })
+}
+
+/// The test shapes expanded to every DOF by [`EstimateOptions::expansion`]
+/// ([`crate::expand::expand_shapes`]) and assessed against the model modes `modes` by
+/// [`estimate_with_bounds`]: the pipeline every front end runs. Returns the expanded shapes with
+/// the estimate.
+///
+/// # Errors
+/// As [`expand_shapes`] and [`estimate_with_bounds`].
+pub fn expand_and_estimate(
+    model: &Model,
+    sys: &SystemMatrices,
+    layout: &SensorLayout,
+    test: &TestModes,
+    modes: &ModeSet,
+    options: &EstimateOptions,
+) -> Result<(Mat<f64>, EstimateResult), StudyError> {
+    let x = expand_shapes(
+        sys,
+        layout,
+        &test.eigenvalues(),
+        test.shapes.as_ref(),
+        options.expansion,
+        None,
+    )?;
+    let result = estimate_with_bounds(model, sys, layout, test, modes, x.as_ref(), options)?;
+    Ok((x, result))
 }
 
 /// One row of the paper's Table 2 for one test mode.
@@ -78,6 +174,48 @@ impl EstimateRow {
                 self.width_over_gap
             ),
         }
+    }
+}
+
+/// The legend of [`EstimateResult::table2`]: what its columns mean.
+pub fn table2_legend() -> String {
+    format!(
+        "Eigenvalues are lambda = (2 pi f)^2 in s^-2; min gap = distance from the test eigenvalue to the nearest model eigenvalue; `rho_2 = ||R_F||_2 / ||x||_2` is the paper's Euclidean ratio (in the units of K, so a bound only when M = I), `rho_M = ||R_F||_M^-1 / ||x||_M` the mass-weighted one (Theorem 2 is a theorem for it: some model eigenvalue lies within rho_M of the test eigenvalue). A bound more than {TOO_WIDE:.0} times the gap it bounds holds but is too wide to inform."
+    )
+}
+
+impl EstimateResult {
+    /// The paper's Table 2 as a Markdown table ([`table2`]).
+    pub fn table2(&self) -> String {
+        table2(&self.rows)
+    }
+}
+
+/// The paper's Table 2 as a Markdown table (header and one row per test mode): the one rendering
+/// of every front end (`femu estimate`, `femu run`, the demo's report); [`table2_legend`] says
+/// what its columns mean.
+pub fn table2(rows: &[EstimateRow]) -> String {
+    {
+        let mut s = String::from(
+            "| test | min gap (s^-2) | paired gap (s^-2) | rho_2 (paper, N/m) | T2 paper holds | rho_M (rigorous, s^-2) | T2 rigorous holds | model frequency within (Hz) |\n|---|---|---|---|---|---|---|---|\n",
+        );
+        for row in rows {
+            let _ = writeln!(
+                s,
+                "| {} | {:.3e} | {} | {:.3e} | {} | {:.3e} | {} | {:.1} .. {:.1} |",
+                row.test,
+                row.min_gap,
+                row.paired_gap
+                    .map_or("unpaired".into(), |g| format!("{g:.3e}")),
+                row.rho_2,
+                if row.t2_paper_holds { "yes" } else { "**no**" },
+                row.rho_m,
+                row.rigorous_verdict(),
+                row.interval_hz.0,
+                row.interval_hz.1
+            );
+        }
+        s
     }
 }
 

@@ -243,24 +243,55 @@ pub struct TestOptions {
     pub test_units: Option<f64>,
 }
 
+/// A unit of length a test file's coordinates may be in (`--test-units`, a study file's
+/// `test_units`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum LengthUnit {
+    /// Metres.
+    M,
+    /// Centimetres.
+    Cm,
+    /// Millimetres.
+    Mm,
+    /// Inches.
+    In,
+    /// Feet.
+    Ft,
+}
+
+impl LengthUnit {
+    /// The unit in metres.
+    pub fn metres(self) -> f64 {
+        match self {
+            Self::M => 1.0,
+            Self::Cm => 0.01,
+            Self::Mm => 0.001,
+            Self::In => 0.0254,
+            Self::Ft => 0.3048,
+        }
+    }
+}
+
 /// Metres per unit of `name` (`m`, `cm`, `mm`, `in`, `ft`).
 ///
 /// # Errors
 /// Another name.
 pub fn length_unit(name: &str) -> Result<f64, StudyError> {
     Ok(match name.to_ascii_lowercase().as_str() {
-        "m" => 1.0,
-        "cm" => 0.01,
-        "mm" => 0.001,
-        "in" => 0.0254,
-        "ft" => 0.3048,
+        "m" => LengthUnit::M,
+        "cm" => LengthUnit::Cm,
+        "mm" => LengthUnit::Mm,
+        "in" => LengthUnit::In,
+        "ft" => LengthUnit::Ft,
         other => {
             return Err(StudyError::invalid(
                 "test units",
                 format!("{other}: expected m, cm, mm, in or ft"),
             ));
         }
-    })
+    }
+    .metres())
 }
 
 /// Reads test modes (`.unv`/`.uff` universal file, `.json`, or CSV) and maps their sensors onto

@@ -23,6 +23,7 @@ use std::path::Path;
 
 /// How test nodes land on the model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum MapMethod {
     /// The nearest FE node (two test nodes on one FE node are an error).

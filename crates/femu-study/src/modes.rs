@@ -19,12 +19,12 @@ pub struct ModesOptions {
     pub shift_hz: Option<f64>,
     /// Every mode between two frequencies, Hz.
     pub band_hz: Option<(f64, f64)>,
-    /// Right-hand sides the eigensolver solves together ([`EigenOptions::block_size`]; `None`:
-    /// its default, 4). Wider blocks read the factor fewer times per vector and need more
-    /// vectors: on this project's 50k-DOF benchmarks blocks of 4 solved 74 and 131 vectors where
-    /// blocks of 2 solved 53 and 99 (ARPACK: 53 and 100) and took 6-21 % longer
-    /// (docs/SCALING.md, "Block size and the count of solved vectors").
-    pub block_size: Option<usize>,
+    /// The eigensolver's settings: its engine, and the right-hand sides it solves together
+    /// ([`EigenOptions::block_size`], default 4). Wider blocks read the factor fewer times per
+    /// vector and need more vectors: on this project's 50k-DOF benchmarks blocks of 4 solved 74
+    /// and 131 vectors where blocks of 2 solved 53 and 99 (ARPACK: 53 and 100) and took 6-21 %
+    /// longer (docs/SCALING.md, "Block size and the count of solved vectors").
+    pub eigen: EigenOptions,
 }
 
 /// Where an eigensolve's time went and how much work it did: [`EigenStats`] with the block size
@@ -181,13 +181,9 @@ pub fn solve_modes(
         }
         (None, None) => Which::Lowest(count),
     };
-    let default = EigenOptions::default();
-    // checked by the eigensolver (1 to `MAX_BLOCK`)
-    let eigen = EigenOptions {
-        block_size: options.block_size.unwrap_or(default.block_size),
-        ..default
-    };
-    let modes = sys.modes(which, &eigen)?;
+    // the block size is checked by the eigensolver (1 to `MAX_BLOCK`)
+    let eigen = &options.eigen;
+    let modes = sys.modes(which, eigen)?;
     let report = ModesReport {
         model: loaded.path.display().to_string(),
         dofs: sys.k.rows(),
@@ -244,7 +240,7 @@ pub fn notes(modes: &Modes, band: bool) -> Vec<String> {
 }
 
 /// The lowest `count` modes (default: twice the test modes plus 4, at most the DOFs), as the
-/// correlation and estimate workflows need them.
+/// correlation and estimate workflows need them, solved with `eigen`.
 ///
 /// # Errors
 /// The eigensolver's errors.
@@ -252,8 +248,9 @@ pub fn lowest_for_test(
     loaded: &LoadedModel,
     count: Option<usize>,
     test_modes: usize,
+    eigen: &EigenOptions,
 ) -> Result<Modes, StudyError> {
     let sys = &loaded.sys;
     let count = count.unwrap_or(2 * test_modes + 4).min(sys.k.rows());
-    Ok(sys.modes(Which::Lowest(count), &EigenOptions::default())?)
+    Ok(sys.modes(Which::Lowest(count), eigen)?)
 }

@@ -24,17 +24,17 @@
 //! Paths in the file are relative to the file. Unknown keys are errors with their line.
 
 use crate::StudyError;
-use crate::estimate::{EstimateOptions, EstimateResult, estimate_with_bounds};
-use crate::expand::{ExpansionReport, expand_shapes, expanded_names};
+use crate::estimate::{EstimateOptions, EstimateResult, estimate_loaded};
+use crate::expand::{ExpansionReport, expanded_names};
 use crate::load::{MaterialOptions, ModelOptions, TestOptions, load_model, load_test_with};
 use crate::mapping::MapOptions;
-use crate::modes::lowest_for_test;
 use crate::removal::{removal_over_test, write_removal_study};
 use crate::report::{create_dir, write_json, write_shapes_vtu, write_text};
-use crate::updating::{UpdateStudy, UpdateStudyOptions, localise_update_check, resolve_sets};
+use crate::updating::{UpdateRequest, UpdateStudy, update_loaded};
 use femu_correlate::expansion::Method;
 use femu_correlate::{ModeSet, PairingOptions};
-use femu_update::UpdateMethod;
+use femu_sparse::eigen::EigenOptions;
+use femu_sparse::slepc::{Engine, SlepcOptions};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -78,7 +78,19 @@ pub struct StudyFile {
     pub expansion: Option<ExpansionSection>,
     /// Updating.
     #[serde(default)]
-    pub update: Option<UpdateSection>,
+    pub update: Option<UpdateRequest>,
+}
+
+/// The eigensolver a study names (`[eigen] engine`, `femu --engine`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum EngineName {
+    /// femu's own shift-invert block Lanczos.
+    #[default]
+    Femu,
+    /// SLEPc with MUMPS under MPI.
+    Slepc,
 }
 
 /// `[eigen]`.
@@ -86,8 +98,8 @@ pub struct StudyFile {
 #[serde(deny_unknown_fields)]
 pub struct EigenSection {
     /// `femu` (default) or `slepc`.
-    #[serde(default = "default_engine_name")]
-    pub engine: String,
+    #[serde(default)]
+    pub engine: EngineName,
     /// MPI ranks for SLEPc.
     #[serde(default = "default_ranks")]
     pub ranks: usize,
@@ -96,24 +108,99 @@ pub struct EigenSection {
     pub hostfile: Option<PathBuf>,
 }
 
-fn default_engine_name() -> String {
-    "femu".into()
+impl EigenSection {
+    /// The eigensolver settings the section asks for, a hostfile taken relative to `base` (the
+    /// study file's folder).
+    ///
+    /// # Errors
+    /// SLEPc with zero ranks.
+    pub fn options(&self, base: &Path) -> Result<EigenOptions, StudyError> {
+        engine_options(
+            self.engine,
+            self.ranks,
+            self.hostfile.as_ref().map(|h| base.join(h)),
+        )
+    }
+}
+
+/// The eigensolver settings of an engine: femu's own, or SLEPc on `ranks` MPI ranks (with a
+/// hostfile for a cluster); the other settings their defaults.
+///
+/// # Errors
+/// SLEPc with zero ranks; ranks other than 1 or a hostfile for femu's engine, which would ignore
+/// them.
+pub fn engine_options(
+    engine: EngineName,
+    ranks: usize,
+    hostfile: Option<PathBuf>,
+) -> Result<EigenOptions, StudyError> {
+    let engine = match engine {
+        EngineName::Femu => {
+            if ranks != 1 || hostfile.is_some() {
+                return Err(StudyError::invalid(
+                    "engine",
+                    "ranks and a hostfile apply to the slepc engine (MPI), not to femu's",
+                ));
+            }
+            Engine::Femu
+        }
+        EngineName::Slepc => {
+            if ranks == 0 {
+                return Err(StudyError::invalid(
+                    "engine",
+                    "SLEPc needs at least one MPI rank",
+                ));
+            }
+            Engine::Slepc(SlepcOptions {
+                ranks,
+                hostfile,
+                ..Default::default()
+            })
+        }
+    };
+    Ok(EigenOptions {
+        engine,
+        ..Default::default()
+    })
 }
 
 fn default_ranks() -> usize {
     1
 }
 
-/// `[pairing]`.
+/// `[pairing]`, and the pairing arguments of `femu correlate` and `femu estimate` (with the
+/// `clap` feature): one definition, one default.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(deny_unknown_fields)]
 pub struct PairingSection {
     /// Smallest MAC accepted for a pair.
+    #[cfg_attr(feature = "clap", arg(long, default_value_t = 0.8))]
     #[serde(default = "default_mac_threshold")]
     pub mac_threshold: f64,
-    /// Largest frequency error of a pair, percent.
+    /// Largest frequency error of a pair, percent (default: no limit).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PERCENT"))]
     #[serde(default)]
     pub max_frequency_error: Option<f64>,
+}
+
+impl Default for PairingSection {
+    fn default() -> Self {
+        Self {
+            mac_threshold: default_mac_threshold(),
+            max_frequency_error: None,
+        }
+    }
+}
+
+impl PairingSection {
+    /// The pairing settings (the frequency error as a fraction).
+    pub fn options(&self) -> PairingOptions {
+        PairingOptions {
+            mac_threshold: self.mac_threshold,
+            max_frequency_error: self.max_frequency_error.map(|p| p / 100.0),
+        }
+    }
 }
 
 fn default_mac_threshold() -> f64 {
@@ -129,46 +216,6 @@ pub struct ExpansionSection {
     /// Run the sensor-removal study.
     #[serde(default)]
     pub study: bool,
-}
-
-/// `[update]`.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct UpdateSection {
-    /// Candidate element sets.
-    pub sets: Vec<String>,
-    /// Tuned test modes (default: all but the last third).
-    #[serde(default)]
-    pub tuned: Option<usize>,
-    /// `sbebe` (default) or `ies`.
-    #[serde(default = "default_update_method")]
-    pub method: UpdateMethod,
-    /// Update every candidate set instead of the localised ones.
-    #[serde(default)]
-    pub all: bool,
-    /// The test's frequency uncertainty, percent (default 0.1, assumed and said so).
-    #[serde(default)]
-    pub frequency_uncertainty: Option<f64>,
-    /// The test's shape uncertainty, percent of each mode's largest reading (default 1).
-    #[serde(default)]
-    pub shape_uncertainty: Option<f64>,
-    /// Inverse eigensensitivity fits the shapes too.
-    #[serde(default)]
-    pub shapes: bool,
-    /// SB-EBE's test-error weight (default 1e-3).
-    #[serde(default)]
-    pub test_error: Option<f64>,
-    /// Estimate the model's discretisation error (default true).
-    #[serde(default = "default_true")]
-    pub discretisation: bool,
-}
-
-fn default_true() -> bool {
-    true
-}
-
-fn default_update_method() -> UpdateMethod {
-    UpdateMethod::SbEbe
 }
 
 impl StudyFile {
@@ -206,6 +253,11 @@ pub struct StudyRun {
     pub warnings: Vec<String>,
     /// Files written.
     pub files: Vec<PathBuf>,
+    /// Global assemblies of the model's `K` and `M` during the study ([`Assembler::assemblies`]
+    /// of the loaded model's assembler and its clones): 1, the study's promise.
+    ///
+    /// [`Assembler::assemblies`]: femu_fem::assembly::Assembler::assemblies
+    pub model_assemblies: usize,
 }
 
 /// Runs the study file `path`, writing every result into `out`. `progress` receives one line per
@@ -232,29 +284,10 @@ pub fn run_study_file(
         StudyError::Io(femu_io::IoError::Io { .. }) => StudyError::within(path, e),
         e => e,
     };
-    if let Some(e) = &s.eigen {
-        use femu_sparse::slepc::{Engine, SlepcOptions, set_default_engine};
-        match e.engine.as_str() {
-            "femu" => set_default_engine(Engine::Femu),
-            "slepc" if e.ranks > 0 => set_default_engine(Engine::Slepc(SlepcOptions {
-                ranks: e.ranks,
-                hostfile: e.hostfile.as_ref().map(|h| base.join(h)),
-                ..Default::default()
-            })),
-            other => {
-                return Err(StudyError::within(
-                    path,
-                    StudyError::invalid(
-                        "[eigen]",
-                        format!(
-                            "engine {other:?} with {} ranks: expected femu, or slepc with at least one rank",
-                            e.ranks
-                        ),
-                    ),
-                ));
-            }
-        }
-    }
+    let eigen = match &s.eigen {
+        Some(e) => e.options(base).map_err(|e| StudyError::within(path, e))?,
+        None => EigenOptions::default(),
+    };
     let model = load_model(&base.join(&s.model), &options).map_err(named)?;
     let test = load_test_with(
         &base.join(&s.test),
@@ -278,43 +311,17 @@ pub fn run_study_file(
         files.push(p);
     }
     let n_test = test.data.modes.len();
-    // one solve serves correlation (2 n + 4 modes), estimation and the truth check (n + 10)
-    let count = (2 * n_test + 4).max(n_test + 10);
-    progress(&format!(
-        "solving {count} modes ({} DOF)",
-        model.sys.k.rows()
-    ));
-    let modes = ModeSet::from_modes(&lowest_for_test(&model, Some(count), n_test)?);
-    let pairing = PairingOptions {
-        mac_threshold: s.pairing.map_or(0.8, |p| p.mac_threshold),
-        max_frequency_error: s
-            .pairing
-            .and_then(|p| p.max_frequency_error)
-            .map(|p| p / 100.0),
+    let options = EstimateOptions {
+        expansion: s.expansion.map_or(Method::Dynamic, |e| e.method),
+        pairing: s.pairing.unwrap_or_default().options(),
+        // one solve serves correlation (2 n + 4 modes), estimation and the truth check (n + 10)
+        count: Some((2 * n_test + 4).max(n_test + 10)),
+        eigen: eigen.clone(),
     };
-    let method = s.expansion.map_or(Method::Dynamic, |e| e.method);
-    progress(&format!("expanding the test shapes ({method})"));
+    let run = estimate_loaded(&model, &test, &options, &mut progress)?;
+    let (modes, x, estimate) = (run.modes, run.expanded, run.result);
     let modes_t = &test.data.modes;
-    let x = expand_shapes(
-        &model.sys,
-        &test.layout,
-        &modes_t.eigenvalues(),
-        modes_t.shapes.as_ref(),
-        method,
-        None,
-    )?;
-    let estimate = estimate_with_bounds(
-        &model.model,
-        &model.sys,
-        &test.layout,
-        modes_t,
-        &modes,
-        x.as_ref(),
-        &EstimateOptions {
-            expansion: method,
-            pairing,
-        },
-    )?;
+    let method = options.expansion;
     for (name, value) in [
         (
             "correlation.json",
@@ -364,39 +371,12 @@ pub fn run_study_file(
     let update = match &s.update {
         Some(u) => {
             progress("localising and updating");
-            let names = resolve_sets(&model, &u.sets)?;
-            let tuned = u.tuned.unwrap_or((2 * n_test).div_ceil(3)).min(n_test);
-            let defaults = UpdateStudyOptions::new(tuned, n_test);
-            let opts = UpdateStudyOptions {
-                method: u.method,
-                all: u.all,
-                shapes: u.shapes,
-                uncertainty: femu_update::TestUncertainty::from_percent(
-                    u.frequency_uncertainty,
-                    u.shape_uncertainty,
-                )?,
-                test_error: u.test_error.or(defaults.test_error),
-                discretisation: u.discretisation,
-                ..defaults
-            };
-            let nominal = (!s.lumped).then_some((&model.asm, &model.sys));
-            let names: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-            let before = (!s.lumped).then_some(&modes);
-            let st = localise_update_check(
-                &model.model,
-                &names,
-                &test.layout,
-                &test.data.modes,
-                before,
-                nominal,
-                &opts,
-                |it| {
-                    progress(&format!(
-                        "iteration {}: objective {:.4e}",
-                        it.iteration, it.objective
-                    ))
-                },
-            )?;
+            let st = update_loaded(&model, &test, u, &eigen, Some(&modes), |it| {
+                progress(&format!(
+                    "iteration {}: objective {:.4e}",
+                    it.iteration, it.objective
+                ))
+            })?;
             let p = out.join("update.json");
             write_json(&p, &st)?;
             files.push(p);
@@ -409,6 +389,7 @@ pub fn run_study_file(
         expansion,
         update,
         modes,
+        model_assemblies: model.asm.assemblies(),
         warnings: model.warnings,
         files,
     })

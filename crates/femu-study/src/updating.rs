@@ -4,18 +4,185 @@
 
 use crate::StudyError;
 use crate::discretisation::{DiscretisationEstimate, estimate as estimate_discretisation};
-use crate::load::LoadedModel;
+use crate::load::{LoadedModel, LoadedTest};
 use crate::reach::{Reach, reach};
 use femu_correlate::{ModeSet, SensorLayout, TestModes};
 use femu_fem::assembly::{Assembler, MassKind, SystemMatrices};
 use femu_fem::groups::ParameterGroups;
 use femu_fem::model::Model;
+use femu_sparse::eigen::EigenOptions;
 use femu_update::{
     Corrections, Iteration, JudgeInputs, Localisation, ParameterFinding, SbebeOptions,
     SelectionRule, SensitivityOptions, TestUncertainty, TruthCheck, UpdateMethod, UpdateModel,
     UpdateResult, inverse_eigensensitivity, localise_expanded, model_modes, sb_ebe, truth_check,
 };
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+
+/// What a user asks of the updating workflow ([`update_loaded`]): the one definition behind
+/// `femu update`'s arguments (with the `clap` feature), a study file's `[update]` section and the
+/// Python binding's `update`, with the one set of defaults ([`UpdateRequest::options`]).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+#[serde(deny_unknown_fields)]
+pub struct UpdateRequest {
+    /// Candidate element sets (comma-separated); localisation selects among them.
+    #[cfg_attr(feature = "clap", arg(long, value_delimiter = ',', required = true))]
+    pub sets: Vec<String>,
+    /// The first N test modes are tuned, the others held out (default: all but the last third,
+    /// [`UpdateRequest::tuned_of`]).
+    #[cfg_attr(feature = "clap", arg(long))]
+    #[serde(default)]
+    pub tuned: Option<usize>,
+    /// The updating method.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "sbebe"))]
+    #[serde(default = "default_update_method")]
+    pub method: UpdateMethod,
+    /// Update every candidate set instead of the localised ones.
+    #[cfg_attr(feature = "clap", arg(long))]
+    #[serde(default)]
+    pub all: bool,
+    /// The test's frequency uncertainty, percent (one standard deviation; default: 0.1 %,
+    /// assumed and said so). The truth check's tolerance is three of it.
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PERCENT"))]
+    #[serde(default)]
+    pub frequency_uncertainty: Option<f64>,
+    /// The test's shape uncertainty, percent of each mode's largest reading (default: 1 %).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "PERCENT"))]
+    #[serde(default)]
+    pub shape_uncertainty: Option<f64>,
+    /// Inverse eigensensitivity fits the shapes at the sensors as well as the frequencies
+    /// (eigenvector derivatives); recommended when the model is not the structure.
+    #[cfg_attr(feature = "clap", arg(long))]
+    #[serde(default)]
+    pub shapes: bool,
+    /// SB-EBE's trust in the measured shapes: the weight of the test-error term of the expansion
+    /// (default 1e-3; smaller trusts the test more).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "WEIGHT"))]
+    #[serde(default)]
+    pub test_error: Option<f64>,
+    /// Estimate the model's discretisation error (the same mesh with quadratic elements, solved
+    /// once) and weigh the verdict with it (default true; `--no-discretisation` skips it).
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long = "no-discretisation",
+            action = clap::ArgAction::SetFalse,
+            help = "Skip the estimate of the model's discretisation error (the same mesh with quadratic elements, solved once)"
+        )
+    )]
+    #[serde(default = "default_true")]
+    pub discretisation: bool,
+}
+
+fn default_true() -> bool {
+    true
+}
+
+fn default_update_method() -> UpdateMethod {
+    UpdateMethod::SbEbe
+}
+
+impl UpdateRequest {
+    /// The request with every default, for the candidate sets `sets`.
+    pub fn new(sets: Vec<String>) -> Self {
+        Self {
+            sets,
+            tuned: None,
+            method: UpdateMethod::SbEbe,
+            all: false,
+            frequency_uncertainty: None,
+            shape_uncertainty: None,
+            shapes: false,
+            test_error: None,
+            discretisation: true,
+        }
+    }
+
+    /// The tuned modes out of `test_modes`: the request's, at most `test_modes`, or by default
+    /// all but the last third (`ceil(2 n / 3)`), so that a third of the test is held out for the
+    /// truth check.
+    pub fn tuned_of(&self, test_modes: usize) -> usize {
+        self.tuned
+            .unwrap_or((2 * test_modes).div_ceil(3))
+            .min(test_modes)
+    }
+
+    /// The workflow's settings for a test of `test_modes` modes, solved with `eigen`.
+    ///
+    /// # Errors
+    /// `tuned = 0`, an uncertainty that is not a positive percentage.
+    pub fn options(
+        &self,
+        test_modes: usize,
+        eigen: &EigenOptions,
+    ) -> Result<UpdateStudyOptions, StudyError> {
+        let tuned = self.tuned_of(test_modes);
+        if tuned == 0 {
+            return Err(StudyError::invalid(
+                "tuned modes",
+                "must be at least 1 (the first N test modes are tuned)",
+            ));
+        }
+        let defaults = UpdateStudyOptions::new(tuned, test_modes);
+        Ok(UpdateStudyOptions {
+            method: self.method,
+            all: self.all,
+            shapes: self.shapes,
+            uncertainty: TestUncertainty::from_percent(
+                self.frequency_uncertainty,
+                self.shape_uncertainty,
+            )?,
+            test_error: self.test_error.or(defaults.test_error),
+            discretisation: self.discretisation,
+            eigen: eigen.clone(),
+            ..defaults
+        })
+    }
+
+    /// What the request asks that its method will not use, one warning each (`shapes` with
+    /// SB-EBE, which always uses the shapes).
+    pub fn unused(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        if self.shapes && self.method != UpdateMethod::InverseEigensensitivity {
+            w.push(
+                "shapes (--shapes) applies to the ies method: SB-EBE always uses the shapes".into(),
+            );
+        }
+        w
+    }
+}
+
+/// Localisation, updating and the truth check of a loaded model against a loaded test, as
+/// `request` asks: the candidate sets resolved by name ([`resolve_sets`]), the defaults of
+/// [`UpdateRequest::options`], and the model's assembly reused when its mass is consistent (the
+/// updating's mass). `before` are the model's own modes when the caller has solved them
+/// (consistent mass; ignored otherwise). Every front end (CLI, study file, Python) calls this.
+///
+/// # Errors
+/// Unknown sets, `tuned = 0`, and those of [`localise_update_check`].
+pub fn update_loaded(
+    model: &LoadedModel,
+    test: &LoadedTest,
+    request: &UpdateRequest,
+    eigen: &EigenOptions,
+    before: Option<&ModeSet>,
+    progress: impl FnMut(&Iteration),
+) -> Result<UpdateStudy, StudyError> {
+    let names = resolve_sets(model, &request.sets)?;
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
+    let options = request.options(test.data.modes.len(), eigen)?;
+    let consistent = model.sys.mass_kind == MassKind::Consistent;
+    localise_update_check(
+        &model.model,
+        &names,
+        &test.layout,
+        &test.data.modes,
+        before.filter(|_| consistent),
+        consistent.then_some((&model.asm, &model.sys)),
+        &options,
+        progress,
+    )
+}
 
 /// Settings of [`localise_update_check`].
 #[derive(Debug, Clone, PartialEq)]
@@ -40,6 +207,9 @@ pub struct UpdateStudyOptions {
     /// Estimate the model's discretisation error (the same mesh with quadratic elements) and
     /// weigh the verdict with it (default true; skipped for quadratic meshes).
     pub discretisation: bool,
+    /// The eigensolver of every solve of the workflow (the modes before and after, the
+    /// eigensensitivities, the discretisation estimate's reference).
+    pub eigen: EigenOptions,
 }
 
 impl UpdateStudyOptions {
@@ -56,6 +226,7 @@ impl UpdateStudyOptions {
             uncertainty: TestUncertainty::default(),
             shapes: false,
             discretisation: true,
+            eigen: EigenOptions::default(),
         }
     }
 }
@@ -161,7 +332,7 @@ pub fn localise_update_check(
     let before = match before {
         Some(b) => b,
         None => {
-            computed = model_modes(&mut nominal, options.check_modes, &Default::default())?;
+            computed = model_modes(&mut nominal, options.check_modes, &options.eigen)?;
             &computed
         }
     };
@@ -181,6 +352,7 @@ pub fn localise_update_check(
                 let o = SensitivityOptions {
                     shapes: options.shapes,
                     uncertainty: options.uncertainty,
+                    eigen: options.eigen.clone(),
                     ..Default::default()
                 };
                 inverse_eigensensitivity(up, layout, &tuned, &o, log)?
@@ -188,7 +360,7 @@ pub fn localise_update_check(
         })
     };
     let result = run(options.method, &mut up, &mut progress)?;
-    let after = model_modes(&mut up, options.check_modes, &Default::default())?;
+    let after = model_modes(&mut up, options.check_modes, &options.eigen)?;
     let tuned_idx: Vec<usize> = (0..options.tuned).collect();
     let mut truth_check = truth_check(
         before,
@@ -199,7 +371,7 @@ pub fn localise_update_check(
         &Default::default(),
     )?;
     let discretisation = if options.discretisation {
-        estimate_discretisation(model, before)?
+        estimate_discretisation(model, before, &options.eigen)?
     } else {
         None
     };

@@ -53,9 +53,13 @@ fn the_quadratic_comparison_keeps_masses_and_links() {
     let model = build(&mesh);
     let sys = model.assemble(MassKind::Consistent).unwrap();
     let modes = eigs(&sys.k, &sys.m, Which::Lowest(3), &EigenOptions::default()).unwrap();
-    let est = femu_study::discretisation::estimate(&model, &ModeSet::from_modes(&modes))
-        .unwrap()
-        .expect("a linear mesh has a quadratic comparison");
+    let est = femu_study::discretisation::estimate(
+        &model,
+        &ModeSet::from_modes(&modes),
+        &Default::default(),
+    )
+    .unwrap()
+    .expect("a linear mesh has a quadratic comparison");
     // by hand: the quadratic mesh, every end-face node linked, the same mass
     let reference = build(&to_quadratic(&mesh));
     let f_ref = lowest(&reference, 1)[0].sqrt();

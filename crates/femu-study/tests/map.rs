@@ -227,7 +227,8 @@ fn a_turned_millimetre_wireframe_between_nodes_maps_onto_the_model() {
     let deck = dir.join("plate.inp");
     femu_io::inp::write_inp(&plate, None, &deck).unwrap();
     let model = load_model(&deck, &ModelOptions::default()).unwrap();
-    let modes = femu_study::modes::lowest_for_test(&model, Some(6), 0).unwrap();
+    let modes =
+        femu_study::modes::lowest_for_test(&model, Some(6), 0, &Default::default()).unwrap();
     let mesh = model.model.mesh();
     let dofs = &model.sys.dofs;
     let h = 0.05;

@@ -1,10 +1,11 @@
 //! `femu correlate`: test modes paired with the model's lowest modes.
 
-use crate::common::{MeshOptions, load_model, spinner, write_json};
+use crate::common::{EngineArgs, ModelArgs, TestArgs, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
-use femu::correlate::{ModeSet, PairingOptions, correlate};
+use femu::correlate::{ModeSet, correlate};
 use femu::study::modes::lowest_for_test;
+use femu::study::study_file::PairingSection;
 use std::path::PathBuf;
 
 /// Pair test modes with the model's modes: MAC on the sensors, frequency errors, MSD, COMAC.
@@ -23,36 +24,35 @@ pub struct CorrelateArgs {
     /// Model modes to compute (default: twice the test modes plus 4).
     #[arg(long)]
     pub count: Option<usize>,
-    /// Smallest MAC accepted for a pair.
-    #[arg(long, default_value_t = 0.8)]
-    pub mac_threshold: f64,
-    /// Largest frequency error of a pair, percent (default: MAC alone decides, and pairs beyond
-    /// 10 % are named in a warning).
-    #[arg(long, value_name = "PERCENT")]
-    pub max_frequency_error: Option<f64>,
+    #[command(flatten)]
+    pub pairing: PairingSection,
     /// Lumped (diagonal) mass instead of consistent.
     #[arg(long)]
     pub lumped: bool,
     /// Write the correlation (MAC matrix, pairs, MSD, COMAC) as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    #[command(flatten)]
+    pub model_args: ModelArgs,
+    #[command(flatten)]
+    pub test_args: TestArgs,
+    #[command(flatten)]
+    pub engine: EngineArgs,
 }
 
 /// Runs `femu correlate`.
 ///
 /// # Errors
 /// Reading, assembly, eigensolver and pairing errors.
-pub fn run(a: &CorrelateArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliError> {
+pub fn run(a: &CorrelateArgs, quiet: bool) -> Result<(), CliError> {
     let pb = spinner(quiet, "reading the model");
-    let loaded = load_model(&a.model, mesh, a.lumped, quiet, &pb)?;
-    let test = crate::common::load_test(&a.test, &loaded, mesh, quiet)?;
+    let eigen = a.engine.eigen()?;
+    let loaded = load_model(&a.model, &a.model_args, a.lumped, quiet, &pb)?;
+    let test = crate::common::load_test(&a.test, &loaded, &a.test_args, quiet)?;
     pb.set_message("solving for the model's modes");
-    let modes = lowest_for_test(&loaded, a.count, test.data.modes.len())?;
+    let modes = lowest_for_test(&loaded, a.count, test.data.modes.len(), &eigen)?;
     pb.finish_and_clear();
-    let options = PairingOptions {
-        mac_threshold: a.mac_threshold,
-        max_frequency_error: a.max_frequency_error.map(|p| p / 100.0),
-    };
+    let options = a.pairing.options();
     let report = correlate(
         &ModeSet::from_modes(&modes),
         &test.data.modes,
@@ -65,7 +65,7 @@ pub fn run(a: &CorrelateArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), Cli
             test.data.modes.len(),
             test.layout.len(),
             modes.values.len(),
-            a.mac_threshold
+            a.pairing.mac_threshold
         );
         print!("{report}");
     }

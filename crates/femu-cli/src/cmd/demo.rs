@@ -1,6 +1,6 @@
 //! `femu demo`: the paper's plate study end to end.
 
-use crate::common::spinner;
+use crate::common::{EngineArgs, spinner};
 use crate::error::CliError;
 use clap::Args;
 use femu::study::StudyError;
@@ -30,6 +30,8 @@ pub struct DemoArgs {
     /// The smaller study (plate at half resolution, every third sensor set): seconds.
     #[arg(long)]
     pub quick: bool,
+    #[command(flatten)]
+    pub engine: EngineArgs,
 }
 
 /// Runs `femu demo`.
@@ -54,6 +56,7 @@ pub fn run(a: &DemoArgs, quiet: bool) -> Result<(), CliError> {
         out: a.out.clone(),
         shape_noise: a.shape_noise,
         frequency_noise: a.frequency_noise,
+        eigen: a.engine.eigen()?,
         ..base
     };
     let pb = spinner(quiet, "building the plate");

@@ -1,7 +1,7 @@
 //! `femu expand`: test shapes expanded to every model DOF, their estimators, and the
 //! sensor-removal study.
 
-use crate::common::{MeshOptions, load_model, spinner, write_json};
+use crate::common::{ModelArgs, TestArgs, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
 use femu::correlate::Method;
@@ -41,16 +41,20 @@ pub struct ExpandArgs {
     /// Write rho_M, rho_2 and the study's points as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    #[command(flatten)]
+    pub model_args: ModelArgs,
+    #[command(flatten)]
+    pub test_args: TestArgs,
 }
 
 /// Runs `femu expand`.
 ///
 /// # Errors
 /// Reading, assembly and expansion errors; a study with fewer than 3 measured nodes.
-pub fn run(a: &ExpandArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliError> {
+pub fn run(a: &ExpandArgs, quiet: bool) -> Result<(), CliError> {
     let pb = spinner(quiet, "reading the model");
-    let loaded = load_model(&a.model, mesh, a.lumped, quiet, &pb)?;
-    let test = crate::common::load_test(&a.test, &loaded, mesh, quiet)?;
+    let loaded = load_model(&a.model, &a.model_args, a.lumped, quiet, &pb)?;
+    let test = crate::common::load_test(&a.test, &loaded, &a.test_args, quiet)?;
     let modes = &test.data.modes;
     pb.set_message(format!(
         "expanding {} test modes ({}){}",

@@ -1,6 +1,6 @@
 //! `femu matrices`: `K` and `M` as MatrixMarket files with the DOF map.
 
-use crate::common::{MeshOptions, load_model, spinner};
+use crate::common::{ModelArgs, load_model, spinner};
 use crate::error::CliError;
 use clap::Args;
 use femu::study::StudyError;
@@ -24,15 +24,17 @@ pub struct MatricesArgs {
     /// Lumped (diagonal) mass instead of consistent.
     #[arg(long)]
     pub lumped: bool,
+    #[command(flatten)]
+    pub model_args: ModelArgs,
 }
 
 /// Runs `femu matrices`.
 ///
 /// # Errors
 /// Reading, assembly and file system errors.
-pub fn run(a: &MatricesArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliError> {
+pub fn run(a: &MatricesArgs, quiet: bool) -> Result<(), CliError> {
     let pb = spinner(quiet, "reading the model");
-    let loaded = load_model(&a.model, mesh, a.lumped, quiet, &pb)?;
+    let loaded = load_model(&a.model, &a.model_args, a.lumped, quiet, &pb)?;
     let sys = &loaded.sys;
     let name = |suffix: &str| {
         let mut p = a.out.as_os_str().to_owned();

@@ -1,7 +1,7 @@
 //! `femu modes`: the lowest modes of a model (or those nearest a frequency, or in a band), with
 //! their Sturm evidence.
 
-use crate::common::{MeshOptions, load_model, spinner, write_json};
+use crate::common::{EngineArgs, ModelArgs, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
 use femu::study::modes::{ModesOptions, solve_modes};
@@ -43,27 +43,35 @@ pub struct ModesArgs {
     /// in all but read the factor more often; on large models 4 is the faster.
     #[arg(long, value_name = "N")]
     pub block_size: Option<usize>,
+    #[command(flatten)]
+    pub model_args: ModelArgs,
+    #[command(flatten)]
+    pub engine: EngineArgs,
 }
 
 /// Runs `femu modes`.
 ///
 /// # Errors
 /// Reading, assembly and eigensolver errors; bad counts, shifts and bands.
-pub fn run(a: &ModesArgs, mesh: &MeshOptions, quiet: bool) -> Result<(), CliError> {
+pub fn run(a: &ModesArgs, quiet: bool) -> Result<(), CliError> {
     let pb = spinner(quiet, "reading the model");
-    let loaded = load_model(&a.model, mesh, a.lumped, quiet, &pb)?;
+    let mut eigen = a.engine.eigen()?;
+    if let Some(b) = a.block_size {
+        eigen.block_size = b;
+    }
+    let loaded = load_model(&a.model, &a.model_args, a.lumped, quiet, &pb)?;
     pb.set_message(format!("solving ({} DOF)", loaded.sys.k.rows()));
     let options = ModesOptions {
         count: a.count,
         shift_hz: a.shift,
         band_hz: a.band.as_ref().map(|b| (b[0], b[1])),
-        block_size: a.block_size,
+        eigen,
     };
     let (result, report) = solve_modes(&loaded, &options)?;
     pb.finish_and_clear();
     let f = &report.frequencies_hz;
     if !quiet {
-        let engine = match femu::sparse::slepc::default_engine() {
+        let engine = match &options.eigen.engine {
             femu::sparse::slepc::Engine::Femu => "femu's shift-invert Lanczos".to_string(),
             femu::sparse::slepc::Engine::Slepc(o) => format!(
                 "SLEPc Krylov-Schur with MUMPS, {} MPI rank{}",

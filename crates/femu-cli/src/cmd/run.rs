@@ -28,6 +28,8 @@ use std::path::PathBuf;
 ///   [expansion]
 ///   method = "dynamic"             # static, dynamic, serep:M, min-residual, mdre
 ///   study = true                   # the sensor-removal study (Figure 1)
+///   [eigen]
+///   engine = "femu"                # or "slepc", with ranks = N and hostfile = "hosts"
 ///   [update]
 ///   sets = ["r0", "r1", "r2", "r3"]
 ///   tuned = 4
@@ -59,15 +61,11 @@ pub fn run(a: &RunArgs, quiet: bool) -> Result<(), CliError> {
     }
     println!("# correlation\n\n{}", r.estimate.correlation);
     println!(
-        "# estimators ({} expansion)\n\n| test | min gap (s^-2) | rho_2 (paper) | rho_M (rigorous) | a model frequency within (Hz) |\n|---|---|---|---|---|",
-        r.estimate.expansion
+        "# estimators ({} expansion)\n\n{}\n{}\n",
+        r.estimate.expansion,
+        r.estimate.table2(),
+        femu::study::estimate::table2_legend()
     );
-    for row in &r.estimate.rows {
-        println!(
-            "| {} | {:.3e} | {:.3e} | {:.3e} | {:.1} .. {:.1} |",
-            row.test, row.min_gap, row.rho_2, row.rho_m, row.interval_hz.0, row.interval_hz.1
-        );
-    }
     if let Some(e) = &r.expansion {
         println!(
             "\n# expansion ({})\n\nrho_M (s^-2) per test mode: {:?}",

@@ -103,21 +103,38 @@ def read_test(path: _Path, model: Model, *, test_units: Optional[float] = None) 
 def mac(a: _F64, b: Optional[_F64] = None) -> _F64: ...
 def expand(model: Model, test: Test, *, method: str = "dynamic") -> _F64: ...
 def estimate(
-    model: Model, test: Test, *, expansion: str = "dynamic", count: Optional[int] = None
+    model: Model,
+    test: Test,
+    *,
+    expansion: str = "dynamic",
+    count: Optional[int] = None,
+    mac_threshold: float = 0.8,
+    max_frequency_error: Optional[float] = None,
 ) -> Dict[str, Any]: ...
 def run_demo(
     out: _Path, *, quick: bool = False, progress: Optional[Callable[[str], Any]] = None
 ) -> Dict[str, Any]: ...
-def correlate(model: Model, test: Test, *, count: Optional[int] = None) -> Dict[str, Any]: ...
+def correlate(
+    model: Model,
+    test: Test,
+    *,
+    count: Optional[int] = None,
+    mac_threshold: float = 0.8,
+    max_frequency_error: Optional[float] = None,
+) -> Dict[str, Any]: ...
 def removal_study(model: Model, test: Test, *, expansion: str = "dynamic") -> Dict[str, Any]: ...
 def update(
     model: Model,
     test: Test,
     sets: Sequence[str],
     *,
-    tuned: int,
+    tuned: Optional[int] = None,
     method: str = "sbebe",
     all: bool = False,
     shapes: bool = False,
+    frequency_uncertainty: Optional[float] = None,
+    shape_uncertainty: Optional[float] = None,
+    test_error: Optional[float] = None,
+    discretisation: bool = True,
     progress: Optional[Callable[[Dict[str, Any]], Any]] = None,
 ) -> Dict[str, Any]: ...
