@@ -754,3 +754,105 @@ fn flags_a_command_cannot_use_are_refused_by_name() {
         "{stderr}"
     );
 }
+
+/// A Nastran deck's own request: `femu modes` solves the EIGRL the case control's METHOD selects
+/// (ND lowest modes, or every mode in V1-V2) unless --count, --shift or --band say otherwise, with
+/// the deck's mass formulation (lumped: no PARAM,COUPMASS), and `femu info` says so. The band's
+/// modes are the lowest-count solve's modes inside it (the same solver's two requests must agree,
+/// and the band's Sturm count proves none is missing).
+#[test]
+fn a_nastran_deck_s_eigrl_and_mass_are_honoured() {
+    let dir = std::env::temp_dir().join(format!("femu-cli-eigrl-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut deck = String::from("SOL 103\nCEND\nSPC = 1\nMETHOD = 20 $ three modes\nBEGIN BULK\n");
+    let nx = 6;
+    let id = |i: usize, j: usize, k: usize| 1 + i + (nx + 1) * (j + 2 * k);
+    for k in 0..2 {
+        for j in 0..2 {
+            for i in 0..=nx {
+                deck.push_str(&format!(
+                    "GRID,{},,{:?},{:?},{:?}\n",
+                    id(i, j, k),
+                    0.05 * i as f64,
+                    0.02 * j as f64,
+                    0.01 * k as f64
+                ));
+            }
+        }
+    }
+    for i in 0..nx {
+        deck.push_str(&format!(
+            "CHEXA,{},1,{},{},{},{},{},{}\n,{},{}\n",
+            i + 1,
+            id(i, 0, 0),
+            id(i + 1, 0, 0),
+            id(i + 1, 1, 0),
+            id(i, 1, 0),
+            id(i, 0, 1),
+            id(i + 1, 0, 1),
+            id(i + 1, 1, 1),
+            id(i, 1, 1)
+        ));
+    }
+    deck.push_str("PSOLID,1,1,,2,,FULL\nMAT1,1,2.1+11,,.3,7850.\nEIGRL,10,,,8\nEIGRL,20,,,3\n");
+    deck.push_str(&format!(
+        "SPC1,1,123,{},{},{},{}\n",
+        id(0, 0, 0),
+        id(0, 1, 0),
+        id(0, 0, 1),
+        id(0, 1, 1)
+    ));
+    let path = dir.join("bar.bdf");
+    std::fs::write(&path, &deck).unwrap();
+    let p = path.to_str().unwrap();
+    let json = dir.join("m.json");
+    let j = json.to_str().unwrap();
+    stdout_of_success(&["modes", p, "--json", j]);
+    let v = json_of(&json);
+    assert_eq!(v["frequencies_hz"].as_array().unwrap().len(), 3);
+    assert_eq!(v["mass"], "lumped");
+    assert!(
+        v["notes"][0]
+            .as_str()
+            .unwrap()
+            .starts_with("the deck's EIGRL: the lowest 3 modes"),
+        "{}",
+        v["notes"]
+    );
+    stdout_of_success(&["modes", p, "--count", "5", "--json", j]);
+    let five = json_of(&json);
+    let f5: Vec<f64> = five["frequencies_hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_f64().unwrap())
+        .collect();
+    assert_eq!(f5.len(), 5);
+    // V1-V2: the modes between the 2nd and the 4th of the five, each to the solver's tolerance
+    let (lo, hi) = (0.5 * (f5[0] + f5[1]), 0.5 * (f5[3] + f5[4]));
+    std::fs::write(
+        &path,
+        deck.replace("EIGRL,20,,,3", &format!("EIGRL,20,{lo:?},{hi:?}")),
+    )
+    .unwrap();
+    stdout_of_success(&["modes", p, "--json", j]);
+    let band = json_of(&json);
+    let fb: Vec<f64> = band["frequencies_hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_f64().unwrap())
+        .collect();
+    assert_eq!(fb.len(), 3, "{fb:?}");
+    for (a, b) in fb.iter().zip(&f5[1..4]) {
+        assert!((a / b - 1.0).abs() < 1e-8, "{a} {b}");
+    }
+    assert!(band["sturm_verified"].as_bool().unwrap());
+    let info = stdout_of_success(&["info", p]);
+    assert!(
+        info.contains("mass: lumped (no PARAM,COUPMASS: MSC Nastran's default)"),
+        "{info}"
+    );
+    assert!(info.contains("SPC set 1"), "{info}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

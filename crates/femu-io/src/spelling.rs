@@ -1,9 +1,13 @@
 //! "Did you mean": the nearest known spelling of a misspelt keyword, parameter or name.
 
-/// The Levenshtein distance between `a` and `b` (case-insensitive, ASCII).
+/// The edit distance between `a` and `b` (case-insensitive, ASCII) with a swap of two adjacent
+/// letters counted as one edit (the optimal string alignment distance): `GIRD` is one edit from
+/// `GRID`, as a typist's slip is.
 fn distance(a: &str, b: &str) -> usize {
     let a: Vec<u8> = a.bytes().map(|c| c.to_ascii_uppercase()).collect();
     let b: Vec<u8> = b.bytes().map(|c| c.to_ascii_uppercase()).collect();
+    // rows i - 2, i - 1 and i of the table
+    let mut before: Vec<usize> = Vec::new();
     let mut prev: Vec<usize> = (0..=b.len()).collect();
     for (i, ca) in a.iter().enumerate() {
         let mut cur = vec![i + 1; b.len() + 1];
@@ -11,8 +15,11 @@ fn distance(a: &str, b: &str) -> usize {
             cur[j + 1] = (prev[j] + usize::from(ca != cb))
                 .min(prev[j + 1] + 1)
                 .min(cur[j] + 1);
+            if i > 0 && j > 0 && *ca == b[j - 1] && a[i - 1] == *cb {
+                cur[j + 1] = cur[j + 1].min(before[j - 1] + 1);
+            }
         }
-        prev = cur;
+        before = std::mem::replace(&mut prev, cur);
     }
     prev[b.len()]
 }
@@ -50,6 +57,12 @@ mod tests {
         assert_eq!(distance("BOUNDRY", "boundary"), 1);
         assert_eq!(distance("GENERTE", "GENERATE"), 1);
         assert_eq!(distance("", "abc"), 3);
+        // a swap of two adjacent letters is one edit (Levenshtein counts two)
+        assert_eq!(distance("GIRD", "GRID"), 1);
+        assert_eq!(distance("ELASITC", "ELASTIC"), 1);
+        assert_eq!(distance("CHEXAA", "CHEXA"), 1);
+        // no swap shortcut across a third letter: ab-c-d against cb-a-d is two substitutions
+        assert_eq!(distance("abcd", "cbad"), 2);
     }
 
     #[test]

@@ -36,32 +36,20 @@ fn ccx_eigenvalues(dat: &str) -> Vec<f64> {
 
 /// CalculiX's lowest `count` eigenvalues of `model` (written by femu with a `*FREQUENCY` step).
 fn ccx_lowest(model: &Model, count: usize, name: &str) -> Vec<f64> {
-    let dir = std::env::temp_dir().join(format!("femu-ccx-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let path =
+        std::env::temp_dir().join(format!("femu-ccx-deck-{name}-{}.inp", std::process::id()));
     write_inp(
         model,
         Some(&FrequencyStep {
             count,
             shift_cycles2: None,
         }),
-        dir.join("job.inp"),
+        &path,
     )
     .unwrap();
-    let out = Command::new("ccx")
-        .arg("-i")
-        .arg("job")
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "ccx failed: {}",
-        String::from_utf8_lossy(&out.stdout)
-    );
-    let ccx = ccx_eigenvalues(&std::fs::read_to_string(dir.join("job.dat")).unwrap());
-    assert_eq!(ccx.len(), count);
-    let _ = std::fs::remove_dir_all(&dir);
-    ccx
+    let text = std::fs::read_to_string(&path).unwrap();
+    let _ = std::fs::remove_file(&path);
+    ccx_of_text(&text, count, name)
 }
 
 /// femu's lowest `count` eigenvalues of `model` (consistent mass).
@@ -232,5 +220,140 @@ fn constraints_agree_with_calculix() {
     let again = femu_lowest(&back, 6);
     for (p, q) in femu.iter().zip(&again) {
         assert!((p / q - 1.0).abs() < 1e-10, "{p} vs {q}");
+    }
+}
+
+/// CalculiX's lowest `count` eigenvalues of an `.inp` deck given as text.
+fn ccx_of_text(text: &str, count: usize, name: &str) -> Vec<f64> {
+    let dir = std::env::temp_dir().join(format!("femu-ccx-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("job.inp"), text).unwrap();
+    let out = Command::new("ccx")
+        .arg("-i")
+        .arg("job")
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "ccx failed: {}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    let ccx = ccx_eigenvalues(&std::fs::read_to_string(dir.join("job.dat")).unwrap());
+    assert_eq!(ccx.len(), count);
+    let _ = std::fs::remove_dir_all(&dir);
+    ccx
+}
+
+/// A Nastran deck and a CalculiX deck of the same structure, both written here from one list of
+/// grids and elements: a hex8 bar clamped by GRID field 8 (`PS = 123` at x = 0) and by GRDSET's
+/// `PS = 3` elsewhere (a bar that may move in x and y only), MAT1 by E and G (NU = E / 2G - 1 by
+/// hand for CalculiX), coupled mass (`PARAM,COUPMASS,1`), full integration (`IN = 2`, `ISOP =
+/// FULL`), small-field continuations labelled and placed away from their parents. femu's reading
+/// of the Nastran deck gives CalculiX's eigenvalues to 1e-6: the reading is checked against
+/// another code, not against femu's own `.inp` writer.
+#[test]
+fn a_nastran_deck_agrees_with_calculix_on_its_equivalent() {
+    if !ccx_available() {
+        return;
+    }
+    let (nx, ny, nz) = (8usize, 2usize, 2usize);
+    let (lx, ly, lz) = (0.4, 0.04, 0.03);
+    let id = |i: usize, j: usize, k: usize| 1 + i + (nx + 1) * (j + (ny + 1) * k);
+    let (e, g, rho) = (2.1e11, 8.0e10, 7850.0);
+    let nu = e / (2.0 * g) - 1.0;
+    let mut bdf = String::from("SOL 103\nCEND\nMETHOD = 1\nBEGIN BULK\nGRDSET,,,,,,,3\n");
+    let mut inp = String::from("*NODE\n");
+    for k in 0..=nz {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let p = [
+                    lx * i as f64 / nx as f64,
+                    ly * j as f64 / ny as f64,
+                    lz * k as f64 / nz as f64,
+                ];
+                let ps = if i == 0 { ",,123" } else { "" };
+                bdf.push_str(&format!(
+                    "GRID,{},,{:?},{:?},{:?}{ps}\n",
+                    id(i, j, k),
+                    p[0],
+                    p[1],
+                    p[2]
+                ));
+                inp.push_str(&format!(
+                    "{}, {:?}, {:?}, {:?}\n",
+                    id(i, j, k),
+                    p[0],
+                    p[1],
+                    p[2]
+                ));
+            }
+        }
+    }
+    inp.push_str("*ELEMENT, TYPE=C3D8, ELSET=ALL\n");
+    let mut later = String::new();
+    let mut eid = 0;
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                eid += 1;
+                let c = [
+                    id(i, j, k),
+                    id(i + 1, j, k),
+                    id(i + 1, j + 1, k),
+                    id(i, j + 1, k),
+                    id(i, j, k + 1),
+                    id(i + 1, j, k + 1),
+                    id(i + 1, j + 1, k + 1),
+                    id(i, j + 1, k + 1),
+                ];
+                // small field, the continuation labelled and written after all the elements
+                bdf.push_str(&format!(
+                    "{:<8}{:<8}{:<8}{:<8}{:<8}{:<8}{:<8}{:<8}{:<8}+E{eid:<6}\n",
+                    "CHEXA", eid, 1, c[0], c[1], c[2], c[3], c[4], c[5]
+                ));
+                later.push_str(&format!("+E{eid:<6}{:<8}{:<8}\n", c[6], c[7]));
+                inp.push_str(&format!(
+                    "{eid}, {}\n",
+                    c.iter()
+                        .map(usize::to_string)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+            }
+        }
+    }
+    bdf.push_str(&later);
+    bdf.push_str(&format!(
+        "PSOLID,1,1,,2,,FULL\nMAT1,1,{e:?},{g:?},,{rho:?}\nPARAM,COUPMASS,1\nEIGRL,1,,,6\n"
+    ));
+    inp.push_str(&format!(
+        "*MATERIAL, NAME=M\n*ELASTIC\n{e:?}, {nu:?}\n*DENSITY\n{rho:?}\n*SOLID SECTION, ELSET=ALL, MATERIAL=M\n*BOUNDARY\n"
+    ));
+    for k in 0..=nz {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                if i == 0 {
+                    inp.push_str(&format!("{}, 1, 3\n", id(i, j, k)));
+                } else {
+                    inp.push_str(&format!("{}, 3, 3\n", id(i, j, k)));
+                }
+            }
+        }
+    }
+    inp.push_str("*STEP\n*FREQUENCY\n6\n*END STEP\n");
+    let deck = femu_io::nastran::parse_bdf(&bdf, "bar.bdf", &Default::default()).unwrap();
+    assert_eq!(deck.mass, MassKind::Consistent);
+    assert_eq!(deck.eigrl, Some((None, None, Some(6))));
+    let femu = femu_lowest(&deck.model, 6);
+    let ccx = ccx_of_text(&inp, 6, "nastran-equivalent");
+    for (j, c) in ccx.iter().enumerate() {
+        let rel = (femu[j] / c - 1.0).abs();
+        assert!(
+            rel < 1e-6,
+            "mode {}: femu {} ccx {c} ({rel:.1e})",
+            j + 1,
+            femu[j]
+        );
     }
 }

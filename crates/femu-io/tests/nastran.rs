@@ -185,7 +185,7 @@ fn three_formats_give_the_same_k_and_m_as_the_mesh() {
         // PARAM,POST is skipped with a warning, once
         let w: Vec<String> = deck.warnings.iter().map(|w| w.message.clone()).collect();
         assert_eq!(w.len(), 1, "{w:?}");
-        assert!(w[0].starts_with("PARAM skipped"), "{w:?}");
+        assert!(w[0].starts_with("PARAM,POST skipped"), "{w:?}");
     }
 }
 
@@ -249,7 +249,7 @@ fn frames_constraints_and_masses() {
     assert_eq!(deck.model.point_masses()[0].mass[0][0], 2.5);
     assert!(
         deck.warnings.iter().any(|w| w.message.contains(
-            "the grid has no rotations (only RBE2 reference grids have), so its offset is dropped"
+            "GRID 7 has no rotations (only RBE2 reference grids, and grids an RBE2 moves in all six components, have), so its offset is dropped"
         )),
         "{:?}",
         deck.warnings
@@ -301,7 +301,7 @@ fn bad_decks_name_the_card_and_line() {
         ),
         (
             base.replace("SPC = 100", "SPC = 300"),
-            "SPC set 300 is selected but no SPC, SPC1 or SPCADD defines it",
+            "cube.bdf:3: SPC = 300 selects a set that no SPC, SPC1 or SPCADD defines",
         ),
         (
             base.replace("PARAM    WTMASS  1.", "CQUAD4   2       1       1       2       3       4\nRBAR     3       7       6       123456\nCQUAD4   4       1       5       6       7       8\nPARAM    WTMASS  1."),
@@ -350,7 +350,15 @@ fn pynastran_tet10_example_against_msc_nastran() {
         .filter_map(|w| w.message.split(" skipped").next())
         .collect();
     for card in [
-        "PARAM", "FREQ1", "LSEQ", "DLOAD", "RLOAD1", "FORCE", "MOMENT", "TABLED1",
+        "PARAM,POST",
+        "PARAM,PRTMAXIM",
+        "FREQ1",
+        "LSEQ",
+        "DLOAD",
+        "RLOAD1",
+        "FORCE",
+        "MOMENT",
+        "TABLED1",
     ] {
         assert!(skipped.contains(&card), "{card}: {skipped:?}");
     }
@@ -483,10 +491,12 @@ fn rigid_and_interpolation_links() {
     let k = deck.model.assemble(MassKind::Consistent).unwrap();
     // the same through the API
     let plain = parse_bdf(
-        &base.replace(
-            "PARAM    WTMASS  1.",
-            "GRID,20,,0.5,0.5,2.0\nGRID,21,,0.5,0.5,1.0\nPARAM    WTMASS  1.",
-        ),
+        &base
+            .replace(
+                "PARAM    WTMASS  1.",
+                "GRID,20,,0.5,0.5,2.0\nGRID,21,,0.5,0.5,1.0\nPARAM    WTMASS  1.",
+            )
+            .replace("CONM2    10      7               2.5     0.1\n", ""),
         "cube.bdf",
         &BdfOptions::default(),
     )
@@ -496,6 +506,12 @@ fn rigid_and_interpolation_links() {
         .add_rigid_link(20, &[5, 6, 7, 8], &[0, 1, 2], "RBE2 30")
         .unwrap();
     model.add_point_mass(20, 4.0).unwrap();
+    // CONM2 10 (2.5 at an offset 0.1 in x from GRID 7 at (1, 1, 1)) sits on a grid RBE2 30 moves
+    // rigidly in all six components: it moves with the reference GRID 20 at (0.5, 0.5, 2), as a
+    // rigid mass offset (1.1 - 0.5, 1 - 0.5, 1 - 2) from it
+    model
+        .add_rigid_mass(20, 2.5, [0.6, 0.5, -1.0], [[0.0; 3]; 3])
+        .unwrap();
     model
         .add_weighted_average(
             21,

@@ -84,15 +84,30 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
         mesh_lines(&mut s, model.mesh());
         let _ = writeln!(
             s,
-            "point masses (CONM2): {}; constrained DOFs (SPC): {}; dependent DOFs (RBE2, RBE3, blank mid-side grids): {}",
+            "point masses (CONM2): {}; constrained DOFs: {} (SPC set {}, permanent constraints of {} grids); dependent DOFs (RBE2, RBE3, blank mid-side grids): {}",
             model.point_masses().len(),
             model.fixed_dofs().count(),
+            deck.spc_set
+                .map_or("none selected".to_string(), |s| s.to_string()),
+            deck.permanent_constraints,
             model.constraints().len()
+        );
+        let _ = writeln!(
+            s,
+            "mass: {} ({})",
+            match deck.mass {
+                femu_fem::assembly::MassKind::Lumped => "lumped",
+                _ => "coupled (consistent)",
+            },
+            match deck.coupmass {
+                Some(v) => format!("PARAM,COUPMASS,{v}"),
+                None => "no PARAM,COUPMASS: MSC Nastran's default".to_string(),
+            }
         );
         if let Some((v1, v2, nd)) = deck.eigrl {
             let _ = writeln!(
                 s,
-                "EIGRL: {} modes{}",
+                "EIGRL (femu modes solves it unless given --count, --shift or --band): {} modes{}",
                 nd.map_or("all".to_string(), |n| n.to_string()),
                 match (v1, v2) {
                     (Some(a), Some(b)) => format!(" in [{a}, {b}] Hz"),

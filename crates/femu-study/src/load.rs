@@ -63,6 +63,9 @@ pub struct LoadedModel {
     pub asm: Assembler,
     /// The deck's `*FREQUENCY` step, if any.
     pub frequency: Option<FrequencyStep>,
+    /// The Nastran deck's `EIGRL` (the one its case control's `METHOD` selects): `V1`, `V2` in Hz
+    /// and `ND`, which `femu modes` honours unless told otherwise.
+    pub eigrl: Option<femu_io::nastran::Eigrl>,
     /// What the readers noticed and the options that did not apply, one line each.
     pub warnings: Vec<String>,
 }
@@ -110,6 +113,8 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
             "femu reads models as Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh) and universal files (.unv, .uff); the file's extension is none of them",
         ));
     }
+    let mut mass = options.mass();
+    let mut eigrl = None;
     let (model, frequency) = if has_extension(path, &["msh", "unv", "uff"]) {
         let Some(mat) = options.material else {
             return Err(StudyError::in_file(
@@ -152,6 +157,21 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
             },
         )?;
         warnings.extend(deck.warnings.iter().map(|w| w.to_string()));
+        // the deck's mass formulation, as Nastran reads it, unless lumped mass is asked for
+        if !options.lumped {
+            mass = deck.mass;
+            if deck.mass == MassKind::Lumped {
+                warnings.push(format!(
+                    "{}: lumped mass: {} (MSC Nastran's mass for solids unless PARAM,COUPMASS is positive; femu lumps by row sums for linear elements and by the scaled diagonal for quadratic ones)",
+                    path.display(),
+                    match deck.coupmass {
+                        Some(v) => format!("the deck sets PARAM,COUPMASS,{v}"),
+                        None => "the deck has no PARAM,COUPMASS".to_string(),
+                    }
+                ));
+            }
+        }
+        eigrl = deck.eigrl;
         if options.material.is_some() || !options.fix.is_empty() {
             warnings.push(format!(
                 "{}: the deck has its own materials and constraints: the given material and sets to fix are not used",
@@ -184,7 +204,7 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
     leave_out_orphans(&mut model, path, &mut warnings)?;
     let asm = Assembler::new(&model).map_err(|e| StudyError::within(path, e))?;
     let sys = asm
-        .assemble_analysed(&model, options.mass())
+        .assemble_analysed(&model, mass)
         .map_err(|e| StudyError::within(path, e))?;
     Ok(LoadedModel {
         path: path.to_path_buf(),
@@ -192,6 +212,7 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         sys,
         asm,
         frequency,
+        eigrl,
         warnings,
     })
 }

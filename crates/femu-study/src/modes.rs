@@ -136,7 +136,9 @@ pub struct ModesReport {
     pub eigensolver: EigenReport,
 }
 
-/// Solves for the modes `options` asks for.
+/// Solves for the modes `options` asks for; where it asks for none (no count, shift or band), those
+/// of the deck: an Abaqus `*FREQUENCY` step's count, or a Nastran `EIGRL`'s `ND` (the lowest `ND`)
+/// or `V1`-`V2` range (every mode in it), as Nastran would compute them; else the lowest 10.
 ///
 /// # Errors
 /// A count of 0, a negative or non-finite frequency, a band with `LO >= HI`, and the
@@ -147,14 +149,43 @@ pub fn solve_modes(
 ) -> Result<(Modes, ModesReport), StudyError> {
     let start = std::time::Instant::now();
     let sys = &loaded.sys;
-    let count = options
-        .count
-        .or(loaded.frequency.map(|f| f.count))
-        .unwrap_or(10);
+    let asked = options.count.is_some() || options.shift_hz.is_some() || options.band_hz.is_some();
+    let mut deck_notes = Vec::new();
+    let mut band_hz = options.band_hz;
+    let mut deck_count = loaded.frequency.map(|f| f.count);
+    if let (false, Some((v1, v2, nd))) = (asked, loaded.eigrl) {
+        match (v1, v2, nd) {
+            (lo, Some(hi), nd) => {
+                band_hz = Some((lo.unwrap_or(0.0).max(0.0), hi));
+                deck_notes.push(format!(
+                    "the deck's EIGRL: every mode from {} to {hi} Hz{}",
+                    lo.unwrap_or(0.0).max(0.0),
+                    nd.map_or(String::new(), |n| format!(
+                        " (its ND = {n} is not a cap here: femu returns the whole range, Sturm-verified)"
+                    ))
+                ));
+            }
+            (None | Some(0.0), None, Some(nd)) => {
+                deck_count = Some(nd);
+                deck_notes.push(format!("the deck's EIGRL: the lowest {nd} modes"));
+            }
+            (Some(lo), None, nd) => {
+                return Err(StudyError::invalid(
+                    "EIGRL",
+                    format!(
+                        "V1 = {lo} Hz without V2{}: the modes above a frequency are not a request femu solves; give --count, --shift or --band",
+                        nd.map_or(String::new(), |n| format!(" (ND = {n})"))
+                    ),
+                ));
+            }
+            (_, None, None) => {}
+        }
+    }
+    let count = options.count.or(deck_count).unwrap_or(10);
     if count == 0 {
         return Err(StudyError::invalid("count", "must be at least 1"));
     }
-    let which = match (options.shift_hz, options.band_hz) {
+    let which = match (options.shift_hz, band_hz) {
         (Some(hz), _) => {
             if !(hz.is_finite() && hz >= 0.0) {
                 return Err(StudyError::invalid(
@@ -200,7 +231,10 @@ pub fn solve_modes(
         sturm_count: modes.sturm.count,
         sturm_lower: modes.sturm.lower,
         sturm_upper: modes.sturm.upper,
-        notes: notes(&modes, matches!(which, Which::Band { .. })),
+        notes: deck_notes
+            .into_iter()
+            .chain(notes(&modes, matches!(which, Which::Band { .. })))
+            .collect(),
         seconds: start.elapsed().as_secs_f64(),
         eigensolver: EigenReport::new(
             &modes.stats,

@@ -1,0 +1,262 @@
+//! Single-point constraints: the `SPC`, `SPC1` and `SPCADD` set the case control selects, and the
+//! permanent constraints of `GRID` field 8 (`PS`, or `GRDSET`'s).
+
+use super::cards::Card;
+use super::case_control::Selected;
+use super::geometry::Geometry;
+use crate::{IoError, Warning};
+use femu_fem::model::Model;
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+fn warn(warnings: &mut Vec<Warning>, c: &Card, message: String) {
+    warnings.push(Warning {
+        path: c.path.clone(),
+        line: c.line,
+        message,
+    });
+}
+
+/// Fixes components `comps` (0-based, 0-5) of GRID `g` for card `c`: rotations only where the
+/// grid has them (rigid links' reference grids; solid grids have none to fix); partial components
+/// of a grid whose displacement frame is turned are refused (femu constrains basic components).
+pub(super) fn fix_components(
+    model: &mut Model,
+    turned: &HashMap<u64, i64>,
+    c: &Card,
+    g: u64,
+    comps: &[usize],
+) -> Result<(), IoError> {
+    let Some(gi) = model.mesh().node_index(g) else {
+        return Err(c.err(format!(
+            "constrains GRID {g}, which the deck does not define"
+        )));
+    };
+    let has_rotations = model.rotation_nodes().contains(&gi);
+    let comps: Vec<usize> = comps
+        .iter()
+        .copied()
+        .filter(|k| *k < 3 || has_rotations)
+        .collect();
+    if let Some(cd) = turned
+        .get(&g)
+        .filter(|_| !comps.is_empty() && comps.len() < 3)
+    {
+        return Err(c.err(format!(
+            "constrains components {:?} of GRID {g} in its displacement frame {cd}, which is turned from the basic frame: femu constrains basic components only (a constraint in a turned frame needs a multipoint constraint, not read yet)",
+            comps.iter().map(|c| c + 1).collect::<Vec<_>>()
+        )));
+    }
+    model.fix_node_dofs(g, &comps).map_err(c.located())
+}
+
+/// The permanent single-point constraints of the grids (QRG GRID field 8, `PS`: "permanent
+/// single-point constraints", in the grid's displacement frame; blank takes GRDSET's).
+///
+/// # Errors
+/// A malformed component list, partial components in a turned frame.
+pub(super) fn apply_permanent(
+    grids: &[&Card],
+    geometry: &Geometry<'_>,
+    model: &mut Model,
+    turned: &HashMap<u64, i64>,
+) -> Result<usize, IoError> {
+    let mut count = 0;
+    for g in grids {
+        let source = geometry.grid_field(g, 6);
+        let t = source.field(6);
+        if t.is_empty() || t == "0" {
+            continue;
+        }
+        let comps = super::links::components(source, 6, "PS")?;
+        let id = g.id(0, "ID")?;
+        fix_components(model, turned, g, id, &comps)?;
+        count += 1;
+    }
+    Ok(count)
+}
+
+/// Applies the SPC set the case control selects (`selected`), or the deck's only set when it has
+/// no case control.
+///
+/// # Errors
+/// A selected set nothing defines, several sets and no selection, malformed cards.
+pub(super) fn apply_spc(
+    spcs: &[&Card],
+    selected: Option<&Selected>,
+    has_case_control: bool,
+    model: &mut Model,
+    turned: &HashMap<u64, i64>,
+    geometry: &Geometry<'_>,
+    path: &Path,
+    warnings: &mut Vec<Warning>,
+) -> Result<(), IoError> {
+    // constraints: the case control's SPC set, or the only one a bulk-only file has
+    let mut sets: BTreeMap<i64, Vec<&Card>> = BTreeMap::new();
+    for c in spcs {
+        let sid = c
+            .int(0, "SID")?
+            .ok_or_else(|| c.err("needs a set id (SID)".into()))?;
+        sets.entry(sid).or_default().push(c);
+    }
+    let chosen = match selected.map(|s| s.id) {
+        Some(s) => Some(s),
+        None if has_case_control => {
+            if let Some(c) = spcs.first() {
+                warn(
+                    warnings,
+                    c,
+                    "the case control selects no SPC set: the model is free (unconstrained)".into(),
+                );
+            }
+            None
+        }
+        None => match sets.keys().copied().collect::<Vec<_>>().as_slice() {
+            [] => None,
+            [one] => {
+                warn(
+                    warnings,
+                    spcs[0],
+                    format!("no case control: the deck's only SPC set {one} is applied"),
+                );
+                Some(*one)
+            }
+            many => {
+                return Err(IoError::Parse {
+                    path: spcs[0].path.clone(),
+                    line: spcs[0].line,
+                    reason: format!(
+                        "the deck defines SPC sets {many:?} and no case control selects one (SPC = n before BEGIN BULK)"
+                    ),
+                });
+            }
+        },
+    };
+    if let Some(sid) = chosen {
+        let mut todo = vec![sid];
+        let mut seen = Vec::new();
+        while let Some(s) = todo.pop() {
+            if seen.contains(&s) {
+                continue;
+            }
+            seen.push(s);
+            let cards = sets.get(&s).cloned().unwrap_or_default();
+            if cards.is_empty() {
+                return Err(match selected.filter(|sel| sel.id == s) {
+                    Some(sel) => IoError::Parse {
+                        path: sel.path.clone(),
+                        line: sel.line,
+                        reason: format!(
+                            "SPC = {s} selects a set that no SPC, SPC1 or SPCADD defines"
+                        ),
+                    },
+                    None => IoError::Content {
+                        path: path.to_path_buf(),
+                        reason: format!(
+                            "SPC set {s} is selected but no SPC, SPC1 or SPCADD defines it"
+                        ),
+                    },
+                });
+            }
+            for c in cards {
+                let comps = |c: &Card, i: usize| -> Result<Vec<usize>, IoError> {
+                    let t = c.field(i);
+                    let mut out = Vec::new();
+                    for ch in t.chars() {
+                        match ch {
+                            '1'..='6' => out.push(ch as usize - '1' as usize),
+                            '0' => {}
+                            _ => return Err(c.err(format!("component {t:?} is not a list of 1-6"))),
+                        }
+                    }
+                    Ok(out)
+                };
+                let mut fix =
+                    |c: &Card, g: u64, comps: &[usize]| fix_components(model, turned, c, g, comps);
+                match c.name.as_str() {
+                    "SPC" => {
+                        for k in 0..2 {
+                            let base = 1 + 3 * k;
+                            if c.field(base).is_empty() {
+                                continue;
+                            }
+                            let g = c.id(base, "G")?;
+                            let cs = comps(c, base + 1)?;
+                            if c.real(base + 2, "D")?.is_some_and(|d| d != 0.0) {
+                                warn(
+                                    warnings,
+                                    c,
+                                    "an enforced value is read as 0 (modal analysis)".into(),
+                                );
+                            }
+                            fix(c, g, &cs)?;
+                        }
+                    }
+                    "SPC1" => {
+                        let cs = comps(c, 1)?;
+                        let rest: Vec<String> = c
+                            .fields
+                            .get(2..)
+                            .unwrap_or_default()
+                            .iter()
+                            .map(|s| s.trim().to_ascii_uppercase())
+                            .filter(|s| !s.is_empty())
+                            .collect();
+                        let mut grids_here = Vec::new();
+                        if rest.len() == 3 && rest[1] == "THRU" {
+                            let (a, b) = (rest[0].parse::<u64>(), rest[2].parse::<u64>());
+                            match (a, b) {
+                                (Ok(a), Ok(b)) if a <= b => {
+                                    // the defined grids in the range (not every id of it: a
+                                    // range may span billions of ids)
+                                    let mut ids: Vec<u64> = geometry
+                                        .grid_of
+                                        .keys()
+                                        .copied()
+                                        .filter(|g| (a..=b).contains(g))
+                                        .collect();
+                                    ids.sort_unstable();
+                                    grids_here.extend(ids);
+                                }
+                                _ => return Err(c.err(format!("THRU range {rest:?} is invalid"))),
+                            }
+                        } else {
+                            for t in &rest {
+                                grids_here.push(
+                                    t.parse::<u64>()
+                                        .map_err(|_| c.err(format!("grid {t:?} is not an id")))?,
+                                );
+                            }
+                        }
+                        if rest.is_empty() {
+                            return Err(c.err("names no grid (SPC1 SID C G1 G2 ...)".into()));
+                        }
+                        for g in grids_here {
+                            fix(c, g, &cs)?;
+                        }
+                    }
+                    _ => {
+                        // SPCADD SID S1 S2 ...
+                        if c.fields.iter().skip(1).all(|s| s.trim().is_empty()) {
+                            return Err(c.err("names no set (SPCADD SID S1 S2 ...)".into()));
+                        }
+                        for t in c
+                            .fields
+                            .get(1..)
+                            .unwrap_or_default()
+                            .iter()
+                            .map(|s| s.trim())
+                            .filter(|s| !s.is_empty())
+                        {
+                            todo.push(
+                                t.parse::<i64>()
+                                    .map_err(|_| c.err(format!("set {t:?} is not an id")))?,
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,188 @@
+//! `RBE2` (rigid links) and `RBE3` (weighted averages) as multipoint constraints.
+
+use super::cards::Card;
+use crate::{IoError, Warning};
+use femu_fem::model::Model;
+use std::collections::HashMap;
+
+/// Components `1-6` of a field as 0-based indices.
+pub(super) fn components(c: &Card, i: usize, what: &str) -> Result<Vec<usize>, IoError> {
+    let t = c.field(i);
+    let mut out = Vec::new();
+    for ch in t.chars() {
+        match ch {
+            '1'..='6' => {
+                let k = ch as usize - '1' as usize;
+                if !out.contains(&k) {
+                    out.push(k);
+                }
+            }
+            _ => {
+                return Err(c.err(format!(
+                    "field {} ({what}): {t:?} is not a list of components 1-6",
+                    i + 2
+                )));
+            }
+        }
+    }
+    if out.is_empty() {
+        return Err(c.err(format!("field {} ({what}) is missing", i + 2)));
+    }
+    Ok(out)
+}
+
+/// RBE2 (rigid links) and RBE3 (weighted averages) into the model's multipoint constraints
+/// (docs/MATH.md, "Multipoint constraints"). Reference grids of RBE2 get rotations first, so that
+/// RBE2 chains, RBE3 references with rotational components and SPCs on 4-6 find them.
+pub(super) fn read_links(
+    links: &[&Card],
+    model: &mut Model,
+    turned: &HashMap<u64, i64>,
+    warnings: &mut Vec<Warning>,
+) -> Result<HashMap<u64, (u64, Vec<usize>)>, IoError> {
+    let mut dependents: HashMap<u64, (u64, Vec<usize>)> = HashMap::new();
+    let grid = |model: &Model, c: &Card, g: u64| -> Result<usize, IoError> {
+        model.mesh().node_index(g).ok_or_else(|| {
+            c.err(format!(
+                "{} names GRID {g}, which the deck does not define",
+                c.field(0)
+            ))
+        })
+    };
+    for c in links.iter().filter(|c| c.name == "RBE2") {
+        let gn = c.id(1, "GN")?;
+        grid(model, c, gn)?;
+        model.add_rotations(gn).map_err(c.located())?;
+    }
+    let mut noted_rotations = false;
+    for c in links {
+        let eid = c.id(0, "EID")?;
+        let label = format!("{} {eid} ({} line {})", c.name, c.path.display(), c.line);
+        if c.name == "RBE2" {
+            let gn = c.id(1, "GN")?;
+            let cm = components(c, 2, "CM")?;
+            let mut gm = Vec::new();
+            for t in c
+                .fields
+                .get(3..)
+                .unwrap_or_default()
+                .iter()
+                .map(|s| s.trim())
+            {
+                if t.is_empty() {
+                    continue;
+                }
+                // the optional ALPHA (and TREF) after the grids are reals
+                if t.contains('.') || t.contains(['E', 'e']) {
+                    break;
+                }
+                let g =
+                    t.parse::<u64>().ok().filter(|g| *g > 0).ok_or_else(|| {
+                        c.err(format!("{eid}: dependent grid {t:?} is not an id"))
+                    })?;
+                grid(model, c, g)?;
+                gm.push(g);
+            }
+            if gm.is_empty() {
+                return Err(c.err(format!("{eid} has no dependent grids (GMi)")));
+            }
+            let trans: Vec<usize> = cm.iter().copied().filter(|k| *k < 3).collect();
+            if trans.len() < 3
+                && let Some(g) = gm.iter().find(|g| turned.contains_key(g))
+            {
+                return Err(c.err(format!(
+                    "{eid}: components {} of GRID {g} are in its displacement frame {}, which is turned: femu links partial components in the basic frame only",
+                    c.field(2),
+                    turned[g]
+                )));
+            }
+            model
+                .add_rigid_link(gn, &gm, &trans, &label)
+                .map_err(c.located())?;
+            for &g in &gm {
+                dependents.insert(g, (gn, cm.clone()));
+            }
+            // rotations of dependents that carry them (another link's reference) follow GN's
+            let rot: Vec<usize> = cm.iter().copied().filter(|k| *k >= 3).collect();
+            for &g in &gm {
+                let gi = grid(model, c, g)?;
+                if model.rotation_nodes().contains(&gi) {
+                    for &k in &rot {
+                        model
+                            .add_constraint((g, k), &[((gn, k), 1.0)], &label)
+                            .map_err(c.located())?;
+                    }
+                } else if !rot.is_empty() && !noted_rotations {
+                    noted_rotations = true;
+                    warnings.push(Warning {
+                        path: c.path.clone(),
+                        line: c.line,
+                        message: format!(
+                            "RBE2 {eid}: components 4-6 of solid grids are ignored (they have no rotations; the rigid link acts on their translations)"
+                        ),
+                    });
+                }
+            }
+        } else {
+            // RBE3 EID, blank, REFGRID, REFC, then groups WTi Ci Gi,j ..., then UM / ALPHA
+            let refgrid = c.id(2, "REFGRID")?;
+            let refi = grid(model, c, refgrid)?;
+            let refc = components(c, 3, "REFC")?;
+            let mut nodes: Vec<(u64, f64)> = Vec::new();
+            let mut k = 4;
+            while k < c.fields.len() {
+                let t = c.field(k).to_ascii_uppercase();
+                if t.is_empty() {
+                    k += 1;
+                    continue;
+                }
+                if t == "UM" {
+                    return Err(c.err(format!(
+                        "{eid}: UM (other dependent DOFs) is not supported; femu makes REFGRID's REFC dependent"
+                    )));
+                }
+                if t == "ALPHA" || t == "TREF" {
+                    break;
+                }
+                let w = c.real(k, "WT")?.filter(|w| *w > 0.0).ok_or_else(|| {
+                    c.err(format!(
+                        "{eid}: field {} should be a positive weight WTi, got {t:?}",
+                        k + 2
+                    ))
+                })?;
+                let ci = components(c, k + 1, "Ci")?;
+                if !(0..3).all(|j| ci.contains(&j)) {
+                    return Err(c.err(format!(
+                        "{eid}: components {} of a weight group: femu averages all three translations (C = 123 or 123456)",
+                        c.field(k + 1)
+                    )));
+                }
+                k += 2;
+                let before = nodes.len();
+                while k < c.fields.len() {
+                    let t = c.field(k);
+                    if t.is_empty() {
+                        k += 1;
+                        continue;
+                    }
+                    if t.contains('.') || t.chars().any(|ch| ch.is_ascii_alphabetic()) {
+                        break;
+                    }
+                    let g = c.id(k, "Gi,j")?;
+                    grid(model, c, g)?;
+                    nodes.push((g, w));
+                    k += 1;
+                }
+                if nodes.len() == before {
+                    return Err(c.err(format!("{eid}: weight {w} has no grids")));
+                }
+            }
+            let has_rot = model.rotation_nodes().contains(&refi);
+            let comps: Vec<usize> = refc.iter().copied().filter(|k| *k < 3 || has_rot).collect();
+            model
+                .add_weighted_average(refgrid, &comps, &nodes, &label)
+                .map_err(c.located())?;
+        }
+    }
+    Ok(dependents)
+}

@@ -1,0 +1,745 @@
+//! Nastran bulk data (`.bdf`, `.dat`, `.nas`): the solid models of automotive and aerospace
+//! correlation work, read as MSC Nastran reads them (its Quick Reference Guide, QRG, cited by
+//! section), or refused with card and line; never a different model with exit 0.
+//!
+//! - **Fields** (`cards.rs`): small, large (`NAME*`) and free field (commas; a short free-field
+//!   line's missing fields are blank; the QRG's large-field free format `GRID*,...` and `*`
+//!   continuation), implicit exponents (`7.+10`), `$` comments, `INCLUDE`, `ENDDATA`.
+//!   Continuations pair with their parent by label (field 1 of the continuation against field 10
+//!   of the parent, wherever it is); a bare `+`, `*` or blank field 1 continues the card above; a
+//!   label no card holds is an error.
+//! - **Case control** (`case_control.rs`): commands by their grammar (`SPC = n`, not a prefix of
+//!   `SPCFORCES`; `$` comments; four-letter abbreviations such as `METH`; `SUBCASE` blocks
+//!   inheriting the commands above them). The `SPC` set and the `METHOD` (the EIGRL or EIGR of
+//!   the modes) are read; subcases that select different ones are refused (femu solves one model).
+//! - **Mass** (QRG PARAM COUPMASS): lumped unless `PARAM,COUPMASS` is positive, MSC Nastran's
+//!   default ([`BdfDeck::mass`]); `PARAM,WTMASS` scales every mass. Other PARAMs do not change a
+//!   solid model's `K` or `M` (`K6ROT` acts on shells only; output and solution controls) and are
+//!   named as skipped.
+//! - **Constraints** (`constraints.rs`): the selected SPC set (`SPC`, `SPC1`, `SPCADD`) and the
+//!   permanent constraints of GRID field 8 (`PS`), with `GRDSET`'s CP, CD and PS for grids that
+//!   leave them blank. Components 4-6 act on grids with rotations (RBE2 reference grids) only.
+//! - **Elements**: `CHEXA` (8/20), `CPENTA` (6/15), `CTETRA` (4/10), `CPYRAM` (5/13) in Nastran's
+//!   grid order; blank mid-side grids make a straight edge (a node at its midpoint tied to the
+//!   average of its ends, docs/MATH.md "Multipoint constraints"). MSC integrates 8-node CHEXA and
+//!   6-node CPENTA with reduced shear and bubble functions unless the PSOLID asks for `IN = 2`,
+//!   `ISOP = FULL`; femu builds the fully integrated elements and says so once per property.
+//! - **Materials** (`materials.rs`): `PSOLID` with `MAT1` completed as the QRG's MAT1 remarks say
+//!   (three moduli that are not isotropic within 1 % refused) or `MAT9` in the material frame
+//!   `CORDM` (a rectangular system; cylindrical, spherical and the element frame refused).
+//! - **Links and masses** (`links.rs`, `masses.rs`): `RBE2`, `RBE3`, `CONM2` (a rigid mass with
+//!   offset, `CID` frame and inertia on a grid with rotations, or on a grid an RBE2 moves in all
+//!   six components, carried to its reference; elsewhere the translational mass, as `AUTOSPC`
+//!   leaves it).
+//! - **Unknown cards** are errors naming the nearest known card; cards that cannot change `K` or
+//!   `M` (loads, output requests, tables) and cards that act only in other solutions (contact,
+//!   nonlinear controls, temperature-dependent materials) are warnings, once per card name. Cards
+//!   that change `K` or `M` and that femu cannot model (shells, bars, springs, RBAR and MPC, other
+//!   materials) are an error that counts them by kind. [`BdfOptions::lenient`] reads the rest
+//!   with a warning (unknown cards skipped; for the unsupported ones, that `K` and `M` are then
+//!   incomplete).
+
+mod cards;
+mod case_control;
+mod constraints;
+mod elements;
+mod geometry;
+mod links;
+mod masses;
+mod materials;
+
+use crate::{IoError, Warning};
+pub use cards::real;
+use cards::{Card, Line};
+use femu_fem::assembly::MassKind;
+use femu_fem::mesh::Mesh;
+use femu_fem::model::Model;
+use geometry::Geometry;
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+
+/// The modes an `EIGRL` asks for: `V1`, `V2` in Hz and `ND`.
+pub type Eigrl = (Option<f64>, Option<f64>, Option<usize>);
+
+/// Options of the reader.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct BdfOptions {
+    /// Read a deck with cards femu cannot model (they are left out, with a warning that `K` and
+    /// `M` are incomplete) instead of refusing it.
+    pub lenient: bool,
+}
+
+/// A model read from bulk data, with what the reader noticed.
+#[derive(Debug, Clone)]
+pub struct BdfDeck {
+    /// The model: mesh, materials, constraints of the selected SPC set, point masses.
+    pub model: Model,
+    /// The modes the `EIGRL` (or `EIGR`) the case control's `METHOD` selects asks for (`V1`, `V2`
+    /// in Hz, `ND`); the deck's only one when nothing is selected.
+    pub eigrl: Option<Eigrl>,
+    /// The mass formulation the deck asks for: MSC Nastran's default, lumped, unless
+    /// `PARAM,COUPMASS` is positive (QRG PARAM COUPMASS).
+    pub mass: MassKind,
+    /// The value of `PARAM,COUPMASS`, when the deck gives one.
+    pub coupmass: Option<i64>,
+    /// Grids with permanent single-point constraints (GRID field 8, `PS`, or GRDSET's).
+    pub permanent_constraints: usize,
+    /// The SPC set the case control selects.
+    pub spc_set: Option<i64>,
+    /// Findings that did not stop the reading.
+    pub warnings: Vec<Warning>,
+}
+
+/// Cards that cannot change `K` or `M`: read past with a warning.
+const NO_EFFECT: &[&str] = &[
+    "PARAM", "FORCE", "MOMENT", "LOAD", "DLOAD", "RLOAD1", "RLOAD2", "TLOAD1", "TLOAD2", "TABLED1",
+    "TABLED2", "TABLED3", "TABLED4", "TABDMP1", "FREQ", "FREQ1", "FREQ2", "GRAV", "TEMP", "TEMPD",
+    "PLOAD", "PLOAD2", "PLOAD4", "EIGR", "EIGRL", "SPOINT", "DAREA", "NSM", "SET1", "DESVAR",
+    "DRESP1", "DCONSTR", "MONPNT1", "ASET", "ASET1", "OMIT", "OMIT1", "SUPORT", "SUPORT1",
+    "MDLPRM", "LSEQ", "RLOAD1", "RLOAD2",
+];
+
+/// Cards that change `K` or `M` and that femu cannot model yet, with what they are.
+const UNSUPPORTED: &[(&str, &str)] = &[
+    ("CQUAD4", "shells"),
+    ("CQUAD8", "shells"),
+    ("CTRIA3", "shells"),
+    ("CTRIA6", "shells"),
+    ("CQUADR", "shells"),
+    ("CTRIAR", "shells"),
+    ("PSHELL", "shells"),
+    ("PCOMP", "shells"),
+    ("CBAR", "beams"),
+    ("CBEAM", "beams"),
+    ("CROD", "rods"),
+    ("CONROD", "rods"),
+    ("PBAR", "beams"),
+    ("PBARL", "beams"),
+    ("PBEAM", "beams"),
+    ("PBEAML", "beams"),
+    ("PROD", "rods"),
+    ("CELAS1", "springs"),
+    ("CELAS2", "springs"),
+    ("CBUSH", "springs"),
+    ("PELAS", "springs"),
+    ("PBUSH", "springs"),
+    ("CONM1", "general mass matrices"),
+    ("CMASS1", "scalar masses"),
+    ("CMASS2", "scalar masses"),
+    ("RBAR", "rigid links"),
+    ("MPC", "multipoint constraints"),
+    ("MPCADD", "multipoint constraints"),
+    ("MAT2", "anisotropic materials"),
+    ("MAT8", "orthotropic materials"),
+    ("CORD3G", "coordinate systems"),
+    ("GENEL", "general elements"),
+    ("DMIG", "direct matrix input"),
+];
+
+/// Reads a bulk data deck.
+///
+/// # Errors
+/// As [`parse_bdf`], and the file system's.
+pub fn read_bdf(path: impl AsRef<Path>, options: &BdfOptions) -> Result<BdfDeck, IoError> {
+    let mut lines = Vec::new();
+    cards::load(path.as_ref(), 0, &mut lines)?;
+    parse_lines(&lines, path.as_ref(), options)
+}
+
+/// Parses bulk data from text (`path` names it in messages; `INCLUDE`s are not followed).
+///
+/// # Errors
+/// [`IoError::Parse`] naming the card's line: malformed fields, a GRID used but not defined, a
+/// coordinate system cycle or an unknown one, a PSOLID without its MAT1, an SPC on an unknown
+/// node, an element of a kind femu cannot model (unless lenient), an invalid material.
+pub fn parse_bdf(
+    text: &str,
+    path: impl AsRef<Path>,
+    options: &BdfOptions,
+) -> Result<BdfDeck, IoError> {
+    let path = path.as_ref();
+    let lines: Vec<(PathBuf, usize, String)> = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            (
+                path.to_path_buf(),
+                i + 1,
+                l.trim_end_matches('\r').to_string(),
+            )
+        })
+        .collect();
+    parse_lines(&lines, path, options)
+}
+
+/// The bulk data's cards sorted by what they define.
+#[derive(Default)]
+struct Sorted<'a> {
+    grids: Vec<&'a Card>,
+    grdset: Option<&'a Card>,
+    cords: Vec<&'a Card>,
+    elements: Vec<&'a Card>,
+    psolids: HashMap<u64, (u64, &'a Card)>,
+    materials: HashMap<u64, &'a Card>,
+    spcs: Vec<&'a Card>,
+    conm2: Vec<&'a Card>,
+    links: Vec<&'a Card>,
+    /// `EIGRL` and `EIGR` cards by set id.
+    methods: BTreeMap<i64, &'a Card>,
+    wtmass: f64,
+    coupmass: Option<(i64, &'a Card)>,
+}
+
+fn warn(warnings: &mut Vec<Warning>, c: &Card, message: String) {
+    warnings.push(Warning {
+        path: c.path.clone(),
+        line: c.line,
+        message,
+    })
+}
+
+/// `PARAM`s that change neither stiffness nor mass of a solid model: output requests, solution
+/// controls, and `K6ROT` (the drilling stiffness of shells).
+const PARAM_NO_EFFECT: &[&str] = &[
+    "POST", "PRTMAXIM", "GRDPNT", "AUTOSPC", "MAXRATIO", "BAILOUT", "OGEOM", "NOCOMPS", "SNORM",
+    "PATVER", "PRGPST", "OUGCORD", "EST", "NOFISR", "SRCOMPS", "OMACHPR", "USETPRT", "K6ROT",
+    "RESVEC", "PEDGEP", "LGDISP", "NASPRT", "PRTGPL", "PRTEQXIN", "PRTGPDT", "PRTCSTM", "PRTBGPDT",
+    "PRTGPTT", "PRTMGG", "PRTPG", "DBALL", "DBDICT", "CHECKOUT", "SEMAP", "OLDSEQ", "TINY",
+    "ALPHA1", "ALPHA2", "G", "W3", "W4", "OIBULK", "POSTEXT", "UNITSYS", "LFREQ", "HFREQ",
+    "LMODES", "NOELOF", "NOELOP", "NOGPF", "SRTOUT", "PRTRESLT",
+];
+
+/// Cards that act only in other solutions than a linear modal one: contact (nonlinear or contact
+/// solutions), nonlinear and transient controls, temperature-dependent material tables (a modal
+/// analysis has no temperature field): skipped with a warning that says why.
+const OTHER_SOLUTIONS: &[(&str, &str)] = &[
+    ("BCTSET", "contact"),
+    ("BCTPARA", "contact"),
+    ("BCTPARM", "contact"),
+    ("BCTADD", "contact"),
+    ("BCRPARA", "contact"),
+    ("BCPARA", "contact"),
+    ("BCPROP", "contact"),
+    ("BCBODY", "contact"),
+    ("BCONP", "contact"),
+    ("BSURF", "contact"),
+    ("BSURFS", "contact"),
+    ("BLSEG", "contact"),
+    ("BFRIC", "contact"),
+    ("NLPARM", "nonlinear solution controls"),
+    ("NLPCI", "nonlinear solution controls"),
+    ("TSTEP", "transient solution controls"),
+    ("TSTEPNL", "nonlinear solution controls"),
+    ("MATT1", "temperature-dependent material properties"),
+    ("MATT9", "temperature-dependent material properties"),
+    ("TABLEM1", "temperature-dependent material properties"),
+    ("TABLEM2", "temperature-dependent material properties"),
+    ("TABLEM3", "temperature-dependent material properties"),
+    ("TABLEM4", "temperature-dependent material properties"),
+    ("TABLES1", "nonlinear material properties"),
+    ("TABLEST", "nonlinear material properties"),
+];
+
+/// Every card name the reader knows, for the nearest spelling of an unknown one.
+fn known_cards() -> Vec<&'static str> {
+    let mut v: Vec<&'static str> = vec![
+        "GRID", "GRDSET", "CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S", "CHEXA",
+        "CPENTA", "CTETRA", "CPYRAM", "PSOLID", "MAT1", "MAT9", "SPC", "SPC1", "SPCADD", "CONM2",
+        "RBE2", "RBE3", "PARAM", "EIGRL", "EIGR",
+    ];
+    v.extend(NO_EFFECT);
+    v.extend(UNSUPPORTED.iter().map(|(n, _)| *n));
+    v.extend(OTHER_SOLUTIONS.iter().map(|(n, _)| *n));
+    v
+}
+
+/// Sorts the cards, reads the `PARAM`s that change the model (`WTMASS`, `COUPMASS`), and refuses
+/// what femu cannot model (counted by kind) and unknown cards (naming the nearest known one),
+/// unless `lenient`.
+fn sort<'a>(
+    cards: &'a [Card],
+    options: &BdfOptions,
+    warnings: &mut Vec<Warning>,
+) -> Result<Sorted<'a>, IoError> {
+    let mut s = Sorted {
+        wtmass: 1.0,
+        ..Default::default()
+    };
+    // what cannot be modelled: counted by kind
+    let mut unsupported: BTreeMap<&str, (usize, Vec<&str>, &Card)> = BTreeMap::new();
+    let mut warned: Vec<String> = Vec::new();
+    let known = known_cards();
+    for c in cards {
+        match c.name.as_str() {
+            "GRID" => s.grids.push(c),
+            "GRDSET" => {
+                if let Some(first) = s.grdset.replace(c) {
+                    return Err(c.err(format!(
+                        "appears twice (first at line {}): a deck has one GRDSET",
+                        first.line
+                    )));
+                }
+            }
+            "CORD2R" | "CORD2C" | "CORD2S" | "CORD1R" | "CORD1C" | "CORD1S" => s.cords.push(c),
+            "CHEXA" | "CPENTA" | "CTETRA" | "CPYRAM" => s.elements.push(c),
+            "PSOLID" => {
+                let pid = c.id(0, "PID")?;
+                let mid = c.id(1, "MID")?;
+                if s.psolids.insert(pid, (mid, c)).is_some() {
+                    return Err(c.err(format!("{pid} is defined twice")));
+                }
+            }
+            "MAT1" | "MAT9" => {
+                let mid = c.id(0, "MID")?;
+                if s.materials.insert(mid, c).is_some() {
+                    return Err(c.err(format!("{mid} is defined twice (MAT1 and MAT9 share ids)")));
+                }
+            }
+            "SPC" | "SPC1" | "SPCADD" => s.spcs.push(c),
+            "CONM2" => s.conm2.push(c),
+            "RBE2" | "RBE3" => s.links.push(c),
+            "EIGRL" | "EIGR" => {
+                let sid = c.id(0, "SID")? as i64;
+                if s.methods.insert(sid, c).is_some() {
+                    return Err(c.err(format!("{sid} is defined twice (EIGRL and EIGR share ids)")));
+                }
+            }
+            "PARAM" => param(c, &mut s, &mut warned, warnings)?,
+            name => {
+                if let Some((_, kind)) = UNSUPPORTED.iter().find(|(n, _)| *n == name) {
+                    let e = unsupported.entry(kind).or_insert((0, Vec::new(), c));
+                    e.0 += 1;
+                    if !e.1.contains(&name) {
+                        e.1.push(
+                            UNSUPPORTED
+                                .iter()
+                                .find(|(n, _)| *n == name)
+                                .map(|(n, _)| *n)
+                                .unwrap_or(""),
+                        );
+                    }
+                } else if let Some((_, what)) = OTHER_SOLUTIONS.iter().find(|(n, _)| *n == name) {
+                    if !warned.contains(&c.name) {
+                        warned.push(c.name.clone());
+                        warn(
+                            warnings,
+                            c,
+                            format!(
+                                "{name} skipped: {what} act in other solutions, not in a linear modal analysis's stiffness and mass (once per card name)"
+                            ),
+                        );
+                    }
+                } else if NO_EFFECT.contains(&name) {
+                    if !warned.contains(&c.name) {
+                        warned.push(c.name.clone());
+                        warn(
+                            warnings,
+                            c,
+                            format!(
+                                "{name} skipped: it does not change the stiffness or the mass (once per card name)"
+                            ),
+                        );
+                    }
+                } else {
+                    let hint = crate::spelling::nearest(name, known.iter().copied())
+                        .map_or(String::new(), |k| format!(" (did you mean {k}?)"));
+                    let text = format!("unknown card {name}{hint}");
+                    if !options.lenient {
+                        return Err(IoError::Parse {
+                            path: c.path.clone(),
+                            line: c.line,
+                            reason: format!(
+                                "{text}: femu cannot tell whether it changes the stiffness or the mass (--lenient skips unknown cards with a warning)"
+                            ),
+                        });
+                    }
+                    if !warned.contains(&c.name) {
+                        warned.push(c.name.clone());
+                        warn(
+                            warnings,
+                            c,
+                            format!(
+                                "{text} skipped (--lenient): check that it changes neither stiffness nor mass (once per card name)"
+                            ),
+                        );
+                    }
+                }
+            }
+        }
+    }
+    if !unsupported.is_empty() {
+        let list: Vec<String> = unsupported
+            .iter()
+            .map(|(kind, (n, names, _))| format!("{n} {kind} ({})", names.join(", ")))
+            .collect();
+        let first = unsupported
+            .values()
+            .map(|v| v.2)
+            .min_by_key(|c| c.line)
+            .expect("non-empty");
+        let text = format!(
+            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, CONM2 point masses, RBE2 and RBE3 links and SPC constraints",
+            list.join(", ")
+        );
+        if options.lenient {
+            warn(
+                warnings,
+                first,
+                format!("{text}: left out (--lenient), so the model's K and M are incomplete"),
+            );
+        } else {
+            return Err(first
+                .err(format!("{text} (--lenient reads the rest)"))
+                .relocated(first));
+        }
+    }
+    Ok(s)
+}
+
+/// A `PARAM`: `WTMASS` (the mass factor) and `COUPMASS` (coupled or lumped mass) change the model
+/// and are read; those of [`PARAM_NO_EFFECT`] are skipped with a warning; others are reported as
+/// unknown to femu.
+fn param<'a>(
+    c: &'a Card,
+    s: &mut Sorted<'a>,
+    warned: &mut Vec<String>,
+    warnings: &mut Vec<Warning>,
+) -> Result<(), IoError> {
+    let name = c.field(0).to_ascii_uppercase();
+    match name.as_str() {
+        "WTMASS" => {
+            s.wtmass = c
+                .real(1, "WTMASS")?
+                .filter(|v| *v > 0.0)
+                .ok_or_else(|| c.err("WTMASS needs a positive value".into()))?;
+        }
+        "COUPMASS" => {
+            let v = c.field(1).to_ascii_uppercase();
+            let value = match v.as_str() {
+                "YES" | "ON" => 1,
+                "NO" | "OFF" => -1,
+                _ => c.int(1, "COUPMASS")?.ok_or_else(|| {
+                    c.err("COUPMASS needs a value (1: coupled mass, -1: lumped)".into())
+                })?,
+            };
+            s.coupmass = Some((value, c));
+        }
+        _ => {
+            let key = format!("PARAM,{name}");
+            if warned.contains(&key) {
+                return Ok(());
+            }
+            warned.push(key);
+            let why = if PARAM_NO_EFFECT.contains(&name.as_str()) {
+                "it does not change the stiffness or the mass of a solid model"
+            } else {
+                "femu does not know this parameter; check that it changes neither stiffness nor mass"
+            };
+            warn(warnings, c, format!("PARAM,{name} skipped: {why}"));
+        }
+    }
+    Ok(())
+}
+
+trait Relocated {
+    fn relocated(self, c: &Card) -> IoError;
+}
+
+impl Relocated for IoError {
+    /// The error without the card's name repeated in front (the message names the cards).
+    fn relocated(self, c: &Card) -> IoError {
+        match self {
+            IoError::Parse { reason, .. } => IoError::Parse {
+                path: c.path.clone(),
+                line: c.line,
+                reason: reason
+                    .strip_prefix(&format!("{} ", c.name))
+                    .map_or(reason.clone(), str::to_string),
+            },
+            e => e,
+        }
+    }
+}
+
+/// The grids as femu's mesh holds them: the mesh, the grids whose displacement frame (CD, or
+/// GRDSET's) is turned from the basic frame with that frame, and how many grids name a frame
+/// (with the first of them).
+struct Grids<'a> {
+    mesh: Mesh,
+    turned: HashMap<u64, i64>,
+    named_cd: Option<(usize, &'a Card)>,
+}
+
+/// The grids into a mesh, at their basic positions.
+fn grids_into_mesh<'a>(geometry: &mut Geometry<'a>) -> Result<Grids<'a>, IoError> {
+    let mut mesh = Mesh::new();
+    let mut ids: Vec<u64> = geometry.grid_of.keys().copied().collect();
+    ids.sort_unstable();
+    let mut named_cd: Option<(usize, &Card)> = None;
+    let mut turned: HashMap<u64, i64> = HashMap::new();
+    for id in &ids {
+        let g = geometry.grid_of[id];
+        let p = geometry.position(*id, g)?;
+        let cd = geometry.grid_int(g, 5, "CD")?.unwrap_or(0);
+        if cd != 0 {
+            let e = named_cd.get_or_insert((0, g));
+            e.0 += 1;
+            if !geometry.frame(cd, g)?.is_global_orientation() {
+                turned.insert(*id, cd);
+            }
+        }
+        mesh.add_node(*id, p).map_err(g.located())?;
+    }
+    Ok(Grids {
+        mesh,
+        turned,
+        named_cd,
+    })
+}
+
+/// The element sets `PID<n>` and the model with each property's material.
+fn model_with_materials(
+    mut mesh: Mesh,
+    element_pid: &[(u64, u64, &Card)],
+    sorted: &Sorted<'_>,
+    geometry: &mut Geometry<'_>,
+    path: &Path,
+    warnings: &mut Vec<Warning>,
+) -> Result<Model, IoError> {
+    let mut by_pid: BTreeMap<u64, Vec<u64>> = BTreeMap::new();
+    for (eid, pid, _) in element_pid {
+        by_pid.entry(*pid).or_default().push(*eid);
+    }
+    for (pid, eids) in &by_pid {
+        mesh.add_element_set(format!("PID{pid}"), eids)
+            .map_err(|e| IoError::Content {
+                path: path.to_path_buf(),
+                reason: e.to_string(),
+            })?;
+    }
+    let mut model = Model::new(mesh).map_err(|source| {
+        let line = element_pid
+            .iter()
+            .find(|(eid, _, _)| source.to_string().contains(&format!("element {eid} ")))
+            .map(|e| e.2);
+        match line {
+            Some(c) => IoError::Model {
+                path: c.path.clone(),
+                line: c.line,
+                source,
+            },
+            None => IoError::Content {
+                path: path.to_path_buf(),
+                reason: source.to_string(),
+            },
+        }
+    })?;
+    for (pid, eids) in &by_pid {
+        let first = element_pid
+            .iter()
+            .find(|e| e.0 == eids[0])
+            .expect("listed")
+            .2;
+        let (mid, pc) = sorted.psolids.get(pid).ok_or_else(|| {
+            first.err(format!(
+                "{} refers to PSOLID {pid}, which the deck does not define",
+                eids[0]
+            ))
+        })?;
+        let m = sorted.materials.get(mid).ok_or_else(|| {
+            pc.err(format!(
+                "{pid} refers to MAT1 {mid}, which the deck does not define (femu reads MAT1 and MAT9)"
+            ))
+        })?;
+        let material = materials::material(m, pc, geometry, sorted.wtmass, warnings)?;
+        model
+            .set_material(Some(&format!("PID{pid}")), material)
+            .map_err(pc.located())?;
+        formulation_warning(pc, eids, element_pid, warnings)?;
+    }
+    Ok(model)
+}
+
+/// MSC Nastran integrates 8-node CHEXA and 6-node CPENTA of a PSOLID whose `IN` and `ISOP` are
+/// blank with reduced shear and bubble functions (QRG PSOLID, remarks); femu builds the fully
+/// integrated linear elements (`IN = 2`, `ISOP = FULL`), stiffer in bending on coarse meshes. One
+/// warning per property that has such elements and does not ask for full integration.
+fn formulation_warning(
+    pc: &Card,
+    eids: &[u64],
+    element_pid: &[(u64, u64, &Card)],
+    warnings: &mut Vec<Warning>,
+) -> Result<(), IoError> {
+    let isop = pc.field(5).to_ascii_uppercase();
+    let integration = pc.field(3).to_ascii_uppercase();
+    let full = (isop == "1" || isop == "FULL") && (integration == "2" || integration == "TWO");
+    if full {
+        return Ok(());
+    }
+    let linear: Vec<&&Card> = element_pid
+        .iter()
+        .filter(|e| eids.contains(&e.0))
+        .map(|e| &e.2)
+        .filter(|c| {
+            let grids = c.fields[2..]
+                .iter()
+                .filter(|f| !f.trim().is_empty())
+                .count();
+            (c.name == "CHEXA" && grids == 8) || (c.name == "CPENTA" && grids == 6)
+        })
+        .collect();
+    if let Some(first) = linear.first() {
+        warn(
+            warnings,
+            pc,
+            format!(
+                "PSOLID {}: {} of its elements are 8-node CHEXA or 6-node CPENTA (first: {} {}, line {}), which MSC Nastran integrates with reduced shear and bubble functions unless IN = 2 and ISOP = FULL; femu builds the fully integrated linear element, stiffer in bending where few elements span a thickness (femu update's discretisation estimate measures that error; IN = 2 and ISOP = FULL make Nastran solve what femu solves)",
+                pc.field(0),
+                linear.len(),
+                first.name,
+                first.field(0),
+                first.line
+            ),
+        );
+    }
+    Ok(())
+}
+
+/// The `EIGRL` (or `EIGR`) the case control's `METHOD` selects, or the deck's only one when no
+/// method is selected: `(V1, V2, ND)` with the frequencies in Hz.
+fn selected_method(
+    sorted: &Sorted<'_>,
+    method: Option<&case_control::Selected>,
+) -> Result<Option<Eigrl>, IoError> {
+    let card = match method {
+        Some(m) => Some(*sorted.methods.get(&m.id).ok_or_else(|| IoError::Parse {
+            path: m.path.clone(),
+            line: m.line,
+            reason: format!(
+                "METHOD = {} selects no EIGRL or EIGR (the deck defines {:?})",
+                m.id,
+                sorted.methods.keys().collect::<Vec<_>>()
+            ),
+        })?),
+        None if sorted.methods.len() == 1 => sorted.methods.values().next().copied(),
+        None => None,
+    };
+    let Some(c) = card else {
+        return Ok(None);
+    };
+    // EIGRL: SID V1 V2 ND ...; EIGR: SID METHOD F1 F2 NE ND ...
+    let (f1, f2, nd) = if c.name == "EIGRL" {
+        (1, 2, 3)
+    } else {
+        (2, 3, 5)
+    };
+    Ok(Some((
+        c.real(f1, "V1")?,
+        c.real(f2, "V2")?,
+        c.int(nd, "ND")?.map(|v| v.max(0) as usize),
+    )))
+}
+
+fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfDeck, IoError> {
+    let deck = cards::deck(lines)?;
+    let mut warnings = Vec::new();
+    let sorted = sort(&deck.cards, options, &mut warnings)?;
+    let mut geometry = Geometry::new(&sorted.cords, &sorted.grids, sorted.grdset)?;
+    let Grids {
+        mut mesh,
+        turned,
+        named_cd,
+    } = grids_into_mesh(&mut geometry)?;
+    let max_grid = geometry.grid_of.keys().copied().max().unwrap_or(0);
+    let els = elements::add_elements(&sorted.elements, &mut mesh, max_grid)?;
+    if mesh.element_count() == 0 {
+        return Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: format!(
+                "the deck defines {} GRID{} and no solid element (CHEXA, CPENTA, CTETRA, CPYRAM)",
+                mesh.node_count(),
+                if mesh.node_count() == 1 { "" } else { "s" }
+            ),
+        });
+    }
+    let mut model = model_with_materials(
+        mesh,
+        &els.element_pid,
+        &sorted,
+        &mut geometry,
+        path,
+        &mut warnings,
+    )?;
+    for (id, ga, gb, label) in &els.ties {
+        for k in 0..3 {
+            model
+                .add_constraint((*id, k), &[((*ga, k), 0.5), ((*gb, k), 0.5)], label)
+                .map_err(|source| IoError::Content {
+                    path: path.to_path_buf(),
+                    reason: source.to_string(),
+                })?;
+        }
+    }
+    if let Some(c) = els.first_blank {
+        warn(
+            &mut warnings,
+            c,
+            format!(
+                "{} mid-side grids are blank: those edges are straight and the elements vary linearly along them, as Nastran reads them (femu adds a node at each such midpoint, ids from {}, tied to the average of the edge's ends)",
+                els.ties.len(),
+                els.ties.first().map_or(0, |t| t.0)
+            ),
+        );
+    }
+    let dependents = links::read_links(&sorted.links, &mut model, &turned, &mut warnings)?;
+    let permanent = constraints::apply_permanent(&sorted.grids, &geometry, &mut model, &turned)?;
+    constraints::apply_spc(
+        &sorted.spcs,
+        deck.case_control.spc.as_ref(),
+        deck.has_case_control,
+        &mut model,
+        &turned,
+        &geometry,
+        path,
+        &mut warnings,
+    )?;
+    if let Some((n, g)) = named_cd {
+        warn(
+            &mut warnings,
+            g,
+            format!(
+                "{n} grids name a displacement frame (CD): femu reports displacements in the basic frame"
+            ),
+        );
+    }
+    masses::add_masses(
+        &sorted.conm2,
+        &mut model,
+        &mut geometry,
+        sorted.wtmass,
+        options.lenient,
+        &dependents,
+        &mut warnings,
+    )?;
+    // conflicts between links and constraints, found now rather than at the first solve
+    model.dof_map().map_err(|source| IoError::Content {
+        path: path.to_path_buf(),
+        reason: source.to_string(),
+    })?;
+    let eigrl = selected_method(&sorted, deck.case_control.method.as_ref())?;
+    // QRG PARAM,COUPMASS: -1 (the default) lumped, > 0 coupled
+    let (mass, coupmass) = match sorted.coupmass {
+        Some((v, c)) if v > 0 => (MassKind::Consistent, Some((v, c.line))),
+        Some((v, c)) => (MassKind::Lumped, Some((v, c.line))),
+        None => (MassKind::Lumped, None),
+    };
+    Ok(BdfDeck {
+        model,
+        eigrl,
+        mass,
+        coupmass: coupmass.map(|c| c.0),
+        permanent_constraints: permanent,
+        spc_set: deck.case_control.spc.as_ref().map(|s| s.id),
+        warnings,
+    })
+}
