@@ -309,11 +309,31 @@ fn closest_on_triangle(p: [f64; 3], t: &[[f64; 3]; 3]) -> [f64; 3] {
 /// transform (direction `n_i` from the nearest point `q_i`, or the face normal where the point
 /// lies on the face), solves the 6 x 6 (7 x 7 with `scale`) normal equations for a small rotation,
 /// translation (and scale) and takes the step if the root mean square distance falls (halving it
-/// otherwise); at most 200 rounds, until the step is below 1e-13 of the wireframe's size.
+/// otherwise); at most 200 rounds, until the step is below 1e-13 of the wireframe's size. With
+/// `scale`, the distances are measured in the wireframe's own units (divided by the scale): in
+/// the model's units, shrinking the wireframe onto one point of the surface drives every distance
+/// to zero, and the fit collapsed to a scale of 0; in the wireframe's units such a collapse leaves
+/// the distances at the wireframe's own spread and is no better than where it started.
 ///
 /// # Errors
 /// Fewer than three points, a mesh without boundary.
 pub fn fit_surface(
+    points: &[[f64; 3]],
+    surface: &Surface,
+    start: Transform,
+    scale: bool,
+) -> Result<Fit, FemError> {
+    // the scale is freed from the rigid fit: from a far start, shrinking the wireframe into the
+    // body finds minima of its own before the rotation and translation are found
+    if scale {
+        let rigid = refine(points, surface, start, false)?;
+        return refine(points, surface, rigid.transform, true);
+    }
+    refine(points, surface, start, false)
+}
+
+/// [`fit_surface`]'s iterations, with the scale fitted or held.
+fn refine(
     points: &[[f64; 3]],
     surface: &Surface,
     start: Transform,
@@ -352,15 +372,20 @@ pub fn fit_surface(
             })
             .collect()
     };
-    let rms = |e: &[([f64; 3], [f64; 3], f64)]| {
-        (e.iter().map(|v| v.2 * v.2).sum::<f64>() / e.len() as f64).sqrt()
+    // root mean square distance in the wireframe's units (the model's for a rigid fit)
+    let rms = |e: &[([f64; 3], [f64; 3], f64)], s: f64| {
+        (e.iter().map(|v| v.2 * v.2).sum::<f64>() / e.len() as f64).sqrt() / s
     };
+    let unit = |t: &Transform| if scale { t.scale.abs() } else { 1.0 };
     let np = if scale { 7 } else { 6 };
     let mut transform = start;
     let mut state = evaluate(&transform);
-    let mut current = rms(&state);
+    let mut current = rms(&state, unit(&transform));
     for _ in 0..200 {
-        // signed distances along n: r_i = (y_i - q_i) . n_i = d_i
+        // signed distances along n: r_i = (y_i - q_i) . n_i = d_i, divided by the scale `s` when
+        // it is fitted: with y = s R x + t and s' = s (1 + delta), d(d_i / s)/d delta =
+        // (c . n - d_i) / s, c = y - t
+        let s = unit(&transform);
         let mut jtj = nalgebra::DMatrix::<f64>::zeros(np, np);
         let mut jtr = nalgebra::DVector::<f64>::zeros(np);
         for (y, n, d) in &state {
@@ -370,12 +395,20 @@ pub fn fit_surface(
                 c[2] * n[0] - c[0] * n[2],
                 c[0] * n[1] - c[1] * n[0],
             ];
-            let mut row = vec![cxn[0], cxn[1], cxn[2], n[0], n[1], n[2]];
+            let mut row = vec![
+                cxn[0] / s,
+                cxn[1] / s,
+                cxn[2] / s,
+                n[0] / s,
+                n[1] / s,
+                n[2] / s,
+            ];
             if scale {
-                row.push(c[0] * n[0] + c[1] * n[1] + c[2] * n[2]);
+                row.push((c[0] * n[0] + c[1] * n[1] + c[2] * n[2] - d) / s);
             }
+            let r = d / s;
             for a in 0..np {
-                jtr[a] += row[a] * d;
+                jtr[a] += row[a] * r;
                 for b in 0..np {
                     jtj[(a, b)] += row[a] * row[b];
                 }
@@ -411,11 +444,17 @@ pub fn fit_surface(
                     transform.scale
                 },
             };
+            // a scale through zero would mirror the wireframe: halve the step instead
+            if trial.scale <= 0.0 {
+                t *= 0.5;
+                continue;
+            }
             let next_state = evaluate(&trial);
-            let next = rms(&next_state);
+            let next = rms(&next_state, unit(&trial));
             if next < current || next == 0.0 {
                 let moved = angle * size
-                    + t * (step[3] * step[3] + step[4] * step[4] + step[5] * step[5]).sqrt();
+                    + t * (step[3] * step[3] + step[4] * step[4] + step[5] * step[5]).sqrt()
+                    + if scale { t * step[6].abs() * size } else { 0.0 };
                 transform = trial;
                 state = next_state;
                 accepted = moved > 1e-13 * size && next < current * (1.0 - 1e-14);
@@ -443,6 +482,14 @@ pub fn fit_surface(
 /// # Errors
 /// As [`fit_surface`].
 pub fn fit_auto(points: &[[f64; 3]], surface: &Surface, scale: bool) -> Result<Fit, FemError> {
+    let spread = |p: &[[f64; 3]]| -> f64 {
+        let c = mean(p);
+        (p.iter()
+            .map(|q| (Vector3::from(*q) - c).norm_squared())
+            .sum::<f64>()
+            / p.len().max(1) as f64)
+            .sqrt()
+    };
     let axes = |p: &[[f64; 3]]| -> (Vector3<f64>, Matrix3<f64>) {
         let c = mean(p);
         let mut cov = Matrix3::zeros();
@@ -498,20 +545,40 @@ pub fn fit_auto(points: &[[f64; 3]], surface: &Surface, scale: bool) -> Result<F
                 }
             }
         }
+        // with a fitted scale, the starts bring the wireframe to the size of the boundary (the
+        // ratio of their spreads about their centroids): a wireframe in millimetres read as
+        // metres starts near 1/1000, not 1000 times too large
+        let s0 = if scale {
+            let (a, b) = (spread(&corners), spread(points));
+            if a > 0.0 && b > 0.0 { a / b } else { 1.0 }
+        } else {
+            1.0
+        };
+        if s0 != 1.0 {
+            // the identity start too: the test's axes, at the boundary's size and centroid
+            let t = cm - s0 * cp;
+            starts[0] = Transform {
+                translation: [t[0], t[1], t[2]],
+                scale: s0,
+                ..Transform::IDENTITY
+            };
+        }
         for g in group {
             let r = vm * g * vp.transpose();
-            let t = cm - r * cp;
+            let t = cm - s0 * (r * cp);
             starts.push(Transform {
                 rotation: std::array::from_fn(|i| std::array::from_fn(|k| r[(i, k)])),
                 translation: [t[0], t[1], t[2]],
-                scale: 1.0,
+                scale: s0,
             });
         }
     }
     let mut best: Option<Fit> = None;
     for start in starts {
         let fit = fit_surface(points, surface, start, scale)?;
-        if best.as_ref().is_none_or(|b| fit.rms() < b.rms()) {
+        // compared in the wireframe's units, as fit_surface minimises them
+        let measure = |f: &Fit| f.rms() / f.transform.scale.abs().max(f64::MIN_POSITIVE);
+        if best.as_ref().is_none_or(|b| measure(&fit) < measure(b)) {
             best = Some(fit);
         }
     }

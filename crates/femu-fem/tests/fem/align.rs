@@ -216,3 +216,72 @@ fn iterative_closest_points_recover_a_known_placement() {
     let auto = fit_auto(&test, &surface, false).unwrap();
     assert!(auto.rms() < 1e-9, "auto {}", auto.rms());
 }
+
+/// With a fitted scale, the fit measures distances in the wireframe's units: in the model's units
+/// shrinking the wireframe onto one point of the surface drives every distance to zero, and the
+/// fit collapsed to a scale of 0 (`--align auto --align-scale` on a wireframe in millimetres read
+/// as metres printed scale 0.000000 and paired nothing; here 7.6e-12). The wireframe is the
+/// L-body's nodes on its top and bottom faces (the thickness between them fixes the scale; points
+/// on one face alone would leave it free): 3 % large, from the rigid part of its placement, and
+/// 1000 times large and 60 degrees away through the automatic starts, the scale and the placement
+/// come back to 1e-9.
+#[test]
+fn a_fitted_scale_does_not_collapse_the_wireframe() {
+    let (mesh, _) = l_body();
+    // the nodes the elements use (the grid's nodes in the L's notch belong to none)
+    let mut used = vec![false; mesh.node_count()];
+    for e in mesh.elements() {
+        for n in e.nodes {
+            used[*n] = true;
+        }
+    }
+    let points: Vec<[f64; 3]> = (0..mesh.node_count())
+        .filter(|i| used[*i])
+        .map(|i| mesh.coords()[i])
+        .collect();
+    let surface = Surface::new(&mesh);
+    let placed = |scale: f64| Transform {
+        rotation: rotation([0.3, -0.2, 1.0], 60f64.to_radians()),
+        translation: [0.05, -0.02, 0.03],
+        scale,
+    };
+    // the inverse placement without its scale: R^T (x - t)
+    let rigid_inverse = |t: &Transform| {
+        let rt: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|k| t.rotation[k][i]));
+        Transform {
+            rotation: rt,
+            translation: std::array::from_fn(|i| {
+                -(0..3).map(|k| rt[i][k] * t.translation[k]).sum::<f64>()
+            }),
+            scale: 1.0,
+        }
+    };
+    let place = |t: &Transform| -> Vec<[f64; 3]> { points.iter().map(|p| t.apply(*p)).collect() };
+    let (small, large) = (placed(1.03), placed(1000.0));
+    let (t_small, t_large) = (place(&small), place(&large));
+    for (scale, test, fit) in [
+        (
+            1.03,
+            &t_small,
+            fit_surface(&t_small, &surface, rigid_inverse(&small), true).unwrap(),
+        ),
+        (
+            1000.0,
+            &t_large,
+            fit_auto(&t_large, &surface, true).unwrap(),
+        ),
+    ] {
+        assert!(
+            (fit.transform.scale * scale - 1.0).abs() < 1e-9,
+            "scale {}",
+            fit.transform.scale
+        );
+        for (t, p) in test.iter().zip(&points) {
+            let back = fit.transform.apply(*t);
+            assert!(
+                (0..3).all(|i| (back[i] - p[i]).abs() < 1e-9),
+                "{back:?} vs {p:?}"
+            );
+        }
+    }
+}
