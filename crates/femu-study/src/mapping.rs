@@ -350,37 +350,87 @@ pub fn map_test(
     let transform = alignment
         .as_ref()
         .map_or(Transform::IDENTITY, |a| a.transform);
+    // a wireframe larger than the model is in other units (or another frame): said before any
+    // node is searched for, with the unit whose factor matches the size ratio
+    let placed: Vec<[f64; 3]> = test.values().map(|x| transform.apply(*x)).collect();
+    let span = |pts: &[[f64; 3]]| -> f64 {
+        let (mut a, mut b) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for c in pts {
+            for i in 0..3 {
+                a[i] = a[i].min(c[i]);
+                b[i] = b[i].max(c[i]);
+            }
+        }
+        (0..3).map(|i| (b[i] - a[i]).powi(2)).sum::<f64>().sqrt()
+    };
+    let test_span = span(&placed);
+    if test_span > 2.0 * diagonal + 2.0 * tolerance {
+        let ratio = test_span / diagonal.max(f64::MIN_POSITIVE);
+        let units = [("mm", 1000.0), ("cm", 100.0), ("in", 39.37), ("ft", 3.281)];
+        let likely = units
+            .iter()
+            .filter(|(_, r)| ratio <= 1.25 * r && ratio >= 0.05 * r)
+            .min_by(|a, b| {
+                (ratio / a.1)
+                    .ln()
+                    .abs()
+                    .total_cmp(&(ratio / b.1).ln().abs())
+            })
+            .map(|(u, _)| *u);
+        return Err(in_file(format!(
+            "the test's nodes span {test_span:.4e} m, {ratio:.0} times the model's {diagonal:.4e} m (its bounding-box diagonal): a test cannot be larger than the structure it measures, so its coordinates are in other units{}{}",
+            match likely {
+                Some(u) => format!(
+                    " (the ratio is about that of {u} to the model's unit: --test-units {u}, or test_units = \"{u}\" in a study file)"
+                ),
+                None => " (--test-units)".into(),
+            },
+            if metres != 1.0 {
+                format!("; they were read as {metres} m per unit")
+            } else {
+                String::new()
+            }
+        )));
+    }
     let locator = Locator::new(mesh);
     let mut nodes = Vec::with_capacity(test.len());
     let mut reads: BTreeMap<u64, Vec<(u64, f64)>> = BTreeMap::new();
     let mut taken: BTreeMap<u64, u64> = BTreeMap::new();
+    // test nodes beyond the tolerance: (distance, node, what), all of them, to name the worst
+    let mut beyond: Vec<(f64, u64, [f64; 3], String)> = Vec::new();
+    // the distance from the model's bounding box, which needs no search
+    let outside_box = |p: [f64; 3]| -> f64 {
+        (0..3)
+            .map(|i| (lo[i] - p[i]).max(p[i] - hi[i]).max(0.0).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
     for (&t, x) in &test {
         let p = transform.apply(*x);
-        let far = |what: String| {
-            in_file(format!(
-                "test node {t} at ({:.6}, {:.6}, {:.6}) m in the model's frame {what}, beyond the tolerance {tolerance:.3e} m{}",
-                p[0],
-                p[1],
-                p[2],
-                if alignment.is_none() {
-                    " (is the test in another frame? see --align)"
-                } else {
-                    ""
-                }
-            ))
-        };
+        // beyond the tolerance from the bounding box: beyond it from the model; described below
+        // if it is the farthest
+        let boxed = outside_box(p);
+        if boxed > tolerance {
+            beyond.push((boxed, t, p, String::new()));
+            continue;
+        }
         let row = match options.method {
             MapMethod::Nearest => {
-                let (i, d) =
-                    locator.nearest_node(mesh, p, tolerance).ok_or_else(|| {
-                        match locator.nearest_node(mesh, p, f64::INFINITY) {
-                            Some((i, d)) => far(format!(
+                let Some((i, d)) = locator.nearest_node(mesh, p, tolerance) else {
+                    match locator.nearest_node(mesh, p, f64::INFINITY) {
+                        Some((i, d)) => beyond.push((
+                            d,
+                            t,
+                            p,
+                            format!(
                                 "is {d:.3e} m from the nearest model node ({})",
                                 mesh.node_id(i)
-                            )),
-                            None => far("finds no model node".into()),
-                        }
-                    })?;
+                            ),
+                        )),
+                        None => beyond.push((f64::INFINITY, t, p, "finds no model node".into())),
+                    }
+                    continue;
+                };
                 let id = mesh.node_id(i);
                 if let Some(other) = taken.insert(id, t) {
                     return Err(in_file(format!(
@@ -396,16 +446,22 @@ pub fn map_test(
                 }
             }
             MapMethod::Interpolate => {
-                let loc = locator.locate(mesh, p, tolerance).ok_or_else(|| {
+                let Some(loc) = locator.locate(mesh, p, tolerance) else {
                     match locator.locate(mesh, p, f64::INFINITY) {
-                        Some(l) => far(format!(
-                            "lies outside the model, {:.3e} m from element {}",
+                        Some(l) => beyond.push((
                             l.distance,
-                            mesh.element(l.element).id
+                            t,
+                            p,
+                            format!(
+                                "lies outside the model, {:.3e} m from element {}",
+                                l.distance,
+                                mesh.element(l.element).id
+                            ),
                         )),
-                        None => far("lies outside the model".into()),
+                        None => beyond.push((f64::INFINITY, t, p, "lies outside the model".into())),
                     }
-                })?;
+                    continue;
+                };
                 let el = mesh.element(loc.element);
                 // a point on a node reads that node alone
                 let on_node = loc.weights.iter().find(|w| (w.1 - 1.0).abs() < 1e-9);
@@ -439,6 +495,67 @@ pub fn map_test(
             }
         };
         nodes.push(row);
+    }
+    // the farthest (the first of equals), described by a search of the model
+    let worst = beyond
+        .iter()
+        .enumerate()
+        .fold(None::<usize>, |w, (k, b)| match w {
+            Some(j) if beyond[j].0 >= b.0 => Some(j),
+            _ => Some(k),
+        })
+        .map(|k| beyond[k].clone());
+    if let Some((_, t, p, what)) = worst {
+        let what = if !what.is_empty() {
+            what
+        } else {
+            match options.method {
+                MapMethod::Nearest => match locator.nearest_node(mesh, p, f64::INFINITY) {
+                    Some((i, d)) => format!(
+                        "is {d:.3e} m from the nearest model node ({})",
+                        mesh.node_id(i)
+                    ),
+                    None => "finds no model node".into(),
+                },
+                MapMethod::Interpolate => match locator.locate(mesh, p, f64::INFINITY) {
+                    Some(l) => format!(
+                        "lies outside the model, {:.3e} m from element {}",
+                        l.distance,
+                        mesh.element(l.element).id
+                    ),
+                    None => "lies outside the model".into(),
+                },
+            }
+        };
+        let others = beyond.len() - 1;
+        return Err(in_file(format!(
+            "test node {t} at ({:.6}, {:.6}, {:.6}) m in the model's frame {what}, beyond the tolerance {tolerance:.3e} m{}{}",
+            p[0],
+            p[1],
+            p[2],
+            if others > 0 {
+                format!(
+                    "; the farthest of {} test nodes beyond it ({})",
+                    beyond.len(),
+                    beyond
+                        .iter()
+                        .filter(|b| b.1 != t)
+                        .take(8)
+                        .map(|b| format!("{} at {:.3e} m", b.1, b.0))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            } else if alignment.is_some() {
+                ": the only test node the alignment could not place".into()
+            } else {
+                String::new()
+            },
+            if alignment.is_none() {
+                " (is the test in another frame? see --align)"
+            } else {
+                ""
+            }
+        )));
     }
     for s in &mut data.sensors {
         let at = &reads[&s.node];

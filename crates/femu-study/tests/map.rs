@@ -96,8 +96,9 @@ fn a_test_on_its_own_wireframe_maps_onto_the_model() {
     let e = load_test_with(&own, &model, &nearest(1e-4))
         .unwrap_err()
         .to_string();
+    // every test node beyond it counted, the farthest named (the first of equals)
     assert!(
-        e.contains("test node 1003 at (0.200200, 0.000000, -0.000200) m in the model's frame is 2.828e-4 m from the nearest model node (3), beyond the tolerance 1.000e-4 m (is the test in another frame? see --align)"),
+        e.contains("test node 1003 at (0.200200, 0.000000, -0.000200) m in the model's frame is 2.828e-4 m from the nearest model node (3), beyond the tolerance 1.000e-4 m; the farthest of 4 test nodes beyond it (1006 at 2.828e-4 m, 1009 at 2.000e-4 m, 1012 at 2.000e-4 m) (is the test in another frame? see --align)"),
         "{e}"
     );
     // a tolerance that takes two test nodes to one model node: move node 1006 onto node 3
@@ -166,9 +167,17 @@ fn test_units_where_the_file_says_nothing() {
             .iter()
             .all(|m| m.distance < 1e-12 && model_node(&m.target) + 1000 == m.test)
     );
-    // read as metres, the nodes are 200 m away
+    // read as metres, the wireframe is 1000 times the model: the refusal says so and names the
+    // unit (it spoke of frames and --align), before any node is searched for
     let metres = nearest(1e-3);
-    assert!(load_test_with(&path, &model, &metres).is_err());
+    let e = load_test_with(&path, &model, &metres)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("times the model's") && e.contains("its coordinates are in other units"),
+        "{e}"
+    );
+    assert!(e.contains("--test-units mm"), "{e}");
     assert!(femu_study::load::length_unit("furlong").is_err());
 }
 
@@ -533,11 +542,11 @@ fn a_turned_millimetre_wireframe_between_nodes_maps_onto_the_model() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("test node 501 at (0.041163, 0.075129, -0.193807) m in the model's frame lies outside the model, 1.938e-1 m from element"),
+        e.contains("test node 609 at (0.075566, 0.197255, -0.209692) m in the model's frame lies outside the model, 2.097e-1 m from element 26, beyond the tolerance 1.000e-6 m; the farthest of 22 test nodes beyond it (501 at 1.938e-1 m,"),
         "{e}"
     );
     assert!(
-        e.ends_with("beyond the tolerance 1.000e-6 m (is the test in another frame? see --align)"),
+        e.ends_with(") (is the test in another frame? see --align)"),
         "{e}"
     );
     std::fs::remove_dir_all(&dir).ok();
