@@ -72,6 +72,7 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
         }
         warnings.extend(deck.warnings.iter().map(ToString::to_string));
         let model = deck.to_model()?;
+        warnings.extend(crate::load::units_hint(&model, path));
         let _ = writeln!(
             s,
             "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",
@@ -118,6 +119,7 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
             );
         }
         warnings.extend(deck.warnings.iter().map(ToString::to_string));
+        warnings.extend(crate::load::units_hint(model, path));
         let _ = writeln!(
             s,
             "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",

@@ -202,6 +202,7 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
     };
     let mut model = model;
     leave_out_orphans(&mut model, path, &mut warnings)?;
+    warnings.extend(units_hint(&model, path));
     let asm = Assembler::new(&model).map_err(|e| StudyError::within(path, e))?;
     let sys = asm
         .assemble_analysed(&model, mass)
@@ -215,6 +216,49 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         eigrl,
         warnings,
     })
+}
+
+/// femu computes in SI units (m, kg, s, N, Pa). A material whose modulus and density are those of
+/// a structural material in another consistent system (mm, t, s with MPa; in, lbf s^2/in, s with
+/// psi) solves without complaint and gives frequencies in no unit at all that the user expects:
+/// named here, once, with the likely system. Frequencies scale with `sqrt(E / rho) / L`, so a
+/// consistent system gives the right frequencies; femu's SI labels (Pa, kg/m^3, m) do not apply.
+pub(crate) fn units_hint(model: &Model, path: &Path) -> Option<String> {
+    let mesh = model.mesh();
+    let mut seen = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY);
+    for e in 0..mesh.element_count() {
+        let Ok(m) = model.material_of(e) else {
+            continue;
+        };
+        let stiffness = match &m.elasticity {
+            femu_fem::material::Elasticity::Isotropic { e, .. } => *e,
+            femu_fem::material::Elasticity::Anisotropic(d) => d[0][0].max(d[1][1]).max(d[2][2]),
+        };
+        seen = (
+            seen.0.min(stiffness),
+            seen.1.max(stiffness),
+            seen.2.min(m.density),
+        );
+    }
+    let (e_min, _, rho) = seen;
+    if !e_min.is_finite() || !rho.is_finite() {
+        return None;
+    }
+    // structural solids: E from about 1e8 Pa (polymers) to 1.2e12 (diamond), density from about
+    // 10 kg/m^3 (foams) to 2.3e4 (osmium)
+    let system = if (1e2..1e6).contains(&e_min) && (1e-11..1e-7).contains(&rho) {
+        "millimetres, tonnes and seconds (E in MPa, density in t/mm^3)"
+    } else if (1e4..1e8).contains(&e_min) && (1e-6..1e-2).contains(&rho) {
+        "inches, lbf s^2/in and seconds (E in psi, density in lbf s^2/in^4)"
+    } else if e_min < 1e7 || rho < 1.0 {
+        "a system other than SI"
+    } else {
+        return None;
+    };
+    Some(format!(
+        "{}: a modulus of {e_min:.4e} and a density of {rho:.4e} are not those of a structural solid in SI units (Pa, kg/m^3); they look like {system}: femu computes with the numbers as given, so frequencies are right in a consistent system, but its labels (Pa, kg/m^3, m) are not",
+        path.display()
+    ))
 }
 
 /// Nodes that belong to no element and no multipoint constraint have no stiffness and no mass:
@@ -315,6 +359,69 @@ pub fn length_unit(name: &str) -> Result<f64, StudyError> {
     .metres())
 }
 
+/// Without `--map`, a test's labels are the model's node ids: where the file also gives its
+/// nodes' coordinates, they must be where the model's nodes of those ids are (within 1 % of the
+/// model's bounding-box diagonal, the mapping's default tolerance), or the labels are the test's
+/// own and the sensors would read other nodes than those measured.
+fn check_coordinates(
+    data: &TestData,
+    model: &LoadedModel,
+    metres: f64,
+    path: &Path,
+) -> Result<(), StudyError> {
+    let mesh = model.model.mesh();
+    if data.coordinates.is_empty() || mesh.node_count() == 0 {
+        return Ok(());
+    }
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for c in mesh.coords() {
+        for i in 0..3 {
+            lo[i] = lo[i].min(c[i]);
+            hi[i] = hi[i].max(c[i]);
+        }
+    }
+    let diagonal = (0..3).map(|i| (hi[i] - lo[i]).powi(2)).sum::<f64>().sqrt();
+    let tolerance = 0.01 * diagonal;
+    let mut off: Vec<(f64, u64, [f64; 3], [f64; 3])> = Vec::new();
+    for s in &data.sensors {
+        let (Some(x), Some(i)) = (data.coordinates.get(&s.node), mesh.node_index(s.node)) else {
+            continue;
+        };
+        let x = x.map(|v| v * metres);
+        let y = mesh.coords()[i];
+        let d = (0..3).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>().sqrt();
+        if d > tolerance && !off.iter().any(|o| o.1 == s.node) {
+            off.push((d, s.node, x, y));
+        }
+    }
+    let Some(worst) = off.iter().max_by(|a, b| a.0.total_cmp(&b.0)) else {
+        return Ok(());
+    };
+    let labelled = data
+        .sensors
+        .iter()
+        .map(|s| s.node)
+        .collect::<std::collections::BTreeSet<_>>()
+        .len();
+    Err(StudyError::in_file(
+        path,
+        "test",
+        format!(
+            "{} of its {labelled} nodes are not where the model's nodes of the same ids are (test node {} at ({:.6}, {:.6}, {:.6}) m, model node {} at ({:.6}, {:.6}, {:.6}) m, {:.3e} m apart; 1 % of the model's size is {tolerance:.3e} m): without --map the labels are taken as model node ids; map the test's own wireframe with --map nearest or --map interpolate ([map] in a study file), or give its units (--test-units) or frame (--align)",
+            off.len(),
+            worst.1,
+            worst.2[0],
+            worst.2[1],
+            worst.2[2],
+            worst.1,
+            worst.3[0],
+            worst.3[1],
+            worst.3[2],
+            worst.0
+        ),
+    ))
+}
+
 /// Reads test modes (`.unv`/`.uff` universal file, `.json`, or CSV) and maps their sensors onto
 /// `model` (test node ids are model node ids).
 ///
@@ -368,6 +475,9 @@ pub fn load_test_with(
         .as_ref()
         .map(|m| map_test(&mut data, model, m, metres, path))
         .transpose()?;
+    if mapping.is_none() {
+        check_coordinates(&data, model, metres, path)?;
+    }
     let layout = SensorLayout::new(model.model.mesh(), &model.sys.dofs, data.sensors.clone())
         .map_err(|e| match e {
             femu_correlate::CorrelateError::SensorOnMissingNode { .. }

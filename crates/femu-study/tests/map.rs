@@ -551,3 +551,24 @@ fn a_turned_millimetre_wireframe_between_nodes_maps_onto_the_model() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Without --map a test's labels are the model's node ids; a file whose coordinates put those
+/// nodes elsewhere (here 20 mm off in x and z, the model 0.2 m long) is refused with a pointer to
+/// --map, naming the farthest node and both positions (it was read by its labels alone, and its
+/// sensors read nodes other than those measured). Within 1 % of the model's size it is read.
+#[test]
+fn coordinates_that_disagree_with_the_labels_are_refused() {
+    let model = load_model(&fixture("inp", "two_hex.inp"), &ModelOptions::default()).unwrap();
+    let off = test_file("labels-off", |id| id, 20.0);
+    let e = load_test(&off, &model).unwrap_err().to_string();
+    assert!(
+        e.contains("4 of its 4 nodes are not where the model's nodes of the same ids are"),
+        "{e}"
+    );
+    assert!(e.contains("--map nearest or --map interpolate"), "{e}");
+    assert!(e.contains("2.828e-2 m apart"), "{e}");
+    let close = test_file("labels-close", |id| id, 0.5);
+    assert!(load_test(&close, &model).is_ok());
+    std::fs::remove_file(&off).ok();
+    std::fs::remove_file(&close).ok();
+}
