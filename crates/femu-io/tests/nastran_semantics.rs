@@ -593,3 +593,22 @@ fn the_default_hexa_formulation_is_named() {
     let full = read(&bar(2, |_, _| String::new(), "PSOLID,1,1,,2,,FULL"));
     assert!(full.warnings.is_empty(), "{:?}", full.warnings);
 }
+
+/// Found by the fuzz test (`fuzz_readers.rs`): a CTETRA with ten grids, a corner given as 0 and a
+/// mid-side one blank, passed the blank-corner check (0 is not blank) and panicked on grid 0; an
+/// explicit grid id of 0 or below is refused with its field.
+#[test]
+fn a_grid_id_of_zero_is_refused() {
+    let text = "GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,0.,0.,1.\n\
+CTETRA,1,1,1,2,3,0,,,\n,,,,\nPSOLID,1,1\nMAT1,1,2.1+11,,.3,7850.\n";
+    let e = error(&format!("{text}GRID,5,,.5,0.,0.\n").replace(
+        "CTETRA,1,1,1,2,3,0,,,\n,,,,",
+        "CTETRA,1,1,1,2,3,0,5,,\n,,,,",
+    ));
+    assert!(
+        e.contains("CTETRA 1: field 7 (G4) is 0: a grid id is positive"),
+        "{e}"
+    );
+    let e = error(text);
+    assert!(e.contains("CTETRA 1: field 7 (G4) is 0"), "{e}");
+}

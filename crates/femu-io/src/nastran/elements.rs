@@ -38,7 +38,14 @@ pub(super) fn add_elements<'a>(
         let eid = c.id(0, "EID")?;
         let pid = c.id(1, "PID")?;
         let mut slots: Vec<Option<u64>> = (2..c.fields.len())
-            .map(|i| c.int(i, "G").map(|v| v.map(|v| v as u64)))
+            .map(|i| match c.int(i, "G")? {
+                Some(v) if v <= 0 => Err(c.err(format!(
+                    "{eid}: field {} (G{}) is {v}: a grid id is positive (leave a mid-side grid blank instead)",
+                    i + 2,
+                    i - 1
+                ))),
+                v => Ok(v.map(|v| v as u64)),
+            })
             .collect::<Result<Vec<_>, _>>()?;
         while slots.last().is_some_and(Option::is_none) {
             slots.pop();

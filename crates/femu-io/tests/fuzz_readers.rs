@@ -1,0 +1,177 @@
+//! Fuzzing of the Nastran and Universal File readers on the stable toolchain, in CI: decks and
+//! files of the corpus (`fixtures/`, the seed corpus of `fuzz/run.sh`, files up to 16 KiB) mutated
+//! by proptest (bytes replaced by the characters their formats are made of, lines deleted,
+//! duplicated, swapped and cut, fields inserted) must give a model or an error, never a panic;
+//! a model that reads must also give its DOF map. `FEMU_FUZZ_CASES` sets the cases per reader
+//! (default 192, a few seconds); `fuzz/run.sh` runs libFuzzer for longer on the nightly toolchain.
+
+use proptest::prelude::*;
+use std::path::{Path, PathBuf};
+
+fn corpus(dirs: &[&str], exts: &[&str]) -> Vec<(PathBuf, Vec<u8>)> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures");
+    let mut out = Vec::new();
+    for d in dirs {
+        let Ok(entries) = std::fs::read_dir(root.join(d)) else {
+            continue;
+        };
+        let mut paths: Vec<PathBuf> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
+        paths.sort();
+        for p in paths {
+            let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("");
+            if exts.contains(&ext) {
+                let bytes = std::fs::read(&p).unwrap();
+                if bytes.len() <= 16 * 1024 {
+                    out.push((p, bytes));
+                }
+            }
+        }
+    }
+    assert!(!out.is_empty(), "no corpus in {dirs:?}");
+    out
+}
+
+/// One edit of a file: where (a fraction of its length or of its lines) and what.
+#[derive(Debug, Clone)]
+enum Edit {
+    Byte(f64, u8),
+    DeleteLine(f64),
+    DuplicateLine(f64),
+    SwapLines(f64, f64),
+    Truncate(f64),
+    InsertField(f64, String),
+}
+
+fn edit() -> impl Strategy<Value = Edit> {
+    // the characters the formats are made of: digits, signs, exponents, separators, markers
+    let alphabet: Vec<u8> = b"0123456789.+-*,$ EeDd\n\r\t-1GRIDTHRU".to_vec();
+    let field = prop::sample::select(vec![
+        "",
+        "0",
+        "-1",
+        "1.+30",
+        "1.-300",
+        "NaN",
+        "inf",
+        "THRU",
+        "999999999999",
+        "+",
+        "*",
+        ",",
+        "-0.",
+        "1e308",
+        "123456",
+        "ALL",
+        "=",
+    ]);
+    prop_oneof![
+        (0.0..1.0f64, prop::sample::select(alphabet)).prop_map(|(p, b)| Edit::Byte(p, b)),
+        (0.0..1.0f64).prop_map(Edit::DeleteLine),
+        (0.0..1.0f64).prop_map(Edit::DuplicateLine),
+        (0.0..1.0f64, 0.0..1.0f64).prop_map(|(a, b)| Edit::SwapLines(a, b)),
+        (0.0..1.0f64).prop_map(Edit::Truncate),
+        (0.0..1.0f64, field).prop_map(|(p, f)| Edit::InsertField(p, f.to_string())),
+    ]
+}
+
+fn apply(bytes: &[u8], edits: &[Edit]) -> Vec<u8> {
+    let mut b = bytes.to_vec();
+    for e in edits {
+        let at = |f: f64, n: usize| ((f * n as f64) as usize).min(n.saturating_sub(1));
+        match e {
+            Edit::Byte(f, c) if !b.is_empty() => {
+                let i = at(*f, b.len());
+                b[i] = *c;
+            }
+            Edit::Truncate(f) => b.truncate(at(*f, b.len() + 1)),
+            Edit::InsertField(f, s) => {
+                let i = at(*f, b.len() + 1).min(b.len());
+                let text = format!(",{s}");
+                b.splice(i..i, text.bytes());
+            }
+            _ => {
+                let mut lines: Vec<Vec<u8>> =
+                    b.split(|c| *c == b'\n').map(<[u8]>::to_vec).collect();
+                let n = lines.len();
+                match e {
+                    Edit::DeleteLine(f) if n > 1 => {
+                        lines.remove(at(*f, n));
+                    }
+                    Edit::DuplicateLine(f) if n > 0 => {
+                        let i = at(*f, n);
+                        let l = lines[i].clone();
+                        lines.insert(i, l);
+                    }
+                    Edit::SwapLines(x, y) if n > 1 => lines.swap(at(*x, n), at(*y, n)),
+                    _ => {}
+                }
+                b = lines.join(&b'\n');
+            }
+        }
+    }
+    b
+}
+
+fn cases() -> u32 {
+    std::env::var("FEMU_FUZZ_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(192)
+}
+
+/// The Nastran reader, strict and lenient, on mutated decks (`INCLUDE`s are left out: they name
+/// files).
+#[test]
+fn nastran_reader_never_panics() {
+    let mut decks = corpus(
+        &["nastran/femu", "nastran/pynastran", "malformed/model"],
+        &["bdf"],
+    );
+    // decks with a case control, subcases, labels and the cards the reader reads
+    decks.push((
+        PathBuf::from("cases.bdf"),
+        b"SOL 103\nCEND\nSPC = 1 $ c\nMETHOD = 2\nSUBCASE 1\n  SPC = 1\nBEGIN BULK\nGRDSET,,,,,,,3\n\
+GRID,1,,0.,0.,0.,,123\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,0.,0.,1.\nCTETRA,1,1,1,2,3,4\n\
+PSOLID,1,1,3,2,,FULL\nCORD2R,3,0,0.,0.,0.,0.,0.,1.\n,1.,0.,0.\nMAT1,1,2.1+11,8.+10,,7850.\n\
+SPC1,1,123,2,,,,,,+S\n+S,3\nEIGRL,2,,,3\nPARAM,COUPMASS,1\nCONM2,5,4,,1.,.1\nENDDATA\n"
+            .to_vec(),
+    ));
+    let n = decks.len();
+    let config = ProptestConfig {
+        cases: cases(),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    };
+    proptest!(config, |(k in 0..n, edits in prop::collection::vec(edit(), 1..6))| {
+        let bytes = apply(&decks[k].1, &edits);
+        let text = String::from_utf8_lossy(&bytes);
+        if !text.to_ascii_uppercase().contains("INCLUDE") {
+            for lenient in [false, true] {
+                let options = femu_io::nastran::BdfOptions { lenient };
+                if let Ok(deck) = femu_io::nastran::parse_bdf(&text, &decks[k].0, &options) {
+                    let _ = deck.model.dof_map();
+                }
+            }
+        }
+    });
+}
+
+/// The Universal File reader (text and binary datasets) on mutated files, and its test data.
+#[test]
+fn universal_file_reader_never_panics() {
+    let files = corpus(&["uff", "uff/pyuff", "malformed/test"], &["unv", "uff"]);
+    let n = files.len();
+    let config = ProptestConfig {
+        cases: cases(),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    };
+    proptest!(config, |(k in 0..n, edits in prop::collection::vec(edit(), 1..6))| {
+        let bytes = apply(&files[k].1, &edits);
+        let path: &Path = &files[k].0;
+        if let Ok(u) = femu_io::uff::parse_uff_bytes(&bytes, path) {
+            let _ = u.test_data(path);
+            let _ = u.to_mesh(path);
+        }
+    });
+}
