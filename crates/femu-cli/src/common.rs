@@ -61,6 +61,12 @@ pub struct TestArgs {
     pub test_units: Option<LengthUnit>,
 }
 
+/// An expansion method as the library spells it (`serep:M` takes its count of modes).
+pub fn parse_method(s: &str) -> Result<femu::correlate::Method, String> {
+    s.parse()
+        .map_err(|e: femu::correlate::CorrelateError| e.to_string())
+}
+
 fn parse_align(s: &str) -> Result<Align, String> {
     s.parse::<Align>().map_err(|e| e.to_string())
 }

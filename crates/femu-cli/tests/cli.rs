@@ -533,7 +533,25 @@ fn expand_recovers_a_model_mode() {
     let png = std::fs::read(study.join("study.png")).unwrap();
     assert_eq!(&png[..4], b"\x89PNG");
     assert!(!v["study"].as_array().unwrap().is_empty());
+    // SEREP on the lowest three modes, which hold the measured one: exact too (serep:M was
+    // refused by the command line, and a study file's serep:M failed for want of a basis)
     femu()
+        .args([
+            "expand",
+            deck.to_str().unwrap(),
+            csv.to_str().unwrap(),
+            "--method",
+            "serep:3",
+            "--json",
+            json.to_str().unwrap(),
+            "--quiet",
+        ])
+        .assert()
+        .success();
+    let rho = json_of(&json)["rho_m"][0].as_f64().unwrap();
+    assert!(rho < 1e-6 * modes.values[2], "serep: {rho}");
+    // a usage error (exit 2) that lists the methods
+    let out = femu()
         .args([
             "expand",
             deck.to_str().unwrap(),
@@ -542,7 +560,13 @@ fn expand_recovers_a_model_mode() {
             "guess",
         ])
         .assert()
-        .failure();
+        .failure()
+        .code(2);
+    let e = String::from_utf8_lossy(&out.get_output().stderr).into_owned();
+    assert!(
+        e.contains("expected static, dynamic, serep:M (M >= 1 model modes), min-residual or mdre"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -13,6 +13,7 @@ use serde::Serialize;
 
 /// Expands measured shapes `ya` (one row per sensor of `layout`) to every free DOF by `method`.
 /// When the sensors cover every free DOF, the readings are placed on their DOFs as they are.
+/// SEREP uses `serep_basis`, or the model's lowest `M` modes when none is given.
 ///
 /// # Errors
 /// Sizes, NaN, two sensors too close for expansion ([`SensorBasis::new`]), and the method's
@@ -25,6 +26,20 @@ pub fn expand_shapes(
     method: Method,
     serep_basis: Option<MatRef<'_, f64>>,
 ) -> Result<Mat<f64>, StudyError> {
+    // SEREP without a basis given: the model's lowest M modes, solved here (by femu's own
+    // eigensolver, Sturm-verified); every front end's `serep:M` comes this way
+    let solved;
+    let serep_basis = match (method, serep_basis) {
+        (Method::Serep(m), None) => {
+            let modes = sys.modes(
+                femu_sparse::eigen::Which::Lowest(m.min(sys.k.rows())),
+                &femu_sparse::eigen::EigenOptions::default(),
+            )?;
+            solved = modes.vectors;
+            Some(solved.as_ref())
+        }
+        (_, b) => b,
+    };
     Ok(match layout.measured_dofs() {
         Some(dofs) if dofs.len() == sys.dofs.free_count() => {
             place_measured(sys.k.rows(), &dofs, ya)?

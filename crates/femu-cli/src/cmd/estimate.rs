@@ -22,8 +22,14 @@ pub struct EstimateArgs {
     pub model: PathBuf,
     /// The test modes (`.unv`/`.uff`, `.json` or `.csv`).
     pub test: PathBuf,
-    /// Expansion of the test shapes.
-    #[arg(long, value_enum, default_value = "dynamic")]
+    /// Expansion of the test shapes: static (Guyan), dynamic, serep:M (the model's lowest M
+    /// modes), min-residual or mdre.
+    #[arg(
+        long,
+        value_parser = crate::common::parse_method,
+        default_value = "dynamic",
+        value_name = "static|dynamic|serep:M|min-residual|mdre"
+    )]
     pub expansion: Method,
     /// Model modes computed for the comparison (default: twice the test modes plus 4).
     #[arg(long)]

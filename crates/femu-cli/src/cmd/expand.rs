@@ -25,8 +25,14 @@ pub struct ExpandArgs {
     pub model: PathBuf,
     /// The test modes (`.unv`/`.uff`, `.json` or `.csv`).
     pub test: PathBuf,
-    /// The expansion method.
-    #[arg(long, value_enum, default_value = "dynamic")]
+    /// The expansion method: static (Guyan), dynamic, serep:M (the model's lowest M modes),
+    /// min-residual or mdre.
+    #[arg(
+        long,
+        value_parser = crate::common::parse_method,
+        default_value = "dynamic",
+        value_name = "static|dynamic|serep:M|min-residual|mdre"
+    )]
     pub method: Method,
     /// Lumped (diagonal) mass instead of consistent.
     #[arg(long)]
