@@ -82,7 +82,8 @@ impl ModelArgs {
         lumped: bool,
         quiet: bool,
     ) -> Result<ModelOptions, CliError> {
-        let deck = femu::study::load::has_extension(path, &["inp", "bdf", "dat", "nas"]);
+        // a deck has its own materials and constraints (the format table says which)
+        let deck = femu::io::Format::from_path(path).is_some_and(|f| f.info().deck);
         let material = match (self.young, self.poisson, self.density) {
             (None, None, None) => None,
             // a deck has its own materials

@@ -22,16 +22,7 @@ use femu_sparse::faer::Mat;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-/// Test modes and the sensors they were measured with.
-#[derive(Debug, Clone)]
-pub struct TestData {
-    /// The sensors, in the order of the shape rows.
-    pub sensors: Vec<Sensor>,
-    /// The modes.
-    pub modes: TestModes,
-    /// Test node coordinates the file gives (its own frame and units; empty when it gives none).
-    pub coordinates: BTreeMap<u64, [f64; 3]>,
-}
+pub use crate::test_data::TestData;
 
 /// One mode's rows: frequency, damping, first line, values by sensor.
 type ModeRows = (f64, Option<f64>, usize, BTreeMap<usize, f64>);

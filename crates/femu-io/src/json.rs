@@ -6,7 +6,8 @@
 //! (1-based), with the same checks as the CSV reader.
 
 use crate::IoError;
-use crate::csv::{TestData, parse_test_csv};
+use crate::TestData;
+use crate::csv::parse_test_csv;
 use serde::Deserialize;
 use std::fmt::Write as _;
 use std::path::Path;

@@ -11,12 +11,16 @@
 
 pub mod csv;
 mod error;
+pub mod format;
 pub mod gmsh;
 pub mod inp;
 pub mod json;
 pub mod nastran;
 mod spelling;
+pub mod test_data;
 pub mod uff;
 pub mod vtk;
 
 pub use error::{IoError, Warning};
+pub use format::Format;
+pub use test_data::TestData;

@@ -12,7 +12,7 @@
 use faer::Mat;
 use femu_correlate::expansion::Method;
 use femu_correlate::{ModeSet, TestModes};
-use femu_io::csv::TestData;
+use femu_io::TestData;
 use femu_study::load::{
     LoadedModel, LoadedTest, MaterialOptions, ModelOptions, TestOptions, load_model, load_test_with,
 };

@@ -1,8 +1,8 @@
 //! `femu info FILE`: what a file femu reads contains, and what femu would do with it.
 
 use crate::StudyError;
-use crate::load::{MODEL_EXTENSIONS, TEST_EXTENSIONS, has_extension};
 use femu_fem::mesh::Mesh;
+use femu_io::Format;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -48,7 +48,8 @@ fn frequencies(f: &[f64]) -> String {
 pub fn describe(path: &Path) -> Result<String, StudyError> {
     let mut s = format!("{}\n", path.display());
     let mut warnings: Vec<String> = Vec::new();
-    if has_extension(path, &["inp"]) {
+    let format = Format::from_path(path);
+    if format == Some(Format::Inp) {
         let deck = femu_io::inp::read_inp(path)?;
         let _ = writeln!(s, "format: Abaqus/CalculiX input deck");
         mesh_lines(&mut s, &deck.mesh);
@@ -78,7 +79,7 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
             "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",
             model.dof_map()?.free_count()
         );
-    } else if has_extension(path, &["bdf", "dat", "nas"]) {
+    } else if format == Some(Format::Nastran) {
         let deck = femu_io::nastran::read_bdf(path, &femu_io::nastran::BdfOptions::default())?;
         let _ = writeln!(s, "format: Nastran bulk data");
         let model = &deck.model;
@@ -125,7 +126,7 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
             "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",
             model.dof_map()?.free_count()
         );
-    } else if has_extension(path, &["msh"]) {
+    } else if format == Some(Format::Gmsh) {
         let g = femu_io::gmsh::read_msh(path)?;
         let _ = writeln!(s, "format: Gmsh mesh");
         mesh_lines(&mut s, &g.mesh);
@@ -134,7 +135,7 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
             s,
             "femu would: use it as a model once given a material (--young, --poisson, --density) and, if clamped, the sets to fix (--fix)"
         );
-    } else if has_extension(path, &["unv", "uff"]) {
+    } else if format == Some(Format::Universal) {
         let u = femu_io::uff::read_uff(path)?;
         let _ = writeln!(s, "format: universal file");
         if let Some(units) = &u.units {
@@ -249,8 +250,8 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
                 format!("use it as {}", does.join(" and as "))
             }
         );
-    } else if has_extension(path, &["json", "csv", "txt"]) {
-        let data = if has_extension(path, &["json"]) {
+    } else if matches!(format, Some(Format::Json | Format::Csv)) {
+        let data = if format == Some(Format::Json) {
             femu_io::json::read_test_json(path)?
         } else {
             femu_io::csv::read_test_csv(path)?
@@ -261,7 +262,7 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
         let _ = writeln!(
             s,
             "format: test modes ({})",
-            if has_extension(path, &["json"]) {
+            if format == Some(Format::Json) {
                 "JSON"
             } else {
                 "CSV"
@@ -284,12 +285,7 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
             "femu would: use it as test modes, its node ids being the model's (femu correlate, estimate, expand, update)"
         );
     } else {
-        let mut all: Vec<&str> = MODEL_EXTENSIONS.to_vec();
-        all.extend(
-            TEST_EXTENSIONS
-                .iter()
-                .filter(|e| !MODEL_EXTENSIONS.contains(e)),
-        );
+        let all = femu_io::format::all_extensions();
         return Err(StudyError::in_file(
             path,
             "format",

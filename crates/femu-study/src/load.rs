@@ -7,8 +7,8 @@ use femu_correlate::SensorLayout;
 use femu_fem::assembly::{Assembler, MassKind, SystemMatrices};
 use femu_fem::material::Material;
 use femu_fem::model::Model;
-use femu_io::csv::TestData;
 use femu_io::inp::FrequencyStep;
+use femu_io::{Format, TestData};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -83,19 +83,6 @@ pub struct LoadedTest {
     pub mapping: Option<Mapping>,
 }
 
-/// The extensions of the model files femu reads.
-pub const MODEL_EXTENSIONS: &[&str] = &["inp", "bdf", "dat", "nas", "msh", "unv", "uff"];
-
-/// The extensions of the test files femu reads.
-pub const TEST_EXTENSIONS: &[&str] = &["unv", "uff", "json", "csv", "txt"];
-
-/// Whether `path` ends in one of `exts` (any case).
-pub fn has_extension(path: &Path, exts: &[&str]) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| exts.iter().any(|x| e.eq_ignore_ascii_case(x)))
-}
-
 /// Reads a model: an Abaqus/CalculiX `.inp` deck or Nastran bulk data (`.bdf`, `.dat`, `.nas`;
 /// materials, constraints and point masses inside), or a mesh
 /// (Gmsh `.msh`, universal file `.unv`/`.uff` with datasets 2411/2412) with the material and
@@ -106,16 +93,21 @@ pub fn has_extension(path: &Path, exts: &[&str]) -> bool {
 /// assembly errors (naming the element).
 pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, StudyError> {
     let mut warnings = Vec::new();
-    if !has_extension(path, MODEL_EXTENSIONS) {
-        return Err(StudyError::in_file(
-            path,
-            "model",
-            "femu reads models as Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh) and universal files (.unv, .uff); the file's extension is none of them",
-        ));
-    }
+    let format = Format::from_path(path)
+        .filter(|f| f.info().model)
+        .ok_or_else(|| {
+            StudyError::in_file(
+                path,
+                "model",
+                format!(
+                    "femu reads models as {}; the file's extension is none of them",
+                    femu_io::format::described(true)
+                ),
+            )
+        })?;
     let mut mass = options.mass();
     let mut eigrl = None;
-    let (model, frequency) = if has_extension(path, &["msh", "unv", "uff"]) {
+    let (model, frequency) = if !format.info().deck {
         let Some(mat) = options.material else {
             return Err(StudyError::in_file(
                 path,
@@ -123,7 +115,7 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
                 "a mesh file has no material: give Young's modulus, Poisson's ratio and the density (--young, --poisson, --density, or [material] in a study file)",
             ));
         };
-        let mesh = if has_extension(path, &["unv", "uff"]) {
+        let mesh = if format == Format::Universal {
             let u = femu_io::uff::read_uff(path)?;
             let (mesh, w) = u.to_mesh(path)?;
             warnings.extend(u.warnings.iter().map(|w| w.to_string()));
@@ -149,7 +141,7 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
                 .map_err(|e| StudyError::within(path, e))?;
         }
         (model, None)
-    } else if has_extension(path, &["bdf", "dat", "nas"]) {
+    } else if format == Format::Nastran {
         let deck = femu_io::nastran::read_bdf(
             path,
             &femu_io::nastran::BdfOptions {
@@ -442,15 +434,20 @@ pub fn load_test_with(
     model: &LoadedModel,
     options: &TestOptions,
 ) -> Result<LoadedTest, StudyError> {
-    if !has_extension(path, TEST_EXTENSIONS) {
-        return Err(StudyError::in_file(
-            path,
-            "test",
-            "femu reads test modes from universal files (.unv, .uff: datasets 15/2411 and 55 or 2414), JSON (.json) and CSV (.csv, .txt); this extension is none of them",
-        ));
-    }
+    let format = Format::from_path(path)
+        .filter(|f| f.info().test)
+        .ok_or_else(|| {
+            StudyError::in_file(
+                path,
+                "test",
+                format!(
+                    "femu reads test modes from {}; this extension is none of them",
+                    femu_io::format::described(false)
+                ),
+            )
+        })?;
     // metres per file unit: a universal file's dataset 164, else the option, else metres
-    let (mut data, metres) = if has_extension(path, &["unv", "uff"]) {
+    let (mut data, metres) = if format == Format::Universal {
         let u = femu_io::uff::read_uff(path)?;
         let data = u.test_data(path)?;
         let metres = match (&u.units, options.test_units) {
@@ -459,7 +456,7 @@ pub fn load_test_with(
             (None, None) => 1.0,
         };
         (data, metres)
-    } else if has_extension(path, &["json"]) {
+    } else if format == Format::Json {
         (
             femu_io::json::read_test_json(path)?,
             options.test_units.unwrap_or(1.0),

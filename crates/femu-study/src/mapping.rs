@@ -15,7 +15,7 @@ use femu_correlate::Sensor;
 use femu_fem::align::{Fit, Surface, Transform, fit_auto, fit_pairs};
 use femu_fem::element::ElementKind;
 use femu_fem::locate::Locator;
-use femu_io::csv::TestData;
+use femu_io::TestData;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;

@@ -144,7 +144,7 @@ impl Universal {
     ///
     /// # Errors
     /// No modes, modes on different node lists, no non-zero value, invalid frequencies.
-    pub fn test_data(&self, path: &Path) -> Result<crate::csv::TestData, IoError> {
+    pub fn test_data(&self, path: &Path) -> Result<crate::TestData, IoError> {
         let bad = |reason: String| IoError::Content {
             path: PathBuf::from(path),
             reason,
@@ -246,7 +246,7 @@ impl Universal {
             .iter()
             .filter_map(|s| positions.get(&s.node).map(|x| (s.node, *x)))
             .collect();
-        Ok(crate::csv::TestData {
+        Ok(crate::TestData {
             sensors,
             modes,
             coordinates,

@@ -1,0 +1,606 @@
+//! Abaqus/CalculiX input decks (`.inp`): read a model (mesh, sets, materials, sections,
+//! boundary conditions, the `*FREQUENCY` step) and write one that CalculiX runs.
+//!
+//! Supported keywords: `*HEADING`, `*NODE`, `*ELEMENT` (C3D4, C3D10, C3D8, C3D20, C3D6, C3D15; the
+//! reduced-integration C3D8R and C3D20R are read as full integration, with a warning), `*NSET`,
+//! `*ELSET` (lists of ids or set names, or `GENERATE`), `*MATERIAL`, `*ELASTIC` (isotropic),
+//! `*DENSITY`, `*SOLID SECTION`, `*BOUNDARY` (DOFs 1-3, and 4-6 on coupling reference nodes;
+//! zero values), `*ELEMENT, TYPE=MASS` with `*MASS`, `*EQUATION` (node ids; the first term's DOF
+//! is dependent), `*KINEMATIC COUPLING` and `*COUPLING` with `*KINEMATIC` (rigid links: the
+//! reference node gets rotations) or `*DISTRIBUTING` (weighted averages, with the weights of a
+//! `*SURFACE, TYPE=NODE`), `*INCLUDE`, `*STEP`, `*FREQUENCY`, `*END STEP` (docs/MATH.md,
+//! "Multipoint constraints").
+//!
+//! The writer states multipoint constraints as `*EQUATION`s; the rotations of a rigid link's
+//! reference are the DOFs 1-3 of an extra node (set `FEMU_ROT`), as CalculiX's rotational nodes.
+//!
+//! The deck is checked as strictly as CalculiX and Abaqus check it, so that a typo never changes
+//! the model silently:
+//! - a keyword femu reads accepts only its known parameters: an unknown one (`*NSET, NSET=A,
+//!   GENERTE`) is an error naming the nearest known spelling;
+//! - a keyword that cannot change `K` or `M` (output requests, loads, amplitudes, other steps) is
+//!   skipped with a warning;
+//! - a keyword that would change `K` or `M` and that femu cannot model (shells, beams, springs,
+//!   `*RIGID BODY`, `*TIE`, parts and instances, other materials) is an error;
+//! - any other keyword is unknown: an error naming the nearest known spelling (`*BOUNDRY`: did you
+//!   mean `*BOUNDARY`?), or a warning with [`InpOptions::lenient`].
+//!
+//! Names are case-insensitive (stored upper case); comments (`**`) and blank lines are ignored;
+//! numbers may use Fortran `D` exponents. Node ordering is femu's (which is Abaqus's).
+
+use crate::{IoError, Warning};
+use femu_fem::element::ElementKind;
+use femu_fem::material::{Elasticity, Material};
+use femu_fem::mesh::Mesh;
+use femu_fem::model::Model;
+use std::collections::{BTreeMap, HashMap};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+mod model;
+mod parse;
+mod write;
+
+use parse::*;
+pub use write::{inp_string, write_inp};
+
+/// How strictly a deck is read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct InpOptions {
+    /// Unknown keywords are warnings instead of errors (unknown parameters of known keywords stay
+    /// errors: they change what a known keyword means).
+    pub lenient: bool,
+}
+
+/// The keywords femu reads, with the parameters each accepts.
+const READ: &[(&str, &[&str])] = &[
+    ("HEADING", &[]),
+    ("NODE", &["NSET", "SYSTEM"]),
+    ("ELEMENT", &["TYPE", "ELSET"]),
+    ("MASS", &["ELSET"]),
+    ("NSET", &["NSET", "GENERATE", "UNSORTED", "INTERNAL"]),
+    ("ELSET", &["ELSET", "GENERATE", "UNSORTED", "INTERNAL"]),
+    ("MATERIAL", &["NAME"]),
+    ("ELASTIC", &["TYPE", "DEPENDENCIES", "MODULI"]),
+    ("DENSITY", &["DEPENDENCIES"]),
+    (
+        "SOLID SECTION",
+        &[
+            "ELSET",
+            "MATERIAL",
+            "ORIENTATION",
+            "CONTROLS",
+            "SECTION CONTROLS",
+        ],
+    ),
+    (
+        "BOUNDARY",
+        &[
+            "OP",
+            "TYPE",
+            "AMPLITUDE",
+            "FIXED",
+            "USER",
+            "SUBMODEL",
+            "LOAD CASE",
+        ],
+    ),
+    ("INCLUDE", &["INPUT"]),
+    ("EQUATION", &[]),
+    ("KINEMATIC COUPLING", &["REF NODE"]),
+    (
+        "COUPLING",
+        &["REF NODE", "SURFACE", "CONSTRAINT NAME", "INFLUENCE RADIUS"],
+    ),
+    ("KINEMATIC", &[]),
+    ("DISTRIBUTING", &["WEIGHTING METHOD"]),
+    ("SURFACE", &["NAME", "TYPE"]),
+    (
+        "STEP",
+        &[
+            "NAME",
+            "NLGEOM",
+            "INC",
+            "INCF",
+            "PERTURBATION",
+            "AMPLITUDE",
+            "UNSYMM",
+            "EXTRAPOLATION",
+            "THERMAL NETWORK",
+        ],
+    ),
+    (
+        "FREQUENCY",
+        &[
+            "SOLVER",
+            "STORAGE",
+            "GLOBAL",
+            "CYCMPC",
+            "MATRIXSTORAGE",
+            "EIGENSOLVER",
+            "NORMALIZATION",
+            "ACOUSTIC COUPLING",
+            "SIM",
+            "PROPERTY EVALUATION",
+            "RESIDUAL MODES",
+        ],
+    ),
+    ("END STEP", &[]),
+];
+
+/// Keywords that cannot change `K` or `M` of an undamped frequency analysis: skipped, with a
+/// warning.
+const NO_EFFECT: &[&str] = &[
+    "AMPLITUDE",
+    "BUCKLE",
+    "CLOAD",
+    "CONTACT FILE",
+    "CONTACT OUTPUT",
+    "CONTACT PRINT",
+    "CONDUCTIVITY",
+    "DAMPING",
+    "DASHPOT",
+    "DLOAD",
+    "DSLOAD",
+    "EL FILE",
+    "EL PRINT",
+    "ELEMENT OUTPUT",
+    "END PART",
+    "ENERGY OUTPUT",
+    "EXPANSION",
+    "FILM",
+    "HEAT TRANSFER",
+    "INITIAL CONDITIONS",
+    "MODAL DAMPING",
+    "MODAL DYNAMIC",
+    "NODE FILE",
+    "NODE OUTPUT",
+    "NODE PRINT",
+    "OUTPUT",
+    "PLASTIC",
+    "PREPRINT",
+    "RADIATE",
+    "RESTART",
+    "SPECIFIC HEAT",
+    "STATIC",
+    "STEADY STATE DYNAMICS",
+    "SURFACE",
+    "TEMPERATURE",
+    "TIME POINTS",
+];
+
+/// Keywords that would change `K` or `M` and that femu cannot model: errors.
+const UNSUPPORTED: &[(&str, &str)] = &[
+    (
+        "ASSEMBLY",
+        "part/instance input: flatten the deck (nodes and elements at the top level)",
+    ),
+    (
+        "BEAM SECTION",
+        "beam elements are not supported (solids only)",
+    ),
+    (
+        "BEAM GENERAL SECTION",
+        "beam elements are not supported (solids only)",
+    ),
+    (
+        "CONTACT PAIR",
+        "contact changes the stiffness and is not supported",
+    ),
+    (
+        "DISTRIBUTING COUPLING",
+        "element-based distributing coupling is not supported (use *COUPLING with *DISTRIBUTING)",
+    ),
+    ("GAP", "gap elements are not supported"),
+    (
+        "HYPERELASTIC",
+        "only linear isotropic elasticity is supported",
+    ),
+    (
+        "INSTANCE",
+        "part/instance input: flatten the deck (nodes and elements at the top level)",
+    ),
+    (
+        "MEMBRANE SECTION",
+        "membrane elements are not supported (solids only)",
+    ),
+    ("MPC", "multi-point constraints are not supported yet"),
+    (
+        "NONSTRUCTURAL MASS",
+        "non-structural mass is not supported yet",
+    ),
+    (
+        "PART",
+        "part/instance input: flatten the deck (nodes and elements at the top level)",
+    ),
+    ("RIGID BODY", "rigid bodies are not supported yet"),
+    (
+        "ROTARY INERTIA",
+        "rotary inertia is not supported (solid elements have no rotations)",
+    ),
+    (
+        "SHELL SECTION",
+        "shell elements are not supported (solids only)",
+    ),
+    ("SPRING", "spring elements are not supported yet"),
+    ("TIE", "tied surfaces are not supported yet"),
+    (
+        "TRANSFORM",
+        "local nodal systems are not supported yet: constraints would act in the wrong directions",
+    ),
+    (
+        "USER MATERIAL",
+        "only linear isotropic elasticity is supported",
+    ),
+];
+
+/// Every keyword femu knows, for "did you mean".
+fn known_keywords() -> impl Iterator<Item = &'static str> {
+    READ.iter()
+        .map(|(k, _)| *k)
+        .chain(NO_EFFECT.iter().copied())
+        .chain(UNSUPPORTED.iter().map(|(k, _)| *k))
+}
+
+/// What to do with the keyword `name` with `params` on line `l`: `Ok(true)` when femu reads it,
+/// `Ok(false)` when it is skipped (with a warning pushed), or the error.
+fn check_keyword(
+    name: &str,
+    params: &[(String, String)],
+    options: &InpOptions,
+    l: &Line,
+    warnings: &mut Vec<Warning>,
+) -> Result<bool, IoError> {
+    let err = |reason: String| IoError::Parse {
+        path: l.path.clone(),
+        line: l.number,
+        reason,
+    };
+    if let Some((_, accepted)) = READ.iter().find(|(k, _)| *k == name) {
+        for (p, _) in params {
+            if !accepted.contains(&p.as_str()) {
+                let hint = crate::spelling::suggestion(p, accepted.iter().copied(), "");
+                let list = if accepted.is_empty() {
+                    "none".to_string()
+                } else {
+                    accepted.join(", ")
+                };
+                return Err(err(format!(
+                    "unknown parameter {p} of *{name}{hint}; *{name} accepts: {list}"
+                )));
+            }
+        }
+        return Ok(true);
+    }
+    if NO_EFFECT.contains(&name) {
+        warnings.push(Warning {
+            path: l.path.clone(),
+            line: l.number,
+            message: format!("*{name} skipped: it does not change the stiffness or the mass"),
+        });
+        return Ok(false);
+    }
+    if let Some((_, why)) = UNSUPPORTED.iter().find(|(k, _)| *k == name) {
+        return Err(err(format!("*{name}: {why}")));
+    }
+    let hint = crate::spelling::suggestion(name, known_keywords(), "*");
+    if options.lenient {
+        warnings.push(Warning {
+            path: l.path.clone(),
+            line: l.number,
+            message: format!("unknown keyword *{name}{hint} skipped (--lenient)"),
+        });
+        return Ok(false);
+    }
+    Err(err(format!(
+        "unknown keyword *{name}{hint}; a misspelt keyword would change the model silently, so it \
+         is an error (--lenient makes unknown keywords warnings)"
+    )))
+}
+
+/// The `*FREQUENCY` step: how many modes, and the shift (s^-2) when given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrequencyStep {
+    /// Number of eigenvalues requested.
+    pub count: usize,
+    /// Shift point in (cycles/time)^2 as Abaqus writes it, when given.
+    pub shift_cycles2: Option<f64>,
+}
+
+/// A constraint target: one node or a node set.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Target {
+    /// A node id.
+    Node(u64),
+    /// A node set name (upper case).
+    Set(String),
+}
+
+/// A `*BOUNDARY` line: DOFs `first..=last` (1-based, 1-3) of the target fixed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Boundary {
+    /// What is fixed.
+    pub target: Target,
+    /// First DOF (1 = x).
+    pub first: usize,
+    /// Last DOF.
+    pub last: usize,
+    /// Where it was defined.
+    pub line: Location,
+}
+
+/// A `*SOLID SECTION`: the material of an element set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Section {
+    /// Element set (upper case).
+    pub elset: String,
+    /// Material name (upper case).
+    pub material: String,
+    /// Where it was defined.
+    pub line: Location,
+}
+
+/// The nodes of a coupling: data-line targets, or a node-based `*SURFACE` by name.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LinkNodes {
+    /// Nodes and node sets.
+    Targets(Vec<Target>),
+    /// A `*SURFACE, TYPE=NODE` (upper-case name), whose lines may give weights.
+    Surface(String),
+}
+
+/// A multipoint constraint of the deck (docs/MATH.md, "Multipoint constraints").
+#[derive(Debug, Clone, PartialEq)]
+pub enum LinkKind {
+    /// `*EQUATION`: `sum_k a_k u_k = 0` over `(node, DOF 1-6, a_k)`; the first DOF is dependent.
+    Equation(Vec<(u64, usize, f64)>),
+    /// `*KINEMATIC COUPLING` or `*COUPLING` with `*KINEMATIC`: the DOFs (1-6; none listed = all)
+    /// of the nodes follow the reference node rigidly.
+    Kinematic {
+        /// Reference node id.
+        reference: u64,
+        /// The coupled nodes.
+        nodes: LinkNodes,
+        /// DOFs 1-6 (empty: all).
+        dofs: Vec<usize>,
+    },
+    /// `*COUPLING` with `*DISTRIBUTING`: the reference's DOFs follow the weighted least-squares
+    /// rigid motion of the nodes.
+    Distributing {
+        /// Reference node id.
+        reference: u64,
+        /// The surface's nodes and weights.
+        nodes: LinkNodes,
+        /// DOFs 1-6 (empty: all).
+        dofs: Vec<usize>,
+    },
+}
+
+/// A constraint and where it was defined.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InpLink {
+    /// What it is.
+    pub kind: LinkKind,
+    /// Its keyword line.
+    pub line: Location,
+}
+
+/// A `*MASS` card: the mass of every MASS element of a set.
+#[derive(Debug, Clone, PartialEq)]
+struct MassCard {
+    elset: String,
+    mass: f64,
+    line: Location,
+}
+
+/// A file and 1-based line.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Location {
+    /// The file.
+    pub path: PathBuf,
+    /// The line.
+    pub line: usize,
+}
+
+/// A parsed deck.
+#[derive(Debug, Clone)]
+pub struct InpDeck {
+    /// Nodes, elements and sets.
+    pub mesh: Mesh,
+    /// Materials by upper-case name.
+    pub materials: BTreeMap<String, Material>,
+    /// Solid sections in file order.
+    pub sections: Vec<Section>,
+    /// Boundary conditions in file order.
+    pub boundaries: Vec<Boundary>,
+    /// Point masses: node id, mass (kg) and the `*MASS` that gave it.
+    pub point_masses: Vec<(u64, f64, Location)>,
+    /// Multipoint constraints in file order.
+    pub links: Vec<InpLink>,
+    /// Node-based surfaces by upper-case name: targets and weights.
+    pub surfaces: BTreeMap<String, Vec<(Target, f64)>>,
+    /// The frequency step, if any.
+    pub frequency: Option<FrequencyStep>,
+    /// Non-fatal findings.
+    pub warnings: Vec<Warning>,
+    /// where each element was defined (for errors found later)
+    element_lines: HashMap<u64, Location>,
+    /// the file read (for errors that concern the whole deck)
+    path: PathBuf,
+}
+
+struct Line {
+    path: PathBuf,
+    number: usize,
+    text: String,
+}
+
+/// Reads the lines of `path` with its `*INCLUDE`s expanded in place (depth limited to 16).
+fn load(path: &Path, depth: usize, out: &mut Vec<Line>) -> Result<(), IoError> {
+    let text = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    push_lines(&String::from_utf8_lossy(&text), path, depth, out)
+}
+
+/// Appends the lines of `text` (from `path`) to `out`, expanding `*INCLUDE`s relative to `path`.
+fn push_lines(text: &str, path: &Path, depth: usize, out: &mut Vec<Line>) -> Result<(), IoError> {
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    for (i, raw) in text.lines().enumerate() {
+        let t = raw.trim_end_matches('\r');
+        if t.trim_start().to_ascii_uppercase().starts_with("*INCLUDE") {
+            let (_, params) = keyword(t);
+            let Some(file) = params.get("INPUT") else {
+                return Err(IoError::Parse {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    reason: "*INCLUDE without INPUT=".into(),
+                });
+            };
+            if depth >= 16 {
+                return Err(IoError::Parse {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    reason: "*INCLUDE nested more than 16 deep (a cycle?)".into(),
+                });
+            }
+            let target = dir.join(file.trim_matches('"'));
+            load(&target, depth + 1, out).map_err(|e| match e {
+                IoError::Io { reason, .. } => IoError::Parse {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    reason: format!(
+                        "*INCLUDE, INPUT={file}: cannot read {}: {reason}",
+                        target.display()
+                    ),
+                },
+                e => e,
+            })?;
+            continue;
+        }
+        out.push(Line {
+            path: path.to_path_buf(),
+            number: i + 1,
+            text: t.to_string(),
+        });
+    }
+    Ok(())
+}
+
+/// `*KEYWORD, A=b, FLAG` -> ("KEYWORD", {A: b, FLAG: ""}); keys upper case, values as written.
+fn keyword(line: &str) -> (String, HashMap<String, String>) {
+    let mut parts = line.trim().trim_start_matches('*').split(',');
+    let name = parts
+        .next()
+        .unwrap_or("")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
+        .to_ascii_uppercase();
+    let mut params = HashMap::new();
+    for p in parts {
+        let p = p.trim();
+        if p.is_empty() {
+            continue;
+        }
+        match p.split_once('=') {
+            Some((k, v)) => params.insert(k.trim().to_ascii_uppercase(), v.trim().to_string()),
+            None => params.insert(p.to_ascii_uppercase(), String::new()),
+        };
+    }
+    (name, params)
+}
+
+/// DOFs `first..=last` (1-6; `last` defaults to `first`), or all six when neither is given.
+fn dof_range(first: Option<&str>, last: Option<&str>) -> Result<Vec<usize>, String> {
+    let parse = |v: &str| {
+        v.parse::<usize>()
+            .ok()
+            .filter(|d| (1..=6).contains(d))
+            .ok_or_else(|| format!("DOF {v:?} is not 1-6"))
+    };
+    let first = match first.filter(|v| !v.is_empty()) {
+        Some(v) => parse(v)?,
+        None => return Ok((1..=6).collect()),
+    };
+    let last = match last.filter(|v| !v.is_empty()) {
+        Some(v) => parse(v)?,
+        None => first,
+    };
+    if last < first {
+        return Err(format!("DOF range {first}..{last} is empty"));
+    }
+    Ok((first..=last).collect())
+}
+
+fn fields(line: &str) -> Vec<&str> {
+    let mut f: Vec<&str> = line.split(',').map(str::trim).collect();
+    while f.last().is_some_and(|s| s.is_empty()) {
+        f.pop();
+    }
+    f
+}
+
+fn parse_f64(s: &str) -> Option<f64> {
+    s.parse::<f64>()
+        .ok()
+        .or_else(|| s.replace(['D', 'd'], "E").parse().ok())
+        .filter(|v: &f64| v.is_finite())
+}
+
+/// The element kind of an Abaqus type name, and whether it was read as an approximation.
+fn element_kind(name: &str) -> Option<(ElementKind, bool)> {
+    Some(match name.to_ascii_uppercase().as_str() {
+        "C3D4" => (ElementKind::Tet4, false),
+        "C3D10" => (ElementKind::Tet10, false),
+        "C3D8" => (ElementKind::Hex8, false),
+        "C3D20" => (ElementKind::Hex20, false),
+        "C3D6" => (ElementKind::Penta6, false),
+        "C3D15" => (ElementKind::Penta15, false),
+        "C3D8R" => (ElementKind::Hex8, true),
+        "C3D20R" => (ElementKind::Hex20, true),
+        _ => return None,
+    })
+}
+
+#[derive(Default)]
+struct PendingMaterial {
+    name: String,
+    young: Option<(f64, f64)>,
+    density: Option<f64>,
+    line: usize,
+    path: PathBuf,
+}
+
+/// Reads a deck from a file (with its includes).
+///
+/// # Errors
+/// [`IoError::Io`] for unreadable files, [`IoError::Parse`] with file and line for malformed
+/// content, [`IoError::Model`] for a valid deck that does not make a valid mesh.
+pub fn read_inp(path: impl AsRef<Path>) -> Result<InpDeck, IoError> {
+    read_inp_with(path, &InpOptions::default())
+}
+
+/// Reads a deck from a file (with its includes) as `options` say.
+///
+/// # Errors
+/// As [`read_inp`]; errors found after warnings carry them ([`IoError::warnings`]).
+pub fn read_inp_with(path: impl AsRef<Path>, options: &InpOptions) -> Result<InpDeck, IoError> {
+    let mut lines = Vec::new();
+    load(path.as_ref(), 0, &mut lines)?;
+    parse(&lines, path.as_ref(), options)
+}
+
+/// Parses a deck held in memory (`path` names it in messages; `*INCLUDE` is resolved against the
+/// file system relative to `path`).
+///
+/// # Errors
+/// As [`read_inp`].
+pub fn parse_inp(text: &str, path: impl AsRef<Path>) -> Result<InpDeck, IoError> {
+    let mut lines = Vec::new();
+    push_lines(text, path.as_ref(), 0, &mut lines)?;
+    parse(&lines, path.as_ref(), &InpOptions::default())
+}
+
+fn parse(lines: &[Line], path: &Path, options: &InpOptions) -> Result<InpDeck, IoError> {
+    let mut warnings = Vec::new();
+    parse_collecting(lines, path, options, &mut warnings).map_err(|e| e.after(&warnings))
+}

@@ -1,0 +1,353 @@
+//! An [`InpDeck`] into femu's [`Model`]: sets, materials, sections, constraints, links, masses.
+
+use super::*;
+
+impl InpDeck {
+    /// The model: mesh (validated), materials by section, fixed DOFs.
+    ///
+    /// # Errors
+    /// [`IoError::Model`] naming the line of an invalid element (inverted, degenerate), a section
+    /// on an unknown set or material, a boundary on an unknown node or set; elements without a
+    /// section.
+    pub fn to_model(&self) -> Result<Model, IoError> {
+        self.build_model().map_err(|e| e.after(&self.warnings))
+    }
+
+    /// Where element `id` was defined, or the deck itself.
+    fn at_element(&self, id: Option<u64>, source: femu_fem::FemError) -> IoError {
+        match id.and_then(|id| self.element_lines.get(&id)) {
+            Some(l) => IoError::Model {
+                path: l.path.clone(),
+                line: l.line,
+                source,
+            },
+            None => IoError::Content {
+                path: self.path.clone(),
+                reason: source.to_string(),
+            },
+        }
+    }
+
+    fn build_model(&self) -> Result<Model, IoError> {
+        let mut model = Model::new(self.mesh.clone())
+            .map_err(|source| self.at_element(element_of(&source), source))?;
+        for s in &self.sections {
+            let material = self.materials.get(&s.material).ok_or_else(|| {
+                let hint = crate::spelling::suggestion(
+                    &s.material,
+                    self.materials.keys().map(String::as_str),
+                    "",
+                );
+                IoError::Parse {
+                    path: s.line.path.clone(),
+                    line: s.line.line,
+                    reason: format!(
+                        "*SOLID SECTION names material {}, which no *MATERIAL defines{hint}",
+                        s.material
+                    ),
+                }
+            })?;
+            if self.mesh.element_sets().get(&s.elset).is_none() {
+                let hint = crate::spelling::suggestion(
+                    &s.elset,
+                    self.mesh.element_sets().keys().map(String::as_str),
+                    "",
+                );
+                return Err(IoError::Parse {
+                    path: s.line.path.clone(),
+                    line: s.line.line,
+                    reason: format!(
+                        "*SOLID SECTION names element set {}, which the deck does not define{hint}",
+                        s.elset
+                    ),
+                });
+            }
+            model
+                .set_material(Some(&s.elset), material.clone())
+                .map_err(|source| IoError::Model {
+                    path: s.line.path.clone(),
+                    line: s.line.line,
+                    source,
+                })?;
+        }
+        self.apply_links(&mut model)?;
+        for b in &self.boundaries {
+            let all: Vec<usize> = (b.first - 1..b.last).collect();
+            let comps: Vec<usize> = all.iter().copied().filter(|c| *c < 3).collect();
+            // rotations: on the nodes that have them (coupling references)
+            let rotations: Vec<usize> = all.iter().copied().filter(|c| *c >= 3).collect();
+            if !rotations.is_empty() {
+                let nodes: Vec<usize> = match &b.target {
+                    Target::Node(id) => model.mesh().node_index(*id).into_iter().collect(),
+                    Target::Set(s) => self.mesh.node_sets().get(s).cloned().unwrap_or_default(),
+                };
+                for n in nodes {
+                    if model.rotation_nodes().contains(&n) {
+                        let id = model.mesh().node_id(n);
+                        model
+                            .fix_node_dofs(id, &rotations)
+                            .map_err(|source| IoError::Model {
+                                path: b.line.path.clone(),
+                                line: b.line.line,
+                                source,
+                            })?;
+                    }
+                }
+            }
+            if comps.is_empty() {
+                continue;
+            }
+            let r = match &b.target {
+                Target::Node(id) => model.fix_nodes(&[*id], &comps),
+                Target::Set(s) => {
+                    if self.mesh.node_sets().get(s).is_none() {
+                        let hint = crate::spelling::suggestion(
+                            s,
+                            self.mesh.node_sets().keys().map(String::as_str),
+                            "",
+                        );
+                        return Err(IoError::Parse {
+                            path: b.line.path.clone(),
+                            line: b.line.line,
+                            reason: format!(
+                                "*BOUNDARY names {s}, which is neither a node id nor a node set of the deck{hint}"
+                            ),
+                        });
+                    }
+                    model.fix_set(s, &comps)
+                }
+            };
+            r.map_err(|source| IoError::Model {
+                path: b.line.path.clone(),
+                line: b.line.line,
+                source,
+            })?;
+        }
+        // point masses, on nodes that solid elements or constraints connect (a mass on a free
+        // node would have no stiffness)
+        let mut connected = model.constrained_nodes();
+        for el in model.mesh().elements() {
+            for n in el.nodes {
+                connected[*n] = true;
+            }
+        }
+        for (node, mass, at) in &self.point_masses {
+            let located = |reason: String| IoError::Parse {
+                path: at.path.clone(),
+                line: at.line,
+                reason,
+            };
+            let i = model.mesh().node_index(*node).ok_or_else(|| {
+                located(format!(
+                    "*MASS on node {node}, which the deck does not define"
+                ))
+            })?;
+            if !connected[i] {
+                return Err(located(format!(
+                    "*MASS on node {node}, which no solid element or constraint connects: it would have no stiffness"
+                )));
+            }
+            model
+                .add_point_mass(*node, *mass)
+                .map_err(|source| IoError::Model {
+                    path: at.path.clone(),
+                    line: at.line,
+                    source,
+                })?;
+        }
+        // every element needs a material
+        for e in 0..model.mesh().element_count() {
+            if let Err(source) = model.material_of(e) {
+                let id = model.mesh().element(e).id;
+                return Err(self.at_element(Some(id), source));
+            }
+        }
+        // conflicts between constraints (a DOF dependent twice or also fixed, cycles) now
+        model.dof_map().map_err(|source| IoError::Content {
+            path: self.path.clone(),
+            reason: source.to_string(),
+        })?;
+        Ok(model)
+    }
+
+    /// Node ids of a target (a node, or a node set of the deck).
+    fn target_ids(&self, t: &Target, at: &Location, what: &str) -> Result<Vec<u64>, IoError> {
+        match t {
+            Target::Node(id) => Ok(vec![*id]),
+            Target::Set(s) => match self.mesh.node_sets().get(s) {
+                Some(nodes) => Ok(nodes.iter().map(|n| self.mesh.node_id(*n)).collect()),
+                None => {
+                    let hint = crate::spelling::suggestion(
+                        s,
+                        self.mesh.node_sets().keys().map(String::as_str),
+                        "",
+                    );
+                    Err(IoError::Parse {
+                        path: at.path.clone(),
+                        line: at.line,
+                        reason: format!(
+                            "{what} names {s}, which is neither a node id nor a node set of the deck{hint}"
+                        ),
+                    })
+                }
+            },
+        }
+    }
+
+    /// The coupled nodes and their weights.
+    fn link_nodes(
+        &self,
+        nodes: &LinkNodes,
+        at: &Location,
+        what: &str,
+    ) -> Result<Vec<(u64, f64)>, IoError> {
+        let mut out = Vec::new();
+        match nodes {
+            LinkNodes::Targets(ts) => {
+                for t in ts {
+                    out.extend(self.target_ids(t, at, what)?.into_iter().map(|i| (i, 1.0)));
+                }
+            }
+            LinkNodes::Surface(name) => {
+                let list = self.surfaces.get(name).ok_or_else(|| IoError::Parse {
+                    path: at.path.clone(),
+                    line: at.line,
+                    reason: format!(
+                        "{what}: surface {name} is not defined (femu reads *SURFACE, TYPE=NODE){}",
+                        crate::spelling::suggestion(
+                            name,
+                            self.surfaces.keys().map(String::as_str),
+                            ""
+                        )
+                    ),
+                })?;
+                for (t, w) in list {
+                    out.extend(self.target_ids(t, at, what)?.into_iter().map(|i| (i, *w)));
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// The deck's couplings and equations into `model`: kinematic couplings first (their
+    /// references get rotations), then distributing couplings, then equations (which may name
+    /// the references' rotations, DOFs 4-6).
+    fn apply_links(&self, model: &mut Model) -> Result<(), IoError> {
+        for pass in 0..3 {
+            for link in &self.links {
+                let at = &link.line;
+                let located = |source| IoError::Model {
+                    path: at.path.clone(),
+                    line: at.line,
+                    source,
+                };
+                match (&link.kind, pass) {
+                    (
+                        LinkKind::Kinematic {
+                            reference,
+                            nodes,
+                            dofs,
+                        },
+                        0,
+                    ) => {
+                        let label = format!(
+                            "kinematic coupling to node {reference} ({} line {})",
+                            at.path.display(),
+                            at.line
+                        );
+                        let ids = self.link_nodes(nodes, at, "*KINEMATIC COUPLING")?;
+                        let ids: Vec<u64> = ids.into_iter().map(|p| p.0).collect();
+                        let all: &[usize] = if dofs.is_empty() {
+                            &[1, 2, 3, 4, 5, 6]
+                        } else {
+                            dofs
+                        };
+                        let trans: Vec<usize> =
+                            all.iter().filter(|d| **d <= 3).map(|d| d - 1).collect();
+                        model
+                            .add_rigid_link(*reference, &ids, &trans, &label)
+                            .map_err(located)?;
+                        // coupled nodes that carry rotations follow the reference's
+                        for &id in &ids {
+                            let has = model
+                                .mesh()
+                                .node_index(id)
+                                .is_some_and(|n| model.rotation_nodes().contains(&n));
+                            if has && id != *reference {
+                                for d in all.iter().filter(|d| **d > 3) {
+                                    model
+                                        .add_constraint(
+                                            (id, d - 1),
+                                            &[((*reference, d - 1), 1.0)],
+                                            &label,
+                                        )
+                                        .map_err(located)?;
+                                }
+                            }
+                        }
+                    }
+                    (
+                        LinkKind::Distributing {
+                            reference,
+                            nodes,
+                            dofs,
+                        },
+                        1,
+                    ) => {
+                        let label = format!(
+                            "distributing coupling of node {reference} ({} line {})",
+                            at.path.display(),
+                            at.line
+                        );
+                        let pairs = self.link_nodes(nodes, at, "*DISTRIBUTING")?;
+                        let has_rot = model
+                            .mesh()
+                            .node_index(*reference)
+                            .is_some_and(|n| model.rotation_nodes().contains(&n));
+                        let all: &[usize] = if dofs.is_empty() {
+                            &[1, 2, 3, 4, 5, 6]
+                        } else {
+                            dofs
+                        };
+                        let comps: Vec<usize> = all
+                            .iter()
+                            .filter(|d| **d <= 3 || has_rot)
+                            .map(|d| d - 1)
+                            .collect();
+                        model
+                            .add_weighted_average(*reference, &comps, &pairs, &label)
+                            .map_err(located)?;
+                    }
+                    (LinkKind::Equation(terms), 2) => {
+                        let label = format!("*EQUATION ({} line {})", at.path.display(), at.line);
+                        let (n0, d0, a0) = terms[0];
+                        if a0 == 0.0 {
+                            return Err(IoError::Parse {
+                                path: at.path.clone(),
+                                line: at.line,
+                                reason: "*EQUATION: the first coefficient (of the dependent DOF) is zero".into(),
+                            });
+                        }
+                        let rest: Vec<((u64, usize), f64)> = terms[1..]
+                            .iter()
+                            .map(|(n, d, a)| ((*n, d - 1), -a / a0))
+                            .collect();
+                        model
+                            .add_constraint((n0, d0 - 1), &rest, &label)
+                            .map_err(located)?;
+                    }
+                    _ => {}
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+pub(super) fn element_of(e: &femu_fem::FemError) -> Option<u64> {
+    use femu_fem::FemError as E;
+    match e {
+        E::InvertedElement { element, .. } | E::DegenerateElement { element, .. } => Some(*element),
+        _ => None,
+    }
+}
