@@ -67,6 +67,18 @@ pub fn parse_method(s: &str) -> Result<femu::correlate::Method, String> {
         .map_err(|e: femu::correlate::CorrelateError| e.to_string())
 }
 
+/// The model, test and eigensolver arguments of a command that reads a model and a test and
+/// solves for modes (correlate, estimate, update).
+#[derive(Args, Debug, Clone)]
+pub struct Inputs {
+    #[command(flatten)]
+    pub model: ModelArgs,
+    #[command(flatten)]
+    pub test: TestArgs,
+    #[command(flatten)]
+    pub engine: EngineArgs,
+}
+
 fn parse_align(s: &str) -> Result<Align, String> {
     s.parse::<Align>().map_err(|e| e.to_string())
 }

@@ -28,8 +28,7 @@ pub struct UpdateRequest {
     /// Candidate element sets (comma-separated); localisation selects among them.
     #[cfg_attr(feature = "clap", arg(long, value_delimiter = ',', required = true))]
     pub sets: Vec<String>,
-    /// The first N test modes are tuned, the others held out (default: all but the last third,
-    /// [`UpdateRequest::tuned_of`]).
+    /// The first N test modes are tuned, the others held out (default: all but the last third).
     #[cfg_attr(feature = "clap", arg(long))]
     #[serde(default)]
     pub tuned: Option<usize>,

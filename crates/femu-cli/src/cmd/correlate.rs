@@ -1,6 +1,6 @@
 //! `femu correlate`: test modes paired with the model's lowest modes.
 
-use crate::common::{EngineArgs, ModelArgs, TestArgs, load_model, spinner, write_json};
+use crate::common::{Inputs, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
 use femu::correlate::{ModeSet, correlate};
@@ -33,11 +33,7 @@ pub struct CorrelateArgs {
     #[arg(long)]
     pub json: Option<PathBuf>,
     #[command(flatten)]
-    pub model_args: ModelArgs,
-    #[command(flatten)]
-    pub test_args: TestArgs,
-    #[command(flatten)]
-    pub engine: EngineArgs,
+    pub inputs: Inputs,
 }
 
 /// Runs `femu correlate`.
@@ -46,9 +42,9 @@ pub struct CorrelateArgs {
 /// Reading, assembly, eigensolver and pairing errors.
 pub fn run(a: &CorrelateArgs, quiet: bool) -> Result<(), CliError> {
     let pb = spinner(quiet, "reading the model");
-    let eigen = a.engine.eigen()?;
-    let loaded = load_model(&a.model, &a.model_args, a.lumped, quiet, &pb)?;
-    let test = crate::common::load_test(&a.test, &loaded, &a.test_args, quiet)?;
+    let eigen = a.inputs.engine.eigen()?;
+    let loaded = load_model(&a.model, &a.inputs.model, a.lumped, quiet, &pb)?;
+    let test = crate::common::load_test(&a.test, &loaded, &a.inputs.test, quiet)?;
     pb.set_message("solving for the model's modes");
     let modes = lowest_for_test(&loaded, a.count, test.data.modes.len(), &eigen)?;
     pb.finish_and_clear();

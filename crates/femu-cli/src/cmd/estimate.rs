@@ -1,6 +1,6 @@
 //! `femu estimate`: the paper's a priori estimators for test modes, after expansion.
 
-use crate::common::{EngineArgs, ModelArgs, TestArgs, load_model, spinner, write_json};
+use crate::common::{Inputs, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
 use femu::correlate::Method;
@@ -43,11 +43,7 @@ pub struct EstimateArgs {
     #[command(flatten)]
     pub pairing: PairingSection,
     #[command(flatten)]
-    pub model_args: ModelArgs,
-    #[command(flatten)]
-    pub test_args: TestArgs,
-    #[command(flatten)]
-    pub engine: EngineArgs,
+    pub inputs: Inputs,
 }
 
 /// Runs `femu estimate`.
@@ -60,10 +56,10 @@ pub fn run(a: &EstimateArgs, quiet: bool) -> Result<(), CliError> {
         expansion: a.expansion,
         pairing: a.pairing.options(),
         count: a.count,
-        eigen: a.engine.eigen()?,
+        eigen: a.inputs.engine.eigen()?,
     };
-    let loaded = load_model(&a.model, &a.model_args, a.lumped, quiet, &pb)?;
-    let test = crate::common::load_test(&a.test, &loaded, &a.test_args, quiet)?;
+    let loaded = load_model(&a.model, &a.inputs.model, a.lumped, quiet, &pb)?;
+    let test = crate::common::load_test(&a.test, &loaded, &a.inputs.test, quiet)?;
     let run = estimate_loaded(&loaded, &test, &options, |line| {
         pb.set_message(line.to_string())
     })?;

@@ -1,6 +1,6 @@
 //! `femu update`: localisation, updating and the held-out truth check.
 
-use crate::common::{EngineArgs, ModelArgs, TestArgs, load_model, spinner, write_json};
+use crate::common::{Inputs, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
 use femu::study::updating::{UpdateRequest, update_loaded};
@@ -26,11 +26,7 @@ pub struct UpdateArgs {
     #[arg(long)]
     pub json: Option<PathBuf>,
     #[command(flatten)]
-    pub model_args: ModelArgs,
-    #[command(flatten)]
-    pub test_args: TestArgs,
-    #[command(flatten)]
-    pub engine: EngineArgs,
+    pub inputs: Inputs,
 }
 
 /// Runs `femu update`.
@@ -39,9 +35,9 @@ pub struct UpdateArgs {
 /// Reading, unknown sets, `--tuned 0`, and the updating errors.
 pub fn run(a: &UpdateArgs, quiet: bool) -> Result<(), CliError> {
     let pb = spinner(quiet, "reading the model");
-    let eigen = a.engine.eigen()?;
-    let loaded = load_model(&a.model, &a.model_args, false, quiet, &pb)?;
-    let test = crate::common::load_test(&a.test, &loaded, &a.test_args, quiet)?;
+    let eigen = a.inputs.engine.eigen()?;
+    let loaded = load_model(&a.model, &a.inputs.model, false, quiet, &pb)?;
+    let test = crate::common::load_test(&a.test, &loaded, &a.inputs.test, quiet)?;
     crate::common::warn(quiet, &a.request.unused());
     let tuned = a.request.tuned_of(test.data.modes.len());
     pb.set_message("localising and updating");
