@@ -98,32 +98,75 @@ pub struct Localisation {
     /// [`localise_expanded`].
     #[serde(skip)]
     pub normal: Option<(Vec<Vec<f64>>, Vec<f64>, f64)>,
+    /// Each group's stiffness-factor bounds (the model's parameters'), within which the
+    /// explained fractions and [`Localisation::joint_fit`] are computed.
+    #[serde(skip)]
+    pub bounds: Vec<(f64, f64)>,
 }
 
 impl Localisation {
     /// The least-squares stiffness factors of `groups` together, at the expansion of the
-    /// localisation (the first Gauss-Newton step of the expanded objective), and the fraction of
-    /// the objective they remove; `None` without the normal equations.
+    /// localisation (the first Gauss-Newton step of the expanded objective), within the groups'
+    /// bounds ([`Localisation::bounds`]), and the fraction of the objective they remove at those
+    /// factors; `None` without the normal equations. The fraction is that of the bounded factors:
+    /// a factor the data would take past its bound (a stiffness below 10 % of nominal) is held at
+    /// the bound, and what it removes there is what is reported, not what the unbounded fit
+    /// would remove.
     pub fn joint_fit(&self, groups: &[usize]) -> Option<(Vec<f64>, f64)> {
         let (gram, num, objective) = self.normal.as_ref()?;
-        let g = faer::Mat::from_fn(groups.len(), groups.len(), |a, b| {
-            gram[groups[a]][groups[b]]
-        });
+        let n = groups.len();
+        let g = faer::Mat::from_fn(n, n, |a, b| gram[groups[a]][groups[b]]);
         // the minimum-norm least-squares factors: groups the data do not see stay at zero
         let (inverse, _) = crate::lsq::symmetric_pseudo_inverse(g.as_ref()).ok()?;
-        let theta: Vec<f64> = (0..groups.len())
+        let bound = |a: usize| {
+            self.bounds
+                .get(groups[a])
+                .copied()
+                .unwrap_or((f64::NEG_INFINITY, f64::INFINITY))
+        };
+        let mut theta: Vec<f64> = (0..n)
             .map(|a| {
-                -(0..groups.len())
+                let v = -(0..n)
                     .map(|b| inverse[(a, b)] * num[groups[b]])
-                    .sum::<f64>()
+                    .sum::<f64>();
+                v.clamp(bound(a).0, bound(a).1)
             })
             .collect();
-        // removed = -theta . num (the decrease of the quadratic at its minimum)
-        let removed: f64 = -groups
-            .iter()
-            .zip(&theta)
-            .map(|(&a, t)| t * num[a])
-            .sum::<f64>();
+        // the box-constrained minimum of the convex quadratic
+        // f(theta) = r^T W r + 2 num . theta + theta^T G theta: cyclic coordinate minimisation
+        // from the clamped unconstrained minimum (each step exact; convergent for a convex
+        // quadratic), groups the data do not see (G_aa = 0) left where they are
+        let unconstrained = (0..n).all(|a| {
+            let (lo, hi) = bound(a);
+            theta[a] > lo && theta[a] < hi
+        });
+        if !unconstrained {
+            for _ in 0..10_000 {
+                let mut moved = 0.0f64;
+                for a in 0..n {
+                    if g[(a, a)] <= 0.0 {
+                        continue;
+                    }
+                    let rest: f64 = (0..n)
+                        .filter(|b| *b != a)
+                        .map(|b| g[(a, b)] * theta[b])
+                        .sum();
+                    let (lo, hi) = bound(a);
+                    let v = (-(num[groups[a]] + rest) / g[(a, a)]).clamp(lo, hi);
+                    moved = moved.max((v - theta[a]).abs());
+                    theta[a] = v;
+                }
+                if moved <= 1e-14 * theta.iter().fold(1.0f64, |m, t| m.max(t.abs())) {
+                    break;
+                }
+            }
+        }
+        // removed = r^T W r - f(theta) = -2 num . theta - theta^T G theta
+        let linear: f64 = (0..n).map(|a| num[groups[a]] * theta[a]).sum();
+        let quadratic: f64 = (0..n)
+            .map(|a| (0..n).map(|b| theta[a] * g[(a, b)] * theta[b]).sum::<f64>())
+            .sum();
+        let removed = -2.0 * linear - quadratic;
         let explained = if *objective > 0.0 {
             (removed / objective).clamp(0.0, 1.0)
         } else {
@@ -250,18 +293,37 @@ pub fn localise(
                 .sum::<f64>();
         }
     }
+    let bounds = stiffness_bounds(up);
     let explained: Vec<f64> = (0..groups.len())
-        .map(|g| explained_fraction(num[g], den[g], objective))
+        .map(|g| explained_fraction(num[g], den[g], objective, bounds[g]))
         .collect();
     Ok(rank(up, energy, force, explained, rule))
 }
 
-fn explained_fraction(num: f64, den: f64, objective: f64) -> f64 {
+/// The fraction of the objective one group's stiffness factor removes, the factor held within
+/// its bounds `(lo, hi)`: `f(theta) = objective + 2 num theta + den theta^2` is least at
+/// `-num / den`, clamped to the bounds, where it has removed `-2 num theta - den theta^2` (the
+/// unbounded fit removed `num^2 / den` even where its factor left the physical range).
+fn explained_fraction(num: f64, den: f64, objective: f64, (lo, hi): (f64, f64)) -> f64 {
     if den > 0.0 && objective > 0.0 {
-        (num * num / (den * objective)).clamp(0.0, 1.0)
+        let theta = (-num / den).clamp(lo, hi);
+        ((-2.0 * num * theta - den * theta * theta) / objective).clamp(0.0, 1.0)
     } else {
         0.0
     }
+}
+
+/// Each group's stiffness-factor bounds: those of the model's stiffness parameter of the group,
+/// unbounded where it has none.
+fn stiffness_bounds(up: &UpdateModel<'_>) -> Vec<(f64, f64)> {
+    (0..up.groups().len())
+        .map(|g| {
+            up.parameters()
+                .iter()
+                .find(|p| p.group == g && !p.mass)
+                .map_or((f64::NEG_INFINITY, f64::INFINITY), |p| (p.lower, p.upper))
+        })
+        .collect()
 }
 
 fn check_rule(rule: &SelectionRule) -> Result<(), UpdateError> {
@@ -386,8 +448,9 @@ pub fn localise_expanded(
             energy[g] += c.weighted_dot_full(&rd, &ones);
         }
     }
+    let bounds = stiffness_bounds(up);
     let explained = (0..groups)
-        .map(|g| explained_fraction(num[g], den[g], objective))
+        .map(|g| explained_fraction(num[g], den[g], objective, bounds[g]))
         .collect();
     let mut loc = rank(up, energy, force, explained, rule);
     loc.normal = Some((gram, num, objective));
@@ -436,6 +499,7 @@ fn rank(
         .map(|r| r.group)
         .collect();
     Localisation {
+        bounds: stiffness_bounds(up),
         ranking,
         selected,
         rule: rule.clone(),
