@@ -880,3 +880,45 @@ fn a_nastran_deck_s_eigrl_and_mass_are_honoured() {
     assert!(info.contains("SPC set 1"), "{info}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A test with one reading for three modes: every MAC is 1, so the pairs rest on the
+/// frequencies; correlate says so (it paired without a word), and the pairs are the nearest
+/// frequencies (test modes 1.5 % above the model's first three, read at one sensor).
+#[test]
+fn one_sensor_pairs_by_frequency_and_says_so() {
+    use femu_correlate::TestModes;
+    let deck = fixture("two_hex.inp");
+    let (modes, sensors, layout) = two_hex_case(6);
+    let at = layout.measure_all(modes.vectors.as_ref()).unwrap();
+    let f = modes.frequencies_hz();
+    // the first sensor alone, modes 1-3 (mode 3 is not in the repeated pair 1-2)
+    let shapes = femu_sparse::faer::Mat::from_fn(1, 3, |_, j| at[(0, j)]);
+    let test = TestModes::new((0..3).map(|j| 1.015 * f[j]).collect(), None, shapes).unwrap();
+    let dir = std::env::temp_dir().join(format!("femu-cli-one-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("test.csv");
+    std::fs::write(&csv, femu_io::csv::test_csv_string(&sensors[..1], &test)).unwrap();
+    let json = dir.join("corr.json");
+    let stdout = stdout_of_success(&[
+        "correlate",
+        deck.to_str().unwrap(),
+        csv.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    let v = json_of(&json);
+    let w = v["pairing"]["warnings"][0].as_str().unwrap_or_default();
+    assert!(
+        w.starts_with("1 reading for 3 test modes: MAC cannot tell any shapes apart at the sensors (every MAC is 1)"),
+        "{w}\n{stdout}"
+    );
+    assert!(stdout.contains("1 reading for 3 test modes"), "{stdout}");
+    // the nearest frequencies: test modes 1 and 2 with the repeated pair 1-2, test mode 3 with 3
+    let pairs = v["pairing"]["pairs"].as_array().unwrap();
+    assert_eq!(pairs.len(), 3, "{stdout}");
+    for p in pairs {
+        let (t, m) = (p["test"].as_u64().unwrap(), p["model"].as_u64().unwrap());
+        assert!(if t < 2 { m < 2 } else { m == 2 }, "{p}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -371,6 +371,11 @@ fn procrustes_towards(
     };
     // an orthonormal basis of span(Phi_c) at the sensors
     let basis = pc.thin_svd().map_err(svd_err)?;
+    // fewer readings than the cluster has modes: the sensors cannot tell them apart (and the
+    // thin SVD has only that many singular values)
+    if pc.nrows() < k {
+        return Ok(None);
+    }
     let smax = (0..k).fold(0.0_f64, |m, i| m.max(basis.S()[i]));
     if !(smax > 0.0) {
         return Ok(None);

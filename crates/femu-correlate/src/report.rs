@@ -57,7 +57,24 @@ pub fn correlate(
     )?;
     let mac = mac_matrix(test.shapes.as_ref(), phia.as_ref())?;
     let f_model = model.frequencies_hz();
-    let pairing = pair_modes(mac.as_ref(), &test.frequencies_hz, &f_model, options)?;
+    let mut pairing = pair_modes(mac.as_ref(), &test.frequencies_hz, &f_model, options)?;
+    // MAC compares shapes at the sensors: with fewer readings than test modes the shapes cannot
+    // all be told apart there (with one reading every MAC is 1), and a pair rests on the
+    // frequencies alone
+    if layout.len() < test.len() || layout.len() == 1 {
+        pairing.warnings.insert(
+            0,
+            format!(
+                "{} reading{} for {} test mode{}: MAC cannot tell {} shapes apart at the sensors{}, so the pairs rest on the frequencies (the nearest one wins among equal MACs); check them, or measure more DOFs",
+                layout.len(),
+                if layout.len() == 1 { "" } else { "s" },
+                test.len(),
+                if test.len() == 1 { "" } else { "s" },
+                if layout.len() == 1 { "any" } else { "all the" },
+                if layout.len() == 1 { " (every MAC is 1)" } else { "" }
+            ),
+        );
+    }
     let col = |m: MatRef<'_, f64>, j: usize| -> Vec<f64> { m.col(j).iter().copied().collect() };
     let msd = pairing
         .pairs
