@@ -24,6 +24,9 @@ use std::path::Path;
 
 pub use crate::test_data::TestData;
 
+/// The refusal of a test that gives frequencies and no shapes.
+const FREQUENCIES_ONLY: &str = "the test gives frequencies without mode shapes (no node, direction and value): femu's correlation (MAC, pairing), estimators, expansion and updating all read the shapes at sensors, and a test of frequencies alone is not read yet; give each mode's readings (mode,frequency_hz,node,direction,value)";
+
 /// One mode's rows: frequency, damping, first line, values by sensor.
 type ModeRows = (f64, Option<f64>, usize, BTreeMap<usize, f64>);
 
@@ -80,6 +83,12 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
         let f: Vec<&str> = t.split(',').map(str::trim).collect();
         if !header_seen {
             let h: Vec<String> = f.iter().map(|s| s.to_ascii_lowercase()).collect();
+            if h.len() >= 2
+                && h[..2] == ["mode", "frequency_hz"]
+                && !h.iter().any(|c| c == "node" || c == "value")
+            {
+                return Err(err(line, FREQUENCIES_ONLY.into()));
+            }
             if h.len() < 5 || h[..5] != ["mode", "frequency_hz", "node", "direction", "value"] {
                 return Err(err(
                     line,
@@ -132,6 +141,12 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
                     format!("frequency {:?} is not a positive number", f[1]),
                 )
             })?;
+        if f[2].is_empty()
+            && f.get(3).is_none_or(|d| d.is_empty())
+            && f.get(4).is_none_or(|v| v.is_empty())
+        {
+            return Err(err(line, FREQUENCIES_ONLY.into()));
+        }
         let node = f[2]
             .parse::<u64>()
             .map_err(|_| err(line, format!("node {:?} is not an integer id", f[2])))?;
