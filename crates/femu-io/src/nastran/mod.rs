@@ -306,62 +306,44 @@ fn sort<'a>(
             }
             "PARAM" => param(c, &mut s, &mut warned, warnings)?,
             name => {
-                if let Some((_, kind)) = UNSUPPORTED.iter().find(|(n, _)| *n == name) {
+                if let Some((card, kind)) = UNSUPPORTED.iter().find(|(n, _)| *n == name) {
                     let e = unsupported.entry(kind).or_insert((0, Vec::new(), c));
                     e.0 += 1;
-                    if !e.1.contains(&name) {
-                        e.1.push(
-                            UNSUPPORTED
-                                .iter()
-                                .find(|(n, _)| *n == name)
-                                .map(|(n, _)| *n)
-                                .unwrap_or(""),
-                        );
-                    }
-                } else if let Some((_, what)) = OTHER_SOLUTIONS.iter().find(|(n, _)| *n == name) {
-                    if !warned.contains(&c.name) {
-                        warned.push(c.name.clone());
-                        warn(
-                            warnings,
-                            c,
-                            format!(
-                                "{name} skipped: {what} act in other solutions, not in a linear modal analysis's stiffness and mass (once per card name)"
-                            ),
-                        );
-                    }
-                } else if NO_EFFECT.contains(&name) {
-                    if !warned.contains(&c.name) {
-                        warned.push(c.name.clone());
-                        warn(
-                            warnings,
-                            c,
-                            format!(
-                                "{name} skipped: it does not change the stiffness or the mass (once per card name)"
-                            ),
-                        );
+                    if !e.1.contains(card) {
+                        e.1.push(card);
                     }
                 } else {
-                    let hint = crate::spelling::nearest(name, known.iter().copied())
-                        .map_or(String::new(), |k| format!(" (did you mean {k}?)"));
-                    let text = format!("unknown card {name}{hint}");
-                    if !options.lenient {
-                        return Err(IoError::Parse {
-                            path: c.path.clone(),
-                            line: c.line,
-                            reason: format!(
-                                "{text}: femu cannot tell whether it changes the stiffness or the mass (--lenient skips unknown cards with a warning)"
-                            ),
-                        });
-                    }
+                    // skipped cards are named once per card name
+                    let message = if let Some((_, what)) =
+                        OTHER_SOLUTIONS.iter().find(|(n, _)| *n == name)
+                    {
+                        format!(
+                            "{name} skipped: {what} act in other solutions, not in a linear modal analysis's stiffness and mass (once per card name)"
+                        )
+                    } else if NO_EFFECT.contains(&name) {
+                        format!(
+                            "{name} skipped: it does not change the stiffness or the mass (once per card name)"
+                        )
+                    } else {
+                        let hint = crate::spelling::nearest(name, known.iter().copied())
+                            .map_or(String::new(), |k| format!(" (did you mean {k}?)"));
+                        let text = format!("unknown card {name}{hint}");
+                        if !options.lenient {
+                            return Err(IoError::Parse {
+                                path: c.path.clone(),
+                                line: c.line,
+                                reason: format!(
+                                    "{text}: femu cannot tell whether it changes the stiffness or the mass (--lenient skips unknown cards with a warning)"
+                                ),
+                            });
+                        }
+                        format!(
+                            "{text} skipped (--lenient): check that it changes neither stiffness nor mass (once per card name)"
+                        )
+                    };
                     if !warned.contains(&c.name) {
                         warned.push(c.name.clone());
-                        warn(
-                            warnings,
-                            c,
-                            format!(
-                                "{text} skipped (--lenient): check that it changes neither stiffness nor mass (once per card name)"
-                            ),
-                        );
+                        warn(warnings, c, message);
                     }
                 }
             }
