@@ -81,7 +81,7 @@ pub struct StudyFile {
     pub update: Option<UpdateRequest>,
 }
 
-/// The eigensolver a study names (`[eigen] engine`, `femu --engine`).
+/// The eigensolver a study names (`[eigen] engine`, the `--engine` of the commands that solve).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
