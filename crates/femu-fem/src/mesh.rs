@@ -426,8 +426,8 @@ impl Mesh {
     }
 }
 
-/// Length of the bounding-box diagonal of a point set.
-pub(crate) fn bounding_diagonal(x: &[[f64; 3]]) -> f64 {
+/// Length of the bounding-box diagonal of a point set (infinite for an empty one).
+pub fn bounding_diagonal(x: &[[f64; 3]]) -> f64 {
     let mut s = 0.0;
     for i in 0..3 {
         let (lo, hi) = x

@@ -195,28 +195,26 @@ impl EstimateResult {
 /// of every front end (`femu estimate`, `femu run`, the demo's report); [`table2_legend`] says
 /// what its columns mean.
 pub fn table2(rows: &[EstimateRow]) -> String {
-    {
-        let mut s = String::from(
-            "| test | min gap (s^-2) | paired gap (s^-2) | rho_2 (paper, N/m) | T2 paper holds | rho_M (rigorous, s^-2) | T2 rigorous holds | model frequency within (Hz) |\n|---|---|---|---|---|---|---|---|\n",
+    let mut s = String::from(
+        "| test | min gap (s^-2) | paired gap (s^-2) | rho_2 (paper, N/m) | T2 paper holds | rho_M (rigorous, s^-2) | T2 rigorous holds | model frequency within (Hz) |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    for row in rows {
+        let _ = writeln!(
+            s,
+            "| {} | {:.3e} | {} | {:.3e} | {} | {:.3e} | {} | {:.1} .. {:.1} |",
+            row.test,
+            row.min_gap,
+            row.paired_gap
+                .map_or("unpaired".into(), |g| format!("{g:.3e}")),
+            row.rho_2,
+            if row.t2_paper_holds { "yes" } else { "**no**" },
+            row.rho_m,
+            row.rigorous_verdict(),
+            row.interval_hz.0,
+            row.interval_hz.1
         );
-        for row in rows {
-            let _ = writeln!(
-                s,
-                "| {} | {:.3e} | {} | {:.3e} | {} | {:.3e} | {} | {:.1} .. {:.1} |",
-                row.test,
-                row.min_gap,
-                row.paired_gap
-                    .map_or("unpaired".into(), |g| format!("{g:.3e}")),
-                row.rho_2,
-                if row.t2_paper_holds { "yes" } else { "**no**" },
-                row.rho_m,
-                row.rigorous_verdict(),
-                row.interval_hz.0,
-                row.interval_hz.1
-            );
-        }
-        s
     }
+    s
 }
 
 /// What [`estimate_with_bounds`] found.

@@ -365,15 +365,7 @@ fn check_coordinates(
     if data.coordinates.is_empty() || mesh.node_count() == 0 {
         return Ok(());
     }
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for c in mesh.coords() {
-        for i in 0..3 {
-            lo[i] = lo[i].min(c[i]);
-            hi[i] = hi[i].max(c[i]);
-        }
-    }
-    let diagonal = (0..3).map(|i| (hi[i] - lo[i]).powi(2)).sum::<f64>().sqrt();
-    let tolerance = 0.01 * diagonal;
+    let tolerance = 0.01 * femu_fem::mesh::bounding_diagonal(mesh.coords());
     let mut off: Vec<(f64, u64, [f64; 3], [f64; 3])> = Vec::new();
     for s in &data.sensors {
         let (Some(x), Some(i)) = (data.coordinates.get(&s.node), mesh.node_index(s.node)) else {

@@ -353,18 +353,8 @@ pub fn map_test(
     // a wireframe larger than the model is in other units (or another frame): said before any
     // node is searched for, with the unit whose factor matches the size ratio
     let placed: Vec<[f64; 3]> = test.values().map(|x| transform.apply(*x)).collect();
-    let span = |pts: &[[f64; 3]]| -> f64 {
-        let (mut a, mut b) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-        for c in pts {
-            for i in 0..3 {
-                a[i] = a[i].min(c[i]);
-                b[i] = b[i].max(c[i]);
-            }
-        }
-        (0..3).map(|i| (b[i] - a[i]).powi(2)).sum::<f64>().sqrt()
-    };
-    let test_span = span(&placed);
-    if test_span > 2.0 * diagonal + 2.0 * tolerance {
+    let test_span = femu_fem::mesh::bounding_diagonal(&placed);
+    if !placed.is_empty() && test_span > 2.0 * diagonal + 2.0 * tolerance {
         let ratio = test_span / diagonal.max(f64::MIN_POSITIVE);
         let units = [("mm", 1000.0), ("cm", 100.0), ("in", 39.37), ("ft", 3.281)];
         let likely = units

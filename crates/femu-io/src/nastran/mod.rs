@@ -370,9 +370,11 @@ fn sort<'a>(
                 format!("{text}: left out (--lenient), so the model's K and M are incomplete"),
             );
         } else {
-            return Err(first
-                .err(format!("{text} (--lenient reads the rest)"))
-                .relocated(first));
+            return Err(IoError::Parse {
+                path: first.path.clone(),
+                line: first.line,
+                reason: format!("{text} (--lenient reads the rest)"),
+            });
         }
     }
     Ok(s)
@@ -421,26 +423,6 @@ fn param<'a>(
         }
     }
     Ok(())
-}
-
-trait Relocated {
-    fn relocated(self, c: &Card) -> IoError;
-}
-
-impl Relocated for IoError {
-    /// The error without the card's name repeated in front (the message names the cards).
-    fn relocated(self, c: &Card) -> IoError {
-        match self {
-            IoError::Parse { reason, .. } => IoError::Parse {
-                path: c.path.clone(),
-                line: c.line,
-                reason: reason
-                    .strip_prefix(&format!("{} ", c.name))
-                    .map_or(reason.clone(), str::to_string),
-            },
-            e => e,
-        }
-    }
 }
 
 /// The grids as femu's mesh holds them: the mesh, the grids whose displacement frame (CD, or
