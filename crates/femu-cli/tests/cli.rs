@@ -349,7 +349,7 @@ fn correlate_pairs_the_model_with_itself() {
 }
 
 /// `femu demo --quick` writes the report, and `femu update` on the files it wrote (the plate as
-/// `.inp`, the test as `.unv`) localises region r3 and recovers its +30 % from noise-free data.
+/// `.inp`, the test as `.unv`) selects region r3 and recovers its +30 % from noise-free data.
 #[test]
 fn demo_then_update_from_its_files() {
     let dir = std::env::temp_dir().join(format!("femu-cli-demo-{}", std::process::id()));
@@ -397,8 +397,10 @@ fn demo_then_update_from_its_files() {
     let v = json_of(&json);
     assert_eq!(v["result"]["names"][0], "k:R3");
     let p = v["result"]["theta"][0].as_f64().unwrap();
-    // six stored digits in the UFF and 14 in the deck: 1e-5 (measured 5e-7)
-    assert!((p - 0.3).abs() < 1e-5, "{p}");
+    // the default (inverse eigensensitivity on frequencies and shapes) fits the UFF's
+    // frequencies, stored to six digits (1631.76 Hz): a 3e-6 relative rounding of an eigenvalue
+    // whose sensitivity to k:R3 is about 0.07 moves the minimum by up to 1e-4 (measured 2.6e-5)
+    assert!((p - 0.3).abs() < 1e-4, "{p}");
     // bad input: an unknown set, an unknown method, noise out of range
     let bad = femu()
         .args([

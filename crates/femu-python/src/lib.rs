@@ -727,8 +727,10 @@ fn removal_study<'py>(
 /// Localisation, updating and the truth check (docs/MATH.md, "Localisation", "Updating", "The
 /// truth check"): among the element sets `sets` (stiffness corrections), the regions that explain
 /// the residues of the first `tuned` test modes (default: all but the last third, as `femu update`
-/// and study files) are selected (or all with `all=True`) and updated by `method` (`"sbebe"`:
-/// SB-EBE; `"ies"`: inverse eigensensitivity, with the shapes when `shapes=True`); the updated
+/// and study files) are selected by `select` (`"forward"`: those the data support, by forward
+/// selection with an F-test; `"residual"`: the paper's residual ranking; `"all"`) and updated by
+/// `method` (`"ies"`: inverse eigensensitivity, on frequencies and shapes unless
+/// `shapes=False`; `"sbebe"`: the paper's SB-EBE); the updated
 /// model is then checked on every test mode, the held-out ones included, and judged against the
 /// test's uncertainty (`frequency_uncertainty`, `shape_uncertainty`, percent) and the model's
 /// discretisation error (`discretisation=False` skips its estimate). `test_error` is SB-EBE's
@@ -736,7 +738,7 @@ fn removal_study<'py>(
 /// theta, seconds). Returns the study as a dict. Releases the GIL; Ctrl-C, or an exception raised
 /// by `progress`, stops it at the next iteration.
 #[pyfunction]
-#[pyo3(signature = (model, test, sets, *, tuned=None, method="sbebe", all=false, shapes=false, frequency_uncertainty=None, shape_uncertainty=None, test_error=None, discretisation=true, progress=None))]
+#[pyo3(signature = (model, test, sets, *, tuned=None, method="ies", select="forward", shapes=true, frequency_uncertainty=None, shape_uncertainty=None, test_error=None, discretisation=true, progress=None))]
 #[allow(clippy::too_many_arguments)]
 fn update<'py>(
     py: Python<'py>,
@@ -745,7 +747,7 @@ fn update<'py>(
     sets: Vec<String>,
     tuned: Option<usize>,
     method: &str,
-    all: bool,
+    select: &str,
     shapes: bool,
     frequency_uncertainty: Option<f64>,
     shape_uncertainty: Option<f64>,
@@ -756,12 +758,22 @@ fn update<'py>(
     let m: femu_update::UpdateMethod = method.parse().map_err(|e| {
         pyo3::exceptions::PyValueError::new_err(format!("method {method:?}: {e} (sbebe or ies)"))
     })?;
+    let select = match select {
+        "forward" => femu_study::updating::Select::Forward,
+        "residual" => femu_study::updating::Select::Residual,
+        "all" => femu_study::updating::Select::All,
+        other => {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "select {other:?}: expected forward, residual or all"
+            )));
+        }
+    };
     // the request of `femu update` and of a study file's [update], with their defaults
     let request = femu_study::updating::UpdateRequest {
         sets,
         tuned,
         method: m,
-        all,
+        select,
         frequency_uncertainty,
         shape_uncertainty,
         shapes,

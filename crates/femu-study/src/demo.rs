@@ -27,8 +27,8 @@ use femu_correlate::{CorrelationReport, Sensor, SensorLayout, TestModes};
 use femu_fem::prelude::*;
 use femu_io::uff::{UffMode, UffNode, UffUnits, Universal};
 use femu_update::{
-    Corrections, Localisation, ParameterCheck, TestUncertainty, TruthCheck, UpdateMethod,
-    UpdateModel, UpdateResult, model_modes,
+    Corrections, Localisation, ParameterCheck, TestUncertainty, TruthCheck, UpdateModel,
+    UpdateResult, model_modes,
 };
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -103,13 +103,18 @@ pub struct DemoReport {
     pub assessments: Vec<femu_correlate::Assessment>,
     /// Figure 1's points.
     pub figure1: Vec<StudyPoint>,
-    /// The localisation.
+    /// The paper's residual localisation.
     pub localisation: Localisation,
-    /// SB-EBE on the selected regions.
+    /// The regions the data support (forward selection with an F-test).
+    pub selection: femu_update::ParameterSelection,
+    /// What the workflow decided and why.
+    pub notes: Vec<String>,
+    /// The default updating (inverse eigensensitivity on frequencies and shapes) of the selected
+    /// regions.
+    pub updating: UpdateResult,
+    /// The paper's SB-EBE on the same regions, for comparison.
     pub sbebe: UpdateResult,
-    /// Inverse eigensensitivity on the same regions.
-    pub eigensensitivity: UpdateResult,
-    /// The held-out check of the SB-EBE model, judged.
+    /// The held-out check of the updated model, judged.
     pub truth_check: TruthCheck,
     /// Before updating, what the selected regions can reach.
     pub reach: crate::reach::Reach,
@@ -312,11 +317,9 @@ pub fn run_demo(
     progress(&format!("Figure 1: {} points", figure1.len()));
 
     // localisation, updating on the tuned modes and the held-out check
+    // the default workflow, with the paper's SB-EBE on the same regions for comparison
     let update_options = UpdateStudyOptions {
-        method: UpdateMethod::SbEbe,
         compare: true,
-        // the comparison fits frequencies and shapes
-        shapes: true,
         check_modes: 6 + opts.modes + 6,
         // the demo knows its test's noise: standard deviations of the uniform noise it adds
         uncertainty: TestUncertainty {
@@ -337,20 +340,23 @@ pub fn run_demo(
         &update_options,
         |it| {
             progress(&format!(
-                "SB-EBE iteration {}: objective {:.4e}",
+                "updating iteration {}: objective {:.4e}",
                 it.iteration, it.objective
             ))
         },
     )?;
-    let localisation = study.localisation;
-    let sbebe = study.result;
-    let eigensensitivity = study
-        .comparison
-        .ok_or_else(|| StudyError::invalid("demo", "no comparison run"))?;
+    let (Some(localisation), Some(reach), Some(sbebe)) =
+        (study.localisation, study.reach, study.comparison)
+    else {
+        return Err(StudyError::invalid(
+            "demo",
+            "the residual localisation, its reach or the SB-EBE comparison did not run",
+        ));
+    };
+    let updating = study.result;
     let mut truth_check = study.truth_check;
     let discretisation = study.discretisation;
-    let reach = study.reach;
-    for (name, v) in sbebe.names.iter().zip(&sbebe.theta) {
+    for (name, v) in updating.names.iter().zip(&updating.theta) {
         let t = if name == "k:r3" { opts.truth } else { 0.0 };
         truth_check.parameters.push(ParameterCheck {
             name: name.clone(),
@@ -360,7 +366,7 @@ pub fn run_demo(
     }
     let selected = study.updated_sets;
     lap(
-        "localisation, updating, held-out check and inverse eigensensitivity",
+        "localisation, selection, updating, held-out check and SB-EBE",
         &mut timings,
     );
     progress(&format!("localisation: selected {selected:?}"));
@@ -406,8 +412,10 @@ pub fn run_demo(
         assessments,
         figure1,
         localisation,
+        selection: study.selection,
+        notes: study.notes,
+        updating,
         sbebe,
-        eigensensitivity,
         truth_check,
         reach,
         discretisation,
@@ -458,8 +466,16 @@ fn markdown(r: &DemoReport, o: &DemoOptions, test: &TestModes) -> String {
     );
     let _ = writeln!(
         s,
-        "## Updating\n\n{}\n{}\n{}",
-        r.reach, r.sbebe, r.eigensensitivity
+        "## Which regions do the data support?\n\n{}",
+        r.selection
+    );
+    for n in &r.notes {
+        let _ = writeln!(s, "- {n}");
+    }
+    let _ = writeln!(
+        s,
+        "\n## Updating\n\n{}\nThe default updating (inverse eigensensitivity on frequencies and shapes):\n\n{}\nThe paper's SB-EBE on the same regions, for comparison:\n\n{}",
+        r.reach, r.updating, r.sbebe
     );
     if let Some(d) = &r.discretisation {
         let _ = writeln!(

@@ -15,8 +15,9 @@
 //! [update]
 //! sets = ["r0", "r1", "r2", "r3"]
 //! tuned = 4
-//! method = "sbebe"               # or "ies"
-//! shapes = true                  # ies: fit the shapes too
+//! select = "forward"             # the sets the data support (or "residual", "all")
+//! method = "ies"                 # inverse eigensensitivity (or "sbebe", the paper's)
+//! shapes = true                  # fit the shapes too (false: frequencies only)
 //! frequency_uncertainty = 0.1    # percent, one standard deviation
 //! shape_uncertainty = 1          # percent of each mode's largest reading
 //! ```

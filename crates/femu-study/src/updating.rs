@@ -12,9 +12,10 @@ use femu_fem::groups::ParameterGroups;
 use femu_fem::model::Model;
 use femu_sparse::eigen::EigenOptions;
 use femu_update::{
-    Corrections, Iteration, JudgeInputs, Localisation, ParameterFinding, SbebeOptions,
-    SelectionRule, SensitivityOptions, TestUncertainty, TruthCheck, UpdateMethod, UpdateModel,
-    UpdateResult, inverse_eigensensitivity, localise_expanded, model_modes, sb_ebe, truth_check,
+    Corrections, Iteration, JudgeInputs, Localisation, ParameterFinding, ParameterSelection,
+    SbebeOptions, SelectionOptions, SelectionRule, SensitivityOptions, TestUncertainty, TruthCheck,
+    UpdateMethod, UpdateModel, UpdateResult, forward_at, inverse_eigensensitivity,
+    localise_expanded, model_modes, sb_ebe, select_parameters, truth_check,
 };
 use serde::{Deserialize, Serialize};
 
@@ -32,14 +33,17 @@ pub struct UpdateRequest {
     #[cfg_attr(feature = "clap", arg(long))]
     #[serde(default)]
     pub tuned: Option<usize>,
-    /// The updating method.
-    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "sbebe"))]
+    /// The updating method (default: inverse eigensensitivity on frequencies and shapes, the
+    /// one that holds under noise and discretisation error; `sbebe` is the paper's).
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "ies"))]
     #[serde(default = "default_update_method")]
     pub method: UpdateMethod,
-    /// Update every candidate set instead of the localised ones.
-    #[cfg_attr(feature = "clap", arg(long))]
+    /// Which candidate sets are updated: those the data support (`forward`: forward selection
+    /// with an F-test on the weighted objective, the default), the paper's residual ranking
+    /// (`residual`), or `all`.
+    #[cfg_attr(feature = "clap", arg(long, value_enum, default_value = "forward"))]
     #[serde(default)]
-    pub all: bool,
+    pub select: Select,
     /// The test's frequency uncertainty, percent (one standard deviation; default: 0.1 %,
     /// assumed and said so). The truth check's tolerance is three of it.
     #[cfg_attr(feature = "clap", arg(long, value_name = "PERCENT"))]
@@ -49,10 +53,18 @@ pub struct UpdateRequest {
     #[cfg_attr(feature = "clap", arg(long, value_name = "PERCENT"))]
     #[serde(default)]
     pub shape_uncertainty: Option<f64>,
-    /// Inverse eigensensitivity fits the shapes at the sensors as well as the frequencies
-    /// (eigenvector derivatives); recommended when the model is not the structure.
-    #[cfg_attr(feature = "clap", arg(long))]
-    #[serde(default)]
+    /// Inverse eigensensitivity and the selection fit the shapes at the sensors as well as the
+    /// frequencies (eigenvector derivatives; default true: frequencies alone cannot tell a
+    /// correction from a compensation; `--no-shapes` fits the frequencies only).
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long = "no-shapes",
+            action = clap::ArgAction::SetFalse,
+            help = "Fit the frequencies only (the selection and inverse eigensensitivity); by default the shapes at the sensors are fitted too"
+        )
+    )]
+    #[serde(default = "default_true")]
     pub shapes: bool,
     /// SB-EBE's trust in the measured shapes: the weight of the test-error term of the expansion
     /// (default 1e-3; smaller trusts the test more).
@@ -78,7 +90,23 @@ fn default_true() -> bool {
 }
 
 fn default_update_method() -> UpdateMethod {
-    UpdateMethod::SbEbe
+    UpdateMethod::InverseEigensensitivity
+}
+
+/// Which candidate sets the updating workflow updates ([`UpdateRequest::select`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Select {
+    /// Those the data support: forward selection with an F-test on the weighted objective of
+    /// frequencies and shapes, asked again after each fit (`docs/MATH.md`, "Selecting the
+    /// parameters").
+    #[default]
+    Forward,
+    /// The paper's residual ranking on expanded shapes (axis sensors only).
+    Residual,
+    /// Every candidate.
+    All,
 }
 
 impl UpdateRequest {
@@ -87,11 +115,11 @@ impl UpdateRequest {
         Self {
             sets,
             tuned: None,
-            method: UpdateMethod::SbEbe,
-            all: false,
+            method: UpdateMethod::InverseEigensensitivity,
+            select: Select::Forward,
             frequency_uncertainty: None,
             shape_uncertainty: None,
-            shapes: false,
+            shapes: true,
             test_error: None,
             discretisation: true,
         }
@@ -125,7 +153,7 @@ impl UpdateRequest {
         let defaults = UpdateStudyOptions::new(tuned, test_modes);
         Ok(UpdateStudyOptions {
             method: self.method,
-            all: self.all,
+            select: self.select,
             shapes: self.shapes,
             uncertainty: TestUncertainty::from_percent(
                 self.frequency_uncertainty,
@@ -138,14 +166,15 @@ impl UpdateRequest {
         })
     }
 
-    /// What the request asks that its method will not use, one warning each (`shapes` with
-    /// SB-EBE, which always uses the shapes).
+    /// What the request asks that its method will not use, one warning each (frequencies only
+    /// with SB-EBE, which always uses the shapes; a test error with inverse eigensensitivity).
     pub fn unused(&self) -> Vec<String> {
         let mut w = Vec::new();
-        if self.shapes && self.method != UpdateMethod::InverseEigensensitivity {
-            w.push(
-                "shapes (--shapes) applies to the ies method: SB-EBE always uses the shapes".into(),
-            );
+        if !self.shapes && self.method == UpdateMethod::SbEbe {
+            w.push("frequencies only (--no-shapes) applies to the selection: SB-EBE always uses the shapes".into());
+        }
+        if self.test_error.is_some() && self.method != UpdateMethod::SbEbe {
+            w.push("the test error (--test-error) is SB-EBE's: inverse eigensensitivity weighs the shapes by the shape uncertainty".into());
         }
         w
     }
@@ -186,13 +215,15 @@ pub fn update_loaded(
 /// Settings of [`localise_update_check`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct UpdateStudyOptions {
-    /// The updating method (default SB-EBE).
+    /// The updating method (default inverse eigensensitivity).
     pub method: UpdateMethod,
     /// The first `tuned` test modes are used for localisation and updating; the others are held
     /// out for the truth check.
     pub tuned: usize,
-    /// Update every candidate set instead of the localised ones.
-    pub all: bool,
+    /// Which candidates are updated (default: those the data support).
+    pub select: Select,
+    /// The forward selection's settings.
+    pub selection: SelectionOptions,
     /// SB-EBE's trust in the test ([`SbebeOptions::test_error`]; default `Some(1e-3)`).
     pub test_error: Option<f64>,
     /// Also run the other method on the same sets, for comparison (default false).
@@ -201,7 +232,8 @@ pub struct UpdateStudyOptions {
     pub check_modes: usize,
     /// The test's uncertainty: the truth check's tolerance, inverse eigensensitivity's weights.
     pub uncertainty: TestUncertainty,
-    /// Inverse eigensensitivity fits the shapes at the sensors too (eigenvector derivatives).
+    /// The selection and inverse eigensensitivity fit the shapes at the sensors too (eigenvector
+    /// derivatives; default true).
     pub shapes: bool,
     /// Estimate the model's discretisation error (the same mesh with quadratic elements) and
     /// weigh the verdict with it (default true; skipped for quadratic meshes).
@@ -212,18 +244,20 @@ pub struct UpdateStudyOptions {
 }
 
 impl UpdateStudyOptions {
-    /// The defaults for `tuned` modes out of `test_modes`: SB-EBE with test error `1e-3`, the
-    /// localised sets, `test_modes + 10` model modes for the check.
+    /// The defaults for `tuned` modes out of `test_modes`: inverse eigensensitivity on
+    /// frequencies and shapes, the sets the forward selection supports, `test_modes + 10` model
+    /// modes for the check (SB-EBE's test error `1e-3` when it is asked for).
     pub fn new(tuned: usize, test_modes: usize) -> Self {
         Self {
-            method: UpdateMethod::SbEbe,
+            method: UpdateMethod::InverseEigensensitivity,
             tuned,
-            all: false,
+            select: Select::Forward,
+            selection: SelectionOptions::default(),
             test_error: Some(1e-3),
             compare: false,
             check_modes: test_modes + 10,
             uncertainty: TestUncertainty::default(),
-            shapes: false,
+            shapes: true,
             discretisation: true,
             eigen: EigenOptions::default(),
         }
@@ -235,8 +269,15 @@ impl UpdateStudyOptions {
 pub struct UpdateStudy {
     /// The candidate element sets, in the localisation's group order.
     pub candidates: Vec<String>,
-    /// Localisation among the candidates.
-    pub localisation: Localisation,
+    /// The paper's residual localisation among the candidates (`None` when a sensor does not lie
+    /// along a global axis: it expands the shapes).
+    pub localisation: Option<Localisation>,
+    /// The parameters the data support (forward selection with an F-test), with its steps, its
+    /// refits and its stability under resampling.
+    pub selection: ParameterSelection,
+    /// What the workflow decided and why, one sentence each (where the residual ranking and the
+    /// selection disagree, a candidate added after a refit, ...).
+    pub notes: Vec<String>,
     /// The sets updated.
     pub updated_sets: Vec<String>,
     /// The updating run.
@@ -249,11 +290,41 @@ pub struct UpdateStudy {
     /// The model's discretisation error, when estimated.
     pub discretisation: Option<DiscretisationEstimate>,
     /// Before updating, what the chosen parameters can reach (best residual in their span and
-    /// the Theorem 2 interval that follows on each tuned mode).
-    pub reach: Reach,
+    /// the Theorem 2 interval that follows on each tuned mode); with the residual localisation.
+    pub reach: Option<Reach>,
     /// The updated model's modes (those of the check).
     #[serde(skip)]
     pub updated_modes: ModeSet,
+}
+
+impl std::fmt::Display for UpdateStudy {
+    /// The study as `femu update` prints it: localisation, selection and its notes, reach, the
+    /// updating, the model's own error and the truth check.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if let Some(l) = &self.localisation {
+            writeln!(
+                f,
+                "Residual localisation ({} candidate sets):\n{l}",
+                self.candidates.len()
+            )?;
+        }
+        writeln!(f, "{}", self.selection)?;
+        for n in &self.notes {
+            writeln!(f, "- {n}")?;
+        }
+        writeln!(f, "\nUpdated: {}\n", self.updated_sets.join(", "))?;
+        if let Some(r) = &self.reach {
+            writeln!(f, "{r}")?;
+        }
+        writeln!(f, "{}", self.result)?;
+        if let Some(c) = &self.comparison {
+            writeln!(f, "For comparison:\n{c}")?;
+        }
+        if let Some(d) = &self.discretisation {
+            writeln!(f, "{}", crate::discretisation::table(d, &self.truth_check))?;
+        }
+        write!(f, "{}", self.truth_check)
+    }
 }
 
 /// Localises among the element sets `candidates` of `model` (stiffness corrections), updates the
@@ -310,23 +381,14 @@ pub fn localise_update_check(
         })
     };
     let mut nominal = build(candidates)?;
-    let localisation = localise_expanded(&nominal, layout, &tuned, &SelectionRule::default())?;
-    let chosen: Vec<&str> = if options.all {
-        candidates.to_vec()
-    } else {
-        localisation
-            .selected
-            .iter()
-            .map(|g| candidates[*g])
-            .collect()
+    let sensitivity = SensitivityOptions {
+        shapes: options.shapes,
+        uncertainty: options.uncertainty,
+        eigen: options.eigen.clone(),
+        ..Default::default()
     };
-    let chosen_groups: Vec<usize> = chosen
-        .iter()
-        .filter_map(|c| candidates.iter().position(|k| k == c))
-        .collect();
-    // the model that will be updated serves the a priori reach first (left at zero)
-    let mut up = build(&chosen)?;
-    let reach = reach(&localisation, &chosen_groups, &mut up, layout, &tuned)?;
+    // the nominal modes first, before any solve leaves its shift as the next one's hint: the
+    // same modes as a caller's own solve, bit for bit
     let computed;
     let before = match before {
         Some(b) => b,
@@ -335,6 +397,71 @@ pub fn localise_update_check(
             &computed
         }
     };
+    nominal.forget_shift();
+    let mut notes = Vec::new();
+    // the paper's residual ranking expands the shapes: axis sensors only
+    let localisation = if layout.measured_dofs().is_some() {
+        Some(localise_expanded(
+            &nominal,
+            layout,
+            &tuned,
+            &SelectionRule::default(),
+        )?)
+    } else {
+        notes.push("the residual ranking expands the shapes and needs every sensor along a global axis: only the forward selection was run".into());
+        None
+    };
+    let mut selection = select_parameters(
+        &mut nominal,
+        layout,
+        &tuned,
+        &sensitivity,
+        &options.selection,
+    )?;
+    if let (Some(loc), Some(first)) = (&localisation, selection.steps.first())
+        && let Some(top) = loc.ranking.first()
+        && first.index != top.group
+    {
+        notes.push(format!(
+            "the residual ranking puts {} first ({:.0} % of the expanded residual), the forward selection {} (F = {:.3e}); the ranking reads expanded shapes, where the sensors' noise spreads over the model, the selection weighs each reading by its uncertainty",
+            top.name,
+            100.0 * top.explained,
+            first.parameter,
+            first.f_statistic
+        ));
+    }
+    let mut chosen_groups: Vec<usize> = match options.select {
+        Select::All => (0..candidates.len()).collect(),
+        Select::Residual => match &localisation {
+            Some(l) => l.selected.clone(),
+            None => {
+                return Err(StudyError::invalid(
+                    "selection",
+                    "the residual ranking needs every sensor along a global axis: use the forward selection",
+                ));
+            }
+        },
+        Select::Forward => selection.selected.clone(),
+    };
+    let mut unsupported = None;
+    if chosen_groups.is_empty() {
+        // nothing passed: the best candidate is fitted for the record, and the verdict says so
+        let best = selection.steps.first();
+        let why = match best {
+            Some(s) => format!(
+                "the tuned modes support no correction among the candidates: the best, {}, lowers the objective by F = {:.3e} (p = {:.2e} against the {:.2e} needed), selected in {:.0} % of the resamples; it is fitted for the record only",
+                candidates[s.index],
+                s.f_statistic,
+                s.p_value,
+                s.level,
+                100.0 * s.stability.unwrap_or(0.0)
+            ),
+            None => "the tuned modes support no correction among the candidates (too few residuals to test one)".to_string(),
+        };
+        notes.push(why.clone());
+        unsupported = Some(why);
+        chosen_groups.push(best.map_or(0, |s| s.index));
+    }
     let run = |method: UpdateMethod,
                up: &mut UpdateModel<'_>,
                log: &mut dyn FnMut(&Iteration)|
@@ -348,17 +475,65 @@ pub fn localise_update_check(
                 sb_ebe(up, layout, &tuned, &o, log)?
             }
             UpdateMethod::InverseEigensensitivity => {
-                let o = SensitivityOptions {
-                    shapes: options.shapes,
-                    uncertainty: options.uncertainty,
-                    eigen: options.eigen.clone(),
-                    ..Default::default()
-                };
-                inverse_eigensensitivity(up, layout, &tuned, &o, log)?
+                inverse_eigensensitivity(up, layout, &tuned, &sensitivity, log)?
             }
         })
     };
-    let result = run(options.method, &mut up, &mut progress)?;
+    let names_of =
+        |groups: &[usize]| -> Vec<&str> { groups.iter().map(|g| candidates[*g]).collect() };
+    // fit the chosen sets; with the forward selection, ask again at the fit whether another
+    // candidate is still needed (the first selection is linear at the nominal model)
+    let (mut up, result) = loop {
+        let mut up = build(&names_of(&chosen_groups))?;
+        let result = run(options.method, &mut up, &mut progress)?;
+        if options.select != Select::Forward
+            || options.method != UpdateMethod::InverseEigensensitivity
+            || chosen_groups.len() >= candidates.len()
+        {
+            break (up, result);
+        }
+        let mut at_fit = vec![0.0; candidates.len()];
+        for (k, g) in chosen_groups.iter().enumerate() {
+            at_fit[*g] = result.theta[k];
+        }
+        nominal.set_theta(&at_fit)?;
+        let steps = forward_at(
+            &mut nominal,
+            layout,
+            &tuned,
+            &sensitivity,
+            &chosen_groups,
+            &options.selection,
+        );
+        nominal.set_theta(&vec![0.0; candidates.len()])?;
+        let added: Vec<_> = steps?.steps.into_iter().filter(|s| s.kept).collect();
+        if added.is_empty() {
+            break (up, result);
+        }
+        notes.push(format!(
+            "at the fit of {}, the selection adds {}: linearised at the nominal model it had not passed",
+            names_of(&chosen_groups).join(", "),
+            added
+                .iter()
+                .map(|s| format!("{} (F = {:.3e})", s.parameter, s.f_statistic))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+        for s in added {
+            chosen_groups.push(s.index);
+            selection.selected.push(s.index);
+            selection.steps.push(s);
+        }
+    };
+    let chosen = names_of(&chosen_groups);
+    // what the chosen parameters can reach, from the residual localisation's expansion
+    let reach = match &localisation {
+        Some(loc) => {
+            let mut fresh = build(&chosen)?;
+            Some(reach(loc, &chosen_groups, &mut fresh, layout, &tuned)?)
+        }
+        None => None,
+    };
     let after = model_modes(&mut up, options.check_modes, &options.eigen)?;
     let tuned_idx: Vec<usize> = (0..options.tuned).collect();
     let mut truth_check = truth_check(
@@ -387,32 +562,40 @@ pub fn localise_update_check(
         .parameters()
         .iter()
         .enumerate()
-        .map(|(k, p)| {
-            let set = chosen[p.group];
-            let group = candidates.iter().position(|c| *c == set);
-            ParameterFinding {
-                name: p.name.clone(),
-                value: result.theta[k],
-                bounds: (p.lower, p.upper),
-                half_width_95: result
-                    .confidence
-                    .as_ref()
-                    .and_then(|c| c.half_width_95.get(k).copied()),
-                evidence: group.is_some_and(|g| localisation.selected.contains(&g)),
-            }
+        .map(|(k, p)| ParameterFinding {
+            name: p.name.clone(),
+            value: result.theta[k],
+            bounds: (p.lower, p.upper),
+            half_width_95: result
+                .confidence
+                .as_ref()
+                .and_then(|c| c.half_width_95.get(k).copied()),
+            evidence: selection.selected.contains(&chosen_groups[p.group])
+                || (options.select == Select::Residual
+                    && localisation
+                        .as_ref()
+                        .is_some_and(|l| l.selected.contains(&chosen_groups[p.group]))),
         })
         .collect();
+    let fit_scale = result.confidence.as_ref().map(|c| c.scale.sqrt());
     truth_check.judge(&JudgeInputs {
         uncertainty: options.uncertainty,
         discretisation: per_test,
         parameters,
+        fit_scale,
+        unsupported,
     });
     if options.discretisation && discretisation.is_none() {
         truth_check.judgement.reasons.push(
             "the model's discretisation error was not estimated: its mesh is already quadratic (refine it once and compare to know it)".into(),
         );
     }
-    if !reach.can_explain() {
+    // the expanded residual holds the readings' noise spread over the model: a low fraction is a
+    // finding only when the fit's chi-square also leaves more than the uncertainty explains
+    if let Some(reach) = &reach
+        && !reach.can_explain()
+        && fit_scale.is_none_or(|s| s > 1.5)
+    {
         truth_check.judgement.reasons.insert(
             0,
             format!(
@@ -434,6 +617,8 @@ pub fn localise_update_check(
     Ok(UpdateStudy {
         candidates: candidates.iter().map(|s| s.to_string()).collect(),
         localisation,
+        selection,
+        notes,
         updated_sets: chosen.iter().map(|s| s.to_string()).collect(),
         result,
         comparison,

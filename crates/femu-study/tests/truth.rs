@@ -1,17 +1,19 @@
 //! Can updating tell the truth when the model is not the structure? Each case's "real" plate is
-//! built apart from the model (another mesh, quadratic elements; `common/real.rs`), one region 25 %
-//! softer, measured at the model's 15 sensor nodes in y and z with noise; the truth is known.
-//! Where the data hold the answer femu localises the damaged region first and recovers it within
-//! 0.05; where they do not, the verdict says why and is never "agrees".
+//! built apart from the model (another mesh, quadratic elements; `common/real.rs`), one or two
+//! regions softer, measured at the model's 15 sensor nodes in y and z with noise; the truth is
+//! known. With default settings, where the data hold the answer femu selects the damaged region
+//! first and recovers it within 0.05, other regions stay within 0.1 or are named not determined,
+//! and the verdict is not "compensates"; where they do not, the verdict says why and is never
+//! "agrees". Each case's numbers are in `docs/VERIFICATION.md`, "Updating by default".
 
 mod common;
 
 use common::real;
 use femu_correlate::prelude::*;
 use femu_fem::prelude::*;
-use femu_study::updating::{UpdateStudy, UpdateStudyOptions, localise_update_check};
+use femu_study::updating::{Select, UpdateStudy, UpdateStudyOptions, localise_update_check};
 use femu_update::prelude::*;
-use femu_update::{JudgeInputs, ParameterFinding, Verdict};
+use femu_update::{JudgeInputs, ParameterFinding, Verdict, select_parameters};
 use rayon::prelude::*;
 
 const TRUTH: f64 = -0.25;
@@ -22,26 +24,23 @@ fn truth() -> Vec<f64> {
     t
 }
 
-fn run(model: &Model, realm: &Model, noise: f64, method: UpdateMethod, all: bool) -> UpdateStudy {
-    run_seed(model, realm, noise, method, all, 7)
-}
-
-fn run_seed(
+/// The default workflow (forward selection, inverse eigensensitivity on frequencies and shapes)
+/// on a test of `realm` with region factors `theta`, measured at `model`'s sensors with `noise` on
+/// shapes and a tenth of it on frequencies, the first `tuned` of ten modes tuned; `adjust` changes
+/// the options.
+fn study(
     model: &Model,
     realm: &Model,
+    theta: &[f64],
     noise: f64,
-    method: UpdateMethod,
-    all: bool,
     seed: u64,
+    adjust: impl FnOnce(&mut UpdateStudyOptions),
 ) -> UpdateStudy {
-    let (test, sensors) = real::measure(realm, &truth(), model, 10, noise, noise / 10.0, seed);
+    let (test, sensors) = real::measure(realm, theta, model, 10, noise, noise / 10.0, seed);
     let layout = SensorLayout::new(model.mesh(), &model.dof_map().unwrap(), sensors).unwrap();
     let names = real::regions();
     let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-    let options = UpdateStudyOptions {
-        method,
-        all,
-        shapes: method == UpdateMethod::InverseEigensensitivity,
+    let mut options = UpdateStudyOptions {
         uncertainty: TestUncertainty {
             frequency: (noise / 10.0).max(1e-3),
             shape: noise.max(1e-2),
@@ -49,6 +48,7 @@ fn run_seed(
         },
         ..UpdateStudyOptions::new(4, 10)
     };
+    adjust(&mut options);
     localise_update_check(model, &sets, &layout, &test, None, None, &options, |_| {}).unwrap()
 }
 
@@ -60,25 +60,46 @@ fn value(s: &UpdateStudy, name: &str) -> Option<f64> {
         .map(|k| s.result.theta[k])
 }
 
-/// The user's mesh is the real structure's (noise 0 to 2 %): inverse eigensensitivity on
-/// frequencies and shapes, localised, recovers r3 within 0.05 at every noise level and agrees;
-/// SB-EBE at 2 % noise is not judged to agree (it also softens r4 and the held-out modes get
-/// worse).
+/// Every updated parameter other than `damaged` is within 0.1 of zero or not determined (its
+/// 95 % interval contains zero).
+fn others_small_or_undetermined(s: &UpdateStudy, damaged: &[&str]) {
+    let c = s.result.confidence.as_ref().unwrap();
+    for (k, (n, v)) in s.result.names.iter().zip(&s.result.theta).enumerate() {
+        if !damaged.contains(&n.as_str()) {
+            assert!(
+                v.abs() < 0.1 || c.half_width_95[k] >= v.abs(),
+                "{n} = {v} +- {}\n{}",
+                c.half_width_95[k],
+                s.result
+            );
+        }
+    }
+}
+
+/// The user's mesh is the real structure's (noise 0 to 2 %): with default settings the
+/// selection takes r3 first (and only), inverse eigensensitivity recovers it within 0.01 (measured
+/// -0.250, -0.245, -0.241 at 0, 1 and 2 %), every held-out mode improves and the verdict agrees.
+/// The paper's route (residual ranking and SB-EBE) at 2 % noise is not judged to agree.
 #[test]
 fn same_mesh_at_every_noise_level() {
     let model = real::plate([20, 7, 2], false);
-    for noise in [0.0, 0.005, 0.01, 0.02] {
-        let s = run(
-            &model,
-            &model,
-            noise,
-            UpdateMethod::InverseEigensensitivity,
-            false,
+    let studies: Vec<(f64, UpdateStudy)> = [0.0, 0.005, 0.01, 0.02]
+        .par_iter()
+        .map(|&noise| (noise, study(&model, &model, &truth(), noise, 7, |_| {})))
+        .collect();
+    for (noise, s) in &studies {
+        assert_eq!(
+            s.selection.names(),
+            ["k:r3"],
+            "noise {noise}\n{}",
+            s.selection
         );
-        let r3 = value(&s, "k:r3").expect("r3 selected");
+        assert_eq!(s.updated_sets, ["r3"]);
+        let r3 = value(s, "k:r3").unwrap();
+        assert!((r3 - TRUTH).abs() < 0.01, "noise {noise}: r3 {r3}");
         assert!(
-            (r3 - TRUTH).abs() < 0.05,
-            "noise {noise}: r3 {r3}\n{}",
+            s.truth_check.held_out().all(|m| m.improved() == Some(true)),
+            "noise {noise}\n{}",
             s.truth_check
         );
         assert_eq!(
@@ -87,75 +108,47 @@ fn same_mesh_at_every_noise_level() {
             "noise {noise}\n{}",
             s.truth_check
         );
-        if noise <= 0.01 {
-            assert_eq!(s.localisation.ranking[0].name, "r3", "noise {noise}");
-        }
     }
-    let s = run(&model, &model, 0.02, UpdateMethod::SbEbe, false);
-    assert_ne!(
-        s.truth_check.judgement.verdict,
-        Verdict::Agrees,
+    let s = study(&model, &model, &truth(), 0.02, 7, |o| {
+        o.method = UpdateMethod::SbEbe;
+        o.select = Select::Residual;
+    });
+    assert!(
+        !s.truth_check.judgement.verdict.agrees(),
         "{}",
         s.truth_check
     );
 }
 
 /// The realisations of the converged-model case: without noise (seed 7), and at 1 % noise.
-const CASES: [(f64, u64); 6] = [
-    (0.0, 7),
-    (0.01, 1),
-    (0.01, 2),
-    (0.01, 3),
-    (0.01, 4),
-    (0.01, 7),
-];
+const CASES: [(f64, u64); 5] = [(0.0, 7), (0.01, 1), (0.01, 3), (0.01, 5), (0.01, 7)];
 
 /// A converged model (hex20, two through the thickness) against a "real" plate of another
-/// element kind (tet10 on the same grid), so that the test carries a discretisation difference
-/// of a few tenths of a percent. Noise-free, the least-squares fit with every region free (what
-/// decides whether the data hold the answer) finds r3 within 0.05 as the largest change;
-/// localised, inverse eigensensitivity on frequencies and shapes recovers r3 within 0.05 without
-/// noise and within 0.07 at 1 % noise (five realisations), and the held-out modes improve but stay
-/// outside the test's uncertainty
-/// (the element difference no stiffness factor represents): model-form error, not "agrees".
-/// SB-EBE at 1 % noise is not judged to agree either.
+/// element kind (tet10 on the same grid), so that the test carries a model-form difference of a
+/// few tenths of a percent.
+///
+/// - What the data hold, by the least-squares fit with every region free (noise-free): r3 is the
+///   largest change, -0.282 +- 0.061, every other region within 0.08 and not determined.
+/// - With default settings, in every realisation: r3 selected first and alone (the end regions
+///   that lower the objective in some realisations are selected in 40-70 % of the resamples
+///   only, and not kept), r3 within 0.02 of -0.25 (measured -0.231 to -0.237), the held-out RMS
+///   error cut by at least three (about 1.4 % to 0.35 %), and the verdict "improved, but still
+///   off": the element difference leaves held-out modes 7 and 10 0.4-0.7 % off, which no
+///   stiffness factor represents. Mode 10 overshoots (+0.62 % to -0.66 % at seed 1, measured), so
+///   one held-out mode may end up no better, by less than 0.1 point.
 #[test]
 fn converged_model_against_another_discretisation() {
     let model = real::plate([20, 7, 2], true);
     let realm = real::plate_of([20, 7, 2], BoxCells::Tet6, true);
-    // the eight studies are independent: run on every thread, checked in order below
-    let ((all, sbebe), studies) = rayon::join(
-        || {
-            rayon::join(
-                || {
-                    run(
-                        &model,
-                        &realm,
-                        0.0,
-                        UpdateMethod::InverseEigensensitivity,
-                        true,
-                    )
-                },
-                || run(&model, &realm, 0.01, UpdateMethod::SbEbe, false),
-            )
-        },
+    let (all, studies) = rayon::join(
+        || study(&model, &realm, &truth(), 0.0, 7, |o| o.select = Select::All),
         || {
             CASES
                 .par_iter()
-                .map(|&(noise, seed)| {
-                    run_seed(
-                        &model,
-                        &realm,
-                        noise,
-                        UpdateMethod::InverseEigensensitivity,
-                        false,
-                        seed,
-                    )
-                })
+                .map(|&(noise, seed)| study(&model, &realm, &truth(), noise, seed, |_| {}))
                 .collect::<Vec<UpdateStudy>>()
         },
     );
-    assert_eq!(all.localisation.ranking[0].name, "r3");
     let r3 = value(&all, "k:r3").unwrap();
     assert!((r3 - TRUTH).abs() < 0.05, "r3 {r3}\n{}", all.result);
     let largest = all
@@ -167,45 +160,209 @@ fn converged_model_against_another_discretisation() {
         .unwrap()
         .0;
     assert_eq!(all.result.names[largest], "k:r3", "{}", all.result);
-    // without noise (seed 7), and at 1 % noise over five realisations: at 1 % the element
-    // difference and the noise together move r3 by up to 0.065 (measured -0.217 to -0.315 over
-    // eight seeds) and localisation ranks it first in most realisations only (four of these five;
-    // over eight seeds r3 was not selected at all in two), so the assertions are what holds for
-    // every realisation: r3 within 0.07 and the verdict model-form error, never "agrees"
-    let mut first = 0;
+    others_small_or_undetermined(&all, &["k:r3"]);
     for (&(noise, seed), s) in CASES.iter().zip(&studies) {
-        let r3 = value(s, "k:r3")
-            .unwrap_or_else(|| panic!("noise {noise} seed {seed}: r3 not selected"));
-        let tol = if noise == 0.0 { 0.05 } else { 0.07 };
-        assert!(
-            (r3 - TRUTH).abs() < tol,
-            "noise {noise} seed {seed}: r3 {r3}\n{}",
-            s.result
+        let at = format!("noise {noise} seed {seed}");
+        assert_eq!(
+            s.selection.steps[0].parameter, "k:r3",
+            "{at}\n{}",
+            s.selection
         );
-        if noise == 0.0 {
-            assert_eq!(s.localisation.ranking[0].name, "r3");
-        } else if s.localisation.ranking[0].name == "r3" {
-            first += 1;
-        }
+        assert_eq!(s.updated_sets, ["r3"], "{at}\n{}", s.selection);
+        let r3 = value(s, "k:r3").unwrap();
+        assert!((r3 - TRUTH).abs() < 0.02, "{at}: r3 {r3}");
         let (before, after) = s.truth_check.held_out_rms();
-        assert!(after < before);
+        assert!(after < before / 3.0, "{at}: {before} -> {after}");
+        let worse: Vec<f64> = s
+            .truth_check
+            .held_out()
+            .filter(|m| m.improved() == Some(false))
+            .map(|m| m.error_after().unwrap().abs() - m.error_before().unwrap().abs())
+            .collect();
+        assert!(
+            worse.len() <= 1 && worse.iter().all(|w| *w < 1e-3),
+            "{at}: {worse:?}\n{}",
+            s.truth_check
+        );
         assert_eq!(
             s.truth_check.judgement.verdict,
             Verdict::ModelFormError,
-            "noise {noise} seed {seed}\n{}",
+            "{at}\n{}",
             s.truth_check
         );
     }
+}
+
+/// The residual ranking against the selection on the converged-model case at 1 % noise, eight
+/// realisations: the selection puts r3 first in every one, and keeps it in every resample; the
+/// ranking reads the expanded shapes and, in the measurement this test was written from, put r3
+/// first in four of the eight (seeds 3, 5, 6 and 8 ranked r6, r9, r0 and r4 first). Where they
+/// disagree the workflow says so.
+#[test]
+fn the_selection_is_stable_where_the_residual_ranking_follows_the_noise() {
+    let model = real::plate([20, 7, 2], true);
+    let realm = real::plate_of([20, 7, 2], BoxCells::Tet6, true);
+    let names = real::regions();
+    let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+    let ranked_first: Vec<bool> = (1..=8u64)
+        .into_par_iter()
+        .map(|seed| {
+            let (test, sensors) = real::measure(&realm, &truth(), &model, 10, 0.01, 0.001, seed);
+            let layout =
+                SensorLayout::new(model.mesh(), &model.dof_map().unwrap(), sensors).unwrap();
+            let tuned = TestModes::new(
+                test.frequencies_hz[..4].to_vec(),
+                None,
+                test.shapes.as_ref().subcols(0, 4).to_owned(),
+            )
+            .unwrap();
+            let mut up = UpdateModel::from_element_sets(
+                &model,
+                &sets,
+                MassKind::Consistent,
+                Corrections::Stiffness,
+            )
+            .unwrap();
+            let options = SensitivityOptions {
+                shapes: true,
+                uncertainty: TestUncertainty {
+                    frequency: 1e-3,
+                    shape: 1e-2,
+                    given: true,
+                },
+                ..Default::default()
+            };
+            let s =
+                select_parameters(&mut up, &layout, &tuned, &options, &Default::default()).unwrap();
+            assert_eq!(s.steps[0].parameter, "k:r3", "seed {seed}\n{s}");
+            let r3 = s.stability_of("k:r3").unwrap();
+            assert_eq!((r3.selected, r3.first), (1.0, 1.0), "seed {seed}\n{s}");
+            let loc = localise_expanded(&up, &layout, &tuned, &SelectionRule::default()).unwrap();
+            loc.ranking[0].name == "r3"
+        })
+        .collect();
+    let first = ranked_first.iter().filter(|b| **b).count();
     assert!(
-        first >= 3,
-        "r3 ranked first in {first} of 5 noisy realisations"
+        first < 8,
+        "the residual ranking put r3 first in every realisation"
     );
-    assert_ne!(
-        sbebe.truth_check.judgement.verdict,
+    // the workflow names the disagreement
+    let s = study(&model, &realm, &truth(), 0.01, 3, |_| {});
+    assert!(
+        s.notes
+            .iter()
+            .any(|n| n.starts_with("the residual ranking puts r6 first")),
+        "{:?}",
+        s.notes
+    );
+}
+
+/// Two damaged regions (r3 -25 %, r7 -15 %) at 1 % noise: on the same mesh and on the converged
+/// model of another element kind, the selection keeps both and only them, each within 0.02 of its
+/// value (measured -0.244/-0.152 and -0.240/-0.135), every held-out mode improves; the verdict
+/// agrees on the same mesh and is "improved, but still off" on the other.
+#[test]
+fn two_damaged_regions() {
+    let mut theta = truth();
+    theta[7] = -0.15;
+    let same = real::plate([20, 7, 2], false);
+    let model = real::plate([20, 7, 2], true);
+    let realm = real::plate_of([20, 7, 2], BoxCells::Tet6, true);
+    let (a, b) = rayon::join(
+        || study(&same, &same, &theta, 0.01, 7, |_| {}),
+        || study(&model, &realm, &theta, 0.01, 7, |_| {}),
+    );
+    for (s, verdict) in [(&a, Verdict::Agrees), (&b, Verdict::ModelFormError)] {
+        assert_eq!(s.updated_sets, ["r3", "r7"], "{}", s.selection);
+        for (name, v) in [("k:r3", TRUTH), ("k:r7", -0.15)] {
+            let got = value(s, name).unwrap();
+            assert!((got - v).abs() < 0.02, "{name} {got}");
+        }
+        assert!(s.truth_check.held_out().all(|m| m.improved() == Some(true)));
+        assert_eq!(
+            s.truth_check.judgement.verdict, verdict,
+            "{}",
+            s.truth_check
+        );
+    }
+}
+
+/// Where the data do not hold the answer the verdict says so, never "agrees": r0 (a free end,
+/// little strain energy in the two lowest modes) 25 % softer, tuned on those two modes. With
+/// shapes the best candidate (r0) misses the Bonferroni level (measured F = 6.7, p = 0.012 against
+/// 0.005); on frequencies alone the free-free plate's mirror symmetry makes r9 look the same as r0.
+/// Either way no candidate is kept and the verdict is "cannot tell", naming the best candidate's
+/// test.
+#[test]
+fn a_region_the_tuned_modes_barely_strain_cannot_be_told() {
+    let model = real::plate([20, 7, 2], false);
+    let mut theta = vec![0.0; real::REGIONS];
+    theta[0] = TRUTH;
+    let studies: Vec<UpdateStudy> = [true, false]
+        .par_iter()
+        .map(|&shapes| {
+            study(&model, &model, &theta, 0.01, 7, |o| {
+                o.tuned = 2;
+                o.shapes = shapes;
+            })
+        })
+        .collect();
+    for s in &studies {
+        assert!(s.selection.selected.is_empty(), "{}", s.selection);
+        let j = &s.truth_check.judgement;
+        assert_eq!(j.verdict, Verdict::Inconclusive, "{}", s.truth_check);
+        assert!(j.rule.starts_with("3:"), "{j:?}");
+        assert!(
+            j.reasons
+                .iter()
+                .any(|r| r.starts_with("the tuned modes support no correction")),
+            "{j:?}"
+        );
+    }
+}
+
+/// Sensors along directions turned 30 degrees about x (neither is a global axis): the residual
+/// ranking, which expands the shapes, cannot run and says so; the default workflow selects r3,
+/// recovers it within 0.01 (measured -0.245) and agrees.
+#[test]
+fn sensors_off_the_global_axes() {
+    let model = real::plate([20, 7, 2], false);
+    let c = 30f64.to_radians();
+    let directions = [[0.0, c.cos(), c.sin()], [0.0, -c.sin(), c.cos()]];
+    let (test, sensors) =
+        real::measure_along(&model, &truth(), &model, 10, (0.01, 0.001), 7, &directions);
+    let layout = SensorLayout::new(model.mesh(), &model.dof_map().unwrap(), sensors).unwrap();
+    assert!(layout.measured_dofs().is_none());
+    let names = real::regions();
+    let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+    let options = UpdateStudyOptions {
+        uncertainty: TestUncertainty {
+            frequency: 1e-3,
+            shape: 1e-2,
+            given: true,
+        },
+        ..UpdateStudyOptions::new(4, 10)
+    };
+    let s =
+        localise_update_check(&model, &sets, &layout, &test, None, None, &options, |_| {}).unwrap();
+    assert!(s.localisation.is_none() && s.reach.is_none());
+    assert!(s.notes[0].contains("needs every sensor along a global axis"));
+    assert_eq!(s.updated_sets, ["r3"]);
+    assert!((value(&s, "k:r3").unwrap() - TRUTH).abs() < 0.01);
+    assert_eq!(
+        s.truth_check.judgement.verdict,
         Verdict::Agrees,
         "{}",
-        sbebe.truth_check
+        s.truth_check
     );
+    // the paper's residual ranking is refused by name
+    let residual = UpdateStudyOptions {
+        select: Select::Residual,
+        ..options
+    };
+    let e = localise_update_check(&model, &sets, &layout, &test, None, None, &residual, |_| {})
+        .unwrap_err();
+    assert!(e.to_string().contains("forward selection"), "{e}");
 }
 
 /// A locked model (one hex8 through the thickness) against a hex20 plate: its discretisation
@@ -215,8 +372,14 @@ fn converged_model_against_another_discretisation() {
 fn locked_model_is_said_and_never_agrees() {
     let model = real::plate([20, 7, 1], false);
     let realm = real::plate([20, 7, 2], true);
-    for method in [UpdateMethod::SbEbe, UpdateMethod::InverseEigensensitivity] {
-        let s = run(&model, &realm, 0.0, method, false);
+    for (method, select) in [
+        (UpdateMethod::SbEbe, Select::Residual),
+        (UpdateMethod::InverseEigensensitivity, Select::Forward),
+    ] {
+        let s = study(&model, &realm, &truth(), 0.0, 7, |o| {
+            o.method = method;
+            o.select = select;
+        });
         let d = s.discretisation.as_ref().expect("a linear mesh is checked");
         let worst = d
             .relative
@@ -242,8 +405,8 @@ fn locked_model_is_said_and_never_agrees() {
 }
 
 /// A compensating parameter set: regions r0 and r9, where localisation finds no evidence,
-/// updated on frequencies alone; the held-out frequencies may improve, but the verdict is that the
-/// correction is not where the evidence is.
+/// updated on frequencies alone: the fit drives r0 beyond -50 % and r9 to its bound (the
+/// tuned frequencies can be matched that way), and the verdict is that the correction compensates.
 #[test]
 fn a_correction_away_from_the_evidence_compensates() {
     let model = real::plate([20, 7, 2], false);
@@ -302,10 +465,15 @@ fn a_correction_away_from_the_evidence_compensates() {
         })
         .clone();
     assert_eq!(j.verdict, Verdict::Compensates, "{check}");
+    // measured: r0 -0.77 (beyond 50 %) and r9 at its upper bound, said with how far the tuned
+    // frequencies moved
     assert!(
         j.reasons
             .iter()
-            .any(|r| r.contains("where localisation found no evidence")),
+            .any(|r| r.starts_with("k:r9 = +2.000 is at a bound"))
+            && j.reasons
+                .iter()
+                .any(|r| r.contains("moved the tuned frequencies")),
         "{:?}",
         j.reasons
     );

@@ -10,6 +10,8 @@
 //!   energy of the displacement residual (5), ranked, with a selection rule.
 //! - [`sbebe`]: SB-EBE, alternating minimum-residual expansion and bounded least-squares
 //!   corrections (13)-(15), nondimensionalised, with the total-mass guard.
+//! - [`select`]: which parameters the data support (forward selection with an F-test on the
+//!   weighted objective), and how stable that choice is under resampling.
 //! - [`sensitivity`]: inverse eigensensitivity (Levenberg-Marquardt on relative eigenvalue errors,
 //!   modes re-solved on the reused symbolic analysis).
 //! - [`truth`]: the held-out check that answers the paper's title.
@@ -48,6 +50,7 @@ pub mod localise;
 pub mod lsq;
 pub mod problem;
 pub mod sbebe;
+pub mod select;
 pub mod sensitivity;
 pub mod truth;
 
@@ -58,6 +61,9 @@ pub use lsq::{MassGuard, UpdateOptions};
 pub use problem::{Corrections, Parameter, UpdateModel};
 pub use sbebe::{
     Confidence, Iteration, SbebeOptions, StopReason, UpdateMethod, UpdateResult, sb_ebe,
+};
+pub use select::{
+    ParameterSelection, SelectionOptions, SelectionStep, Stability, forward_at, select_parameters,
 };
 pub use sensitivity::{SensitivityOptions, TestUncertainty, inverse_eigensensitivity, model_modes};
 pub use truth::{

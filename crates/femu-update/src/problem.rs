@@ -383,6 +383,13 @@ impl<'m> UpdateModel<'m> {
         self.last_shift
     }
 
+    /// Forgets the last solve's shift: the next solve finds its own. A workflow whose results
+    /// must not depend on whether it solved this model before (the same bits from every front
+    /// end) calls it.
+    pub fn forget_shift(&mut self) {
+        self.last_shift = None;
+    }
+
     /// Records the shift of an eigen solve of this model (see [`UpdateModel::last_shift`]).
     pub(crate) fn set_last_shift(&mut self, shift: f64) {
         self.last_shift = Some(shift);

@@ -227,7 +227,7 @@ pub(crate) fn evaluate(
 }
 
 /// The Jacobian of the weighted residuals with respect to `theta` at `eval`.
-fn jacobian(
+pub(crate) fn jacobian(
     up: &mut UpdateModel<'_>,
     layout: &SensorLayout,
     test: &TestModes,

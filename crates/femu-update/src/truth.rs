@@ -76,18 +76,26 @@ pub struct TruthCheck {
 #[serde(rename_all = "kebab-case")]
 pub enum Verdict {
     /// Every held-out mode agrees within three standard deviations of the test's frequency
-    /// uncertainty and the model's discretisation error, and the parameters are plausible.
+    /// uncertainty, no held-out shape got worse, the held-out modes are not worse than the nominal
+    /// model's, and the parameters are plausible.
     Agrees,
-    /// The held-out modes improved, but at least one is still outside that tolerance, and the
-    /// parameters are plausible: an error the chosen parameters cannot represent (model form).
+    /// As [`Verdict::Agrees`], but some held-out modes agree only once the model's own
+    /// discretisation error is added to the test's uncertainty: the updated model is as close as
+    /// its mesh allows.
+    AgreesWithinDiscretisation,
+    /// The held-out modes improved, but at least one is still outside that tolerance (or its shape
+    /// got worse), and the parameters are plausible: an error the chosen parameters cannot
+    /// represent (model form).
     ModelFormError,
-    /// The parameters are not credible (at a bound, beyond +-50 %, or in regions without localised
-    /// evidence), whatever the held-out modes do: the correction compensates rather than corrects.
+    /// A determined parameter is not credible (at a bound, beyond +-50 %, or a change the data's
+    /// selection did not support), whatever the held-out modes do: the correction compensates
+    /// rather than corrects.
     Compensates,
-    /// The held-out modes did not improve.
+    /// The held-out modes did not improve (their RMS frequency error is not lower than the
+    /// nominal model's).
     NotImproved,
-    /// Nothing to judge on (no held-out mode), or the held-out modes agree only within the
-    /// model's own discretisation error, which is larger than the test's uncertainty.
+    /// Nothing to judge on: no held-out mode, or the data support no correction among the
+    /// candidates.
     Inconclusive,
 }
 
@@ -96,6 +104,9 @@ impl Verdict {
     pub fn answer(self) -> &'static str {
         match self {
             Verdict::Agrees => "yes: agrees within the test's uncertainty",
+            Verdict::AgreesWithinDiscretisation => {
+                "yes: agrees within the test's uncertainty and the model's discretisation error"
+            }
             Verdict::ModelFormError => {
                 "no: improved, but still off by more than the test's uncertainty allows (an error the parameters cannot represent, or a biased estimate)"
             }
@@ -103,6 +114,11 @@ impl Verdict {
             Verdict::NotImproved => "no: the held-out modes did not improve",
             Verdict::Inconclusive => "cannot tell",
         }
+    }
+
+    /// Whether the verdict says the updated model tells the truth.
+    pub fn agrees(self) -> bool {
+        matches!(self, Verdict::Agrees | Verdict::AgreesWithinDiscretisation)
     }
 }
 
@@ -128,7 +144,8 @@ pub struct ParameterFinding {
     pub bounds: (f64, f64),
     /// The half-width of its 95 % interval, when known.
     pub half_width_95: Option<f64>,
-    /// Whether localisation found evidence in its region (selected it).
+    /// Whether the data support a change of it: the parameter selection (or, when asked for,
+    /// the residual localisation) chose it.
     pub evidence: bool,
 }
 
@@ -141,6 +158,12 @@ pub struct JudgeInputs {
     pub discretisation: Vec<Option<f64>>,
     /// The identified parameters (empty: not reviewed).
     pub parameters: Vec<ParameterFinding>,
+    /// `sqrt(chi^2 / nu)` of the fit, when known: the scatter the fit leaves in units of the
+    /// test's uncertainty (1: the uncertainty explains it).
+    pub fit_scale: Option<f64>,
+    /// Why the data support no correction among the candidates, when the selection kept none
+    /// (the parameters were then fitted for the record only).
+    pub unsupported: Option<String>,
 }
 
 /// A parameter change beyond this (50 %) is implausible for a model that was built with care.
@@ -148,6 +171,12 @@ pub const IMPLAUSIBLE_CHANGE: f64 = 0.5;
 
 /// How many standard deviations a held-out error may be and still agree.
 pub const AGREEMENT_SIGMAS: f64 = 3.0;
+
+/// A held-out mode's shape got worse when its MAC fell by more than this.
+pub const MAC_DROP: f64 = 0.02;
+
+/// A change below this (5 %) is small enough not to need the data's support.
+pub const SMALL_CHANGE: f64 = 0.05;
 
 impl TruthCheck {
     /// The held-out modes.
@@ -180,14 +209,18 @@ impl TruthCheck {
     /// 1. no held-out mode: inconclusive;
     /// 2. each tuned mode whose discretisation error is at least half its test-analysis error is
     ///    named (parameters fitted to such a mesh are effective values of the mesh), a caveat to
-    ///    any verdict;
-    /// 3. a parameter at a bound, beyond +-50 %, or without localised evidence: compensates (a
-    ///    parameter whose 95 % interval is wider than its change is named as not determined, a
-    ///    caveat to any verdict);
-    /// 4. every held-out error within `3 sigma_f`: agrees;
-    /// 5. within `3 sqrt(sigma_f^2 + d_i^2)` only: inconclusive;
-    /// 6. held-out RMS error lower than before: model-form error;
-    /// 7. otherwise: not improved.
+    ///    any verdict; so is a parameter whose 95 % interval contains zero ("not determined":
+    ///    the data are consistent with no change there), whatever its size;
+    /// 3. the data's selection kept no candidate ([`JudgeInputs::unsupported`]): inconclusive;
+    /// 4. a parameter at a bound, or a determined one (interval excluding zero, or unknown)
+    ///    beyond +-50 %, or a determined change above 5 % that the data's selection did not
+    ///    support: compensates;
+    /// 5. held-out RMS frequency error not lower than before: not improved (even inside the
+    ///    tolerance: a nominal model that already agreed is said so);
+    /// 6. every held-out error within `3 sigma_f`, every held-out MAC within 0.02 of its nominal
+    ///    value: agrees;
+    /// 7. the same within `3 sqrt(sigma_f^2 + d_i^2)`: agrees within the discretisation error;
+    /// 8. otherwise: model-form error (improved, still outside).
     pub fn judge(&mut self, inputs: &JudgeInputs) -> &Judgement {
         self.judgement = judge(self, inputs);
         &self.judgement
@@ -208,8 +241,16 @@ fn judge(check: &TruthCheck, inputs: &JudgeInputs) -> Judgement {
     let mut reasons = Vec::new();
     if !inputs.uncertainty.given {
         reasons.push(format!(
-            "test uncertainty not given: assumed {} on frequencies",
-            pct(sf)
+            "test uncertainty not given: assumed {} on frequencies and {} on shapes",
+            pct(sf),
+            pct(inputs.uncertainty.shape)
+        ));
+    }
+    if let Some(scale) = inputs.fit_scale.filter(|s| *s > 1.5) {
+        reasons.push(format!(
+            "the fit leaves {scale:.1} times the scatter the test's uncertainty explains (chi-square per degree of freedom {:.1}): noise larger than {}, or what the parameters cannot represent; the intervals are widened by that factor",
+            scale * scale,
+            if inputs.uncertainty.given { "given" } else { "assumed" }
         ));
     }
     let held: Vec<&ModeCheck> = check.held_out().collect();
@@ -250,33 +291,57 @@ fn judge(check: &TruthCheck, inputs: &JudgeInputs) -> Judgement {
             swamped.join("; ")
         ));
     }
-    // 3: the parameters
+    // 2 and 3: the parameters
     let mut doubts = Vec::new();
     let mut undetermined = Vec::new();
+    let mut at_bound = false;
     for p in &inputs.parameters {
         let span = (p.bounds.1 - p.bounds.0).abs().max(1e-12);
+        let determined = p.half_width_95.is_none_or(|h| h < p.value.abs());
+        if let Some(h) = p.half_width_95
+            && !determined
+        {
+            undetermined.push(format!("{} = {:+.3} +- {:.3}", p.name, p.value, h));
+        }
         if (p.value - p.bounds.0).abs() <= 1e-6 * span
             || (p.value - p.bounds.1).abs() <= 1e-6 * span
         {
-            doubts.push(format!("{} = {:+.3} is at a bound", p.name, p.value));
-        } else if p.value.abs() > IMPLAUSIBLE_CHANGE {
+            at_bound = true;
+            doubts.push(format!(
+                "{} = {:+.3} is at a bound: the correction left the range a stiffness factor can physically take",
+                p.name, p.value
+            ));
+        } else if determined && p.value.abs() > IMPLAUSIBLE_CHANGE {
             doubts.push(format!(
                 "{} = {:+.3} changes its region by more than 50 %",
                 p.name, p.value
             ));
-        }
-        if !p.evidence && p.value.abs() > 0.05 {
+        } else if determined && !p.evidence && p.value.abs() > SMALL_CHANGE {
             doubts.push(format!(
-                "{} = {:+.3} corrects a region where localisation found no evidence",
-                p.name, p.value
+                "{} = {:+.3}{} is a determined change the data's selection did not support",
+                p.name,
+                p.value,
+                p.half_width_95
+                    .map_or(String::new(), |h| format!(" +- {h:.3}"))
             ));
         }
-        if let Some(h) = p.half_width_95
-            && p.value.abs() > 0.05
-            && h > p.value.abs()
-        {
-            // a caveat, not a verdict: the data are consistent with no change there
-            undetermined.push(format!("{} = {:+.3} +- {:.3}", p.name, p.value, h));
+    }
+    if at_bound {
+        let moved: Vec<f64> = check
+            .modes
+            .iter()
+            .filter(|m| m.tuned)
+            .filter_map(|m| Some(m.f_after? / m.f_before? - 1.0))
+            .collect();
+        if let (Some(lo), Some(hi)) = (
+            moved.iter().copied().reduce(f64::min),
+            moved.iter().copied().reduce(f64::max),
+        ) {
+            doubts.push(format!(
+                "the update moved the tuned frequencies by {:+.1} to {:+.1} %",
+                100.0 * lo,
+                100.0 * hi
+            ));
         }
     }
     let outside_with = |with_mesh: bool| -> Vec<String> {
@@ -303,72 +368,114 @@ fn judge(check: &TruthCheck, inputs: &JudgeInputs) -> Judgement {
     let outside = outside_with(false);
     let outside_mesh = outside_with(true);
     let unpaired = held.iter().filter(|m| m.f_after.is_none()).count();
+    let shape_worse: Vec<String> = held
+        .iter()
+        .filter_map(|m| {
+            let (mb, ma) = (m.mac_before?, m.mac_after?);
+            (ma < mb - MAC_DROP).then(|| format!("mode {} MAC {mb:.3} -> {ma:.3}", m.test))
+        })
+        .collect();
+    let mean_mac = |f: &dyn Fn(&ModeCheck) -> Option<f64>| {
+        let v: Vec<f64> = held.iter().filter_map(|m| f(m)).collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    };
     reasons.push(format!(
-        "held-out RMS frequency error {:.2} % before, {:.2} % after ({} modes)",
+        "held-out RMS frequency error {:.2} % before, {:.2} % after ({} modes){}",
         100.0 * b,
         100.0 * a,
-        held.len()
+        held.len(),
+        match (mean_mac(&|m| m.mac_before), mean_mac(&|m| m.mac_after)) {
+            (Some(x), Some(y)) => format!("; mean held-out MAC {x:.3} before, {y:.3} after"),
+            _ => String::new(),
+        }
     ));
     if !undetermined.is_empty() {
         reasons.push(format!(
-            "not determined by the data (95 % interval wider than the change; consistent with no change): {}",
+            "not determined by the data (95 % interval contains zero: consistent with no change): {}",
             undetermined.join(", ")
         ));
+    }
+    if let Some(why) = &inputs.unsupported {
+        reasons.push(why.clone());
+        return verdict(
+            Verdict::Inconclusive,
+            "3: the data support no correction among the candidates",
+            reasons,
+        );
     }
     if !doubts.is_empty() {
         reasons.extend(doubts);
         return verdict(
             Verdict::Compensates,
-            "3: a parameter at a bound, beyond 50 %, or without localised evidence",
+            "4: a parameter at a bound, or a determined one beyond 50 % or without the data's support",
             reasons,
         );
     }
-    if outside.is_empty() && unpaired == 0 {
+    let nominal_agreed = held.iter().all(|m| {
+        m.error_before()
+            .is_some_and(|e| e.abs() <= AGREEMENT_SIGMAS * sf)
+    });
+    if !(a < b) {
         reasons.push(format!(
-            "every held-out mode within {AGREEMENT_SIGMAS} standard deviations of the test's frequency uncertainty ({})",
+            "{} of {} held-out modes improved{}",
+            held.iter().filter(|m| m.improved() == Some(true)).count(),
+            held.len(),
+            if nominal_agreed {
+                "; the nominal model already agreed within the test's uncertainty: there was nothing for the data to correct"
+            } else {
+                ""
+            }
+        ));
+        return verdict(
+            Verdict::NotImproved,
+            "5: held-out RMS error not lower than the nominal model's",
+            reasons,
+        );
+    }
+    if !shape_worse.is_empty() {
+        reasons.push(format!(
+            "held-out shapes got worse (MAC fell by more than {MAC_DROP}): {}",
+            shape_worse.join(", ")
+        ));
+    }
+    if outside.is_empty() && unpaired == 0 && shape_worse.is_empty() {
+        reasons.push(format!(
+            "every held-out mode within {AGREEMENT_SIGMAS} standard deviations of the test's frequency uncertainty ({}), no held-out shape worse",
             pct(AGREEMENT_SIGMAS * sf)
         ));
         return verdict(
             Verdict::Agrees,
-            "4: every held-out error within 3 sigma of the test",
+            "6: every held-out error within 3 sigma of the test, no held-out shape worse",
             reasons,
         );
     }
-    if outside_mesh.is_empty() && unpaired == 0 {
+    if outside_mesh.is_empty() && unpaired == 0 && shape_worse.is_empty() {
         reasons.push(format!(
-            "the held-out modes agree only within the model's discretisation error, not within the test's uncertainty: {}",
+            "the held-out modes agree within the test's uncertainty and the model's discretisation error together: {}",
             outside.join(", ")
         ));
         return verdict(
-            Verdict::Inconclusive,
-            "5: held-out errors within the discretisation error only",
-            reasons,
-        );
-    }
-    if a < b {
-        reasons.push(format!(
-            "still outside the tolerance: {}{}",
-            outside.join(", "),
-            if unpaired > 0 {
-                format!("; {unpaired} held-out mode(s) unpaired")
-            } else {
-                String::new()
-            }
-        ));
-        return verdict(
-            Verdict::ModelFormError,
-            "6: improved, but a held-out error above 3 sigma",
+            Verdict::AgreesWithinDiscretisation,
+            "7: held-out errors within 3 sigma of the test and the discretisation error",
             reasons,
         );
     }
     reasons.push(format!(
-        "{} of {} held-out modes improved",
-        held.iter().filter(|m| m.improved() == Some(true)).count(),
-        held.len()
+        "still outside the tolerance: {}{}",
+        if outside_mesh.is_empty() {
+            "no frequency".to_string()
+        } else {
+            outside_mesh.join(", ")
+        },
+        if unpaired > 0 {
+            format!("; {unpaired} held-out mode(s) unpaired")
+        } else {
+            String::new()
+        }
     ));
     verdict(
-        Verdict::NotImproved,
-        "7: held-out RMS error not lower",
+        Verdict::ModelFormError,
+        "8: improved, but a held-out error above 3 sigma or a held-out shape worse",
         reasons,
     )
 }
@@ -525,10 +632,10 @@ mod tests {
     #[test]
     fn each_rule_by_hand() {
         let errs = [0.02, 0.02, 0.02, 0.02];
-        // 4: within 3 sigma (sigma 0.1 %: 0.3 %)
+        // 6: within 3 sigma (sigma 0.1 %: 0.3 %)
         let mut c = check(errs, [Some(0.0), Some(0.0), Some(0.002), Some(-0.0029)]);
         assert_eq!(c.judge(&given(1e-3)).verdict, Verdict::Agrees);
-        // 6: improved, one held-out at 0.5 % > 0.3 %
+        // 8: improved, one held-out at 0.5 % > 0.3 %
         let mut c = check(errs, [Some(0.0), Some(0.0), Some(0.005), Some(0.001)]);
         let j = c.judge(&given(1e-3)).clone();
         assert_eq!(j.verdict, Verdict::ModelFormError);
@@ -538,39 +645,96 @@ mod tests {
                 .any(|r| r.contains("mode 3 +0.50 % (tolerance 0.30 %)")),
             "{j:?}"
         );
-        // 5: within 3 sqrt(sigma^2 + d^2) only, d = 1 %
+        // 7: within 3 sqrt(sigma^2 + d^2) only, d = 1 %: 3.02 % tolerance
         let mut inputs = given(1e-3);
         inputs.discretisation = vec![Some(0.01); 4];
         let mut c = check(errs, [Some(0.0), Some(0.0), Some(0.005), Some(0.001)]);
-        assert_eq!(c.judge(&inputs).verdict, Verdict::Inconclusive);
-        // 7: not improved
+        assert_eq!(
+            c.judge(&inputs).verdict,
+            Verdict::AgreesWithinDiscretisation
+        );
+        assert!(Verdict::AgreesWithinDiscretisation.agrees());
+        // 5: not improved
         let mut c = check(errs, [Some(0.0), Some(0.0), Some(0.03), Some(0.02)]);
         assert_eq!(c.judge(&given(1e-3)).verdict, Verdict::NotImproved);
+        // 5 before 6: a nominal model that already agreed within a 1 % uncertainty (3 %
+        // tolerance), made worse inside the tolerance, is not improved, and said so
+        let mut c = check(
+            [0.02, 0.02, 0.0086, -0.0086],
+            [Some(0.0), Some(0.0), Some(0.0099), Some(-0.0099)],
+        );
+        let j = c.judge(&given(1e-2)).clone();
+        assert_eq!(j.verdict, Verdict::NotImproved, "{j:?}");
+        assert!(
+            j.reasons
+                .iter()
+                .any(|r| r.contains("the nominal model already agreed")),
+            "{j:?}"
+        );
         // 1: no held-out mode
         let mut c = check(errs, [Some(0.0); 4]);
         c.modes.iter_mut().for_each(|m| m.tuned = true);
         assert_eq!(c.judge(&given(1e-3)).verdict, Verdict::Inconclusive);
-        // 3: at a bound, beyond 50 %, without evidence -- even when the held-out modes agree
+        // 3: no candidate supported by the data, whatever the held-out modes do
+        let mut c = check(errs, [Some(0.0); 4]);
+        let mut inputs = given(1e-3);
+        inputs.unsupported = Some("no candidate passed".into());
+        let j = c.judge(&inputs).clone();
+        assert_eq!(j.verdict, Verdict::Inconclusive);
+        assert!(j.rule.starts_with("3:"), "{j:?}");
+        // 4: at a bound; determined beyond 50 %; a determined change without the data's support
+        // -- even when the held-out modes agree
         for p in [
-            finding(-0.9, true, None),
+            finding(-0.9, true, Some(0.01)),
             finding(0.6, true, None),
-            finding(0.2, false, None),
+            finding(0.6, true, Some(0.1)),
+            finding(0.2, false, Some(0.05)),
         ] {
             let mut c = check(errs, [Some(0.0); 4]);
             let mut inputs = given(1e-3);
             inputs.parameters = vec![p.clone()];
             assert_eq!(c.judge(&inputs).verdict, Verdict::Compensates, "{p:?}");
         }
-        // a parameter not determined by the data is a caveat, not a verdict
+        // at a bound: how far the tuned frequencies moved is said (2 % to 0 %: -1.96 %)
         let mut c = check(errs, [Some(0.0); 4]);
         let mut inputs = given(1e-3);
-        inputs.parameters = vec![finding(0.1, true, Some(0.3))];
+        inputs.parameters = vec![finding(-0.9, true, None)];
         let j = c.judge(&inputs).clone();
-        assert_eq!(j.verdict, Verdict::Agrees);
         assert!(
             j.reasons
                 .iter()
-                .any(|r| r.contains("not determined by the data"))
+                .any(|r| r.contains("moved the tuned frequencies by -2.0 to -2.0 %")),
+            "{j:?}"
+        );
+        // an interval containing zero is "not determined", never compensation, whatever its size
+        // and whether or not the selection chose it; small changes are named too
+        let mut c = check(errs, [Some(0.0); 4]);
+        let mut inputs = given(1e-3);
+        inputs.parameters = vec![
+            finding(0.073, false, Some(0.162)),
+            finding(0.6, true, Some(0.8)),
+            finding(0.02, true, Some(0.24)),
+        ];
+        let j = c.judge(&inputs).clone();
+        assert_eq!(j.verdict, Verdict::Agrees, "{j:?}");
+        let caveat = j
+            .reasons
+            .iter()
+            .find(|r| r.contains("not determined by the data"))
+            .expect("caveat");
+        for v in ["+0.073 +- 0.162", "+0.600 +- 0.800", "+0.020 +- 0.240"] {
+            assert!(caveat.contains(v), "{caveat}");
+        }
+        // a held-out shape worse by more than 0.02 in MAC keeps the verdict from agreeing
+        let mut c = check(errs, [Some(0.0), Some(0.0), Some(0.001), Some(0.001)]);
+        c.modes[2].mac_after = Some(0.95);
+        let j = c.judge(&given(1e-3)).clone();
+        assert_eq!(j.verdict, Verdict::ModelFormError, "{j:?}");
+        assert!(
+            j.reasons
+                .iter()
+                .any(|r| r.contains("mode 3 MAC 0.990 -> 0.950")),
+            "{j:?}"
         );
         // the mesh's own error as large as the signal is said before anything else
         let mut inputs = given(1e-3);
@@ -578,12 +742,18 @@ mod tests {
         let mut c = check(errs, [Some(0.0); 4]);
         let j = c.judge(&inputs).clone();
         assert!(j.reasons[0].starts_with("before updating"), "{j:?}");
-        // an assumed uncertainty is said
+        // an assumed uncertainty is said, and a fit that leaves more scatter than it explains
         let mut c = check(errs, [Some(0.0); 4]);
-        let j = c.judge(&JudgeInputs::default()).clone();
+        let j = c
+            .judge(&JudgeInputs {
+                fit_scale: Some(3.0),
+                ..Default::default()
+            })
+            .clone();
         assert!(
             j.reasons[0].starts_with("test uncertainty not given"),
             "{j:?}"
         );
+        assert!(j.reasons[1].contains("3.0 times the scatter"), "{j:?}");
     }
 }

@@ -80,10 +80,7 @@ pub fn run(a: &RunArgs, quiet: bool) -> Result<(), CliError> {
         }
     }
     if let Some(u) = &r.update {
-        println!(
-            "\n# updating\n\n{}\n{}\n{}",
-            u.localisation, u.result, u.truth_check
-        );
+        println!("\n# updating\n\n{u}");
     }
     println!("results written to {}:", a.out.display());
     for f in &r.files {

@@ -49,20 +49,7 @@ pub fn run(a: &UpdateArgs, quiet: bool) -> Result<(), CliError> {
     })?;
     pb.finish_and_clear();
     if !quiet {
-        println!(
-            "Localisation ({} candidate sets, tuned on test modes 1-{tuned}):\n{}",
-            study.candidates.len(),
-            study.localisation
-        );
-        println!("{}", study.reach);
-        println!("{}", study.result);
-        if let Some(d) = &study.discretisation {
-            println!(
-                "{}",
-                femu::study::discretisation::table(d, &study.truth_check)
-            );
-        }
-        println!("{}", study.truth_check);
+        println!("Tuned on test modes 1-{tuned}.\n\n{study}");
     }
     write_json(a.json.as_deref(), &study)
 }

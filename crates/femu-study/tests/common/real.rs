@@ -67,6 +67,27 @@ pub fn measure(
     frequency_noise: f64,
     seed: u64,
 ) -> (TestModes, Vec<Sensor>) {
+    measure_along(
+        real,
+        theta,
+        model,
+        count,
+        (shape_noise, frequency_noise),
+        seed,
+        &[[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+    )
+}
+
+/// As [`measure`], with the sensors of each node along `directions` (unit vectors).
+pub fn measure_along(
+    real: &Model,
+    theta: &[f64],
+    model: &Model,
+    count: usize,
+    (shape_noise, frequency_noise): (f64, f64),
+    seed: u64,
+    directions: &[[f64; 3]],
+) -> (TestModes, Vec<Sensor>) {
     let names = regions();
     let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
     let mut up =
@@ -80,9 +101,9 @@ pub fn measure(
     for id in &nodes {
         let x = model.mesh().coords()[model.mesh().node_index(*id).unwrap()];
         let rid = node_at(real.mesh(), x);
-        for c in [1, 2] {
-            real_sensors.push(Sensor::axis(rid, c));
-            sensors.push(Sensor::axis(*id, c));
+        for d in directions {
+            real_sensors.push(Sensor::new(rid, *d));
+            sensors.push(Sensor::new(*id, *d));
         }
     }
     let layout = SensorLayout::new(real.mesh(), &up.matrices().dofs, real_sensors).unwrap();
