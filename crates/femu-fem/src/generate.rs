@@ -460,3 +460,281 @@ pub fn to_quadratic(mesh: &Mesh) -> Mesh {
     }
     out
 }
+
+/// A mesh made from another by [`refine`] or [`quadratic_refinement`], with what ties it to the
+/// original: every original node keeps its id (and index), and each new node is a combination of
+/// the original nodes of the face, edge or cell it lies in.
+#[derive(Debug, Clone)]
+pub struct Refinement {
+    /// The new mesh (original nodes first, with their ids; new nodes after, ids above the largest).
+    pub mesh: Mesh,
+    /// For each element of the new mesh, the index of the original element it came from.
+    pub parent: Vec<usize>,
+    /// Each new node (index into the new mesh) with the original nodes (indices) of the entity it
+    /// lies on and their shape-function values there: its displacement in the original element's
+    /// interpolation is `sum w u`. A fixed or rigidly linked entity fixes or links it.
+    pub new_nodes: Vec<(usize, Vec<(usize, f64)>)>,
+}
+
+/// [`to_quadratic`] with the map of [`Refinement`]: each mid-edge node is `(a + b) / 2` of its
+/// edge's ends.
+pub fn quadratic_refinement(mesh: &Mesh) -> Refinement {
+    let out = to_quadratic(mesh);
+    let n0 = mesh.node_count();
+    let mut new_nodes = Vec::new();
+    let mut seen = vec![false; out.node_count()];
+    for (e, el) in out.elements().enumerate() {
+        if mesh.element(e).kind.is_quadratic() {
+            continue;
+        }
+        let corners = el.kind.num_corners();
+        for (k, edge) in el.kind.edges().iter().enumerate() {
+            let mid = el.nodes[corners + k];
+            if mid >= n0 && !seen[mid] {
+                seen[mid] = true;
+                new_nodes.push((
+                    mid,
+                    vec![(el.nodes[edge[0]], 0.5), (el.nodes[edge[1]], 0.5)],
+                ));
+            }
+        }
+    }
+    new_nodes.sort_unstable_by_key(|(m, _)| *m);
+    Refinement {
+        parent: (0..out.element_count()).collect(),
+        mesh: out,
+        new_nodes,
+    }
+}
+
+/// The children of a reference cell split once, as the reference coordinates of their corners:
+/// the cube in 8, the tetrahedron in 8 (4 corner tetrahedra and the central octahedron cut along
+/// a diagonal), the wedge in 8 (4 triangles by 2 layers). `None` for pyramids.
+fn children(kind: ElementKind) -> Option<Vec<Vec<[f64; 3]>>> {
+    let lin = kind.linear();
+    let c = lin.reference_nodes();
+    let mid = |a: [f64; 3], b: [f64; 3]| {
+        [
+            0.5 * (a[0] + b[0]),
+            0.5 * (a[1] + b[1]),
+            0.5 * (a[2] + b[2]),
+        ]
+    };
+    Some(match lin {
+        ElementKind::Hex8 => {
+            let mut out = Vec::new();
+            for oz in [-0.5, 0.5] {
+                for oy in [-0.5, 0.5] {
+                    for ox in [-0.5, 0.5] {
+                        out.push(
+                            c.iter()
+                                .map(|p| [ox + 0.5 * p[0], oy + 0.5 * p[1], oz + 0.5 * p[2]])
+                                .collect(),
+                        );
+                    }
+                }
+            }
+            out
+        }
+        ElementKind::Tet4 => {
+            let (p0, p1, p2, p3) = (c[0], c[1], c[2], c[3]);
+            let (m01, m02, m03) = (mid(p0, p1), mid(p0, p2), mid(p0, p3));
+            let (m12, m13, m23) = (mid(p1, p2), mid(p1, p3), mid(p2, p3));
+            vec![
+                vec![p0, m01, m02, m03],
+                vec![m01, p1, m12, m13],
+                vec![m02, m12, p2, m23],
+                vec![m03, m13, m23, p3],
+                vec![m02, m13, m01, m03],
+                vec![m02, m13, m03, m23],
+                vec![m02, m13, m23, m12],
+                vec![m02, m13, m12, m01],
+            ]
+        }
+        ElementKind::Penta6 => {
+            let t = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+            let m = |a: [f64; 2], b: [f64; 2]| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+            let (m01, m12, m02) = (m(t[0], t[1]), m(t[1], t[2]), m(t[0], t[2]));
+            let tris = [
+                [t[0], m01, m02],
+                [m01, t[1], m12],
+                [m02, m12, t[2]],
+                [m12, m02, m01],
+            ];
+            let mut out = Vec::new();
+            for (lo, hi) in [(-1.0, 0.0), (0.0, 1.0)] {
+                for tr in &tris {
+                    let mut v: Vec<[f64; 3]> = tr.iter().map(|p| [p[0], p[1], lo]).collect();
+                    v.extend(tr.iter().map(|p| [p[0], p[1], hi]));
+                    out.push(v);
+                }
+            }
+            out
+        }
+        _ => return None,
+    })
+}
+
+/// The determinant of the affine map from the reference cell of `lin` to the child with corners
+/// `c` (reference coordinates of the parent).
+fn child_orientation(lin: ElementKind, c: &[[f64; 3]]) -> f64 {
+    let centre = match lin {
+        ElementKind::Tet4 => [0.25; 3],
+        ElementKind::Penta6 => [1.0 / 3.0, 1.0 / 3.0, 0.0],
+        _ => [0.0; 3],
+    };
+    let mut dn = vec![0.0; 3 * lin.num_nodes()];
+    lin.shape_gradients(centre, &mut dn);
+    let mut j = [[0.0; 3]; 3];
+    for (a, p) in c.iter().enumerate() {
+        for r in 0..3 {
+            for s in 0..3 {
+                j[r][s] += p[r] * dn[3 * a + s];
+            }
+        }
+    }
+    j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1])
+        - j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0])
+        + j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0])
+}
+
+/// Splits every element of a mesh once (8 children each) keeping its interpolation: each child
+/// node is placed by the parent's own shape functions, so curved quadratic geometry stays curved,
+/// and children of a quadratic element are quadratic. Nodes on a shared face or edge are shared
+/// (identified by the face's or edge's corner nodes and the position on it, not by coordinates:
+/// coincident nodes of separate parts stay separate). Node sets take the new nodes whose face,
+/// edge or cell lies in the set; element sets take the children of their elements.
+///
+/// # Errors
+/// [`FemError::InvalidGenerator`] for a pyramid (its split into pyramids and tetrahedra is not
+/// implemented), named by element id.
+pub fn refine(mesh: &Mesh) -> Result<Refinement, FemError> {
+    let mut out = Mesh::new();
+    for i in 0..mesh.node_count() {
+        out.add_node(mesh.node_id(i), mesh.coords()[i])?;
+    }
+    let mut next = (0..mesh.node_count())
+        .map(|i| mesh.node_id(i))
+        .max()
+        .unwrap_or(0)
+        + 1;
+    // a point of an element: its entity's corner nodes with the linear weights there, in 64ths
+    // (the split's points are on a lattice of quarters: every weight is exact)
+    type Key = Vec<(usize, i64)>;
+    let mut by_key: HashMap<Key, usize> = HashMap::new();
+    let mut new_nodes = Vec::new();
+    let mut parent = Vec::new();
+    let mut next_element = 1u64;
+    let mut children_of: Vec<Vec<usize>> = vec![Vec::new(); mesh.element_count()];
+    for (e, el) in mesh.elements().enumerate() {
+        let kind = el.kind;
+        let lin = kind.linear();
+        let kids = children(kind).ok_or_else(|| FemError::InvalidGenerator {
+            reason: format!(
+                "refinement: element {} is a {kind:?}, and pyramids are not split",
+                el.id
+            ),
+        })?;
+        let corners = lin.num_nodes();
+        let ref_nodes = kind.reference_nodes();
+        let mut n_lin = vec![0.0; corners];
+        let mut n_par = vec![0.0; kind.num_nodes()];
+        let key_of = |xi: [f64; 3], n_lin: &mut Vec<f64>| -> Key {
+            lin.shape(xi, n_lin);
+            let mut k: Key = n_lin
+                .iter()
+                .enumerate()
+                .filter(|(_, w)| w.abs() > 1e-12)
+                .map(|(a, w)| (el.nodes[a], (w * 64.0).round() as i64))
+                .collect();
+            k.sort_unstable();
+            k
+        };
+        // the parent's own nodes are the original ones
+        for (a, xi) in ref_nodes.iter().enumerate() {
+            let k = key_of(*xi, &mut n_lin);
+            by_key.entry(k).or_insert(el.nodes[a]);
+        }
+        for mut kid in kids {
+            if child_orientation(lin, &kid) < 0.0 {
+                // a mirrored child: swap two corners (and their layer partners for a wedge)
+                kid.swap(1, 2);
+                if lin == ElementKind::Penta6 {
+                    kid.swap(4, 5);
+                }
+            }
+            let mut nodes = Vec::with_capacity(kind.num_nodes());
+            for r in &ref_nodes {
+                // the child's reference point in the parent's reference coordinates (affine)
+                lin.shape(*r, &mut n_lin);
+                let mut xi = [0.0; 3];
+                for (a, p) in kid.iter().enumerate() {
+                    for d in 0..3 {
+                        xi[d] += n_lin[a] * p[d];
+                    }
+                }
+                let k = key_of(xi, &mut n_lin);
+                let idx = match by_key.get(&k) {
+                    Some(i) => *i,
+                    None => {
+                        kind.shape(xi, &mut n_par);
+                        let mut x = [0.0; 3];
+                        for (a, w) in n_par.iter().enumerate() {
+                            let p = mesh.coords()[el.nodes[a]];
+                            for d in 0..3 {
+                                x[d] += w * p[d];
+                            }
+                        }
+                        let i = out.add_node(next, x)?;
+                        next += 1;
+                        // the entity's original nodes with their weights (the others vanish on it)
+                        let entity: Vec<usize> = k.iter().map(|(n, _)| *n).collect();
+                        let weights: Vec<(usize, f64)> = n_par
+                            .iter()
+                            .enumerate()
+                            .filter(|(a, _)| {
+                                let mut on = vec![0.0; corners];
+                                lin.shape(ref_nodes[*a], &mut on);
+                                on.iter()
+                                    .enumerate()
+                                    .all(|(c, w)| w.abs() <= 1e-12 || entity.contains(&el.nodes[c]))
+                            })
+                            .map(|(a, w)| (el.nodes[a], *w))
+                            .collect();
+                        new_nodes.push((i, weights));
+                        by_key.insert(k, i);
+                        i
+                    }
+                };
+                nodes.push(idx);
+            }
+            children_of[e].push(out.element_count());
+            out.push_element(next_element, kind, &nodes);
+            next_element += 1;
+            parent.push(e);
+        }
+    }
+    for (name, set) in mesh.node_sets() {
+        let mut members = vec![false; mesh.node_count()];
+        set.iter().for_each(|n| members[*n] = true);
+        let mut nodes = set.clone();
+        nodes.extend(
+            new_nodes
+                .iter()
+                .filter(|(_, w)| w.iter().all(|(n, _)| members[*n]))
+                .map(|(i, _)| *i),
+        );
+        out.add_node_set_indices(name.clone(), nodes);
+    }
+    for (name, set) in mesh.element_sets() {
+        out.add_element_set_indices(
+            name.clone(),
+            set.iter().flat_map(|e| children_of[*e].clone()).collect(),
+        );
+    }
+    Ok(Refinement {
+        mesh: out,
+        parent,
+        new_nodes,
+    })
+}

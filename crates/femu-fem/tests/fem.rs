@@ -10,4 +10,5 @@ mod fem {
     mod locate;
     mod mesh;
     mod pyramids;
+    mod refine;
 }

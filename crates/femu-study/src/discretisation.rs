@@ -1,6 +1,7 @@
 //! The model's own error: how far its mesh is from converged, estimated by solving the same mesh
 //! with quadratic elements (every linear element gets straight mid-edge nodes; same materials,
-//! same constraints) and pairing the modes by MAC at the original nodes. For a linear mesh that
+//! same constraints), or for a quadratic mesh the same mesh split once, and pairing the modes by
+//! MAC at the original nodes. For a linear mesh that
 //! locks in bending (one or two hex8 through a plate's thickness) the difference is the error that
 //! updating would otherwise absorb into its parameters; `docs/MATH.md`, "The truth check".
 
@@ -8,7 +9,7 @@ use crate::StudyError;
 use femu_correlate::correlation::mac_matrix;
 use femu_correlate::{ModeSet, PairingOptions, Sensor, SensorLayout, pair_modes};
 use femu_fem::assembly::{Assembler, MassKind};
-use femu_fem::generate::to_quadratic;
+use femu_fem::generate::{quadratic_refinement, refine};
 use femu_fem::model::Model;
 use femu_sparse::eigen::{EigenOptions, Which};
 use serde::Serialize;
@@ -27,9 +28,44 @@ pub struct DiscretisationEstimate {
     pub frequencies_hz: Vec<f64>,
 }
 
+/// The largest reference femu builds for the estimate, in DOFs: beyond it the estimate is skipped
+/// and said (a quadratic mesh split once has about eight times its nodes).
+pub const REFERENCE_DOF_LIMIT: usize = 3_000_000;
+
+/// Why [`estimate`] will not estimate `model`'s discretisation error, when it will not: a
+/// quadratic mesh with pyramids (not split), or a reference above [`REFERENCE_DOF_LIMIT`]
+/// (its size estimated from the node count).
+pub fn not_estimated(model: &Model) -> Option<String> {
+    let mesh = model.mesh();
+    let quadratic = mesh.elements().all(|e| e.kind.is_quadratic());
+    if quadratic
+        && mesh
+            .elements()
+            .any(|e| e.kind == femu_fem::element::ElementKind::Pyramid13)
+    {
+        return Some("its quadratic mesh has pyramids, which femu does not split (refine it once and compare to know it)".into());
+    }
+    // nodes of the reference: a split quadratic mesh about 8 times, a linear one with its
+    // mid-edge nodes at most 7 times (tetrahedra; about 4 for bricks)
+    let factor = if quadratic { 8 } else { 7 };
+    let dofs = 3 * factor * mesh.node_count();
+    (dofs > REFERENCE_DOF_LIMIT).then(|| {
+        format!(
+            "its reference ({}) would have about {dofs} DOFs, above femu's limit of {REFERENCE_DOF_LIMIT} for it (refine the model once and compare to know it, or --no-discretisation)",
+            if quadratic {
+                "the mesh split once"
+            } else {
+                "the mesh with quadratic elements"
+            }
+        )
+    })
+}
+
 /// Estimates the discretisation error of the first modes of `model` (`modes`, the model's own
-/// modes, consistent mass). `None` when the mesh is already quadratic (nothing cheaper to compare
-/// with; said by the callers). The reference is solved with `eigen`.
+/// modes, consistent mass) against a finer model of the same structure: a linear (or mixed) mesh
+/// with quadratic elements, a quadratic mesh split once (every element in eight, placed by its
+/// parent's shape functions: the reference contains the model, so its eigenvalues are lower).
+/// `None` where [`not_estimated`] says why. The reference is solved with `eigen`.
 ///
 /// # Errors
 /// Building or solving the quadratic model.
@@ -39,20 +75,38 @@ pub fn estimate(
     eigen: &EigenOptions,
 ) -> Result<Option<DiscretisationEstimate>, StudyError> {
     let mesh = model.mesh();
-    if mesh.elements().all(|e| e.kind.is_quadratic()) {
-        return Ok(None);
-    }
-    let mut qm = to_quadratic(mesh);
-    // materials element by element, grouped by material
+    // a linear (or mixed) mesh against itself with quadratic elements; a quadratic one against
+    // itself split once, each child placed by its parent's shape functions
+    let quadratic = mesh.elements().all(|e| e.kind.is_quadratic());
+    let (refinement, reference_name) = if quadratic {
+        if mesh
+            .elements()
+            .any(|e| e.kind == femu_fem::element::ElementKind::Pyramid13)
+        {
+            return Ok(None);
+        }
+        (
+            refine(mesh)?,
+            "the same mesh split once (each element in eight)",
+        )
+    } else {
+        (
+            quadratic_refinement(mesh),
+            "the same mesh with quadratic elements",
+        )
+    };
+    let qmesh = refinement.mesh;
+    // materials element by element (a child takes its parent's), grouped by material
     let mut by_material: Vec<(femu_fem::material::Material, Vec<u64>)> = Vec::new();
-    for e in 0..mesh.element_count() {
-        let m = model.material_of(e)?;
-        let id = mesh.element(e).id;
+    for (e, p) in refinement.parent.iter().enumerate() {
+        let m = model.material_of(*p)?;
+        let id = qmesh.element(e).id;
         match by_material.iter_mut().find(|(d, _)| d == m) {
             Some(d) => d.1.push(id),
             None => by_material.push((m.clone(), vec![id])),
         }
     }
+    let mut qm = qmesh;
     for (i, (_, ids)) in by_material.iter().enumerate() {
         qm.add_element_set(format!("__femu_discretisation_{i}"), ids)?;
     }
@@ -81,44 +135,40 @@ pub fn estimate(
         q.add_constraint((mesh.node_id(n), c), &terms, &con.label)?;
         dependent.insert((mesh.node_id(n), c));
     }
-    // boundary conditions: the same nodes, and a mid-edge node where both ends of its edge are
-    // fixed; a mid-edge node whose ends are both dependent follows their average (exact for a
-    // rigid link, whose motion is affine)
+    // boundary conditions: the same nodes, and a new node where every original node of its face,
+    // edge or cell is fixed; a new node whose original nodes are all dependent follows their
+    // interpolation (exact for a rigid link, whose motion is affine)
     let fixed: std::collections::HashSet<(u64, usize)> = model
         .fixed_dofs()
         .map(|(n, c)| (mesh.node_id(n), c))
         .collect();
     let mut extra: Vec<(u64, usize)> = Vec::new();
-    let mut ties: Vec<(u64, usize, u64, u64)> = Vec::new();
-    {
-        let qmesh = q.mesh();
-        let mut seen = std::collections::HashSet::new();
-        for el in qmesh.elements() {
-            let corners = el.kind.num_corners();
-            for (k, e) in el.kind.edges().iter().enumerate() {
-                let (a, b) = (qmesh.node_id(el.nodes[e[0]]), qmesh.node_id(el.nodes[e[1]]));
-                let mid = qmesh.node_id(el.nodes[corners + k]);
-                if !seen.insert(mid) {
-                    continue;
-                }
-                for c in 0..3 {
-                    if fixed.contains(&(a, c)) && fixed.contains(&(b, c)) {
-                        extra.push((mid, c));
-                    } else if dependent.contains(&(a, c)) && dependent.contains(&(b, c)) {
-                        ties.push((mid, c, a, b));
-                    }
-                }
+    // (node, component, the interpolation it follows)
+    type Tie = (u64, usize, Vec<((u64, usize), f64)>);
+    let mut ties: Vec<Tie> = Vec::new();
+    for (i, weights) in &refinement.new_nodes {
+        let id = q.mesh().node_id(*i);
+        let on: Vec<(u64, f64)> = weights
+            .iter()
+            .filter(|(_, w)| w.abs() > 1e-12)
+            .map(|(n, w)| (mesh.node_id(*n), *w))
+            .collect();
+        for c in 0..3 {
+            if on.iter().all(|(n, _)| fixed.contains(&(*n, c))) {
+                extra.push((id, c));
+            } else if on.iter().all(|(n, _)| dependent.contains(&(*n, c))) {
+                ties.push((id, c, on.iter().map(|(n, w)| ((*n, c), *w)).collect()));
             }
         }
     }
     for (id, c) in fixed.iter().chain(&extra) {
         q.fix_node_dofs(*id, &[*c])?;
     }
-    for (mid, c, a, b) in ties {
+    for (id, c, terms) in ties {
         q.add_constraint(
-            (mid, c),
-            &[((a, c), 0.5), ((b, c), 0.5)],
-            &format!("(mid-edge node {mid} of the quadratic comparison mesh, between {a} and {b})"),
+            (id, c),
+            &terms,
+            &format!("(node {id} of the discretisation reference, interpolated on its parent)"),
         )?;
     }
     let asm = Assembler::new(&q)?;
@@ -156,7 +206,7 @@ pub fn estimate(
         .collect();
     let f_model = modes.frequencies_hz();
     Ok(Some(DiscretisationEstimate {
-        reference: "the same mesh with quadratic elements".into(),
+        reference: reference_name.into(),
         reference_dofs: sys.k.rows(),
         relative,
         frequencies_hz: f_model,
@@ -183,7 +233,7 @@ pub fn table(d: &DiscretisationEstimate, check: &femu_update::TruthCheck) -> Str
                 .map_or("-".into(), |e| format!("{:+.2}", 100.0 * e))
         );
     }
-    s.push_str("\ndiscretisation = (f model - f quadratic) / f quadratic for the model mode paired with the test mode.\n");
+    s.push_str("\ndiscretisation = (f model - f reference) / f reference for the model mode paired with the test mode.\n");
     s
 }
 

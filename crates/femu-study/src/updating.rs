@@ -585,10 +585,13 @@ pub fn localise_update_check(
         fit_scale,
         unsupported,
     });
-    if options.discretisation && discretisation.is_none() {
-        truth_check.judgement.reasons.push(
-            "the model's discretisation error was not estimated: its mesh is already quadratic (refine it once and compare to know it)".into(),
-        );
+    if options.discretisation
+        && discretisation.is_none()
+        && let Some(why) = crate::discretisation::not_estimated(model)
+    {
+        truth_check.judgement.reasons.push(format!(
+            "the model's discretisation error was not estimated: {why}"
+        ));
     }
     // the expanded residual holds the readings' noise spread over the model: a low fraction is a
     // finding only when the fit's chi-square also leaves more than the uncertainty explains

@@ -130,12 +130,15 @@ const CASES: [(f64, u64); 5] = [(0.0, 7), (0.01, 1), (0.01, 3), (0.01, 5), (0.01
 /// - What the data hold, by the least-squares fit with every region free (noise-free): r3 is the
 ///   largest change, -0.282 +- 0.061, every other region within 0.08 and not determined.
 /// - With default settings, in every realisation: r3 selected first and alone (the end regions
-///   that lower the objective in some realisations are selected in 40-70 % of the resamples
+///   that lower the objective in some realisations are selected in 10-73 % of the resamples
 ///   only, and not kept), r3 within 0.02 of -0.25 (measured -0.231 to -0.237), the held-out RMS
-///   error cut by at least three (about 1.4 % to 0.35 %), and the verdict "improved, but still
-///   off": the element difference leaves held-out modes 7 and 10 0.4-0.7 % off, which no
-///   stiffness factor represents. Mode 10 overshoots (+0.62 % to -0.66 % at seed 1, measured), so
-///   one held-out mode may end up no better, by less than 0.1 point.
+///   error cut by at least three (about 1.4 % to 0.35 %). The element difference leaves held-out
+///   modes 7 and 10 0.4-0.7 % off, which no stiffness factor represents, and the model's own
+///   discretisation error (the hex20 mesh split once: up to 0.28 % on these modes) is of that
+///   size: noise-free the verdict is "agrees within the test's uncertainty and the model's
+///   discretisation error"; at 1 % noise either that or "improved, but still off", by
+///   realisation, never "agrees" alone. Mode 10 overshoots (+0.62 % to -0.66 % at seed 1,
+///   measured), so one held-out mode may end up no better, by less than 0.1 point.
 #[test]
 fn converged_model_against_another_discretisation() {
     let model = real::plate([20, 7, 2], true);
@@ -184,12 +187,45 @@ fn converged_model_against_another_discretisation() {
             "{at}: {worse:?}\n{}",
             s.truth_check
         );
-        assert_eq!(
-            s.truth_check.judgement.verdict,
-            Verdict::ModelFormError,
-            "{at}\n{}",
-            s.truth_check
-        );
+        // the hex20 model split once: its own error is a few tenths of a percent, what the
+        // element difference leaves on the held-out modes; which of the two verdicts holds
+        // depends on the realisation, never "agrees" within the test's uncertainty alone
+        let d = s
+            .discretisation
+            .as_ref()
+            .expect("a hex20 mesh is split once");
+        let worst = d
+            .relative
+            .iter()
+            .flatten()
+            .fold(0.0_f64, |a, v| a.max(v.abs()));
+        assert!(worst < 0.01, "{at}: {worst}");
+        let j = &s.truth_check.judgement;
+        match j.verdict {
+            Verdict::AgreesWithinDiscretisation => assert!(
+                j.reasons
+                    .iter()
+                    .any(|r| r.contains("the model's discretisation error together")),
+                "{at}\n{}",
+                s.truth_check
+            ),
+            Verdict::ModelFormError => assert!(
+                j.reasons
+                    .iter()
+                    .any(|r| r.starts_with("still outside the tolerance")),
+                "{at}\n{}",
+                s.truth_check
+            ),
+            other => panic!("{at}: {other:?}\n{}", s.truth_check),
+        }
+        if noise == 0.0 {
+            assert_eq!(
+                j.verdict,
+                Verdict::AgreesWithinDiscretisation,
+                "{}",
+                s.truth_check
+            );
+        }
     }
 }
 
