@@ -924,3 +924,68 @@ fn one_sensor_pairs_by_frequency_and_says_so() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A test of frequencies alone, as CSV (`mode,frequency_hz` and blank readings) and as a Universal
+/// File whose datasets 55 have no node records: `correlate` pairs it by frequency and says what
+/// shapes would add; `estimate` and `expand` refuse it by naming the missing shapes; `update`
+/// fits the frequencies and refuses SB-EBE by name.
+#[test]
+fn a_test_of_frequencies_alone_is_read_and_paired_by_frequency() {
+    let deck = fixture("two_hex.inp");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures");
+    for test in [
+        root.join("csv/frequencies_only.csv"),
+        root.join("csv/frequencies_blank_shapes.csv"),
+        root.join("uff/frequencies_only.unv"),
+    ] {
+        let t = test.to_str().unwrap();
+        let out = stdout_of_success(&["correlate", deck.to_str().unwrap(), t]);
+        assert!(out.contains("at 0 sensors"), "{out}");
+        assert!(
+            out.contains("warning: the test gives frequencies without mode shapes"),
+            "{out}"
+        );
+        assert!(
+            out.contains("pairs by optimal assignment on the frequencies"),
+            "{out}"
+        );
+        // the pairs are by frequency: the first test mode, 1311.2 or 1442.8 Hz, with model
+        // mode 1, and no MAC column value
+        assert!(
+            out.contains("| 1 | 13") || out.contains("| 1 | 14"),
+            "{out}"
+        );
+        assert!(out.contains("| - | - |"), "{out}");
+        for cmd in ["estimate", "expand"] {
+            let err = stderr_of_failure(&[cmd, deck.to_str().unwrap(), t]);
+            assert!(
+                err.contains("frequencies without mode shapes"),
+                "{cmd}: {err}"
+            );
+        }
+        let err = stderr_of_failure(&[
+            "update",
+            deck.to_str().unwrap(),
+            t,
+            "--sets",
+            "LEFT,RIGHT",
+            "--method",
+            "sbebe",
+        ]);
+        assert!(err.contains("frequencies alone"), "{err}");
+    }
+    let out = stdout_of_success(&[
+        "update",
+        deck.to_str().unwrap(),
+        root.join("uff/frequencies_only.unv").to_str().unwrap(),
+        "--sets",
+        "LEFT,RIGHT",
+        "--tuned",
+        "2",
+    ]);
+    assert!(out.contains("the test gives frequencies alone"), "{out}");
+    assert!(
+        out.contains("Does the updated model tell the truth?"),
+        "{out}"
+    );
+}

@@ -71,7 +71,7 @@ pub use expansion::{
 };
 pub use mass::MassSolver;
 pub use modes::{ModeSet, TestModes};
-pub use pairing::{Pair, Pairing, PairingOptions, pair_modes};
+pub use pairing::{Pair, Pairing, PairingOptions, pair_by_frequency, pair_modes};
 pub use report::{Assessment, CorrelationReport, correlate, estimate};
 pub use residues::StiffnessSolver;
 pub use sensor_space::SensorSpace;

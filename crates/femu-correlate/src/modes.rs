@@ -150,7 +150,8 @@ impl ModeSet {
 }
 
 /// Identified test modes: frequencies (Hz), optional damping ratios, shapes at the sensors (one
-/// row per sensor of a [`SensorLayout`](crate::SensorLayout), one column per mode).
+/// row per sensor of a [`SensorLayout`](crate::SensorLayout), one column per mode). A test of
+/// frequencies alone has no sensor: zero rows ([`TestModes::frequencies_only`]).
 #[derive(Debug, Clone)]
 pub struct TestModes {
     /// Identified natural frequencies in Hz.
@@ -206,12 +207,31 @@ impl TestModes {
                 });
             }
         }
-        check_shapes("test mode shape", shapes.as_ref())?;
+        if shapes.nrows() > 0 {
+            check_shapes("test mode shape", shapes.as_ref())?;
+        }
         Ok(Self {
             frequencies_hz,
             damping_ratios,
             shapes,
         })
+    }
+
+    /// Test modes of frequencies alone (no shapes: zero sensors).
+    ///
+    /// # Errors
+    /// As [`TestModes::new`].
+    pub fn frequencies_only(
+        frequencies_hz: Vec<f64>,
+        damping_ratios: Option<Vec<f64>>,
+    ) -> Result<Self, CorrelateError> {
+        let m = frequencies_hz.len();
+        Self::new(frequencies_hz, damping_ratios, Mat::zeros(0, m))
+    }
+
+    /// Whether the test gives mode shapes (at least one sensor).
+    pub fn has_shapes(&self) -> bool {
+        self.shapes.nrows() > 0
     }
 
     /// Number of modes.

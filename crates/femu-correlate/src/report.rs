@@ -19,19 +19,25 @@ pub struct CorrelationReport {
     pub f_test: Vec<f64>,
     /// Model frequencies, Hz.
     pub f_model: Vec<f64>,
-    /// MAC on the sensors, `mac[test][model]`.
+    /// MAC on the sensors, `mac[test][model]` (empty for a test of frequencies alone).
     pub mac: Vec<Vec<f64>>,
     /// The pairing (optimal assignment above the threshold).
     pub pairing: Pairing,
-    /// MSD on the sensors with the modal scale factor (17), per pair in pairing order.
+    /// MSD on the sensors with the modal scale factor (17), per pair in pairing order (empty for
+    /// a test of frequencies alone).
     pub msd: Vec<f64>,
     /// COMAC per sensor over the pairs (empty when nothing paired).
     pub comac: Vec<f64>,
 }
 
+/// What a test of frequencies alone cannot give, said with its correlation.
+pub const FREQUENCIES_ONLY: &str = "the test gives frequencies without mode shapes: the modes are paired by frequency alone (nearest, in order), with no MAC, MSD or COMAC; the estimators and expansion need shapes, and updating fits the frequencies only (it cannot tell mirror regions apart)";
+
 /// Correlates model modes with test modes measured on `layout`. The basis of each repeated model
 /// eigenvalue is first turned towards the test ([`align_repeated`]), so that pairs, MACs and MSDs
-/// do not depend on the basis the eigensolver happened to return.
+/// do not depend on the basis the eigensolver happened to return. A test of frequencies alone
+/// (no sensor) is paired by frequency ([`pair_by_frequency`](crate::pair_by_frequency)), with no
+/// MAC, MSD or COMAC, and a warning that says so.
 ///
 /// # Errors
 /// Mismatched sizes (model shapes against the layout, test shapes against the sensors), zero
@@ -47,6 +53,20 @@ pub fn correlate(
             what: "test shapes against the sensors",
             expected: layout.len(),
             got: test.shapes.nrows(),
+        });
+    }
+    if !test.has_shapes() {
+        let f_model = model.frequencies_hz();
+        let mut pairing =
+            crate::pairing::pair_by_frequency(&test.frequencies_hz, &f_model, options)?;
+        pairing.warnings.insert(0, FREQUENCIES_ONLY.to_string());
+        return Ok(CorrelationReport {
+            f_test: test.frequencies_hz.clone(),
+            f_model,
+            mac: Vec::new(),
+            pairing,
+            msd: Vec::new(),
+            comac: Vec::new(),
         });
     }
     // a repeated eigenvalue's basis is the eigensolver's: turn it towards the test first
@@ -112,18 +132,19 @@ impl fmt::Display for CorrelationReport {
             "| test | f test (Hz) | model | f model (Hz) | error (%) | gap (s^-2) | MAC | MSD |"
         )?;
         writeln!(f, "|---|---|---|---|---|---|---|---|")?;
-        for (p, msd) in self.pairing.pairs.iter().zip(&self.msd) {
+        for (k, p) in self.pairing.pairs.iter().enumerate() {
+            let or_dash = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
             writeln!(
                 f,
-                "| {} | {:.1} | {} | {:.1} | {:+.2} | {:.4e} | {:.3} | {:.3} |",
+                "| {} | {:.1} | {} | {:.1} | {:+.2} | {:.4e} | {} | {} |",
                 p.test + 1,
                 p.f_test,
                 p.model + 1,
                 p.f_model,
                 100.0 * p.frequency_error,
                 p.eigenvalue_gap,
-                p.mac,
-                msd
+                or_dash(p.mac),
+                or_dash(self.msd.get(k).copied())
             )?;
         }
         for t in &self.pairing.unpaired_test {
@@ -135,17 +156,27 @@ impl fmt::Display for CorrelationReport {
                 self.pairing.mac_threshold
             )?;
         }
-        writeln!(
-            f,
-            "\nerror = (f model - f test) / f test; gap = |lambda model - lambda test| with \
-             lambda = (2 pi f)^2; MAC and MSD (mode shape difference after the modal scale factor) \
-             on the sensor readings; pairs by optimal assignment at MAC >= {}{}.",
-            self.pairing.mac_threshold,
-            self.pairing
-                .max_frequency_error
-                .map(|w| format!(" within {:.1} % frequency error", 100.0 * w))
-                .unwrap_or_default()
-        )?;
+        let window = self
+            .pairing
+            .max_frequency_error
+            .map(|w| format!(" within {:.1} % frequency error", 100.0 * w))
+            .unwrap_or_default();
+        if self.mac.is_empty() && !self.f_test.is_empty() {
+            writeln!(
+                f,
+                "\nerror = (f model - f test) / f test; gap = |lambda model - lambda test| with \
+                 lambda = (2 pi f)^2; no MAC or MSD (the test has no shapes); pairs by optimal \
+                 assignment on the frequencies (the smallest total relative error){window}."
+            )?;
+        } else {
+            writeln!(
+                f,
+                "\nerror = (f model - f test) / f test; gap = |lambda model - lambda test| with \
+                 lambda = (2 pi f)^2; MAC and MSD (mode shape difference after the modal scale factor) \
+                 on the sensor readings; pairs by optimal assignment at MAC >= {}{window}.",
+                self.pairing.mac_threshold,
+            )?;
+        }
         for w in &self.pairing.warnings {
             writeln!(f, "warning: {w}")?;
         }

@@ -24,9 +24,6 @@ use std::path::Path;
 
 pub use crate::test_data::TestData;
 
-/// The refusal of a test that gives frequencies and no shapes.
-const FREQUENCIES_ONLY: &str = "the test gives frequencies without mode shapes (no node, direction and value): femu's correlation (MAC, pairing), estimators, expansion and updating all read the shapes at sensors, and a test of frequencies alone is not read yet; give each mode's readings (mode,frequency_hz,node,direction,value)";
-
 /// One mode's rows: frequency, damping, first line, values by sensor.
 type ModeRows = (f64, Option<f64>, usize, BTreeMap<usize, f64>);
 
@@ -55,7 +52,9 @@ fn direction(s: &str) -> Option<[f64; 3]> {
     }
 }
 
-/// Parses CSV test modes (`path` names the file in messages).
+/// Parses CSV test modes (`path` names the file in messages). A test of frequencies alone has
+/// the header `mode,frequency_hz[,damping]`, or rows with empty node, direction and value: its
+/// modes have no shapes ([`TestModes::frequencies_only`]).
 ///
 /// # Errors
 /// [`IoError::Parse`] with the line: a missing header, a malformed number, node or direction, two
@@ -69,6 +68,8 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
         reason,
     };
     let mut header_seen = false;
+    // `mode,frequency_hz[,damping]`: a test of frequencies alone
+    let mut frequencies_header = false;
     let mut damping_column = false;
     let mut xyz_from: Option<usize> = None;
     let mut coordinates: BTreeMap<u64, ([f64; 3], usize)> = BTreeMap::new();
@@ -87,7 +88,21 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
                 && h[..2] == ["mode", "frequency_hz"]
                 && !h.iter().any(|c| c == "node" || c == "value")
             {
-                return Err(err(line, FREQUENCIES_ONLY.into()));
+                match &h[2..] {
+                    [] => {}
+                    [d] if d == "damping" => damping_column = true,
+                    _ => {
+                        return Err(err(
+                            line,
+                            format!(
+                                "a test of frequencies alone has the header mode,frequency_hz[,damping], got {t:?}"
+                            ),
+                        ));
+                    }
+                }
+                frequencies_header = true;
+                header_seen = true;
+                continue;
             }
             if h.len() < 5 || h[..5] != ["mode", "frequency_hz", "node", "direction", "value"] {
                 return Err(err(
@@ -123,8 +138,11 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
             header_seen = true;
             continue;
         }
-        if f.len() < 5 {
+        if f.len() < 5 && !frequencies_header {
             return Err(err(line, format!("expected 5 fields, got {}", f.len())));
+        }
+        if frequencies_header && f.len() < 2 {
+            return Err(err(line, format!("expected mode,frequency_hz, got {t:?}")));
         }
         let mode = f[0]
             .parse::<u64>()
@@ -141,11 +159,28 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
                     format!("frequency {:?} is not a positive number", f[1]),
                 )
             })?;
-        if f[2].is_empty()
-            && f.get(3).is_none_or(|d| d.is_empty())
-            && f.get(4).is_none_or(|v| v.is_empty())
-        {
-            return Err(err(line, FREQUENCIES_ONLY.into()));
+        // a mode with no reading: the frequencies-alone header, or empty node, direction and value
+        let bare = frequencies_header
+            || (f[2].is_empty()
+                && f.get(3).is_none_or(|d| d.is_empty())
+                && f.get(4).is_none_or(|v| v.is_empty()));
+        if bare {
+            let column = if frequencies_header { 2 } else { 5 };
+            let damping = match (damping_column, f.get(column)) {
+                (true, Some(s)) if !s.is_empty() => Some(
+                    s.parse::<f64>()
+                        .map_err(|_| err(line, format!("damping {s:?} is not a number")))?,
+                ),
+                _ => None,
+            };
+            if let Some(e) = modes.get(&mode) {
+                return Err(err(
+                    line,
+                    format!("mode {mode} is given again (first at line {})", e.2),
+                ));
+            }
+            modes.insert(mode, (freq, damping, line, BTreeMap::new()));
+            continue;
         }
         let node = f[2]
             .parse::<u64>()
@@ -288,7 +323,12 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
     } else {
         None
     };
-    let modes = TestModes::new(freqs, damping, shapes).map_err(|e| err(1, e.to_string()))?;
+    let modes = if ns == 0 {
+        TestModes::frequencies_only(freqs, damping)
+    } else {
+        TestModes::new(freqs, damping, shapes)
+    }
+    .map_err(|e| err(1, e.to_string()))?;
     Ok(TestData {
         sensors,
         modes,

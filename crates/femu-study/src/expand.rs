@@ -16,7 +16,7 @@ use serde::Serialize;
 /// SEREP uses `serep_basis`, or the model's lowest `M` modes when none is given.
 ///
 /// # Errors
-/// Sizes, NaN, two sensors too close for expansion ([`SensorBasis::new`]), and the method's
+/// A test of frequencies alone (no reading to expand), sizes, NaN, two sensors too close for expansion ([`SensorBasis::new`]), and the method's
 /// errors (a singular expansion).
 pub fn expand_shapes(
     sys: &SystemMatrices,
@@ -26,6 +26,12 @@ pub fn expand_shapes(
     method: Method,
     serep_basis: Option<MatRef<'_, f64>>,
 ) -> Result<Mat<f64>, StudyError> {
+    if ya.nrows() == 0 {
+        return Err(StudyError::invalid(
+            "test",
+            "the test gives frequencies without mode shapes: expansion, the estimators and the sensor-removal study read the shapes at the sensors (correlation pairs by frequency, and updating fits the frequencies)",
+        ));
+    }
     // SEREP without a basis given: the model's lowest M modes, solved here (by femu's own
     // eigensolver, Sturm-verified); every front end's `serep:M` comes this way
     let solved;

@@ -1,6 +1,9 @@
 //! `femu info FILE`: what a file femu reads contains, and what femu would do with it.
 
 use crate::StudyError;
+
+/// What femu does with a test of frequencies alone.
+const FREQUENCIES_ALONE: &str = "a test of frequencies alone, without shapes (femu correlate pairs by frequency, femu update fits the frequencies; estimate and expand need shapes)";
 use femu_fem::mesh::Mesh;
 use femu_io::Format;
 use std::fmt::Write as _;
@@ -236,7 +239,9 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
         if solids > 0 {
             does.push("a model (with a material given on the command line)");
         }
-        if !u.modes.is_empty() {
+        if !u.modes.is_empty() && u.modes.iter().all(|m| m.values.is_empty()) {
+            does.push(FREQUENCIES_ALONE);
+        } else if !u.modes.is_empty() {
             does.push("test modes (femu correlate, estimate, expand, update)");
         } else if !u.nodes.is_empty() && solids == 0 {
             does.push("a test wireframe (its nodes' coordinates, for --map), without modes");
@@ -280,10 +285,14 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
             data.sensors.len(),
             nodes.len()
         );
-        let _ = writeln!(
-            s,
-            "femu would: use it as test modes, its node ids being the model's (femu correlate, estimate, expand, update)"
-        );
+        if data.modes.has_shapes() {
+            let _ = writeln!(
+                s,
+                "femu would: use it as test modes, its node ids being the model's (femu correlate, estimate, expand, update)"
+            );
+        } else {
+            let _ = writeln!(s, "femu would: use it as {FREQUENCIES_ALONE}");
+        }
     } else {
         let all = femu_io::format::all_extensions();
         return Err(StudyError::in_file(

@@ -381,8 +381,17 @@ pub fn localise_update_check(
         })
     };
     let mut nominal = build(candidates)?;
+    // a test of frequencies alone: the selection and the fit use the frequencies; SB-EBE and the
+    // residual ranking, which expand the shapes, cannot run
+    let has_shapes = test.has_shapes();
+    if !has_shapes && options.method == UpdateMethod::SbEbe {
+        return Err(StudyError::invalid(
+            "updating method",
+            "SB-EBE expands the test's shapes, and the test gives frequencies alone: use the default (inverse eigensensitivity, which fits the frequencies)",
+        ));
+    }
     let sensitivity = SensitivityOptions {
-        shapes: options.shapes,
+        shapes: options.shapes && has_shapes,
         uncertainty: options.uncertainty,
         eigen: options.eigen.clone(),
         ..Default::default()
@@ -400,7 +409,12 @@ pub fn localise_update_check(
     nominal.forget_shift();
     let mut notes = Vec::new();
     // the paper's residual ranking expands the shapes: axis sensors only
-    let localisation = if layout.measured_dofs().is_some() {
+    if !has_shapes {
+        notes.push("the test gives frequencies alone: the modes are paired by frequency, the selection and the fit use the frequencies only (mirror-symmetric regions cannot be told apart), and the residual ranking, which expands the shapes, is not run".into());
+    }
+    let localisation = if !has_shapes {
+        None
+    } else if layout.measured_dofs().is_some() {
         Some(localise_expanded(
             &nominal,
             layout,
@@ -428,6 +442,12 @@ pub fn localise_update_check(
             100.0 * top.explained,
             first.parameter,
             first.f_statistic
+        ));
+    }
+    for (p, same) in &selection.equivalents {
+        notes.push(format!(
+            "{p} cannot be told from {} by these data (parallel sensitivities): the correction is in one of them, the data do not say which",
+            same.join(", ")
         ));
     }
     let mut chosen_groups: Vec<usize> = match options.select {
@@ -595,6 +615,14 @@ pub fn localise_update_check(
     }
     // the expanded residual holds the readings' noise spread over the model: a low fraction is a
     // finding only when the fit's chi-square also leaves more than the uncertainty explains
+    for (p, same) in &selection.equivalents {
+        if result.names.contains(p) {
+            truth_check.judgement.reasons.push(format!(
+                "{p} cannot be told from {} by these data: the held-out predictions are the same either way, and only measurements that see the difference (shapes at sensors there) can say which region it is",
+                same.join(", ")
+            ));
+        }
+    }
     if let Some(reach) = &reach
         && !reach.can_explain()
         && fit_scale.is_none_or(|s| s > 1.5)

@@ -63,7 +63,8 @@ pub use sbebe::{
     Confidence, Iteration, SbebeOptions, StopReason, UpdateMethod, UpdateResult, sb_ebe,
 };
 pub use select::{
-    ParameterSelection, SelectionOptions, SelectionStep, Stability, forward_at, select_parameters,
+    EQUIVALENT_COSINE, ParameterSelection, SelectionOptions, SelectionStep, Stability, forward_at,
+    select_parameters,
 };
 pub use sensitivity::{SensitivityOptions, TestUncertainty, inverse_eigensensitivity, model_modes};
 pub use truth::{

@@ -22,7 +22,10 @@
 //! The selection is linear at the parameters it is given (the nominal model, or the last fit
 //! when [`forward`] starts from a selected set): the updating workflow refits and asks again.
 //! Its stability is measured by resampling: every sensor left out in turn, and noise drawn at the
-//! scatter of the fit added to the residual ([`Stability`]).
+//! scatter of the fit added to the residual ([`Stability`]). Candidates whose sensitivities are
+//! parallel (a region and its mirror image, seen by frequencies alone) cannot be told apart: a
+//! resample that picks the other one counts for the choice, and the pair is reported
+//! ([`ParameterSelection::equivalents`]).
 
 use crate::UpdateError;
 use crate::problem::UpdateModel;
@@ -30,6 +33,10 @@ use crate::sensitivity::{SensitivityOptions, evaluate, jacobian};
 use faer::Mat;
 use femu_correlate::{SensorLayout, TestModes};
 use serde::{Deserialize, Serialize};
+
+/// Two candidates whose Jacobian columns have at least this cosine are indistinguishable by the
+/// data (a region and its mirror image, seen by frequencies alone).
+pub const EQUIVALENT_COSINE: f64 = 0.999;
 
 /// Settings of the selection.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -115,6 +122,9 @@ pub struct ParameterSelection {
     pub resamples: (usize, usize),
     /// The criterion, in words.
     pub criterion: String,
+    /// Each significant parameter with the candidates the data cannot tell it from (their
+    /// Jacobian columns parallel to within [`EQUIVALENT_COSINE`]): the data say "one of these".
+    pub equivalents: Vec<(String, Vec<String>)>,
 }
 
 impl ParameterSelection {
@@ -160,6 +170,13 @@ impl std::fmt::Display for ParameterSelection {
                 s.stability
                     .map_or("-".to_string(), |t| format!("{:.0} %", 100.0 * t)),
                 yes(s.kept)
+            )?;
+        }
+        for (p, same) in &self.equivalents {
+            writeln!(
+                f,
+                "\n{p} cannot be told from {} by these data (parallel sensitivities): the error is in one of them, the data do not say which.",
+                same.join(", ")
             )?;
         }
         if self.resamples.0 + self.resamples.1 > 0 {
@@ -398,16 +415,42 @@ pub fn select_linear(
             })
             .collect()
     };
+    // candidates the data cannot tell apart: parallel columns (mirror regions seen by
+    // frequencies alone); a resample that chose an equivalent of a step's parameter counts for it
+    let norms: Vec<f64> = (0..p)
+        .map(|k| {
+            (0..jac.nrows())
+                .map(|i| jac[(i, k)].powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .collect();
+    let parallel = |a: usize, b: usize| -> bool {
+        let d: f64 = (0..jac.nrows()).map(|i| jac[(i, a)] * jac[(i, b)]).sum();
+        norms[a] > 0.0 && norms[b] > 0.0 && d.abs() >= EQUIVALENT_COSINE * norms[a] * norms[b]
+    };
+    let mut equivalents = Vec::new();
     for s in &mut steps {
+        let same: Vec<usize> = (0..p)
+            .filter(|c| *c != s.index && !start.contains(c) && parallel(s.index, *c))
+            .collect();
         if total > 0 {
-            let f = chosen[s.index] as f64 / total as f64;
+            let count = chosen[s.index] + same.iter().map(|c| chosen[*c]).sum::<usize>();
+            let f = (count as f64 / total as f64).min(1.0);
             s.stability = Some(f);
             s.kept = s.significant && f >= options.stability;
+        }
+        if s.significant && !same.is_empty() {
+            equivalents.push((
+                s.parameter.clone(),
+                same.iter().map(|c| names[*c].clone()).collect(),
+            ));
         }
     }
     ParameterSelection {
         selected: steps.iter().filter(|s| s.kept).map(|s| s.index).collect(),
         steps,
+        equivalents,
         chi_square: chi,
         residuals: r.len(),
         stability,

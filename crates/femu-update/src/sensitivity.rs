@@ -21,7 +21,9 @@ use crate::problem::UpdateModel;
 use crate::sbebe::{Confidence, Iteration, StopReason, UpdateMethod, UpdateResult};
 use faer::Mat;
 use femu_correlate::correlation::mac_matrix;
-use femu_correlate::{ModeSet, PairingOptions, SensorLayout, TestModes, pair_modes};
+use femu_correlate::{
+    ModeSet, PairingOptions, SensorLayout, TestModes, pair_by_frequency, pair_modes,
+};
 use femu_sparse::eigen::{EigenOptions, Pencil, Which};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -183,13 +185,22 @@ pub(crate) fn evaluate(
     let count = options.model_modes.unwrap_or(test.len() + 10);
     let modes = model_modes(up, count, &options.eigen)?;
     let at_sensors = layout.measure_all(modes.shapes.as_ref())?;
-    let mac = mac_matrix(test.shapes.as_ref(), at_sensors.as_ref())?;
-    let pairing = pair_modes(
-        mac.as_ref(),
-        &test.frequencies_hz,
-        &modes.frequencies_hz(),
-        &options.pairing,
-    )?;
+    // a test of frequencies alone is paired by frequency
+    let pairing = if test.has_shapes() {
+        let mac = mac_matrix(test.shapes.as_ref(), at_sensors.as_ref())?;
+        pair_modes(
+            mac.as_ref(),
+            &test.frequencies_hz,
+            &modes.frequencies_hz(),
+            &options.pairing,
+        )?
+    } else {
+        pair_by_frequency(
+            &test.frequencies_hz,
+            &modes.frequencies_hz(),
+            &options.pairing,
+        )?
+    };
     let lambdas = test.eigenvalues();
     let sf = 2.0 * options.uncertainty.frequency;
     let mut pair = Vec::with_capacity(test.len());
@@ -331,6 +342,12 @@ pub fn inverse_eigensensitivity(
 ) -> Result<UpdateResult, UpdateError> {
     options.update.check()?;
     options.uncertainty.check()?;
+    if options.shapes && !test.has_shapes() {
+        return Err(UpdateError::Invalid {
+            what: "inverse eigensensitivity options",
+            reason: "shapes are to be fitted, but the test gives frequencies alone".into(),
+        });
+    }
     if !(options.damping > 0.0 && options.damping.is_finite()) {
         return Err(UpdateError::Invalid {
             what: "Levenberg-Marquardt damping",

@@ -559,9 +559,9 @@ pub fn truth_check(
                 tuned: tuned.contains(&t),
                 f_test: test.frequencies_hz[t],
                 f_before: b.map(|p| p.f_model),
-                mac_before: b.map(|p| p.mac),
+                mac_before: b.and_then(|p| p.mac),
                 f_after: a.map(|p| p.f_model),
-                mac_after: a.map(|p| p.mac),
+                mac_after: a.and_then(|p| p.mac),
             }
         })
         .collect();

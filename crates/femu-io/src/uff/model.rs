@@ -140,7 +140,8 @@ impl Universal {
 
     /// The test modes and sensors of the file's dataset-55 modes: one sensor per node and axis
     /// whose value is non-zero in some mode (test systems write unmeasured directions as zeros),
-    /// in node order then x, y, z. `path` names the file in errors.
+    /// in node order then x, y, z. Modes without node records are a test of frequencies alone (no
+    /// sensor). `path` names the file in errors.
     ///
     /// # Errors
     /// No modes, modes on different node lists, no non-zero value, invalid frequencies.
@@ -161,6 +162,19 @@ impl Universal {
                     m.number, first.number
                 )));
             }
+        }
+        // modes without node records: a test of frequencies alone
+        if nodes.is_empty() {
+            let modes = TestModes::frequencies_only(
+                self.modes.iter().map(|m| m.frequency_hz).collect(),
+                Some(self.modes.iter().map(|m| m.damping).collect()),
+            )
+            .map_err(|e| bad(e.to_string()))?;
+            return Ok(crate::TestData {
+                sensors: Vec::new(),
+                modes,
+                coordinates: Default::default(),
+            });
         }
         // Values are in each node's displacement coordinate system. A node measured along all
         // three local axes is turned to global components (global axis sensors); one measured
