@@ -604,6 +604,10 @@ pub fn localise_update_check(
         parameters,
         fit_scale,
         unsupported,
+        implied: result
+            .confidence
+            .as_ref()
+            .and_then(|c| c.implied_uncertainty),
     });
     if options.discretisation
         && discretisation.is_none()

@@ -78,7 +78,8 @@ fn others_small_or_undetermined(s: &UpdateStudy, damaged: &[&str]) {
 
 /// The user's mesh is the real structure's (noise 0 to 2 %): with default settings the
 /// selection takes r3 first (and only), inverse eigensensitivity recovers it within 0.01 (measured
-/// -0.250, -0.245, -0.241 at 0, 1 and 2 %), every held-out mode improves and the verdict agrees.
+/// -0.250, -0.245, -0.241 at 0, 1 and 2 %), every held-out mode improves and the verdict agrees;
+/// the fit's residuals imply the shape noise that was put in, within 15 %.
 /// The paper's route (residual ranking and SB-EBE) at 2 % noise is not judged to agree.
 #[test]
 fn same_mesh_at_every_noise_level() {
@@ -108,6 +109,22 @@ fn same_mesh_at_every_noise_level() {
             "noise {noise}\n{}",
             s.truth_check
         );
+        // the shape noise the fit's residuals imply, against the noise put in (one standard
+        // deviation of each reading relative to the mode's largest)
+        let (_, shape) = s
+            .result
+            .confidence
+            .as_ref()
+            .unwrap()
+            .implied_uncertainty
+            .unwrap();
+        let shape = shape.unwrap();
+        if *noise > 0.0 {
+            assert!(
+                (shape / noise - 1.0).abs() < 0.15,
+                "noise {noise}: implied {shape}"
+            );
+        }
     }
     let s = study(&model, &model, &truth(), 0.02, 7, |o| {
         o.method = UpdateMethod::SbEbe;

@@ -73,6 +73,12 @@ pub struct Confidence {
     pub residuals: usize,
     /// `s^2` applied (1 when the residual left is within the test's uncertainty).
     pub scale: f64,
+    /// What the fit's residuals say of the test's uncertainty, when the rows are frequencies and
+    /// shapes in units of it: `(frequency, shape)`, relative, the RMS of each block's rows times
+    /// the uncertainty they were weighed with (after the fit, which absorbs part of the scatter:
+    /// a lower estimate). `None` for SB-EBE.
+    #[serde(default)]
+    pub implied_uncertainty: Option<(f64, Option<f64>)>,
 }
 
 /// An updating method: SB-EBE ([`sb_ebe`]) or inverse eigensensitivity

@@ -321,6 +321,7 @@ fn confidence(jac: &Mat<f64>, residual: &[f64]) -> Confidence {
         chi_square: chi,
         residuals: m,
         scale,
+        implied_uncertainty: None,
     }
 }
 
@@ -429,6 +430,14 @@ pub fn inverse_eigensensitivity(
         }
     }
     let jac = jacobian(up, layout, test, options, &eval)?;
+    let mut confidence = confidence(&jac, &eval.residual);
+    // each block's RMS in units of its uncertainty, back in relative terms
+    let rms = |r: &[f64]| (r.iter().map(|v| v * v).sum::<f64>() / r.len().max(1) as f64).sqrt();
+    let nt = test.len().min(eval.residual.len());
+    confidence.implied_uncertainty = Some((
+        rms(&eval.residual[..nt]) * options.uncertainty.frequency,
+        (eval.residual.len() > nt).then(|| rms(&eval.residual[nt..]) * options.uncertainty.shape),
+    ));
     Ok(UpdateResult {
         method: UpdateMethod::InverseEigensensitivity,
         names: up.parameters().iter().map(|p| p.name.clone()).collect(),
@@ -436,6 +445,6 @@ pub fn inverse_eigensensitivity(
         history,
         converged,
         stop_reason,
-        confidence: Some(confidence(&jac, &eval.residual)),
+        confidence: Some(confidence),
     })
 }

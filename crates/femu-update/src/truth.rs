@@ -164,6 +164,9 @@ pub struct JudgeInputs {
     /// Why the data support no correction among the candidates, when the selection kept none
     /// (the parameters were then fitted for the record only).
     pub unsupported: Option<String>,
+    /// The test's uncertainty as the fit's residuals imply it, `(frequency, shape)` relative
+    /// ([`crate::Confidence::implied_uncertainty`]); said beside an assumed uncertainty.
+    pub implied: Option<(f64, Option<f64>)>,
 }
 
 /// A parameter change beyond this (50 %) is implausible for a model that was built with care.
@@ -241,9 +244,17 @@ fn judge(check: &TruthCheck, inputs: &JudgeInputs) -> Judgement {
     let mut reasons = Vec::new();
     if !inputs.uncertainty.given {
         reasons.push(format!(
-            "test uncertainty not given: assumed {} on frequencies and {} on shapes",
+            "test uncertainty not given: assumed {} on frequencies and {} on shapes{}",
             pct(sf),
-            pct(inputs.uncertainty.shape)
+            pct(inputs.uncertainty.shape),
+            match inputs.implied {
+                Some((f, s)) => format!(
+                    "; the fit's residuals scatter as {} on the tuned frequencies{} (a lower estimate: the fit absorbs part of it); give --frequency-uncertainty and --shape-uncertainty from the identification",
+                    pct(f),
+                    s.map_or(String::new(), |s| format!(" and {} on the readings", pct(s)))
+                ),
+                None => String::new(),
+            }
         ));
     }
     if let Some(scale) = inputs.fit_scale.filter(|s| *s > 1.5) {
@@ -747,9 +758,15 @@ mod tests {
         let j = c
             .judge(&JudgeInputs {
                 fit_scale: Some(3.0),
+                implied: Some((4e-4, Some(0.025))),
                 ..Default::default()
             })
             .clone();
+        assert!(
+            j.reasons[0]
+                .contains("scatter as 0.04 % on the tuned frequencies and 2.50 % on the readings"),
+            "{j:?}"
+        );
         assert!(
             j.reasons[0].starts_with("test uncertainty not given"),
             "{j:?}"
