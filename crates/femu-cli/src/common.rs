@@ -218,6 +218,7 @@ pub fn load_test(
         test_units: args.test_units.map(LengthUnit::metres),
     };
     let test = femu::study::load::load_test_with(path, loaded, &options)?;
+    warn(quiet, &test.warnings);
     if !quiet && let Some(m) = &test.mapping {
         println!("{m}");
     }

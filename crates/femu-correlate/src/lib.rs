@@ -46,6 +46,7 @@
 //! ```
 
 pub mod bounds;
+pub mod complexity;
 pub mod correlation;
 mod error;
 pub mod estimators;
@@ -61,6 +62,7 @@ pub mod sensors;
 pub mod study;
 
 pub use bounds::{ElementBounds, element_bounds};
+pub use complexity::Complexity;
 pub use error::CorrelateError;
 pub use estimators::{
     Bound, BoundKind, Estimator, Form, ModelSpectrum, PairedModel, Relation, ResidualNorms,

@@ -29,6 +29,7 @@ fn sample() -> Universal {
             modal_mass: 1.0,
             values: vec![(1, [0.0, 1.25e-3, -0.987654321]), (7, [0.0, -2.5e-12, 0.5])],
             complex: false,
+            complexity: None,
         }],
         ..Default::default()
     }
@@ -232,4 +233,24 @@ fn absurd_values_per_node() {
         }
         other => panic!("{other:?}"),
     }
+}
+
+/// A complex mode's indicators read from the file (`docs/MATH.md`, "Complex modes"): node 3's y
+/// is `1`, node 5's y is `e^(i 30 deg)` (equal magnitudes): by hand `MPC = cos^2 30 = 0.75` and
+/// `MPD = 15` degrees. A real mode has none.
+#[test]
+fn complex_mode_indicators() {
+    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let text = format!(
+        "    -1\n    55\nid1\nid2\nid3\nid4\nid5\n         1         3         2         8         5         3\n         2         6         1         4\n -3.5D+00  6.28318D+03  0.0D+00  0.0D+00  0.0D+00  0.0D+00\n         3\n  0.0D+00  0.0D+00  1.0D+00  0.0D+00  0.0D+00  0.0D+00\n         5\n  0.0D+00  0.0D+00  {c:.15E}  {s:.15E}  0.0D+00  0.0D+00\n    -1\n"
+    );
+    let u = parse_uff(&text, Path::new("c.unv")).unwrap();
+    let k = u.modes[0]
+        .complexity
+        .expect("a complex mode has indicators");
+    assert!((k.mpc - 0.75).abs() < 1e-12, "{k:?}");
+    assert!((k.mpd_degrees - 15.0).abs() < 1e-9, "{k:?}");
+    assert!(sample().modes.iter().all(|m| m.complexity.is_none()));
+    let real = parse_uff(&uff_string(&sample()), Path::new("r.unv")).unwrap();
+    assert!(real.modes.iter().all(|m| m.complexity.is_none()));
 }

@@ -162,6 +162,7 @@ fn displacement_and_definition_systems_of_dataset_18() {
                 (4, [0.0, 0.0, 0.5]),
             ],
             complex: false,
+            complexity: None,
         }],
         ..Default::default()
     };
@@ -392,6 +393,7 @@ fn cylindrical_and_spherical_systems_of_2420() {
             modal_mass: 0.0,
             values: vec![(9, [0.3, -0.2, 0.7]), (10, [0.1, 0.2, 0.4])],
             complex: false,
+            complexity: None,
         }],
         ..Default::default()
     };

@@ -485,6 +485,7 @@ impl Test {
                 },
                 layout,
                 mapping: None,
+                warnings: Vec::new(),
             },
         })
     }

@@ -249,6 +249,7 @@ pub fn run_demo(
                 .map(|(k, id)| (*id, [0.0, y[(2 * k, j)], y[(2 * k + 1, j)]]))
                 .collect(),
             complex: false,
+            complexity: None,
         });
     }
     let uff_path = opts.out.join("test.unv");

@@ -230,6 +230,31 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
                 },
                 frequencies(&f)
             );
+            for m in u.modes.iter().filter(|m| m.complex) {
+                let _ = writeln!(
+                    s,
+                    "mode {} ({:.2} Hz): damping {:.3} %{}",
+                    m.number,
+                    m.frequency_hz,
+                    100.0 * m.damping,
+                    m.complexity.map_or(String::new(), |c| format!(
+                        ", MPC {:.3}, MPD {:.1} degrees{}",
+                        c.mpc,
+                        c.mpd_degrees,
+                        if c.mpc < femu_correlate::complexity::MPC_WARNING {
+                            " (far from real)"
+                        } else {
+                            ""
+                        }
+                    ))
+                );
+            }
+            if u.modes.iter().any(|m| m.complex) {
+                let _ = writeln!(
+                    s,
+                    "complex modes are made real: each turned by the phase of its largest component, its real part kept (MPC 1: nothing lost)"
+                );
+            }
         }
         if !u.functions.is_empty() {
             let _ = writeln!(s, "functions (58/58b): {}", u.functions.len());

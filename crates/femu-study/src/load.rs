@@ -81,6 +81,8 @@ pub struct LoadedTest {
     pub layout: SensorLayout,
     /// The mapping table, when the test was mapped ([`TestOptions::map`]).
     pub mapping: Option<Mapping>,
+    /// What the reader noticed (a complex mode made real although it is far from real).
+    pub warnings: Vec<String>,
 }
 
 /// Reads a model: an Abaqus/CalculiX `.inp` deck or Nastran bulk data (`.bdf`, `.dat`, `.nas`;
@@ -439,9 +441,11 @@ pub fn load_test_with(
             )
         })?;
     // metres per file unit: a universal file's dataset 164, else the option, else metres
+    let mut warnings = Vec::new();
     let (mut data, metres) = if format == Format::Universal {
         let u = femu_io::uff::read_uff(path)?;
         let data = u.test_data(path)?;
+        warnings.extend(complex_mode_warnings(&u, path));
         let metres = match (&u.units, options.test_units) {
             (Some(_), _) => 1.0 / u.length_factor(path)?,
             (None, Some(m)) => m,
@@ -487,5 +491,54 @@ pub fn load_test_with(
         data,
         layout,
         mapping,
+        warnings,
     })
+}
+
+/// One warning per complex mode of a universal file whose MPC is below
+/// [`femu_correlate::complexity::MPC_WARNING`]: femu uses its real part after turning it by the
+/// phase of its largest component, and that part stands for the mode only as far as the mode is
+/// real (`docs/MATH.md`, "Complex modes").
+pub fn complex_mode_warnings(u: &femu_io::uff::Universal, path: &Path) -> Vec<String> {
+    u.modes
+        .iter()
+        .filter_map(|m| {
+            let c = m.complexity?;
+            (c.mpc < femu_correlate::complexity::MPC_WARNING).then(|| {
+                format!(
+                    "{}: mode {} ({:.2} Hz) is far from real (MPC {:.3}, MPD {:.1} degrees): femu uses its real part after turning it by the phase of its largest component, which stands for the mode only as far as it is real",
+                    path.display(),
+                    m.number,
+                    m.frequency_hz,
+                    c.mpc,
+                    c.mpd_degrees
+                )
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    /// A complex mode far from real (MPC 0.75 by hand: two equal components 30 degrees apart)
+    /// is named with its indicators; a nearly real one (3 degrees: MPC 0.997) is not.
+    #[test]
+    fn a_complex_mode_far_from_real_is_named() {
+        let text = |deg: f64| {
+            let (c, s) = (deg.to_radians().cos(), deg.to_radians().sin());
+            format!(
+                "    -1\n    55\nid1\nid2\nid3\nid4\nid5\n         1         3         2         8         5         3\n         2         6         1         4\n -3.5D+00  6.28318D+03  0.0D+00  0.0D+00  0.0D+00  0.0D+00\n         3\n  0.0D+00  0.0D+00  1.0D+00  0.0D+00  0.0D+00  0.0D+00\n         5\n  0.0D+00  0.0D+00  {c:.15E}  {s:.15E}  0.0D+00  0.0D+00\n    -1\n"
+            )
+        };
+        let path = std::path::Path::new("c.unv");
+        let u = femu_io::uff::parse_uff(&text(30.0), path).unwrap();
+        let w = super::complex_mode_warnings(&u, path);
+        assert_eq!(w.len(), 1);
+        assert!(
+            w[0].contains("mode 4") && w[0].contains("MPC 0.750") && w[0].contains("MPD 15.0"),
+            "{w:?}"
+        );
+        let u = femu_io::uff::parse_uff(&text(3.0), path).unwrap();
+        assert!(super::complex_mode_warnings(&u, path).is_empty());
+    }
 }

@@ -68,6 +68,7 @@ fn test_file(name: &str, label: impl Fn(u64) -> u64, offset: f64) -> PathBuf {
                 .map(|(k, (id, _))| (label(*id), [0.1 * k as f64, 1.0, -0.5 + 0.25 * k as f64]))
                 .collect(),
             complex: false,
+            complexity: None,
         }],
         ..Default::default()
     };
@@ -362,6 +363,7 @@ fn a_turned_millimetre_wireframe_between_nodes_maps_onto_the_model() {
                 modal_mass: 1.0,
                 values: values(j),
                 complex: false,
+                complexity: None,
             })
             .collect(),
         ..Default::default()

@@ -63,6 +63,8 @@ pub struct UffMode {
     pub values: Vec<(u64, [f64; 3])>,
     /// Whether the file stored complex values.
     pub complex: bool,
+    /// How complex the stored mode is (MPC, MPD over its translations), for complex data.
+    pub complexity: Option<femu_correlate::Complexity>,
 }
 
 /// The supported content of a universal file.

@@ -128,6 +128,7 @@ pub(super) fn parse_55(
     let mut values = Vec::new();
     let k = 7 + rec8_lines;
     let raw = node_values(path, &body[k..], width)?;
+    let complexity = complexity_of(&raw, complex);
     values.extend(translations(raw, complex));
     out.modes.push(UffMode {
         number,
@@ -136,6 +137,7 @@ pub(super) fn parse_55(
         modal_mass,
         values,
         complex,
+        complexity,
     });
     Ok(())
 }
@@ -185,6 +187,18 @@ fn node_values(
         raw.push((node as u64, v));
     }
     Ok(raw)
+}
+
+/// MPC and MPD of a complex mode's translations (`None` for real data).
+fn complexity_of(raw: &[(u64, Vec<f64>)], complex: bool) -> Option<femu_correlate::Complexity> {
+    if !complex {
+        return None;
+    }
+    let components: Vec<(f64, f64)> = raw
+        .iter()
+        .flat_map(|(_, v)| (0..3).map(move |c| (v[2 * c], v[2 * c + 1])))
+        .collect();
+    femu_correlate::Complexity::of(&components)
 }
 
 /// The translations of each node; complex values rotated by the phase of the mode's largest
@@ -325,6 +339,7 @@ pub(super) fn parse_2414(
         ndv as usize
     };
     let raw = node_values(path, &body[13..], width)?;
+    let complexity = complexity_of(&raw, complex);
     out.modes.push(UffMode {
         number,
         frequency_hz,
@@ -332,6 +347,7 @@ pub(super) fn parse_2414(
         modal_mass,
         values: translations(raw, complex),
         complex,
+        complexity,
     });
     out.modes_from_2414 += 1;
     Ok(())
