@@ -432,56 +432,13 @@ pub fn localise_update_check(
         &sensitivity,
         &options.selection,
     )?;
-    if let (Some(loc), Some(first)) = (&localisation, selection.steps.first())
-        && let Some(top) = loc.ranking.first()
-        && first.index != top.group
-    {
-        notes.push(format!(
-            "the residual ranking puts {} first ({:.0} % of the expanded residual), the forward selection {} (F = {:.3e}); the ranking reads expanded shapes, where the sensors' noise spreads over the model, the selection weighs each reading by its uncertainty",
-            top.name,
-            100.0 * top.explained,
-            first.parameter,
-            first.f_statistic
-        ));
-    }
-    for (p, same) in &selection.equivalents {
-        notes.push(format!(
-            "{p} cannot be told from {} by these data (parallel sensitivities): the correction is in one of them, the data do not say which",
-            same.join(", ")
-        ));
-    }
-    let mut chosen_groups: Vec<usize> = match options.select {
-        Select::All => (0..candidates.len()).collect(),
-        Select::Residual => match &localisation {
-            Some(l) => l.selected.clone(),
-            None => {
-                return Err(StudyError::invalid(
-                    "selection",
-                    "the residual ranking needs every sensor along a global axis: use the forward selection",
-                ));
-            }
-        },
-        Select::Forward => selection.selected.clone(),
-    };
-    let mut unsupported = None;
-    if chosen_groups.is_empty() {
-        // nothing passed: the best candidate is fitted for the record, and the verdict says so
-        let best = selection.steps.first();
-        let why = match best {
-            Some(s) => format!(
-                "the tuned modes support no correction among the candidates: the best, {}, lowers the objective by F = {:.3e} (p = {:.2e} against the {:.2e} needed), selected in {:.0} % of the resamples; it is fitted for the record only",
-                candidates[s.index],
-                s.f_statistic,
-                s.p_value,
-                s.level,
-                100.0 * s.stability.unwrap_or(0.0)
-            ),
-            None => "the tuned modes support no correction among the candidates (too few residuals to test one)".to_string(),
-        };
-        notes.push(why.clone());
-        unsupported = Some(why);
-        chosen_groups.push(best.map_or(0, |s| s.index));
-    }
+    let (mut chosen_groups, unsupported) = choose(
+        options.select,
+        candidates,
+        localisation.as_ref(),
+        &selection,
+        &mut notes,
+    )?;
     let run = |method: UpdateMethod,
                up: &mut UpdateModel<'_>,
                log: &mut dyn FnMut(&Iteration)|
@@ -555,91 +512,23 @@ pub fn localise_update_check(
         None => None,
     };
     let after = model_modes(&mut up, options.check_modes, &options.eigen)?;
-    let tuned_idx: Vec<usize> = (0..options.tuned).collect();
-    let mut truth_check = truth_check(
-        before,
-        &after,
+    let (truth_check, discretisation) = judge_update(
+        model,
         test,
         layout,
-        &tuned_idx,
-        &Default::default(),
+        before,
+        &after,
+        options,
+        Fitted {
+            up: &up,
+            result: &result,
+            selection: &selection,
+            localisation: localisation.as_ref(),
+            chosen_groups: &chosen_groups,
+            reach: reach.as_ref(),
+            unsupported,
+        },
     )?;
-    let discretisation = if options.discretisation {
-        estimate_discretisation(model, before, &options.eigen)?
-    } else {
-        None
-    };
-    // the discretisation error of the model mode each test mode paired with before updating
-    let per_test: Vec<Option<f64>> = match &discretisation {
-        Some(d) => truth_check
-            .modes
-            .iter()
-            .map(|m| m.f_before.and_then(|f| d.at_frequency(f)))
-            .collect(),
-        None => Vec::new(),
-    };
-    let parameters = up
-        .parameters()
-        .iter()
-        .enumerate()
-        .map(|(k, p)| ParameterFinding {
-            name: p.name.clone(),
-            value: result.theta[k],
-            bounds: (p.lower, p.upper),
-            half_width_95: result
-                .confidence
-                .as_ref()
-                .and_then(|c| c.half_width_95.get(k).copied()),
-            evidence: selection.selected.contains(&chosen_groups[p.group])
-                || (options.select == Select::Residual
-                    && localisation
-                        .as_ref()
-                        .is_some_and(|l| l.selected.contains(&chosen_groups[p.group]))),
-        })
-        .collect();
-    let fit_scale = result.confidence.as_ref().map(|c| c.scale.sqrt());
-    truth_check.judge(&JudgeInputs {
-        uncertainty: options.uncertainty,
-        discretisation: per_test,
-        parameters,
-        fit_scale,
-        unsupported,
-        implied: result
-            .confidence
-            .as_ref()
-            .and_then(|c| c.implied_uncertainty),
-    });
-    if options.discretisation
-        && discretisation.is_none()
-        && let Some(why) = crate::discretisation::not_estimated(model)
-    {
-        truth_check.judgement.reasons.push(format!(
-            "the model's discretisation error was not estimated: {why}"
-        ));
-    }
-    // the expanded residual holds the readings' noise spread over the model: a low fraction is a
-    // finding only when the fit's chi-square also leaves more than the uncertainty explains
-    for (p, same) in &selection.equivalents {
-        if result.names.contains(p) {
-            truth_check.judgement.reasons.push(format!(
-                "{p} cannot be told from {} by these data: the held-out predictions are the same either way, and only measurements that see the difference (shapes at sensors there) can say which region it is",
-                same.join(", ")
-            ));
-        }
-    }
-    if let Some(reach) = &reach
-        && !reach.can_explain()
-        && fit_scale.is_none_or(|s| s > 1.5)
-    {
-        truth_check.judgement.reasons.insert(
-            0,
-            format!(
-                "before updating: the best fit of {} removes only {:.0} % of the expanded residual: most of it lies outside these parameters' span",
-                chosen.join(", "),
-                100.0 * reach.explained
-            ),
-        );
-    }
     let comparison = if options.compare {
         let other = match options.method {
             UpdateMethod::SbEbe => UpdateMethod::InverseEigensensitivity,
@@ -662,6 +551,185 @@ pub fn localise_update_check(
         reach,
         updated_modes: after,
     })
+}
+
+/// The candidates to update by `select`, with the notes of the choice (where the residual
+/// ranking and the selection disagree, candidates the data cannot tell apart), and why the data
+/// support none when nothing passed (the best candidate is then chosen, for the record).
+fn choose(
+    select: Select,
+    candidates: &[&str],
+    localisation: Option<&Localisation>,
+    selection: &ParameterSelection,
+    notes: &mut Vec<String>,
+) -> Result<(Vec<usize>, Option<String>), StudyError> {
+    if let (Some(loc), Some(first)) = (localisation, selection.steps.first())
+        && let Some(top) = loc.ranking.first()
+        && first.index != top.group
+    {
+        notes.push(format!(
+            "the residual ranking puts {} first ({:.0} % of the expanded residual), the forward selection {} (F = {:.3e}); the ranking reads expanded shapes, where the sensors' noise spreads over the model, the selection weighs each reading by its uncertainty",
+            top.name,
+            100.0 * top.explained,
+            first.parameter,
+            first.f_statistic
+        ));
+    }
+    for (p, same) in &selection.equivalents {
+        notes.push(format!(
+            "{p} cannot be told from {} by these data (parallel sensitivities): the correction is in one of them, the data do not say which",
+            same.join(", ")
+        ));
+    }
+    let mut chosen_groups: Vec<usize> = match select {
+        Select::All => (0..candidates.len()).collect(),
+        Select::Residual => match localisation {
+            Some(l) => l.selected.clone(),
+            None => {
+                return Err(StudyError::invalid(
+                    "selection",
+                    "the residual ranking needs every sensor along a global axis: use the forward selection",
+                ));
+            }
+        },
+        Select::Forward => selection.selected.clone(),
+    };
+    let mut unsupported = None;
+    if chosen_groups.is_empty() {
+        // nothing passed: the best candidate is fitted for the record, and the verdict says so
+        let best = selection.steps.first();
+        let why = match best {
+            Some(s) => format!(
+                "the tuned modes support no correction among the candidates: the best, {}, lowers the objective by F = {:.3e} (p = {:.2e} against the {:.2e} needed), selected in {:.0} % of the resamples; it is fitted for the record only",
+                candidates[s.index],
+                s.f_statistic,
+                s.p_value,
+                s.level,
+                100.0 * s.stability.unwrap_or(0.0)
+            ),
+            None => "the tuned modes support no correction among the candidates (too few residuals to test one)".to_string(),
+        };
+        notes.push(why.clone());
+        unsupported = Some(why);
+        chosen_groups.push(best.map_or(0, |s| s.index));
+    }
+    Ok((chosen_groups, unsupported))
+}
+
+/// What the updating produced, for [`judge_update`].
+struct Fitted<'a, 'm> {
+    up: &'a UpdateModel<'m>,
+    result: &'a UpdateResult,
+    selection: &'a ParameterSelection,
+    localisation: Option<&'a Localisation>,
+    chosen_groups: &'a [usize],
+    reach: Option<&'a Reach>,
+    unsupported: Option<String>,
+}
+
+/// The truth check of the updated model (`after`) against every test mode, judged with the
+/// test's uncertainty, the model's discretisation error (estimated here when asked) and the
+/// identified parameters, and the reasons only the workflow knows.
+fn judge_update(
+    model: &Model,
+    test: &TestModes,
+    layout: &SensorLayout,
+    before: &ModeSet,
+    after: &ModeSet,
+    options: &UpdateStudyOptions,
+    fitted: Fitted<'_, '_>,
+) -> Result<(TruthCheck, Option<DiscretisationEstimate>), StudyError> {
+    let tuned_idx: Vec<usize> = (0..options.tuned).collect();
+    let mut truth_check =
+        truth_check(before, after, test, layout, &tuned_idx, &Default::default())?;
+    let discretisation = if options.discretisation {
+        estimate_discretisation(model, before, &options.eigen)?
+    } else {
+        None
+    };
+    // the discretisation error of the model mode each test mode paired with before updating
+    let per_test: Vec<Option<f64>> = match &discretisation {
+        Some(d) => truth_check
+            .modes
+            .iter()
+            .map(|m| m.f_before.and_then(|f| d.at_frequency(f)))
+            .collect(),
+        None => Vec::new(),
+    };
+    let Fitted {
+        up,
+        result,
+        selection,
+        localisation,
+        chosen_groups,
+        reach,
+        unsupported,
+    } = fitted;
+    let parameters = up
+        .parameters()
+        .iter()
+        .enumerate()
+        .map(|(k, p)| ParameterFinding {
+            name: p.name.clone(),
+            value: result.theta[k],
+            bounds: (p.lower, p.upper),
+            half_width_95: result
+                .confidence
+                .as_ref()
+                .and_then(|c| c.half_width_95.get(k).copied()),
+            evidence: selection.selected.contains(&chosen_groups[p.group])
+                || (options.select == Select::Residual
+                    && localisation.is_some_and(|l| l.selected.contains(&chosen_groups[p.group]))),
+        })
+        .collect();
+    let fit_scale = result.confidence.as_ref().map(|c| c.scale.sqrt());
+    truth_check.judge(&JudgeInputs {
+        uncertainty: options.uncertainty,
+        discretisation: per_test,
+        parameters,
+        fit_scale,
+        unsupported,
+        implied: result
+            .confidence
+            .as_ref()
+            .and_then(|c| c.implied_uncertainty),
+    });
+    if options.discretisation
+        && discretisation.is_none()
+        && let Some(why) = crate::discretisation::not_estimated(model)
+    {
+        truth_check.judgement.reasons.push(format!(
+            "the model's discretisation error was not estimated: {why}"
+        ));
+    }
+    for (p, same) in &selection.equivalents {
+        if result.names.contains(p) {
+            truth_check.judgement.reasons.push(format!(
+                "{p} cannot be told from {} by these data: the held-out predictions are the same either way, and only measurements that see the difference (shapes at sensors there) can say which region it is",
+                same.join(", ")
+            ));
+        }
+    }
+    // the expanded residual holds the readings' noise spread over the model: a low fraction is a
+    // finding only when the fit's chi-square also leaves more than the uncertainty explains
+    if let Some(reach) = reach
+        && !reach.can_explain()
+        && fit_scale.is_none_or(|s| s > 1.5)
+    {
+        truth_check.judgement.reasons.insert(
+            0,
+            format!(
+                "before updating: the best fit of {} removes only {:.0} % of the expanded residual: most of it lies outside these parameters' span",
+                up.parameters()
+                    .iter()
+                    .map(|p| p.name.trim_start_matches("k:").to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                100.0 * reach.explained
+            ),
+        );
+    }
+    Ok((truth_check, discretisation))
 }
 
 /// The model's element sets named by `sets` (Abaqus names are case-insensitive; the reader keeps
