@@ -57,6 +57,21 @@ pub struct Pair {
     pub eigenvalue_gap: f64,
 }
 
+impl Pair {
+    /// Test mode `test` (frequency `f_test`) with model mode `model` (`f_model`).
+    fn new(test: usize, model: usize, mac: Option<f64>, f_test: f64, f_model: f64) -> Self {
+        Self {
+            test,
+            model,
+            mac,
+            f_test,
+            f_model,
+            frequency_error: frequency_error(f_test, f_model),
+            eigenvalue_gap: eigenvalue_gap_hz(f_test, f_model),
+        }
+    }
+}
+
 /// The result of pairing.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Pairing {
@@ -149,33 +164,15 @@ pub fn pair_modes(
             0.0
         }
     };
-    // The Hungarian algorithm needs rows <= columns; transpose otherwise.
-    let assignment: Vec<Option<usize>> = if t <= m {
-        hungarian_max(t, m, weight)
-    } else {
-        let cols = hungarian_max(m, t, |j, i| weight(i, j));
-        let mut rows = vec![None; t];
-        for (j, i) in cols.iter().enumerate() {
-            if let Some(i) = i {
-                rows[*i] = Some(j);
-            }
-        }
-        rows
-    };
+    let assignment = assign(t, m, weight);
     let mut pairs = Vec::new();
     let mut unpaired_test = Vec::new();
     let mut warnings = Vec::new();
     for (i, a) in assignment.iter().enumerate() {
         match a {
-            Some(j) if weight(i, *j) > 0.0 => pairs.push(Pair {
-                test: i,
-                model: *j,
-                mac: Some(mac[(i, *j)]),
-                f_test: f_test[i],
-                f_model: f_model[*j],
-                frequency_error: frequency_error(f_test[i], f_model[*j]),
-                eigenvalue_gap: eigenvalue_gap_hz(f_test[i], f_model[*j]),
-            }),
+            Some(j) if weight(i, *j) > 0.0 => {
+                pairs.push(Pair::new(i, *j, Some(mac[(i, *j)]), f_test[i], f_model[*j]))
+            }
             _ => {
                 if window.is_some() && (0..m).any(|j| mac[(i, j)] >= thr) {
                     warnings.push(format!(
@@ -244,18 +241,7 @@ pub fn pair_by_frequency(
             0.0
         }
     };
-    let assignment: Vec<Option<usize>> = if t <= m {
-        hungarian_max(t, m, weight)
-    } else {
-        let cols = hungarian_max(m, t, |j, i| weight(i, j));
-        let mut rows = vec![None; t];
-        for (j, i) in cols.iter().enumerate() {
-            if let Some(i) = i {
-                rows[*i] = Some(j);
-            }
-        }
-        rows
-    };
+    let assignment = assign(t, m, weight);
     let (mut pairs, mut unpaired_test, mut warnings) = (Vec::new(), Vec::new(), Vec::new());
     for (i, a) in assignment.iter().enumerate() {
         match a {
@@ -275,15 +261,7 @@ pub fn pair_by_frequency(
                         if close.len() == 1 { "s" } else { "" }
                     ));
                 }
-                pairs.push(Pair {
-                    test: i,
-                    model: *j,
-                    mac: None,
-                    f_test: f_test[i],
-                    f_model: f_model[*j],
-                    frequency_error: frequency_error(f_test[i], f_model[*j]),
-                    eigenvalue_gap: eigenvalue_gap_hz(f_test[i], f_model[*j]),
-                })
+                pairs.push(Pair::new(i, *j, None, f_test[i], f_model[*j]))
             }
             _ => unpaired_test.push(i),
         }
@@ -305,6 +283,22 @@ pub fn pair_by_frequency(
         max_frequency_error: window,
         warnings,
     })
+}
+
+/// The maximum-weight assignment of `t` rows to `m` columns, either way round (the Hungarian
+/// algorithm needs rows <= columns: transposed otherwise). Returns the column of each row.
+fn assign(t: usize, m: usize, weight: impl Fn(usize, usize) -> f64) -> Vec<Option<usize>> {
+    if t <= m {
+        return hungarian_max(t, m, weight);
+    }
+    let cols = hungarian_max(m, t, |j, i| weight(i, j));
+    let mut rows = vec![None; t];
+    for (j, i) in cols.iter().enumerate() {
+        if let Some(i) = i {
+            rows[*i] = Some(j);
+        }
+    }
+    rows
 }
 
 /// Maximum-weight assignment of `n` rows to `m >= n` columns (Kuhn-Munkres with potentials,
