@@ -52,6 +52,31 @@ fn study(
     localise_update_check(model, &sets, &layout, &test, None, None, &options, |_| {}).unwrap()
 }
 
+/// The defaults with the test's uncertainty given (0.1 % on frequencies, 1 % on shapes), `tuned`
+/// of ten modes.
+fn given_options(tuned: usize) -> UpdateStudyOptions {
+    UpdateStudyOptions {
+        uncertainty: TestUncertainty {
+            frequency: 1e-3,
+            shape: 1e-2,
+            given: true,
+        },
+        ..UpdateStudyOptions::new(tuned, 10)
+    }
+}
+
+/// The workflow on the plate's regions `r0`..`r9`.
+fn on_regions(
+    model: &Model,
+    layout: &SensorLayout,
+    test: &TestModes,
+    options: &UpdateStudyOptions,
+) -> Result<UpdateStudy, femu_study::StudyError> {
+    let names = real::regions();
+    let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+    localise_update_check(model, &sets, layout, test, None, None, options, |_| {})
+}
+
 fn value(s: &UpdateStudy, name: &str) -> Option<f64> {
     s.result
         .names
@@ -386,18 +411,8 @@ fn sensors_off_the_global_axes() {
         real::measure_along(&model, &truth(), &model, 10, (0.01, 0.001), 7, &directions);
     let layout = SensorLayout::new(model.mesh(), &model.dof_map().unwrap(), sensors).unwrap();
     assert!(layout.measured_dofs().is_none());
-    let names = real::regions();
-    let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-    let options = UpdateStudyOptions {
-        uncertainty: TestUncertainty {
-            frequency: 1e-3,
-            shape: 1e-2,
-            given: true,
-        },
-        ..UpdateStudyOptions::new(4, 10)
-    };
-    let s =
-        localise_update_check(&model, &sets, &layout, &test, None, None, &options, |_| {}).unwrap();
+    let options = given_options(4);
+    let s = on_regions(&model, &layout, &test, &options).unwrap();
     assert!(s.localisation.is_none() && s.reach.is_none());
     assert!(s.notes[0].contains("needs every sensor along a global axis"));
     assert_eq!(s.updated_sets, ["r3"]);
@@ -413,8 +428,7 @@ fn sensors_off_the_global_axes() {
         select: Select::Residual,
         ..options
     };
-    let e = localise_update_check(&model, &sets, &layout, &test, None, None, &residual, |_| {})
-        .unwrap_err();
+    let e = on_regions(&model, &layout, &test, &residual).unwrap_err();
     assert!(e.to_string().contains("forward selection"), "{e}");
 }
 
@@ -545,18 +559,8 @@ fn frequencies_alone() {
     let test = TestModes::frequencies_only(test.frequencies_hz.clone(), None).unwrap();
     assert!(!test.has_shapes());
     let layout = SensorLayout::new(model.mesh(), &model.dof_map().unwrap(), Vec::new()).unwrap();
-    let names = real::regions();
-    let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-    let options = UpdateStudyOptions {
-        uncertainty: TestUncertainty {
-            frequency: 1e-3,
-            shape: 1e-2,
-            given: true,
-        },
-        ..UpdateStudyOptions::new(6, 10)
-    };
-    let s =
-        localise_update_check(&model, &sets, &layout, &test, None, None, &options, |_| {}).unwrap();
+    let options = given_options(6);
+    let s = on_regions(&model, &layout, &test, &options).unwrap();
     assert!(s.localisation.is_none());
     assert!(
         s.notes[0].starts_with("the test gives frequencies alone"),
@@ -594,7 +598,6 @@ fn frequencies_alone() {
         method: UpdateMethod::SbEbe,
         ..options
     };
-    let e = localise_update_check(&model, &sets, &layout, &test, None, None, &sbebe, |_| {})
-        .unwrap_err();
+    let e = on_regions(&model, &layout, &test, &sbebe).unwrap_err();
     assert!(e.to_string().contains("frequencies alone"), "{e}");
 }
