@@ -51,289 +51,324 @@ fn frequencies(f: &[f64]) -> String {
 pub fn describe(path: &Path) -> Result<String, StudyError> {
     let mut s = format!("{}\n", path.display());
     let mut warnings: Vec<String> = Vec::new();
-    let format = Format::from_path(path);
-    if format == Some(Format::Inp) {
-        let deck = femu_io::inp::read_inp(path)?;
-        let _ = writeln!(s, "format: Abaqus/CalculiX input deck");
-        mesh_lines(&mut s, &deck.mesh);
-        for (name, m) in &deck.materials {
-            let elastic = match &m.elasticity {
-                femu_fem::material::Elasticity::Isotropic { e, nu } => {
-                    format!("E = {e:e} Pa, nu = {nu}")
-                }
-                _ => "anisotropic".to_string(),
-            };
-            let _ = writeln!(
-                s,
-                "material {name}: {elastic}, density {} kg/m^3",
-                m.density
-            );
+    let (s_, w) = (&mut s, &mut warnings);
+    match Format::from_path(path) {
+        Some(Format::Inp) => describe_inp(path, s_, w)?,
+        Some(Format::Nastran) => describe_nastran(path, s_, w)?,
+        Some(Format::Gmsh) => describe_gmsh(path, s_, w)?,
+        Some(Format::Universal) => describe_universal(path, s_, w)?,
+        Some(f @ (Format::Json | Format::Csv)) => describe_test_table(path, f == Format::Json, s_)?,
+        _ => {
+            let all = femu_io::format::all_extensions();
+            return Err(StudyError::in_file(
+                path,
+                "format",
+                format!(
+                    "femu reads {}; the file's extension is none of them",
+                    all.iter()
+                        .map(|e| format!(".{e}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
         }
-        let _ = writeln!(s, "solid sections: {}", deck.sections.len());
-        let _ = writeln!(s, "boundary conditions: {}", deck.boundaries.len());
-        if let Some(f) = deck.frequency {
-            let _ = writeln!(s, "frequency step: {} modes", f.count);
-        }
-        warnings.extend(deck.warnings.iter().map(ToString::to_string));
-        let model = deck.to_model()?;
-        warnings.extend(crate::load::units_hint(&model, path));
-        let _ = writeln!(
-            s,
-            "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",
-            model.dof_map()?.free_count()
-        );
-    } else if format == Some(Format::Nastran) {
-        let deck = femu_io::nastran::read_bdf(path, &femu_io::nastran::BdfOptions::default())?;
-        let _ = writeln!(s, "format: Nastran bulk data");
-        let model = &deck.model;
-        mesh_lines(&mut s, model.mesh());
-        let _ = writeln!(
-            s,
-            "point masses (CONM2): {}; constrained DOFs: {} (SPC set {}, permanent constraints of {} grids); dependent DOFs (RBE2, RBE3, blank mid-side grids): {}",
-            model.point_masses().len(),
-            model.fixed_dofs().count(),
-            deck.spc_set
-                .map_or("none selected".to_string(), |s| s.to_string()),
-            deck.permanent_constraints,
-            model.constraints().len()
-        );
-        let _ = writeln!(
-            s,
-            "mass: {} ({})",
-            match deck.mass {
-                femu_fem::assembly::MassKind::Lumped => "lumped",
-                _ => "coupled (consistent)",
-            },
-            match deck.coupmass {
-                Some(v) => format!("PARAM,COUPMASS,{v}"),
-                None => "no PARAM,COUPMASS: MSC Nastran's default".to_string(),
-            }
-        );
-        if let Some((v1, v2, nd)) = deck.eigrl {
-            let _ = writeln!(
-                s,
-                "EIGRL (femu modes solves it unless given --count, --shift or --band): {} modes{}",
-                nd.map_or("all".to_string(), |n| n.to_string()),
-                match (v1, v2) {
-                    (Some(a), Some(b)) => format!(" in [{a}, {b}] Hz"),
-                    (Some(a), None) => format!(" above {a} Hz"),
-                    (None, Some(b)) => format!(" below {b} Hz"),
-                    _ => String::new(),
-                }
-            );
-        }
-        warnings.extend(deck.warnings.iter().map(ToString::to_string));
-        warnings.extend(crate::load::units_hint(model, path));
-        let _ = writeln!(
-            s,
-            "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",
-            model.dof_map()?.free_count()
-        );
-    } else if format == Some(Format::Gmsh) {
-        let g = femu_io::gmsh::read_msh(path)?;
-        let _ = writeln!(s, "format: Gmsh mesh");
-        mesh_lines(&mut s, &g.mesh);
-        warnings.extend(g.warnings.iter().map(ToString::to_string));
-        let _ = writeln!(
-            s,
-            "femu would: use it as a model once given a material (--young, --poisson, --density) and, if clamped, the sets to fix (--fix)"
-        );
-    } else if format == Some(Format::Universal) {
-        let u = femu_io::uff::read_uff(path)?;
-        let _ = writeln!(s, "format: universal file");
-        if let Some(units) = &u.units {
-            let _ = writeln!(
-                s,
-                "units (164): {} (code {}), length factor {}",
-                units.description, units.code, units.factors[0]
-            );
-        }
-        if let Some(h) = &u.header {
-            let _ = writeln!(
-                s,
-                "header (151): model {:?}, description {:?}, written by {:?}",
-                h.model, h.description, h.program
-            );
-        }
-        let _ = writeln!(
-            s,
-            "nodes ({}): {}",
-            if u.nodes_2411 { "2411" } else { "15" },
-            u.nodes.len()
-        );
-        if !u.coordinate_systems.is_empty() {
-            let turned = u
-                .coordinate_systems
-                .values()
-                .filter(|c| !c.is_global_orientation())
-                .count();
-            let curvilinear = u
-                .coordinate_systems
-                .values()
-                .filter(|c| c.kind != 0)
-                .count();
-            let _ = writeln!(
-                s,
-                "coordinate systems (18/2420): {} ({} turned from the global axes, {} cylindrical or spherical); {} nodes measure in one of them (read in global directions)",
-                u.coordinate_systems.len(),
-                turned,
-                curvilinear,
-                u.displacement_systems.len()
-            );
-        }
-        let solids = u
-            .elements
-            .iter()
-            .filter(|e| (111..=118).contains(&e.descriptor))
-            .count();
-        let _ = writeln!(
-            s,
-            "elements (2412): {} ({} solids, {} beams, shells and others)",
-            u.elements.len(),
-            solids,
-            u.elements.len() - solids
-        );
-        for g in &u.groups {
-            let _ = writeln!(
-                s,
-                "group {}: {} nodes, {} elements",
-                g.name,
-                g.nodes.len(),
-                g.elements.len()
-            );
-        }
-        for t in &u.trace_lines {
-            let _ = writeln!(
-                s,
-                "trace line {} ({}): {} labels",
-                t.number,
-                t.id,
-                t.nodes.len()
-            );
-        }
-        if !u.modes.is_empty() {
-            let f: Vec<f64> = u.modes.iter().map(|m| m.frequency_hz).collect();
-            let _ = writeln!(
-                s,
-                "modes ({}): {} at {} nodes{}; Hz: {}",
-                match (u.modes_from_2414, u.modes.len() - u.modes_from_2414) {
-                    (0, _) => "55: test modes".to_string(),
-                    (_, 0) => "2414: analysis results of an FE code".to_string(),
-                    (r, t) => format!("{t} of dataset 55, {r} of dataset 2414"),
-                },
-                u.modes.len(),
-                u.modes[0].values.len(),
-                if u.modes.iter().any(|m| m.complex) {
-                    ", complex (read as real shapes)"
-                } else {
-                    ""
-                },
-                frequencies(&f)
-            );
-            for m in u.modes.iter().filter(|m| m.complex) {
-                let _ = writeln!(
-                    s,
-                    "mode {} ({:.2} Hz): damping {:.3} %{}",
-                    m.number,
-                    m.frequency_hz,
-                    100.0 * m.damping,
-                    m.complexity.map_or(String::new(), |c| format!(
-                        ", MPC {:.3}, MPD {:.1} degrees{}",
-                        c.mpc,
-                        c.mpd_degrees,
-                        if c.mpc < femu_correlate::complexity::MPC_WARNING {
-                            " (far from real)"
-                        } else {
-                            ""
-                        }
-                    ))
-                );
-            }
-            if u.modes.iter().any(|m| m.complex) {
-                let _ = writeln!(
-                    s,
-                    "complex modes are made real: each turned by the phase of its largest component, its real part kept (MPC 1: nothing lost)"
-                );
-            }
-        }
-        if !u.functions.is_empty() {
-            let _ = writeln!(s, "functions (58/58b): {}", u.functions.len());
-        }
-        warnings.extend(u.warnings.iter().map(ToString::to_string));
-        let mut does = Vec::new();
-        if solids > 0 {
-            does.push("a model (with a material given on the command line)");
-        }
-        if !u.modes.is_empty() && u.modes.iter().all(|m| m.values.is_empty()) {
-            does.push(FREQUENCIES_ALONE);
-        } else if !u.modes.is_empty() {
-            does.push("test modes (femu correlate, estimate, expand, update)");
-        } else if !u.nodes.is_empty() && solids == 0 {
-            does.push("a test wireframe (its nodes' coordinates, for --map), without modes");
-        }
-        let _ = writeln!(
-            s,
-            "femu would: {}",
-            if does.is_empty() {
-                "nothing: no solid mesh and no modes (its functions and geometry are read by femu_io::uff)".to_string()
-            } else {
-                format!("use it as {}", does.join(" and as "))
-            }
-        );
-    } else if matches!(format, Some(Format::Json | Format::Csv)) {
-        let data = if format == Some(Format::Json) {
-            femu_io::json::read_test_json(path)?
-        } else {
-            femu_io::csv::read_test_csv(path)?
-        };
-        let mut nodes: Vec<u64> = data.sensors.iter().map(|s| s.node).collect();
-        nodes.sort_unstable();
-        nodes.dedup();
-        let _ = writeln!(
-            s,
-            "format: test modes ({})",
-            if format == Some(Format::Json) {
-                "JSON"
-            } else {
-                "CSV"
-            }
-        );
-        let _ = writeln!(
-            s,
-            "modes: {}; Hz: {}",
-            data.modes.len(),
-            frequencies(&data.modes.frequencies_hz)
-        );
-        let _ = writeln!(
-            s,
-            "sensors: {} readings at {} nodes",
-            data.sensors.len(),
-            nodes.len()
-        );
-        if data.modes.has_shapes() {
-            let _ = writeln!(
-                s,
-                "femu would: use it as test modes, its node ids being the model's (femu correlate, estimate, expand, update)"
-            );
-        } else {
-            let _ = writeln!(s, "femu would: use it as {FREQUENCIES_ALONE}");
-        }
-    } else {
-        let all = femu_io::format::all_extensions();
-        return Err(StudyError::in_file(
-            path,
-            "format",
-            format!(
-                "femu reads {}; the file's extension is none of them",
-                all.iter()
-                    .map(|e| format!(".{e}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        ));
     }
     for w in &warnings {
         let _ = writeln!(s, "warning: {w}");
     }
     Ok(s)
+}
+
+/// What [`describe`] says of an Abaqus/CalculiX deck.
+fn describe_inp(path: &Path, s: &mut String, warnings: &mut Vec<String>) -> Result<(), StudyError> {
+    let deck = femu_io::inp::read_inp(path)?;
+    let _ = writeln!(s, "format: Abaqus/CalculiX input deck");
+    mesh_lines(s, &deck.mesh);
+    for (name, m) in &deck.materials {
+        let elastic = match &m.elasticity {
+            femu_fem::material::Elasticity::Isotropic { e, nu } => {
+                format!("E = {e:e} Pa, nu = {nu}")
+            }
+            _ => "anisotropic".to_string(),
+        };
+        let _ = writeln!(
+            s,
+            "material {name}: {elastic}, density {} kg/m^3",
+            m.density
+        );
+    }
+    let _ = writeln!(s, "solid sections: {}", deck.sections.len());
+    let _ = writeln!(s, "boundary conditions: {}", deck.boundaries.len());
+    if let Some(f) = deck.frequency {
+        let _ = writeln!(s, "frequency step: {} modes", f.count);
+    }
+    warnings.extend(deck.warnings.iter().map(ToString::to_string));
+    let model = deck.to_model()?;
+    warnings.extend(crate::load::units_hint(&model, path));
+    let _ = writeln!(
+        s,
+        "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",
+        model.dof_map()?.free_count()
+    );
+    Ok(())
+}
+
+/// What [`describe`] says of Nastran bulk data.
+fn describe_nastran(
+    path: &Path,
+    s: &mut String,
+    warnings: &mut Vec<String>,
+) -> Result<(), StudyError> {
+    let deck = femu_io::nastran::read_bdf(path, &femu_io::nastran::BdfOptions::default())?;
+    let _ = writeln!(s, "format: Nastran bulk data");
+    let model = &deck.model;
+    mesh_lines(s, model.mesh());
+    let _ = writeln!(
+        s,
+        "point masses (CONM2): {}; constrained DOFs: {} (SPC set {}, permanent constraints of {} grids); dependent DOFs (RBE2, RBE3, blank mid-side grids): {}",
+        model.point_masses().len(),
+        model.fixed_dofs().count(),
+        deck.spc_set
+            .map_or("none selected".to_string(), |s| s.to_string()),
+        deck.permanent_constraints,
+        model.constraints().len()
+    );
+    let _ = writeln!(
+        s,
+        "mass: {} ({})",
+        match deck.mass {
+            femu_fem::assembly::MassKind::Lumped => "lumped",
+            _ => "coupled (consistent)",
+        },
+        match deck.coupmass {
+            Some(v) => format!("PARAM,COUPMASS,{v}"),
+            None => "no PARAM,COUPMASS: MSC Nastran's default".to_string(),
+        }
+    );
+    if let Some((v1, v2, nd)) = deck.eigrl {
+        let _ = writeln!(
+            s,
+            "EIGRL (femu modes solves it unless given --count, --shift or --band): {} modes{}",
+            nd.map_or("all".to_string(), |n| n.to_string()),
+            match (v1, v2) {
+                (Some(a), Some(b)) => format!(" in [{a}, {b}] Hz"),
+                (Some(a), None) => format!(" above {a} Hz"),
+                (None, Some(b)) => format!(" below {b} Hz"),
+                _ => String::new(),
+            }
+        );
+    }
+    warnings.extend(deck.warnings.iter().map(ToString::to_string));
+    warnings.extend(crate::load::units_hint(model, path));
+    let _ = writeln!(
+        s,
+        "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",
+        model.dof_map()?.free_count()
+    );
+    Ok(())
+}
+
+/// What [`describe`] says of a Gmsh mesh.
+fn describe_gmsh(
+    path: &Path,
+    s: &mut String,
+    warnings: &mut Vec<String>,
+) -> Result<(), StudyError> {
+    let g = femu_io::gmsh::read_msh(path)?;
+    let _ = writeln!(s, "format: Gmsh mesh");
+    mesh_lines(s, &g.mesh);
+    warnings.extend(g.warnings.iter().map(ToString::to_string));
+    let _ = writeln!(
+        s,
+        "femu would: use it as a model once given a material (--young, --poisson, --density) and, if clamped, the sets to fix (--fix)"
+    );
+    Ok(())
+}
+
+/// What [`describe`] says of a universal file.
+fn describe_universal(
+    path: &Path,
+    s: &mut String,
+    warnings: &mut Vec<String>,
+) -> Result<(), StudyError> {
+    let u = femu_io::uff::read_uff(path)?;
+    let _ = writeln!(s, "format: universal file");
+    if let Some(units) = &u.units {
+        let _ = writeln!(
+            s,
+            "units (164): {} (code {}), length factor {}",
+            units.description, units.code, units.factors[0]
+        );
+    }
+    if let Some(h) = &u.header {
+        let _ = writeln!(
+            s,
+            "header (151): model {:?}, description {:?}, written by {:?}",
+            h.model, h.description, h.program
+        );
+    }
+    let _ = writeln!(
+        s,
+        "nodes ({}): {}",
+        if u.nodes_2411 { "2411" } else { "15" },
+        u.nodes.len()
+    );
+    if !u.coordinate_systems.is_empty() {
+        let turned = u
+            .coordinate_systems
+            .values()
+            .filter(|c| !c.is_global_orientation())
+            .count();
+        let curvilinear = u
+            .coordinate_systems
+            .values()
+            .filter(|c| c.kind != 0)
+            .count();
+        let _ = writeln!(
+            s,
+            "coordinate systems (18/2420): {} ({} turned from the global axes, {} cylindrical or spherical); {} nodes measure in one of them (read in global directions)",
+            u.coordinate_systems.len(),
+            turned,
+            curvilinear,
+            u.displacement_systems.len()
+        );
+    }
+    let solids = u
+        .elements
+        .iter()
+        .filter(|e| (111..=118).contains(&e.descriptor))
+        .count();
+    let _ = writeln!(
+        s,
+        "elements (2412): {} ({} solids, {} beams, shells and others)",
+        u.elements.len(),
+        solids,
+        u.elements.len() - solids
+    );
+    for g in &u.groups {
+        let _ = writeln!(
+            s,
+            "group {}: {} nodes, {} elements",
+            g.name,
+            g.nodes.len(),
+            g.elements.len()
+        );
+    }
+    for t in &u.trace_lines {
+        let _ = writeln!(
+            s,
+            "trace line {} ({}): {} labels",
+            t.number,
+            t.id,
+            t.nodes.len()
+        );
+    }
+    if !u.modes.is_empty() {
+        let f: Vec<f64> = u.modes.iter().map(|m| m.frequency_hz).collect();
+        let _ = writeln!(
+            s,
+            "modes ({}): {} at {} nodes{}; Hz: {}",
+            match (u.modes_from_2414, u.modes.len() - u.modes_from_2414) {
+                (0, _) => "55: test modes".to_string(),
+                (_, 0) => "2414: analysis results of an FE code".to_string(),
+                (r, t) => format!("{t} of dataset 55, {r} of dataset 2414"),
+            },
+            u.modes.len(),
+            u.modes[0].values.len(),
+            if u.modes.iter().any(|m| m.complex) {
+                ", complex (read as real shapes)"
+            } else {
+                ""
+            },
+            frequencies(&f)
+        );
+        for m in u.modes.iter().filter(|m| m.complex) {
+            let _ = writeln!(
+                s,
+                "mode {} ({:.2} Hz): damping {:.3} %{}",
+                m.number,
+                m.frequency_hz,
+                100.0 * m.damping,
+                m.complexity.map_or(String::new(), |c| format!(
+                    ", MPC {:.3}, MPD {:.1} degrees{}",
+                    c.mpc,
+                    c.mpd_degrees,
+                    if c.mpc < femu_correlate::complexity::MPC_WARNING {
+                        " (far from real)"
+                    } else {
+                        ""
+                    }
+                ))
+            );
+        }
+        if u.modes.iter().any(|m| m.complex) {
+            let _ = writeln!(
+                s,
+                "complex modes are made real: each turned by the phase of its largest component, its real part kept (MPC 1: nothing lost)"
+            );
+        }
+    }
+    if !u.functions.is_empty() {
+        let _ = writeln!(s, "functions (58/58b): {}", u.functions.len());
+    }
+    warnings.extend(u.warnings.iter().map(ToString::to_string));
+    let mut does = Vec::new();
+    if solids > 0 {
+        does.push("a model (with a material given on the command line)");
+    }
+    if !u.modes.is_empty() && u.modes.iter().all(|m| m.values.is_empty()) {
+        does.push(FREQUENCIES_ALONE);
+    } else if !u.modes.is_empty() {
+        does.push("test modes (femu correlate, estimate, expand, update)");
+    } else if !u.nodes.is_empty() && solids == 0 {
+        does.push("a test wireframe (its nodes' coordinates, for --map), without modes");
+    }
+    let _ = writeln!(
+        s,
+        "femu would: {}",
+        if does.is_empty() {
+            "nothing: no solid mesh and no modes (its functions and geometry are read by femu_io::uff)".to_string()
+        } else {
+            format!("use it as {}", does.join(" and as "))
+        }
+    );
+    Ok(())
+}
+
+/// What [`describe`] says of test modes in JSON or CSV.
+fn describe_test_table(path: &Path, json: bool, s: &mut String) -> Result<(), StudyError> {
+    let data = if json {
+        femu_io::json::read_test_json(path)?
+    } else {
+        femu_io::csv::read_test_csv(path)?
+    };
+    let mut nodes: Vec<u64> = data.sensors.iter().map(|s| s.node).collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    let _ = writeln!(
+        s,
+        "format: test modes ({})",
+        if json { "JSON" } else { "CSV" }
+    );
+    let _ = writeln!(
+        s,
+        "modes: {}; Hz: {}",
+        data.modes.len(),
+        frequencies(&data.modes.frequencies_hz)
+    );
+    let _ = writeln!(
+        s,
+        "sensors: {} readings at {} nodes",
+        data.sensors.len(),
+        nodes.len()
+    );
+    if data.modes.has_shapes() {
+        let _ = writeln!(
+            s,
+            "femu would: use it as test modes, its node ids being the model's (femu correlate, estimate, expand, update)"
+        );
+    } else {
+        let _ = writeln!(s, "femu would: use it as {FREQUENCIES_ALONE}");
+    }
+    Ok(())
 }

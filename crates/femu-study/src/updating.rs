@@ -360,26 +360,7 @@ pub fn localise_update_check(
         None,
         test.shapes.as_ref().subcols(0, options.tuned).to_owned(),
     )?;
-    let build = |sets: &[&str]| -> Result<UpdateModel<'_>, StudyError> {
-        Ok(match assembly {
-            Some((asm, base)) if base.mass_kind == MassKind::Consistent => {
-                let groups = ParameterGroups::from_element_sets(model, sets, MassKind::Consistent)?;
-                UpdateModel::from_assembly(
-                    model,
-                    groups,
-                    Corrections::Stiffness,
-                    asm.clone(),
-                    base.clone(),
-                )?
-            }
-            _ => UpdateModel::from_element_sets(
-                model,
-                sets,
-                MassKind::Consistent,
-                Corrections::Stiffness,
-            )?,
-        })
-    };
+    let build = |sets: &[&str]| update_model(model, sets, assembly);
     let mut nominal = build(candidates)?;
     // a test of frequencies alone: the selection and the fit use the frequencies; SB-EBE and the
     // residual ranking, which expand the shapes, cannot run
@@ -443,18 +424,7 @@ pub fn localise_update_check(
                up: &mut UpdateModel<'_>,
                log: &mut dyn FnMut(&Iteration)|
      -> Result<UpdateResult, StudyError> {
-        Ok(match method {
-            UpdateMethod::SbEbe => {
-                let o = SbebeOptions {
-                    test_error: options.test_error,
-                    ..Default::default()
-                };
-                sb_ebe(up, layout, &tuned, &o, log)?
-            }
-            UpdateMethod::InverseEigensensitivity => {
-                inverse_eigensensitivity(up, layout, &tuned, &sensitivity, log)?
-            }
-        })
+        run_method(method, up, layout, &tuned, options, &sensitivity, log)
     };
     let names_of =
         |groups: &[usize]| -> Vec<&str> { groups.iter().map(|g| candidates[*g]).collect() };
@@ -487,14 +457,14 @@ pub fn localise_update_check(
         if added.is_empty() {
             break (up, result);
         }
+        let list: Vec<String> = added
+            .iter()
+            .map(|s| format!("{} (F = {:.3e})", s.parameter, s.f_statistic))
+            .collect();
         notes.push(format!(
             "at the fit of {}, the selection adds {}: linearised at the nominal model it had not passed",
             names_of(&chosen_groups).join(", "),
-            added
-                .iter()
-                .map(|s| format!("{} (F = {:.3e})", s.parameter, s.f_statistic))
-                .collect::<Vec<_>>()
-                .join(", ")
+            list.join(", ")
         ));
         for s in added {
             chosen_groups.push(s.index);
@@ -550,6 +520,57 @@ pub fn localise_update_check(
         discretisation,
         reach,
         updated_modes: after,
+    })
+}
+
+/// The updating model of `model` over the element sets `sets` (stiffness factors, consistent
+/// mass), on the caller's assembly when it has a consistent-mass one.
+fn update_model<'m>(
+    model: &'m Model,
+    sets: &[&str],
+    assembly: Option<(&Assembler, &SystemMatrices)>,
+) -> Result<UpdateModel<'m>, StudyError> {
+    Ok(match assembly {
+        Some((asm, base)) if base.mass_kind == MassKind::Consistent => {
+            let groups = ParameterGroups::from_element_sets(model, sets, MassKind::Consistent)?;
+            UpdateModel::from_assembly(
+                model,
+                groups,
+                Corrections::Stiffness,
+                asm.clone(),
+                base.clone(),
+            )?
+        }
+        _ => UpdateModel::from_element_sets(
+            model,
+            sets,
+            MassKind::Consistent,
+            Corrections::Stiffness,
+        )?,
+    })
+}
+
+/// One updating run of `method` on `up` from the tuned modes.
+fn run_method(
+    method: UpdateMethod,
+    up: &mut UpdateModel<'_>,
+    layout: &SensorLayout,
+    tuned: &TestModes,
+    options: &UpdateStudyOptions,
+    sensitivity: &SensitivityOptions,
+    log: &mut dyn FnMut(&Iteration),
+) -> Result<UpdateResult, StudyError> {
+    Ok(match method {
+        UpdateMethod::SbEbe => {
+            let o = SbebeOptions {
+                test_error: options.test_error,
+                ..Default::default()
+            };
+            sb_ebe(up, layout, tuned, &o, log)?
+        }
+        UpdateMethod::InverseEigensensitivity => {
+            inverse_eigensensitivity(up, layout, tuned, sensitivity, log)?
+        }
     })
 }
 
