@@ -136,6 +136,133 @@ fn noise(seed: &mut u64) -> f64 {
     ((*seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) * 3f64.sqrt()
 }
 
+/// The "real" plate (region r3 changed by the options' truth) and its modes, with its DOF map.
+fn real_plate(
+    model: &Model,
+    sets: &[&str],
+    opts: &DemoOptions,
+    progress: &mut impl FnMut(&str),
+) -> Result<(femu_correlate::ModeSet, femu_fem::dof::DofMap), StudyError> {
+    let mut real =
+        UpdateModel::from_element_sets(model, sets, MassKind::Consistent, Corrections::Stiffness)?;
+    let mut theta = vec![0.0; 10];
+    theta[3] = opts.truth;
+    real.set_theta(&theta)?;
+    let n = real.matrices().dofs.free_count();
+    progress(&format!(
+        "plate: {} nodes, {} elements {:?}, {n} DOF; the real plate has region r3 {:+.0} % stiffer",
+        model.mesh().node_count(),
+        model.mesh().element_count(),
+        model.mesh().kind_counts(),
+        100.0 * opts.truth
+    ));
+    let truth = model_modes(&mut real, 6 + opts.modes, &opts.eigen)?;
+    Ok((truth, real.matrices().dofs.clone()))
+}
+
+/// The demo's maps: `plate.vtu` (the updated model's first four elastic modes, the error
+/// indicator per element) and the error map as SVG and PNG.
+fn write_maps(
+    opts: &DemoOptions,
+    model: &Model,
+    dofs: &femu_fem::dof::DofMap,
+    updated: &femu_correlate::ModeSet,
+    density: &[f64],
+    localisation: &Localisation,
+    files: &mut Vec<PathBuf>,
+) -> Result<(), StudyError> {
+    let names: Vec<String> = (0..4)
+        .map(|j| {
+            format!(
+                "updated model mode {} ({:.1} Hz)",
+                j + 1,
+                hz_of_eigenvalue(updated.values[6 + j])
+            )
+        })
+        .collect();
+    let vtu = opts.out.join("plate.vtu");
+    write_shapes_vtu(
+        &vtu,
+        model.mesh(),
+        dofs,
+        updated.shapes.as_ref().subcols(6, 4),
+        &names,
+        &[femu_io::vtk::CellField {
+            name: "error indicator (explained residual density)",
+            values: density,
+        }],
+    )?;
+    files.push(vtu);
+    let svg = error_map_svg(localisation);
+    write_text(&opts.out.join("error_map.svg"), &svg, files)?;
+    write_png(&svg, 2.0, opts.out.join("error_map.png"))?;
+    files.push(opts.out.join("error_map.png"));
+    Ok(())
+}
+
+/// The simulated test: the real plate's modes `truth` read on `layout` at `nodes` (y and z),
+/// with the options' noise on shapes and frequencies, written as a universal file at `path`
+/// (units, the sensor nodes' coordinates, dataset 55).
+fn write_test_uff(
+    opts: &DemoOptions,
+    model: &Model,
+    nodes: &[u64],
+    layout: &SensorLayout,
+    truth: &femu_correlate::ModeSet,
+    path: &std::path::Path,
+) -> Result<(), StudyError> {
+    let x_true = truth.shapes.as_ref().subcols(6, opts.modes);
+    let mut y = layout.measure_all(x_true)?;
+    // the noise must not depend on the arbitrary sign of an eigenvector (round-off)
+    femu_correlate::modes::canonical_signs(&mut y);
+    let mut seed = 0x2545_F491_4F6C_DD1D_u64;
+    for j in 0..y.ncols() {
+        let peak = y.col(j).iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+        for i in 0..y.nrows() {
+            y[(i, j)] += opts.shape_noise * peak * noise(&mut seed);
+        }
+    }
+    let f_test: Vec<f64> = truth.values[6..6 + opts.modes]
+        .iter()
+        .map(|l| hz_of_eigenvalue(*l) * (1.0 + opts.frequency_noise * noise(&mut seed)))
+        .collect();
+    // as a universal file, then read back like real test data
+    let mut uff = Universal {
+        units: Some(UffUnits {
+            code: 1,
+            description: "SI".into(),
+            factors: [1.0, 1.0, 1.0],
+        }),
+        ..Default::default()
+    };
+    for id in nodes {
+        let i = model.mesh().node_index(*id).ok_or_else(|| {
+            StudyError::invalid("sensor node", format!("{id} is not in the plate"))
+        })?;
+        uff.nodes.push(UffNode {
+            id: *id,
+            x: model.mesh().coords()[i],
+        });
+    }
+    for (j, f) in f_test.iter().enumerate() {
+        uff.modes.push(UffMode {
+            number: j as i64 + 1,
+            frequency_hz: *f,
+            damping: 0.0,
+            modal_mass: 0.0,
+            values: nodes
+                .iter()
+                .enumerate()
+                .map(|(k, id)| (*id, [0.0, y[(2 * k, j)], y[(2 * k + 1, j)]]))
+                .collect(),
+            complex: false,
+            complexity: None,
+        });
+    }
+    femu_io::uff::write_uff(path, &uff)?;
+    Ok(())
+}
+
 /// The plate of `spec` in steel, with ten regions along x as element sets `r0`..`r9`.
 pub fn plate_with_regions(spec: &PlateSpec) -> Result<Model, StudyError> {
     let mut mesh = mixed_plate(spec)?;
@@ -170,90 +297,23 @@ pub fn run_demo(
         timings.push((name.to_string(), clock.elapsed().as_secs_f64()));
         clock = Instant::now();
     };
-    let spec = &opts.plate;
-    let model = plate_with_regions(spec)?;
+    let model = plate_with_regions(&opts.plate)?;
     let inp = opts.out.join("plate.inp");
     femu_io::inp::write_inp(&model, None, &inp)?;
     files.push(inp);
     let regions: Vec<String> = (0..10).map(|r| format!("r{r}")).collect();
     let sets: Vec<&str> = regions.iter().map(|s| s.as_str()).collect();
     // the "real" plate and its test
-    let mut real = UpdateModel::from_element_sets(
-        &model,
-        &sets,
-        MassKind::Consistent,
-        Corrections::Stiffness,
-    )?;
-    let mut theta = vec![0.0; 10];
-    theta[3] = opts.truth;
-    real.set_theta(&theta)?;
-    let n = real.matrices().dofs.free_count();
-    progress(&format!(
-        "plate: {} nodes, {} elements {:?}, {n} DOF; the real plate has region r3 {:+.0} % stiffer",
-        model.mesh().node_count(),
-        model.mesh().element_count(),
-        model.mesh().kind_counts(),
-        100.0 * opts.truth
-    ));
-    let truth = model_modes(&mut real, 6 + opts.modes, &opts.eigen)?;
+    let (truth, dofs) = real_plate(&model, &sets, opts, &mut progress)?;
+    let n = dofs.free_count();
     let nodes = femu_correlate::placement::grid_nodes(model.mesh(), "zmax", [5, 3])?;
-    let mut sensors = Vec::new();
-    for id in &nodes {
-        sensors.push(Sensor::axis(*id, 1));
-        sensors.push(Sensor::axis(*id, 2));
-    }
-    let dofs = real.matrices().dofs.clone();
-    let layout = SensorLayout::new(model.mesh(), &dofs, sensors)?;
-    let x_true = truth.shapes.as_ref().subcols(6, opts.modes).to_owned();
-    let mut y = layout.measure_all(x_true.as_ref())?;
-    // the noise must not depend on the arbitrary sign of an eigenvector (round-off)
-    femu_correlate::modes::canonical_signs(&mut y);
-    let mut seed = 0x2545_F491_4F6C_DD1D_u64;
-    for j in 0..y.ncols() {
-        let peak = y.col(j).iter().fold(0.0_f64, |a, v| a.max(v.abs()));
-        for i in 0..y.nrows() {
-            y[(i, j)] += opts.shape_noise * peak * noise(&mut seed);
-        }
-    }
-    let f_test: Vec<f64> = truth.values[6..6 + opts.modes]
+    let sensors = nodes
         .iter()
-        .map(|l| hz_of_eigenvalue(*l) * (1.0 + opts.frequency_noise * noise(&mut seed)))
-        .collect();
-    // as a universal file, then read back like real test data
-    let mut uff = Universal {
-        units: Some(UffUnits {
-            code: 1,
-            description: "SI".into(),
-            factors: [1.0, 1.0, 1.0],
-        }),
-        ..Default::default()
-    };
-    for id in &nodes {
-        let i = model.mesh().node_index(*id).ok_or_else(|| {
-            StudyError::invalid("sensor node", format!("{id} is not in the plate"))
-        })?;
-        uff.nodes.push(UffNode {
-            id: *id,
-            x: model.mesh().coords()[i],
-        });
-    }
-    for (j, f) in f_test.iter().enumerate() {
-        uff.modes.push(UffMode {
-            number: j as i64 + 1,
-            frequency_hz: *f,
-            damping: 0.0,
-            modal_mass: 0.0,
-            values: nodes
-                .iter()
-                .enumerate()
-                .map(|(k, id)| (*id, [0.0, y[(2 * k, j)], y[(2 * k + 1, j)]]))
-                .collect(),
-            complex: false,
-            complexity: None,
-        });
-    }
+        .flat_map(|id| [1, 2].map(|c| Sensor::axis(*id, c)));
+    let layout = SensorLayout::new(model.mesh(), &dofs, sensors.collect())?;
+    let x_true = truth.shapes.as_ref().subcols(6, opts.modes).to_owned();
     let uff_path = opts.out.join("test.unv");
-    femu_io::uff::write_uff(&uff_path, &uff)?;
+    write_test_uff(opts, &model, &nodes, &layout, &truth, &uff_path)?;
     files.push(uff_path.clone());
     let data = femu_io::uff::read_uff(&uff_path)?.test_data(&uff_path)?;
     let layout = SensorLayout::new(model.mesh(), &dofs, data.sensors.clone())?;
@@ -377,34 +437,15 @@ pub fn run_demo(
     ));
 
     // VTK: error map and the updated model's first elastic modes
-    let updated = study.updated_modes;
-    let density = localisation.density_by_element(&nominal);
-    let names: Vec<String> = (0..4)
-        .map(|j| {
-            format!(
-                "updated model mode {} ({:.1} Hz)",
-                j + 1,
-                hz_of_eigenvalue(updated.values[6 + j])
-            )
-        })
-        .collect();
-    let vtu = opts.out.join("plate.vtu");
-    write_shapes_vtu(
-        &vtu,
-        model.mesh(),
+    write_maps(
+        opts,
+        &model,
         &dofs,
-        updated.shapes.as_ref().subcols(6, 4),
-        &names,
-        &[femu_io::vtk::CellField {
-            name: "error indicator (explained residual density)",
-            values: &density,
-        }],
+        &study.updated_modes,
+        &localisation.density_by_element(&nominal),
+        &localisation,
+        &mut files,
     )?;
-    files.push(vtu);
-    let svg = error_map_svg(&localisation);
-    write_text(&opts.out.join("error_map.svg"), &svg, &mut files)?;
-    write_png(&svg, 2.0, opts.out.join("error_map.png"))?;
-    files.push(opts.out.join("error_map.png"));
 
     let report = DemoReport {
         dofs: n,
