@@ -260,6 +260,47 @@ impl std::fmt::Display for Mapping {
     }
 }
 
+/// A wireframe larger than the model is in other units (or another frame): the reason, with the
+/// unit whose factor matches the size ratio, when the test's nodes as `placed` span more than
+/// twice the model's `diagonal` (and the tolerance).
+fn check_span(
+    placed: &[[f64; 3]],
+    diagonal: f64,
+    tolerance: f64,
+    metres: f64,
+) -> Result<(), String> {
+    let test_span = femu_fem::mesh::bounding_diagonal(placed);
+    if !placed.is_empty() && test_span > 2.0 * diagonal + 2.0 * tolerance {
+        let ratio = test_span / diagonal.max(f64::MIN_POSITIVE);
+        let units = [("mm", 1000.0), ("cm", 100.0), ("in", 39.37), ("ft", 3.281)];
+        let likely = units
+            .iter()
+            .filter(|(_, r)| ratio <= 1.25 * r && ratio >= 0.05 * r)
+            .min_by(|a, b| {
+                (ratio / a.1)
+                    .ln()
+                    .abs()
+                    .total_cmp(&(ratio / b.1).ln().abs())
+            })
+            .map(|(u, _)| *u);
+        return Err(format!(
+            "the test's nodes span {test_span:.4e} m, {ratio:.0} times the model's {diagonal:.4e} m (its bounding-box diagonal): a test cannot be larger than the structure it measures, so its coordinates are in other units{}{}",
+            match likely {
+                Some(u) => format!(
+                    " (the ratio is about that of {u} to the model's unit: --test-units {u}, or test_units = \"{u}\" in a study file)"
+                ),
+                None => " (--test-units)".into(),
+            },
+            if metres != 1.0 {
+                format!("; they were read as {metres} m per unit")
+            } else {
+                String::new()
+            }
+        ));
+    }
+    Ok(())
+}
+
 /// Aligns and maps the test `data` onto `model` (coordinates of the file times `metres`): the
 /// sensors are relabelled to model nodes ([`MapMethod::Nearest`]) or become sensors between
 /// nodes ([`MapMethod::Interpolate`]); their directions turn with the alignment.
@@ -294,7 +335,7 @@ pub fn map_test(
         })?;
         test.insert(t, x.map(|v| v * metres));
     }
-    // the model's size sets the default tolerance
+    // the model's size sets the default tolerance; its box serves the distance of far nodes
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for c in mesh.coords() {
@@ -353,35 +394,7 @@ pub fn map_test(
     // a wireframe larger than the model is in other units (or another frame): said before any
     // node is searched for, with the unit whose factor matches the size ratio
     let placed: Vec<[f64; 3]> = test.values().map(|x| transform.apply(*x)).collect();
-    let test_span = femu_fem::mesh::bounding_diagonal(&placed);
-    if !placed.is_empty() && test_span > 2.0 * diagonal + 2.0 * tolerance {
-        let ratio = test_span / diagonal.max(f64::MIN_POSITIVE);
-        let units = [("mm", 1000.0), ("cm", 100.0), ("in", 39.37), ("ft", 3.281)];
-        let likely = units
-            .iter()
-            .filter(|(_, r)| ratio <= 1.25 * r && ratio >= 0.05 * r)
-            .min_by(|a, b| {
-                (ratio / a.1)
-                    .ln()
-                    .abs()
-                    .total_cmp(&(ratio / b.1).ln().abs())
-            })
-            .map(|(u, _)| *u);
-        return Err(in_file(format!(
-            "the test's nodes span {test_span:.4e} m, {ratio:.0} times the model's {diagonal:.4e} m (its bounding-box diagonal): a test cannot be larger than the structure it measures, so its coordinates are in other units{}{}",
-            match likely {
-                Some(u) => format!(
-                    " (the ratio is about that of {u} to the model's unit: --test-units {u}, or test_units = \"{u}\" in a study file)"
-                ),
-                None => " (--test-units)".into(),
-            },
-            if metres != 1.0 {
-                format!("; they were read as {metres} m per unit")
-            } else {
-                String::new()
-            }
-        )));
-    }
+    check_span(&placed, diagonal, tolerance, metres).map_err(in_file)?;
     let locator = Locator::new(mesh);
     let mut nodes = Vec::with_capacity(test.len());
     let mut reads: BTreeMap<u64, Vec<(u64, f64)>> = BTreeMap::new();
