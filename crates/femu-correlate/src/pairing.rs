@@ -25,6 +25,22 @@ pub struct PairingOptions {
     pub max_frequency_error: Option<f64>,
 }
 
+impl PairingOptions {
+    /// The frequency window, checked.
+    ///
+    /// # Errors
+    /// A window that is not a positive, finite relative error.
+    pub fn window(&self) -> Result<Option<f64>, CorrelateError> {
+        match self.max_frequency_error {
+            Some(w) if !(w.is_finite() && w > 0.0) => Err(CorrelateError::Invalid {
+                what: "frequency window",
+                reason: format!("{w} is not a positive relative error"),
+            }),
+            w => Ok(w),
+        }
+    }
+}
+
 impl Default for PairingOptions {
     fn default() -> Self {
         Self {
@@ -141,15 +157,7 @@ pub fn pair_modes(
             }
         }
     }
-    let window = options.max_frequency_error;
-    if let Some(w) = window
-        && !(w.is_finite() && w > 0.0)
-    {
-        return Err(CorrelateError::Invalid {
-            what: "frequency window",
-            reason: format!("{w} is not a positive relative error"),
-        });
-    }
+    let window = options.window()?;
     let in_window = |i: usize, j: usize| {
         window.is_none_or(|w| frequency_error(f_test[i], f_model[j]).abs() <= w)
     };
@@ -220,15 +228,7 @@ pub fn pair_by_frequency(
     f_model: &[f64],
     options: &PairingOptions,
 ) -> Result<Pairing, CorrelateError> {
-    let window = options.max_frequency_error;
-    if let Some(w) = window
-        && !(w.is_finite() && w > 0.0)
-    {
-        return Err(CorrelateError::Invalid {
-            what: "frequency window",
-            reason: format!("{w} is not a positive relative error"),
-        });
-    }
+    let window = options.window()?;
     let (t, m) = (f_test.len(), f_model.len());
     // rigid-body modes (zero frequency) are never paired with a test mode
     let elastic = |j: usize| f_model[j] > 1e-6 * f_model.last().copied().unwrap_or(1.0).abs();
