@@ -52,6 +52,68 @@ fn direction(s: &str) -> Option<[f64; 3]> {
     }
 }
 
+/// The columns a CSV test's header announces.
+struct Header {
+    /// `mode,frequency_hz[,damping]`: frequencies alone.
+    frequencies_only: bool,
+    /// A damping column.
+    damping: bool,
+    /// The column of x when the file gives the nodes' coordinates.
+    xyz_from: Option<usize>,
+}
+
+/// The header line `t` split into fields `f`, or what is wrong with it.
+fn parse_header(f: &[&str], t: &str) -> Result<Header, String> {
+    let h: Vec<String> = f.iter().map(|s| s.to_ascii_lowercase()).collect();
+    if h.len() >= 2
+        && h[..2] == ["mode", "frequency_hz"]
+        && !h.iter().any(|c| c == "node" || c == "value")
+    {
+        let damping = match &h[2..] {
+            [] => false,
+            [d] if d == "damping" => true,
+            _ => {
+                return Err(format!(
+                    "a test of frequencies alone has the header mode,frequency_hz[,damping], got {t:?}"
+                ));
+            }
+        };
+        return Ok(Header {
+            frequencies_only: true,
+            damping,
+            xyz_from: None,
+        });
+    }
+    if h.len() < 5 || h[..5] != ["mode", "frequency_hz", "node", "direction", "value"] {
+        return Err(format!(
+            "expected the header mode,frequency_hz,node,direction,value[,damping][,x,y,z], got {t:?}"
+        ));
+    }
+    let rest: Vec<&str> = h[5..].iter().map(String::as_str).collect();
+    let (damping, xyz) = match rest.as_slice() {
+        [] => (false, false),
+        ["damping"] => (true, false),
+        ["x", "y", "z"] => (false, true),
+        ["damping", "x", "y", "z"] => (true, true),
+        _ => {
+            let extra = rest
+                .iter()
+                .find(|c| !["damping", "x", "y", "z"].contains(c))
+                .copied()
+                .unwrap_or(rest[0]);
+            let hint = crate::spelling::suggestion(extra, ["damping", "x", "y", "z"], "");
+            return Err(format!(
+                "unknown or misplaced column {extra:?}{hint}: the columns are mode,frequency_hz,node,direction,value, then optionally damping, then optionally x,y,z"
+            ));
+        }
+    };
+    Ok(Header {
+        frequencies_only: false,
+        damping,
+        xyz_from: xyz.then_some(5 + usize::from(damping)),
+    })
+}
+
 /// Parses CSV test modes (`path` names the file in messages). A test of frequencies alone has
 /// the header `mode,frequency_hz[,damping]`, or rows with empty node, direction and value: its
 /// modes have no shapes ([`TestModes::frequencies_only`]).
@@ -83,58 +145,9 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
         }
         let f: Vec<&str> = t.split(',').map(str::trim).collect();
         if !header_seen {
-            let h: Vec<String> = f.iter().map(|s| s.to_ascii_lowercase()).collect();
-            if h.len() >= 2
-                && h[..2] == ["mode", "frequency_hz"]
-                && !h.iter().any(|c| c == "node" || c == "value")
-            {
-                match &h[2..] {
-                    [] => {}
-                    [d] if d == "damping" => damping_column = true,
-                    _ => {
-                        return Err(err(
-                            line,
-                            format!(
-                                "a test of frequencies alone has the header mode,frequency_hz[,damping], got {t:?}"
-                            ),
-                        ));
-                    }
-                }
-                frequencies_header = true;
-                header_seen = true;
-                continue;
-            }
-            if h.len() < 5 || h[..5] != ["mode", "frequency_hz", "node", "direction", "value"] {
-                return Err(err(
-                    line,
-                    format!(
-                        "expected the header mode,frequency_hz,node,direction,value[,damping][,x,y,z], got {t:?}"
-                    ),
-                ));
-            }
-            let rest: Vec<&str> = h[5..].iter().map(String::as_str).collect();
-            let (damping, xyz) = match rest.as_slice() {
-                [] => (false, false),
-                ["damping"] => (true, false),
-                ["x", "y", "z"] => (false, true),
-                ["damping", "x", "y", "z"] => (true, true),
-                _ => {
-                    let extra = rest
-                        .iter()
-                        .find(|c| !["damping", "x", "y", "z"].contains(c))
-                        .copied()
-                        .unwrap_or(rest[0]);
-                    let hint = crate::spelling::suggestion(extra, ["damping", "x", "y", "z"], "");
-                    return Err(err(
-                        line,
-                        format!(
-                            "unknown or misplaced column {extra:?}{hint}: the columns are mode,frequency_hz,node,direction,value, then optionally damping, then optionally x,y,z"
-                        ),
-                    ));
-                }
-            };
-            damping_column = damping;
-            xyz_from = xyz.then_some(5 + usize::from(damping));
+            let header = parse_header(&f, t).map_err(|reason| err(line, reason))?;
+            (frequencies_header, damping_column, xyz_from) =
+                (header.frequencies_only, header.damping, header.xyz_from);
             header_seen = true;
             continue;
         }
