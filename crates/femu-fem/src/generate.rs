@@ -637,6 +637,15 @@ pub fn refine(mesh: &Mesh) -> Result<Refinement, FemError> {
         })?;
         let corners = lin.num_nodes();
         let ref_nodes = kind.reference_nodes();
+        // for each of the parent's nodes, the corners of the face, edge or cell it lies on
+        let support: Vec<Vec<usize>> = ref_nodes
+            .iter()
+            .map(|xi| {
+                let mut on = vec![0.0; corners];
+                lin.shape(*xi, &mut on);
+                (0..corners).filter(|c| on[*c].abs() > 1e-12).collect()
+            })
+            .collect();
         let mut n_lin = vec![0.0; corners];
         let mut n_par = vec![0.0; kind.num_nodes()];
         let key_of = |xi: [f64; 3], n_lin: &mut Vec<f64>| -> Key {
@@ -693,11 +702,7 @@ pub fn refine(mesh: &Mesh) -> Result<Refinement, FemError> {
                             .iter()
                             .enumerate()
                             .filter(|(a, _)| {
-                                let mut on = vec![0.0; corners];
-                                lin.shape(ref_nodes[*a], &mut on);
-                                on.iter()
-                                    .enumerate()
-                                    .all(|(c, w)| w.abs() <= 1e-12 || entity.contains(&el.nodes[c]))
+                                support[*a].iter().all(|c| entity.contains(&el.nodes[*c]))
                             })
                             .map(|(a, w)| (el.nodes[a], *w))
                             .collect();

@@ -31,6 +31,25 @@ fn at_x(mesh: &Mesh, x: f64) -> Vec<u64> {
 
 const L: f64 = 0.2;
 
+/// The model's three lowest modes and the estimate of their discretisation error.
+fn estimated(
+    model: &Model,
+) -> (
+    femu_sparse::eigen::Modes,
+    femu_study::discretisation::DiscretisationEstimate,
+) {
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let modes = eigs(&sys.k, &sys.m, Which::Lowest(3), &EigenOptions::default()).unwrap();
+    let est = femu_study::discretisation::estimate(
+        model,
+        &ModeSet::from_modes(&modes),
+        &Default::default(),
+    )
+    .unwrap()
+    .expect("a reference is built");
+    (modes, est)
+}
+
 /// The cantilever with its end face rigidly linked to a 0.5 kg body (node 9000).
 fn build(mesh: &Mesh) -> Model {
     let l = L;
@@ -56,16 +75,7 @@ fn the_quadratic_comparison_keeps_masses_and_links() {
     let (l, b, h) = (L, 0.04, 0.02);
     let mut mesh = box_mesh(&BoxSpec::new([l, b, h], [10, 2, 1], BoxCells::Hex, false)).unwrap();
     mesh.add_node(9000, [l + 0.03, b / 2.0, h / 2.0]).unwrap();
-    let model = build(&mesh);
-    let sys = model.assemble(MassKind::Consistent).unwrap();
-    let modes = eigs(&sys.k, &sys.m, Which::Lowest(3), &EigenOptions::default()).unwrap();
-    let est = femu_study::discretisation::estimate(
-        &model,
-        &ModeSet::from_modes(&modes),
-        &Default::default(),
-    )
-    .unwrap()
-    .expect("a linear mesh has a quadratic comparison");
+    let (modes, est) = estimated(&build(&mesh));
     // by hand: the quadratic mesh, every end-face node linked, the same mass
     let reference = build(&to_quadratic(&mesh));
     let f_ref = lowest(&reference, 1)[0].sqrt();
@@ -93,16 +103,7 @@ fn a_quadratic_model_is_compared_with_itself_split_once() {
         mesh.add_node(9000, [l + 0.03, b / 2.0, h / 2.0]).unwrap();
         mesh
     };
-    let model = build(&with_body([5, 1, 1]));
-    let sys = model.assemble(MassKind::Consistent).unwrap();
-    let modes = eigs(&sys.k, &sys.m, Which::Lowest(3), &EigenOptions::default()).unwrap();
-    let est = femu_study::discretisation::estimate(
-        &model,
-        &ModeSet::from_modes(&modes),
-        &Default::default(),
-    )
-    .unwrap()
-    .expect("a hex20 mesh is split");
+    let (modes, est) = estimated(&build(&with_body([5, 1, 1])));
     assert!(est.reference.contains("split once"), "{}", est.reference);
     let reference = build(&with_body([10, 2, 2]));
     let f_ref = lowest(&reference, 1)[0].sqrt();
