@@ -85,6 +85,9 @@ pub(super) fn parse_collecting(
     deck.finish(lines, path, warnings)
 }
 
+/// One term of an `*EQUATION`: node, DOF 1-6, coefficient.
+type EquationTerm = (u64, usize, f64);
+
 /// An `*NSET` or `*ELSET` as written: resolved once every node and element is known.
 struct SetBlock {
     name: String,
@@ -119,7 +122,7 @@ struct DeckBuilder {
     surface_now: Option<String>,
     coupling_now: Option<(u64, String)>,
     /// an *EQUATION being read: number of terms, terms so far, keyword line
-    equation: Option<(usize, Vec<(u64, usize, f64)>, Location)>,
+    equation: Option<(usize, Vec<EquationTerm>, Location)>,
     block: String,
     block_params: HashMap<String, String>,
     element_kind_now: Option<(ElementKind, usize)>,
