@@ -284,7 +284,7 @@ pub fn frequency_error(f_test: f64, f_model: f64) -> f64 {
 
 /// Eigenvalue gap `|lambda_id - lambda_j|` in s^-2 from two frequencies in Hz (Table 2).
 pub fn eigenvalue_gap_hz(f_test: f64, f_model: f64) -> f64 {
-    (crate::modes::eigenvalue_of_hz(f_test) - crate::modes::eigenvalue_of_hz(f_model)).abs()
+    (crate::hz::eigenvalue_of_hz(f_test) - crate::hz::eigenvalue_of_hz(f_model)).abs()
 }
 
 /// Model modes whose eigenvalues are equal to this relative tolerance are one repeated

@@ -66,6 +66,15 @@ pub enum CorrelateError {
         /// Where (mode, entry, ...).
         index: usize,
     },
+    /// A test wireframe that cannot be mapped onto the model, or a mapping setting that does
+    /// not fit (`what`: `map`, `align`, `mapping tolerance`).
+    #[error("{what}: {reason}")]
+    Mapping {
+        /// The setting or step.
+        what: &'static str,
+        /// What is wrong and what would fit.
+        reason: String,
+    },
     /// A value outside its allowed range.
     #[error("invalid {what}: {reason}")]
     Invalid {

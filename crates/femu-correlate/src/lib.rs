@@ -51,6 +51,8 @@ pub mod correlation;
 mod error;
 pub mod estimators;
 pub mod expansion;
+mod hz;
+pub mod mapping;
 pub mod mass;
 pub mod modes;
 pub mod pairing;
@@ -60,6 +62,7 @@ pub mod residues;
 pub mod sensor_space;
 pub mod sensors;
 pub mod study;
+pub mod test_data;
 
 pub use bounds::{ElementBounds, element_bounds};
 pub use complexity::Complexity;
@@ -78,6 +81,7 @@ pub use report::{Assessment, CorrelationReport, correlate, estimate};
 pub use residues::StiffnessSolver;
 pub use sensor_space::SensorSpace;
 pub use sensors::{Sensor, SensorLayout};
+pub use test_data::TestData;
 
 /// The types most programs need.
 pub mod prelude {

@@ -6,7 +6,6 @@ use crate::estimators::SpectrumProof;
 use faer::{Mat, MatRef};
 use femu_sparse::SparseMatrix;
 use femu_sparse::eigen::Modes;
-use std::f64::consts::PI;
 
 /// Gives each column of `shapes` a sign fixed by the shape itself: the one that makes
 /// `sum_i w_i x_i` positive, with weights `w_i = 1 + frac(0.618.. i)` that no symmetry of a
@@ -27,16 +26,7 @@ pub fn canonical_signs(shapes: &mut Mat<f64>) {
     }
 }
 
-/// `lambda = (2 pi f)^2` in s^-2 from a frequency in Hz.
-pub fn eigenvalue_of_hz(f: f64) -> f64 {
-    let w = 2.0 * PI * f;
-    w * w
-}
-
-/// `f = sqrt(max(lambda, 0)) / (2 pi)` in Hz from an eigenvalue in s^-2.
-pub fn hz_of_eigenvalue(lambda: f64) -> f64 {
-    lambda.max(0.0).sqrt() / (2.0 * PI)
-}
+pub use crate::hz::{eigenvalue_of_hz, hz_of_eigenvalue};
 
 fn check_finite(what: &'static str, values: &[f64]) -> Result<(), CorrelateError> {
     match values.iter().position(|v| !v.is_finite()) {

@@ -862,3 +862,17 @@ mod shared {
         }
     }
 }
+
+/// The one-call assembly of a model, here with the assembler it uses (the model itself knows
+/// nothing of assembly).
+impl Model {
+    /// Assembles `K` and `M` (free DOFs) in one call, with the analysis of `K`'s pattern made
+    /// beside it for the solves that follow ([`Assembler::assemble_analysed`]); see [`Assembler`]
+    /// to reuse the pattern.
+    ///
+    /// # Errors
+    /// [`FemError::NoMaterial`], [`FemError::NoFreeDofs`] or an element geometry error.
+    pub fn assemble(&self, mass: MassKind) -> Result<SystemMatrices, FemError> {
+        Assembler::new(self)?.assemble_analysed(self, mass)
+    }
+}

@@ -3,7 +3,6 @@
 //! constraints").
 
 use crate::FemError;
-use crate::assembly::{Assembler, MassKind, SystemMatrices};
 use crate::dof::{DofMap, LinearConstraint};
 use crate::material::Material;
 use crate::mesh::Mesh;
@@ -714,15 +713,5 @@ impl Model {
         }
         m += self.rigid_masses.iter().map(|r| r.mass).sum::<f64>();
         Ok(m)
-    }
-
-    /// Assembles `K` and `M` (free DOFs) in one call, with the analysis of `K`'s pattern made
-    /// beside it for the solves that follow ([`Assembler::assemble_analysed`]); see [`Assembler`]
-    /// to reuse the pattern.
-    ///
-    /// # Errors
-    /// [`FemError::NoMaterial`], [`FemError::NoFreeDofs`] or an element geometry error.
-    pub fn assemble(&self, mass: MassKind) -> Result<SystemMatrices, FemError> {
-        Assembler::new(self)?.assemble_analysed(self, mass)
     }
 }

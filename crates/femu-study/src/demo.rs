@@ -117,9 +117,9 @@ pub struct DemoReport {
     /// The held-out check of the updated model, judged.
     pub truth_check: TruthCheck,
     /// Before updating, what the selected regions can reach.
-    pub reach: crate::reach::Reach,
+    pub reach: femu_update::reach::Reach,
     /// The nominal model's discretisation error (the same mesh with quadratic elements).
-    pub discretisation: Option<crate::discretisation::DiscretisationEstimate>,
+    pub discretisation: Option<femu_update::discretisation::DiscretisationEstimate>,
     /// The true correction and its region.
     pub true_parameter: (String, f64),
     /// Seconds per step.
@@ -523,7 +523,7 @@ fn markdown(r: &DemoReport, o: &DemoOptions, test: &TestModes) -> String {
         let _ = writeln!(
             s,
             "## The model's own error\n\n{}",
-            crate::discretisation::table(d, &r.truth_check)
+            femu_update::discretisation::table(d, &r.truth_check)
         );
     }
     let _ = writeln!(

@@ -4,11 +4,11 @@
 //! 1-4 of the paper, (26)-(29)) with what it bounds. The paper's Table 2 is its summary.
 
 use crate::StudyError;
-use crate::expand::expand_shapes;
 use crate::load::{LoadedModel, LoadedTest};
 use crate::modes::lowest_for_test;
 use faer::{Mat, MatRef};
 use femu_correlate::expansion::Method;
+use femu_correlate::expansion::expand_shapes;
 use femu_correlate::{
     Assessment, BoundKind, CorrelationReport, Form, ModeSet, ModelSpectrum, PairingOptions,
     SensorLayout, TestModes, correlate, element_bounds, estimate,

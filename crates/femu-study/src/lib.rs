@@ -28,15 +28,15 @@
 
 pub mod chart;
 pub mod demo;
-pub mod discretisation;
+pub use femu_update::discretisation;
 mod error;
 pub mod estimate;
 pub mod expand;
 pub mod info;
 pub mod load;
-pub mod mapping;
+pub use femu_correlate::mapping;
 pub mod modes;
-pub mod reach;
+pub use femu_update::reach;
 pub mod removal;
 pub mod report;
 pub mod study_file;

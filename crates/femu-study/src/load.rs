@@ -2,8 +2,8 @@
 //! and check the model, assemble `K` and `M` once, and map the test's sensors onto the model.
 
 use crate::StudyError;
-use crate::mapping::{MapOptions, Mapping, map_test};
-use femu_correlate::SensorLayout;
+use femu_correlate::mapping::{MapOptions, Mapping};
+use femu_correlate::{CorrelateError, SensorLayout};
 use femu_fem::assembly::{Assembler, MassKind, SystemMatrices};
 use femu_fem::material::Material;
 use femu_fem::model::Model;
@@ -419,10 +419,10 @@ pub fn load_test(path: &Path, model: &LoadedModel) -> Result<LoadedTest, StudyEr
 }
 
 /// [`load_test`] with `options`: with [`TestOptions::map`], the test's wireframe is aligned and
-/// mapped onto the model ([`crate::mapping::map_test`]; the table is in [`LoadedTest::mapping`]).
+/// mapped onto the model ([`femu_correlate::mapping::map_test`]; the table is in [`LoadedTest::mapping`]).
 ///
 /// # Errors
-/// As [`load_test`]; with mapping, the errors of [`crate::mapping::map_test`].
+/// As [`load_test`]; with mapping, the errors of [`femu_correlate::mapping::map_test`].
 pub fn load_test_with(
     path: &Path,
     model: &LoadedModel,
@@ -516,6 +516,27 @@ pub fn complex_mode_warnings(u: &femu_io::uff::Universal, path: &Path) -> Vec<St
             })
         })
         .collect()
+}
+
+/// [`femu_correlate::mapping::map_test`] onto `model`'s mesh; an error names the test file `path`.
+fn map_test(
+    data: &mut TestData,
+    model: &LoadedModel,
+    options: &MapOptions,
+    metres: f64,
+    path: &Path,
+) -> Result<Mapping, StudyError> {
+    femu_correlate::mapping::map_test(data, model.model.mesh(), options, metres).map_err(
+        |e| match e {
+            // a setting, not the file
+            CorrelateError::Mapping {
+                what: "mapping tolerance",
+                reason,
+            } => StudyError::invalid("mapping tolerance", reason),
+            CorrelateError::Mapping { what, reason } => StudyError::in_file(path, what, reason),
+            other => other.into(),
+        },
+    )
 }
 
 #[cfg(test)]

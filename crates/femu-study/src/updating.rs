@@ -3,14 +3,14 @@
 //! and check the updated model on held-out test modes it was not tuned on (the truth check).
 
 use crate::StudyError;
-use crate::discretisation::{DiscretisationEstimate, estimate as estimate_discretisation};
 use crate::load::{LoadedModel, LoadedTest};
-use crate::reach::{Reach, reach};
 use femu_correlate::{ModeSet, SensorLayout, TestModes};
 use femu_fem::assembly::{Assembler, MassKind, SystemMatrices};
 use femu_fem::groups::ParameterGroups;
 use femu_fem::model::Model;
 use femu_sparse::eigen::EigenOptions;
+use femu_update::discretisation::{DiscretisationEstimate, estimate as estimate_discretisation};
+use femu_update::reach::{Reach, reach};
 use femu_update::{
     Corrections, Iteration, JudgeInputs, Localisation, ParameterFinding, ParameterSelection,
     SbebeOptions, SelectionOptions, SelectionRule, SensitivityOptions, TestUncertainty, TruthCheck,
@@ -321,7 +321,11 @@ impl std::fmt::Display for UpdateStudy {
             writeln!(f, "For comparison:\n{c}")?;
         }
         if let Some(d) = &self.discretisation {
-            writeln!(f, "{}", crate::discretisation::table(d, &self.truth_check))?;
+            writeln!(
+                f,
+                "{}",
+                femu_update::discretisation::table(d, &self.truth_check)
+            )?;
         }
         write!(f, "{}", self.truth_check)
     }
@@ -717,7 +721,7 @@ fn judge_update(
     });
     if options.discretisation
         && discretisation.is_none()
-        && let Some(why) = crate::discretisation::not_estimated(model)
+        && let Some(why) = femu_update::discretisation::not_estimated(model)
     {
         truth_check.judgement.reasons.push(format!(
             "the model's discretisation error was not estimated: {why}"

@@ -45,10 +45,12 @@
 //! ```
 
 pub mod derivatives;
+pub mod discretisation;
 mod error;
 pub mod localise;
 pub mod lsq;
 pub mod problem;
+pub mod reach;
 pub mod sbebe;
 pub mod select;
 pub mod sensitivity;

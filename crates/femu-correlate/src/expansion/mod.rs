@@ -338,6 +338,56 @@ impl<'a> Expander<'a> {
     }
 }
 
+/// Expands measured shapes `ya` (one row per sensor of `layout`) to every free DOF by `method`.
+/// When the sensors cover every free DOF, the readings are placed on their DOFs as they are.
+/// SEREP uses `serep_basis`, or the model's lowest `M` modes when none is given.
+///
+/// # Errors
+/// A test of frequencies alone (no reading to expand), sizes, NaN, two sensors too close for expansion ([`SensorBasis::new`]), and the method's
+/// errors (a singular expansion).
+pub fn expand_shapes(
+    sys: &femu_fem::assembly::SystemMatrices,
+    layout: &SensorLayout,
+    lambdas: &[f64],
+    ya: MatRef<'_, f64>,
+    method: Method,
+    serep_basis: Option<MatRef<'_, f64>>,
+) -> Result<Mat<f64>, CorrelateError> {
+    if ya.nrows() == 0 {
+        return Err(CorrelateError::Invalid {
+            what: "test",
+            reason: "the test gives frequencies without mode shapes: expansion, the estimators and the sensor-removal study read the shapes at the sensors (correlation pairs by frequency, and updating fits the frequencies)".into(),
+        });
+    }
+    // SEREP without a basis given: the model's lowest M modes, solved here (by femu's own
+    // eigensolver, Sturm-verified); every front end's `serep:M` comes this way
+    let solved;
+    let serep_basis = match (method, serep_basis) {
+        (Method::Serep(m), None) => {
+            let modes = sys.modes(
+                femu_sparse::eigen::Which::Lowest(m.min(sys.k.rows())),
+                &femu_sparse::eigen::EigenOptions::default(),
+            )?;
+            solved = modes.vectors;
+            Some(solved.as_ref())
+        }
+        (_, b) => b,
+    };
+    Ok(match layout.measured_dofs() {
+        Some(dofs) if dofs.len() == sys.dofs.free_count() => {
+            place_measured(sys.k.rows(), &dofs, ya)?
+        }
+        Some(_) => {
+            Expander::new(&sys.k, &sys.m, layout)?.expand(method, lambdas, ya, serep_basis)?
+        }
+        // oblique sensors and sensors between nodes: expansion in the coordinates where every
+        // reading is a DOF
+        None => {
+            SensorBasis::new(&sys.k, &sys.m, layout)?.expand(method, lambdas, ya, serep_basis)?
+        }
+    })
+}
+
 mod basis;
 mod condensation;
 mod mdre;

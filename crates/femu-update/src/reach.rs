@@ -10,10 +10,10 @@
 //! `lambda_i`: an interval that stays wide says that no value of these parameters brings the
 //! model close to the test, whatever the updating method.
 
-use crate::StudyError;
-use crate::expand::expand_shapes;
+use crate::UpdateError;
+use crate::{Localisation, UpdateModel};
+use femu_correlate::expansion::expand_shapes;
 use femu_correlate::{Estimator, Method, SensorLayout, TestModes};
-use femu_update::{Localisation, UpdateModel};
 use serde::Serialize;
 
 /// One tuned mode before and at the best fit.
@@ -100,12 +100,12 @@ pub fn reach(
     chosen: &mut UpdateModel<'_>,
     layout: &SensorLayout,
     tuned: &TestModes,
-) -> Result<Reach, StudyError> {
+) -> Result<Reach, UpdateError> {
     let (theta, explained) = localisation.joint_fit(groups).ok_or_else(|| {
-        StudyError::invalid(
-            "reach",
-            "the localisation has no normal equations (it was not computed from expanded shapes)",
-        )
+        UpdateError::Invalid {
+            what: "reach",
+            reason: "the localisation has no normal equations (it was not computed from expanded shapes)".into(),
+        }
     })?;
     let theta: Vec<f64> = chosen
         .parameters()
@@ -114,7 +114,7 @@ pub fn reach(
         .map(|(p, v)| v.clamp(p.lower, p.upper))
         .collect();
     let lambdas = tuned.eigenvalues();
-    let rho = |up: &UpdateModel<'_>| -> Result<Vec<f64>, StudyError> {
+    let rho = |up: &UpdateModel<'_>| -> Result<Vec<f64>, UpdateError> {
         let sys = up.matrices();
         let x = expand_shapes(
             sys,

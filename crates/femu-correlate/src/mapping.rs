@@ -9,17 +9,14 @@
 //! inside an element, where the sensor reads the shape-function combination of the element's
 //! nodes. Every test node farther than the tolerance from the model is an error that names it.
 
-use crate::StudyError;
-use crate::load::LoadedModel;
-use femu_correlate::Sensor;
+use crate::{CorrelateError, Sensor, TestData};
 use femu_fem::align::{Fit, Surface, Transform, fit_auto, fit_pairs};
 use femu_fem::element::ElementKind;
 use femu_fem::locate::Locator;
-use femu_io::TestData;
+use femu_fem::mesh::Mesh;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::Path;
 
 /// How test nodes land on the model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -34,15 +31,15 @@ pub enum MapMethod {
 }
 
 impl std::str::FromStr for MapMethod {
-    type Err = StudyError;
+    type Err = CorrelateError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s.to_ascii_lowercase().as_str() {
             "nearest" => Ok(Self::Nearest),
             "interpolate" => Ok(Self::Interpolate),
-            other => Err(StudyError::invalid(
-                "map",
-                format!("{other:?}: expected nearest or interpolate"),
-            )),
+            other => Err(CorrelateError::Mapping {
+                what: "map",
+                reason: format!("{other:?}: expected nearest or interpolate"),
+            }),
         }
     }
 }
@@ -62,7 +59,7 @@ pub enum Align {
 }
 
 impl std::str::FromStr for Align {
-    type Err = StudyError;
+    type Err = CorrelateError;
     /// `auto`, `none`, or pairs `T:M,T:M,T:M` (test node `T` is model node `M`).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let t = s.trim();
@@ -71,13 +68,11 @@ impl std::str::FromStr for Align {
             "none" => return Ok(Self::None),
             _ => {}
         }
-        let bad = |p: &str| {
-            StudyError::invalid(
-                "align",
-                format!(
-                    "{p:?} is not a pair TEST:MODEL of node ids (give auto, none, or pairs like 101:3,102:6,103:9)"
-                ),
-            )
+        let bad = |p: &str| CorrelateError::Mapping {
+            what: "align",
+            reason: format!(
+                "{p:?} is not a pair TEST:MODEL of node ids (give auto, none, or pairs like 101:3,102:6,103:9)"
+            ),
         };
         let pairs = t
             .split(',')
@@ -88,7 +83,7 @@ impl std::str::FromStr for Align {
                     b.trim().parse().map_err(|_| bad(p))?,
                 ))
             })
-            .collect::<Result<Vec<(u64, u64)>, StudyError>>()?;
+            .collect::<Result<Vec<(u64, u64)>, CorrelateError>>()?;
         Ok(Self::Pairs(pairs))
     }
 }
@@ -109,7 +104,7 @@ impl std::fmt::Display for Align {
 impl TryFrom<String> for Align {
     type Error = String;
     fn try_from(s: String) -> Result<Self, Self::Error> {
-        s.parse().map_err(|e: StudyError| e.to_string())
+        s.parse().map_err(|e: CorrelateError| e.to_string())
     }
 }
 
@@ -311,13 +306,14 @@ fn check_span(
 /// model (its label, position and distance); two test nodes on one model node (nearest).
 pub fn map_test(
     data: &mut TestData,
-    model: &LoadedModel,
+    mesh: &Mesh,
     options: &MapOptions,
     metres: f64,
-    path: &Path,
-) -> Result<Mapping, StudyError> {
-    let in_file = |reason: String| StudyError::in_file(path, "map", reason);
-    let mesh = model.model.mesh();
+) -> Result<Mapping, CorrelateError> {
+    let in_file = |reason: String| CorrelateError::Mapping {
+        what: "map",
+        reason,
+    };
     let mut labels: Vec<u64> = data.sensors.iter().map(|s| s.node).collect();
     labels.sort_unstable();
     labels.dedup();
@@ -347,47 +343,12 @@ pub fn map_test(
     let diagonal = (0..3).map(|i| (hi[i] - lo[i]).powi(2)).sum::<f64>().sqrt();
     let tolerance = options.tolerance.unwrap_or(0.01 * diagonal);
     if !(tolerance.is_finite() && tolerance >= 0.0) {
-        return Err(StudyError::invalid(
-            "mapping tolerance",
-            format!("{tolerance} m is not a non-negative distance"),
-        ));
+        return Err(CorrelateError::Mapping {
+            what: "mapping tolerance",
+            reason: format!("{tolerance} m is not a non-negative distance"),
+        });
     }
-    let fit = |f: Result<Fit, femu_fem::FemError>| f.map_err(|e| in_file(e.to_string()));
-    let alignment = match &options.align {
-        Align::None => None,
-        Align::Pairs(pairs) => {
-            let mut from = Vec::new();
-            let mut to = Vec::new();
-            for (t, m) in pairs {
-                let x = data.coordinates.get(t).ok_or_else(|| {
-                    in_file(format!(
-                        "alignment pair {t}:{m}: the test file has no node {t} with coordinates"
-                    ))
-                })?;
-                let i = mesh.node_index(*m).ok_or_else(|| {
-                    in_file(format!("alignment pair {t}:{m}: the model has no node {m}"))
-                })?;
-                from.push(x.map(|v| v * metres));
-                to.push(mesh.coords()[i]);
-            }
-            let f = fit(fit_pairs(&from, &to, options.scale))?;
-            Some(Alignment {
-                method: "pairs",
-                transform: f.transform,
-                residuals: pairs.iter().map(|p| p.0).zip(f.residuals).collect(),
-            })
-        }
-        Align::Auto => {
-            let surface = Surface::new(mesh);
-            let points: Vec<[f64; 3]> = test.values().copied().collect();
-            let f = fit(fit_auto(&points, &surface, options.scale))?;
-            Some(Alignment {
-                method: "auto",
-                transform: f.transform,
-                residuals: test.keys().copied().zip(f.residuals).collect(),
-            })
-        }
-    };
+    let alignment = align(data, &test, mesh, options, metres)?;
     let transform = alignment
         .as_ref()
         .map_or(Transform::IDENTITY, |a| a.transform);
@@ -499,66 +460,15 @@ pub fn map_test(
         };
         nodes.push(row);
     }
-    // the farthest (the first of equals), described by a search of the model
-    let worst = beyond
-        .iter()
-        .enumerate()
-        .fold(None::<usize>, |w, (k, b)| match w {
-            Some(j) if beyond[j].0 >= b.0 => Some(j),
-            _ => Some(k),
-        })
-        .map(|k| beyond[k].clone());
-    if let Some((_, t, p, what)) = worst {
-        let what = if !what.is_empty() {
-            what
-        } else {
-            match options.method {
-                MapMethod::Nearest => match locator.nearest_node(mesh, p, f64::INFINITY) {
-                    Some((i, d)) => format!(
-                        "is {d:.3e} m from the nearest model node ({})",
-                        mesh.node_id(i)
-                    ),
-                    None => "finds no model node".into(),
-                },
-                MapMethod::Interpolate => match locator.locate(mesh, p, f64::INFINITY) {
-                    Some(l) => format!(
-                        "lies outside the model, {:.3e} m from element {}",
-                        l.distance,
-                        mesh.element(l.element).id
-                    ),
-                    None => "lies outside the model".into(),
-                },
-            }
-        };
-        let others = beyond.len() - 1;
-        return Err(in_file(format!(
-            "test node {t} at ({:.6}, {:.6}, {:.6}) m in the model's frame {what}, beyond the tolerance {tolerance:.3e} m{}{}",
-            p[0],
-            p[1],
-            p[2],
-            if others > 0 {
-                format!(
-                    "; the farthest of {} test nodes beyond it ({})",
-                    beyond.len(),
-                    beyond
-                        .iter()
-                        .filter(|b| b.1 != t)
-                        .take(8)
-                        .map(|b| format!("{} at {:.3e} m", b.1, b.0))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            } else if alignment.is_some() {
-                ": the only test node the alignment could not place".into()
-            } else {
-                String::new()
-            },
-            if alignment.is_none() {
-                " (is the test in another frame? see --align)"
-            } else {
-                ""
-            }
-        )));
+    if !beyond.is_empty() {
+        return Err(far_node_error(
+            &beyond,
+            tolerance,
+            alignment.is_some(),
+            options.method,
+            &locator,
+            mesh,
+        ));
     }
     for s in &mut data.sensors {
         let at = &reads[&s.node];
@@ -577,4 +487,129 @@ pub fn map_test(
         alignment,
         nodes,
     })
+}
+
+/// The alignment `options` ask for of the test nodes `test` (metres) onto `mesh`.
+fn align(
+    data: &TestData,
+    test: &BTreeMap<u64, [f64; 3]>,
+    mesh: &Mesh,
+    options: &MapOptions,
+    metres: f64,
+) -> Result<Option<Alignment>, CorrelateError> {
+    let in_file = |reason: String| CorrelateError::Mapping {
+        what: "map",
+        reason,
+    };
+    let fit = |f: Result<Fit, femu_fem::FemError>| f.map_err(|e| in_file(e.to_string()));
+    Ok(match &options.align {
+        Align::None => None,
+        Align::Pairs(pairs) => {
+            let mut from = Vec::new();
+            let mut to = Vec::new();
+            for (t, m) in pairs {
+                let x = data.coordinates.get(t).ok_or_else(|| {
+                    in_file(format!(
+                        "alignment pair {t}:{m}: the test file has no node {t} with coordinates"
+                    ))
+                })?;
+                let i = mesh.node_index(*m).ok_or_else(|| {
+                    in_file(format!("alignment pair {t}:{m}: the model has no node {m}"))
+                })?;
+                from.push(x.map(|v| v * metres));
+                to.push(mesh.coords()[i]);
+            }
+            let f = fit(fit_pairs(&from, &to, options.scale))?;
+            Some(Alignment {
+                method: "pairs",
+                transform: f.transform,
+                residuals: pairs.iter().map(|p| p.0).zip(f.residuals).collect(),
+            })
+        }
+        Align::Auto => {
+            let surface = Surface::new(mesh);
+            let points: Vec<[f64; 3]> = test.values().copied().collect();
+            let f = fit(fit_auto(&points, &surface, options.scale))?;
+            Some(Alignment {
+                method: "auto",
+                transform: f.transform,
+                residuals: test.keys().copied().zip(f.residuals).collect(),
+            })
+        }
+    })
+}
+
+/// The error for the test nodes `beyond` the tolerance: the farthest, described by a search of
+/// the model, and the others by distance.
+fn far_node_error(
+    beyond: &[(f64, u64, [f64; 3], String)],
+    tolerance: f64,
+    aligned: bool,
+    method: MapMethod,
+    locator: &Locator,
+    mesh: &Mesh,
+) -> CorrelateError {
+    // the farthest (the first of equals), described by a search of the model
+    let worst = beyond
+        .iter()
+        .enumerate()
+        .fold(None::<usize>, |w, (k, b)| match w {
+            Some(j) if beyond[j].0 >= b.0 => Some(j),
+            _ => Some(k),
+        })
+        .map(|k| beyond[k].clone());
+    let (_, t, p, what) = worst.expect("called with nodes beyond the tolerance");
+    let what = if !what.is_empty() {
+        what
+    } else {
+        match method {
+            MapMethod::Nearest => match locator.nearest_node(mesh, p, f64::INFINITY) {
+                Some((i, d)) => format!(
+                    "is {d:.3e} m from the nearest model node ({})",
+                    mesh.node_id(i)
+                ),
+                None => "finds no model node".into(),
+            },
+            MapMethod::Interpolate => match locator.locate(mesh, p, f64::INFINITY) {
+                Some(l) => format!(
+                    "lies outside the model, {:.3e} m from element {}",
+                    l.distance,
+                    mesh.element(l.element).id
+                ),
+                None => "lies outside the model".into(),
+            },
+        }
+    };
+    let others = beyond.len() - 1;
+    CorrelateError::Mapping {
+        what: "map",
+        reason: format!(
+            "test node {t} at ({:.6}, {:.6}, {:.6}) m in the model's frame {what}, beyond the tolerance {tolerance:.3e} m{}{}",
+            p[0],
+            p[1],
+            p[2],
+            if others > 0 {
+                format!(
+                    "; the farthest of {} test nodes beyond it ({})",
+                    beyond.len(),
+                    beyond
+                        .iter()
+                        .filter(|b| b.1 != t)
+                        .take(8)
+                        .map(|b| format!("{} at {:.3e} m", b.1, b.0))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            } else if aligned {
+                ": the only test node the alignment could not place".into()
+            } else {
+                String::new()
+            },
+            if !aligned {
+                " (is the test in another frame? see --align)"
+            } else {
+                ""
+            }
+        ),
+    }
 }

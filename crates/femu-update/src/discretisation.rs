@@ -5,7 +5,7 @@
 //! locks in bending (one or two hex8 through a plate's thickness) the difference is the error that
 //! updating would otherwise absorb into its parameters; `docs/MATH.md`, "The truth check".
 
-use crate::StudyError;
+use crate::UpdateError;
 use femu_correlate::correlation::mac_matrix;
 use femu_correlate::{ModeSet, PairingOptions, Sensor, SensorLayout, pair_modes};
 use femu_fem::assembly::{Assembler, MassKind};
@@ -73,7 +73,7 @@ pub fn estimate(
     model: &Model,
     modes: &ModeSet,
     eigen: &EigenOptions,
-) -> Result<Option<DiscretisationEstimate>, StudyError> {
+) -> Result<Option<DiscretisationEstimate>, UpdateError> {
     let mesh = model.mesh();
     // a linear (or mixed) mesh against itself with quadratic elements; a quadratic one against
     // itself split once, each child placed by its parent's shape functions
@@ -215,7 +215,7 @@ pub fn estimate(
 
 /// The discretisation error beside the test-analysis difference, per test mode, as a Markdown
 /// table with its definitions (the modes paired before updating, as in `check`).
-pub fn table(d: &DiscretisationEstimate, check: &femu_update::TruthCheck) -> String {
+pub fn table(d: &DiscretisationEstimate, check: &crate::TruthCheck) -> String {
     use std::fmt::Write as _;
     let mut s = format!(
         "The model's modes against {} ({} DOF), mode by mode: what the mesh alone gets wrong.\n\n| test | f test (Hz) | f model (Hz) | discretisation (%) |\n|---|---|---|---|\n",
