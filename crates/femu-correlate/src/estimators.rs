@@ -50,8 +50,8 @@ impl ResidualNorms {
     pub fn frequency_interval_hz(&self) -> (f64, f64) {
         let (lo, hi) = self.eigenvalue_interval();
         (
-            crate::modes::hz_of_eigenvalue(lo),
-            crate::modes::hz_of_eigenvalue(hi),
+            crate::hz::hz_of_eigenvalue(lo),
+            crate::hz::hz_of_eigenvalue(hi),
         )
     }
 }
@@ -422,21 +422,7 @@ pub fn assess(
         });
     };
     let dk = (lam - lk).abs();
-    // the nearest eigenvalues below and above lambda_k, or the ends of the proven interval (no
-    // eigenvalue lies between them and lambda_k); None when nothing proves it
-    let below: Option<f64> = match (k.checked_sub(1), proof) {
-        (_, SpectrumProof::Unverified) => None,
-        (Some(i), _) => Some(vals[i]),
-        (None, SpectrumProof::Complete | SpectrumProof::Lowest { .. }) => Some(f64::NEG_INFINITY),
-        (None, SpectrumProof::Band { lo, .. }) => Some(lo),
-    };
-    let above: Option<f64> = match (vals.get(k + 1), proof) {
-        (_, SpectrumProof::Unverified) => None,
-        (Some(b), _) => Some(*b),
-        (None, SpectrumProof::Complete) => Some(f64::INFINITY),
-        (None, SpectrumProof::Lowest { upper }) => Some(upper),
-        (None, SpectrumProof::Band { hi, .. }) => Some(hi),
-    };
+    let (below, above) = neighbours(vals, k, proof);
     // spread_k = max(lambda_k - lambda_1, lambda_max - lambda_k): lambda_1 is vals[0] for the
     // lowest values, otherwise bounded below by 0 (K is positive semi-definite); a larger
     // spread keeps T3 a theorem
@@ -531,8 +517,39 @@ pub fn assess(
             });
         }
     }
-    // Kato-Temple on (a, b) = (lambda_{k-1}, lambda_{k+1}) or the ends of the proven interval,
-    // which holds lambda_k alone; not formed without a proof
+    bounds.extend(kato_temple(norms, below, above, lk));
+    Ok(bounds)
+}
+
+/// The nearest eigenvalues below and above `vals[k]`, or the ends of the proven interval (no
+/// eigenvalue lies between them and `lambda_k`); `None` when nothing proves it.
+fn neighbours(vals: &[f64], k: usize, proof: SpectrumProof) -> (Option<f64>, Option<f64>) {
+    let below: Option<f64> = match (k.checked_sub(1), proof) {
+        (_, SpectrumProof::Unverified) => None,
+        (Some(i), _) => Some(vals[i]),
+        (None, SpectrumProof::Complete | SpectrumProof::Lowest { .. }) => Some(f64::NEG_INFINITY),
+        (None, SpectrumProof::Band { lo, .. }) => Some(lo),
+    };
+    let above: Option<f64> = match (vals.get(k + 1), proof) {
+        (_, SpectrumProof::Unverified) => None,
+        (Some(b), _) => Some(*b),
+        (None, SpectrumProof::Complete) => Some(f64::INFINITY),
+        (None, SpectrumProof::Lowest { upper }) => Some(upper),
+        (None, SpectrumProof::Band { hi, .. }) => Some(hi),
+    };
+    (below, above)
+}
+
+/// Kato-Temple's two-sided enclosure of `lambda_k` from the Rayleigh quotient and its residual
+/// on `(a, b) = (lambda_{k-1}, lambda_{k+1})` or the ends of the proven interval, which holds
+/// `lambda_k` alone; none without a proof.
+fn kato_temple(
+    norms: &ResidualNorms,
+    below: Option<f64>,
+    above: Option<f64>,
+    lk: f64,
+) -> Vec<Bound> {
+    let mut out = Vec::new();
     let lr = norms.rayleigh;
     let rr2 = norms.rho_rayleigh * norms.rho_rayleigh;
     let (a, b) = match (below, above) {
@@ -540,7 +557,7 @@ pub fn assess(
         _ => (f64::NAN, f64::NAN),
     };
     if a < lr && lr < b {
-        bounds.push(Bound {
+        out.push(Bound {
             kind: BoundKind::KatoTempleLower,
             form: Form::Rigorous,
             bound: if b.is_finite() {
@@ -552,7 +569,7 @@ pub fn assess(
             quantity: Some(lk),
             theorem: true,
         });
-        bounds.push(Bound {
+        out.push(Bound {
             kind: BoundKind::KatoTempleUpper,
             form: Form::Rigorous,
             bound: if a.is_finite() {
@@ -565,7 +582,7 @@ pub fn assess(
             theorem: true,
         });
     }
-    Ok(bounds)
+    out
 }
 
 /// The smaller of the theorems that bound `sin theta_M(x, phi_k)`: rigorous T4 and Davis-Kahan,

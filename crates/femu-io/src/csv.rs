@@ -210,23 +210,7 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
             .filter(|v| v.is_finite())
             .ok_or_else(|| err(line, format!("value {:?} is not a finite number", f[4])))?;
         if let Some(at) = xyz_from {
-            let mut x = [0.0; 3];
-            for (c, v) in x.iter_mut().enumerate() {
-                let t = f.get(at + c).copied().unwrap_or("");
-                *v = t
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|v| v.is_finite())
-                    .ok_or_else(|| {
-                        err(
-                            line,
-                            format!(
-                                "coordinate {} {t:?} of node {node} is not a finite number",
-                                ["x", "y", "z"][c]
-                            ),
-                        )
-                    })?;
-            }
+            let x = row_coordinates(&f, at, node).map_err(|reason| err(line, reason))?;
             match coordinates.get(&node) {
                 Some((earlier, at_line)) if *earlier != x => {
                     return Err(err(
@@ -249,29 +233,8 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
             ),
             _ => None,
         };
-        // same sensor: same node and parallel direction (signs flip the reading)
-        let norm = |d: [f64; 3]| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        let nd = norm(dir);
-        if !(nd > 0.0) {
-            return Err(err(line, "direction is the zero vector".into()));
-        }
-        let mut sign = 1.0;
-        let s = match sensors.iter().position(|s| {
-            let c = (s.direction[0] * dir[0] + s.direction[1] * dir[1] + s.direction[2] * dir[2])
-                / (norm(s.direction) * nd);
-            if s.node == node && (c.abs() - 1.0).abs() < 1e-9 {
-                sign = c.signum();
-                true
-            } else {
-                false
-            }
-        }) {
-            Some(s) => s,
-            None => {
-                sensors.push(Sensor::new(node, dir));
-                sensors.len() - 1
-            }
-        };
+        let (s, sign) =
+            sensor_index(&mut sensors, node, dir).map_err(|reason| err(line, reason))?;
         let entry = modes
             .entry(mode)
             .or_insert((freq, damping, line, BTreeMap::new()));
@@ -347,6 +310,57 @@ pub fn parse_test_csv(text: &str, path: impl AsRef<Path>) -> Result<TestData, Io
         modes,
         coordinates: coordinates.into_iter().map(|(n, (x, _))| (n, x)).collect(),
     })
+}
+
+/// The `x, y, z` of a row from column `at`.
+fn row_coordinates(f: &[&str], at: usize, node: u64) -> Result<[f64; 3], String> {
+    let mut x = [0.0; 3];
+    for (c, v) in x.iter_mut().enumerate() {
+        let t = f.get(at + c).copied().unwrap_or("");
+        *v = t
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| {
+                format!(
+                    "coordinate {} {t:?} of node {node} is not a finite number",
+                    ["x", "y", "z"][c]
+                )
+            })?;
+    }
+    Ok(x)
+}
+
+/// The sensor of a reading at `node` along `dir` (added when new), and the sign that turns the
+/// reading to the sensor's direction: the same sensor is the same node and a parallel direction.
+fn sensor_index(
+    sensors: &mut Vec<Sensor>,
+    node: u64,
+    dir: [f64; 3],
+) -> Result<(usize, f64), String> {
+    let norm = |d: [f64; 3]| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    let nd = norm(dir);
+    if !(nd > 0.0) {
+        return Err("direction is the zero vector".into());
+    }
+    let mut sign = 1.0;
+    let s = match sensors.iter().position(|s| {
+        let c = (s.direction[0] * dir[0] + s.direction[1] * dir[1] + s.direction[2] * dir[2])
+            / (norm(s.direction) * nd);
+        if s.node == node && (c.abs() - 1.0).abs() < 1e-9 {
+            sign = c.signum();
+            true
+        } else {
+            false
+        }
+    }) {
+        Some(s) => s,
+        None => {
+            sensors.push(Sensor::new(node, dir));
+            sensors.len() - 1
+        }
+    };
+    Ok((s, sign))
 }
 
 /// Reads CSV test modes from a file.

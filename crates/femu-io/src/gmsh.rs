@@ -245,129 +245,8 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<GmshMesh, IoError> {
                 }
                 l.expect_end("Entities")?;
             }
-            "$Nodes" => match version {
-                Some(4) => {
-                    let (_, h) = l.ints("$Nodes", 4)?;
-                    for _ in 0..h[0] {
-                        let (ln2, b) = l.ints("a node block header", 4)?;
-                        if b[2] != 0 {
-                            return Err(l.err(
-                                ln2,
-                                "parametric node coordinates are not read by femu".into(),
-                            ));
-                        }
-                        // a count is not trusted with memory: at most one tag per line left
-                        // (found by the fuzzer: a block of 10^15 nodes aborted the process)
-                        let left = l.lines.len() - l.at;
-                        let mut tags = Vec::with_capacity((b[3].max(0) as usize).min(left));
-                        for _ in 0..b[3] {
-                            let (ln3, t) = l.ints("a node tag", 1)?;
-                            if t[0] <= 0 {
-                                return Err(
-                                    l.err(ln3, format!("node tag {} must be positive", t[0]))
-                                );
-                            }
-                            tags.push((t[0] as u64, ln3));
-                        }
-                        for (tag, _) in tags {
-                            let (ln3, x) = l.floats("node coordinates", 3)?;
-                            nodes.push((tag, [x[0], x[1], x[2]], ln3));
-                        }
-                    }
-                    l.expect_end("Nodes")?;
-                }
-                Some(_) => {
-                    let (_, h) = l.ints("$Nodes", 1)?;
-                    for _ in 0..h[0] {
-                        let (ln2, s) = l.next("$Nodes")?;
-                        let t: Vec<&str> = s.split_whitespace().collect();
-                        let id = t
-                            .first()
-                            .and_then(|x| x.parse::<i64>().ok())
-                            .filter(|v| *v > 0);
-                        let x: Option<Vec<f64>> = t.get(1..4).map(|c| {
-                            c.iter()
-                                .filter_map(|v| v.parse::<f64>().ok().filter(|f| f.is_finite()))
-                                .collect()
-                        });
-                        match (id, x) {
-                            (Some(id), Some(x)) if x.len() == 3 => {
-                                nodes.push((id as u64, [x[0], x[1], x[2]], ln2))
-                            }
-                            _ => {
-                                return Err(l.err(
-                                    ln2,
-                                    format!(
-                                        "expected 'tag x y z' with a positive tag, found '{s}'"
-                                    ),
-                                ));
-                            }
-                        }
-                    }
-                    l.expect_end("Nodes")?;
-                }
-                None => return Err(l.err(ln, "$Nodes before $MeshFormat".into())),
-            },
-            "$Elements" => {
-                match version {
-                    Some(4) => {
-                        let (_, h) = l.ints("$Elements", 4)?;
-                        for _ in 0..h[0] {
-                            let (ln2, b) = l.ints("an element block header", 4)?;
-                            let (dim, entity, ty, count) = (b[0], b[1], b[2], b[3]);
-                            let (nn, _) = gmsh_type(ty)
-                                .ok_or_else(|| l.err(ln2, format!("unknown element type {ty}")))?;
-                            let phys = entity_phys.get(&(dim, entity)).cloned().unwrap_or_default();
-                            for _ in 0..count {
-                                let (ln3, e) = l.ints("an element", nn + 1)?;
-                                if e.len() != nn + 1 || e.iter().any(|v| *v <= 0) {
-                                    return Err(l.err(ln3, format!("element type {ty} needs a positive tag and {nn} positive node tags, found {} values", e.len())));
-                                }
-                                elements.push((
-                                    ty,
-                                    e[0] as u64,
-                                    e[1..].iter().map(|v| *v as u64).collect(),
-                                    (dim, phys.clone()),
-                                    ln3,
-                                ));
-                            }
-                        }
-                        l.expect_end("Elements")?;
-                    }
-                    Some(_) => {
-                        let (_, h) = l.ints("$Elements", 1)?;
-                        for _ in 0..h[0] {
-                            let (ln2, e) = l.ints("an element", 3)?;
-                            let (tag, ty, ntags) = (e[0], e[1], e[2].max(0) as usize);
-                            let (nn, kind) = gmsh_type(ty)
-                                .ok_or_else(|| l.err(ln2, format!("unknown element type {ty}")))?;
-                            if e.len() != 3 + ntags + nn || tag <= 0 {
-                                return Err(l.err(ln2, format!("element type {ty} with {ntags} tags needs {} values, found {}", 3 + ntags + nn, e.len())));
-                            }
-                            let phys = if ntags > 0 { vec![e[3]] } else { vec![] };
-                            let dim = match (kind, nn) {
-                                (Some(_), _) => 3,
-                                (None, 1) => 0,
-                                (None, 2) | (None, 3) if ty == 1 || ty == 8 => 1,
-                                _ => 2,
-                            };
-                            let ids: Vec<i64> = e[3 + ntags..].to_vec();
-                            if ids.iter().any(|v| *v <= 0) {
-                                return Err(l.err(ln2, "node tags must be positive".into()));
-                            }
-                            elements.push((
-                                ty,
-                                tag as u64,
-                                ids.iter().map(|v| *v as u64).collect(),
-                                (dim, phys),
-                                ln2,
-                            ));
-                        }
-                        l.expect_end("Elements")?;
-                    }
-                    None => return Err(l.err(ln, "$Elements before $MeshFormat".into())),
-                }
-            }
+            "$Nodes" => nodes_section(&mut l, version, ln, &mut nodes)?,
+            "$Elements" => elements_section(&mut l, version, ln, &entity_phys, &mut elements)?,
             s if s.starts_with('$') && !s.starts_with("$End") => {
                 let name = s[1..].to_string();
                 warnings.push(skipped_section(path, ln, &name));
@@ -385,6 +264,152 @@ pub fn parse_msh(text: &str, path: &Path) -> Result<GmshMesh, IoError> {
         return Err(l.err(1, "no $MeshFormat section: not a Gmsh mesh".into()));
     }
     build(path, &nodes, &elements, &names, warnings)
+}
+
+/// A `$Nodes` section (format 4.1 or 2.2), its nodes appended to `nodes`.
+fn nodes_section(
+    l: &mut Lines<'_>,
+    version: Option<i32>,
+    ln: usize,
+    nodes: &mut Vec<(u64, [f64; 3], usize)>,
+) -> Result<(), IoError> {
+    match version {
+        Some(4) => {
+            let (_, h) = l.ints("$Nodes", 4)?;
+            for _ in 0..h[0] {
+                let (ln2, b) = l.ints("a node block header", 4)?;
+                if b[2] != 0 {
+                    return Err(l.err(
+                        ln2,
+                        "parametric node coordinates are not read by femu".into(),
+                    ));
+                }
+                // a count is not trusted with memory: at most one tag per line left
+                // (found by the fuzzer: a block of 10^15 nodes aborted the process)
+                let left = l.lines.len() - l.at;
+                let mut tags = Vec::with_capacity((b[3].max(0) as usize).min(left));
+                for _ in 0..b[3] {
+                    let (ln3, t) = l.ints("a node tag", 1)?;
+                    if t[0] <= 0 {
+                        return Err(l.err(ln3, format!("node tag {} must be positive", t[0])));
+                    }
+                    tags.push((t[0] as u64, ln3));
+                }
+                for (tag, _) in tags {
+                    let (ln3, x) = l.floats("node coordinates", 3)?;
+                    nodes.push((tag, [x[0], x[1], x[2]], ln3));
+                }
+            }
+            l.expect_end("Nodes")?;
+        }
+        Some(_) => {
+            let (_, h) = l.ints("$Nodes", 1)?;
+            for _ in 0..h[0] {
+                let (ln2, s) = l.next("$Nodes")?;
+                let t: Vec<&str> = s.split_whitespace().collect();
+                let id = t
+                    .first()
+                    .and_then(|x| x.parse::<i64>().ok())
+                    .filter(|v| *v > 0);
+                let x: Option<Vec<f64>> = t.get(1..4).map(|c| {
+                    c.iter()
+                        .filter_map(|v| v.parse::<f64>().ok().filter(|f| f.is_finite()))
+                        .collect()
+                });
+                match (id, x) {
+                    (Some(id), Some(x)) if x.len() == 3 => {
+                        nodes.push((id as u64, [x[0], x[1], x[2]], ln2))
+                    }
+                    _ => {
+                        return Err(l.err(
+                            ln2,
+                            format!("expected 'tag x y z' with a positive tag, found '{s}'"),
+                        ));
+                    }
+                }
+            }
+            l.expect_end("Nodes")?;
+        }
+        None => return Err(l.err(ln, "$Nodes before $MeshFormat".into())),
+    }
+    Ok(())
+}
+
+/// An `$Elements` section (format 4.1 or 2.2), its elements appended to `elements` with the
+/// physical tags of their entities (4.1) or their own (2.2).
+fn elements_section(
+    l: &mut Lines<'_>,
+    version: Option<i32>,
+    ln: usize,
+    entity_phys: &BTreeMap<(i64, i64), Vec<i64>>,
+    elements: &mut Vec<RawElement>,
+) -> Result<(), IoError> {
+    match version {
+        Some(4) => {
+            let (_, h) = l.ints("$Elements", 4)?;
+            for _ in 0..h[0] {
+                let (ln2, b) = l.ints("an element block header", 4)?;
+                let (dim, entity, ty, count) = (b[0], b[1], b[2], b[3]);
+                let (nn, _) = gmsh_type(ty)
+                    .ok_or_else(|| l.err(ln2, format!("unknown element type {ty}")))?;
+                let phys = entity_phys.get(&(dim, entity)).cloned().unwrap_or_default();
+                for _ in 0..count {
+                    let (ln3, e) = l.ints("an element", nn + 1)?;
+                    if e.len() != nn + 1 || e.iter().any(|v| *v <= 0) {
+                        return Err(l.err(ln3, format!("element type {ty} needs a positive tag and {nn} positive node tags, found {} values", e.len())));
+                    }
+                    elements.push((
+                        ty,
+                        e[0] as u64,
+                        e[1..].iter().map(|v| *v as u64).collect(),
+                        (dim, phys.clone()),
+                        ln3,
+                    ));
+                }
+            }
+            l.expect_end("Elements")?;
+        }
+        Some(_) => {
+            let (_, h) = l.ints("$Elements", 1)?;
+            for _ in 0..h[0] {
+                let (ln2, e) = l.ints("an element", 3)?;
+                let (tag, ty, ntags) = (e[0], e[1], e[2].max(0) as usize);
+                let (nn, kind) = gmsh_type(ty)
+                    .ok_or_else(|| l.err(ln2, format!("unknown element type {ty}")))?;
+                if e.len() != 3 + ntags + nn || tag <= 0 {
+                    return Err(l.err(
+                        ln2,
+                        format!(
+                            "element type {ty} with {ntags} tags needs {} values, found {}",
+                            3 + ntags + nn,
+                            e.len()
+                        ),
+                    ));
+                }
+                let phys = if ntags > 0 { vec![e[3]] } else { vec![] };
+                let dim = match (kind, nn) {
+                    (Some(_), _) => 3,
+                    (None, 1) => 0,
+                    (None, 2) | (None, 3) if ty == 1 || ty == 8 => 1,
+                    _ => 2,
+                };
+                let ids: Vec<i64> = e[3 + ntags..].to_vec();
+                if ids.iter().any(|v| *v <= 0) {
+                    return Err(l.err(ln2, "node tags must be positive".into()));
+                }
+                elements.push((
+                    ty,
+                    tag as u64,
+                    ids.iter().map(|v| *v as u64).collect(),
+                    (dim, phys),
+                    ln2,
+                ));
+            }
+            l.expect_end("Elements")?;
+        }
+        None => return Err(l.err(ln, "$Elements before $MeshFormat".into())),
+    }
+    Ok(())
 }
 
 /// The warning for a section femu does not read.

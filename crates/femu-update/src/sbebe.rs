@@ -363,26 +363,7 @@ pub fn sb_ebe(
     let mut theta = up.theta();
     let np = theta.len();
     let state = evaluate(up)?;
-    // mode weights 1 / ||x_i||_{M_0}^2 from the starting expansion
-    let weights: Vec<f64> = {
-        let mx = femu_sparse::csc::sym_mul_mat(&m0, state.x.as_ref())?;
-        (0..state.x.ncols())
-            .map(|j| {
-                let s: f64 = (0..n).map(|i| state.x[(i, j)] * mx[(i, j)]).sum();
-                if s > 0.0 && s.is_finite() {
-                    1.0 / s
-                } else {
-                    0.0
-                }
-            })
-            .collect()
-    };
-    if let Some(j) = weights.iter().position(|v| *v == 0.0) {
-        return Err(UpdateError::Invalid {
-            what: "test shapes",
-            reason: format!("test mode {} expands to a zero vector", j + 1),
-        });
-    }
+    let weights = mode_weights(&m0, state.x.as_ref())?;
     let mut state = weighted(state, &weights);
     let mut history = vec![Iteration {
         iteration: 0,
@@ -542,4 +523,32 @@ impl clap::ValueEnum for UpdateMethod {
             }
         })
     }
+}
+
+/// The mode weights `1 / ||x_i||_{M_0}^2` of the starting expansion `x`.
+///
+/// # Errors
+/// A test mode that expands to a zero (or non-finite) vector.
+fn mode_weights(
+    m0: &femu_sparse::SparseMatrix,
+    x: faer::MatRef<'_, f64>,
+) -> Result<Vec<f64>, UpdateError> {
+    let mx = femu_sparse::csc::sym_mul_mat(m0, x)?;
+    let weights: Vec<f64> = (0..x.ncols())
+        .map(|j| {
+            let s: f64 = (0..x.nrows()).map(|i| x[(i, j)] * mx[(i, j)]).sum();
+            if s > 0.0 && s.is_finite() {
+                1.0 / s
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    if let Some(j) = weights.iter().position(|v| *v == 0.0) {
+        return Err(UpdateError::Invalid {
+            what: "test shapes",
+            reason: format!("test mode {} expands to a zero vector", j + 1),
+        });
+    }
+    Ok(weights)
 }

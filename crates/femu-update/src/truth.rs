@@ -241,29 +241,7 @@ fn pct(v: f64) -> String {
 
 fn judge(check: &TruthCheck, inputs: &JudgeInputs) -> Judgement {
     let sf = inputs.uncertainty.frequency;
-    let mut reasons = Vec::new();
-    if !inputs.uncertainty.given {
-        reasons.push(format!(
-            "test uncertainty not given: assumed {} on frequencies and {} on shapes{}",
-            pct(sf),
-            pct(inputs.uncertainty.shape),
-            match inputs.implied {
-                Some((f, s)) => format!(
-                    "; the fit's residuals scatter as {} on the tuned frequencies{} (a lower estimate: the fit absorbs part of it); give --frequency-uncertainty and --shape-uncertainty from the identification",
-                    pct(f),
-                    s.map_or(String::new(), |s| format!(" and {} on the readings", pct(s)))
-                ),
-                None => String::new(),
-            }
-        ));
-    }
-    if let Some(scale) = inputs.fit_scale.filter(|s| *s > 1.5) {
-        reasons.push(format!(
-            "the fit leaves {scale:.1} times the scatter the test's uncertainty explains (chi-square per degree of freedom {:.1}): noise larger than {}, or what the parameters cannot represent; the intervals are widened by that factor",
-            scale * scale,
-            if inputs.uncertainty.given { "given" } else { "assumed" }
-        ));
-    }
+    let mut reasons = uncertainty_caveats(inputs);
     let held: Vec<&ModeCheck> = check.held_out().collect();
     let (b, a) = check.held_out_rms();
     let d = |t: usize| inputs.discretisation.get(t - 1).copied().flatten();
@@ -279,82 +257,8 @@ fn judge(check: &TruthCheck, inputs: &JudgeInputs) -> Judgement {
         );
         return verdict(Verdict::Inconclusive, "1: no held-out mode", reasons);
     }
-    // 2: the mesh's own error against the signal
-    let swamped: Vec<String> = check
-        .modes
-        .iter()
-        .filter(|m| m.tuned)
-        .filter_map(|m| {
-            let (e, di) = (m.error_before()?, d(m.test)?);
-            (di.abs() >= 0.5 * e.abs()).then(|| {
-                format!(
-                    "mode {}: discretisation error {:+.2} % against a test-analysis difference of {:+.2} %",
-                    m.test,
-                    100.0 * di,
-                    100.0 * e
-                )
-            })
-        })
-        .collect();
-    if !swamped.is_empty() {
-        reasons.push(format!(
-            "before updating: the model's own discretisation error is as large as what updating would correct ({}); parameters fitted to such a mesh are effective values of the mesh, not of the structure",
-            swamped.join("; ")
-        ));
-    }
-    // 2 and 3: the parameters
-    let mut doubts = Vec::new();
-    let mut undetermined = Vec::new();
-    let mut at_bound = false;
-    for p in &inputs.parameters {
-        let span = (p.bounds.1 - p.bounds.0).abs().max(1e-12);
-        let determined = p.half_width_95.is_none_or(|h| h < p.value.abs());
-        if let Some(h) = p.half_width_95
-            && !determined
-        {
-            undetermined.push(format!("{} = {:+.3} +- {:.3}", p.name, p.value, h));
-        }
-        if (p.value - p.bounds.0).abs() <= 1e-6 * span
-            || (p.value - p.bounds.1).abs() <= 1e-6 * span
-        {
-            at_bound = true;
-            doubts.push(format!(
-                "{} = {:+.3} is at a bound: the correction left the range a stiffness factor can physically take",
-                p.name, p.value
-            ));
-        } else if determined && p.value.abs() > IMPLAUSIBLE_CHANGE {
-            doubts.push(format!(
-                "{} = {:+.3} changes its region by more than 50 %",
-                p.name, p.value
-            ));
-        } else if determined && !p.evidence && p.value.abs() > SMALL_CHANGE {
-            doubts.push(format!(
-                "{} = {:+.3}{} is a determined change the data's selection did not support",
-                p.name,
-                p.value,
-                p.half_width_95
-                    .map_or(String::new(), |h| format!(" +- {h:.3}"))
-            ));
-        }
-    }
-    if at_bound {
-        let moved: Vec<f64> = check
-            .modes
-            .iter()
-            .filter(|m| m.tuned)
-            .filter_map(|m| Some(m.f_after? / m.f_before? - 1.0))
-            .collect();
-        if let (Some(lo), Some(hi)) = (
-            moved.iter().copied().reduce(f64::min),
-            moved.iter().copied().reduce(f64::max),
-        ) {
-            doubts.push(format!(
-                "the update moved the tuned frequencies by {:+.1} to {:+.1} %",
-                100.0 * lo,
-                100.0 * hi
-            ));
-        }
-    }
+    reasons.extend(discretisation_caveat(check, inputs));
+    let (doubts, undetermined) = parameter_doubts(check, inputs);
     let outside_with = |with_mesh: bool| -> Vec<String> {
         held.iter()
             .filter_map(|m| {
@@ -587,6 +491,125 @@ pub fn truth_check(
     };
     check.judge(&JudgeInputs::default());
     Ok(check)
+}
+
+/// Rule 2's caveats on the test's uncertainty: assumed rather than given (with the scatter the
+/// fit's residuals imply), and a fit that leaves more scatter than it explains.
+fn uncertainty_caveats(inputs: &JudgeInputs) -> Vec<String> {
+    let sf = inputs.uncertainty.frequency;
+    let mut reasons = Vec::new();
+    if !inputs.uncertainty.given {
+        reasons.push(format!(
+            "test uncertainty not given: assumed {} on frequencies and {} on shapes{}",
+            pct(sf),
+            pct(inputs.uncertainty.shape),
+            match inputs.implied {
+                Some((f, s)) => format!(
+                    "; the fit's residuals scatter as {} on the tuned frequencies{} (a lower estimate: the fit absorbs part of it); give --frequency-uncertainty and --shape-uncertainty from the identification",
+                    pct(f),
+                    s.map_or(String::new(), |s| format!(" and {} on the readings", pct(s)))
+                ),
+                None => String::new(),
+            }
+        ));
+    }
+    if let Some(scale) = inputs.fit_scale.filter(|s| *s > 1.5) {
+        reasons.push(format!(
+            "the fit leaves {scale:.1} times the scatter the test's uncertainty explains (chi-square per degree of freedom {:.1}): noise larger than {}, or what the parameters cannot represent; the intervals are widened by that factor",
+            scale * scale,
+            if inputs.uncertainty.given { "given" } else { "assumed" }
+        ));
+    }
+    reasons
+}
+
+/// Rule 2's caveat on the mesh: a tuned mode whose discretisation error is at least half the
+/// test-analysis difference.
+fn discretisation_caveat(check: &TruthCheck, inputs: &JudgeInputs) -> Option<String> {
+    let d = |t: usize| inputs.discretisation.get(t - 1).copied().flatten();
+    // 2: the mesh's own error against the signal
+    let swamped: Vec<String> = check
+        .modes
+        .iter()
+        .filter(|m| m.tuned)
+        .filter_map(|m| {
+            let (e, di) = (m.error_before()?, d(m.test)?);
+            (di.abs() >= 0.5 * e.abs()).then(|| {
+                format!(
+                    "mode {}: discretisation error {:+.2} % against a test-analysis difference of {:+.2} %",
+                    m.test,
+                    100.0 * di,
+                    100.0 * e
+                )
+            })
+        })
+        .collect();
+    (!swamped.is_empty()).then(|| {
+        format!(
+            "before updating: the model's own discretisation error is as large as what updating would correct ({}); parameters fitted to such a mesh are effective values of the mesh, not of the structure",
+            swamped.join("; ")
+        )
+    })
+}
+
+/// Rule 4's doubts on the fitted parameters (at a bound, beyond 50 %, or a determined change the
+/// selection did not support, with how far the tuned frequencies moved), and the parameters the
+/// data do not determine.
+fn parameter_doubts(check: &TruthCheck, inputs: &JudgeInputs) -> (Vec<String>, Vec<String>) {
+    // 2 and 3: the parameters
+    let mut doubts = Vec::new();
+    let mut undetermined = Vec::new();
+    let mut at_bound = false;
+    for p in &inputs.parameters {
+        let span = (p.bounds.1 - p.bounds.0).abs().max(1e-12);
+        let determined = p.half_width_95.is_none_or(|h| h < p.value.abs());
+        if let Some(h) = p.half_width_95
+            && !determined
+        {
+            undetermined.push(format!("{} = {:+.3} +- {:.3}", p.name, p.value, h));
+        }
+        if (p.value - p.bounds.0).abs() <= 1e-6 * span
+            || (p.value - p.bounds.1).abs() <= 1e-6 * span
+        {
+            at_bound = true;
+            doubts.push(format!(
+                "{} = {:+.3} is at a bound: the correction left the range a stiffness factor can physically take",
+                p.name, p.value
+            ));
+        } else if determined && p.value.abs() > IMPLAUSIBLE_CHANGE {
+            doubts.push(format!(
+                "{} = {:+.3} changes its region by more than 50 %",
+                p.name, p.value
+            ));
+        } else if determined && !p.evidence && p.value.abs() > SMALL_CHANGE {
+            doubts.push(format!(
+                "{} = {:+.3}{} is a determined change the data's selection did not support",
+                p.name,
+                p.value,
+                p.half_width_95
+                    .map_or(String::new(), |h| format!(" +- {h:.3}"))
+            ));
+        }
+    }
+    if at_bound {
+        let moved: Vec<f64> = check
+            .modes
+            .iter()
+            .filter(|m| m.tuned)
+            .filter_map(|m| Some(m.f_after? / m.f_before? - 1.0))
+            .collect();
+        if let (Some(lo), Some(hi)) = (
+            moved.iter().copied().reduce(f64::min),
+            moved.iter().copied().reduce(f64::max),
+        ) {
+            doubts.push(format!(
+                "the update moved the tuned frequencies by {:+.1} to {:+.1} %",
+                100.0 * lo,
+                100.0 * hi
+            ));
+        }
+    }
+    (doubts, undetermined)
 }
 
 #[cfg(test)]

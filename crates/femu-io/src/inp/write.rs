@@ -66,12 +66,6 @@ pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String,
             }
         }
     }
-    let write_ids = |s: &mut String, ids: Vec<u64>| {
-        for chunk in ids.chunks(16) {
-            let t: Vec<String> = chunk.iter().map(|v| v.to_string()).collect();
-            let _ = writeln!(s, "{}", t.join(", "));
-        }
-    };
     // the sets this writer generates itself are not copied (a read deck has them)
     let generated = |name: &str| {
         let u = name.to_ascii_uppercase();
@@ -85,113 +79,8 @@ pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String,
         let _ = writeln!(s, "*ELSET, ELSET={name}");
         write_ids(&mut s, els.iter().map(|e| mesh.element(*e).id).collect());
     }
-    // distinct materials, in order of first use in the written element order (so that a deck read
-    // back and written again is the same text)
-    let mut distinct: Vec<(Material, Vec<u64>)> = Vec::new();
-    let written_order = femu_fem::element::ALL_KINDS
-        .iter()
-        .flat_map(|k| {
-            mesh.elements()
-                .filter(move |e| e.kind == *k)
-                .map(|e| e.index)
-        })
-        .collect::<Vec<_>>();
-    for e in written_order {
-        let m = model
-            .material_of(e)
-            .map_err(|e| unwritable(e.to_string()))?;
-        let id = mesh.element(e).id;
-        match distinct.iter_mut().find(|(d, _)| d == m) {
-            Some(d) => d.1.push(id),
-            None => distinct.push((m.clone(), vec![id])),
-        }
-    }
-    for (i, (m, ids)) in distinct.iter().enumerate() {
-        let Elasticity::Isotropic { e, nu } = &m.elasticity else {
-            return Err(unwritable(format!(
-                "material {} is anisotropic: not written yet",
-                m.name
-            )));
-        };
-        // the material's own name when it is a valid Abaqus name not used before
-        let clean: String = m
-            .name
-            .chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
-                    c
-                } else {
-                    '_'
-                }
-            })
-            .collect();
-        let taken = distinct[..i]
-            .iter()
-            .any(|(d, _)| d.name.eq_ignore_ascii_case(&m.name));
-        let valid = clean.starts_with(|c: char| c.is_ascii_alphabetic()) && clean.len() <= 80;
-        let name = if valid && !taken {
-            clean
-        } else {
-            format!("FEMU_MAT{}", i + 1)
-        };
-        let _ = writeln!(s, "*ELSET, ELSET=FEMU_MAT{}", i + 1);
-        write_ids(&mut s, ids.clone());
-        let _ = writeln!(
-            s,
-            "*MATERIAL, NAME={name}\n*ELASTIC\n{}, {}\n*DENSITY\n{}",
-            number_field(*e),
-            number_field(*nu),
-            number_field(m.density)
-        );
-        let _ = writeln!(
-            s,
-            "*SOLID SECTION, ELSET=FEMU_MAT{}, MATERIAL={name}",
-            i + 1
-        );
-    }
-    // point masses: one MASS element each (ids after the solids'), a *MASS per element; a rigid
-    // mass without offset or inertia is one too
-    let first_id = mesh.elements().map(|e| e.id).max().unwrap_or(0) + 1;
-    let mut masses: Vec<femu_fem::model::PointMass> = model.point_masses().to_vec();
-    for r in model.rigid_masses() {
-        if r.offset
-            .iter()
-            .chain(r.inertia.iter().flatten())
-            .any(|v| *v != 0.0)
-        {
-            return Err(unwritable(format!(
-                "the rigid mass on node {} has an offset or rotary inertia, which CalculiX's *MASS cannot state",
-                mesh.node_id(r.node)
-            )));
-        }
-        let m = r.mass;
-        masses.push(femu_fem::model::PointMass {
-            node: r.node,
-            mass: [[m, 0.0, 0.0], [0.0, m, 0.0], [0.0, 0.0, m]],
-        });
-    }
-    for (k, p) in masses.iter().enumerate() {
-        let m = p.mass[0][0];
-        let isotropic =
-            (0..3).all(|i| (0..3).all(|j| p.mass[i][j] == if i == j { m } else { 0.0 }));
-        if !isotropic {
-            return Err(IoError::Content {
-                path: PathBuf::from("(deck being written)"),
-                reason: format!(
-                    "the point mass on node {} differs by direction ({:?}): *MASS gives one mass for all three",
-                    mesh.node_id(p.node),
-                    p.mass
-                ),
-            });
-        }
-        let id = first_id + k as u64;
-        let _ = writeln!(
-            s,
-            "*ELEMENT, TYPE=MASS, ELSET=FEMU_MASS{id}\n{id}, {}\n*MASS, ELSET=FEMU_MASS{id}\n{}",
-            mesh.node_id(p.node),
-            number_field(m)
-        );
-    }
+    write_materials(&mut s, model)?;
+    write_point_masses(&mut s, model)?;
     // rotations of reference nodes: as CalculiX's rotational nodes, an extra node per reference
     // (ids after the mesh's) whose translations 1-3 are the reference's rotations 4-6
     let first_rot = (0..mesh.node_count())
@@ -275,4 +164,139 @@ pub fn write_inp(
 ) -> Result<(), IoError> {
     let text = inp_string(model, step)?;
     std::fs::write(path.as_ref(), text).map_err(|e| IoError::io(path.as_ref(), e))
+}
+
+/// Ids, 16 to a line.
+fn write_ids(s: &mut String, ids: Vec<u64>) {
+    for chunk in ids.chunks(16) {
+        let t: Vec<String> = chunk.iter().map(|v| v.to_string()).collect();
+        let _ = writeln!(s, "{}", t.join(", "));
+    }
+}
+
+/// An element set, a `*MATERIAL` and a `*SOLID SECTION` per distinct material.
+fn write_materials(s: &mut String, model: &Model) -> Result<(), IoError> {
+    let mesh = model.mesh();
+    let unwritable = |reason: String| IoError::Content {
+        path: PathBuf::from("<model>"),
+        reason,
+    };
+    // distinct materials, in order of first use in the written element order (so that a deck read
+    // back and written again is the same text)
+    let mut distinct: Vec<(Material, Vec<u64>)> = Vec::new();
+    let written_order = femu_fem::element::ALL_KINDS
+        .iter()
+        .flat_map(|k| {
+            mesh.elements()
+                .filter(move |e| e.kind == *k)
+                .map(|e| e.index)
+        })
+        .collect::<Vec<_>>();
+    for e in written_order {
+        let m = model
+            .material_of(e)
+            .map_err(|e| unwritable(e.to_string()))?;
+        let id = mesh.element(e).id;
+        match distinct.iter_mut().find(|(d, _)| d == m) {
+            Some(d) => d.1.push(id),
+            None => distinct.push((m.clone(), vec![id])),
+        }
+    }
+    for (i, (m, ids)) in distinct.iter().enumerate() {
+        let Elasticity::Isotropic { e, nu } = &m.elasticity else {
+            return Err(unwritable(format!(
+                "material {} is anisotropic: not written yet",
+                m.name
+            )));
+        };
+        // the material's own name when it is a valid Abaqus name not used before
+        let clean: String = m
+            .name
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        let taken = distinct[..i]
+            .iter()
+            .any(|(d, _)| d.name.eq_ignore_ascii_case(&m.name));
+        let valid = clean.starts_with(|c: char| c.is_ascii_alphabetic()) && clean.len() <= 80;
+        let name = if valid && !taken {
+            clean
+        } else {
+            format!("FEMU_MAT{}", i + 1)
+        };
+        let _ = writeln!(s, "*ELSET, ELSET=FEMU_MAT{}", i + 1);
+        write_ids(s, ids.clone());
+        let _ = writeln!(
+            s,
+            "*MATERIAL, NAME={name}\n*ELASTIC\n{}, {}\n*DENSITY\n{}",
+            number_field(*e),
+            number_field(*nu),
+            number_field(m.density)
+        );
+        let _ = writeln!(
+            s,
+            "*SOLID SECTION, ELSET=FEMU_MAT{}, MATERIAL={name}",
+            i + 1
+        );
+    }
+    Ok(())
+}
+
+/// The point masses, and the rigid masses without offset or inertia, as MASS elements.
+fn write_point_masses(s: &mut String, model: &Model) -> Result<(), IoError> {
+    let mesh = model.mesh();
+    let unwritable = |reason: String| IoError::Content {
+        path: PathBuf::from("<model>"),
+        reason,
+    };
+    // point masses: one MASS element each (ids after the solids'), a *MASS per element; a rigid
+    // mass without offset or inertia is one too
+    let first_id = mesh.elements().map(|e| e.id).max().unwrap_or(0) + 1;
+    let mut masses: Vec<femu_fem::model::PointMass> = model.point_masses().to_vec();
+    for r in model.rigid_masses() {
+        if r.offset
+            .iter()
+            .chain(r.inertia.iter().flatten())
+            .any(|v| *v != 0.0)
+        {
+            return Err(unwritable(format!(
+                "the rigid mass on node {} has an offset or rotary inertia, which CalculiX's *MASS cannot state",
+                mesh.node_id(r.node)
+            )));
+        }
+        let m = r.mass;
+        masses.push(femu_fem::model::PointMass {
+            node: r.node,
+            mass: [[m, 0.0, 0.0], [0.0, m, 0.0], [0.0, 0.0, m]],
+        });
+    }
+    for (k, p) in masses.iter().enumerate() {
+        let m = p.mass[0][0];
+        let isotropic =
+            (0..3).all(|i| (0..3).all(|j| p.mass[i][j] == if i == j { m } else { 0.0 }));
+        if !isotropic {
+            return Err(IoError::Content {
+                path: PathBuf::from("(deck being written)"),
+                reason: format!(
+                    "the point mass on node {} differs by direction ({:?}): *MASS gives one mass for all three",
+                    mesh.node_id(p.node),
+                    p.mass
+                ),
+            });
+        }
+        let id = first_id + k as u64;
+        let _ = writeln!(
+            s,
+            "*ELEMENT, TYPE=MASS, ELSET=FEMU_MASS{id}\n{id}, {}\n*MASS, ELSET=FEMU_MASS{id}\n{}",
+            mesh.node_id(p.node),
+            number_field(m)
+        );
+    }
+    Ok(())
 }

@@ -585,49 +585,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
                 stats.ritz_seconds += t.elapsed().as_secs_f64();
                 continue;
             }
-            // the candidates' Ritz vectors V_m S by one GEMM, their K and M images by one sparse
-            // product each
-            let mut locked = vec![false; m];
-            if !candidates.is_empty() {
-                let s_c = Mat::from_fn(m, candidates.len(), |j, c| {
-                    eig.eigenvectors[(j, candidates[c])]
-                });
-                let y = basis.range(0, m) * &s_c;
-                let ky = crate::csc::sym_mul_mat(self.pencil.k, y.as_ref())?;
-                let my = crate::csc::sym_mul_mat(self.pencil.m, y.as_ref())?;
-                // Ritz vectors of a basis deflated against the locked vectors are M-orthogonal to
-                // them and to each other to round-off. One block projection (two GEMMs) makes the
-                // first exact and the Gram matrix checks the second, so that a pair locks without
-                // a Gram-Schmidt of its own against every locked vector (0.43 s of a 10 s solve
-                // at 199,200 DOF). A candidate the projection moves, or a block that is not
-                // orthogonal, takes the pair-by-pair path of `lock_with` from the unprojected
-                // vector, whose images `ky`, `my` are.
-                let mut projected = y.clone();
-                let mut clean = self.project_locked(&mut projected, &my);
-                let gram = my.transpose() * &projected;
-                let nc = candidates.len();
-                let diag = |i: usize| gram[(i, i)].abs().sqrt();
-                if (0..nc).any(|i| (0..i).any(|j| gram[(i, j)].abs() > 1e-10 * diag(i) * diag(j))) {
-                    clean.iter_mut().for_each(|c| *c = false);
-                }
-                for (c, &r) in candidates.iter().enumerate() {
-                    let col = |a: &Mat<f64>| -> Vec<f64> { a.col(c).iter().copied().collect() };
-                    let (yc, kyc, myc) = (slice(&y, c), slice(&ky, c), slice(&my, c));
-                    let lambda = self.sigma + 1.0 / eig.eigenvalues[r];
-                    let (rho, eta, relative) = self.residuals_of(yc, kyc, myc, 1.0, lambda);
-                    // With the shift on (or within round-off of) an eigenvalue, `(K - sigma M) x`
-                    // vanishes and the shifted residual cannot be small: the classical relative
-                    // residual decides; rigid-body modes can only meet the backward error.
-                    let converged =
-                        rho < self.params.tol || eta < BACKWARD_LOCK || relative < self.params.tol;
-                    locked[r] = converged
-                        && if clean[c] {
-                            self.push_normalised(slice(&projected, c), kyc, myc)
-                        } else {
-                            self.lock_with(col(&y), col(&ky), col(&my))
-                        };
-                }
-            }
+            let locked = self.lock_candidates(&basis, m, &eig, &candidates)?;
             let keep: Vec<usize> = order.iter().copied().filter(|&r| !locked[r]).collect();
             let locked_now = m - keep.len();
             if locked_now > 0 && !keep.is_empty() {
@@ -698,6 +656,61 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             applied = kk;
             stats.ritz_seconds += t.elapsed().as_secs_f64();
         }
+    }
+
+    /// Locks the Ritz pairs `candidates` of the first `m` basis columns that converge; which of
+    /// the `m` pairs locked. Their Ritz vectors `V_m S` come by one GEMM, their K and M images by
+    /// one sparse product each.
+    fn lock_candidates(
+        &mut self,
+        basis: &Columns,
+        m: usize,
+        eig: &nalgebra::SymmetricEigen<f64, nalgebra::Dyn>,
+        candidates: &[usize],
+    ) -> Result<Vec<bool>, SparseError> {
+        let mut locked = vec![false; m];
+        if candidates.is_empty() {
+            return Ok(locked);
+        }
+        let s_c = Mat::from_fn(m, candidates.len(), |j, c| {
+            eig.eigenvectors[(j, candidates[c])]
+        });
+        let y = basis.range(0, m) * &s_c;
+        let ky = crate::csc::sym_mul_mat(self.pencil.k, y.as_ref())?;
+        let my = crate::csc::sym_mul_mat(self.pencil.m, y.as_ref())?;
+        // Ritz vectors of a basis deflated against the locked vectors are M-orthogonal to
+        // them and to each other to round-off. One block projection (two GEMMs) makes the
+        // first exact and the Gram matrix checks the second, so that a pair locks without
+        // a Gram-Schmidt of its own against every locked vector (0.43 s of a 10 s solve
+        // at 199,200 DOF). A candidate the projection moves, or a block that is not
+        // orthogonal, takes the pair-by-pair path of `lock_with` from the unprojected
+        // vector, whose images `ky`, `my` are.
+        let mut projected = y.clone();
+        let mut clean = self.project_locked(&mut projected, &my);
+        let gram = my.transpose() * &projected;
+        let nc = candidates.len();
+        let diag = |i: usize| gram[(i, i)].abs().sqrt();
+        if (0..nc).any(|i| (0..i).any(|j| gram[(i, j)].abs() > 1e-10 * diag(i) * diag(j))) {
+            clean.iter_mut().for_each(|c| *c = false);
+        }
+        for (c, &r) in candidates.iter().enumerate() {
+            let col = |a: &Mat<f64>| -> Vec<f64> { a.col(c).iter().copied().collect() };
+            let (yc, kyc, myc) = (slice(&y, c), slice(&ky, c), slice(&my, c));
+            let lambda = self.sigma + 1.0 / eig.eigenvalues[r];
+            let (rho, eta, relative) = self.residuals_of(yc, kyc, myc, 1.0, lambda);
+            // With the shift on (or within round-off of) an eigenvalue, `(K - sigma M) x`
+            // vanishes and the shifted residual cannot be small: the classical relative
+            // residual decides; rigid-body modes can only meet the backward error.
+            let converged =
+                rho < self.params.tol || eta < BACKWARD_LOCK || relative < self.params.tol;
+            locked[r] = converged
+                && if clean[c] {
+                    self.push_normalised(slice(&projected, c), kyc, myc)
+                } else {
+                    self.lock_with(col(&y), col(&ky), col(&my))
+                };
+        }
+        Ok(locked)
     }
 
     /// Thick restart: the basis becomes the Ritz vectors `keep[..kk]` of its first `m` columns

@@ -538,32 +538,7 @@ impl<'a> Pencil<'a> {
             // the rigid-body zeros) instead of a shift on the zeros
             return self.solve(Which::Lowest(count), params);
         }
-        let (mut sigma, band) = match which {
-            Which::Lowest(_) => (hint.unwrap_or_else(|| self.lowest_shift()), None),
-            Which::Nearest { shift, .. } => {
-                if !shift.is_finite() {
-                    return Err(SparseError::InvalidRequest {
-                        reason: format!("the shift {shift} is not a finite number"),
-                    });
-                }
-                (shift, None)
-            }
-            Which::Band { lo, hi } => {
-                if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-                    return Err(SparseError::InvalidRequest {
-                        reason: format!(
-                            "the band [{lo:e}, {hi:e}] s^-2 needs finite ends with the lower below the upper"
-                        ),
-                    });
-                }
-                let (lo, hi) = (lo - self.tie_tolerance(lo), hi + self.tie_tolerance(hi));
-                let t = Instant::now();
-                let (nl, nh) = (self.count_below(lo)?, self.count_below(hi)?);
-                stats.factor_seconds += t.elapsed().as_secs_f64();
-                stats.factorizations += 2;
-                (0.5 * (lo + hi), Some((lo, hi, nh - nl)))
-            }
-        };
+        let (mut sigma, band) = self.first_shift(which, hint, stats)?;
         let mut want = band.map_or(requested, |b| b.2);
         // the nearest modes are chosen by their distance to the shift the user gave
         let target = sigma;
@@ -668,22 +643,7 @@ impl<'a> Pencil<'a> {
             }
         }
         if want == 0 {
-            return Ok(Modes {
-                values: vec![],
-                vectors: Mat::zeros(n, 0),
-                residuals: vec![],
-                residual_kinds: vec![],
-                shifted_residuals: vec![],
-                requested,
-                shift: sigma,
-                sturm: SturmCheck {
-                    lower: band.map(|b| b.0),
-                    upper: band.map_or(sigma, |b| b.1),
-                    count: 0,
-                    returned: 0,
-                },
-                stats: stats.clone(),
-            });
+            return Ok(no_modes(n, requested, sigma, band, stats));
         }
         let mut lanczos = Lanczos::new(self, op, sigma, params, &known);
         lanczos.probed = probed;
@@ -720,42 +680,8 @@ impl<'a> Pencil<'a> {
                 }
                 r => r?,
             }
-            let (sel, check) = match band {
-                Some((lo, hi, count)) => {
-                    let sel: Vec<usize> = (0..lanczos.values.len())
-                        .filter(|i| lanczos.values[*i] >= lo && lanczos.values[*i] <= hi)
-                        .collect();
-                    let returned = sel.len();
-                    let check = SturmCheck {
-                        lower: Some(lo),
-                        upper: hi,
-                        count,
-                        returned,
-                    };
-                    (sel, check)
-                }
-                None => {
-                    let nearest = matches!(which, Which::Nearest { .. });
-                    let centre = if nearest { target } else { sigma };
-                    let (sel, lower, upper) =
-                        self.select(&lanczos.values, requested, centre, nearest);
-                    // one factor alive at a time: release the iteration's before the check's
-                    lanczos.op = None;
-                    let t = Instant::now();
-                    let count = self.count_below(upper)?
-                        - lower.map(|l| self.count_below(l)).transpose()?.unwrap_or(0);
-                    stats.factor_seconds += t.elapsed().as_secs_f64();
-                    stats.factorizations += 1 + usize::from(lower.is_some());
-                    let returned = sel.len();
-                    let check = SturmCheck {
-                        lower,
-                        upper,
-                        count,
-                        returned,
-                    };
-                    (sel, check)
-                }
-            };
+            let (sel, check) =
+                self.checked_selection(&mut lanczos, band, which, requested, target, stats)?;
             if check.verified() {
                 let mut modes = lanczos.finish(sel, sigma, check, requested, stats.clone());
                 modes.stats.total_seconds =
@@ -775,6 +701,93 @@ impl<'a> Pencil<'a> {
             want = lanczos.values.len() + (check.count - check.returned);
             lanczos.force_random_start = true;
         }
+    }
+
+    /// The first shift of a solve, and for a band its ends widened by the tie tolerance and the
+    /// count of eigenvalues inside by two Sturm counts.
+    fn first_shift(
+        &self,
+        which: Which,
+        hint: Option<f64>,
+        stats: &mut EigenStats,
+    ) -> Result<(f64, Option<Band>), SparseError> {
+        Ok(match which {
+            Which::Lowest(_) => (hint.unwrap_or_else(|| self.lowest_shift()), None),
+            Which::Nearest { shift, .. } => {
+                if !shift.is_finite() {
+                    return Err(SparseError::InvalidRequest {
+                        reason: format!("the shift {shift} is not a finite number"),
+                    });
+                }
+                (shift, None)
+            }
+            Which::Band { lo, hi } => {
+                if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                    return Err(SparseError::InvalidRequest {
+                        reason: format!(
+                            "the band [{lo:e}, {hi:e}] s^-2 needs finite ends with the lower below the upper"
+                        ),
+                    });
+                }
+                let (lo, hi) = (lo - self.tie_tolerance(lo), hi + self.tie_tolerance(hi));
+                let t = Instant::now();
+                let (nl, nh) = (self.count_below(lo)?, self.count_below(hi)?);
+                stats.factor_seconds += t.elapsed().as_secs_f64();
+                stats.factorizations += 2;
+                (0.5 * (lo + hi), Some((lo, hi, nh - nl)))
+            }
+        })
+    }
+
+    /// The pairs of a finished run that answer the request, and the Sturm count that proves none
+    /// was skipped: for a band, the values inside it against the count made at the start; else
+    /// the `requested` nearest `target` (nearest) or lowest above the shift, counted now (the
+    /// iteration's factor is released first, so that one factor is alive at a time).
+    fn checked_selection(
+        &self,
+        lanczos: &mut Lanczos<'_, '_>,
+        band: Option<Band>,
+        which: Which,
+        requested: usize,
+        target: f64,
+        stats: &mut EigenStats,
+    ) -> Result<(Vec<usize>, SturmCheck), SparseError> {
+        let sigma = lanczos.sigma;
+        Ok(match band {
+            Some((lo, hi, count)) => {
+                let sel: Vec<usize> = (0..lanczos.values.len())
+                    .filter(|i| lanczos.values[*i] >= lo && lanczos.values[*i] <= hi)
+                    .collect();
+                let returned = sel.len();
+                let check = SturmCheck {
+                    lower: Some(lo),
+                    upper: hi,
+                    count,
+                    returned,
+                };
+                (sel, check)
+            }
+            None => {
+                let nearest = matches!(which, Which::Nearest { .. });
+                let centre = if nearest { target } else { sigma };
+                let (sel, lower, upper) = self.select(&lanczos.values, requested, centre, nearest);
+                // one factor alive at a time: release the iteration's before the check's
+                lanczos.op = None;
+                let t = Instant::now();
+                let count = self.count_below(upper)?
+                    - lower.map(|l| self.count_below(l)).transpose()?.unwrap_or(0);
+                stats.factor_seconds += t.elapsed().as_secs_f64();
+                stats.factorizations += 1 + usize::from(lower.is_some());
+                let returned = sel.len();
+                let check = SturmCheck {
+                    lower,
+                    upper,
+                    count,
+                    returned,
+                };
+                (sel, check)
+            }
+        })
     }
 
     /// The factor at `better` (half the first elastic eigenvalue of a free-free model) and that
@@ -951,4 +964,32 @@ pub fn with_interrupt<T>(check: impl FnMut(usize) -> bool + 'static, f: impl FnO
 /// Whether the hook of [`with_interrupt`] asks to stop after `solved` vectors.
 pub(super) fn interrupted(solved: usize) -> bool {
     INTERRUPT.with(|c| c.borrow_mut().as_mut().is_some_and(|f| f(solved)))
+}
+/// A band's ends, widened by the tie tolerance, and the Sturm count of the eigenvalues inside.
+type Band = (f64, f64, usize);
+
+/// The answer to a request for no modes (an empty band): the Sturm count that proves it.
+fn no_modes(
+    n: usize,
+    requested: usize,
+    sigma: f64,
+    band: Option<Band>,
+    stats: &EigenStats,
+) -> Modes {
+    Modes {
+        values: vec![],
+        vectors: Mat::zeros(n, 0),
+        residuals: vec![],
+        residual_kinds: vec![],
+        shifted_residuals: vec![],
+        requested,
+        shift: sigma,
+        sturm: SturmCheck {
+            lower: band.map(|b| b.0),
+            upper: band.map_or(sigma, |b| b.1),
+            count: 0,
+            returned: 0,
+        },
+        stats: stats.clone(),
+    }
 }
