@@ -66,8 +66,8 @@ pub enum CorrelateError {
         /// Where (mode, entry, ...).
         index: usize,
     },
-    /// A test wireframe that cannot be mapped onto the model, or a mapping setting that does
-    /// not fit (`what`: `map`, `align`, `mapping tolerance`).
+    /// A test wireframe that cannot be mapped onto the model, or an alignment or mapping
+    /// method that cannot be read (`what`: `map`, `align`).
     #[error("{what}: {reason}")]
     Mapping {
         /// The setting or step.

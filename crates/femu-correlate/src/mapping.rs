@@ -343,7 +343,7 @@ pub fn map_test(
     let diagonal = (0..3).map(|i| (hi[i] - lo[i]).powi(2)).sum::<f64>().sqrt();
     let tolerance = options.tolerance.unwrap_or(0.01 * diagonal);
     if !(tolerance.is_finite() && tolerance >= 0.0) {
-        return Err(CorrelateError::Mapping {
+        return Err(CorrelateError::Invalid {
             what: "mapping tolerance",
             reason: format!("{tolerance} m is not a non-negative distance"),
         });

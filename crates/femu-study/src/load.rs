@@ -528,11 +528,7 @@ fn map_test(
 ) -> Result<Mapping, StudyError> {
     femu_correlate::mapping::map_test(data, model.model.mesh(), options, metres).map_err(
         |e| match e {
-            // a setting, not the file
-            CorrelateError::Mapping {
-                what: "mapping tolerance",
-                reason,
-            } => StudyError::invalid("mapping tolerance", reason),
+            // the file's wireframe; a setting's error (the tolerance) names no file
             CorrelateError::Mapping { what, reason } => StudyError::in_file(path, what, reason),
             other => other.into(),
         },
