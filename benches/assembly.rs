@@ -113,8 +113,14 @@ fn reassembly(c: &mut Criterion) {
                     let kind = mesh.element(e).kind;
                     let nn = kind.num_nodes();
                     mesh.element_coords(e, &mut x);
-                    kernel::element_stiffness_for(kind, &x, &steel, &mut ke[..9 * nn * nn])
-                        .unwrap();
+                    kernel::element_stiffness_for(
+                        kind,
+                        Default::default(),
+                        &x,
+                        &steel,
+                        &mut ke[..9 * nn * nn],
+                    )
+                    .unwrap();
                     kernel::scalar_mass(kind, &x, steel.density, &mut m[..nn * nn]).unwrap();
                     std::hint::black_box((&ke, &m));
                 }

@@ -16,7 +16,7 @@ use crate::CorrelateError;
 use faer::Mat;
 use femu_fem::FemError;
 use femu_fem::assembly::MassKind;
-use femu_fem::kernel::{element_stiffness, lumped_mass, scalar_mass};
+use femu_fem::kernel::{element_stiffness_for, lumped_mass, scalar_mass};
 use femu_fem::model::Model;
 use femu_sparse::dense::{generalized_symmetric_eigenvalues, symmetric_eigen};
 use rayon::prelude::*;
@@ -51,7 +51,8 @@ fn element_extremes(model: &Model, e: usize, mass: MassKind) -> Result<(f64, f64
         .into()
     };
     let mut ke = vec![0.0; nd * nd];
-    element_stiffness(el.kind, &coords, &material.elasticity_matrix(), &mut ke).map_err(bad)?;
+    element_stiffness_for(el.kind, model.formulation(e), &coords, material, &mut ke)
+        .map_err(bad)?;
     let rho = material.density;
     let (me, mu_min) = match mass {
         MassKind::Consistent => {

@@ -698,8 +698,14 @@ impl Assembler {
                         let rho = &material.density;
                         let nd = 3 * el.kind.num_nodes();
                         buf.ke.resize(nd * nd, 0.0);
-                        kernel::element_stiffness_for(el.kind, &buf.x, material, &mut buf.ke)
-                            .map_err(bad_jacobian(el.id))?;
+                        kernel::element_stiffness_for(
+                            el.kind,
+                            model.formulation(e),
+                            &buf.x,
+                            material,
+                            &mut buf.ke,
+                        )
+                        .map_err(bad_jacobian(el.id))?;
                         // SAFETY of the shared writes (see `shared`): chunks of one colour share no
                         // node, and an element writes only to the columns of its own nodes.
                         let plain = !self.dofs.has_dependents()
@@ -808,7 +814,8 @@ pub(crate) fn element_matrices(
     let nd = 3 * nn;
     let mut ke = vec![0.0; nd * nd];
     let mut me = vec![0.0; nd * nd];
-    kernel::element_stiffness_for(el.kind, &x, mat, &mut ke).map_err(bad_jacobian(el.id))?;
+    kernel::element_stiffness_for(el.kind, model.formulation(e), &x, mat, &mut ke)
+        .map_err(bad_jacobian(el.id))?;
     match mass {
         MassKind::Consistent => {
             kernel::element_mass(el.kind, &x, mat.density, &mut me).map_err(bad_jacobian(el.id))?

@@ -61,6 +61,23 @@ pub enum ElementKind {
     Pyramid13,
 }
 
+/// How an element's stiffness is formed. Every kind has the full formulation; the 8-node brick
+/// also has incompatible modes ([`crate::kernel::hex8_incompatible_stiffness`]). The mass is the
+/// same in both.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Formulation {
+    /// The element's own integration rule over its shape functions (CalculiX C3D8, Nastran
+    /// `IN = 2`, `ISOP = FULL`).
+    #[default]
+    Full,
+    /// The 8-node brick with three bubbles per component condensed out (CalculiX and Abaqus
+    /// C3D8I; the bubble functions of Nastran's default 8-node CHEXA).
+    IncompatibleModes,
+}
+
 /// Every element kind, for loops in tests and tools.
 pub const ALL_KINDS: [ElementKind; 8] = [
     ElementKind::Tet4,

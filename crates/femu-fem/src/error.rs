@@ -104,6 +104,16 @@ pub enum FemError {
         /// What is wrong.
         reason: String,
     },
+    /// A formulation the element's kind does not have (incompatible modes are for 8-node bricks).
+    #[error("element {element} is a {kind}: {reason}")]
+    InvalidFormulation {
+        /// Element id.
+        element: u64,
+        /// Its kind (Abaqus name).
+        kind: &'static str,
+        /// What is wrong.
+        reason: String,
+    },
     /// An element without a material.
     #[error("element {element} has no material (assign one to its element set)")]
     NoMaterial {

@@ -159,39 +159,143 @@ pub fn element_stiffness(
     out.iter_mut().for_each(|v| *v = 0.0);
     let tab = &kind.reference().stiffness;
     let mut g = [0.0; 60];
-    let mut db = [[0.0; 18]; 20];
     for q in 0..tab.rule.len() {
         let det = physical_gradients(coords, &tab.dn[3 * q * nn..3 * (q + 1) * nn], &mut g[..nd]);
         check_det(tab, q, det)?;
-        let w = tab.rule.weights[q] * det;
-        // D B_b for every node b (6x3, row-major), B in the Voigt order above.
-        for b in 0..nn {
-            let (gx, gy, gz) = (g[3 * b], g[3 * b + 1], g[3 * b + 2]);
-            let m = &mut db[b];
-            for r in 0..6 {
-                let dr = &d[r];
-                m[3 * r] = (dr[0] * gx + dr[3] * gy + dr[4] * gz) * w;
-                m[3 * r + 1] = (dr[1] * gy + dr[3] * gx + dr[5] * gz) * w;
-                m[3 * r + 2] = (dr[2] * gz + dr[4] * gx + dr[5] * gy) * w;
-            }
-        }
-        for a in 0..nn {
-            let (gx, gy, gz) = (g[3 * a], g[3 * a + 1], g[3 * a + 2]);
-            for b in a..nn {
-                let m = &db[b];
-                for j in 0..3 {
-                    let k0 = gx * m[j] + gy * m[9 + j] + gz * m[12 + j];
-                    let k1 = gy * m[3 + j] + gx * m[9 + j] + gz * m[15 + j];
-                    let k2 = gz * m[6 + j] + gx * m[12 + j] + gy * m[15 + j];
-                    out[(3 * a) * nd + 3 * b + j] += k0;
-                    out[(3 * a + 1) * nd + 3 * b + j] += k1;
-                    out[(3 * a + 2) * nd + 3 * b + j] += k2;
-                }
-            }
-        }
+        add_btdb_upper(&g[..nd], d, tab.rule.weights[q] * det, out);
     }
     mirror_upper_blocks(out, nn);
     Ok(())
+}
+
+/// Adds `w B^T D B` to the upper node-block triangle of `out` (`3 n` square, row-major), for the
+/// physical gradients `g[3 a + i] = dN_a / dx_i` of `n = g.len() / 3 <= 20` shape functions and
+/// the 6x6 `d` in Voigt order `(11, 22, 33, 12, 13, 23)`.
+fn add_btdb_upper(g: &[f64], d: &[[f64; 6]; 6], w: f64, out: &mut [f64]) {
+    let nn = g.len() / 3;
+    let nd = 3 * nn;
+    let mut db = [[0.0; 18]; 20];
+    // D B_b for every node b (6x3, row-major)
+    for b in 0..nn {
+        let (gx, gy, gz) = (g[3 * b], g[3 * b + 1], g[3 * b + 2]);
+        let m = &mut db[b];
+        for r in 0..6 {
+            let dr = &d[r];
+            m[3 * r] = (dr[0] * gx + dr[3] * gy + dr[4] * gz) * w;
+            m[3 * r + 1] = (dr[1] * gy + dr[3] * gx + dr[5] * gz) * w;
+            m[3 * r + 2] = (dr[2] * gz + dr[4] * gx + dr[5] * gy) * w;
+        }
+    }
+    for a in 0..nn {
+        let (gx, gy, gz) = (g[3 * a], g[3 * a + 1], g[3 * a + 2]);
+        for b in a..nn {
+            let m = &db[b];
+            for j in 0..3 {
+                let k0 = gx * m[j] + gy * m[9 + j] + gz * m[12 + j];
+                let k1 = gy * m[3 + j] + gx * m[9 + j] + gz * m[15 + j];
+                let k2 = gz * m[6 + j] + gx * m[12 + j] + gy * m[15 + j];
+                out[(3 * a) * nd + 3 * b + j] += k0;
+                out[(3 * a + 1) * nd + 3 * b + j] += k1;
+                out[(3 * a + 2) * nd + 3 * b + j] += k2;
+            }
+        }
+    }
+}
+
+/// Stiffness of the 8-node brick with incompatible modes (docs/MATH.md, "The brick with
+/// incompatible modes"): the trilinear displacement enriched, per component, by the three bubbles
+/// `P_k = 1 - xi_k^2` with element-internal amplitudes `alpha`, whose gradients are formed with
+/// the Jacobian at the centre `J_0` and scaled by `det J_0 / det J` (Taylor's form, so that a
+/// constant strain leaves the bubbles at rest on any shape: the patch test); `K = K_uu - K_ua
+/// K_aa^-1 K_au` after integration by the 2x2x2 rule. The bubbles carry no mass. On a
+/// parallelepiped this is CalculiX's C3D8I stiffness; it represents pure bending of a rectangular
+/// brick exactly, where the fully integrated brick locks in shear. `coords` are the 8 nodes in
+/// [`ElementKind::Hex8`] order; `out` is `24 x 24`, row-major, overwritten.
+///
+/// # Errors
+/// [`BadJacobian`] at the centre or at the first integration point with `det J <= 0`.
+pub fn hex8_incompatible_stiffness(
+    coords: &[[f64; 3]],
+    d: &[[f64; 6]; 6],
+    out: &mut [f64],
+) -> Result<(), BadJacobian> {
+    const N: usize = 33; // 24 nodal DOFs and 9 bubble amplitudes
+    debug_assert_eq!(coords.len(), 8);
+    debug_assert_eq!(out.len(), 24 * 24);
+    let kind = ElementKind::Hex8;
+    let tab = &kind.reference().stiffness;
+    // the centre's Jacobian: the bubbles' gradients are mapped with it
+    let mut dn0 = [0.0; 24];
+    kind.shape_gradients([0.0; 3], &mut dn0);
+    let j0 = jacobian(coords, &dn0);
+    let det0 = det3(&j0);
+    if !(det0.is_finite() && det0 > 0.0) {
+        return Err(BadJacobian {
+            point: [0.0; 3],
+            det: det0,
+        });
+    }
+    // dP_k/dx_i = dP_k/dxi_k (J_0^-1)[k][i], (J_0^-1)[k][i] = cofactor(i, k) / det0
+    let inv0 = inverse(&j0, det0);
+    let mut k = [0.0; N * N];
+    let mut g = [0.0; N];
+    for q in 0..tab.rule.len() {
+        let det = physical_gradients(coords, &tab.dn[24 * q..24 * (q + 1)], &mut g[..24]);
+        check_det(tab, q, det)?;
+        let xi = tab.rule.points[q];
+        for b in 0..3 {
+            let scale = -2.0 * xi[b] * det0 / det;
+            for i in 0..3 {
+                g[24 + 3 * b + i] = scale * inv0[b][i];
+            }
+        }
+        add_btdb_upper(&g, d, tab.rule.weights[q] * det, &mut k);
+    }
+    // the upper triangle of the 33 x 33 matrix to the lower one
+    for r in 0..N {
+        for c in r + 1..N {
+            k[c * N + r] = k[r * N + c];
+        }
+    }
+    // static condensation: eliminate the amplitudes one by one (Gauss on the SPD K_aa block)
+    for p in 24..N {
+        let piv = k[p * N + p];
+        if !(piv.is_finite() && piv > 0.0) {
+            return Err(BadJacobian {
+                point: [0.0; 3],
+                det: det0,
+            });
+        }
+        for r in (0..24).chain(p + 1..N) {
+            let f = k[r * N + p] / piv;
+            if f == 0.0 {
+                continue;
+            }
+            for c in (0..24).chain(p + 1..N) {
+                k[r * N + c] -= f * k[p * N + c];
+            }
+        }
+    }
+    for r in 0..24 {
+        for c in 0..24 {
+            out[r * 24 + c] = 0.5 * (k[r * N + c] + k[c * N + r]);
+        }
+    }
+    Ok(())
+}
+
+/// `J^-1` with `inv[k][i] = d xi_k / d x_i`, from `J[i][k] = dx_i / dxi_k` and its determinant.
+fn inverse(j: &[[f64; 3]; 3], det: f64) -> [[f64; 3]; 3] {
+    let mut inv = [[0.0; 3]; 3];
+    for (k, row) in inv.iter_mut().enumerate() {
+        for (i, v) in row.iter_mut().enumerate() {
+            // cofactor of J[i][k] (transposed: the adjugate)
+            let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
+            let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+            *v = (j[i1][k1] * j[i2][k2] - j[i1][k2] * j[i2][k1]) / det;
+        }
+    }
+    inv
 }
 
 /// Element stiffness of an isotropic material with Lame parameters `lambda`, `mu` (Pa), equal to
@@ -276,17 +380,22 @@ pub fn element_stiffness_isotropic(
     Ok(())
 }
 
-/// Element stiffness for `material`: the isotropic kernel for isotropic materials, `B^T D B`
-/// otherwise.
+/// Element stiffness for `material` and `formulation`: incompatible modes for a brick that asks
+/// for them ([`hex8_incompatible_stiffness`]), else the isotropic kernel for isotropic materials
+/// and `B^T D B` otherwise.
 ///
 /// # Errors
 /// [`BadJacobian`] at the first integration point with `det J <= 0`.
 pub fn element_stiffness_for(
     kind: ElementKind,
+    formulation: crate::element::Formulation,
     coords: &[[f64; 3]],
     material: &crate::material::Material,
     out: &mut [f64],
 ) -> Result<(), BadJacobian> {
+    if formulation == crate::element::Formulation::IncompatibleModes && kind == ElementKind::Hex8 {
+        return hex8_incompatible_stiffness(coords, &material.elasticity_matrix(), out);
+    }
     match &material.elasticity {
         crate::material::Elasticity::Isotropic { e, nu } => {
             let (lambda, mu) = crate::material::lame_parameters(*e, *nu);

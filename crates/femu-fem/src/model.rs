@@ -4,6 +4,7 @@
 
 use crate::FemError;
 use crate::dof::{DofMap, LinearConstraint};
+use crate::element::{ElementKind, Formulation};
 use crate::material::Material;
 use crate::mesh::Mesh;
 use std::collections::BTreeSet;
@@ -19,6 +20,8 @@ pub struct Model {
     rotation_nodes: Vec<usize>,
     constraints: Vec<LinearConstraint>,
     rigid_masses: Vec<RigidMass>,
+    /// per element, when any is not [`Formulation::Full`] (empty: all full)
+    formulations: Vec<Formulation>,
 }
 
 /// A rigid body's mass on a node that carries rotations (a rigid link's reference, where Nastran
@@ -71,6 +74,7 @@ impl Model {
             rotation_nodes: Vec::new(),
             constraints: Vec::new(),
             rigid_masses: Vec::new(),
+            formulations: Vec::new(),
         })
     }
 
@@ -108,6 +112,35 @@ impl Model {
             .ok_or(FemError::NoMaterial {
                 element: self.mesh.element(e).id,
             })
+    }
+
+    /// Sets how element `e` (internal index) forms its stiffness.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidFormulation`] for incompatible modes on an element that is not an
+    /// 8-node brick.
+    pub fn set_formulation(&mut self, e: usize, formulation: Formulation) -> Result<(), FemError> {
+        let el = self.mesh.element(e);
+        if formulation == Formulation::IncompatibleModes && el.kind != ElementKind::Hex8 {
+            return Err(FemError::InvalidFormulation {
+                element: el.id,
+                kind: el.kind.abaqus_name(),
+                reason: "incompatible modes are built for 8-node bricks only".into(),
+            });
+        }
+        if self.formulations.is_empty() {
+            if formulation == Formulation::Full {
+                return Ok(());
+            }
+            self.formulations = vec![Formulation::Full; self.mesh.element_count()];
+        }
+        self.formulations[e] = formulation;
+        Ok(())
+    }
+
+    /// How element `e` (internal index) forms its stiffness.
+    pub fn formulation(&self, e: usize) -> Formulation {
+        self.formulations.get(e).copied().unwrap_or_default()
     }
 
     /// Fixes components (0 = x, 1 = y, 2 = z) of every node of a named node set.

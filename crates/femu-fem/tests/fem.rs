@@ -7,6 +7,7 @@ mod fem {
     mod constraints;
     mod convergence;
     mod elements;
+    mod incompatible;
     mod locate;
     mod mesh;
     mod pyramids;
