@@ -451,7 +451,8 @@ fn mat9_in_nastran_order() {
         deck.push_str(&format!("CHEXA,{},1,{}\n", el.id, ids[..6].join(",")));
         deck.push_str(&format!("+,{}\n", ids[6..].join(",")));
     }
-    deck.push_str("PSOLID,1,9\n");
+    // IN = 2, ISOP = FULL: the fully integrated brick of the direct model
+    deck.push_str("PSOLID,1,9,,2,,FULL\n");
     // MAT9 MID G11..G16 / G22..G26, G33 / G34..G36, G44..G46, G55 / G56, G66, RHO
     deck.push_str(&format!("MAT9,9,{}\n", g[..7].join(",")));
     deck.push_str(&format!("+,{}\n", g[7..15].join(",")));

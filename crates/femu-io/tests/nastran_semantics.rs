@@ -574,24 +574,33 @@ fn mat9_in_a_turned_material_frame() {
     assert!(e.contains("CORDM = 4 is a cylindrical system"), "{e}");
 }
 
-/// MSC's default formulation of 8-node CHEXA (reduced shear with bubble functions) is not femu's
-/// fully integrated brick: one warning per property that does not ask for IN = 2, ISOP = FULL.
+/// The PSOLID's `IN` and `ISOP` choose the 8-node CHEXA's formulation, as MSC Nastran's QRG
+/// says: blank, the brick with bubble functions (femu's incompatible modes, with one warning that
+/// names them); `IN = 2`, `ISOP = FULL`, the fully integrated brick, without a word.
 #[test]
 fn the_default_hexa_formulation_is_named() {
+    use femu_fem::element::Formulation;
     let default = read(&bar(2, |_, _| String::new(), "PSOLID,1,1"));
     let w: Vec<&str> = default
         .warnings
         .iter()
         .map(|w| w.message.as_str())
-        .filter(|m| m.contains("reduced shear and bubble functions"))
+        .filter(|m| m.contains("incompatible modes"))
         .collect();
     assert_eq!(w.len(), 1, "{w:?}");
     assert!(
-        w[0].starts_with("PSOLID 1: 2 of its elements are 8-node CHEXA"),
+        w[0].starts_with("PSOLID 1: its 2 8-node CHEXA (first: CHEXA 1"),
         "{w:?}"
+    );
+    let formulations =
+        |m: &femu_fem::model::Model| (0..2).map(|e| m.formulation(e)).collect::<Vec<_>>();
+    assert_eq!(
+        formulations(&default.model),
+        [Formulation::IncompatibleModes; 2]
     );
     let full = read(&bar(2, |_, _| String::new(), "PSOLID,1,1,,2,,FULL"));
     assert!(full.warnings.is_empty(), "{:?}", full.warnings);
+    assert_eq!(formulations(&full.model), [Formulation::Full; 2]);
 }
 
 /// Found by the fuzz test (`fuzz_readers.rs`): a CTETRA with ten grids, a corner given as 0 and a

@@ -34,6 +34,20 @@ fn mesh_lines(s: &mut String, mesh: &Mesh) {
     }
 }
 
+/// The 8-node bricks built with incompatible modes, when there are any.
+fn formulation_line(s: &mut String, model: &femu_fem::model::Model) {
+    let n = (0..model.mesh().element_count())
+        .filter(|e| model.formulation(*e) == femu_fem::element::Formulation::IncompatibleModes)
+        .count();
+    if n > 0 {
+        let _ = writeln!(
+            s,
+            "8-node bricks with incompatible modes (C3D8I): {n} of {}",
+            model.mesh().element_count()
+        );
+    }
+}
+
 fn frequencies(f: &[f64]) -> String {
     let shown: Vec<String> = f.iter().take(12).map(|v| format!("{v:.4}")).collect();
     format!(
@@ -104,6 +118,7 @@ fn describe_inp(path: &Path, s: &mut String, warnings: &mut Vec<String>) -> Resu
     }
     warnings.extend(deck.warnings.iter().map(ToString::to_string));
     let model = deck.to_model()?;
+    formulation_line(s, &model);
     warnings.extend(crate::load::units_hint(&model, path));
     let _ = writeln!(
         s,
@@ -123,6 +138,7 @@ fn describe_nastran(
     let _ = writeln!(s, "format: Nastran bulk data");
     let model = &deck.model;
     mesh_lines(s, model.mesh());
+    formulation_line(s, model);
     let _ = writeln!(
         s,
         "point masses (CONM2): {}; constrained DOFs: {} (SPC set {}, permanent constraints of {} grids); dependent DOFs (RBE2, RBE3, blank mid-side grids): {}",

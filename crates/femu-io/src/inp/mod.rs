@@ -1,8 +1,9 @@
 //! Abaqus/CalculiX input decks (`.inp`): read a model (mesh, sets, materials, sections,
 //! boundary conditions, the `*FREQUENCY` step) and write one that CalculiX runs.
 //!
-//! Supported keywords: `*HEADING`, `*NODE`, `*ELEMENT` (C3D4, C3D10, C3D8, C3D20, C3D6, C3D15; the
-//! reduced-integration C3D8R and C3D20R are read as full integration, with a warning), `*NSET`,
+//! Supported keywords: `*HEADING`, `*NODE`, `*ELEMENT` (C3D4, C3D10, C3D8, C3D20, C3D6, C3D15, and
+//! C3D8I, the brick with incompatible modes; the reduced-integration C3D8R and C3D20R are read as
+//! full integration, with a warning), `*NSET`,
 //! `*ELSET` (lists of ids or set names, or `GENERATE`), `*MATERIAL`, `*ELASTIC` (isotropic),
 //! `*DENSITY`, `*SOLID SECTION`, `*BOUNDARY` (DOFs 1-3, and 4-6 on coupling reference nodes;
 //! zero values), `*ELEMENT, TYPE=MASS` with `*MASS`, `*EQUATION` (node ids; the first term's DOF
@@ -29,7 +30,7 @@
 //! numbers may use Fortran `D` exponents. Node ordering is femu's (which is Abaqus's).
 
 use crate::{IoError, Warning};
-use femu_fem::element::ElementKind;
+use femu_fem::element::{ElementKind, Formulation};
 use femu_fem::material::{Elasticity, Material};
 use femu_fem::mesh::Mesh;
 use femu_fem::model::Model;
@@ -421,6 +422,8 @@ pub struct InpDeck {
     pub surfaces: BTreeMap<String, Vec<(Target, f64)>>,
     /// The frequency step, if any.
     pub frequency: Option<FrequencyStep>,
+    /// The ids of the elements read as C3D8I (incompatible modes).
+    pub incompatible_modes: Vec<u64>,
     /// Non-fatal findings.
     pub warnings: Vec<Warning>,
     /// where each element was defined (for errors found later)
@@ -546,17 +549,20 @@ fn parse_f64(s: &str) -> Option<f64> {
         .filter(|v: &f64| v.is_finite())
 }
 
-/// The element kind of an Abaqus type name, and whether it was read as an approximation.
-fn element_kind(name: &str) -> Option<(ElementKind, bool)> {
+/// The element kind and formulation of an Abaqus type name, and whether it was read as an
+/// approximation.
+fn element_kind(name: &str) -> Option<(ElementKind, Formulation, bool)> {
+    let full = Formulation::Full;
     Some(match name.to_ascii_uppercase().as_str() {
-        "C3D4" => (ElementKind::Tet4, false),
-        "C3D10" => (ElementKind::Tet10, false),
-        "C3D8" => (ElementKind::Hex8, false),
-        "C3D20" => (ElementKind::Hex20, false),
-        "C3D6" => (ElementKind::Penta6, false),
-        "C3D15" => (ElementKind::Penta15, false),
-        "C3D8R" => (ElementKind::Hex8, true),
-        "C3D20R" => (ElementKind::Hex20, true),
+        "C3D4" => (ElementKind::Tet4, full, false),
+        "C3D10" => (ElementKind::Tet10, full, false),
+        "C3D8" => (ElementKind::Hex8, full, false),
+        "C3D8I" => (ElementKind::Hex8, Formulation::IncompatibleModes, false),
+        "C3D20" => (ElementKind::Hex20, full, false),
+        "C3D6" => (ElementKind::Penta6, full, false),
+        "C3D15" => (ElementKind::Penta15, full, false),
+        "C3D8R" => (ElementKind::Hex8, full, true),
+        "C3D20R" => (ElementKind::Hex20, full, true),
         _ => return None,
     })
 }

@@ -31,6 +31,12 @@ impl InpDeck {
     fn build_model(&self) -> Result<Model, IoError> {
         let mut model = Model::new(self.mesh.clone())
             .map_err(|source| self.at_element(element_of(&source), source))?;
+        for id in &self.incompatible_modes {
+            let e = self.mesh.element_index(*id).expect("read with the mesh");
+            model
+                .set_formulation(e, Formulation::IncompatibleModes)
+                .map_err(|source| self.at_element(Some(*id), source))?;
+        }
         for s in &self.sections {
             let material = self.materials.get(&s.material).ok_or_else(|| {
                 let hint = crate::spelling::suggestion(

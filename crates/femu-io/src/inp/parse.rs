@@ -125,7 +125,8 @@ struct DeckBuilder {
     equation: Option<(usize, Vec<EquationTerm>, Location)>,
     block: String,
     block_params: HashMap<String, String>,
-    element_kind_now: Option<(ElementKind, usize)>,
+    element_kind_now: Option<(ElementKind, Formulation, usize)>,
+    incompatible_modes: Vec<u64>,
     element_buffer: Vec<String>,
     element_start: usize,
     seen_keyword: bool,
@@ -380,8 +381,8 @@ impl DeckBuilder {
         let ty = params
             .get("TYPE")
             .ok_or_else(|| err(l, "*ELEMENT without TYPE=".into()))?;
-        let (kind, approx) = element_kind(ty).ok_or_else(|| {
-            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS)"))
+        let (kind, formulation, approx) = element_kind(ty).ok_or_else(|| {
+            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS)"))
         })?;
         if approx {
             warn(
@@ -390,7 +391,7 @@ impl DeckBuilder {
                 format!("{ty} read as {} with full integration", kind.abaqus_name()),
             );
         }
-        self.element_kind_now = Some((kind, kind.num_nodes()));
+        self.element_kind_now = Some((kind, formulation, kind.num_nodes()));
         if let Some(s) = params.get("ELSET") {
             self.elem_set_of_block
                 .push((s.to_ascii_uppercase(), Vec::new()));
@@ -616,7 +617,7 @@ impl DeckBuilder {
 
     /// An element's line; an element may continue on the lines after it.
     fn element_line(&mut self, f: &[&str], lines: &[Line], li: usize) -> Result<(), IoError> {
-        let (kind, nn) = self.element_kind_now.expect("set with the keyword");
+        let (kind, formulation, nn) = self.element_kind_now.expect("set with the keyword");
         if self.element_buffer.is_empty() {
             self.element_start = li;
         }
@@ -651,6 +652,9 @@ impl DeckBuilder {
         })?;
         self.elements
             .push((ids[0], kind, ids[1..].to_vec(), self.element_start));
+        if formulation == Formulation::IncompatibleModes {
+            self.incompatible_modes.push(ids[0]);
+        }
         if let Some(last) = self
             .elem_set_of_block
             .last_mut()
@@ -942,6 +946,7 @@ impl DeckBuilder {
             links: self.links,
             surfaces: self.surfaces,
             frequency: self.frequency,
+            incompatible_modes: self.incompatible_modes,
             warnings: std::mem::take(warnings),
             element_lines,
             path: path.to_path_buf(),

@@ -48,13 +48,9 @@ pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String,
             number_field(x[2])
         );
     }
-    for kind in femu_fem::element::ALL_KINDS {
-        let els: Vec<_> = mesh.elements().filter(|e| e.kind == kind).collect();
-        if els.is_empty() {
-            continue;
-        }
-        let _ = writeln!(s, "*ELEMENT, TYPE={}, ELSET=EALL", kind.abaqus_name());
-        for el in els {
+    for (name, els) in element_blocks(model) {
+        let _ = writeln!(s, "*ELEMENT, TYPE={name}, ELSET=EALL");
+        for el in els.iter().map(|e| mesh.element(*e)) {
             let ids: Vec<String> = std::iter::once(el.id)
                 .chain(el.nodes.iter().map(|n| mesh.node_id(*n)))
                 .map(|v| v.to_string())
@@ -166,6 +162,30 @@ pub fn write_inp(
     std::fs::write(path.as_ref(), text).map_err(|e| IoError::io(path.as_ref(), e))
 }
 
+/// The elements in the order they are written: by kind, bricks with incompatible modes as their
+/// own C3D8I block; each block's Abaqus name and internal element indices.
+fn element_blocks(model: &Model) -> Vec<(&'static str, Vec<usize>)> {
+    let mesh = model.mesh();
+    let mut blocks = Vec::new();
+    for kind in femu_fem::element::ALL_KINDS {
+        for formulation in [Formulation::Full, Formulation::IncompatibleModes] {
+            let els: Vec<usize> = mesh
+                .elements()
+                .filter(|e| e.kind == kind && model.formulation(e.index) == formulation)
+                .map(|e| e.index)
+                .collect();
+            if !els.is_empty() {
+                let name = match formulation {
+                    Formulation::IncompatibleModes => "C3D8I",
+                    Formulation::Full => kind.abaqus_name(),
+                };
+                blocks.push((name, els));
+            }
+        }
+    }
+    blocks
+}
+
 /// Ids, 16 to a line.
 fn write_ids(s: &mut String, ids: Vec<u64>) {
     for chunk in ids.chunks(16) {
@@ -184,14 +204,7 @@ fn write_materials(s: &mut String, model: &Model) -> Result<(), IoError> {
     // distinct materials, in order of first use in the written element order (so that a deck read
     // back and written again is the same text)
     let mut distinct: Vec<(Material, Vec<u64>)> = Vec::new();
-    let written_order = femu_fem::element::ALL_KINDS
-        .iter()
-        .flat_map(|k| {
-            mesh.elements()
-                .filter(move |e| e.kind == *k)
-                .map(|e| e.index)
-        })
-        .collect::<Vec<_>>();
+    let written_order = element_blocks(model).into_iter().flat_map(|(_, els)| els);
     for e in written_order {
         let m = model
             .material_of(e)

@@ -52,6 +52,7 @@ use crate::{IoError, Warning};
 pub use cards::real;
 use cards::{Card, Line};
 use femu_fem::assembly::MassKind;
+use femu_fem::element::Formulation;
 use femu_fem::mesh::Mesh;
 use femu_fem::model::Model;
 use geometry::Geometry;
@@ -519,19 +520,22 @@ fn model_with_materials(
         model
             .set_material(Some(&format!("PID{pid}")), material)
             .map_err(pc.located())?;
-        formulation_warning(pc, eids, element_pid, warnings)?;
+        formulation(pc, eids, element_pid, &mut model, warnings)?;
     }
     Ok(model)
 }
 
-/// MSC Nastran integrates 8-node CHEXA and 6-node CPENTA of a PSOLID whose `IN` and `ISOP` are
-/// blank with reduced shear and bubble functions (QRG PSOLID, remarks); femu builds the fully
-/// integrated linear elements (`IN = 2`, `ISOP = FULL`), stiffer in bending on coarse meshes. One
-/// warning per property that has such elements and does not ask for full integration.
-fn formulation_warning(
+/// MSC Nastran forms 8-node CHEXA and 6-node CPENTA of a PSOLID whose `IN` and `ISOP` are blank
+/// with bubble functions and a reduced rule for the shear (QRG PSOLID, remarks). femu builds such
+/// CHEXA with incompatible modes (the bubbles, [`Formulation::IncompatibleModes`]; the shear rule
+/// is not reproduced) and such CPENTA as the fully integrated wedge, stiffer in bending where few
+/// elements span a thickness; one warning per property says which. `IN = 2`, `ISOP = FULL` ask
+/// for the fully integrated elements, which femu builds as asked.
+fn formulation(
     pc: &Card,
     eids: &[u64],
     element_pid: &[(u64, u64, &Card)],
+    model: &mut Model,
     warnings: &mut Vec<Warning>,
 ) -> Result<(), IoError> {
     let isop = pc.field(5).to_ascii_uppercase();
@@ -540,27 +544,53 @@ fn formulation_warning(
     if full {
         return Ok(());
     }
-    let linear: Vec<&&Card> = element_pid
-        .iter()
-        .filter(|e| eids.contains(&e.0))
-        .map(|e| &e.2)
-        .filter(|c| {
-            let grids = c.fields[2..]
-                .iter()
-                .filter(|f| !f.trim().is_empty())
-                .count();
-            (c.name == "CHEXA" && grids == 8) || (c.name == "CPENTA" && grids == 6)
-        })
-        .collect();
-    if let Some(first) = linear.first() {
+    let of_kind = |name: &str, grids: usize| -> Vec<&Card> {
+        element_pid
+            .iter()
+            .filter(|e| eids.contains(&e.0))
+            .map(|e| e.2)
+            .filter(|c| {
+                c.name == name
+                    && c.fields[2..]
+                        .iter()
+                        .filter(|f| !f.trim().is_empty())
+                        .count()
+                        == grids
+            })
+            .collect()
+    };
+    let (bricks, wedges) = (of_kind("CHEXA", 8), of_kind("CPENTA", 6));
+    for c in &bricks {
+        let id: u64 = c.field(0).trim().parse().unwrap_or(0);
+        let e = model
+            .mesh()
+            .element_index(id)
+            .ok_or_else(|| c.err(format!("{} is not in the mesh", c.field(0))))?;
+        model
+            .set_formulation(e, Formulation::IncompatibleModes)
+            .map_err(c.located())?;
+    }
+    if let Some(first) = bricks.first() {
         warn(
             warnings,
             pc,
             format!(
-                "PSOLID {}: {} of its elements are 8-node CHEXA or 6-node CPENTA (first: {} {}, line {}), which MSC Nastran integrates with reduced shear and bubble functions unless IN = 2 and ISOP = FULL; femu builds the fully integrated linear element, stiffer in bending where few elements span a thickness (on a clamped cantilever with one or two elements through the thickness its bending frequencies are 20-65 % above the converged ones, incompatible modes' within 2 %: docs/VERIFICATION.md, \"How much the 8-node brick's formulation matters\"; femu update's discretisation estimate measures that error on this mesh; IN = 2 and ISOP = FULL make Nastran solve what femu solves)",
+                "PSOLID {}: its {} 8-node CHEXA (first: CHEXA {}, line {}) are built with incompatible modes, the bubble functions MSC Nastran adds when IN and ISOP are blank; MSC's reduced shear integration is not reproduced (IN = 2 and ISOP = FULL make both solve the fully integrated brick, which is 20-65 % stiffer in bending with one or two elements through a thickness: docs/VERIFICATION.md)",
                 pc.field(0),
-                linear.len(),
-                first.name,
+                bricks.len(),
+                first.field(0),
+                first.line
+            ),
+        );
+    }
+    if let Some(first) = wedges.first() {
+        warn(
+            warnings,
+            pc,
+            format!(
+                "PSOLID {}: its {} 6-node CPENTA (first: CPENTA {}, line {}) are built fully integrated, where MSC Nastran adds bubble functions unless IN = 2 and ISOP = FULL; they are stiffer in bending where few elements span a thickness (femu update's discretisation estimate measures that error on this mesh)",
+                pc.field(0),
+                wedges.len(),
                 first.field(0),
                 first.line
             ),
