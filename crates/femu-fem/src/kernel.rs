@@ -219,11 +219,29 @@ pub fn hex8_incompatible_stiffness(
     d: &[[f64; 6]; 6],
     out: &mut [f64],
 ) -> Result<(), BadJacobian> {
+    hex8_incompatible(coords, Elastic::Matrix(d), out)
+}
+
+/// The elasticity of a kernel: Lame parameters (the Gram-matrix form of
+/// [`element_stiffness_isotropic`]) or a 6x6 matrix.
+#[derive(Clone, Copy)]
+enum Elastic<'a> {
+    Isotropic { lambda: f64, mu: f64 },
+    Matrix(&'a [[f64; 6]; 6]),
+}
+
+fn hex8_incompatible(
+    coords: &[[f64; 3]],
+    elastic: Elastic<'_>,
+    out: &mut [f64],
+) -> Result<(), BadJacobian> {
     const N: usize = 33; // 24 nodal DOFs and 9 bubble amplitudes
+    const Q: usize = 8; // the 2x2x2 rule
     debug_assert_eq!(coords.len(), 8);
     debug_assert_eq!(out.len(), 24 * 24);
     let kind = ElementKind::Hex8;
     let tab = &kind.reference().stiffness;
+    debug_assert_eq!(tab.rule.len(), Q);
     // the centre's Jacobian: the bubbles' gradients are mapped with it
     let mut dn0 = [0.0; 24];
     kind.shape_gradients([0.0; 3], &mut dn0);
@@ -235,11 +253,12 @@ pub fn hex8_incompatible_stiffness(
             det: det0,
         });
     }
-    // dP_k/dx_i = dP_k/dxi_k (J_0^-1)[k][i], (J_0^-1)[k][i] = cofactor(i, k) / det0
     let inv0 = inverse(&j0, det0);
-    let mut k = [0.0; N * N];
-    let mut g = [0.0; N];
-    for q in 0..tab.rule.len() {
+    // one row per point: sqrt(w |J|) times the 8 nodal gradients and the 3 bubbles' gradients
+    // dP_b/dx_i = -2 xi_b (J_0^-1)[b][i] det0 / det
+    let mut gs = [0.0; Q * N];
+    for q in 0..Q {
+        let g = &mut gs[q * N..(q + 1) * N];
         let det = physical_gradients(coords, &tab.dn[24 * q..24 * (q + 1)], &mut g[..24]);
         check_det(tab, q, det)?;
         let xi = tab.rule.points[q];
@@ -249,36 +268,64 @@ pub fn hex8_incompatible_stiffness(
                 g[24 + 3 * b + i] = scale * inv0[b][i];
             }
         }
-        add_btdb_upper(&g, d, tab.rule.weights[q] * det, &mut k);
+        let sw = (tab.rule.weights[q] * det).sqrt();
+        g.iter_mut().for_each(|v| *v *= sw);
     }
-    // the upper triangle of the 33 x 33 matrix to the lower one
-    for r in 0..N {
-        for c in r + 1..N {
-            k[c * N + r] = k[r * N + c];
+    let mut k = [0.0; N * N];
+    match elastic {
+        Elastic::Isotropic { lambda, mu } => isotropic_from_gradients(&gs, Q, lambda, mu, &mut k),
+        Elastic::Matrix(d) => {
+            for q in 0..Q {
+                add_btdb_upper(&gs[q * N..(q + 1) * N], d, 1.0, &mut k);
+            }
+            mirror_upper_blocks(&mut k, 11);
         }
     }
-    // static condensation: eliminate the amplitudes one by one (Gauss on the SPD K_aa block)
-    for p in 24..N {
-        let piv = k[p * N + p];
-        if !(piv.is_finite() && piv > 0.0) {
-            return Err(BadJacobian {
-                point: [0.0; 3],
-                det: det0,
-            });
+    condense(&k, out)
+}
+
+/// `K_uu - K_ua K_aa^-1 K_au` of the 33 x 33 brick-and-bubbles matrix `k` into `out` (24 x 24):
+/// `K_aa = L L^T` (Cholesky, 9 x 9), `Y = L^-1 K_au`, `out = K_uu - Y^T Y`.
+fn condense(k: &[f64], out: &mut [f64]) -> Result<(), BadJacobian> {
+    const N: usize = 33;
+    const A: usize = 9;
+    let mut l = [[0.0; A]; A];
+    for i in 0..A {
+        for j in 0..=i {
+            let mut v = k[(24 + i) * N + 24 + j];
+            for p in 0..j {
+                v -= l[i][p] * l[j][p];
+            }
+            if i == j {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(BadJacobian {
+                        point: [0.0; 3],
+                        det: v,
+                    });
+                }
+                l[i][i] = v.sqrt();
+            } else {
+                l[i][j] = v / l[j][j];
+            }
         }
-        for r in (0..24).chain(p + 1..N) {
-            let f = k[r * N + p] / piv;
-            if f == 0.0 {
-                continue;
+    }
+    // Y = L^-1 K_au by forward substitution, column by column of K_au
+    let mut y = [[0.0; 24]; A];
+    for c in 0..24 {
+        for i in 0..A {
+            let mut v = k[(24 + i) * N + c];
+            for p in 0..i {
+                v -= l[i][p] * y[p][c];
             }
-            for c in (0..24).chain(p + 1..N) {
-                k[r * N + c] -= f * k[p * N + c];
-            }
+            y[i][c] = v / l[i][i];
         }
     }
     for r in 0..24 {
-        for c in 0..24 {
-            out[r * 24 + c] = 0.5 * (k[r * N + c] + k[c * N + r]);
+        for c in r..24 {
+            let yy: f64 = (0..A).map(|i| y[i][r] * y[i][c]).sum();
+            let v = k[r * N + c] - yy;
+            out[r * 24 + c] = v;
+            out[c * 24 + r] = v;
         }
     }
     Ok(())
@@ -328,12 +375,22 @@ pub fn element_stiffness_isotropic(
         let sw = (tab.rule.weights[q] * det).sqrt();
         row.iter_mut().for_each(|v| *v *= sw);
     }
+    isotropic_from_gradients(&gs[..nq * nd], nq, lambda, mu, out);
+    Ok(())
+}
+
+/// `K` of an isotropic material from the rows `sqrt(w_q |J_q|) grad N` of `gs` (`nq` rows of
+/// `3 n` values, row-major) into `out` (`3 n` square): the Gram matrix `A = G^T G` and `K[3a+i,
+/// 3b+j] = lambda A[3a+i, 3b+j] + mu A[3a+j, 3b+i] + mu delta_ij sum_k A[3a+k, 3b+k]`.
+fn isotropic_from_gradients(gs: &[f64], nq: usize, lambda: f64, mu: f64, out: &mut [f64]) {
+    let nd = gs.len() / nq;
+    let nn = nd / 3;
     // the upper triangle of A = G^T G (row-major), which is the lower triangle of the same storage
     // read column-major: one triangular product (faer's SIMD kernels; the strict lower triangle of
     // `out` is not written)
     {
         use faer::linalg::matmul::triangular::{BlockStructure, matmul};
-        let g = faer::MatRef::from_row_major_slice(&gs[..nq * nd], nq, nd);
+        let g = faer::MatRef::from_row_major_slice(gs, nq, nd);
         let a = faer::MatMut::from_column_major_slice_mut(out, nd, nd);
         matmul(
             a,
@@ -377,7 +434,6 @@ pub fn element_stiffness_isotropic(
             }
         }
     }
-    Ok(())
 }
 
 /// Element stiffness for `material` and `formulation`: incompatible modes for a brick that asks
@@ -394,7 +450,16 @@ pub fn element_stiffness_for(
     out: &mut [f64],
 ) -> Result<(), BadJacobian> {
     if formulation == crate::element::Formulation::IncompatibleModes && kind == ElementKind::Hex8 {
-        return hex8_incompatible_stiffness(coords, &material.elasticity_matrix(), out);
+        let elastic = match &material.elasticity {
+            crate::material::Elasticity::Isotropic { e, nu } => {
+                let (lambda, mu) = crate::material::lame_parameters(*e, *nu);
+                Elastic::Isotropic { lambda, mu }
+            }
+            crate::material::Elasticity::Anisotropic(_) => {
+                return hex8_incompatible_stiffness(coords, &material.elasticity_matrix(), out);
+            }
+        };
+        return hex8_incompatible(coords, elastic, out);
     }
     match &material.elasticity {
         crate::material::Elasticity::Isotropic { e, nu } => {
