@@ -33,6 +33,10 @@ pub struct ModelArgs {
     /// keywords stay errors).
     #[arg(long)]
     pub lenient: bool,
+    /// Mesh-only models: how the 8-node bricks form their stiffness (incompatible-modes: the
+    /// C3D8I brick, which bends without locking; a deck states its own).
+    #[arg(long, value_enum, default_value = "full")]
+    pub bricks: femu::fem::element::Formulation,
 }
 
 /// How a test is placed on the model: the arguments of every command that reads a test.
@@ -137,6 +141,7 @@ impl ModelArgs {
             fix: self.fix.clone(),
             lumped,
             lenient: self.lenient,
+            bricks: self.bricks,
         })
     }
 }

@@ -67,6 +67,7 @@ pub enum ElementKind {
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize, serde::Deserialize,
 )]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "snake_case")]
 pub enum Formulation {
     /// The element's own integration rule over its shape functions (CalculiX C3D8, Nastran

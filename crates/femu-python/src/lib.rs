@@ -119,9 +119,10 @@ struct Model {
 
 /// Reads a model: an Abaqus/CalculiX deck (`.inp`), Nastran bulk data (`.bdf`, `.dat`, `.nas`),
 /// a Gmsh mesh (`.msh`) or universal file solids (`.unv`, `.uff`). A mesh-only file needs the
-/// material (`young` Pa, `poisson`, `density` kg/m^3) and may clamp node sets (`fix`).
+/// material (`young` Pa, `poisson`, `density` kg/m^3) and may clamp node sets (`fix`); its 8-node
+/// bricks are fully integrated unless `bricks="incompatible_modes"` (a deck states its own).
 #[pyfunction]
-#[pyo3(signature = (path, *, lumped=false, lenient=false, young=None, poisson=None, density=None, fix=None))]
+#[pyo3(signature = (path, *, lumped=false, lenient=false, young=None, poisson=None, density=None, fix=None, bricks="full"))]
 #[allow(clippy::too_many_arguments)]
 fn read_model(
     py: Python<'_>,
@@ -132,7 +133,17 @@ fn read_model(
     poisson: Option<f64>,
     density: Option<f64>,
     fix: Option<Vec<String>>,
+    bricks: &str,
 ) -> PyResult<Model> {
+    let bricks = match bricks {
+        "full" => femu_fem::element::Formulation::Full,
+        "incompatible_modes" => femu_fem::element::Formulation::IncompatibleModes,
+        other => {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "bricks={other:?}: give \"full\" or \"incompatible_modes\""
+            )));
+        }
+    };
     let material = match (young, poisson, density) {
         (Some(young), Some(poisson), Some(density)) => Some(MaterialOptions {
             young,
@@ -151,6 +162,7 @@ fn read_model(
         fix: fix.unwrap_or_default(),
         lumped,
         lenient,
+        bricks,
     };
     let loaded = py.detach(|| load_model(&path, &options)).map_err(err)?;
     let warnings = loaded.warnings.clone();

@@ -305,3 +305,46 @@ def test_modes_report_progress_and_stop_when_asked(model):
     # the hook is gone afterwards: the same solve completes
     again = model.modes(8)
     np.testing.assert_allclose(again.values, modes.values, rtol=1e-12)
+
+
+def test_bricks_with_incompatible_modes(tmp_path):
+    """bricks="incompatible_modes" on a Gmsh mesh builds what a C3D8I deck asks for (the brick
+    checked against CalculiX in the Rust tests): the same box as a .msh and as .inp decks."""
+    nx, ny, nz, (lx, ly, lz) = 6, 3, 2, (0.3, 0.06, 0.03)
+    deck = box_deck(tmp_path / "c3d8.inp", nx, ny, nz)
+    c3d8i = tmp_path / "c3d8i.inp"
+    c3d8i.write_text(deck.read_text().replace("TYPE=C3D8,", "TYPE=C3D8I,"))
+    node = lambda i, j, k: 1 + i + (nx + 1) * (j + (ny + 1) * k)
+    lines = ["$MeshFormat", "2.2 0 8", "$EndMeshFormat", "$PhysicalNames", "2",
+             '2 1 "root"', '3 2 "solid"', "$EndPhysicalNames", "$Nodes",
+             str((nx + 1) * (ny + 1) * (nz + 1))]
+    for k in range(nz + 1):
+        for j in range(ny + 1):
+            for i in range(nx + 1):
+                lines.append(f"{node(i, j, k)} {lx * i / nx!r} {ly * j / ny!r} {lz * k / nz!r}")
+    quads = [[node(0, j, k), node(0, j + 1, k), node(0, j + 1, k + 1), node(0, j, k + 1)]
+             for k in range(nz) for j in range(ny)]
+    hexes = [[node(i, j, k), node(i + 1, j, k), node(i + 1, j + 1, k), node(i, j + 1, k),
+              node(i, j, k + 1), node(i + 1, j, k + 1), node(i + 1, j + 1, k + 1),
+              node(i, j + 1, k + 1)]
+             for k in range(nz) for j in range(ny) for i in range(nx)]
+    lines += ["$EndNodes", "$Elements", str(len(quads) + len(hexes))]
+    e = 0
+    for q in quads:
+        e += 1
+        lines.append(f"{e} 3 2 1 1 " + " ".join(map(str, q)))
+    for h in hexes:
+        e += 1
+        lines.append(f"{e} 5 2 2 2 " + " ".join(map(str, h)))
+    lines.append("$EndElements")
+    msh = tmp_path / "box.msh"
+    msh.write_text("\n".join(lines) + "\n")
+    steel = dict(young=2.1e11, poisson=0.3, density=7850.0, fix=["root"])
+    f = lambda m: m.modes(3).frequencies_hz
+    with_modes = f(femu.read_model(msh, bricks="incompatible_modes", **steel))
+    np.testing.assert_allclose(with_modes, f(femu.read_model(c3d8i)), rtol=1e-9)
+    plain = f(femu.read_model(msh, **steel))
+    np.testing.assert_allclose(plain, f(femu.read_model(deck)), rtol=1e-9)
+    assert plain[0] > with_modes[0]
+    with pytest.raises(ValueError, match="incompatible_modes"):
+        femu.read_model(msh, bricks="C3D8I", **steel)

@@ -5,6 +5,7 @@ use crate::StudyError;
 use femu_correlate::mapping::{MapOptions, Mapping};
 use femu_correlate::{CorrelateError, SensorLayout};
 use femu_fem::assembly::{Assembler, MassKind, SystemMatrices};
+use femu_fem::element::Formulation;
 use femu_fem::material::Material;
 use femu_fem::model::Model;
 use femu_io::inp::FrequencyStep;
@@ -37,6 +38,10 @@ pub struct ModelOptions {
     /// Unknown keywords in an `.inp` deck are warnings instead of errors
     /// ([`femu_io::inp::InpOptions::lenient`]).
     pub lenient: bool,
+    /// How the 8-node bricks of a mesh-only model form their stiffness (a deck states its own:
+    /// C3D8 or C3D8I, or the PSOLID's `IN` and `ISOP`; docs/MATH.md, "The brick with
+    /// incompatible modes").
+    pub bricks: Formulation,
 }
 
 impl ModelOptions {
@@ -137,6 +142,7 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         let mut model = Model::new(mesh).map_err(|e| StudyError::within(path, e))?;
         let material = Material::isotropic("command line", mat.young, mat.poisson, mat.density)?;
         model.set_material(None, material)?;
+        set_bricks(&mut model, options.bricks, path, &mut warnings)?;
         for set in &options.fix {
             model
                 .fix_set(set, &[0, 1, 2])
@@ -166,6 +172,12 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
             }
         }
         eigrl = deck.eigrl;
+        bricks_of_deck(
+            options.bricks,
+            path,
+            "the PSOLID's IN and ISOP",
+            &mut warnings,
+        );
         if options.material.is_some() || !options.fix.is_empty() {
             warnings.push(format!(
                 "{}: the deck has its own materials and constraints: the given material and sets to fix are not used",
@@ -179,6 +191,7 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         };
         let deck = femu_io::inp::read_inp_with(path, &inp_options)?;
         warnings.extend(deck.warnings.iter().map(|w| w.to_string()));
+        bricks_of_deck(options.bricks, path, "C3D8 or C3D8I", &mut warnings);
         if options.material.is_some() {
             warnings.push(format!(
                 "{}: the deck has its own materials: the given Young's modulus, Poisson's ratio and density are not used",
@@ -516,6 +529,44 @@ pub fn complex_mode_warnings(u: &femu_io::uff::Universal, path: &Path) -> Vec<St
             })
         })
         .collect()
+}
+
+/// Every 8-node brick of a mesh-only model with the formulation asked for.
+fn set_bricks(
+    model: &mut Model,
+    bricks: Formulation,
+    path: &Path,
+    warnings: &mut Vec<String>,
+) -> Result<(), StudyError> {
+    if bricks == Formulation::Full {
+        return Ok(());
+    }
+    let hexes: Vec<usize> = model
+        .mesh()
+        .elements()
+        .filter(|e| e.kind == femu_fem::element::ElementKind::Hex8)
+        .map(|e| e.index)
+        .collect();
+    if hexes.is_empty() {
+        warnings.push(format!(
+            "{}: the mesh has no 8-node bricks: incompatible modes are not used",
+            path.display()
+        ));
+    }
+    for e in hexes {
+        model.set_formulation(e, bricks)?;
+    }
+    Ok(())
+}
+
+/// A deck states its bricks' formulation itself (`how`): a formulation asked for is not used.
+fn bricks_of_deck(bricks: Formulation, path: &Path, how: &str, warnings: &mut Vec<String>) {
+    if bricks != Formulation::Full {
+        warnings.push(format!(
+            "{}: the deck states its bricks' formulation ({how}): the one asked for is not used",
+            path.display()
+        ));
+    }
 }
 
 /// [`femu_correlate::mapping::map_test`] onto `model`'s mesh; an error names the test file `path`.

@@ -59,6 +59,9 @@ pub struct StudyFile {
     /// Unknown keywords of an `.inp` model are warnings instead of errors.
     #[serde(default)]
     pub lenient: bool,
+    /// The 8-node bricks of a mesh-only model: `"full"` (the default) or `"incompatible_modes"`.
+    #[serde(default)]
+    pub bricks: femu_fem::element::Formulation,
     /// `[map]`: a test on its own wireframe, aligned and mapped onto the model
     /// (`method = "nearest" | "interpolate"`, `tolerance` in m, `align = "auto" | "T:M,T:M,T:M"`,
     /// `scale`).
@@ -278,6 +281,7 @@ pub fn run_study_file(
         fix: s.fix.clone(),
         lumped: s.lumped,
         lenient: s.lenient,
+        bricks: s.bricks,
     };
     progress("reading and assembling the model");
     // a file the study names that cannot be read: say which study file names it
@@ -394,4 +398,29 @@ pub fn run_study_file(
         warnings: model.warnings,
         files,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::StudyFile;
+    use femu_fem::element::Formulation;
+
+    /// `bricks` reads the two formulations by their snake-case names, defaults to the fully
+    /// integrated brick, and refuses anything else by naming both.
+    #[test]
+    fn bricks_key() {
+        let parse = |extra: &str| {
+            toml::from_str::<StudyFile>(&format!("model = \"m.msh\"\ntest = \"t.csv\"\n{extra}"))
+        };
+        assert_eq!(parse("").unwrap().bricks, Formulation::Full);
+        assert_eq!(
+            parse("bricks = \"incompatible_modes\"").unwrap().bricks,
+            Formulation::IncompatibleModes
+        );
+        let e = parse("bricks = \"C3D8I\"").unwrap_err().to_string();
+        assert!(
+            e.contains("full") && e.contains("incompatible_modes"),
+            "{e}"
+        );
+    }
 }
