@@ -51,6 +51,7 @@ pub mod correlation;
 mod error;
 pub mod estimators;
 pub mod expansion;
+pub mod frf;
 mod hz;
 pub mod mapping;
 pub mod mass;

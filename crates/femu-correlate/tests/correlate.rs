@@ -5,6 +5,7 @@ mod correlate {
     pub mod common;
     mod correlation;
     mod expansion;
+    mod frf;
     mod identities;
     mod inputs;
     mod placement;

@@ -1,0 +1,321 @@
+//! Frequency responses of the model at the test's DOFs, and their correlation with measured ones
+//! (docs/MATH.md, "Frequency responses").
+//!
+//! The model's FRF between output sensors `C` and input (excitation) sensors `B` at the circular
+//! frequency `w` is, by modal superposition of the mass-normalised modes `phi_r` with eigenvalues
+//! `lambda_r`,
+//!
+//! `H(w) = sum_r (C phi_r)(B phi_r)^T / (lambda_r - w^2 + i g_r(w)) + R`,
+//!
+//! with the damping term `g_r` of [`Damping`] and, when given, the residual flexibility
+//! `R = C K^-1 B^T - sum_r (C phi_r)(B phi_r)^T / lambda_r` of the modes left out (the static
+//! response they would add; [`residual_flexibility`]). For damping proportional to the modes
+//! (ratios, Rayleigh, a loss factor) and every mode kept this equals the direct solution
+//! `C (K (1 + i eta) + i w C_v - w^2 M)^-1 B^T` exactly. Mobility and accelerance are the
+//! receptance times `i w` and `-w^2`.
+//!
+//! The correlation of measured and model FRFs: FRAC per output and input over the lines (the
+//! shape of one response curve), CSAC and CSF per line over the outputs (the shape of the
+//! deflection at one frequency, and its amplitude).
+
+use crate::{CorrelateError, SensorLayout};
+use faer::{Mat, MatRef, c64};
+use femu_sparse::SparseMatrix;
+use serde::{Deserialize, Serialize};
+
+/// The damping of the model's modes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Damping {
+    /// One viscous damping ratio `zeta` for every mode: `g_r = 2 zeta omega_r w`.
+    Ratio(f64),
+    /// A viscous ratio per mode (for example the test's identified ratios of paired modes).
+    Ratios(Vec<f64>),
+    /// Rayleigh damping `C = alpha M + beta K`: `g_r = (alpha + beta lambda_r) w`.
+    Rayleigh {
+        /// The mass coefficient, s^-1.
+        alpha: f64,
+        /// The stiffness coefficient, s.
+        beta: f64,
+    },
+    /// A structural loss factor `eta` (`K (1 + i eta)`): `g_r = eta lambda_r`.
+    LossFactor(f64),
+}
+
+impl Damping {
+    /// `g_r(w)` of mode `r` with eigenvalue `lambda`.
+    fn term(&self, r: usize, lambda: f64, w: f64) -> f64 {
+        let omega = lambda.max(0.0).sqrt();
+        match self {
+            Damping::Ratio(z) => 2.0 * z * omega * w,
+            Damping::Ratios(z) => 2.0 * z[r] * omega * w,
+            Damping::Rayleigh { alpha, beta } => (alpha + beta * lambda) * w,
+            Damping::LossFactor(eta) => eta * lambda,
+        }
+    }
+
+    fn check(&self, modes: usize) -> Result<(), CorrelateError> {
+        let bad = |reason: String| CorrelateError::Invalid {
+            what: "damping",
+            reason,
+        };
+        let values: Vec<f64> = match self {
+            Damping::Ratio(z) => vec![*z],
+            Damping::Ratios(z) => {
+                if z.len() != modes {
+                    return Err(bad(format!(
+                        "{} ratios for {modes} modes: give one per mode",
+                        z.len()
+                    )));
+                }
+                z.clone()
+            }
+            Damping::Rayleigh { alpha, beta } => vec![*alpha, *beta],
+            Damping::LossFactor(eta) => vec![*eta],
+        };
+        match values.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+            Some(v) => Err(bad(format!("{v} is not a finite, non-negative value"))),
+            None => Ok(()),
+        }
+    }
+}
+
+/// What an FRF relates the force to: displacement, velocity or acceleration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ResponseKind {
+    /// Displacement over force (m/N).
+    Receptance,
+    /// Velocity over force (m/(N s)): `i w` times the receptance.
+    Mobility,
+    /// Acceleration over force (m/(N s^2)): `-w^2` times the receptance.
+    Accelerance,
+}
+
+impl ResponseKind {
+    fn factor(self, w: f64) -> c64 {
+        match self {
+            ResponseKind::Receptance => c64::new(1.0, 0.0),
+            ResponseKind::Mobility => c64::new(0.0, w),
+            ResponseKind::Accelerance => c64::new(-w * w, 0.0),
+        }
+    }
+}
+
+/// How the model's FRFs are formed: the modes' damping and what the response is.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrfOptions {
+    /// The modes' damping.
+    pub damping: Damping,
+    /// Receptance, mobility or accelerance.
+    pub kind: ResponseKind,
+}
+
+/// The model's FRFs at frequency lines: `h[line]` is the `outputs x inputs` matrix.
+#[derive(Debug, Clone)]
+pub struct Frf {
+    /// The frequency lines, Hz.
+    pub lines_hz: Vec<f64>,
+    /// What the responses are.
+    pub kind: ResponseKind,
+    /// One `outputs x inputs` matrix per line.
+    pub h: Vec<Mat<c64>>,
+}
+
+/// The model's FRFs between `outputs` and `inputs` at `lines_hz` by modal superposition of the
+/// mass-normalised `shapes` (free DOFs x modes) with eigenvalues `values` (s^-2), the damping
+/// and response of `options`, and the residual flexibility `residual` (`outputs x inputs`,
+/// receptance; [`residual_flexibility`]) of the modes left out when given.
+///
+/// # Errors
+/// Sizes that do not match, negative or non-finite lines or damping, a line on an undamped
+/// eigenvalue (an infinite response).
+pub fn modal_frf(
+    values: &[f64],
+    shapes: MatRef<'_, f64>,
+    residual: Option<MatRef<'_, f64>>,
+    outputs: &SensorLayout,
+    inputs: &SensorLayout,
+    lines_hz: &[f64],
+    options: &FrfOptions,
+) -> Result<Frf, CorrelateError> {
+    let (damping, kind) = (&options.damping, options.kind);
+    if values.len() != shapes.ncols() {
+        return Err(CorrelateError::DimensionMismatch {
+            what: "eigenvalues against mode shapes",
+            expected: shapes.ncols(),
+            got: values.len(),
+        });
+    }
+    damping.check(values.len())?;
+    if let Some(k) = lines_hz.iter().position(|f| !(f.is_finite() && *f >= 0.0)) {
+        return Err(CorrelateError::NonFinite {
+            what: "frequency line (Hz, finite and non-negative)",
+            index: k,
+        });
+    }
+    if let Some(r) = residual
+        && (r.nrows() != outputs.len() || r.ncols() != inputs.len())
+    {
+        return Err(CorrelateError::DimensionMismatch {
+            what: "residual flexibility (outputs x inputs)",
+            expected: outputs.len() * inputs.len(),
+            got: r.nrows() * r.ncols(),
+        });
+    }
+    let co = outputs.measure_all(shapes)?;
+    let bi = inputs.measure_all(shapes)?;
+    let mut h = Vec::with_capacity(lines_hz.len());
+    for (line, f) in lines_hz.iter().enumerate() {
+        let w = 2.0 * std::f64::consts::PI * f;
+        let mut hl = Mat::<c64>::zeros(outputs.len(), inputs.len());
+        for (r, lambda) in values.iter().enumerate() {
+            let den = c64::new(lambda - w * w, damping.term(r, *lambda, w));
+            if den.re == 0.0 && den.im == 0.0 {
+                return Err(CorrelateError::Invalid {
+                    what: "frequency line",
+                    reason: format!(
+                        "line {} ({f} Hz) is on undamped mode {} : the response is infinite",
+                        line + 1,
+                        r + 1
+                    ),
+                });
+            }
+            let inv = c64::new(1.0, 0.0) / den;
+            for i in 0..outputs.len() {
+                let ci = co[(i, r)];
+                for j in 0..inputs.len() {
+                    hl[(i, j)] += inv * (ci * bi[(j, r)]);
+                }
+            }
+        }
+        if let Some(res) = residual {
+            for i in 0..outputs.len() {
+                for j in 0..inputs.len() {
+                    hl[(i, j)] += c64::new(res[(i, j)], 0.0);
+                }
+            }
+        }
+        let s = kind.factor(w);
+        for i in 0..outputs.len() {
+            for j in 0..inputs.len() {
+                hl[(i, j)] *= s;
+            }
+        }
+        h.push(hl);
+    }
+    Ok(Frf {
+        lines_hz: lines_hz.to_vec(),
+        kind,
+        h,
+    })
+}
+
+/// The residual flexibility of the modes left out: `C K^-1 B^T - sum_r (C phi_r)(B phi_r)^T /
+/// lambda_r` over the kept `values` and mass-normalised `shapes` (`outputs x inputs`).
+///
+/// # Errors
+/// `K` not positive definite (a model with rigid-body motions has no static flexibility: its
+/// residual flexibility needs inertia relief, which femu does not form), sizes, a zero eigenvalue
+/// among the kept modes.
+pub fn residual_flexibility(
+    k: &SparseMatrix,
+    values: &[f64],
+    shapes: MatRef<'_, f64>,
+    outputs: &SensorLayout,
+    inputs: &SensorLayout,
+) -> Result<Mat<f64>, CorrelateError> {
+    use femu_sparse::cholesky::{Factorization, SymbolicFactor};
+    if let Some(r) = values.iter().position(|l| !(*l > 0.0)) {
+        return Err(CorrelateError::Invalid {
+            what: "residual flexibility",
+            reason: format!(
+                "mode {} has eigenvalue {:e}: a model with rigid-body motions has no static flexibility",
+                r + 1,
+                values[r]
+            ),
+        });
+    }
+    let llt = SymbolicFactor::new(k, Default::default())?.llt(k, "K")?;
+    // K^-1 B^T: the inputs' rows as columns, solved together
+    let mut cols = Mat::<f64>::zeros(k.rows(), inputs.len());
+    for j in 0..inputs.len() {
+        for (f, w) in inputs.row(j) {
+            cols[(*f, j)] += w;
+        }
+    }
+    llt.solve_in_place(cols.as_mut());
+    let mut r = outputs.measure_all(cols.as_ref())?;
+    let co = outputs.measure_all(shapes)?;
+    let bi = inputs.measure_all(shapes)?;
+    for (m, lambda) in values.iter().enumerate() {
+        for i in 0..outputs.len() {
+            for j in 0..inputs.len() {
+                r[(i, j)] -= co[(i, m)] * bi[(j, m)] / lambda;
+            }
+        }
+    }
+    Ok(r)
+}
+
+fn dot(a: &[c64], b: &[c64]) -> c64 {
+    a.iter().zip(b).map(|(x, y)| x.conj() * y).sum()
+}
+
+fn norm2(a: &[c64]) -> f64 {
+    a.iter().map(|x| x.re * x.re + x.im * x.im).sum()
+}
+
+/// The frequency response assurance criterion of one measured response curve `test` and the
+/// model's `model` over the same lines: `|t^H m|^2 / ((t^H t)(m^H m))`, 1 for curves of the same
+/// shape (any complex scale), 0 for orthogonal ones.
+///
+/// # Errors
+/// Different lengths, or a curve that is zero.
+pub fn frac(test: &[c64], model: &[c64]) -> Result<f64, CorrelateError> {
+    assurance("FRAC", test, model).map(|(c, _, _)| c)
+}
+
+/// The cross-signature assurance criterion of the measured and model deflections `test` and
+/// `model` at one line (over the outputs): `|t^H m|^2 / ((t^H t)(m^H m))`, as [`frac`].
+///
+/// # Errors
+/// As [`frac`].
+pub fn csac(test: &[c64], model: &[c64]) -> Result<f64, CorrelateError> {
+    assurance("CSAC", test, model).map(|(c, _, _)| c)
+}
+
+/// The cross-signature scale factor at one line: `2 |t^H m| / (t^H t + m^H m)`, 1 only when the
+/// deflections agree in shape and amplitude.
+///
+/// # Errors
+/// As [`frac`].
+pub fn csf(test: &[c64], model: &[c64]) -> Result<f64, CorrelateError> {
+    let (_, tm, (tt, mm)) = assurance("CSF", test, model)?;
+    Ok(2.0 * tm / (tt + mm))
+}
+
+/// `(|t^H m|^2 / (t^H t m^H m), |t^H m|, (t^H t, m^H m))`.
+fn assurance(
+    what: &'static str,
+    test: &[c64],
+    model: &[c64],
+) -> Result<(f64, f64, (f64, f64)), CorrelateError> {
+    if test.len() != model.len() {
+        return Err(CorrelateError::DimensionMismatch {
+            what,
+            expected: test.len(),
+            got: model.len(),
+        });
+    }
+    let (tt, mm) = (norm2(test), norm2(model));
+    if !(tt > 0.0 && mm > 0.0 && tt.is_finite() && mm.is_finite()) {
+        return Err(CorrelateError::Invalid {
+            what,
+            reason: "a response that is zero or not finite has no shape to compare".into(),
+        });
+    }
+    let tm = dot(test, model);
+    let a = (tm.re * tm.re + tm.im * tm.im).sqrt();
+    Ok((a * a / (tt * mm), a, (tt, mm)))
+}
