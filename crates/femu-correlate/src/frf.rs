@@ -42,6 +42,19 @@ pub enum Damping {
     LossFactor(f64),
 }
 
+impl std::fmt::Display for Damping {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Damping::Ratio(z) => write!(f, "viscous ratio {z} on every mode"),
+            Damping::Ratios(z) => write!(f, "viscous ratios per mode {z:?}"),
+            Damping::Rayleigh { alpha, beta } => {
+                write!(f, "Rayleigh, C = {alpha:e} M + {beta:e} K")
+            }
+            Damping::LossFactor(eta) => write!(f, "structural loss factor {eta}"),
+        }
+    }
+}
+
 impl Damping {
     /// `g_r(w)` of mode `r` with eigenvalue `lambda`.
     fn term(&self, r: usize, lambda: f64, w: f64) -> f64 {

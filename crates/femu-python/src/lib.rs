@@ -707,6 +707,35 @@ fn correlate<'py>(
     to_dict(py, &report)
 }
 
+/// Measured FRFs (a universal file with dataset 58, function type 4, at the model's node ids)
+/// against the model's at the same DOFs and lines, by modal superposition of the modes up to
+/// `modes_up_to` times the highest line with the residual flexibility of those above: FRAC per
+/// function, CSAC and CSF per line, as a dict. Damping: `damping_ratio` (viscous, default 0.01)
+/// or `loss_factor`. Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (model, path, *, damping_ratio=None, loss_factor=None, modes_up_to=2.0))]
+fn frf<'py>(
+    py: Python<'py>,
+    model: &Model,
+    path: PathBuf,
+    damping_ratio: Option<f64>,
+    loss_factor: Option<f64>,
+    modes_up_to: f64,
+) -> PyResult<Bound<'py, PyAny>> {
+    let request = femu_study::frf::FrfRequest {
+        file: None,
+        damping_ratio,
+        loss_factor,
+        modes_up_to,
+    };
+    let result = py
+        .detach(|| {
+            femu_study::frf::frf_correlation(&model.loaded, &path, &request, &Default::default())
+        })
+        .map_err(err)?;
+    to_dict(py, &result)
+}
+
 /// The sensor-removal study (the paper's Figure 1): from triaxial sensors at the test's nodes,
 /// nodes removed one by one in Effective Independence order, the test shapes re-expanded (static,
 /// dynamic, minimum residual) from every set and `rho_M`, `rho_2` evaluated, as a dict of points.
@@ -821,6 +850,7 @@ fn _femu(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(estimate, m)?)?;
     m.add_function(wrap_pyfunction!(run_demo, m)?)?;
     m.add_function(wrap_pyfunction!(correlate, m)?)?;
+    m.add_function(wrap_pyfunction!(frf, m)?)?;
     m.add_function(wrap_pyfunction!(removal_study, m)?)?;
     m.add_function(wrap_pyfunction!(update, m)?)?;
     Ok(())

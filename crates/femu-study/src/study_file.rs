@@ -83,6 +83,10 @@ pub struct StudyFile {
     /// Updating.
     #[serde(default)]
     pub update: Option<UpdateRequest>,
+    /// `[frf]`: measured FRFs (`file`, a universal file with dataset 58) against the model's
+    /// (`damping_ratio` or `loss_factor`, `modes_up_to`).
+    #[serde(default)]
+    pub frf: Option<crate::frf::FrfRequest>,
 }
 
 /// The eigensolver a study names (`[eigen] engine`, the `--engine` of the commands that solve).
@@ -250,6 +254,8 @@ pub struct StudyRun {
     pub expansion: Option<ExpansionReport>,
     /// Updating (`update.json`).
     pub update: Option<UpdateStudy>,
+    /// Measured FRFs against the model's (`frf.json`).
+    pub frf: Option<crate::frf::FrfCorrelation>,
     /// The model's modes, solved once and used by every step.
     #[serde(skip)]
     pub modes: ModeSet,
@@ -389,10 +395,32 @@ pub fn run_study_file(
         }
         None => None,
     };
+    let frf = match &s.frf {
+        Some(r) => {
+            progress("measured FRFs against the model's");
+            let file = r.file.as_ref().ok_or_else(|| {
+                StudyError::within(
+                    path,
+                    StudyError::invalid(
+                        "[frf]",
+                        "file = \"...\" names the universal file of measured FRFs",
+                    ),
+                )
+            })?;
+            let c =
+                crate::frf::frf_correlation(&model, &base.join(file), r, &eigen).map_err(named)?;
+            let p = out.join("frf.json");
+            write_json(&p, &c)?;
+            files.push(p);
+            Some(c)
+        }
+        None => None,
+    };
     Ok(StudyRun {
         estimate,
         expansion,
         update,
+        frf,
         modes,
         model_assemblies: model.asm.assemblies(),
         warnings: model.warnings,

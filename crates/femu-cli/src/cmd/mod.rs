@@ -4,6 +4,7 @@ pub mod correlate;
 pub mod demo;
 pub mod estimate;
 pub mod expand;
+pub mod frf;
 pub mod info;
 pub mod matrices;
 pub mod modes;

@@ -123,6 +123,14 @@ def correlate(
     mac_threshold: float = 0.8,
     max_frequency_error: Optional[float] = None,
 ) -> Dict[str, Any]: ...
+def frf(
+    model: Model,
+    path: _Path,
+    *,
+    damping_ratio: Optional[float] = None,
+    loss_factor: Optional[float] = None,
+    modes_up_to: float = 2.0,
+) -> Dict[str, Any]: ...
 def removal_study(model: Model, test: Test, *, expansion: str = "dynamic") -> Dict[str, Any]: ...
 def update(
     model: Model,

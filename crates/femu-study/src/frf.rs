@@ -1,0 +1,377 @@
+//! The frf workflow: a test's measured frequency response functions (universal file dataset 58,
+//! function type 4) against the model's at the same DOFs and frequency lines, by modal
+//! superposition with the residual flexibility of the modes above (docs/MATH.md, "Frequency
+//! responses"): FRAC per function, CSAC and CSF per line and reference.
+
+use crate::StudyError;
+use crate::load::LoadedModel;
+use faer::c64;
+use femu_correlate::frf::{
+    Damping, Frf, FrfOptions, ResponseKind, csac, csf, frac, modal_frf, residual_flexibility,
+};
+use femu_correlate::{Sensor, SensorLayout};
+use femu_io::uff::{Ordinate, UffDof, UffFunction};
+use femu_sparse::eigen::{EigenOptions, Which};
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The options of [`frf_correlation`]: the study file's `[frf]`, `femu frf`'s flags and Python's
+/// keywords.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
+#[serde(deny_unknown_fields, default)]
+pub struct FrfRequest {
+    /// In a study file's `[frf]`, the universal file of measured FRFs (relative to the study
+    /// file); `femu frf` and Python take it as an argument.
+    #[cfg_attr(feature = "clap", arg(skip))]
+    pub file: Option<std::path::PathBuf>,
+    /// Viscous damping ratio of every model mode (default 0.01 when no loss factor is given).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "ZETA"))]
+    pub damping_ratio: Option<f64>,
+    /// A structural loss factor instead of viscous damping (`K (1 + i eta)`).
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "ETA", conflicts_with = "damping_ratio")
+    )]
+    pub loss_factor: Option<f64>,
+    /// Model modes up to this multiple of the highest line; those above enter by their residual
+    /// flexibility.
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "FACTOR", default_value_t = 2.0)
+    )]
+    pub modes_up_to: f64,
+}
+
+impl Default for FrfRequest {
+    fn default() -> Self {
+        Self {
+            file: None,
+            damping_ratio: None,
+            loss_factor: None,
+            modes_up_to: 2.0,
+        }
+    }
+}
+
+impl FrfRequest {
+    /// The damping this request asks for.
+    ///
+    /// # Errors
+    /// Both a ratio and a loss factor.
+    pub fn damping(&self) -> Result<Damping, StudyError> {
+        match (self.damping_ratio, self.loss_factor) {
+            (Some(_), Some(_)) => Err(StudyError::invalid(
+                "damping",
+                "give a damping ratio or a loss factor, not both",
+            )),
+            (_, Some(eta)) => Ok(Damping::LossFactor(eta)),
+            (z, None) => Ok(Damping::Ratio(z.unwrap_or(0.01))),
+        }
+    }
+}
+
+/// One measured FRF and its FRAC with the model's.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FunctionCorrelation {
+    /// Response DOF, as `node+x` (or `-x`).
+    pub response: String,
+    /// Reference (excitation) DOF.
+    pub reference: String,
+    /// The frequency response assurance criterion over the lines.
+    pub frac: f64,
+    /// Its row among the model FRFs' outputs.
+    #[serde(skip)]
+    pub output: usize,
+    /// Its column among the model FRFs' inputs.
+    #[serde(skip)]
+    pub input: usize,
+}
+
+/// The deflections at one line for one reference: CSAC and CSF.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LineCorrelation {
+    /// The line, Hz.
+    pub hz: f64,
+    /// The reference DOF.
+    pub reference: String,
+    /// Cross-signature assurance criterion (shape).
+    pub csac: f64,
+    /// Cross-signature scale factor (shape and amplitude).
+    pub csf: f64,
+}
+
+/// What [`frf_correlation`] found.
+#[derive(Debug, Clone, Serialize)]
+pub struct FrfCorrelation {
+    /// Receptance, mobility or accelerance (from the file's ordinate).
+    pub kind: ResponseKind,
+    /// The model's damping.
+    pub damping: Damping,
+    /// Model modes superposed, and the highest one's frequency (Hz).
+    pub modes: (usize, f64),
+    /// Whether the residual flexibility of the modes above was added.
+    pub residual_flexibility: bool,
+    /// One row per measured FRF.
+    pub functions: Vec<FunctionCorrelation>,
+    /// One row per line and reference.
+    pub lines: Vec<LineCorrelation>,
+    /// What the reader and the workflow noticed.
+    pub notes: Vec<String>,
+    /// The model's FRFs at the test's lines (outputs x inputs per line), for the writers.
+    #[serde(skip)]
+    pub model: Option<Frf>,
+}
+
+fn dof_name(d: &UffDof) -> String {
+    let axis = ["x", "y", "z"][(d.direction.unsigned_abs() as usize).clamp(1, 3) - 1];
+    format!(
+        "{}{}{axis}",
+        d.node,
+        if d.direction < 0 { "-" } else { "+" }
+    )
+}
+
+/// The sensor of a dataset 58 DOF (a translation, signed), or why not.
+fn sensor_of(d: &UffDof, what: &str, f: &UffFunction) -> Result<(Sensor, f64), String> {
+    match d.direction.unsigned_abs() {
+        1..=3 => Ok((
+            Sensor::axis(d.node, d.direction.unsigned_abs() as usize - 1),
+            d.direction.signum() as f64,
+        )),
+        _ => Err(format!(
+            "FRF {} ({}): its {what} DOF has direction {}: femu's models have translations (1-3) at the test's nodes",
+            f.numbers[0],
+            f.ids[0].trim(),
+            d.direction
+        )),
+    }
+}
+
+/// The response kind of an FRF from its ordinate numerator's specific data type (record 9).
+fn kind_of(f: &UffFunction) -> Result<ResponseKind, String> {
+    match f.axes[1].data_type {
+        8 => Ok(ResponseKind::Receptance),
+        11 => Ok(ResponseKind::Mobility),
+        12 => Ok(ResponseKind::Accelerance),
+        other => Err(format!(
+            "FRF {}: ordinate data type {other} (record 9): femu compares displacement (8), velocity (11) or acceleration (12) over force",
+            f.numbers[0]
+        )),
+    }
+}
+
+/// The measured FRFs of the universal file `path` against the model's: the test's response and
+/// reference DOFs are the model's node ids (translations), its lines the FRFs' abscissa (Hz, the
+/// same for every function), their values in the model's units (SI: m, N, s). Model modes up to
+/// `request.modes_up_to` times the highest line are superposed with the request's damping; the
+/// residual flexibility of those above is added when the model has no rigid-body motion.
+///
+/// # Errors
+/// A file without FRFs, FRFs of different lines or kinds, rotations, nodes the model does not
+/// have, and the eigensolver's errors.
+pub fn frf_correlation(
+    model: &LoadedModel,
+    path: &Path,
+    request: &FrfRequest,
+    eigen: &EigenOptions,
+) -> Result<FrfCorrelation, StudyError> {
+    let in_file = |reason: String| StudyError::in_file(path, "FRF", reason);
+    let uff = femu_io::uff::read_uff(path)?;
+    let mut notes: Vec<String> = uff.warnings.iter().map(ToString::to_string).collect();
+    let functions: Vec<&UffFunction> = uff
+        .functions
+        .iter()
+        .filter(|f| f.function_type == 4)
+        .collect();
+    let Some(first) = functions.first() else {
+        return Err(in_file(
+            "no frequency response function (dataset 58 with function type 4)".into(),
+        ));
+    };
+    let lines = first.abscissa_values();
+    let kind = kind_of(first).map_err(in_file)?;
+    let mut outputs: Vec<Sensor> = Vec::new();
+    let mut inputs: Vec<Sensor> = Vec::new();
+    let mut pairs = Vec::with_capacity(functions.len());
+    for f in &functions {
+        if f.abscissa_values() != lines {
+            return Err(in_file(format!(
+                "FRF {} has other frequency lines than FRF {}: femu compares FRFs on one set of lines",
+                f.numbers[0], first.numbers[0]
+            )));
+        }
+        if kind_of(f).map_err(in_file)? != kind {
+            return Err(in_file(format!(
+                "FRF {} is a {:?} and FRF {} a {kind:?}: one kind at a time",
+                f.numbers[0],
+                kind_of(f).map_err(in_file)?,
+                first.numbers[0]
+            )));
+        }
+        let (o, so) = sensor_of(&f.response, "response", f).map_err(in_file)?;
+        let (i, si) = sensor_of(&f.reference, "reference", f).map_err(in_file)?;
+        let index = |list: &mut Vec<Sensor>, s: Sensor| match list.iter().position(|x| *x == s) {
+            Some(k) => k,
+            None => {
+                list.push(s);
+                list.len() - 1
+            }
+        };
+        let (oi, ii) = (index(&mut outputs, o), index(&mut inputs, i));
+        let values: Vec<c64> = match &f.ordinate {
+            Ordinate::Complex(v) => v
+                .iter()
+                .map(|(re, im)| c64::new(*re, *im) * (so * si))
+                .collect(),
+            Ordinate::Real(v) => v.iter().map(|re| c64::new(*re * so * si, 0.0)).collect(),
+        };
+        pairs.push((f, oi, ii, values));
+    }
+    let mesh = model.model.mesh();
+    let outputs = SensorLayout::new(mesh, &model.sys.dofs, outputs)
+        .map_err(|e| StudyError::within(path, e))?;
+    let inputs = SensorLayout::new(mesh, &model.sys.dofs, inputs)
+        .map_err(|e| StudyError::within(path, e))?;
+    // the model's modes up to the request's multiple of the highest line
+    let f_max = lines.iter().copied().fold(0.0, f64::max);
+    let w_top = 2.0 * std::f64::consts::PI * request.modes_up_to * f_max;
+    if !(request.modes_up_to >= 1.0 && w_top.is_finite() && w_top > 0.0) {
+        return Err(StudyError::invalid(
+            "modes_up_to",
+            format!(
+                "{} times the highest line ({f_max} Hz): give a factor of at least 1 and lines above 0 Hz",
+                request.modes_up_to
+            ),
+        ));
+    }
+    let hi = w_top * w_top;
+    let modes = model.sys.modes(Which::Band { lo: -1e-6 * hi, hi }, eigen)?;
+    let top_hz = modes
+        .values
+        .last()
+        .map_or(0.0, |l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI));
+    let residual = if modes.values.first().is_some_and(|l| *l <= 0.0)
+        || modes.values.first().is_some_and(|l| {
+            // rigid-body eigenvalues are round-off far below the first elastic one
+            *l < 1e-8 * hi
+        }) {
+        notes.push(
+            "no residual flexibility: the model has rigid-body motions (it would need inertia relief); modes above the band are left out".into(),
+        );
+        None
+    } else {
+        Some(residual_flexibility(
+            &model.sys.k,
+            &modes.values,
+            modes.vectors.as_ref(),
+            &outputs,
+            &inputs,
+        )?)
+    };
+    let damping = request.damping()?;
+    if request.damping_ratio.is_none() && request.loss_factor.is_none() {
+        notes.push("damping: 1 % viscous on every mode (the default; --damping-ratio or --loss-factor give another)".into());
+    }
+    let options = FrfOptions {
+        damping: damping.clone(),
+        kind,
+    };
+    let frf = modal_frf(
+        &modes.values,
+        modes.vectors.as_ref(),
+        residual.as_ref().map(|r| r.as_ref()),
+        &outputs,
+        &inputs,
+        &lines,
+        &options,
+    )?;
+    let mut rows = Vec::with_capacity(pairs.len());
+    for (f, oi, ii, values) in &pairs {
+        let model_curve: Vec<c64> = frf.h.iter().map(|h| h[(*oi, *ii)]).collect();
+        rows.push(FunctionCorrelation {
+            response: dof_name(&f.response),
+            reference: dof_name(&f.reference),
+            frac: frac(values, &model_curve).map_err(|e| StudyError::within(path, e))?,
+            output: *oi,
+            input: *ii,
+        });
+    }
+    let mut line_rows = Vec::new();
+    for ii in 0..inputs.len() {
+        let of_ref: Vec<_> = pairs.iter().filter(|p| p.2 == ii).collect();
+        let reference = dof_name(&of_ref[0].0.reference);
+        for (l, hz) in lines.iter().enumerate() {
+            let t: Vec<c64> = of_ref.iter().map(|p| p.3[l]).collect();
+            let m: Vec<c64> = of_ref.iter().map(|p| frf.h[l][(p.1, ii)]).collect();
+            // a line where the measured deflection is zero (a 0 Hz line of a mobility) has no shape
+            let (Ok(a), Ok(s)) = (csac(&t, &m), csf(&t, &m)) else {
+                continue;
+            };
+            line_rows.push(LineCorrelation {
+                hz: *hz,
+                reference: reference.clone(),
+                csac: a,
+                csf: s,
+            });
+        }
+    }
+    Ok(FrfCorrelation {
+        kind,
+        damping,
+        modes: (modes.values.len(), top_hz),
+        residual_flexibility: residual.is_some(),
+        functions: rows,
+        lines: line_rows,
+        notes,
+        model: Some(frf),
+    })
+}
+
+impl std::fmt::Display for FrfCorrelation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "{} of {} model modes (up to {:.2} Hz){}, damping: {}",
+            match self.kind {
+                ResponseKind::Receptance => "Receptance",
+                ResponseKind::Mobility => "Mobility",
+                ResponseKind::Accelerance => "Accelerance",
+            },
+            self.modes.0,
+            self.modes.1,
+            if self.residual_flexibility {
+                " with the residual flexibility of those above"
+            } else {
+                ""
+            },
+            self.damping
+        );
+        let _ = writeln!(s, "\n| response | reference | FRAC |\n|---|---|---|");
+        for r in &self.functions {
+            let _ = writeln!(s, "| {} | {} | {:.4} |", r.response, r.reference, r.frac);
+        }
+        let mut refs: Vec<&str> = self.lines.iter().map(|l| l.reference.as_str()).collect();
+        refs.dedup();
+        let _ = writeln!(
+            s,
+            "\n| reference | lines | mean CSAC | lowest CSAC (Hz) | mean CSF |\n|---|---|---|---|---|"
+        );
+        for r in refs {
+            let l: Vec<&LineCorrelation> = self.lines.iter().filter(|x| x.reference == r).collect();
+            let n = l.len().max(1) as f64;
+            let worst = l.iter().min_by(|a, b| a.csac.total_cmp(&b.csac));
+            let _ = writeln!(
+                s,
+                "| {r} | {} | {:.4} | {} | {:.4} |",
+                l.len(),
+                l.iter().map(|x| x.csac).sum::<f64>() / n,
+                worst.map_or("-".into(), |w| format!("{:.4} ({:.2})", w.csac, w.hz)),
+                l.iter().map(|x| x.csf).sum::<f64>() / n
+            );
+        }
+        f.write_str(&s)
+    }
+}
