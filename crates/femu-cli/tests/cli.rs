@@ -990,6 +990,79 @@ fn a_test_of_frequencies_alone_is_read_and_paired_by_frequency() {
     );
 }
 
+/// A cantilever of `nx` hex8 bricks along x, one through the width and the thickness, node ids
+/// `1 + i + (nx + 1) (j + 2 k)`, clamped at `x = 0` (the `root` face).
+struct Cantilever {
+    nx: usize,
+    coords: Vec<(usize, [f64; 3])>,
+    hexes: Vec<[usize; 8]>,
+    root: [usize; 4],
+}
+
+impl Cantilever {
+    fn new(nx: usize, [l, b, h]: [f64; 3]) -> Self {
+        let id = |i: usize, j: usize, k: usize| 1 + i + (nx + 1) * (j + 2 * k);
+        let mut coords = Vec::new();
+        for k in 0..2 {
+            for j in 0..2 {
+                for i in 0..=nx {
+                    coords.push((
+                        id(i, j, k),
+                        [l * i as f64 / nx as f64, b * j as f64, h * k as f64],
+                    ));
+                }
+            }
+        }
+        let hexes = (0..nx)
+            .map(|i| {
+                [
+                    id(i, 0, 0),
+                    id(i + 1, 0, 0),
+                    id(i + 1, 1, 0),
+                    id(i, 1, 0),
+                    id(i, 0, 1),
+                    id(i + 1, 0, 1),
+                    id(i + 1, 1, 1),
+                    id(i, 1, 1),
+                ]
+            })
+            .collect();
+        let root = [id(0, 0, 0), id(0, 1, 0), id(0, 1, 1), id(0, 0, 1)];
+        Self {
+            nx,
+            coords,
+            hexes,
+            root,
+        }
+    }
+
+    fn id(&self, i: usize, j: usize, k: usize) -> usize {
+        1 + i + (self.nx + 1) * (j + 2 * k)
+    }
+
+    /// A CalculiX deck of the cantilever: elements `ty`, steel with Young's modulus `young`.
+    fn deck(&self, ty: &str, young: f64) -> String {
+        let mut s = String::from("*NODE\n");
+        for (n, x) in &self.coords {
+            s.push_str(&format!("{n}, {:e}, {:e}, {:e}\n", x[0], x[1], x[2]));
+        }
+        s.push_str(&format!("*ELEMENT, TYPE={ty}, ELSET=EALL\n"));
+        for (e, c) in self.hexes.iter().enumerate() {
+            let c: Vec<String> = c.iter().map(|v| v.to_string()).collect();
+            s.push_str(&format!("{}, {}\n", e + 2, c.join(", ")));
+        }
+        let r = self.root;
+        s.push_str(&format!(
+            "*NSET, NSET=ROOT\n{}, {}, {}, {}\n*BOUNDARY\nROOT, 1, 3\n",
+            r[0], r[1], r[2], r[3]
+        ));
+        s.push_str(&format!(
+            "*MATERIAL, NAME=STEEL\n*ELASTIC\n{young:e}, 0.3\n*DENSITY\n7850.\n*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n"
+        ));
+        s
+    }
+}
+
 /// `--bricks incompatible-modes` on a Gmsh mesh builds the brick that a deck asks for with C3D8I
 /// (checked against CalculiX in `crates/femu-io/tests/calculix.rs`): the same cantilever as a
 /// `.msh` with the flag and as an `.inp` of C3D8I elements gives the same frequencies to 1e-9, and
@@ -997,33 +1070,8 @@ fn a_test_of_frequencies_alone_is_read_and_paired_by_frequency() {
 /// integrated brick is more than 20 % stiffer. A deck with the flag says the flag is not used.
 #[test]
 fn bricks_with_incompatible_modes_from_the_command_line() {
-    let (nx, l, b, h) = (8usize, 0.4, 0.04, 0.02);
-    let id = |i: usize, j: usize, k: usize| 1 + i + (nx + 1) * (j + 2 * k);
-    let mut coords = Vec::new();
-    for k in 0..2 {
-        for j in 0..2 {
-            for i in 0..=nx {
-                coords.push((
-                    id(i, j, k),
-                    [l * i as f64 / nx as f64, b * j as f64, h * k as f64],
-                ));
-            }
-        }
-    }
-    let hexes: Vec<[usize; 8]> = (0..nx)
-        .map(|i| {
-            [
-                id(i, 0, 0),
-                id(i + 1, 0, 0),
-                id(i + 1, 1, 0),
-                id(i, 1, 0),
-                id(i, 0, 1),
-                id(i + 1, 0, 1),
-                id(i + 1, 1, 1),
-                id(i, 1, 1),
-            ]
-        })
-        .collect();
+    let beam = Cantilever::new(8, [0.4, 0.04, 0.02]);
+    let (coords, hexes, root) = (&beam.coords, &beam.hexes, beam.root);
     let join = |v: &[usize]| {
         v.iter()
             .map(|x| x.to_string())
@@ -1035,38 +1083,16 @@ fn bricks_with_incompatible_modes_from_the_command_line() {
         "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n2 1 \"root\"\n3 2 \"solid\"\n$EndPhysicalNames\n",
     );
     msh.push_str(&format!("$Nodes\n{}\n", coords.len()));
-    for (n, x) in &coords {
+    for (n, x) in coords {
         msh.push_str(&format!("{n} {:e} {:e} {:e}\n", x[0], x[1], x[2]));
     }
-    msh.push_str(&format!("$EndNodes\n$Elements\n{}\n", 1 + nx));
-    msh.push_str(&format!(
-        "1 3 2 1 1 {}\n",
-        join(&[id(0, 0, 0), id(0, 1, 0), id(0, 1, 1), id(0, 0, 1)])
-    ));
+    msh.push_str(&format!("$EndNodes\n$Elements\n{}\n", 1 + hexes.len()));
+    msh.push_str(&format!("1 3 2 1 1 {}\n", join(&root)));
     for (e, c) in hexes.iter().enumerate() {
         msh.push_str(&format!("{} 5 2 2 2 {}\n", e + 2, join(c)));
     }
     msh.push_str("$EndElements\n");
-    let deck = |ty: &str| {
-        let mut s = String::from("*NODE\n");
-        for (n, x) in &coords {
-            s.push_str(&format!("{n}, {:e}, {:e}, {:e}\n", x[0], x[1], x[2]));
-        }
-        s.push_str(&format!("*ELEMENT, TYPE={ty}, ELSET=EALL\n"));
-        for (e, c) in hexes.iter().enumerate() {
-            s.push_str(&format!("{}, {}\n", e + 2, join(c).replace(' ', ", ")));
-        }
-        s.push_str(&format!(
-            "*NSET, NSET=ROOT\n{}, {}, {}, {}\n*BOUNDARY\nROOT, 1, 3\n",
-            id(0, 0, 0),
-            id(0, 1, 0),
-            id(0, 1, 1),
-            id(0, 0, 1)
-        ));
-        s.push_str("*MATERIAL, NAME=STEEL\n*ELASTIC\n2.1e11, 0.3\n*DENSITY\n7850.\n");
-        s.push_str("*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n");
-        s
-    };
+    let deck = |ty: &str| beam.deck(ty, 2.1e11);
     let dir = std::env::temp_dir().join(format!("femu-cli-bricks-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = |name: &str| dir.join(name);
@@ -1144,50 +1170,10 @@ fn frf_correlation_against_a_direct_solve() {
     use faer::c64;
     use faer::linalg::solvers::Solve;
     use femu_io::uff::{Abscissa, Ordinate, UffAxis, UffDof, UffFunction, Universal};
-    let (nx, l, b, h) = (10usize, 0.4, 0.04, 0.02);
-    let id = |i: usize, j: usize, k: usize| 1 + i + (nx + 1) * (j + 2 * k);
-    let deck = |young: f64| {
-        let mut s = String::from("*NODE\n");
-        for k in 0..2 {
-            for j in 0..2 {
-                for i in 0..=nx {
-                    s.push_str(&format!(
-                        "{}, {:e}, {:e}, {:e}\n",
-                        id(i, j, k),
-                        l * i as f64 / nx as f64,
-                        b * j as f64,
-                        h * k as f64
-                    ));
-                }
-            }
-        }
-        s.push_str("*ELEMENT, TYPE=C3D8, ELSET=EALL\n");
-        for i in 0..nx {
-            s.push_str(&format!(
-                "{}, {}, {}, {}, {}, {}, {}, {}, {}\n",
-                i + 1,
-                id(i, 0, 0),
-                id(i + 1, 0, 0),
-                id(i + 1, 1, 0),
-                id(i, 1, 0),
-                id(i, 0, 1),
-                id(i + 1, 0, 1),
-                id(i + 1, 1, 1),
-                id(i, 1, 1)
-            ));
-        }
-        s.push_str(&format!(
-            "*NSET, NSET=ROOT\n{}, {}, {}, {}\n*BOUNDARY\nROOT, 1, 3\n",
-            id(0, 0, 0),
-            id(0, 1, 0),
-            id(0, 1, 1),
-            id(0, 0, 1)
-        ));
-        s.push_str(&format!(
-            "*MATERIAL, NAME=STEEL\n*ELASTIC\n{young:e}, 0.3\n*DENSITY\n7850.\n*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n"
-        ));
-        s
-    };
+    let nx = 10;
+    let beam = Cantilever::new(nx, [0.4, 0.04, 0.02]);
+    let id = |i: usize, j: usize, k: usize| beam.id(i, j, k);
+    let deck = |young: f64| beam.deck("C3D8", young);
     let dir = std::env::temp_dir().join(format!("femu-cli-frf-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("bar.inp"), deck(2.1e11)).unwrap();
