@@ -1304,6 +1304,49 @@ fn frf_correlation_against_a_direct_solve() {
     assert!(mean_csac > 0.999, "{mean_csac}");
     let csv = std::fs::read_to_string(dir.join("same.json.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + count * 4);
+    // the model's FRFs as a universal file: the direct solve's values to 1e-4 of each curve's peak
+    // along the force and 1e-2 across it (modes to twice the highest line and the residual
+    // flexibility of those above); and a chart per function, magnitude and phase of both curves
+    femu()
+        .args(["frf", dir.join("bar.inp").to_str().unwrap()])
+        .arg(dir.join("frf.uff"))
+        .args(["--loss-factor", "0.02", "--quiet", "--uff"])
+        .arg(dir.join("model.uff"))
+        .arg("--charts")
+        .arg(dir.join("charts"))
+        .assert()
+        .success();
+    let back = femu_io::uff::read_uff(dir.join("model.uff")).unwrap();
+    assert_eq!(back.functions.len(), 4);
+    for (o, f) in back.functions.iter().enumerate() {
+        let Ordinate::Complex(v) = &f.ordinate else {
+            panic!("complex FRF expected")
+        };
+        let peak = values[o]
+            .iter()
+            .map(|(a, b)| a.hypot(*b))
+            .fold(0.0, f64::max);
+        let err = v
+            .iter()
+            .zip(&values[o])
+            .map(|((a, b), (c, d))| (a - c).hypot(b - d))
+            .fold(0.0, f64::max);
+        // measured: 1.0e-5 and 2.1e-6 of the peak for the responses along the force (z); 4.0e-3 and
+        // 1.7e-3 for the small y responses it couples to, where the left-out modes' dynamics
+        // (beyond their static part) weigh more
+        let tol = if outputs[o].1 == 3 { 1e-4 } else { 1e-2 };
+        assert!(
+            err < tol * peak,
+            "function {o}: {err:e} against peak {peak:e}"
+        );
+        assert_eq!(f.abscissa, Abscissa::Even { min, step });
+        assert_eq!(f.axes[1].data_type, 8);
+    }
+    for k in 1..=4 {
+        let svg = std::fs::read_to_string(dir.join(format!("charts/frf_{k}.svg"))).unwrap();
+        assert_eq!(svg.matches("<polyline").count(), 4, "chart {k}");
+        assert!(dir.join(format!("charts/frf_{k}.png")).is_file());
+    }
     let stiffer = run("stiffer.inp", "stiffer.json");
     let low = fracs(&stiffer).into_iter().fold(1.0, f64::min);
     assert!(low < 0.9, "{:?}", fracs(&stiffer));

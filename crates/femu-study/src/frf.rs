@@ -122,6 +122,9 @@ pub struct FrfCorrelation {
     /// The model's FRFs at the test's lines (outputs x inputs per line), for the writers.
     #[serde(skip)]
     pub model: Option<Frf>,
+    /// The measured FRFs as read, in the order of `functions` (for the writers).
+    #[serde(skip)]
+    pub measured: Vec<UffFunction>,
 }
 
 fn dof_name(d: &UffDof) -> String {
@@ -326,6 +329,7 @@ pub fn frf_correlation(
         lines: line_rows,
         notes,
         model: Some(frf),
+        measured: pairs.iter().map(|p| (*p.0).clone()).collect(),
     })
 }
 
@@ -373,5 +377,99 @@ impl std::fmt::Display for FrfCorrelation {
             );
         }
         f.write_str(&s)
+    }
+}
+
+impl FrfCorrelation {
+    /// The model's FRF of measured function `k` over the lines.
+    fn model_curve(&self, k: usize) -> Vec<c64> {
+        let r = &self.functions[k];
+        self.model
+            .as_ref()
+            .map(|m| m.h.iter().map(|h| h[(r.output, r.input)]).collect())
+            .unwrap_or_default()
+    }
+
+    /// The measured FRF `k` over the lines (signed to the sensors' directions as compared).
+    fn measured_curve(&self, k: usize) -> Vec<c64> {
+        let f = &self.measured[k];
+        let sign = (f.response.direction.signum() * f.reference.direction.signum()) as f64;
+        match &f.ordinate {
+            Ordinate::Complex(v) => v.iter().map(|(re, im)| c64::new(*re, *im) * sign).collect(),
+            Ordinate::Real(v) => v.iter().map(|re| c64::new(re * sign, 0.0)).collect(),
+        }
+    }
+
+    /// The model's FRFs as a universal file: each measured function's dataset 58 with the
+    /// model's values (in the file's sense of its DOFs, the same abscissa, kinds and units; record
+    /// 1 says "femu model").
+    pub fn model_uff(&self) -> femu_io::uff::Universal {
+        let functions = (0..self.measured.len())
+            .map(|k| {
+                let mut f = self.measured[k].clone();
+                let sign = (f.response.direction.signum() * f.reference.direction.signum()) as f64;
+                f.ordinate = Ordinate::Complex(
+                    self.model_curve(k)
+                        .iter()
+                        .map(|v| (v.re * sign, v.im * sign))
+                        .collect(),
+                );
+                f.double = true;
+                f.ids[0] = format!("femu model {}", f.ids[0].trim());
+                f
+            })
+            .collect();
+        femu_io::uff::Universal {
+            functions,
+            ..Default::default()
+        }
+    }
+
+    /// The model's FRFs as CSV: `hz,response,reference,re,im`, one row per line and function.
+    pub fn model_csv(&self) -> String {
+        let mut s = String::from("hz,response,reference,re,im\n");
+        let curves: Vec<Vec<c64>> = (0..self.functions.len())
+            .map(|k| self.model_curve(k))
+            .collect();
+        let lines = self.model.as_ref().map_or(&[][..], |m| &m.lines_hz[..]);
+        for (l, hz) in lines.iter().enumerate() {
+            for (r, c) in self.functions.iter().zip(&curves) {
+                let _ = writeln!(
+                    s,
+                    "{hz},{},{},{:e},{:e}",
+                    r.response, r.reference, c[l].re, c[l].im
+                );
+            }
+        }
+        s
+    }
+
+    /// Writes one chart per measured FRF into `dir` (`frf_K.svg` and `.png`: magnitude and phase,
+    /// measured over model); the files written.
+    ///
+    /// # Errors
+    /// A folder or file that cannot be written.
+    pub fn write_charts(&self, dir: &Path) -> Result<Vec<std::path::PathBuf>, StudyError> {
+        std::fs::create_dir_all(dir).map_err(|e| StudyError::file(dir, e))?;
+        let lines = self.model.as_ref().map_or(&[][..], |m| &m.lines_hz[..]);
+        let mut files = Vec::new();
+        for (k, r) in self.functions.iter().enumerate() {
+            let svg = crate::chart::frf_svg(
+                &format!(
+                    "FRF {} / {}: FRAC {:.4} ({:?})",
+                    r.response, r.reference, r.frac, self.kind
+                ),
+                lines,
+                &self.measured_curve(k),
+                &self.model_curve(k),
+            );
+            let path = dir.join(format!("frf_{}.svg", k + 1));
+            std::fs::write(&path, &svg).map_err(|e| StudyError::file(&path, e))?;
+            files.push(path);
+            let png = dir.join(format!("frf_{}.png", k + 1));
+            crate::chart::write_png(&svg, 1.0, &png)?;
+            files.push(png);
+        }
+        Ok(files)
     }
 }

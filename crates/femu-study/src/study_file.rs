@@ -412,6 +412,11 @@ pub fn run_study_file(
             let p = out.join("frf.json");
             write_json(&p, &c)?;
             files.push(p);
+            write_text(&out.join("frf_model.csv"), &c.model_csv(), &mut files)?;
+            let p = out.join("frf_model.uff");
+            femu_io::uff::write_uff(&p, &c.model_uff())?;
+            files.push(p);
+            files.extend(c.write_charts(&out.join("frf"))?);
             Some(c)
         }
         None => None,

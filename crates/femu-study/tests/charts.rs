@@ -81,3 +81,37 @@ fn svg_to_png_renders_shapes_and_text() {
     assert!(femu_study::chart::svg_to_png("<svg", 1.0).is_err());
     assert!(femu_study::chart::svg_to_png(svg, 0.0).is_err());
 }
+
+/// The FRF chart: lines at 1, 10 and 100 Hz (the 0 Hz line has no place on a log axis), two
+/// curves of magnitude and phase (four polylines of three points). By hand, on its 760 x 560
+/// canvas (plots 640 wide from x = 90; magnitude at y = 40, phase at y = 295, each 215 high;
+/// phase +180 at the top): the measured `i` at 10 Hz sits at the middle decade, x = 90 + 640 / 2
+/// = 410, and at 90 degrees, y = 295 + 90 / 360 * 215 = 348.75.
+#[test]
+fn frf_chart_places_points_by_hand() {
+    use faer::c64;
+    let lines = [0.0, 1.0, 10.0, 100.0];
+    let measured = [
+        c64::new(1.0, 0.0),
+        c64::new(1.0, 0.0),
+        c64::new(0.0, 1.0),
+        c64::new(-1.0, 0.0),
+    ];
+    let model = [
+        c64::new(2.0, 0.0),
+        c64::new(2.0, 0.0),
+        c64::new(0.0, 2.0),
+        c64::new(-2.0, 0.0),
+    ];
+    let svg = femu_study::chart::frf_svg("a < b & c", &lines, &measured, &model);
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert!(svg.contains("a &lt; b &amp; c"));
+    let polylines: Vec<&str> = svg.lines().filter(|l| l.starts_with("<polyline")).collect();
+    assert_eq!(polylines.len(), 4);
+    for p in &polylines {
+        let points = p.split("points=\"").nth(1).unwrap().trim_end_matches("\"/>");
+        assert_eq!(points.split(' ').count(), 3, "{p}");
+    }
+    // measured phase: 0 deg at 1 Hz (y = 295 + 180 / 360 * 215 = 402.5), 90 at 10 Hz
+    assert!(polylines[1].contains("90.0,402.5 410.0,348.8"), "{}", polylines[1]);
+}

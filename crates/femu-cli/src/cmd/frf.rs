@@ -4,7 +4,6 @@ use crate::common::{EngineArgs, ModelArgs, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
 use femu::study::frf::{FrfRequest, frf_correlation};
-use std::fmt::Write as _;
 use std::path::PathBuf;
 
 /// Correlate measured FRFs (universal file dataset 58) with the model's: FRAC per function, CSAC
@@ -33,6 +32,13 @@ pub struct FrfArgs {
     /// Write the model's FRFs at the test's lines as CSV (hz, response, reference, re, im).
     #[arg(long)]
     pub csv: Option<PathBuf>,
+    /// Write the model's FRFs as a universal file (dataset 58, the test's DOFs, lines and kinds).
+    #[arg(long)]
+    pub uff: Option<PathBuf>,
+    /// Write one chart per FRF (magnitude and phase, measured over model; SVG and PNG) into this
+    /// folder.
+    #[arg(long, value_name = "DIR")]
+    pub charts: Option<PathBuf>,
     #[command(flatten)]
     pub model_args: ModelArgs,
     #[command(flatten)]
@@ -56,24 +62,15 @@ pub fn run(a: &FrfArgs, quiet: bool) -> Result<(), CliError> {
         print!("{result}");
     }
     write_json(a.json.as_deref(), &result)?;
-    if let (Some(path), Some(frf)) = (&a.csv, &result.model) {
-        let mut s = String::from("hz,response,reference,re,im\n");
-        for (l, h) in frf.h.iter().enumerate() {
-            for r in &result.functions {
-                let (i, j) = (r.output, r.input);
-                let _ = writeln!(
-                    s,
-                    "{},{},{},{:e},{:e}",
-                    frf.lines_hz[l],
-                    r.response,
-                    r.reference,
-                    h[(i, j)].re,
-                    h[(i, j)].im
-                );
-            }
-        }
-        std::fs::write(path, s)
-            .map_err(|e| CliError::from(femu::study::StudyError::file(path, e)))?;
+    if let Some(path) = &a.csv {
+        std::fs::write(path, result.model_csv())
+            .map_err(|e| femu::study::StudyError::file(path, e))?;
+    }
+    if let Some(path) = &a.uff {
+        femu::io::uff::write_uff(path, &result.model_uff())?;
+    }
+    if let Some(dir) = &a.charts {
+        result.write_charts(dir)?;
     }
     Ok(())
 }

@@ -169,6 +169,167 @@ pub fn figure1_svg(points: &[StudyPoint]) -> String {
     s
 }
 
+/// A measured FRF over the model's as an SVG chart: magnitude (log-log) above, phase in degrees
+/// (log frequency) below, the measured curve solid black, the model's dashed red. Lines at 0 Hz
+/// and zero magnitudes have no place on log axes and are left out. Self-contained SVG.
+pub fn frf_svg(
+    title: &str,
+    lines_hz: &[f64],
+    measured: &[faer::c64],
+    model: &[faer::c64],
+) -> String {
+    let (w, h, left, right, top, gap, bottom) = (760.0, 560.0, 90.0, 30.0, 40.0, 40.0, 50.0);
+    let pw = w - left - right;
+    let ph = (h - top - gap - bottom) / 2.0;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"12\">"
+    );
+    let _ = writeln!(s, "<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>");
+    let _ = writeln!(
+        s,
+        "<text x=\"{:.1}\" y=\"20\" text-anchor=\"middle\">{}</text>",
+        left + pw / 2.0,
+        xml(title)
+    );
+    let keep = |k: usize| {
+        lines_hz[k] > 0.0
+            && [measured[k], model[k]]
+                .iter()
+                .all(|v| v.norm() > 0.0 && v.norm().is_finite())
+    };
+    let idx: Vec<usize> = (0..lines_hz.len().min(measured.len()).min(model.len()))
+        .filter(|k| keep(*k))
+        .collect();
+    if idx.is_empty() {
+        let _ = writeln!(
+            s,
+            "<text x=\"{}\" y=\"{}\">no data</text>\n</svg>",
+            w / 2.0,
+            h / 2.0
+        );
+        return s;
+    }
+    let lx: Vec<f64> = idx.iter().map(|k| lines_hz[*k].log10()).collect();
+    let (x0, x1) = (
+        lx.iter().copied().fold(f64::INFINITY, f64::min),
+        lx.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    );
+    let x1 = x1.max(x0 + 1e-3);
+    let px = |x: f64| left + (x - x0) / (x1 - x0) * pw;
+    let mags: Vec<f64> = idx
+        .iter()
+        .flat_map(|k| [measured[*k].norm().log10(), model[*k].norm().log10()])
+        .collect();
+    let (y0, y1) = (
+        mags.iter().copied().fold(f64::INFINITY, f64::min).floor(),
+        mags.iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max)
+            .ceil(),
+    );
+    let y1 = y1.max(y0 + 1.0);
+    let top2 = top + ph + gap;
+    let pm = |y: f64| top + (y1 - y) / (y1 - y0) * ph;
+    let pp = |deg: f64| top2 + (180.0 - deg) / 360.0 * ph;
+    for (t, label) in [(top, "magnitude"), (top2, "phase (deg)")] {
+        let _ = writeln!(
+            s,
+            "<rect x=\"{left}\" y=\"{t}\" width=\"{pw}\" height=\"{ph}\" fill=\"none\" stroke=\"black\"/>"
+        );
+        let _ = writeln!(
+            s,
+            "<text x=\"16\" y=\"{:.1}\" transform=\"rotate(-90 16 {:.1})\" text-anchor=\"middle\">{label}</text>",
+            t + ph / 2.0,
+            t + ph / 2.0
+        );
+    }
+    let mut d = y0;
+    while d <= y1 + 1e-9 {
+        let y = pm(d);
+        let _ = writeln!(
+            s,
+            "<line x1=\"{left}\" y1=\"{y:.1}\" x2=\"{:.1}\" y2=\"{y:.1}\" stroke=\"#ddd\"/>\n<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">1e{}</text>",
+            left + pw,
+            left - 6.0,
+            y + 4.0,
+            d as i64
+        );
+        d += 1.0;
+    }
+    for deg in [-180.0, -90.0, 0.0, 90.0, 180.0] {
+        let y = pp(deg);
+        let _ = writeln!(
+            s,
+            "<line x1=\"{left}\" y1=\"{y:.1}\" x2=\"{:.1}\" y2=\"{y:.1}\" stroke=\"#ddd\"/>\n<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{deg}</text>",
+            left + pw,
+            left - 6.0,
+            y + 4.0
+        );
+    }
+    let mut decade = x0.floor();
+    while decade <= x1 {
+        if decade >= x0 {
+            let x = px(decade);
+            let _ = writeln!(
+                s,
+                "<line x1=\"{x:.1}\" y1=\"{top}\" x2=\"{x:.1}\" y2=\"{:.1}\" stroke=\"#ddd\"/>\n<text x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{}</text>",
+                top2 + ph,
+                top2 + ph + 18.0,
+                10f64.powf(decade)
+            );
+        }
+        decade += 1.0;
+    }
+    let _ = writeln!(
+        s,
+        "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">frequency (Hz)</text>",
+        left + pw / 2.0,
+        h - 10.0
+    );
+    for (curve, style) in [
+        (measured, "stroke=\"black\""),
+        (model, "stroke=\"#d62728\" stroke-dasharray=\"6 3\""),
+    ] {
+        let mag: Vec<String> = idx
+            .iter()
+            .zip(&lx)
+            .map(|(k, x)| format!("{:.1},{:.1}", px(*x), pm(curve[*k].norm().log10())))
+            .collect();
+        let phase: Vec<String> = idx
+            .iter()
+            .zip(&lx)
+            .map(|(k, x)| {
+                let deg = curve[*k].im.atan2(curve[*k].re).to_degrees();
+                format!("{:.1},{:.1}", px(*x), pp(deg))
+            })
+            .collect();
+        for pts in [mag, phase] {
+            let _ = writeln!(
+                s,
+                "<polyline fill=\"none\" {style} stroke-width=\"1.3\" points=\"{}\"/>",
+                pts.join(" ")
+            );
+        }
+    }
+    let _ = writeln!(
+        s,
+        "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">measured: solid black; model: dashed red</text>",
+        left + pw - 6.0,
+        top + 16.0
+    );
+    s.push_str("</svg>\n");
+    s
+}
+
+/// Text for SVG: `&`, `<` and `>` escaped.
+fn xml(t: &str) -> String {
+    t.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
 /// The error map as an SVG bar chart: the fraction of the expanded residual each candidate group
 /// explains alone (`docs/MATH.md`, "Localisation"), selected groups in red.
 pub fn error_map_svg(loc: &Localisation) -> String {
