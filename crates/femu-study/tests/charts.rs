@@ -109,9 +109,17 @@ fn frf_chart_places_points_by_hand() {
     let polylines: Vec<&str> = svg.lines().filter(|l| l.starts_with("<polyline")).collect();
     assert_eq!(polylines.len(), 4);
     for p in &polylines {
-        let points = p.split("points=\"").nth(1).unwrap().trim_end_matches("\"/>");
+        let points = p
+            .split("points=\"")
+            .nth(1)
+            .unwrap()
+            .trim_end_matches("\"/>");
         assert_eq!(points.split(' ').count(), 3, "{p}");
     }
     // measured phase: 0 deg at 1 Hz (y = 295 + 180 / 360 * 215 = 402.5), 90 at 10 Hz
-    assert!(polylines[1].contains("90.0,402.5 410.0,348.8"), "{}", polylines[1]);
+    assert!(
+        polylines[1].contains("90.0,402.5 410.0,348.8"),
+        "{}",
+        polylines[1]
+    );
 }
