@@ -73,6 +73,17 @@ fn modes_json_matches_dense_reference() {
     );
     let v = json_of(&json);
     assert_eq!(v["dofs"], 24);
+    // the load's phases: each a duration (their values are the machine's, not checked here)
+    for phase in [
+        "read_seconds",
+        "checks_seconds",
+        "pattern_seconds",
+        "assembly_seconds",
+    ] {
+        let t = v["load"][phase].as_f64().unwrap();
+        assert!(t.is_finite() && t >= 0.0, "{phase}: {t}");
+    }
+    assert!(stdout.contains("Model: read "), "{stdout}");
     let vtu_text = std::fs::read_to_string(&vtu).unwrap();
     assert_eq!(vtu_text.matches("Name=\"model mode ").count(), 4);
     assert!(vtu_text.contains("NumberOfPoints=\"12\" NumberOfCells=\"2\""));

@@ -55,6 +55,20 @@ impl ModelOptions {
     }
 }
 
+/// Where loading a model spent its time, s (what `femu modes` prints and writes under `load`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct LoadTimings {
+    /// Reading the file and building the model (mesh checks, materials, constraints).
+    pub read_seconds: f64,
+    /// The model's checks before assembly (nodes without elements, units).
+    pub checks_seconds: f64,
+    /// The sparsity pattern and the element colouring.
+    pub pattern_seconds: f64,
+    /// The parallel assembly of `K` and `M`, with the ordering and the symbolic analysis of `K`
+    /// made on one thread beside it.
+    pub assembly_seconds: f64,
+}
+
 /// A model read, checked and assembled once.
 #[derive(Debug, Clone)]
 pub struct LoadedModel {
@@ -73,6 +87,8 @@ pub struct LoadedModel {
     pub eigrl: Option<femu_io::nastran::Eigrl>,
     /// What the readers noticed and the options that did not apply, one line each.
     pub warnings: Vec<String>,
+    /// Where loading spent its time.
+    pub timings: LoadTimings,
 }
 
 /// A test read and mapped onto a model.
@@ -99,6 +115,7 @@ pub struct LoadedTest {
 /// The readers' errors (file and line), a mesh without a material, an unknown set to fix, and
 /// assembly errors (naming the element).
 pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, StudyError> {
+    let start = std::time::Instant::now();
     let mut warnings = Vec::new();
     let format = Format::from_path(path)
         .filter(|f| f.info().model)
@@ -208,12 +225,22 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         (deck.to_model()?, deck.frequency)
     };
     let mut model = model;
+    let mut timings = LoadTimings {
+        read_seconds: start.elapsed().as_secs_f64(),
+        ..Default::default()
+    };
+    let mark = std::time::Instant::now();
     leave_out_orphans(&mut model, path, &mut warnings)?;
     warnings.extend(units_hint(&model, path));
+    timings.checks_seconds = mark.elapsed().as_secs_f64();
+    let mark = std::time::Instant::now();
     let asm = Assembler::new(&model).map_err(|e| StudyError::within(path, e))?;
+    timings.pattern_seconds = mark.elapsed().as_secs_f64();
+    let mark = std::time::Instant::now();
     let sys = asm
         .assemble_analysed(&model, mass)
         .map_err(|e| StudyError::within(path, e))?;
+    timings.assembly_seconds = mark.elapsed().as_secs_f64();
     Ok(LoadedModel {
         path: path.to_path_buf(),
         model,
@@ -222,6 +249,7 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         frequency,
         eigrl,
         warnings,
+        timings,
     })
 }
 

@@ -132,6 +132,8 @@ pub struct ModesReport {
     pub notes: Vec<String>,
     /// Wall time of the solve, s.
     pub seconds: f64,
+    /// Where loading the model spent its time.
+    pub load: crate::load::LoadTimings,
     /// Where the eigensolve's time went.
     pub eigensolver: EigenReport,
 }
@@ -217,6 +219,7 @@ pub fn solve_modes(
     let modes = sys.modes(which, eigen)?;
     let report = ModesReport {
         model: loaded.path.display().to_string(),
+        load: loaded.timings,
         dofs: sys.k.rows(),
         mass: match loaded.sys.mass_kind {
             MassKind::Lumped => "lumped",

@@ -111,6 +111,11 @@ pub fn run(a: &ModesArgs, quiet: bool) -> Result<(), CliError> {
                 "FAILED"
             }
         );
+        let l = &report.load;
+        println!(
+            "Model: read {:.2} s, checks {:.2} s, pattern {:.2} s, assembly {:.2} s (ordering and symbolic analysis beside it)",
+            l.read_seconds, l.checks_seconds, l.pattern_seconds, l.assembly_seconds
+        );
         println!("Eigensolver: {}", report.eigensolver.summary());
     }
     if let Some(path) = &a.vtu {
