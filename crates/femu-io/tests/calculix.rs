@@ -6,32 +6,9 @@
 
 use femu_fem::prelude::*;
 use femu_io::inp::{FrequencyStep, write_inp};
-use std::process::Command;
 
 fn ccx_available() -> bool {
-    let found = Command::new("ccx").arg("-v").output().is_ok();
-    if !found && std::env::var_os("FEMU_REQUIRE_CCX").is_some() {
-        panic!("FEMU_REQUIRE_CCX is set but ccx is not on PATH");
-    }
-    if !found {
-        eprintln!("skipped: ccx (CalculiX) is not installed");
-    }
-    found
-}
-
-/// Eigenvalues of the `.dat` file's "E I G E N V A L U E   O U T P U T" table.
-fn ccx_eigenvalues(dat: &str) -> Vec<f64> {
-    let start = dat
-        .find("E I G E N V A L U E   O U T P U T")
-        .expect("eigenvalue table in the .dat file");
-    dat[start..]
-        .lines()
-        .skip(1)
-        .map(str::trim)
-        .skip_while(|l| !l.starts_with(|c: char| c.is_ascii_digit()))
-        .take_while(|l| l.starts_with(|c: char| c.is_ascii_digit()))
-        .map(|l| l.split_whitespace().nth(1).unwrap().parse::<f64>().unwrap())
-        .collect()
+    femu_testkit::ccx::available()
 }
 
 /// CalculiX's lowest `count` eigenvalues of `model` (written by femu with a `*FREQUENCY` step).
@@ -228,18 +205,9 @@ fn ccx_of_text(text: &str, count: usize, name: &str) -> Vec<f64> {
     let dir = std::env::temp_dir().join(format!("femu-ccx-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("job.inp"), text).unwrap();
-    let out = Command::new("ccx")
-        .arg("-i")
-        .arg("job")
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "ccx failed: {}",
-        String::from_utf8_lossy(&out.stdout)
-    );
-    let ccx = ccx_eigenvalues(&std::fs::read_to_string(dir.join("job.dat")).unwrap());
+    femu_testkit::ccx::run(&dir, "job");
+    let ccx =
+        femu_testkit::ccx::eigenvalues(&std::fs::read_to_string(dir.join("job.dat")).unwrap());
     assert_eq!(ccx.len(), count);
     let _ = std::fs::remove_dir_all(&dir);
     ccx
@@ -443,17 +411,7 @@ fn incompatible_mode_bricks_agree_with_calculix_c3d8i() {
     let dir = std::env::temp_dir().join(format!("femu-ccx-c3d8i-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("job.inp"), &stat).unwrap();
-    let out = Command::new("ccx")
-        .arg("-i")
-        .arg("job")
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stdout)
-    );
+    femu_testkit::ccx::run(&dir, "job");
     let dat = std::fs::read_to_string(dir.join("job.dat")).unwrap();
     let _ = std::fs::remove_dir_all(&dir);
     // "node ux uy uz" rows after the displacement header

@@ -2,6 +2,8 @@
 //! random generator, so tests need no RNG crate and are reproducible, the small steel models
 //! several crates test on, and the 3D Laplacian with its analytic spectrum.
 
+pub mod ccx;
+
 use femu_fem::prelude::*;
 use femu_sparse::SparseMatrix;
 
