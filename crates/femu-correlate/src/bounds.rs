@@ -11,6 +11,9 @@
 //!
 //! Fixing DOFs restricts the Rayleigh quotients to a subspace, so both bounds hold for any
 //! constraints.
+//!
+//! A model given as matrices has no elements: [`inertia_bounds`] proves the same two bounds from
+//! the assembled pencil by Sylvester's law of inertia instead (docs/MATH.md, "The estimators").
 
 use crate::CorrelateError;
 use faer::Mat;
@@ -121,4 +124,81 @@ pub fn element_bounds(model: &Model, mass: MassKind) -> Result<ElementBounds, Co
         lambda_max_element: model.mesh().element(at).id,
         mu_min_lower: mu,
     })
+}
+
+/// `lambda_max(K, M)` bounded above and `mu_min(M)` below from the assembled matrices, each proven
+/// by a Sturm count (Sylvester's law of inertia): `K - tau M` with `n` negative pivots has every
+/// eigenvalue below `tau`; `M - mu I` with none has `mu_min(M) >= mu`. The first `tau` tried is
+/// `max_i sum_j |k_ij| / m_ii` (Gershgorin's row sums over the mass diagonal), multiplied by 4
+/// until the count proves it; `mu` is Gershgorin's lower bound when it is positive, otherwise
+/// half the smallest mass diagonal, divided by 4 until proven. For models without elements (K
+/// and M read from another solver), where [`element_bounds`] has nothing to sum over.
+///
+/// Returns `(lambda_max upper bound, mu_min lower bound)`: `lambda_max` is infinite when the
+/// mass is singular (a DOF without mass, or no `tau` up to `4^30` times the first proves a
+/// bound: the pencil has infinite eigenvalues), and `mu_min` is `None` then.
+///
+/// # Errors
+/// The factorizations' errors (a non-finite or non-symmetric matrix).
+pub fn inertia_bounds(
+    k: &femu_sparse::SparseMatrix,
+    m: &femu_sparse::SparseMatrix,
+) -> Result<(f64, Option<f64>), CorrelateError> {
+    use femu_sparse::eigen::Pencil;
+    let n = k.rows();
+    let diag = |a: &femu_sparse::SparseMatrix, i: usize| a.get(i, i).copied().unwrap_or(0.0);
+    let mut row_abs = vec![0.0; n];
+    let mut m_off = vec![0.0; n];
+    for (v, (i, _)) in k.iter() {
+        row_abs[i] += v.abs();
+    }
+    for (v, (i, j)) in m.iter() {
+        if i != j {
+            m_off[i] += v.abs();
+        }
+    }
+    if n == 0 || (0..n).any(|i| !(diag(m, i) > 0.0)) {
+        return Ok((f64::INFINITY, None));
+    }
+    let mut tau = (0..n)
+        .map(|i| row_abs[i] / diag(m, i))
+        .fold(0.0_f64, f64::max)
+        .max(f64::MIN_POSITIVE);
+    // K - tau M is factored on K's pattern: K with a stored zero wherever M has an entry K lacks
+    let mut union = sprs::TriMat::with_capacity((n, n), k.nnz() + m.nnz());
+    for (v, (i, j)) in k.iter() {
+        union.add_triplet(i, j, *v);
+    }
+    for (_, (i, j)) in m.iter() {
+        union.add_triplet(i, j, 0.0);
+    }
+    let k_union: femu_sparse::SparseMatrix = union.to_csc();
+    let pencil = Pencil::new(&k_union, m, femu_sparse::ordering::Ordering::default())?;
+    let mut lambda_max = f64::INFINITY;
+    for _ in 0..=30 {
+        if pencil.count_below(tau)? == n {
+            lambda_max = tau;
+            break;
+        }
+        tau *= 4.0;
+    }
+    if !lambda_max.is_finite() {
+        return Ok((lambda_max, None));
+    }
+    let gershgorin = (0..n)
+        .map(|i| diag(m, i) - m_off[i])
+        .fold(f64::INFINITY, f64::min);
+    if gershgorin > 0.0 {
+        return Ok((lambda_max, Some(gershgorin)));
+    }
+    let identity: femu_sparse::SparseMatrix = sprs::CsMat::eye_csc(n);
+    let mass = Pencil::new(m, &identity, femu_sparse::ordering::Ordering::default())?;
+    let mut mu = 0.5 * (0..n).map(|i| diag(m, i)).fold(f64::INFINITY, f64::min);
+    for _ in 0..=30 {
+        if mass.count_below(mu)? == 0 {
+            return Ok((lambda_max, Some(mu)));
+        }
+        mu *= 0.25;
+    }
+    Ok((lambda_max, None))
 }

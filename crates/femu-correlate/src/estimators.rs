@@ -278,8 +278,9 @@ pub struct ModelSpectrum {
     pub values: Vec<f64>,
     /// What proves them complete where they claim to be.
     pub proof: SpectrumProof,
-    /// An upper bound of `lambda_max` (see [`element_bounds`](crate::element_bounds)); with a
-    /// complete spectrum its largest value is used instead.
+    /// An upper bound of `lambda_max` (see [`element_bounds`](crate::element_bounds) and
+    /// [`inertia_bounds`](crate::inertia_bounds); infinite for a singular mass, when Theorem 3
+    /// is not formed); with a complete spectrum its largest value is used instead.
     pub lambda_max: f64,
     /// A lower bound of the smallest eigenvalue of `M`, for [`BoundKind::EuclideanScaled`].
     pub mu_min: Option<f64>,
@@ -463,7 +464,8 @@ pub fn assess(
             form,
             bound: rho,
             relation: Relation::AtLeast,
-            quantity: s.map(|s| dk + s * spread),
+            // an unbounded spread (a singular mass: infinite eigenvalues) leaves T3 nothing to say
+            quantity: s.filter(|_| spread.is_finite()).map(|s| dk + s * spread),
             theorem,
         });
         if let Some(g) = gap.filter(|g| *g > 0.0) {

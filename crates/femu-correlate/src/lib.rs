@@ -65,7 +65,7 @@ pub mod sensors;
 pub mod study;
 pub mod test_data;
 
-pub use bounds::{ElementBounds, element_bounds};
+pub use bounds::{ElementBounds, element_bounds, inertia_bounds};
 pub use complexity::Complexity;
 pub use error::CorrelateError;
 pub use estimators::{

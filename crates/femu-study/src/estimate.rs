@@ -232,8 +232,8 @@ pub struct EstimateResult {
 
 /// Correlates `test` with the model modes `modes`, and assesses the expanded test shapes `x`
 /// (full length, one column per test mode) against the spectrum: `rho_M`, `rho_2`, Theorems 1-4
-/// in both forms with `lambda_max` and `mu_min(M)` bounded element by element (`docs/MATH.md`,
-/// "Estimators").
+/// in both forms with `lambda_max` and `mu_min(M)` bounded element by element, or by inertia for a
+/// model without elements ([`femu_correlate::inertia_bounds`]; `docs/MATH.md`, "Estimators").
 ///
 /// # Errors
 /// Sizes, NaN, a pairing or estimator error.
@@ -248,13 +248,19 @@ pub fn estimate_with_bounds(
 ) -> Result<EstimateResult, StudyError> {
     let correlation = correlate(modes, test, layout, &options.pairing)?;
     let lambdas = test.eigenvalues();
-    let eb = element_bounds(model, sys.mass_kind)?;
+    // element by element; a model without elements (another solver's matrices) by inertia
+    let (lambda_max, mu_min) = if model.mesh().element_count() > 0 {
+        let eb = element_bounds(model, sys.mass_kind)?;
+        (eb.lambda_max_upper, Some(eb.mu_min_lower))
+    } else {
+        femu_correlate::inertia_bounds(&sys.k, &sys.m)?
+    };
     // the mode set carries its Sturm proof: which bounds are theorems follows from it
     let spectrum = ModelSpectrum {
         values: modes.values.clone(),
         proof: modes.proof,
-        lambda_max: eb.lambda_max_upper,
-        mu_min: Some(eb.mu_min_lower),
+        lambda_max,
+        mu_min,
     };
     let paired: Vec<Option<usize>> = (0..test.len())
         .map(|t| correlation.pairing.of_test(t).map(|p| p.model))

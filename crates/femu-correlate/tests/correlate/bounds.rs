@@ -502,3 +502,63 @@ fn identity_mass_is_computed() {
     }));
     assert!(!femu_correlate::is_identity(&coupled));
 }
+
+/// `inertia_bounds` (matrices without elements): `lambda_max(K, M)` from above and `mu_min(M)`
+/// from below, each proven by a Sturm count, against the dense generalized eigenvalues and the
+/// Laplacian's analytic spectrum. With `M` the 3D Laplacian (Gershgorin's lower bound is 0, so the
+/// count proves `mu`), `mu_min` lies between a sixteenth of the analytic smallest eigenvalue and
+/// it; `lambda_max` lies between the dense largest and 4 times it or the first guess
+/// (`max_i sum_j |k_ij| / m_ii`, written out here). A diagonal `M` takes Gershgorin's exact bound;
+/// a massless DOF makes `lambda_max` infinite.
+#[test]
+fn inertia_bounds_enclose_the_dense_spectrum() {
+    let lap = femu_testkit::laplacian_3d(4);
+    let n = lap.rows();
+    let mut t = sprs::TriMat::new((n, n));
+    for i in 0..n {
+        t.add_triplet(i, i, 1.0e3 * (1.0 + i as f64));
+    }
+    let k_diag: femu_sparse::SparseMatrix = t.to_csc();
+    let (lmax, mu) = femu_correlate::inertia_bounds(&k_diag, &lap).unwrap();
+    let dense_values = femu_sparse::dense::generalized_symmetric_eigenvalues(
+        dense(&k_diag).as_ref(),
+        dense(&lap).as_ref(),
+    )
+    .unwrap();
+    let top = *dense_values.last().unwrap();
+    let guess = 1.0e3 * n as f64 / 6.0;
+    assert!(
+        lmax >= top && lmax <= (4.0 * top).max(guess),
+        "{lmax} vs {top}"
+    );
+    let smallest = femu_testkit::laplacian_3d_spectrum(4)[0];
+    let mu = mu.unwrap();
+    assert!(
+        mu <= smallest && mu >= smallest / 16.0,
+        "{mu} vs {smallest}"
+    );
+    // K the Laplacian, M diagonal: Gershgorin's bound of M is its smallest diagonal, exactly
+    let mut t = sprs::TriMat::new((n, n));
+    for i in 0..n {
+        t.add_triplet(i, i, 2.0 + (i % 5) as f64);
+    }
+    let m_diag: femu_sparse::SparseMatrix = t.to_csc();
+    let (lmax, mu) = femu_correlate::inertia_bounds(&lap, &m_diag).unwrap();
+    let values = femu_sparse::dense::generalized_symmetric_eigenvalues(
+        dense(&lap).as_ref(),
+        dense(&m_diag).as_ref(),
+    )
+    .unwrap();
+    assert!(lmax >= *values.last().unwrap());
+    assert_eq!(mu, Some(2.0));
+    // one DOF without mass: infinite eigenvalue, no bound
+    let mut t = sprs::TriMat::new((n, n));
+    for i in 1..n {
+        t.add_triplet(i, i, 1.0);
+    }
+    let singular: femu_sparse::SparseMatrix = t.to_csc();
+    assert_eq!(
+        femu_correlate::inertia_bounds(&lap, &singular).unwrap(),
+        (f64::INFINITY, None)
+    );
+}
