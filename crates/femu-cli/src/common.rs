@@ -6,7 +6,7 @@ use femu::study::load::{LengthUnit, LoadedModel, MaterialOptions, ModelOptions};
 use femu::study::mapping::{Align, MapMethod};
 use femu::study::study_file::EngineName;
 use indicatif::{ProgressBar, ProgressStyle};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use crate::error::CliError;
@@ -37,6 +37,11 @@ pub struct ModelArgs {
     /// C3D8I brick, which bends without locking; a deck states its own).
     #[arg(long, value_enum, default_value = "full")]
     pub bricks: femu::fem::element::Formulation,
+    /// Models given as another solver's matrices (CalculiX `job.sti`, MatrixMarket `X_K.mtx`):
+    /// the nodes' coordinates, a deck's `*NODE` lines (`.inp`) or a table (`.csv`: node,x,y,z);
+    /// by default `job.inp` or `X_nodes.csv` beside the matrices.
+    #[arg(long, value_name = "FILE")]
+    pub nodes: Option<PathBuf>,
 }
 
 /// How a test is placed on the model: the arguments of every command that reads a test.
@@ -142,6 +147,7 @@ impl ModelArgs {
             lumped,
             lenient: self.lenient,
             bricks: self.bricks,
+            nodes: self.nodes.clone(),
         })
     }
 }

@@ -682,6 +682,32 @@ fn matrices_export_round_trips() {
     }
     let dofs = std::fs::read_to_string(dir.join("m_dofs.csv")).unwrap();
     assert_eq!(dofs.lines().count(), sys.dofs.free_count() + 1);
+    // the set is a model: the same modes from the files as from the deck
+    let lines = |model: &std::path::Path| {
+        let out = femu()
+            .args(["modes", model.to_str().unwrap(), "--count", "4"])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let (from_files, from_deck) = (lines(&dir.join("m_K.mtx")), lines(&deck));
+    assert!(
+        from_files.contains("Matrices: MatrixMarket matrices with a DOF table"),
+        "{from_files}"
+    );
+    let table = |s: &str| -> Vec<String> {
+        s.lines()
+            .filter(|l| l.starts_with("| ") && !l.starts_with("| mode"))
+            .map(|l| l.split('|').nth(2).unwrap().trim().to_string())
+            .collect()
+    };
+    assert_eq!(table(&from_files), table(&from_deck));
+    assert_eq!(table(&from_files).len(), 4);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -65,6 +65,44 @@ pub struct SystemMatrices {
 }
 
 impl SystemMatrices {
+    /// Matrices assembled elsewhere (another solver's `K` and `M`), already numbered by `dofs`'
+    /// free DOFs, with the rigid-body motions of the nodes at `coords` as the eigensolver's
+    /// null-space hint (checked by it, so a supported model loses nothing by it).
+    ///
+    /// # Errors
+    /// [`FemError::Constraint`] when a matrix is not square of `dofs.free_count()` rows.
+    pub fn from_matrices(
+        k: SparseMatrix,
+        m: SparseMatrix,
+        dofs: DofMap,
+        mass_kind: MassKind,
+        coords: &[[f64; 3]],
+    ) -> Result<Self, FemError> {
+        let n = dofs.free_count();
+        for (name, a) in [("K", &k), ("M", &m)] {
+            if a.rows() != n || a.cols() != n {
+                return Err(FemError::Constraint {
+                    label: format!("the matrix {name}"),
+                    reason: format!(
+                        "it is {} x {}, the DOF map has {n} free DOFs",
+                        a.rows(),
+                        a.cols()
+                    ),
+                });
+            }
+        }
+        let rigid_body = NullSpaceHint::new(dofs.rigid_body_motions(coords));
+        Ok(Self {
+            k,
+            m,
+            dofs,
+            mass_kind,
+            rigid_body,
+            analysis: None,
+            checks: None,
+        })
+    }
+
     /// `params` with [`SystemMatrices::rigid_body`] as its null-space hint, unless it has one.
     pub fn eigen_options(&self, params: &EigenOptions) -> EigenOptions {
         EigenOptions {

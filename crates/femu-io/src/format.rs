@@ -20,6 +20,10 @@ pub enum Format {
     Json,
     /// CSV test modes (`mode, frequency_hz, node, direction, value`).
     Csv,
+    /// Another solver's `K` and `M` with the node and component of each row: CalculiX's
+    /// `job.sti` (with `job.mas`, `job.dof`) or MatrixMarket `X_K.mtx` (with `X_M.mtx`,
+    /// `X_dofs.csv`); [`crate::matrices`].
+    Matrices,
 }
 
 /// One row of the table: the format, its extensions (lower case), what it holds for femu, and its
@@ -74,6 +78,14 @@ pub const FORMATS: &[FormatInfo] = &[
         deck: false,
         test: true,
         name: "universal files",
+    },
+    FormatInfo {
+        format: Format::Matrices,
+        extensions: &["sti", "mtx"],
+        model: true,
+        deck: true,
+        test: false,
+        name: "stiffness and mass matrices with their DOF table",
     },
     FormatInfo {
         format: Format::Json,
@@ -158,12 +170,16 @@ mod tests {
         assert!(Format::Inp.info().deck && !Format::Gmsh.info().deck);
         assert_eq!(
             described(true),
-            "Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh) and universal files (.unv, .uff)"
+            "Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh), universal files (.unv, .uff) and stiffness and mass matrices with their DOF table (.sti, .mtx)"
         );
         assert_eq!(
             described(false),
             "universal files (.unv, .uff), JSON (.json) and CSV (.csv, .txt)"
         );
-        assert_eq!(all_extensions().len(), 10);
+        assert_eq!(all_extensions().len(), 12);
+        assert_eq!(
+            Format::from_path(Path::new("job.sti")),
+            Some(Format::Matrices)
+        );
     }
 }

@@ -15,6 +15,7 @@ pub mod format;
 pub mod gmsh;
 pub mod inp;
 pub mod json;
+pub mod matrices;
 pub mod nastran;
 mod spelling;
 pub mod test_data;

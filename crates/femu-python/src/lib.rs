@@ -121,8 +121,11 @@ struct Model {
 /// a Gmsh mesh (`.msh`) or universal file solids (`.unv`, `.uff`). A mesh-only file needs the
 /// material (`young` Pa, `poisson`, `density` kg/m^3) and may clamp node sets (`fix`); its 8-node
 /// bricks are fully integrated unless `bricks="incompatible_modes"` (a deck states its own).
+/// Another solver's matrices (CalculiX `job.sti`, MatrixMarket `X_K.mtx` with `X_M.mtx` and
+/// `X_dofs.csv`) are a model too, with their nodes' coordinates from `nodes` (a deck or a
+/// `node,x,y,z` table; by default `job.inp` or `X_nodes.csv` beside them).
 #[pyfunction]
-#[pyo3(signature = (path, *, lumped=false, lenient=false, young=None, poisson=None, density=None, fix=None, bricks="full"))]
+#[pyo3(signature = (path, *, lumped=false, lenient=false, young=None, poisson=None, density=None, fix=None, bricks="full", nodes=None))]
 #[allow(clippy::too_many_arguments)]
 fn read_model(
     py: Python<'_>,
@@ -134,6 +137,7 @@ fn read_model(
     density: Option<f64>,
     fix: Option<Vec<String>>,
     bricks: &str,
+    nodes: Option<PathBuf>,
 ) -> PyResult<Model> {
     let bricks = match bricks {
         "full" => femu_fem::element::Formulation::Full,
@@ -163,6 +167,7 @@ fn read_model(
         lumped,
         lenient,
         bricks,
+        nodes,
     };
     let loaded = py.detach(|| load_model(&path, &options)).map_err(err)?;
     let warnings = loaded.warnings.clone();

@@ -195,3 +195,35 @@ def test_the_frf_correlation_is_one_pipeline(case):
     assert min(line["csac"] for line in real["lines"]) > 0.999
     # and the nominal bar, whose G1 is 20 % stiffer, misses the resonances
     assert min(f["frac"] for f in py["functions"]) < 0.9
+
+
+def test_another_solvers_matrices_are_a_model_everywhere(case):
+    """The bar's K and M written by `femu matrices` (MatrixMarket, DOF table, node table) are a
+    model for the command line, a study file and Python alike: the same estimate from each, the
+    same frequency intervals as the deck's (the residues do not depend on where K and M came
+    from), and updating refused by all (no elements)."""
+    run = lambda *args: subprocess.run([str(FEMU), *map(str, args), "--quiet"], cwd=case,
+                                       capture_output=True, text=True)
+    done = run("matrices", "bar.inp", "--out", "bar")
+    assert done.returncode == 0, done.stderr
+    done = run("estimate", "bar_K.mtx", "test.csv", "--count", 16, "--json", "estimate_mtx.json")
+    assert done.returncode == 0, done.stderr
+    (case / "study_mtx.toml").write_text(
+        'model = "bar_K.mtx"\ntest = "test.csv"\nnodes = "bar_nodes.csv"\n'
+        '[expansion]\nmethod = "dynamic"\n'
+    )
+    done = run("run", "study_mtx.toml", "--out", "study_mtx")
+    assert done.returncode == 0, done.stderr
+    model = femu.read_model(case / "bar_K.mtx", nodes=case / "bar_nodes.csv")
+    test = femu.read_test(case / "test.csv", model)
+    py = femu.estimate(model, test, count=16)
+    assert_same(py["assessments"], read(case / "estimate_mtx.json"))
+    assert_same(read(case / "study_mtx" / "estimate.json"), py)
+    deck = femu.read_model(case / "bar.inp")
+    own = femu.estimate(deck, femu.read_test(case / "test.csv", deck), count=16)
+    for a, b in zip(py["assessments"], own["assessments"]):
+        assert np.allclose(a["frequency_interval_hz"], b["frequency_interval_hz"], rtol=1e-9)
+    with pytest.raises(Exception, match="no elements"):
+        femu.update(model, test, SETS)
+    done = run("update", "bar_K.mtx", "test.csv", "--sets", ",".join(SETS))
+    assert done.returncode != 0 and "no elements" in done.stderr

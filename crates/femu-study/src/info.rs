@@ -72,7 +72,8 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
         Some(Format::Gmsh) => describe_gmsh(path, s_, w)?,
         Some(Format::Universal) => describe_universal(path, s_, w)?,
         Some(f @ (Format::Json | Format::Csv)) => describe_test_table(path, f == Format::Json, s_)?,
-        _ => {
+        Some(Format::Matrices) => describe_matrices(path, s_, w)?,
+        None => {
             let all = femu_io::format::all_extensions();
             return Err(StudyError::in_file(
                 path,
@@ -125,6 +126,55 @@ fn describe_inp(path: &Path, s: &mut String, warnings: &mut Vec<String>) -> Resu
         "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, update)",
         model.dof_map()?.free_count()
     );
+    Ok(())
+}
+
+/// What [`describe`] says of another solver's matrices: their files, size and DOFs, and where
+/// the nodes' coordinates would come from.
+fn describe_matrices(
+    path: &Path,
+    s: &mut String,
+    warnings: &mut Vec<String>,
+) -> Result<(), StudyError> {
+    let ext = femu_io::matrices::read_matrices(path)?;
+    let _ = writeln!(s, "format: {}", ext.source.name());
+    let names: Vec<String> = ext.files.iter().map(|f| f.display().to_string()).collect();
+    let _ = writeln!(s, "files: {}", names.join(", "));
+    let nodes: std::collections::BTreeSet<u64> = ext.dofs.iter().map(|d| d.node).collect();
+    let rotations = ext.dofs.iter().filter(|d| d.component >= 3).count();
+    let _ = writeln!(
+        s,
+        "rows: {} DOFs on {} nodes ({rotations} of them rotations); nnz(K) = {}, nnz(M) = {}",
+        ext.dofs.len(),
+        nodes.len(),
+        ext.k.nnz(),
+        ext.m.nnz()
+    );
+    match femu_io::matrices::default_node_table(path).filter(|p| p.exists()) {
+        Some(table) => {
+            let (model, sys, _, w) = crate::external::matrix_model(path, Some(&table), false)?;
+            warnings.extend(w);
+            let _ = writeln!(
+                s,
+                "node coordinates: {} ({} nodes)",
+                table.display(),
+                model.mesh().node_count()
+            );
+            let _ = writeln!(
+                s,
+                "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, expand, frf; not update, which needs element matrices)",
+                sys.dofs.free_count()
+            );
+        }
+        None => {
+            let _ = writeln!(
+                s,
+                "node coordinates: none beside the matrices ({}); femu would use it as a model given --nodes FILE",
+                femu_io::matrices::default_node_table(path)
+                    .map_or_else(|| "-".into(), |p| p.display().to_string())
+            );
+        }
+    }
     Ok(())
 }
 

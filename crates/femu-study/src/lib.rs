@@ -32,6 +32,7 @@ pub use femu_update::discretisation;
 mod error;
 pub mod estimate;
 pub mod expand;
+pub mod external;
 pub mod frf;
 pub mod info;
 pub mod load;

@@ -42,6 +42,10 @@ pub struct ModelOptions {
     /// C3D8 or C3D8I, or the PSOLID's `IN` and `ISOP`; docs/MATH.md, "The brick with
     /// incompatible modes").
     pub bricks: Formulation,
+    /// The node coordinates of a model read as another solver's matrices (a deck's `*NODE`
+    /// lines or a `node,x,y,z` table); by default the deck or table beside the matrices
+    /// ([`femu_io::matrices::default_node_table`]).
+    pub nodes: Option<PathBuf>,
 }
 
 impl ModelOptions {
@@ -89,6 +93,9 @@ pub struct LoadedModel {
     pub warnings: Vec<String>,
     /// Where loading spent its time.
     pub timings: LoadTimings,
+    /// For a model read as another solver's `K` and `M`: where they came from (the model then has
+    /// nodes and no elements).
+    pub matrices: Option<crate::external::MatrixOrigin>,
 }
 
 /// A test read and mapped onto a model.
@@ -129,6 +136,9 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
                 ),
             )
         })?;
+    if format == Format::Matrices {
+        return load_matrices(path, options, start);
+    }
     let mut mass = options.mass();
     let mut eigrl = None;
     let (model, frequency) = if !format.info().deck {
@@ -250,6 +260,41 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         eigrl,
         warnings,
         timings,
+        matrices: None,
+    })
+}
+
+/// [`load_model`] for another solver's matrices ([`crate::external::matrix_model`]).
+fn load_matrices(
+    path: &Path,
+    options: &ModelOptions,
+    start: std::time::Instant,
+) -> Result<LoadedModel, StudyError> {
+    let (model, sys, origin, mut warnings) =
+        crate::external::matrix_model(path, options.nodes.as_deref(), options.lumped)?;
+    if options.material.is_some() || !options.fix.is_empty() {
+        warnings.push(format!(
+            "{}: the matrices hold their own material and supports: the given material and sets to fix are not used",
+            path.display()
+        ));
+    }
+    let read_seconds = start.elapsed().as_secs_f64();
+    let mark = std::time::Instant::now();
+    let asm = Assembler::new(&model).map_err(|e| StudyError::within(path, e))?;
+    Ok(LoadedModel {
+        path: path.to_path_buf(),
+        model,
+        sys,
+        asm,
+        frequency: None,
+        eigrl: None,
+        warnings,
+        timings: LoadTimings {
+            read_seconds,
+            pattern_seconds: mark.elapsed().as_secs_f64(),
+            ..Default::default()
+        },
+        matrices: Some(origin),
     })
 }
 

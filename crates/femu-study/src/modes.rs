@@ -108,6 +108,10 @@ pub struct ModesReport {
     pub dofs: usize,
     /// `consistent` or `lumped`.
     pub mass: &'static str,
+    /// For a model read as another solver's matrices: which (`CalculiX's stored matrices`, ...)
+    /// and the files of its stiffness, mass, DOF table and node coordinates.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub matrices: Option<MatricesReport>,
     /// Frequencies, Hz.
     pub frequencies_hz: Vec<f64>,
     /// Eigenvalues `omega^2`, s^-2.
@@ -136,6 +140,32 @@ pub struct ModesReport {
     pub load: crate::load::LoadTimings,
     /// Where the eigensolve's time went.
     pub eigensolver: EigenReport,
+}
+
+/// Where a model read as matrices came from, as [`ModesReport`] states it.
+#[derive(Debug, Clone, Serialize)]
+pub struct MatricesReport {
+    /// The solver's format.
+    pub format: &'static str,
+    /// Stiffness, mass and DOF table.
+    pub files: Vec<String>,
+    /// The node coordinates.
+    pub nodes: String,
+}
+
+impl MatricesReport {
+    /// The report of `origin`.
+    pub fn of(origin: &crate::external::MatrixOrigin) -> Self {
+        Self {
+            format: origin.source.name(),
+            files: origin
+                .files
+                .iter()
+                .map(|f| f.display().to_string())
+                .collect(),
+            nodes: origin.nodes.display().to_string(),
+        }
+    }
 }
 
 /// Solves for the modes `options` asks for; where it asks for none (no count, shift or band), those
@@ -221,6 +251,7 @@ pub fn solve_modes(
         model: loaded.path.display().to_string(),
         load: loaded.timings,
         dofs: sys.k.rows(),
+        matrices: loaded.matrices.as_ref().map(MatricesReport::of),
         mass: match loaded.sys.mass_kind {
             MassKind::Lumped => "lumped",
             _ => "consistent",

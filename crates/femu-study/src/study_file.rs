@@ -62,6 +62,10 @@ pub struct StudyFile {
     /// The 8-node bricks of a mesh-only model: `"full"` (the default) or `"incompatible_modes"`.
     #[serde(default)]
     pub bricks: femu_fem::element::Formulation,
+    /// The node coordinates of a model given as another solver's matrices (relative to the study
+    /// file): a deck's `*NODE` lines or a `node,x,y,z` table; by default the one beside them.
+    #[serde(default)]
+    pub nodes: Option<PathBuf>,
     /// `[map]`: a test on its own wireframe, aligned and mapped onto the model
     /// (`method = "nearest" | "interpolate"`, `tolerance` in m, `align = "auto" | "T:M,T:M,T:M"`,
     /// `scale`).
@@ -288,6 +292,7 @@ pub fn run_study_file(
         lumped: s.lumped,
         lenient: s.lenient,
         bricks: s.bricks,
+        nodes: s.nodes.as_ref().map(|n| base.join(n)),
     };
     progress("reading and assembling the model");
     // a file the study names that cannot be read: say which study file names it

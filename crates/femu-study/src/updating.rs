@@ -187,7 +187,8 @@ impl UpdateRequest {
 /// (consistent mass; ignored otherwise). Every front end (CLI, study file, Python) calls this.
 ///
 /// # Errors
-/// Unknown sets, `tuned = 0`, and those of [`localise_update_check`].
+/// A model read as another solver's matrices (no elements to update), unknown sets,
+/// `tuned = 0`, and those of [`localise_update_check`].
 pub fn update_loaded(
     model: &LoadedModel,
     test: &LoadedTest,
@@ -196,6 +197,16 @@ pub fn update_loaded(
     before: Option<&ModeSet>,
     progress: impl FnMut(&Iteration),
 ) -> Result<UpdateStudy, StudyError> {
+    if let Some(origin) = &model.matrices {
+        return Err(StudyError::in_file(
+            &model.path,
+            "updating",
+            format!(
+                "the model is {}: updating changes element matrices group by group, and matrices read whole have no elements (correlate, estimate, expand and frf run on it)",
+                origin.source.name()
+            ),
+        ));
+    }
     let names = resolve_sets(model, &request.sets)?;
     let names: Vec<&str> = names.iter().map(String::as_str).collect();
     let options = request.options(test.data.modes.len(), eigen)?;

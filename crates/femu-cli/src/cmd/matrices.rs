@@ -3,12 +3,12 @@
 use crate::common::{ModelArgs, load_model, spinner};
 use crate::error::CliError;
 use clap::Args;
-use femu::study::StudyError;
 use std::path::PathBuf;
 
 /// Export the assembled stiffness and mass as MatrixMarket files (`PREFIX_K.mtx`, `PREFIX_M.mtx`,
-/// symmetric, lower triangle, free DOFs in femu's numbering) and the DOF map (`PREFIX_dofs.csv`:
-/// row, node, component).
+/// symmetric, lower triangle, free DOFs in femu's numbering), the DOF map (`PREFIX_dofs.csv`:
+/// row, node, component) and the node coordinates (`PREFIX_nodes.csv`): a set femu reads back as
+/// a model (`femu modes PREFIX_K.mtx`).
 ///
 /// Examples:
 ///   femu matrices plate.inp --out plate
@@ -35,41 +35,20 @@ pub struct MatricesArgs {
 pub fn run(a: &MatricesArgs, quiet: bool) -> Result<(), CliError> {
     let pb = spinner(quiet, "reading the model");
     let loaded = load_model(&a.model, &a.model_args, a.lumped, quiet, &pb)?;
-    let sys = &loaded.sys;
-    let name = |suffix: &str| {
-        let mut p = a.out.as_os_str().to_owned();
-        p.push(suffix);
-        PathBuf::from(p)
-    };
-    let (k, m, d) = (name("_K.mtx"), name("_M.mtx"), name("_dofs.csv"));
     pb.set_message("writing MatrixMarket files");
-    femu::sparse::mtx::write_matrix_market(&k, &sys.k, true)?;
-    femu::sparse::mtx::write_matrix_market(&m, &sys.m, true)?;
-    let mut csv = String::from("row,node,component\n");
-    for f in 0..sys.dofs.free_count() {
-        let (p, c) = sys.dofs.free_dof(f);
-        let (node, rotation) = sys.dofs.point_node(p);
-        csv.push_str(&format!(
-            "{},{},{}\n",
-            f + 1,
-            loaded.model.mesh().node_id(node),
-            if rotation {
-                ["rx", "ry", "rz"][c]
-            } else {
-                ["x", "y", "z"][c]
-            }
-        ));
-    }
-    std::fs::write(&d, csv).map_err(|e| StudyError::file(&d, e))?;
+    let written = femu::study::external::write_matrices(&loaded.model, &loaded.sys, &a.out)?;
     pb.finish_and_clear();
     if !quiet {
+        let names: Vec<String> = written
+            .files
+            .iter()
+            .map(|f| f.display().to_string())
+            .collect();
         println!(
-            "{} DOF, nnz(K) = {}: {}, {}, {}",
-            sys.k.rows(),
-            sys.k.nnz(),
-            k.display(),
-            m.display(),
-            d.display()
+            "{} DOF, nnz(K) = {}: {}",
+            loaded.sys.k.rows(),
+            loaded.sys.k.nnz(),
+            names.join(", ")
         );
     }
     Ok(())

@@ -85,6 +85,14 @@ pub fn run(a: &ModesArgs, quiet: bool) -> Result<(), CliError> {
             report.mass,
             f.len()
         );
+        if let Some(m) = &report.matrices {
+            println!(
+                "Matrices: {} ({}), node coordinates from {}",
+                m.format,
+                m.files.join(", "),
+                m.nodes
+            );
+        }
         println!("| mode | f (Hz) | lambda (s^-2) | residual | residual kind |");
         println!("|---|---|---|---|---|");
         for (j, fj) in f.iter().enumerate() {

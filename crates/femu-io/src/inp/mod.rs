@@ -606,6 +606,81 @@ pub fn parse_inp(text: &str, path: impl AsRef<Path>) -> Result<InpDeck, IoError>
     parse(&lines, path.as_ref(), &InpOptions::default())
 }
 
+/// The nodes of a deck (its `*NODE` blocks, with its includes) and nothing else: the coordinates
+/// of a model whose matrices another solver made (CalculiX's `*FREQUENCY, SOLVER=MATRIXSTORAGE`
+/// beside its deck), whatever elements the deck holds. Each node with the line that defined it.
+///
+/// # Errors
+/// [`IoError::Io`] for unreadable files; [`IoError::Parse`] with file and line for a malformed
+/// node line, a node defined twice, or `*NODE, SYSTEM=` other than rectangular;
+/// [`IoError::Content`] for a deck without nodes.
+pub fn read_nodes(path: impl AsRef<Path>) -> Result<Vec<(u64, [f64; 3])>, IoError> {
+    let path = path.as_ref();
+    let mut lines = Vec::new();
+    load(path, 0, &mut lines)?;
+    let bad = |l: &Line, reason: String| IoError::Parse {
+        path: l.path.clone(),
+        line: l.number,
+        reason,
+    };
+    let mut nodes = Vec::new();
+    let mut seen: HashMap<u64, usize> = HashMap::new();
+    let mut in_node = false;
+    for l in &lines {
+        let t = l.text.trim();
+        if t.is_empty() || t.starts_with("**") {
+            continue;
+        }
+        if t.starts_with('*') {
+            let (name, params) = keyword(t);
+            in_node = name == "NODE";
+            if let Some(sys) = params
+                .get("SYSTEM")
+                .filter(|v| in_node && !v.eq_ignore_ascii_case("R"))
+            {
+                return Err(bad(
+                    l,
+                    format!(
+                        "*NODE, SYSTEM={sys}: only rectangular coordinates (SYSTEM=R) are read"
+                    ),
+                ));
+            }
+            continue;
+        }
+        if !in_node {
+            continue;
+        }
+        let f = fields(t);
+        let id = f
+            .first()
+            .and_then(|s| s.parse::<u64>().ok())
+            .ok_or_else(|| bad(l, format!("a node needs an id and coordinates, got {t:?}")))?;
+        let mut x = [0.0; 3];
+        for (c, s) in f.iter().skip(1).take(3).enumerate() {
+            x[c] = parse_f64(s).ok_or_else(|| {
+                bad(
+                    l,
+                    format!("coordinate {s:?} of node {id} is not a finite number"),
+                )
+            })?;
+        }
+        if let Some(first) = seen.insert(id, l.number) {
+            return Err(bad(
+                l,
+                format!("node {id} is defined again (first at line {first})"),
+            ));
+        }
+        nodes.push((id, x));
+    }
+    if nodes.is_empty() {
+        return Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: "the deck has no *NODE block".into(),
+        });
+    }
+    Ok(nodes)
+}
+
 fn parse(lines: &[Line], path: &Path, options: &InpOptions) -> Result<InpDeck, IoError> {
     let mut warnings = Vec::new();
     parse_collecting(lines, path, options, &mut warnings).map_err(|e| e.after(&warnings))

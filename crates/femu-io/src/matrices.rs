@@ -1,0 +1,630 @@
+//! Stiffness and mass matrices that another solver assembled, with the node and component of each
+//! row (docs/ARCHITECTURE.md, "Models solved elsewhere"):
+//!
+//! - **CalculiX** `*FREQUENCY, SOLVER=MATRIXSTORAGE` writes `job.sti` (stiffness), `job.mas`
+//!   (mass), one entry `row column value` per line for the upper triangle, 1-based, and `job.dof`,
+//!   the `node.direction` of each row (`12.3`: node 12, z). The matrices are on the free DOFs,
+//!   after the boundary conditions. A model whose shells or beams CalculiX expanded to solids
+//!   stores the expanded nodes, whose labels repeat or name nodes the deck does not have: refused.
+//! - **MatrixMarket with a DOF table**: `X_K.mtx` and `X_M.mtx` (coordinate, real, symmetric or
+//!   general) and `X_dofs.csv` (`row,node,component`, component `x`, `y`, `z`, `rx`, `ry`, `rz` or
+//!   1-6), as `femu matrices` writes them and as any solver's matrices can be written by a short
+//!   script.
+//!
+//! The node coordinates come from a separate table ([`read_node_table`]): the deck's `*NODE` lines
+//! (`job.inp`), or `X_nodes.csv` (`node,x,y,z`).
+
+use crate::IoError;
+use femu_sparse::SparseMatrix;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// One row (and column) of the matrices: a node and one of its six components.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct DofLabel {
+    /// The node id.
+    pub node: u64,
+    /// 0-5: x, y, z, rx, ry, rz.
+    pub component: usize,
+}
+
+/// Which solver's files the matrices came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MatrixSource {
+    /// CalculiX's `.sti`, `.mas` and `.dof`.
+    Calculix,
+    /// MatrixMarket `_K.mtx`, `_M.mtx` with `_dofs.csv`.
+    MatrixMarket,
+}
+
+impl MatrixSource {
+    /// The name users know it by.
+    pub fn name(self) -> &'static str {
+        match self {
+            MatrixSource::Calculix => "CalculiX's stored matrices",
+            MatrixSource::MatrixMarket => "MatrixMarket matrices with a DOF table",
+        }
+    }
+}
+
+/// `K` and `M` from another solver, on the same rows, each row labelled.
+#[derive(Debug, Clone)]
+pub struct ExternalMatrices {
+    /// Stiffness, both triangles stored.
+    pub k: SparseMatrix,
+    /// Mass, both triangles stored.
+    pub m: SparseMatrix,
+    /// The node and component of each row.
+    pub dofs: Vec<DofLabel>,
+    /// The solver's format.
+    pub source: MatrixSource,
+    /// The files read: stiffness, mass, DOF table.
+    pub files: [PathBuf; 3],
+}
+
+/// The files of a matrix set named by one of them: `job.sti` (CalculiX) or `X_K.mtx`
+/// (MatrixMarket with a DOF table); `None` for any other name.
+pub fn matrix_files(path: &Path) -> Option<(MatrixSource, [PathBuf; 3])> {
+    let name = path.file_name()?.to_str()?;
+    let lower = name.to_ascii_lowercase();
+    if let Some(stem) = lower.strip_suffix(".sti").map(|s| &name[..s.len()]) {
+        let sibling = |ext: &str| path.with_file_name(format!("{stem}.{ext}"));
+        return Some((
+            MatrixSource::Calculix,
+            [sibling("sti"), sibling("mas"), sibling("dof")],
+        ));
+    }
+    let stem = lower.strip_suffix("_k.mtx").map(|s| &name[..s.len()])?;
+    let sibling = |suffix: &str| path.with_file_name(format!("{stem}{suffix}"));
+    Some((
+        MatrixSource::MatrixMarket,
+        [path.to_path_buf(), sibling("_M.mtx"), sibling("_dofs.csv")],
+    ))
+}
+
+/// Where the node coordinates of a matrix set are looked for when none is named: the CalculiX
+/// deck `job.inp` beside `job.sti`, or `X_nodes.csv` beside `X_K.mtx`.
+pub fn default_node_table(path: &Path) -> Option<PathBuf> {
+    let (source, files) = matrix_files(path)?;
+    Some(match source {
+        MatrixSource::Calculix => files[0].with_extension("inp"),
+        MatrixSource::MatrixMarket => {
+            let name = files[2].file_name()?.to_str()?;
+            files[2].with_file_name(format!("{}_nodes.csv", name.strip_suffix("_dofs.csv")?))
+        }
+    })
+}
+
+/// Reads the matrix set named by `path` ([`matrix_files`]).
+///
+/// # Errors
+/// [`IoError::Content`] for a name that is neither; [`IoError::Io`] for a missing companion file;
+/// [`IoError::Parse`] with file and line for a malformed entry, an index outside the DOF table, a
+/// label given twice, an entry in both triangles of a CalculiX file, or a non-symmetric matrix.
+pub fn read_matrices(path: &Path) -> Result<ExternalMatrices, IoError> {
+    let Some((source, files)) = matrix_files(path) else {
+        return Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: "femu reads matrices as CalculiX's job.sti (with job.mas and job.dof beside it) or as MatrixMarket X_K.mtx (with X_M.mtx and X_dofs.csv beside it)".into(),
+        });
+    };
+    let (k, m, dofs) = match source {
+        MatrixSource::Calculix => {
+            let dofs = read_calculix_dofs(&files[2])?;
+            let k = read_calculix_matrix(&files[0], dofs.len())?;
+            let m = read_calculix_matrix(&files[1], dofs.len())?;
+            (k, m, dofs)
+        }
+        MatrixSource::MatrixMarket => {
+            let dofs = read_dof_csv(&files[2])?;
+            let read = |p: &Path| {
+                let a = femu_sparse::mtx::read_matrix_market(p).map_err(|e| IoError::Content {
+                    path: p.to_path_buf(),
+                    reason: e.to_string(),
+                })?;
+                if a.rows() != dofs.len() || a.cols() != dofs.len() {
+                    return Err(IoError::Content {
+                        path: p.to_path_buf(),
+                        reason: format!(
+                            "the matrix is {} x {}, the DOF table {} has {} rows",
+                            a.rows(),
+                            a.cols(),
+                            files[2].display(),
+                            dofs.len()
+                        ),
+                    });
+                }
+                symmetric(p, &a, &dofs)?;
+                Ok(a)
+            };
+            (read(&files[0])?, read(&files[1])?, dofs)
+        }
+    };
+    Ok(ExternalMatrices {
+        k,
+        m,
+        dofs,
+        source,
+        files,
+    })
+}
+
+/// Refuses a matrix that is not symmetric to round-off (`1e-10` of its largest entry), naming the
+/// worst pair by its DOF labels.
+fn symmetric(path: &Path, a: &SparseMatrix, dofs: &[DofLabel]) -> Result<(), IoError> {
+    let (defect, i, j) = femu_sparse::csc::symmetry_defect(a);
+    if defect > 1e-10 {
+        return Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: format!(
+                "the matrix is not symmetric: the entries of rows {} and {} ({} and {}) differ by {defect:.1e} of its largest entry",
+                i + 1,
+                j + 1,
+                label(dofs[i]),
+                label(dofs[j])
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// `node 12 z`.
+pub fn label(d: DofLabel) -> String {
+    format!(
+        "node {} {}",
+        d.node,
+        ["x", "y", "z", "rx", "ry", "rz"][d.component]
+    )
+}
+
+fn read_text(path: &Path) -> Result<String, IoError> {
+    std::fs::read(path)
+        .map(|b| String::from_utf8_lossy(&b).into_owned())
+        .map_err(|e| IoError::io(path, e))
+}
+
+fn parse_error(path: &Path, line: usize, reason: String) -> IoError {
+    IoError::Parse {
+        path: path.to_path_buf(),
+        line,
+        reason,
+    }
+}
+
+/// Refuses a label seen before, saying where.
+fn unique(
+    seen: &mut HashMap<DofLabel, usize>,
+    d: DofLabel,
+    path: &Path,
+    line: usize,
+    hint: &str,
+) -> Result<(), IoError> {
+    if let Some(first) = seen.insert(d, line) {
+        return Err(parse_error(
+            path,
+            line,
+            format!("{} is listed again (first at line {first}){hint}", label(d)),
+        ));
+    }
+    Ok(())
+}
+
+/// CalculiX's `.dof`: one `node.direction` per row.
+fn read_calculix_dofs(path: &Path) -> Result<Vec<DofLabel>, IoError> {
+    let text = read_text(path)?;
+    let mut dofs = Vec::new();
+    let mut seen = HashMap::new();
+    for (i, raw) in text.lines().enumerate() {
+        let t = raw.trim();
+        if t.is_empty() {
+            continue;
+        }
+        let parsed = t.split_once('.').and_then(|(n, c)| {
+            let node = n.parse::<u64>().ok()?;
+            let c = c.parse::<usize>().ok().filter(|c| (1..=6).contains(c))?;
+            Some(DofLabel {
+                node,
+                component: c - 1,
+            })
+        });
+        let d = parsed.ok_or_else(|| {
+            parse_error(
+                path,
+                i + 1,
+                format!("expected node.direction (direction 1-6), got {t:?}"),
+            )
+        })?;
+        unique(
+            &mut seen,
+            d,
+            path,
+            i + 1,
+            ": CalculiX stores the DOFs of the solids it expands shells and beams into, which femu cannot map to the deck's nodes; export the matrices of a model of solids, or the modes (.frd) instead",
+        )?;
+        dofs.push(d);
+    }
+    if dofs.is_empty() {
+        return Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: "no DOF in the file".into(),
+        });
+    }
+    Ok(dofs)
+}
+
+/// CalculiX's `.sti` or `.mas`: `row column value`, 1-based, one triangle.
+fn read_calculix_matrix(path: &Path, n: usize) -> Result<SparseMatrix, IoError> {
+    let text = read_text(path)?;
+    let mut tri = sprs::TriMat::new((n, n));
+    let (mut upper, mut lower) = (None, None);
+    for (i, raw) in text.lines().enumerate() {
+        let t = raw.trim();
+        if t.is_empty() {
+            continue;
+        }
+        let line = i + 1;
+        let f: Vec<&str> = t.split_whitespace().collect();
+        if f.len() != 3 {
+            return Err(parse_error(
+                path,
+                line,
+                format!("expected 'row column value', got {t:?}"),
+            ));
+        }
+        let index = |s: &str, what: &str| match s.parse::<usize>() {
+            Ok(v) if (1..=n).contains(&v) => Ok(v - 1),
+            _ => Err(parse_error(
+                path,
+                line,
+                format!("{what} {s:?} is not in 1..={n} (the rows of the .dof file)"),
+            )),
+        };
+        let (r, c) = (index(f[0], "row")?, index(f[1], "column")?);
+        let v = f[2]
+            .replace(['D', 'd'], "e")
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| {
+                parse_error(
+                    path,
+                    line,
+                    format!("value {:?} is not a finite number", f[2]),
+                )
+            })?;
+        if r < c {
+            upper.get_or_insert(line);
+        } else if r > c {
+            lower.get_or_insert(line);
+        }
+        if let (Some(u), Some(l)) = (upper, lower) {
+            return Err(parse_error(
+                path,
+                line,
+                format!(
+                    "entries in both triangles (upper at line {u}, lower at line {l}): CalculiX stores one"
+                ),
+            ));
+        }
+        if v != 0.0 || r == c {
+            tri.add_triplet(r, c, v);
+            if r != c {
+                tri.add_triplet(c, r, v);
+            }
+        }
+    }
+    Ok(tri.to_csc())
+}
+
+/// `X_dofs.csv`: `row,node,component`, rows 1..n in order.
+fn read_dof_csv(path: &Path) -> Result<Vec<DofLabel>, IoError> {
+    let text = read_text(path)?;
+    let mut dofs = Vec::new();
+    let mut seen = HashMap::new();
+    let mut header = false;
+    for (i, raw) in text.lines().enumerate() {
+        let t = raw.trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        let line = i + 1;
+        let f: Vec<&str> = t.split(',').map(str::trim).collect();
+        if !header {
+            header = true;
+            if f.first().is_some_and(|s| s.eq_ignore_ascii_case("row")) {
+                continue;
+            }
+        }
+        let bad = || {
+            parse_error(
+                path,
+                line,
+                format!(
+                    "expected 'row,node,component' (component x, y, z, rx, ry, rz or 1-6), got {t:?}"
+                ),
+            )
+        };
+        if f.len() != 3 {
+            return Err(bad());
+        }
+        let row = f[0].parse::<usize>().map_err(|_| bad())?;
+        if row != dofs.len() + 1 {
+            return Err(parse_error(
+                path,
+                line,
+                format!(
+                    "row {row} where row {} was expected: list the rows in order",
+                    dofs.len() + 1
+                ),
+            ));
+        }
+        let node = f[1].parse::<u64>().map_err(|_| bad())?;
+        let names = ["x", "y", "z", "rx", "ry", "rz"];
+        let component = names
+            .iter()
+            .position(|n| f[2].eq_ignore_ascii_case(n))
+            .or_else(|| {
+                f[2].parse::<usize>()
+                    .ok()
+                    .filter(|c| (1..=6).contains(c))
+                    .map(|c| c - 1)
+            })
+            .ok_or_else(bad)?;
+        let d = DofLabel { node, component };
+        unique(&mut seen, d, path, line, "")?;
+        dofs.push(d);
+    }
+    if dofs.is_empty() {
+        return Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: "no DOF in the table".into(),
+        });
+    }
+    Ok(dofs)
+}
+
+/// Node coordinates for a matrix set: the `*NODE` lines of an Abaqus/CalculiX deck (`.inp`,
+/// whatever its elements), or a CSV table `node,x,y,z` (a header line is allowed).
+///
+/// # Errors
+/// [`IoError::Content`] for another extension or a table without nodes; [`IoError::Parse`] with
+/// file and line for a malformed line or a node given twice.
+pub fn read_node_table(path: &Path) -> Result<Vec<(u64, [f64; 3])>, IoError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("inp") => crate::inp::read_nodes(path),
+        Some("csv") => read_node_csv(path),
+        _ => Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: "node coordinates are read from an Abaqus/CalculiX deck (.inp, its *NODE lines) or a CSV table (.csv: node,x,y,z)".into(),
+        }),
+    }
+}
+
+fn read_node_csv(path: &Path) -> Result<Vec<(u64, [f64; 3])>, IoError> {
+    let text = read_text(path)?;
+    let mut nodes = Vec::new();
+    let mut seen = HashMap::new();
+    let mut header = false;
+    for (i, raw) in text.lines().enumerate() {
+        let t = raw.trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        let line = i + 1;
+        let f: Vec<&str> = t.split(',').map(str::trim).collect();
+        if !header {
+            header = true;
+            if f.first().is_some_and(|s| s.eq_ignore_ascii_case("node")) {
+                continue;
+            }
+        }
+        let bad = || parse_error(path, line, format!("expected 'node,x,y,z', got {t:?}"));
+        if f.len() != 4 {
+            return Err(bad());
+        }
+        let id = f[0].parse::<u64>().map_err(|_| bad())?;
+        let mut x = [0.0; 3];
+        for c in 0..3 {
+            x[c] = f[c + 1]
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(bad)?;
+        }
+        if let Some(first) = seen.insert(id, line) {
+            return Err(parse_error(
+                path,
+                line,
+                format!("node {id} is listed again (first at line {first})"),
+            ));
+        }
+        nodes.push((id, x));
+    }
+    if nodes.is_empty() {
+        return Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: "no node in the table".into(),
+        });
+    }
+    Ok(nodes)
+}
+
+/// Writes the node table `node,x,y,z` that [`read_node_table`] reads.
+///
+/// # Errors
+/// [`IoError::Io`] if the file cannot be written.
+pub fn write_node_table(path: &Path, nodes: &[(u64, [f64; 3])]) -> Result<(), IoError> {
+    let mut s = String::from("node,x,y,z\n");
+    for (id, x) in nodes {
+        s.push_str(&format!("{id},{:e},{:e},{:e}\n", x[0], x[1], x[2]));
+    }
+    std::fs::write(path, s).map_err(|e| IoError::io(path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("femu-matrices-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    /// The companions of each name, in the case the user wrote.
+    #[test]
+    fn companion_files() {
+        let (s, f) = matrix_files(Path::new("/a/Job.STI")).unwrap();
+        assert_eq!(s, MatrixSource::Calculix);
+        assert_eq!(f[1], Path::new("/a/Job.mas"));
+        assert_eq!(f[2], Path::new("/a/Job.dof"));
+        assert_eq!(
+            default_node_table(Path::new("/a/Job.sti")).unwrap(),
+            Path::new("/a/Job.inp")
+        );
+        let (s, f) = matrix_files(Path::new("/a/plate_K.mtx")).unwrap();
+        assert_eq!(s, MatrixSource::MatrixMarket);
+        assert_eq!(f[1], Path::new("/a/plate_M.mtx"));
+        assert_eq!(f[2], Path::new("/a/plate_dofs.csv"));
+        assert_eq!(
+            default_node_table(Path::new("/a/plate_K.mtx")).unwrap(),
+            Path::new("/a/plate_nodes.csv")
+        );
+        assert!(matrix_files(Path::new("/a/job_STIF2.mtx")).is_none());
+    }
+
+    /// A 2-DOF CalculiX set written by hand: the upper triangle mirrored, labels read.
+    #[test]
+    fn calculix_set_by_hand() {
+        let d = dir("ccx");
+        std::fs::write(d.join("j.dof"), "7.1\n7.3\n").unwrap();
+        std::fs::write(
+            d.join("j.sti"),
+            "1 1  4.0e+00\n1 2 -1.0e+00\n2 2  3.0e+00\n",
+        )
+        .unwrap();
+        std::fs::write(d.join("j.mas"), "1 1 2.0\n1 2 0.0\n2 2 1.0\n").unwrap();
+        let e = read_matrices(&d.join("j.sti")).unwrap();
+        assert_eq!(e.source, MatrixSource::Calculix);
+        assert_eq!(
+            e.dofs,
+            [
+                DofLabel {
+                    node: 7,
+                    component: 0
+                },
+                DofLabel {
+                    node: 7,
+                    component: 2
+                }
+            ]
+        );
+        assert_eq!(e.k.get(1, 0), Some(&-1.0));
+        assert_eq!(e.k.get(0, 1), Some(&-1.0));
+        assert_eq!(e.m.get(0, 1), None);
+        assert_eq!(e.m.get(1, 1), Some(&1.0));
+    }
+
+    /// Each malformed CalculiX set is refused with its file and line.
+    #[test]
+    fn calculix_refusals() {
+        let d = dir("ccxbad");
+        let cases: [(&str, &str, &str); 5] = [
+            ("2.1\n2.1\n", "1 1 1\n", "j.dof:2: node 2 x is listed again"),
+            ("2.7\n", "1 1 1\n", "j.dof:1: expected node.direction"),
+            (
+                "2.1\n3.1\n",
+                "1 3 1\n",
+                "j.sti:1: column \"3\" is not in 1..=2",
+            ),
+            (
+                "2.1\n3.1\n",
+                "1 2 1\n2 1 1\n",
+                "j.sti:2: entries in both triangles",
+            ),
+            (
+                "2.1\n",
+                "1 1 nan\n",
+                "j.sti:1: value \"nan\" is not a finite",
+            ),
+        ];
+        for (dof, sti, want) in cases {
+            std::fs::write(d.join("j.dof"), dof).unwrap();
+            std::fs::write(d.join("j.sti"), sti).unwrap();
+            std::fs::write(d.join("j.mas"), "1 1 1\n").unwrap();
+            let e = read_matrices(&d.join("j.sti")).unwrap_err().to_string();
+            assert!(e.contains(want), "{e}\nwanted {want}");
+        }
+        std::fs::remove_file(d.join("j.mas")).unwrap();
+        std::fs::write(d.join("j.dof"), "2.1\n").unwrap();
+        std::fs::write(d.join("j.sti"), "1 1 1\n").unwrap();
+        let e = read_matrices(&d.join("j.sti")).unwrap_err().to_string();
+        assert!(e.contains("j.mas"), "{e}");
+    }
+
+    /// A MatrixMarket set: DOF table by names and numbers; a non-symmetric general matrix and a
+    /// size that disagrees with the table refused, naming the DOFs.
+    #[test]
+    fn matrix_market_set() {
+        let d = dir("mm");
+        std::fs::write(
+            d.join("a_dofs.csv"),
+            "row,node,component\n1,4,x\n2,4,RZ\n3,9,2\n",
+        )
+        .unwrap();
+        let sym =
+            "%%MatrixMarket matrix coordinate real symmetric\n3 3 4\n1 1 2\n2 2 2\n3 3 2\n3 1 -1\n";
+        std::fs::write(d.join("a_K.mtx"), sym).unwrap();
+        std::fs::write(d.join("a_M.mtx"), sym).unwrap();
+        let e = read_matrices(&d.join("a_K.mtx")).unwrap();
+        assert_eq!(e.dofs[1].component, 5);
+        assert_eq!(e.dofs[2].component, 1);
+        assert_eq!(e.k.get(0, 2), Some(&-1.0));
+        std::fs::write(
+            d.join("a_M.mtx"),
+            "%%MatrixMarket matrix coordinate real general\n3 3 4\n1 1 2\n2 2 2\n3 3 2\n3 1 -1\n",
+        )
+        .unwrap();
+        let e = read_matrices(&d.join("a_K.mtx")).unwrap_err().to_string();
+        assert!(e.contains("not symmetric") && e.contains("node 9 y"), "{e}");
+        std::fs::write(
+            d.join("a_M.mtx"),
+            "%%MatrixMarket matrix coordinate real symmetric\n2 2 1\n1 1 2\n",
+        )
+        .unwrap();
+        let e = read_matrices(&d.join("a_K.mtx")).unwrap_err().to_string();
+        assert!(e.contains("is 2 x 2, the DOF table"), "{e}");
+        std::fs::write(d.join("a_dofs.csv"), "1,4,x\n3,4,y\n").unwrap();
+        let e = read_matrices(&d.join("a_K.mtx")).unwrap_err().to_string();
+        assert!(e.contains("a_dofs.csv:2: row 3 where row 2"), "{e}");
+    }
+
+    /// Node tables: a deck's `*NODE` lines (its elements ignored, whatever they are) and CSV.
+    #[test]
+    fn node_tables() {
+        let d = dir("nodes");
+        std::fs::write(
+            d.join("n.inp"),
+            "** shells\n*NODE, NSET=ALL\n1, 0., 0., 0.\n2, 1.5D0, 0, 0\n*ELEMENT, TYPE=S4R\n1, 1, 2, 2, 1\n*NODE\n3, 0, 2, 1\n",
+        )
+        .unwrap();
+        let n = read_node_table(&d.join("n.inp")).unwrap();
+        assert_eq!(
+            n,
+            [(1, [0.0; 3]), (2, [1.5, 0.0, 0.0]), (3, [0.0, 2.0, 1.0])]
+        );
+        write_node_table(&d.join("n.csv"), &n).unwrap();
+        assert_eq!(read_node_table(&d.join("n.csv")).unwrap(), n);
+        std::fs::write(d.join("b.csv"), "node,x,y,z\n1,0,0,0\n1,1,0,0\n").unwrap();
+        let e = read_node_table(&d.join("b.csv")).unwrap_err().to_string();
+        assert!(e.contains("b.csv:3: node 1 is listed again"), "{e}");
+        std::fs::write(d.join("b.inp"), "*NODE, SYSTEM=C\n1, 1, 0, 0\n").unwrap();
+        let e = read_node_table(&d.join("b.inp")).unwrap_err().to_string();
+        assert!(e.contains("b.inp:1: *NODE, SYSTEM=C"), "{e}");
+        assert!(read_node_table(&d.join("n.bdf")).is_err());
+    }
+}

@@ -1,0 +1,250 @@
+//! A model given as another solver's `K` and `M` (docs/ARCHITECTURE.md, "Models solved
+//! elsewhere"): the matrices with the node and component of each row
+//! ([`femu_io::matrices::read_matrices`]) and the nodes' coordinates, made into a model of nodes
+//! without elements whose free DOFs are exactly the matrices' rows. Every workflow that needs `K`,
+//! `M` and the node positions runs on it: modes with their Sturm proof, correlation, the
+//! estimators, expansion, sensor removal, FRFs; updating, which needs element matrices, refuses.
+
+use crate::StudyError;
+use femu_fem::assembly::{MassKind, SystemMatrices};
+use femu_fem::mesh::Mesh;
+use femu_fem::model::Model;
+use femu_io::matrices::{ExternalMatrices, MatrixSource, label};
+use femu_sparse::SparseMatrix;
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+
+/// Where a model read as matrices came from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MatrixOrigin {
+    /// The solver's format.
+    pub source: MatrixSource,
+    /// The stiffness, mass and DOF files.
+    pub files: [PathBuf; 3],
+    /// The file of the node coordinates.
+    pub nodes: PathBuf,
+}
+
+/// Reads the matrix set named by `path` and the node coordinates (`nodes`, or the default beside
+/// the matrices, [`femu_io::matrices::default_node_table`]) into a model without elements and
+/// its system matrices on femu's numbering of the same DOFs.
+///
+/// # Errors
+/// The readers' errors; a node of the DOF table missing from the coordinates; matrices whose
+/// mass is not positive on its diagonal.
+pub fn matrix_model(
+    path: &Path,
+    nodes: Option<&Path>,
+    lumped: bool,
+) -> Result<(Model, SystemMatrices, MatrixOrigin, Vec<String>), StudyError> {
+    let mut warnings = Vec::new();
+    let ext = femu_io::matrices::read_matrices(path)?;
+    let node_file = match nodes {
+        Some(p) => p.to_path_buf(),
+        None => {
+            femu_io::matrices::default_node_table(path)
+                .filter(|p| p.exists())
+                .ok_or_else(|| {
+                    StudyError::in_file(
+                        path,
+                        "nodes",
+                        format!(
+                            "the matrices need their nodes' coordinates: none found at {}; name a deck (.inp) or a table (.csv: node,x,y,z) with --nodes (nodes = \"...\" in a study file)",
+                            femu_io::matrices::default_node_table(path)
+                                .map_or_else(|| "-".into(), |p| p.display().to_string())
+                        ),
+                    )
+                })?
+        }
+    };
+    let table = femu_io::matrices::read_node_table(&node_file)?;
+    let (model, dofs_in_order) = model_of(&ext, &table, &node_file)?;
+    if lumped {
+        warnings.push(format!(
+            "{}: the mass is the solver's: --lumped does not apply to matrices read from a file",
+            path.display()
+        ));
+    }
+    // the map of the model's supports and rotations, without the closure of Model::dof_map (which
+    // fixes the rotations that no constraint reaches: here the matrices reach them)
+    let dofs = femu_fem::dof::DofMap::with_constraints(
+        model.mesh().node_count(),
+        model.fixed_dofs(),
+        model.rotation_nodes(),
+        &[],
+        |n| model.mesh().node_id(n),
+    )
+    .map_err(|e| StudyError::within(&node_file, e))?;
+    // row r of the file is free DOF order[r] of femu's map
+    let order: Vec<usize> = dofs_in_order
+        .iter()
+        .map(|&(n, c)| {
+            let p = if c < 3 {
+                n
+            } else {
+                dofs.rotation_point(n).expect("rotation point added above")
+            };
+            dofs.free_index(p, c % 3).expect("every listed DOF is free")
+        })
+        .collect();
+    // the eigensolver factors K - sigma M on K's pattern: K stores (zeros where need be) every
+    // entry M has
+    let k = permuted(&ext.k, &order, Some(&ext.m));
+    let m = permuted(&ext.m, &order, None);
+    if let Some(r) = (0..ext.m.rows()).find(|&r| !(ext.m.get(r, r).copied().unwrap_or(0.0) >= 0.0))
+    {
+        return Err(StudyError::in_file(
+            &ext.files[1],
+            "mass",
+            format!(
+                "the mass matrix has a negative diagonal entry at row {} ({}): a mass matrix is positive semi-definite",
+                r + 1,
+                label(ext.dofs[r])
+            ),
+        ));
+    }
+    let mass_kind = if is_diagonal(&m) {
+        MassKind::Lumped
+    } else {
+        MassKind::Consistent
+    };
+    let sys = SystemMatrices::from_matrices(k, m, dofs, mass_kind, model.mesh().coords())
+        .map_err(|e| StudyError::within(path, e))?;
+    let origin = MatrixOrigin {
+        source: ext.source,
+        files: ext.files.clone(),
+        nodes: node_file,
+    };
+    Ok((model, sys, origin, warnings))
+}
+
+/// The model of the nodes in `table` (every one, so that a test may name a node the matrices
+/// hold no DOF of: a clamped one), with rotations where a row has one and every component no row
+/// lists fixed; and the (node index, component) of each row.
+fn model_of(
+    ext: &ExternalMatrices,
+    table: &[(u64, [f64; 3])],
+    node_file: &Path,
+) -> Result<(Model, Vec<(usize, usize)>), StudyError> {
+    let mut mesh = Mesh::new();
+    let mut index = HashMap::with_capacity(table.len());
+    for &(id, x) in table {
+        let i = mesh
+            .add_node(id, x)
+            .map_err(|e| StudyError::within(node_file, e))?;
+        index.insert(id, i);
+    }
+    let mut rows = Vec::with_capacity(ext.dofs.len());
+    let mut listed: BTreeMap<u64, [bool; 6]> = BTreeMap::new();
+    for (r, d) in ext.dofs.iter().enumerate() {
+        let Some(&i) = index.get(&d.node) else {
+            return Err(StudyError::in_file(
+                &ext.files[2],
+                "nodes",
+                format!(
+                    "row {} is {}, which {} does not define",
+                    r + 1,
+                    label(*d),
+                    node_file.display()
+                ),
+            ));
+        };
+        rows.push((i, d.component));
+        listed.entry(d.node).or_default()[d.component] = true;
+    }
+    let mut model = Model::new(mesh).map_err(|e| StudyError::within(node_file, e))?;
+    for (&id, comps) in &listed {
+        if comps[3..].iter().any(|&c| c) {
+            model
+                .add_rotations(id)
+                .map_err(|e| StudyError::within(node_file, e))?;
+        }
+    }
+    for &(id, _) in table {
+        let comps = listed.get(&id).copied().unwrap_or_default();
+        let rotations = comps[3..].iter().any(|&c| c);
+        let fixed: Vec<usize> = (0..if rotations { 6 } else { 3 })
+            .filter(|&c| !comps[c])
+            .collect();
+        if !fixed.is_empty() {
+            model
+                .fix_node_dofs(id, &fixed)
+                .map_err(|e| StudyError::within(node_file, e))?;
+        }
+    }
+    Ok((model, rows))
+}
+
+/// `P A P^T`: entry `(i, j)` of `a` moved to `(order[i], order[j])`, with a stored zero wherever
+/// `also` has an entry that `a` lacks.
+fn permuted(a: &SparseMatrix, order: &[usize], also: Option<&SparseMatrix>) -> SparseMatrix {
+    let extra = also.map_or(0, |b| b.nnz());
+    let mut tri = sprs::TriMat::with_capacity((a.rows(), a.cols()), a.nnz() + extra);
+    for (v, (i, j)) in a.iter() {
+        tri.add_triplet(order[i], order[j], *v);
+    }
+    for (_, (i, j)) in also.into_iter().flat_map(|b| b.iter()) {
+        tri.add_triplet(order[i], order[j], 0.0);
+    }
+    tri.to_csc()
+}
+
+/// The files [`write_matrices`] wrote.
+#[derive(Debug, Clone)]
+pub struct WrittenMatrices {
+    /// `PREFIX_K.mtx`, `PREFIX_M.mtx`, `PREFIX_dofs.csv`, `PREFIX_nodes.csv`.
+    pub files: [PathBuf; 4],
+}
+
+/// Writes a model's `K` and `M` as MatrixMarket files (`PREFIX_K.mtx`, `PREFIX_M.mtx`:
+/// symmetric, lower triangle, femu's free DOFs), the node and component of each row
+/// (`PREFIX_dofs.csv`: row, node, component x/y/z/rx/ry/rz) and the nodes' coordinates
+/// (`PREFIX_nodes.csv`: node, x, y, z): the set [`matrix_model`] reads back, and what scipy,
+/// MATLAB or another solver reads.
+///
+/// # Errors
+/// File system errors, naming the file.
+pub fn write_matrices(
+    model: &Model,
+    sys: &SystemMatrices,
+    prefix: &Path,
+) -> Result<WrittenMatrices, StudyError> {
+    let name = |suffix: &str| {
+        let mut p = prefix.as_os_str().to_owned();
+        p.push(suffix);
+        PathBuf::from(p)
+    };
+    let files = [
+        name("_K.mtx"),
+        name("_M.mtx"),
+        name("_dofs.csv"),
+        name("_nodes.csv"),
+    ];
+    let mesh = model.mesh();
+    femu_sparse::mtx::write_matrix_market(&files[0], &sys.k, true)?;
+    femu_sparse::mtx::write_matrix_market(&files[1], &sys.m, true)?;
+    let mut csv = String::from("row,node,component\n");
+    for f in 0..sys.dofs.free_count() {
+        let (p, c) = sys.dofs.free_dof(f);
+        let (node, rotation) = sys.dofs.point_node(p);
+        csv.push_str(&format!(
+            "{},{},{}\n",
+            f + 1,
+            mesh.node_id(node),
+            ["x", "y", "z", "rx", "ry", "rz"][c + if rotation { 3 } else { 0 }]
+        ));
+    }
+    std::fs::write(&files[2], csv).map_err(|e| StudyError::file(&files[2], e))?;
+    let nodes: Vec<(u64, [f64; 3])> = mesh
+        .coords()
+        .iter()
+        .enumerate()
+        .map(|(i, x)| (mesh.node_id(i), *x))
+        .collect();
+    femu_io::matrices::write_node_table(&files[3], &nodes)?;
+    Ok(WrittenMatrices { files })
+}
+
+fn is_diagonal(a: &SparseMatrix) -> bool {
+    a.iter().all(|(v, (i, j))| i == j || *v == 0.0)
+}

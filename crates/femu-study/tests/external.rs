@@ -1,0 +1,340 @@
+//! Models given as another solver's `K` and `M` (docs/VERIFICATION.md, "Models solved
+//! elsewhere"): CalculiX's stored matrices give CalculiX's eigenvalues and equal femu's assembly of
+//! the same deck; a spring-mass chain written by hand has its analytic eigenvalues and mode
+//! shapes; femu's own export, rotations included, reads back as the model it came from; and what
+//! cannot be used is refused with the file, row and node.
+
+use femu_correlate::{ModeSet, PairingOptions, correlate};
+use femu_fem::prelude::*;
+use femu_io::inp::{FrequencyStep, inp_string};
+use femu_sparse::eigen::{EigenOptions, Which};
+use femu_study::load::{ModelOptions, load_model, load_test};
+use std::path::{Path, PathBuf};
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("femu-external-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn lowest(path: &Path, count: usize) -> (Vec<f64>, femu_study::load::LoadedModel) {
+    let loaded = load_model(path, &ModelOptions::default()).unwrap();
+    let modes = loaded
+        .sys
+        .modes(Which::Lowest(count), &EigenOptions::default())
+        .unwrap();
+    assert!(modes.sturm.verified(), "{:?}", modes.sturm);
+    (modes.values, loaded)
+}
+
+/// The largest entry of `a - b` over the largest of `b`.
+fn relative_difference(a: &femu_sparse::SparseMatrix, b: &femu_sparse::SparseMatrix) -> f64 {
+    let (da, db) = (femu_sparse::csc::to_dense(a), femu_sparse::csc::to_dense(b));
+    let mut worst: f64 = 0.0;
+    let mut scale: f64 = 0.0;
+    for i in 0..db.nrows() {
+        for j in 0..db.ncols() {
+            worst = worst.max((da[(i, j)] - db[(i, j)]).abs());
+            scale = scale.max(db[(i, j)].abs());
+        }
+    }
+    worst / scale
+}
+
+/// A steel cantilever of hex8 bricks with a point mass at the tip and an `*EQUATION` tying two
+/// tip nodes' x motions: CalculiX stores its `K` and `M` (`*FREQUENCY, SOLVER=MATRIXSTORAGE`,
+/// 14 digits) on the free DOFs after the boundary conditions and the equation. Read by femu
+/// (nodes from the deck beside them) they give
+/// - CalculiX's own eigenvalues of the deck (its `.dat`, 7 digits) to 1e-6,
+/// - femu's assembly of the same deck entry by entry to 1e-12 of the largest (the files' 14
+///   digits: 1.3e-14 measured), hence its eigenvalues to 1e-9.
+#[test]
+fn calculix_stored_matrices_are_the_deck() {
+    if !femu_testkit::ccx::available() {
+        return;
+    }
+    let spec = BoxSpec::new([0.4, 0.1, 0.05], [8, 2, 2], BoxCells::Hex, false);
+    let mesh = box_mesh(&spec).unwrap();
+    let tip: Vec<u64> = mesh
+        .node_set("xmax")
+        .unwrap()
+        .iter()
+        .map(|&n| mesh.node_id(n))
+        .collect();
+    let mut model = Model::new(mesh).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+    model.add_point_mass(tip[0], 0.5).unwrap();
+    model
+        .add_constraint((tip[1], 0), &[((tip[2], 0), 1.0)], "tie")
+        .unwrap();
+    let d = dir("ccx");
+    let text = inp_string(
+        &model,
+        Some(&FrequencyStep {
+            count: 6,
+            shift_cycles2: None,
+        }),
+    )
+    .unwrap();
+    assert!(text.contains("*FREQUENCY\n"));
+    std::fs::write(d.join("reference.inp"), &text).unwrap();
+    std::fs::write(
+        d.join("job.inp"),
+        text.replace("*FREQUENCY\n", "*FREQUENCY, SOLVER=MATRIXSTORAGE\n"),
+    )
+    .unwrap();
+    femu_testkit::ccx::run(&d, "reference");
+    femu_testkit::ccx::run(&d, "job");
+    let ccx =
+        femu_testkit::ccx::eigenvalues(&std::fs::read_to_string(d.join("reference.dat")).unwrap());
+    let (external, loaded) = lowest(&d.join("job.sti"), 6);
+    let (own, deck) = lowest(&d.join("reference.inp"), 6);
+    assert_eq!(loaded.sys.dofs.free_count(), deck.sys.dofs.free_count());
+    for j in 0..6 {
+        let to_ccx = (external[j] / ccx[j] - 1.0).abs();
+        assert!(
+            to_ccx < 1e-6,
+            "mode {}: {} vs ccx {}",
+            j + 1,
+            external[j],
+            ccx[j]
+        );
+        // the files' 14 digits perturb K by 1e-14 of its largest entry, which moves the lowest
+        // eigenvalue by up to that times lambda_max / lambda_1 (here about 1e5): 2.6e-10 measured
+        let to_femu = (external[j] / own[j] - 1.0).abs();
+        assert!(to_femu < 1e-9, "mode {}: {to_femu:.1e}", j + 1);
+    }
+    let dk = relative_difference(&loaded.sys.k, &deck.sys.k);
+    let dm = relative_difference(&loaded.sys.m, &deck.sys.m);
+    assert!(dk < 1e-12 && dm < 1e-12, "K {dk:.1e}, M {dm:.1e}");
+    let origin = loaded.matrices.as_ref().unwrap();
+    assert_eq!(origin.nodes, d.join("job.inp"));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Five masses `m` in a line joined by springs `k`, the first spring to the ground, written by
+/// hand as MatrixMarket with a DOF table (x of nodes 1-5) and a node table: the eigenvalues are
+/// `4 (k / m) sin^2((2j - 1) pi / (2 (2n + 1)))` and the shapes `sin((2j - 1) i pi / (2n + 1))`
+/// at mass `i`. A test made of those shapes at three masses correlates with MAC 1 and no
+/// frequency error, and its residues (expanded dynamically, the estimators' bounds proven by
+/// inertia) vanish.
+#[test]
+fn a_spring_mass_chain_by_hand() {
+    let (n, k, m) = (5usize, 4.0e5, 2.0);
+    let d = dir("chain");
+    let mut entries = Vec::new();
+    for i in 0..n {
+        entries.push((i, i, if i + 1 < n { 2.0 * k } else { k }));
+        if i + 1 < n {
+            entries.push((i + 1, i, -k));
+        }
+    }
+    let mut kt = format!(
+        "%%MatrixMarket matrix coordinate real symmetric\n{n} {n} {}\n",
+        entries.len()
+    );
+    for (i, j, v) in &entries {
+        kt.push_str(&format!("{} {} {v}\n", i + 1, j + 1));
+    }
+    std::fs::write(d.join("chain_K.mtx"), kt).unwrap();
+    let mut mt = format!("%%MatrixMarket matrix coordinate real general\n{n} {n} {n}\n");
+    let mut dofs = String::from("row,node,component\n");
+    let mut nodes = String::from("node,x,y,z\n");
+    for i in 0..n {
+        mt.push_str(&format!("{} {} {m}\n", i + 1, i + 1));
+        dofs.push_str(&format!("{},{},x\n", i + 1, i + 1));
+        nodes.push_str(&format!("{},{},0,0\n", i + 1, 0.1 * (i + 1) as f64));
+    }
+    std::fs::write(d.join("chain_M.mtx"), mt).unwrap();
+    std::fs::write(d.join("chain_dofs.csv"), dofs).unwrap();
+    std::fs::write(d.join("chain_nodes.csv"), nodes).unwrap();
+    let (values, loaded) = lowest(&d.join("chain_K.mtx"), n);
+    let pi = std::f64::consts::PI;
+    let exact: Vec<f64> = (1..=n)
+        .map(|j| {
+            let s = ((2 * j - 1) as f64 * pi / (2.0 * (2 * n + 1) as f64)).sin();
+            4.0 * k / m * s * s
+        })
+        .collect();
+    for j in 0..n {
+        assert!(
+            (values[j] / exact[j] - 1.0).abs() < 1e-12,
+            "{} vs {}",
+            values[j],
+            exact[j]
+        );
+    }
+    assert_eq!(loaded.sys.mass_kind, MassKind::Lumped);
+    // the analytic shapes at masses 2, 4 and 5 as a CSV test
+    let mut test = String::from("mode,frequency_hz,node,direction,value\n");
+    for j in 1..=3 {
+        let f = exact[j - 1].sqrt() / (2.0 * pi);
+        for i in [2, 4, 5] {
+            let v = ((2 * j - 1) as f64 * i as f64 * pi / (2 * n + 1) as f64).sin();
+            test.push_str(&format!("{j},{f:.12},{i},x,{v:.12}\n"));
+        }
+    }
+    std::fs::write(d.join("test.csv"), test).unwrap();
+    let t = load_test(&d.join("test.csv"), &loaded).unwrap();
+    let modes =
+        femu_study::modes::lowest_for_test(&loaded, None, 3, &EigenOptions::default()).unwrap();
+    let report = correlate(
+        &ModeSet::from_modes(&modes),
+        &t.data.modes,
+        &t.layout,
+        &PairingOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(report.pairing.pairs.len(), 3);
+    for p in &report.pairing.pairs {
+        assert_eq!(p.test, p.model);
+        assert!((p.mac.unwrap() - 1.0).abs() < 1e-12, "{p:?}");
+        assert!(p.frequency_error.abs() < 1e-11, "{p:?}");
+    }
+    // the estimators, with lambda_max and mu_min proven by inertia (no elements to bound them):
+    // the test modes are exact eigenpairs, so every residue vanishes to round-off
+    let run = femu_study::estimate::estimate_loaded(
+        &loaded,
+        &t,
+        &femu_study::estimate::EstimateOptions::default(),
+        |_| {},
+    )
+    .unwrap();
+    for row in &run.result.rows {
+        assert!(row.t2_rigorous_holds, "{row:?}");
+        assert!(row.rho_m < 1e-6 * exact[row.test - 1], "{row:?}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `femu matrices`' set (K, M, DOF table with rotations, node table) of a cantilever whose tip is
+/// a rigid link to a reference node with rotations and a point mass: read back as a model, it has
+/// the same free DOFs, rotations included, and the eigenvalues of the model it was written from.
+#[test]
+fn femu_export_reads_back_with_rotations() {
+    let spec = BoxSpec::new([0.3, 0.05, 0.05], [6, 1, 1], BoxCells::Hex, false);
+    let mut mesh = box_mesh(&spec).unwrap();
+    let tip: Vec<u64> = mesh
+        .node_set("xmax")
+        .unwrap()
+        .iter()
+        .map(|&n| mesh.node_id(n))
+        .collect();
+    mesh.add_node(9999, [0.35, 0.025, 0.025]).unwrap();
+    let mut model = Model::new(mesh).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+    model.add_rotations(9999).unwrap();
+    model
+        .add_rigid_link(9999, &tip, &[0, 1, 2], "tip link")
+        .unwrap();
+    model.add_point_mass(9999, 0.3).unwrap();
+    let d = dir("export");
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let own = sys
+        .modes(Which::Lowest(8), &EigenOptions::default())
+        .unwrap()
+        .values;
+    let rotations = (0..sys.dofs.free_count())
+        .filter(|&f| sys.dofs.point_node(sys.dofs.free_dof(f).0).1)
+        .count();
+    assert_eq!(rotations, 3);
+    let written =
+        femu_study::external::write_matrices(&model, &sys, &d.join("cantilever")).unwrap();
+    let dofs = std::fs::read_to_string(&written.files[2]).unwrap();
+    assert_eq!(dofs.matches(",9999,r").count(), 3, "{dofs}");
+    let (back, loaded) = lowest(&written.files[0], 8);
+    assert_eq!(loaded.sys.dofs.free_count(), sys.dofs.free_count());
+    for j in 0..8 {
+        assert!(
+            (back[j] / own[j] - 1.0).abs() < 1e-12,
+            "mode {}: {} vs {}",
+            j + 1,
+            back[j],
+            own[j]
+        );
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// What cannot be a model is refused, naming the file and what is wrong: a DOF of a node the
+/// coordinates lack, no coordinates at all, a negative mass on the diagonal; and updating a model
+/// that has no elements.
+#[test]
+fn refusals() {
+    let d = dir("bad");
+    let sym = |diag: f64| {
+        format!("%%MatrixMarket matrix coordinate real symmetric\n2 2 2\n1 1 {diag}\n2 2 1\n")
+    };
+    std::fs::write(d.join("a_K.mtx"), sym(1.0)).unwrap();
+    std::fs::write(d.join("a_M.mtx"), sym(1.0)).unwrap();
+    std::fs::write(d.join("a_dofs.csv"), "row,node,component\n1,1,x\n2,7,y\n").unwrap();
+    let load = || load_model(&d.join("a_K.mtx"), &ModelOptions::default());
+    let e = load().unwrap_err().to_string();
+    assert!(e.contains("a_nodes.csv") && e.contains("--nodes"), "{e}");
+    std::fs::write(d.join("a_nodes.csv"), "node,x,y,z\n1,0,0,0\n").unwrap();
+    let e = load().unwrap_err().to_string();
+    assert!(
+        e.contains("a_dofs.csv") && e.contains("row 2 is node 7 y"),
+        "{e}"
+    );
+    std::fs::write(d.join("a_nodes.csv"), "node,x,y,z\n1,0,0,0\n7,1,0,0\n").unwrap();
+    std::fs::write(d.join("a_M.mtx"), sym(-1.0)).unwrap();
+    let e = load().unwrap_err().to_string();
+    assert!(
+        e.contains("a_M.mtx") && e.contains("negative diagonal entry at row 1 (node 1 x)"),
+        "{e}"
+    );
+    std::fs::write(d.join("a_M.mtx"), sym(1.0)).unwrap();
+    let loaded = load().unwrap();
+    std::fs::write(
+        d.join("t.csv"),
+        "mode,frequency_hz,node,direction,value\n1,0.2,1,x,1\n1,0.2,7,y,0.5\n2,0.3,1,x,-0.5\n2,0.3,7,y,1\n",
+    )
+    .unwrap();
+    let test = load_test(&d.join("t.csv"), &loaded).unwrap();
+    let request: femu_study::updating::UpdateRequest = toml::from_str("sets = [\"r0\"]").unwrap();
+    let e = femu_study::updating::update_loaded(
+        &loaded,
+        &test,
+        &request,
+        &EigenOptions::default(),
+        None,
+        |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("a_K.mtx") && e.contains("no elements"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// CalculiX stores the matrices of a shell model on the solids it expands the shells into: their
+/// DOF labels repeat (`2.1` twice) and name nodes the deck does not have. femu refuses the set,
+/// naming the `.dof` file's line, instead of reading a model it cannot place.
+#[test]
+fn calculix_shell_matrices_are_refused() {
+    if !femu_testkit::ccx::available() {
+        return;
+    }
+    let d = dir("shell");
+    std::fs::write(
+        d.join("shell.inp"),
+        "*NODE\n1,0,0,0\n2,1,0,0\n3,2,0,0\n4,0,1,0\n5,1,1,0\n6,2,1,0\n\
+         *ELEMENT, TYPE=S4, ELSET=E\n1,1,2,5,4\n2,2,3,6,5\n\
+         *MATERIAL, NAME=S\n*ELASTIC\n2.1e11, 0.3\n*DENSITY\n7850.\n\
+         *SHELL SECTION, ELSET=E, MATERIAL=S\n0.01\n\
+         *BOUNDARY\n1,1,6\n4,1,6\n\
+         *STEP\n*FREQUENCY, SOLVER=MATRIXSTORAGE\n4\n*END STEP\n",
+    )
+    .unwrap();
+    femu_testkit::ccx::run(&d, "shell");
+    let e = load_model(&d.join("shell.sti"), &ModelOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("shell.dof:") && e.contains("is listed again") && e.contains("expands shells"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
