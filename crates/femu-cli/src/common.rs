@@ -200,6 +200,20 @@ pub fn load_test(
     args: &TestArgs,
     quiet: bool,
 ) -> Result<femu::study::load::LoadedTest, CliError> {
+    load_test_on(path, loaded.model.mesh(), &loaded.sys.dofs, args, quiet)
+}
+
+/// [`load_test`] onto the nodes of `mesh` and the DOFs of `dofs` (another solver's modes).
+///
+/// # Errors
+/// As [`load_test`].
+pub fn load_test_on(
+    path: &Path,
+    mesh: &femu::fem::mesh::Mesh,
+    dofs: &femu::fem::dof::DofMap,
+    args: &TestArgs,
+    quiet: bool,
+) -> Result<femu::study::load::LoadedTest, CliError> {
     use femu::study::mapping::MapOptions;
     let map = match args.map {
         Some(method) => Some(MapOptions {
@@ -228,7 +242,7 @@ pub fn load_test(
         map,
         test_units: args.test_units.map(LengthUnit::metres),
     };
-    let test = femu::study::load::load_test_with(path, loaded, &options)?;
+    let test = femu::study::load::load_test_on(path, mesh, dofs, &options)?;
     warn(quiet, &test.warnings);
     if !quiet && let Some(m) = &test.mapping {
         println!("{m}");

@@ -24,6 +24,9 @@ pub enum Format {
     /// `job.sti` (with `job.mas`, `job.dof`) or MatrixMarket `X_K.mtx` (with `X_M.mtx`,
     /// `X_dofs.csv`); [`crate::matrices`].
     Matrices,
+    /// Another solver's modes with its nodes: CalculiX's `.frd` ([`crate::frd`]), the model side of
+    /// a correlation only (no `K` and `M`).
+    Results,
 }
 
 /// One row of the table: the format, its extensions (lower case), what it holds for femu, and its
@@ -86,6 +89,14 @@ pub const FORMATS: &[FormatInfo] = &[
         deck: true,
         test: false,
         name: "stiffness and mass matrices with their DOF table",
+    },
+    FormatInfo {
+        format: Format::Results,
+        extensions: &["frd"],
+        model: true,
+        deck: true,
+        test: false,
+        name: "CalculiX results",
     },
     FormatInfo {
         format: Format::Json,
@@ -170,13 +181,13 @@ mod tests {
         assert!(Format::Inp.info().deck && !Format::Gmsh.info().deck);
         assert_eq!(
             described(true),
-            "Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh), universal files (.unv, .uff) and stiffness and mass matrices with their DOF table (.sti, .mtx)"
+            "Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh), universal files (.unv, .uff), stiffness and mass matrices with their DOF table (.sti, .mtx) and CalculiX results (.frd)"
         );
         assert_eq!(
             described(false),
             "universal files (.unv, .uff), JSON (.json) and CSV (.csv, .txt)"
         );
-        assert_eq!(all_extensions().len(), 12);
+        assert_eq!(all_extensions().len(), 13);
         assert_eq!(
             Format::from_path(Path::new("job.sti")),
             Some(Format::Matrices)

@@ -12,6 +12,7 @@
 pub mod csv;
 mod error;
 pub mod format;
+pub mod frd;
 pub mod gmsh;
 pub mod inp;
 pub mod json;

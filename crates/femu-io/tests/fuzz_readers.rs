@@ -1,4 +1,4 @@
-//! Fuzzing of the Nastran and Universal File readers on the stable toolchain, in CI: decks and
+//! Fuzzing of the Nastran, Universal File and CalculiX result readers on the stable toolchain, in CI: decks and
 //! files of the corpus (`fixtures/`, the seed corpus of `fuzz/run.sh`, files up to 16 KiB) mutated
 //! by proptest (bytes replaced by the characters their formats are made of, lines deleted,
 //! duplicated, swapped and cut, fields inserted) must give a model or an error, never a panic;
@@ -173,5 +173,22 @@ fn universal_file_reader_never_panics() {
             let _ = u.test_data(path);
             let _ = u.to_mesh(path);
         }
+    });
+}
+
+/// CalculiX's result file reader on mutated `.frd` files (fixed columns: a byte moved shifts a
+/// field).
+#[test]
+fn frd_reader_never_panics() {
+    let files = corpus(&["frd"], &["frd"]);
+    let n = files.len();
+    let config = ProptestConfig {
+        cases: cases(),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    };
+    proptest!(config, |(k in 0..n, edits in prop::collection::vec(edit(), 1..6))| {
+        let bytes = apply(&files[k].1, &edits);
+        let _ = femu_io::frd::parse_frd(&String::from_utf8_lossy(&bytes), &files[k].0);
     });
 }

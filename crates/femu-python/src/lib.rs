@@ -428,24 +428,90 @@ struct Test {
     loaded: LoadedTest,
 }
 
+/// Another solver's modes with its nodes (`femu.read_results`): CalculiX's `.frd`. They are the
+/// model side of `femu.correlate` (with no Sturm proof that none was skipped, and no `K` or `M`
+/// for the estimators, expansion or updating).
+#[pyclass(module = "femu", name = "Results", frozen)]
+struct Results {
+    results: femu_study::external::ResultModes,
+}
+
+#[pymethods]
+impl Results {
+    /// The file's warnings (result blocks skipped).
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.results.warnings.clone()
+    }
+
+    /// The modes' frequencies, Hz.
+    #[getter]
+    fn frequencies_hz(&self) -> Vec<f64> {
+        self.results.modes.frequencies_hz()
+    }
+
+    /// The node ids, in the order of the shapes' rows (three per node: x, y, z).
+    #[getter]
+    fn node_ids(&self) -> Vec<u64> {
+        let mesh = self.results.model.mesh();
+        (0..mesh.node_count()).map(|i| mesh.node_id(i)).collect()
+    }
+
+    /// The mode shapes, one column per mode, rows x, y, z of each node in turn.
+    #[getter]
+    fn shapes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        mat_to_py(py, &self.results.modes.shapes)
+    }
+
+    fn __len__(&self) -> usize {
+        self.results.modes.len()
+    }
+}
+
+/// Reads another solver's modes: a CalculiX `.frd` (the displacements of its `*FREQUENCY` step,
+/// asked for with `*NODE FILE` and `U`), with its nodes.
+#[pyfunction]
+fn read_results(py: Python<'_>, path: PathBuf) -> PyResult<Results> {
+    let results = py
+        .detach(|| femu_study::external::load_result_modes(&path))
+        .map_err(err)?;
+    Ok(Results { results })
+}
+
+/// The model side of a test and a correlation: a model (its modes solved) or another solver's
+/// modes.
+#[derive(FromPyObject)]
+enum ModelSide<'py> {
+    Model(PyRef<'py, Model>),
+    Results(PyRef<'py, Results>),
+}
+
 /// Reads test modes (`.unv`/`.uff`: datasets 15/2411 and 55 or 2414; `.json`; `.csv`) and puts
-/// their sensors on `model` (test node ids are model node ids). `test_units` gives metres per
-/// unit where the file says nothing (0.001 for millimetres).
+/// their sensors on `model` (a model or another solver's results; test node ids are its node
+/// ids). `test_units` gives metres per unit where the file says nothing (0.001 for millimetres).
 #[pyfunction]
 #[pyo3(signature = (path, model, *, test_units=None))]
 fn read_test(
     py: Python<'_>,
     path: PathBuf,
-    model: &Model,
+    model: ModelSide<'_>,
     test_units: Option<f64>,
 ) -> PyResult<Test> {
     let options = TestOptions {
         map: None,
         test_units,
     };
-    let loaded = py
-        .detach(|| load_test_with(&path, &model.loaded, &options))
-        .map_err(err)?;
+    let loaded = match &model {
+        ModelSide::Model(m) => {
+            let loaded = &m.loaded;
+            py.detach(|| load_test_with(&path, loaded, &options))
+        }
+        ModelSide::Results(r) => {
+            let r = &r.results;
+            py.detach(|| femu_study::load::load_test_on(&path, r.model.mesh(), &r.dofs, &options))
+        }
+    }
+    .map_err(err)?;
     Ok(Test { loaded })
 }
 
@@ -685,7 +751,7 @@ fn run_demo<'py>(
 #[pyo3(signature = (model, test, *, count=None, mac_threshold=0.8, max_frequency_error=None))]
 fn correlate<'py>(
     py: Python<'py>,
-    model: &Model,
+    model: ModelSide<'py>,
     test: &Test,
     count: Option<usize>,
     mac_threshold: f64,
@@ -693,22 +759,37 @@ fn correlate<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let t = &test.loaded.data.modes;
     let options = pairing(mac_threshold, max_frequency_error);
-    let report = py
-        .detach(|| -> Result<_, femu_study::StudyError> {
-            let modes = femu_study::modes::lowest_for_test(
-                &model.loaded,
-                count,
-                t.len(),
-                &Default::default(),
-            )?;
-            Ok(femu_correlate::correlate(
-                &ModeSet::from_modes(&modes),
-                t,
-                &test.loaded.layout,
-                &options,
-            )?)
-        })
-        .map_err(err)?;
+    let report = match &model {
+        ModelSide::Model(m) => {
+            let loaded = &m.loaded;
+            py.detach(|| -> Result<_, femu_study::StudyError> {
+                let modes = femu_study::modes::lowest_for_test(
+                    loaded,
+                    count,
+                    t.len(),
+                    &Default::default(),
+                )?;
+                Ok(femu_correlate::correlate(
+                    &ModeSet::from_modes(&modes),
+                    t,
+                    &test.loaded.layout,
+                    &options,
+                )?)
+            })
+        }
+        ModelSide::Results(r) => {
+            let modes = &r.results.modes;
+            py.detach(|| -> Result<_, femu_study::StudyError> {
+                Ok(femu_correlate::correlate(
+                    modes,
+                    t,
+                    &test.loaded.layout,
+                    &options,
+                )?)
+            })
+        }
+    }
+    .map_err(err)?;
     to_dict(py, &report)
 }
 
@@ -848,6 +929,8 @@ fn _femu(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Model>()?;
     m.add_class::<Modes>()?;
     m.add_class::<Test>()?;
+    m.add_class::<Results>()?;
+    m.add_function(wrap_pyfunction!(read_results, m)?)?;
     m.add_function(wrap_pyfunction!(read_model, m)?)?;
     m.add_function(wrap_pyfunction!(read_test, m)?)?;
     m.add_function(wrap_pyfunction!(mac, m)?)?;

@@ -227,3 +227,27 @@ def test_another_solvers_matrices_are_a_model_everywhere(case):
         femu.update(model, test, SETS)
     done = run("update", "bar_K.mtx", "test.csv", "--sets", ",".join(SETS))
     assert done.returncode != 0 and "no elements" in done.stderr
+
+
+def test_another_solvers_modes_are_the_model_side_everywhere(case):
+    """CalculiX's modes of the bar (a .frd from *NODE FILE, U) correlated with the test by the
+    command line and by Python: the same report; and the same pairs as femu's own modes of the
+    deck, with frequencies within 1e-6 of femu's (two codes on one deck)."""
+    deck = (case / "bar.inp").read_text()
+    (case / "ccx").mkdir(exist_ok=True)
+    (case / "ccx" / "bar.inp").write_text(deck + "*STEP\n*FREQUENCY\n12\n*NODE FILE\nU\n*END STEP\n")
+    ccx = subprocess.run(["ccx", "-i", "bar"], cwd=case / "ccx", capture_output=True, text=True)
+    assert ccx.returncode == 0, ccx.stdout
+    frd = case / "ccx" / "bar.frd"
+    done = subprocess.run([str(FEMU), "correlate", str(frd), "test.csv", "--json", "frd.json",
+                           "--quiet"], cwd=case, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    results = femu.read_results(frd)
+    assert len(results) == 12 and results.shapes.shape == (3 * len(results.node_ids), 12)
+    py = femu.correlate(results, femu.read_test(case / "test.csv", results))
+    assert_same(py, read(case / "frd.json"))
+    model = femu.read_model(case / "bar.inp")
+    own = femu.correlate(model, femu.read_test(case / "test.csv", model), count=12)
+    assert [(p["test"], p["model"]) for p in py["pairing"]["pairs"]] == \
+        [(p["test"], p["model"]) for p in own["pairing"]["pairs"]]
+    assert np.allclose(py["f_model"], own["f_model"], rtol=1e-6)

@@ -14,6 +14,81 @@ use femu_sparse::SparseMatrix;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
+/// Another solver's modes as the model side of a correlation: its nodes (a model of nodes
+/// without elements, three translations each, all free) and its mode shapes on them, with no
+/// Sturm proof ([`femu_correlate::SpectrumProof::Unverified`]: nothing shows that no mode was
+/// skipped) and no `K` or `M` (so no residue, estimator, expansion or updating).
+#[derive(Debug, Clone)]
+pub struct ResultModes {
+    /// The file.
+    pub path: PathBuf,
+    /// The solver's nodes, without elements.
+    pub model: Model,
+    /// Three translations per node, every one free.
+    pub dofs: femu_fem::dof::DofMap,
+    /// The modes, eigenvalues `(2 pi f)^2` from the file's frequencies.
+    pub modes: femu_correlate::ModeSet,
+    /// What the reader noticed.
+    pub warnings: Vec<String>,
+}
+
+/// Reads another solver's modes (CalculiX's `.frd`: [`femu_io::frd::read_frd`]).
+///
+/// # Errors
+/// The reader's errors; modes whose frequencies do not ascend (named).
+pub fn load_result_modes(path: &Path) -> Result<ResultModes, StudyError> {
+    let frd = femu_io::frd::read_frd(path)?;
+    let mut mesh = Mesh::new();
+    for &(id, x) in &frd.nodes {
+        mesh.add_node(id, x)
+            .map_err(|e| StudyError::within(path, e))?;
+    }
+    let model = Model::new(mesh).map_err(|e| StudyError::within(path, e))?;
+    let n = frd.nodes.len();
+    let dofs = femu_fem::dof::DofMap::new(n, []);
+    let shapes = faer::Mat::from_fn(3 * n, frd.modes.len(), |r, j| {
+        frd.modes[j].shape[r / 3][r % 3]
+    });
+    let values: Vec<f64> = frd
+        .modes
+        .iter()
+        .map(|m| (2.0 * std::f64::consts::PI * m.frequency_hz).powi(2))
+        .collect();
+    if let Some(w) = frd
+        .modes
+        .windows(2)
+        .find(|w| w[1].frequency_hz < w[0].frequency_hz)
+    {
+        return Err(StudyError::in_file(
+            path,
+            "modes",
+            format!(
+                "the mode at line {} ({} Hz) is below the one before it ({} Hz): femu reads the modes of one frequency step, in ascending order",
+                w[1].line, w[1].frequency_hz, w[0].frequency_hz
+            ),
+        ));
+    }
+    let modes = femu_correlate::ModeSet::new(values, shapes, false)?;
+    let warnings = frd
+        .skipped
+        .iter()
+        .map(|(name, count)| {
+            format!(
+                "{}: {count} result block{} {name} skipped (femu reads the displacements of frequency steps)",
+                path.display(),
+                if *count == 1 { "" } else { "s" }
+            )
+        })
+        .collect();
+    Ok(ResultModes {
+        path: path.to_path_buf(),
+        model,
+        dofs,
+        modes,
+        warnings,
+    })
+}
+
 /// Where a model read as matrices came from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MatrixOrigin {

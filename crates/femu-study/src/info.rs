@@ -73,6 +73,7 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
         Some(Format::Universal) => describe_universal(path, s_, w)?,
         Some(f @ (Format::Json | Format::Csv)) => describe_test_table(path, f == Format::Json, s_)?,
         Some(Format::Matrices) => describe_matrices(path, s_, w)?,
+        Some(Format::Results) => describe_results(path, s_, w)?,
         None => {
             let all = femu_io::format::all_extensions();
             return Err(StudyError::in_file(
@@ -175,6 +176,29 @@ fn describe_matrices(
             );
         }
     }
+    Ok(())
+}
+
+/// What [`describe`] says of another solver's results: its nodes and modes.
+fn describe_results(
+    path: &Path,
+    s: &mut String,
+    warnings: &mut Vec<String>,
+) -> Result<(), StudyError> {
+    let r = crate::external::load_result_modes(path)?;
+    let _ = writeln!(s, "format: CalculiX results (.frd)");
+    let _ = writeln!(s, "nodes: {}", r.model.mesh().node_count());
+    let _ = writeln!(
+        s,
+        "modes: {} (displacements of a frequency step); Hz: {}",
+        r.modes.len(),
+        frequencies(&r.modes.frequencies_hz())
+    );
+    warnings.extend(r.warnings);
+    let _ = writeln!(
+        s,
+        "femu would: use them as the model's modes in femu correlate (no Sturm proof that none was skipped; estimate, expand, frf and update need K and M)"
+    );
     Ok(())
 }
 

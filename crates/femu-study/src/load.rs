@@ -139,6 +139,13 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
     if format == Format::Matrices {
         return load_matrices(path, options, start);
     }
+    if format == Format::Results {
+        return Err(StudyError::in_file(
+            path,
+            "model",
+            "the file holds another solver's modes, not its stiffness and mass: femu correlate compares them with a test; estimate, expand, frf and update need K and M (CalculiX writes them with *FREQUENCY, SOLVER=MATRIXSTORAGE: give femu the job.sti)",
+        ));
+    }
     let mut mass = options.mass();
     let mut eigrl = None;
     let (model, frequency) = if !format.info().deck {
@@ -445,11 +452,10 @@ pub fn length_unit(name: &str) -> Result<f64, StudyError> {
 /// own and the sensors would read other nodes than those measured.
 fn check_coordinates(
     data: &TestData,
-    model: &LoadedModel,
+    mesh: &femu_fem::mesh::Mesh,
     metres: f64,
     path: &Path,
 ) -> Result<(), StudyError> {
-    let mesh = model.model.mesh();
     if data.coordinates.is_empty() || mesh.node_count() == 0 {
         return Ok(());
     }
@@ -514,6 +520,20 @@ pub fn load_test_with(
     model: &LoadedModel,
     options: &TestOptions,
 ) -> Result<LoadedTest, StudyError> {
+    load_test_on(path, model.model.mesh(), &model.sys.dofs, options)
+}
+
+/// [`load_test_with`] onto the nodes of `mesh` and the DOFs of `dofs`: a model's, or another
+/// solver's modes' ([`crate::external::ResultModes`]).
+///
+/// # Errors
+/// As [`load_test_with`].
+pub fn load_test_on(
+    path: &Path,
+    mesh: &femu_fem::mesh::Mesh,
+    dofs: &femu_fem::dof::DofMap,
+    options: &TestOptions,
+) -> Result<LoadedTest, StudyError> {
     let format = Format::from_path(path)
         .filter(|f| f.info().test)
         .ok_or_else(|| {
@@ -552,12 +572,12 @@ pub fn load_test_with(
     let mapping = options
         .map
         .as_ref()
-        .map(|m| map_test(&mut data, model, m, metres, path))
+        .map(|m| map_test(&mut data, mesh, m, metres, path))
         .transpose()?;
     if mapping.is_none() {
-        check_coordinates(&data, model, metres, path)?;
+        check_coordinates(&data, mesh, metres, path)?;
     }
-    let layout = SensorLayout::new(model.model.mesh(), &model.sys.dofs, data.sensors.clone())
+    let layout = SensorLayout::new(mesh, dofs, data.sensors.clone())
         .map_err(|e| match e {
             femu_correlate::CorrelateError::SensorOnMissingNode { .. }
                 if mapping.is_none() && !data.coordinates.is_empty() =>
@@ -645,18 +665,16 @@ fn bricks_of_deck(bricks: Formulation, path: &Path, how: &str, warnings: &mut Ve
 /// [`femu_correlate::mapping::map_test`] onto `model`'s mesh; an error names the test file `path`.
 fn map_test(
     data: &mut TestData,
-    model: &LoadedModel,
+    mesh: &femu_fem::mesh::Mesh,
     options: &MapOptions,
     metres: f64,
     path: &Path,
 ) -> Result<Mapping, StudyError> {
-    femu_correlate::mapping::map_test(data, model.model.mesh(), options, metres).map_err(
-        |e| match e {
-            // the file's wireframe; a setting's error (the tolerance) names no file
-            CorrelateError::Mapping { what, reason } => StudyError::in_file(path, what, reason),
-            other => other.into(),
-        },
-    )
+    femu_correlate::mapping::map_test(data, mesh, options, metres).map_err(|e| match e {
+        // the file's wireframe; a setting's error (the tolerance) names no file
+        CorrelateError::Mapping { what, reason } => StudyError::in_file(path, what, reason),
+        other => other.into(),
+    })
 }
 
 #[cfg(test)]
