@@ -11,6 +11,7 @@
 
 pub mod csv;
 mod error;
+pub mod f06;
 pub mod format;
 pub mod frd;
 pub mod gmsh;

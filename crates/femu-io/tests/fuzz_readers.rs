@@ -1,5 +1,5 @@
-//! Fuzzing of the Nastran, Universal File and CalculiX result readers on the stable toolchain, in CI: decks and
-//! files of the corpus (`fixtures/`, the seed corpus of `fuzz/run.sh`, files up to 16 KiB) mutated
+//! Fuzzing of the Nastran, Universal File, CalculiX result and Nastran printed-output readers on
+//! the stable toolchain, in CI: decks and files of the corpus (`fixtures/`, the seed corpus of `fuzz/run.sh`, files up to 16 KiB) mutated
 //! by proptest (bytes replaced by the characters their formats are made of, lines deleted,
 //! duplicated, swapped and cut, fields inserted) must give a model or an error, never a panic;
 //! a model that reads must also give its DOF map. `FEMU_FUZZ_CASES` sets the cases per reader
@@ -190,5 +190,31 @@ fn frd_reader_never_panics() {
     proptest!(config, |(k in 0..n, edits in prop::collection::vec(edit(), 1..6))| {
         let bytes = apply(&files[k].1, &edits);
         let _ = femu_io::frd::parse_frd(&String::from_utf8_lossy(&bytes), &files[k].0);
+    });
+}
+
+/// Nastran's `.f06` reader on mutated pages of a real run's printed modes (the eigenvalue table
+/// and the eigenvector blocks of `fixtures/nastran/pynastran/mode_solid_shell_bar.f06`, lines
+/// 280-460, about 16 KiB).
+#[test]
+fn f06_reader_never_panics() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/nastran/pynastran/mode_solid_shell_bar.f06");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let pages: String = text
+        .lines()
+        .skip(279)
+        .take(180)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert!(femu_io::f06::parse_f06(&pages, &path).is_ok());
+    let config = ProptestConfig {
+        cases: cases(),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    };
+    proptest!(config, |(edits in prop::collection::vec(edit(), 1..6))| {
+        let bytes = apply(pages.as_bytes(), &edits);
+        let _ = femu_io::f06::parse_f06(&String::from_utf8_lossy(&bytes), &path);
     });
 }

@@ -469,11 +469,14 @@ impl Results {
 }
 
 /// Reads another solver's modes: a CalculiX `.frd` (the displacements of its `*FREQUENCY` step,
-/// asked for with `*NODE FILE` and `U`), with its nodes.
+/// asked for with `*NODE FILE` and `U`), with its nodes; or a Nastran `.f06` (its real
+/// eigenvectors) with the grids of the run's deck (`nodes`, or the `.bdf`, `.dat` or `.nas` of the
+/// same name beside it).
 #[pyfunction]
-fn read_results(py: Python<'_>, path: PathBuf) -> PyResult<Results> {
+#[pyo3(signature = (path, *, nodes=None))]
+fn read_results(py: Python<'_>, path: PathBuf, nodes: Option<PathBuf>) -> PyResult<Results> {
     let results = py
-        .detach(|| femu_study::external::load_result_modes(&path))
+        .detach(|| femu_study::external::load_result_modes(&path, nodes.as_deref()))
         .map_err(err)?;
     Ok(Results { results })
 }

@@ -32,54 +32,76 @@ pub struct ResultModes {
     pub warnings: Vec<String>,
 }
 
-/// Reads another solver's modes (CalculiX's `.frd`: [`femu_io::frd::read_frd`]).
+/// Reads another solver's modes: CalculiX's `.frd` ([`femu_io::frd::read_frd`], its own nodes),
+/// or Nastran's `.f06` ([`femu_io::f06::read_f06`]) with the grids of its deck
+/// ([`femu_io::nastran::read_grids`]: `nodes`, or the `.bdf`, `.dat` or `.nas` of the same name
+/// beside it), each grid's printed translations turned from its displacement frame (CD) into the
+/// basic frame. The model's nodes are the grids the modes print (a grid the output leaves out is
+/// not there to be measured); rotations are not kept (a test measures translations).
 ///
 /// # Errors
-/// The reader's errors; modes whose frequencies do not ascend (named).
-pub fn load_result_modes(path: &Path) -> Result<ResultModes, StudyError> {
-    let frd = femu_io::frd::read_frd(path)?;
+/// The readers' errors; a printed grid the deck does not define; no deck beside the `.f06`;
+/// modes whose frequencies do not ascend (named).
+pub fn load_result_modes(path: &Path, nodes: Option<&Path>) -> Result<ResultModes, StudyError> {
+    let is_f06 = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("f06"));
+    let (points, modes, mut warnings) = if is_f06 {
+        f06_modes(path, nodes)?
+    } else {
+        let frd = femu_io::frd::read_frd(path)?;
+        let warnings: Vec<String> = frd
+            .skipped
+            .iter()
+            .map(|(name, count)| {
+                format!(
+                    "{}: {count} result block{} {name} skipped (femu reads the displacements of frequency steps)",
+                    path.display(),
+                    if *count == 1 { "" } else { "s" }
+                )
+            })
+            .collect();
+        let modes: Vec<(f64, usize, Vec<[f64; 3]>)> = frd
+            .modes
+            .into_iter()
+            .map(|m| {
+                (
+                    (2.0 * std::f64::consts::PI * m.frequency_hz).powi(2),
+                    m.line,
+                    m.shape,
+                )
+            })
+            .collect();
+        (frd.nodes, modes, warnings)
+    };
+    if nodes.is_some() && !is_f06 {
+        warnings.push(format!(
+            "{}: the .frd holds its nodes: the given node file is not used",
+            path.display()
+        ));
+    }
     let mut mesh = Mesh::new();
-    for &(id, x) in &frd.nodes {
+    for &(id, x) in &points {
         mesh.add_node(id, x)
             .map_err(|e| StudyError::within(path, e))?;
     }
     let model = Model::new(mesh).map_err(|e| StudyError::within(path, e))?;
-    let n = frd.nodes.len();
+    let n = points.len();
     let dofs = femu_fem::dof::DofMap::new(n, []);
-    let shapes = faer::Mat::from_fn(3 * n, frd.modes.len(), |r, j| {
-        frd.modes[j].shape[r / 3][r % 3]
-    });
-    let values: Vec<f64> = frd
-        .modes
-        .iter()
-        .map(|m| (2.0 * std::f64::consts::PI * m.frequency_hz).powi(2))
-        .collect();
-    if let Some(w) = frd
-        .modes
-        .windows(2)
-        .find(|w| w[1].frequency_hz < w[0].frequency_hz)
-    {
+    if let Some(w) = modes.windows(2).find(|w| w[1].0 < w[0].0) {
         return Err(StudyError::in_file(
             path,
             "modes",
             format!(
-                "the mode at line {} ({} Hz) is below the one before it ({} Hz): femu reads the modes of one frequency step, in ascending order",
-                w[1].line, w[1].frequency_hz, w[0].frequency_hz
+                "the mode at line {} (eigenvalue {:e}) is below the one before it ({:e}): femu reads the modes of one analysis, in ascending order",
+                w[1].1, w[1].0, w[0].0
             ),
         ));
     }
+    let shapes = faer::Mat::from_fn(3 * n, modes.len(), |r, j| modes[j].2[r / 3][r % 3]);
+    let values: Vec<f64> = modes.iter().map(|m| m.0).collect();
     let modes = femu_correlate::ModeSet::new(values, shapes, false)?;
-    let warnings = frd
-        .skipped
-        .iter()
-        .map(|(name, count)| {
-            format!(
-                "{}: {count} result block{} {name} skipped (femu reads the displacements of frequency steps)",
-                path.display(),
-                if *count == 1 { "" } else { "s" }
-            )
-        })
-        .collect();
     Ok(ResultModes {
         path: path.to_path_buf(),
         model,
@@ -87,6 +109,98 @@ pub fn load_result_modes(path: &Path) -> Result<ResultModes, StudyError> {
         modes,
         warnings,
     })
+}
+
+/// Nodes, modes `(eigenvalue, line, translations per node in the basic frame)` and warnings of a
+/// `.f06` with the grids of its deck.
+#[allow(clippy::type_complexity)]
+fn f06_modes(
+    path: &Path,
+    nodes: Option<&Path>,
+) -> Result<
+    (
+        Vec<(u64, [f64; 3])>,
+        Vec<(f64, usize, Vec<[f64; 3]>)>,
+        Vec<String>,
+    ),
+    StudyError,
+> {
+    let f06 = femu_io::f06::read_f06(path)?;
+    let deck = match nodes {
+        Some(p) => p.to_path_buf(),
+        None => ["bdf", "dat", "nas", "BDF", "DAT", "NAS"]
+            .iter()
+            .map(|e| path.with_extension(e))
+            .find(|p| p.exists())
+            .ok_or_else(|| {
+                StudyError::in_file(
+                    path,
+                    "nodes",
+                    "the modes need their grids' positions: no .bdf, .dat or .nas of the same name beside the .f06; name the run's deck with --nodes (nodes = \"...\" in a study file)",
+                )
+            })?,
+    };
+    let grids = femu_io::nastran::read_grids(&deck)?;
+    let by_id: HashMap<u64, &femu_io::nastran::GridPoint> =
+        grids.iter().map(|g| (g.id, g)).collect();
+    // the grids every mode prints, in the first mode's order
+    let printed: Vec<u64> = f06.modes[0].points.iter().map(|(id, _)| *id).collect();
+    let mut points = Vec::with_capacity(printed.len());
+    for id in &printed {
+        let g = by_id.get(id).ok_or_else(|| {
+            StudyError::in_file(
+                path,
+                "modes",
+                format!(
+                    "grid {id} of eigenvector {} is not a GRID of {}",
+                    f06.modes[0].number,
+                    deck.display()
+                ),
+            )
+        })?;
+        points.push((*id, g.position));
+    }
+    let mut modes = Vec::with_capacity(f06.modes.len());
+    for m in &f06.modes {
+        let values: HashMap<u64, [f64; 6]> = m.points.iter().copied().collect();
+        let shape = printed
+            .iter()
+            .map(|id| {
+                let v = values.get(id).ok_or_else(|| {
+                    StudyError::in_file(
+                        path,
+                        "modes",
+                        format!(
+                            "eigenvector {} does not print grid {id}, which eigenvector {} prints",
+                            m.number, f06.modes[0].number
+                        ),
+                    )
+                })?;
+                let a = by_id[id].axes;
+                Ok(std::array::from_fn(|i| {
+                    (0..3).map(|j| a[i][j] * v[j]).sum::<f64>()
+                }))
+            })
+            .collect::<Result<Vec<[f64; 3]>, StudyError>>()?;
+        modes.push((m.eigenvalue, m.line, shape));
+    }
+    let mut warnings = Vec::new();
+    if f06.without_vectors > 0 {
+        warnings.push(format!(
+            "{}: {} eigenvalues of the table have no printed eigenvector: the modes are those printed",
+            path.display(),
+            f06.without_vectors
+        ));
+    }
+    if grids.len() > printed.len() {
+        warnings.push(format!(
+            "{}: {} of the deck's {} grids are not printed in the eigenvectors: a test cannot be placed on them",
+            path.display(),
+            grids.len() - printed.len(),
+            grids.len()
+        ));
+    }
+    Ok((points, modes, warnings))
 }
 
 /// Where a model read as matrices came from.

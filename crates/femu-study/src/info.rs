@@ -185,12 +185,23 @@ fn describe_results(
     s: &mut String,
     warnings: &mut Vec<String>,
 ) -> Result<(), StudyError> {
-    let r = crate::external::load_result_modes(path)?;
-    let _ = writeln!(s, "format: CalculiX results (.frd)");
+    let r = crate::external::load_result_modes(path, None)?;
+    let f06 = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("f06"));
+    let _ = writeln!(
+        s,
+        "format: {}",
+        if f06 {
+            "Nastran printed output (.f06): real eigenvectors, the grids from the run's deck"
+        } else {
+            "CalculiX results (.frd)"
+        }
+    );
     let _ = writeln!(s, "nodes: {}", r.model.mesh().node_count());
     let _ = writeln!(
         s,
-        "modes: {} (displacements of a frequency step); Hz: {}",
+        "modes: {}; Hz: {}",
         r.modes.len(),
         frequencies(&r.modes.frequencies_hz())
     );

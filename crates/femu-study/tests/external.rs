@@ -392,7 +392,7 @@ fn calculix_modes_are_the_model_side() {
         }
     }
     std::fs::write(d.join("test.csv"), csv).unwrap();
-    let results = femu_study::external::load_result_modes(&d.join("job.frd")).unwrap();
+    let results = femu_study::external::load_result_modes(&d.join("job.frd"), None).unwrap();
     assert_eq!(results.modes.len(), 6);
     let test = femu_study::load::load_test_on(
         &d.join("test.csv"),
@@ -421,5 +421,70 @@ fn calculix_modes_are_the_model_side() {
         e.contains("femu correlate") && e.contains("SOLVER=MATRIXSTORAGE"),
         "{e}"
     );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// MSC Nastran's modes (a `.f06` from pyNastran's models, its grids from the run's deck, which
+/// holds shells, bars, beams and rods) as the model side, against a test written from pyNastran's
+/// reading of the same run's OP2 (an independent reader of another file): translations of grids
+/// 1-13 in x, y and z. They pair one to one with MAC 1 to 1e-9 and the same frequencies to 1e-6.
+#[test]
+fn nastran_modes_are_the_model_side() {
+    let fixtures =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/nastran/pynastran");
+    let reference: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(fixtures.join("mode_solid_shell_bar.modes.json")).unwrap(),
+    )
+    .unwrap();
+    let d = dir("f06");
+    let mut csv = String::from("mode,frequency_hz,node,direction,value\n");
+    for j in 0..3 {
+        let f = reference["eigenvalues"][j].as_f64().unwrap().sqrt() / (2.0 * std::f64::consts::PI);
+        for (k, node) in reference["nodes"].as_array().unwrap().iter().enumerate() {
+            let node = node.as_u64().unwrap();
+            if node > 13 {
+                continue;
+            }
+            for (c, name) in ["x", "y", "z"].iter().enumerate() {
+                let v = reference["vectors"][j][k][c].as_f64().unwrap();
+                csv.push_str(&format!("{},{f:.9},{node},{name},{v:e}\n", j + 1));
+            }
+        }
+    }
+    std::fs::write(d.join("test.csv"), csv).unwrap();
+    let results =
+        femu_study::external::load_result_modes(&fixtures.join("mode_solid_shell_bar.f06"), None)
+            .unwrap();
+    assert_eq!(results.model.mesh().node_count(), 25);
+    let test = femu_study::load::load_test_on(
+        &d.join("test.csv"),
+        results.model.mesh(),
+        &results.dofs,
+        &Default::default(),
+    )
+    .unwrap();
+    let report = correlate(
+        &results.modes,
+        &test.data.modes,
+        &test.layout,
+        &PairingOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(report.pairing.pairs.len(), 3);
+    for p in &report.pairing.pairs {
+        assert_eq!(p.test, p.model);
+        assert!(p.mac.unwrap() > 1.0 - 1e-9, "{p:?}");
+        assert!(p.frequency_error.abs() < 1e-6, "{p:?}");
+    }
+    // without the deck beside it, the .f06 says what it needs
+    std::fs::copy(
+        fixtures.join("mode_solid_shell_bar.f06"),
+        d.join("alone.f06"),
+    )
+    .unwrap();
+    let e = femu_study::external::load_result_modes(&d.join("alone.f06"), None)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("--nodes") && e.contains(".bdf"), "{e}");
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -47,7 +47,8 @@ pub fn run(a: &CorrelateArgs, quiet: bool) -> Result<(), CliError> {
     let eigen = a.inputs.engine.eigen()?;
     let (modes, test) = if femu::io::Format::from_path(&a.model) == Some(femu::io::Format::Results)
     {
-        let results = femu::study::external::load_result_modes(&a.model)?;
+        let results =
+            femu::study::external::load_result_modes(&a.model, a.inputs.model.nodes.as_deref())?;
         pb.suspend(|| crate::common::warn(quiet, &results.warnings));
         if a.count.is_some() || a.lumped {
             crate::common::warn(

@@ -147,6 +147,71 @@ pub fn read_bdf(path: impl AsRef<Path>, options: &BdfOptions) -> Result<BdfDeck,
     parse_lines(&lines, path.as_ref(), options)
 }
 
+/// A grid point read for where it is and how its displacements are written.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridPoint {
+    /// The grid id.
+    pub id: u64,
+    /// Its position in the basic frame.
+    pub position: [f64; 3],
+    /// Its displacement frame (`CD`, GRID field 7, or GRDSET's), 0 the basic frame.
+    pub cd: i64,
+    /// The displacement frame's axes at the grid in basic components (`axes[i][j]`: component `i`
+    /// of direction `j`; the identity for the basic frame): a result `u` in the CD frame is
+    /// `axes u` in the basic frame.
+    pub axes: [[f64; 3]; 3],
+}
+
+/// The grids of a deck (with its `INCLUDE`s) in the basic frame, with their displacement frames,
+/// and nothing else: the geometry of a model another run of Nastran solved (its `.f06`), whatever
+/// elements it has. `GRID`, `GRDSET` and the `CORD1/2R/C/S` frames are read as
+/// [`read_bdf`] reads them; every other card is left alone.
+///
+/// # Errors
+/// The file system's; [`IoError::Parse`] naming the card's line for a malformed GRID or frame, a
+/// frame cycle or an unknown frame; [`IoError::Content`] for a deck without GRID.
+pub fn read_grids(path: impl AsRef<Path>) -> Result<Vec<GridPoint>, IoError> {
+    let path = path.as_ref();
+    let mut lines = Vec::new();
+    cards::load(path, 0, &mut lines)?;
+    let deck = cards::deck(&lines)?;
+    let grids: Vec<&Card> = deck.cards.iter().filter(|c| c.name == "GRID").collect();
+    let cords: Vec<&Card> = deck
+        .cards
+        .iter()
+        .filter(|c| c.name.starts_with("CORD1") || c.name.starts_with("CORD2"))
+        .collect();
+    let grdset = deck.cards.iter().find(|c| c.name == "GRDSET");
+    if grids.is_empty() {
+        return Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: "the deck defines no GRID".into(),
+        });
+    }
+    let mut geometry = Geometry::new(&cords, &grids, grdset)?;
+    let mut ids: Vec<u64> = geometry.grid_of.keys().copied().collect();
+    ids.sort_unstable();
+    let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    ids.iter()
+        .map(|id| {
+            let g = geometry.grid_of[id];
+            let position = geometry.position(*id, g)?;
+            let cd = geometry.grid_int(g, 5, "CD")?.unwrap_or(0);
+            let axes = if cd == 0 {
+                identity
+            } else {
+                geometry.frame(cd, g)?.axes_at(position)
+            };
+            Ok(GridPoint {
+                id: *id,
+                position,
+                cd,
+                axes,
+            })
+        })
+        .collect()
+}
+
 /// Parses bulk data from text (`path` names it in messages; `INCLUDE`s are not followed).
 ///
 /// # Errors
