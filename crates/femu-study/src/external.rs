@@ -226,8 +226,21 @@ pub fn matrix_model(
     nodes: Option<&Path>,
     lumped: bool,
 ) -> Result<(Model, SystemMatrices, MatrixOrigin, Vec<String>), StudyError> {
-    let mut warnings = Vec::new();
     let ext = femu_io::matrices::read_matrices(path)?;
+    model_of_matrices(ext, path, nodes, lumped)
+}
+
+/// [`matrix_model`] of a set already read.
+///
+/// # Errors
+/// As [`matrix_model`].
+pub fn model_of_matrices(
+    ext: ExternalMatrices,
+    path: &Path,
+    nodes: Option<&Path>,
+    lumped: bool,
+) -> Result<(Model, SystemMatrices, MatrixOrigin, Vec<String>), StudyError> {
+    let mut warnings = Vec::new();
     let node_file = match nodes {
         Some(p) => p.to_path_buf(),
         None => {
@@ -278,8 +291,10 @@ pub fn matrix_model(
         .collect();
     // the eigensolver factors K - sigma M on K's pattern: K stores (zeros where need be) every
     // entry M has
-    let k = permuted(&ext.k, &order, Some(&ext.m));
-    let m = permuted(&ext.m, &order, None);
+    let (k, m) = rayon::join(
+        || permuted(&ext.k, &order, Some(&ext.m)),
+        || permuted(&ext.m, &order, None),
+    );
     if let Some(r) = (0..ext.m.rows()).find(|&r| !(ext.m.get(r, r).copied().unwrap_or(0.0) >= 0.0))
     {
         return Err(StudyError::in_file(
@@ -367,15 +382,13 @@ fn model_of(
 /// `P A P^T`: entry `(i, j)` of `a` moved to `(order[i], order[j])`, with a stored zero wherever
 /// `also` has an entry that `a` lacks.
 fn permuted(a: &SparseMatrix, order: &[usize], also: Option<&SparseMatrix>) -> SparseMatrix {
-    let extra = also.map_or(0, |b| b.nnz());
-    let mut tri = sprs::TriMat::with_capacity((a.rows(), a.cols()), a.nnz() + extra);
-    for (v, (i, j)) in a.iter() {
-        tri.add_triplet(order[i], order[j], *v);
-    }
-    for (_, (i, j)) in also.into_iter().flat_map(|b| b.iter()) {
-        tri.add_triplet(order[i], order[j], 0.0);
-    }
-    tri.to_csc()
+    let Some(b) = also else {
+        return femu_sparse::csc::permuted(a, order);
+    };
+    let entries = femu_sparse::csc::entries(a)
+        .map(|(i, j, v)| (order[i], order[j], v))
+        .chain(femu_sparse::csc::entries(b).map(|(i, j, _)| (order[i], order[j], 0.0)));
+    femu_sparse::csc::from_entry_iter(a.rows(), a.cols(), entries)
 }
 
 /// The files [`write_matrices`] wrote.

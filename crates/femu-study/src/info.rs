@@ -139,6 +139,7 @@ fn describe_matrices(
 ) -> Result<(), StudyError> {
     let ext = femu_io::matrices::read_matrices(path)?;
     let _ = writeln!(s, "format: {}", ext.source.name());
+    let (k_nnz, m_nnz) = (ext.k.nnz(), ext.m.nnz());
     let names: Vec<String> = ext.files.iter().map(|f| f.display().to_string()).collect();
     let _ = writeln!(s, "files: {}", names.join(", "));
     let nodes: std::collections::BTreeSet<u64> = ext.dofs.iter().map(|d| d.node).collect();
@@ -148,12 +149,13 @@ fn describe_matrices(
         "rows: {} DOFs on {} nodes ({rotations} of them rotations); nnz(K) = {}, nnz(M) = {}",
         ext.dofs.len(),
         nodes.len(),
-        ext.k.nnz(),
-        ext.m.nnz()
+        k_nnz,
+        m_nnz
     );
     match femu_io::matrices::default_node_table(path).filter(|p| p.exists()) {
         Some(table) => {
-            let (model, sys, _, w) = crate::external::matrix_model(path, Some(&table), false)?;
+            let (model, sys, _, w) =
+                crate::external::model_of_matrices(ext, path, Some(&table), false)?;
             warnings.extend(w);
             let _ = writeln!(
                 s,
