@@ -31,9 +31,156 @@ pub struct ParameterGroups {
     slot_offset: Vec<usize>,
     ke: Vec<f64>,
     me: Vec<f64>,
+    /// Groups given as assembled matrices instead of elements ([`ParameterGroups::from_matrices`]).
+    matrices: Option<MatrixGroups>,
+}
+
+/// Groups given as assembled `K_g`, `M_g` on the free DOFs (another solver's), with where each
+/// entry lands in the nominal stiffness pattern.
+#[derive(Debug, Clone)]
+struct MatrixGroups {
+    k: Vec<SparseMatrix>,
+    m: Vec<SparseMatrix>,
+    /// For each group, the index in the nominal `K`'s values of each entry of `K_g`, then of `M_g`.
+    k_at: Vec<Vec<usize>>,
+    m_at: Vec<Vec<usize>>,
+    /// For a lumped nominal `M`: the index in its values of each (diagonal) entry of `M_g`.
+    m_lumped_at: Vec<Vec<usize>>,
+    /// The translational mass of each group, kg.
+    mass: Vec<f64>,
+    /// The free DOFs each group touches, sorted.
+    dofs: Vec<Vec<usize>>,
+}
+
+/// The value index in `pattern` of each stored entry of `a`; `None` at the first entry `pattern`
+/// lacks, with its row and column.
+fn positions(pattern: &SparseMatrix, a: &SparseMatrix) -> Result<Vec<usize>, (usize, usize)> {
+    let ptr = pattern.indptr();
+    let ptr = ptr.raw_storage();
+    let rows = pattern.indices();
+    femu_sparse::csc::entries(a)
+        .map(|(i, j, _)| {
+            rows[ptr[j]..ptr[j + 1]]
+                .binary_search(&i)
+                .map(|k| ptr[j] + k)
+                .map_err(|_| (i, j))
+        })
+        .collect()
+}
+
+/// `t^T M t` for the unit translation `t` along x of every node (the free x DOFs): the mass that
+/// moves with the structure along x, kg.
+pub fn translational_mass(m: &SparseMatrix, dofs: &crate::dof::DofMap) -> f64 {
+    let along_x: Vec<bool> = (0..dofs.free_count())
+        .map(|f| {
+            let (p, c) = dofs.free_dof(f);
+            c == 0 && !dofs.point_node(p).1
+        })
+        .collect();
+    femu_sparse::csc::entries(m)
+        .filter(|(i, j, _)| along_x[*i] && along_x[*j])
+        .map(|(_, _, v)| v)
+        .sum()
 }
 
 impl ParameterGroups {
+    /// Groups given as assembled matrices on `base`'s free DOFs (another solver's, read whole):
+    /// `K_g` and `M_g` of each named group, whose entries must lie in `base`'s stiffness pattern
+    /// (and, for a lumped `base` mass, `M_g` on its diagonal). No element is involved: the products
+    /// and `K(p)` are formed from the matrices.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidGroup`] for a size that is not `base`'s, an entry outside the pattern
+    /// (its row and column), or a group without an entry.
+    pub fn from_matrices(
+        base: &SystemMatrices,
+        groups: Vec<(String, SparseMatrix, SparseMatrix)>,
+    ) -> Result<Self, FemError> {
+        let n = base.k.rows();
+        let mut mg = MatrixGroups {
+            k: Vec::new(),
+            m: Vec::new(),
+            k_at: Vec::new(),
+            m_at: Vec::new(),
+            m_lumped_at: Vec::new(),
+            mass: Vec::new(),
+            dofs: Vec::new(),
+        };
+        let mut named = Vec::new();
+        let lumped = base.mass_kind == MassKind::Lumped;
+        for (name, k, m) in groups {
+            let bad = |reason: String| FemError::InvalidGroup {
+                name: name.clone(),
+                reason,
+            };
+            for (what, a) in [("stiffness", &k), ("mass", &m)] {
+                if a.rows() != n || a.cols() != n {
+                    return Err(bad(format!(
+                        "its {what} is {} x {}, the model's {n} x {n}",
+                        a.rows(),
+                        a.cols()
+                    )));
+                }
+            }
+            if k.nnz() == 0 && m.nnz() == 0 {
+                return Err(bad(
+                    "its stiffness and mass are zero: it changes nothing".into()
+                ));
+            }
+            let outside = |what: &str, (i, j): (usize, usize)| {
+                bad(format!(
+                    "its {what} has an entry at row {} and column {} where the model's stiffness has none",
+                    i + 1,
+                    j + 1
+                ))
+            };
+            mg.k_at
+                .push(positions(&base.k, &k).map_err(|e| outside("stiffness", e))?);
+            mg.m_at
+                .push(positions(&base.k, &m).map_err(|e| outside("mass", e))?);
+            mg.m_lumped_at.push(if lumped {
+                positions(&base.m, &m).map_err(|(i, j)| {
+                    bad(format!(
+                        "its mass has an entry at row {} and column {} off the model's lumped (diagonal) mass",
+                        i + 1,
+                        j + 1
+                    ))
+                })?
+            } else {
+                Vec::new()
+            });
+            let mut dofs: Vec<usize> = femu_sparse::csc::entries(&k)
+                .chain(femu_sparse::csc::entries(&m))
+                .flat_map(|(i, j, _)| [i, j])
+                .collect();
+            dofs.sort_unstable();
+            dofs.dedup();
+            mg.dofs.push(dofs);
+            mg.mass.push(translational_mass(&m, &base.dofs));
+            mg.k.push(k);
+            mg.m.push(m);
+            named.push(ParameterGroup {
+                name,
+                elements: Vec::new(),
+            });
+        }
+        Ok(Self {
+            groups: named,
+            mass_kind: base.mass_kind,
+            slot: Vec::new(),
+            slot_offset: Vec::new(),
+            ke: Vec::new(),
+            me: Vec::new(),
+            matrices: Some(mg),
+        })
+    }
+
+    /// Whether the groups are assembled matrices ([`ParameterGroups::from_matrices`]) rather than
+    /// element sets.
+    pub fn from_assembled_matrices(&self) -> bool {
+        self.matrices.is_some()
+    }
+
     /// Groups given explicitly. Element matrices are computed in parallel for every element in
     /// some group; `mass_kind` must match the system mass they will be added to.
     ///
@@ -87,6 +234,7 @@ impl ParameterGroups {
             slot_offset,
             ke,
             me,
+            matrices: None,
         })
     }
 
@@ -166,7 +314,10 @@ impl ParameterGroups {
         x: &[f64],
         y: &mut [f64],
     ) -> Result<(), FemError> {
-        let n = asm.dofs().free_count();
+        let n = match &self.matrices {
+            Some(mg) => mg.k.first().map_or(0, |k| k.rows()),
+            None => asm.dofs().free_count(),
+        };
         for (what, len) in [("x in K_g x", x.len()), ("y in K_g x", y.len())] {
             if len != n {
                 return Err(FemError::LengthMismatch {
@@ -177,6 +328,13 @@ impl ParameterGroups {
             }
         }
         let group = self.check_group(g)?;
+        if let Some(mg) = &self.matrices {
+            let a = if mass { &mg.m[g] } else { &mg.k[g] };
+            for (i, j, v) in femu_sparse::csc::entries(a) {
+                y[i] += alpha * v * x[j];
+            }
+            return Ok(());
+        }
         let mesh = model.mesh();
         let dm = asm.dofs();
         // y += alpha T_e^T A_e T_e x: gather the element's DOFs through T, multiply, scatter back
@@ -282,6 +440,9 @@ impl ParameterGroups {
                 });
             }
         }
+        if let Some(mg) = &self.matrices {
+            return self.write_matrix_groups(mg, base, p, q, out);
+        }
         if base.k.nnz() != asm.nnz() || base.mass_kind != self.mass_kind {
             return Err(FemError::LengthMismatch {
                 what: "base matrices against the assembler",
@@ -338,6 +499,69 @@ impl ParameterGroups {
         Ok(())
     }
 
+    /// [`ParameterGroups::write_parameterized`] for groups given as matrices.
+    fn write_matrix_groups(
+        &self,
+        mg: &MatrixGroups,
+        base: &SystemMatrices,
+        p: &[f64],
+        q: &[f64],
+        out: &mut SystemMatrices,
+    ) -> Result<(), FemError> {
+        if base.mass_kind != self.mass_kind || mg.k_at.iter().flatten().any(|&i| i >= base.k.nnz())
+        {
+            return Err(FemError::LengthMismatch {
+                what: "base matrices against the groups' matrices",
+                expected: base.k.nnz(),
+                got: out.k.nnz(),
+            });
+        }
+        out.k.data_mut().copy_from_slice(base.k.data());
+        for (g, k) in mg.k.iter().enumerate() {
+            if p[g] != 0.0 {
+                let kd = out.k.data_mut();
+                for (at, v) in mg.k_at[g].iter().zip(k.data()) {
+                    kd[*at] += p[g] * v;
+                }
+            }
+        }
+        if self.mass_kind == MassKind::Lumped {
+            out.m.data_mut().copy_from_slice(base.m.data());
+            for (g, m) in mg.m.iter().enumerate() {
+                if q[g] != 0.0 {
+                    let md = out.m.data_mut();
+                    for (at, v) in mg.m_lumped_at[g].iter().zip(m.data()) {
+                        md[*at] += q[g] * v;
+                    }
+                }
+            }
+            return Ok(());
+        }
+        let mut m_on_k = vec![0.0; base.k.nnz()];
+        femu_sparse::csc::for_entries_within(&base.k, &base.m, |pm, pk| {
+            m_on_k[pk] = base.m.data()[pm];
+        })
+        .map_err(|_| FemError::LengthMismatch {
+            what: "base mass pattern inside the stiffness pattern",
+            expected: base.k.nnz(),
+            got: base.m.nnz(),
+        })?;
+        for (g, m) in mg.m.iter().enumerate() {
+            if q[g] != 0.0 {
+                for (at, v) in mg.m_at[g].iter().zip(m.data()) {
+                    m_on_k[*at] += q[g] * v;
+                }
+            }
+        }
+        out.m = femu_sparse::csc::without_zeros_of(
+            (base.k.rows(), base.k.cols()),
+            base.k.indptr().raw_storage(),
+            base.k.indices(),
+            &m_on_k,
+        );
+        Ok(())
+    }
+
     /// `K(p)` and `M(q)` as new matrices on `base`'s pattern; see
     /// [`ParameterGroups::write_parameterized`] to reuse storage in a loop.
     ///
@@ -363,6 +587,9 @@ impl ParameterGroups {
     /// [`FemError::InvalidGroup`].
     pub fn group_mass(&self, model: &Model, g: usize) -> Result<f64, FemError> {
         let group = self.check_group(g)?;
+        if let Some(mg) = &self.matrices {
+            return Ok(mg.mass[g]);
+        }
         let mut total = 0.0;
         for &e in &group.elements {
             let nn = model.mesh().element(e).nodes.len();
@@ -388,6 +615,9 @@ impl ParameterGroups {
         g: usize,
     ) -> Result<Vec<usize>, FemError> {
         let group = self.check_group(g)?;
+        if let Some(mg) = &self.matrices {
+            return Ok(mg.dofs[g].clone());
+        }
         let mut dofs: Vec<usize> = group
             .elements
             .iter()
@@ -415,6 +645,9 @@ impl ParameterGroups {
         g: usize,
     ) -> Result<SparseMatrix, FemError> {
         let group = self.check_group(g)?;
+        if let Some(mg) = &self.matrices {
+            return Ok(mg.k[g].clone());
+        }
         let mut v = vec![0.0; asm.nnz()];
         for &e in &group.elements {
             let ke = self.element_slices(e).0;

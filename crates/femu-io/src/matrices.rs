@@ -112,9 +112,11 @@ pub fn read_matrices(path: &Path) -> Result<ExternalMatrices, IoError> {
         MatrixSource::Calculix => {
             let dofs = read_calculix_dofs(&files[2])?;
             // the two files at once: each one's column sort is sequential
+            // the stiffness keeps the entries that are exactly zero: its pattern is where other
+            // matrices of the model (the mass, a group's stiffness) may have entries
             let (k, m) = rayon::join(
-                || read_calculix_matrix(&files[0], dofs.len()),
-                || read_calculix_matrix(&files[1], dofs.len()),
+                || read_calculix_matrix(&files[0], dofs.len(), true),
+                || read_calculix_matrix(&files[1], dofs.len(), false),
             );
             (k?, m?, dofs)
         }
@@ -260,13 +262,15 @@ fn read_calculix_dofs(path: &Path) -> Result<Vec<DofLabel>, IoError> {
 /// ([`femu_sparse::csc::from_entries`]): a 105,840-DOF set (two files of 133 MB) reads in a
 /// fraction of the time the `TriMat` route took (docs/SCALING.md, "Reading another solver's
 /// matrices").
-fn read_calculix_matrix(path: &Path, n: usize) -> Result<SparseMatrix, IoError> {
+fn read_calculix_matrix(path: &Path, n: usize, keep_zeros: bool) -> Result<SparseMatrix, IoError> {
     use rayon::prelude::*;
     let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
     let chunks = line_chunks(&bytes, 8 * rayon::current_num_threads());
     let parts: Vec<Result<Chunk, IoError>> = chunks
         .par_iter()
-        .map(|&(start, end, first_line)| parse_chunk(&bytes[start..end], first_line, n, path))
+        .map(|&(start, end, first_line)| {
+            parse_chunk(&bytes[start..end], first_line, n, keep_zeros, path)
+        })
         .collect();
     let mut entries = Vec::new();
     let (mut upper, mut lower): (Option<usize>, Option<usize>) = (None, None);
@@ -318,7 +322,13 @@ struct Chunk {
     lower: Option<usize>,
 }
 
-fn parse_chunk(text: &[u8], first_line: usize, n: usize, path: &Path) -> Result<Chunk, IoError> {
+fn parse_chunk(
+    text: &[u8],
+    first_line: usize,
+    n: usize,
+    keep_zeros: bool,
+    path: &Path,
+) -> Result<Chunk, IoError> {
     let mut chunk = Chunk {
         entries: Vec::with_capacity(text.len() / 30),
         upper: None,
@@ -404,7 +414,7 @@ fn parse_chunk(text: &[u8], first_line: usize, n: usize, path: &Path) -> Result<
         } else if r > c {
             chunk.lower.get_or_insert(line);
         }
-        if value != 0.0 || r == c {
+        if keep_zeros || value != 0.0 || r == c {
             chunk.entries.push((r, c, value));
         }
     }

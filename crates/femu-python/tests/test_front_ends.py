@@ -201,7 +201,8 @@ def test_another_solvers_matrices_are_a_model_everywhere(case):
     """The bar's K and M written by `femu matrices` (MatrixMarket, DOF table, node table) are a
     model for the command line, a study file and Python alike: the same estimate from each, the
     same frequency intervals as the deck's (the residues do not depend on where K and M came
-    from), and updating refused by all (no elements)."""
+    from); and the same update over matrix groups (each group's export with its modulus doubled)
+    from the command line and Python, with the deck's selection and parameters."""
     run = lambda *args: subprocess.run([str(FEMU), *map(str, args), "--quiet"], cwd=case,
                                        capture_output=True, text=True)
     done = run("matrices", "bar.inp", "--out", "bar")
@@ -223,10 +224,22 @@ def test_another_solvers_matrices_are_a_model_everywhere(case):
     own = femu.estimate(deck, femu.read_test(case / "test.csv", deck), count=16)
     for a, b in zip(py["assessments"], own["assessments"]):
         assert np.allclose(a["frequency_interval_hz"], b["frequency_interval_hz"], rtol=1e-9)
-    with pytest.raises(Exception, match="no elements"):
+    with pytest.raises(Exception, match="NAME=FILE"):
         femu.update(model, test, SETS)
-    done = run("update", "bar_K.mtx", "test.csv", "--sets", ",".join(SETS))
-    assert done.returncode != 0 and "no elements" in done.stderr
+    groups = []
+    for name in SETS:
+        slab_deck(case / f"bar_{name}.inp", soft_set=name, factor=2.0)
+        done = run("matrices", f"bar_{name}.inp", "--out", f"bar_{name}")
+        assert done.returncode == 0, done.stderr
+        groups.append(f"{name}=bar_{name}_K.mtx")
+    done = run("update", "bar_K.mtx", "test.csv", "--sets", ",".join(groups), "--json",
+               "update_mtx.json")
+    assert done.returncode == 0, done.stderr
+    py = without_timings(femu.update(model, test, groups))
+    assert_same(py, without_timings(read(case / "update_mtx.json")))
+    own = femu.update(deck, femu.read_test(case / "test.csv", deck), SETS)
+    assert py["updated_sets"] == own["updated_sets"]
+    assert np.allclose(py["result"]["theta"], own["result"]["theta"], rtol=1e-6, atol=1e-9)
 
 
 def test_another_solvers_modes_are_the_model_side_everywhere(case):

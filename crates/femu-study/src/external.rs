@@ -6,6 +6,7 @@
 //! estimators, expansion, sensor removal, FRFs; updating, which needs element matrices, refuses.
 
 use crate::StudyError;
+use crate::load::LoadedModel;
 use femu_fem::assembly::{MassKind, SystemMatrices};
 use femu_fem::mesh::Mesh;
 use femu_fem::model::Model;
@@ -203,6 +204,78 @@ fn f06_modes(
     Ok((points, modes, warnings))
 }
 
+/// The matrix groups of a model read as another solver's matrices, from `sets` of the form
+/// `NAME=FILE`: `FILE` (relative to the model's folder) is the same model's matrix set with the
+/// group's Young's modulus and density doubled, so that `K_g = K_2 - K_0` and `M_g = M_2 - M_0`
+/// exactly (stiffness is linear in the modulus, mass in the density), whatever elements the
+/// solver used: `K(p) = K_0 + sum_g p_g K_g` as for element groups (docs/MATH.md, "Updating").
+///
+/// # Errors
+/// A set without `=`; a file that does not read; a set whose rows are not the model's (labels or
+/// order); a group that changes nothing.
+#[allow(clippy::type_complexity)]
+pub fn matrix_groups(
+    model: &LoadedModel,
+    sets: &[String],
+) -> Result<Vec<(String, SparseMatrix, SparseMatrix)>, StudyError> {
+    let Some(origin) = &model.matrices else {
+        return Err(StudyError::invalid(
+            "matrix groups",
+            "the model is not a set of another solver's matrices",
+        ));
+    };
+    let folder = model.path.parent().unwrap_or(Path::new("."));
+    sets.iter()
+        .map(|set| {
+            let Some((name, file)) = set.split_once('=') else {
+                return Err(StudyError::in_file(
+                    &model.path,
+                    "updating",
+                    format!(
+                        "{set:?}: a model of another solver's matrices is updated over groups given as NAME=FILE, FILE the same model's matrices with the group's Young's modulus and density doubled"
+                    ),
+                ));
+            };
+            let path = folder.join(file.trim());
+            let ext = femu_io::matrices::read_matrices(&path)?;
+            if ext.dofs != origin.labels {
+                let first = ext
+                    .dofs
+                    .iter()
+                    .zip(&origin.labels)
+                    .position(|(a, b)| a != b)
+                    .unwrap_or(ext.dofs.len().min(origin.labels.len()));
+                return Err(StudyError::in_file(
+                    &path,
+                    "matrix group",
+                    format!(
+                        "its rows are not the model's: {} rows against {}, the first difference at row {}",
+                        ext.dofs.len(),
+                        origin.labels.len(),
+                        first + 1
+                    ),
+                ));
+            }
+            let difference = |doubled: &SparseMatrix, nominal: &SparseMatrix| {
+                let entries = femu_sparse::csc::entries(doubled)
+                    .map(|(i, j, v)| (origin.order[i], origin.order[j], v))
+                    .chain(femu_sparse::csc::entries(nominal).map(|(i, j, v)| (i, j, -v)));
+                let summed =
+                    femu_sparse::csc::from_entry_iter(nominal.rows(), nominal.cols(), entries);
+                // what the group does not touch cancels exactly (the same digits in both files)
+                femu_sparse::csc::from_entry_iter(
+                    nominal.rows(),
+                    nominal.cols(),
+                    femu_sparse::csc::entries(&summed).filter(|e| e.2 != 0.0),
+                )
+            };
+            let k = difference(&ext.k, &model.sys.k);
+            let m = difference(&ext.m, &model.sys.m);
+            Ok((name.trim().to_string(), k, m))
+        })
+        .collect()
+}
+
 /// Where a model read as matrices came from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MatrixOrigin {
@@ -212,6 +285,10 @@ pub struct MatrixOrigin {
     pub files: [PathBuf; 3],
     /// The file of the node coordinates.
     pub nodes: PathBuf,
+    /// The node and component of each row of the files.
+    pub labels: Vec<femu_io::matrices::DofLabel>,
+    /// Row `r` of the files is free DOF `order[r]` of the model.
+    pub order: Vec<usize>,
 }
 
 /// Reads the matrix set named by `path` and the node coordinates (`nodes`, or the default beside
@@ -318,6 +395,8 @@ pub fn model_of_matrices(
         source: ext.source,
         files: ext.files.clone(),
         nodes: node_file,
+        labels: ext.dofs.clone(),
+        order,
     };
     Ok((model, sys, origin, warnings))
 }

@@ -26,7 +26,9 @@ use serde::{Deserialize, Serialize};
 #[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(deny_unknown_fields)]
 pub struct UpdateRequest {
-    /// Candidate element sets (comma-separated); localisation selects among them.
+    /// Candidate element sets (comma-separated); localisation selects among them. For a model of
+    /// another solver's matrices, groups as `NAME=FILE`: FILE the same model's matrices with the
+    /// group's Young's modulus and density doubled (relative to the model's folder).
     #[cfg_attr(feature = "clap", arg(long, value_delimiter = ',', required = true))]
     pub sets: Vec<String>,
     /// The first N test modes are tuned, the others held out (default: all but the last third).
@@ -186,9 +188,12 @@ impl UpdateRequest {
 /// updating's mass). `before` are the model's own modes when the caller has solved them
 /// (consistent mass; ignored otherwise). Every front end (CLI, study file, Python) calls this.
 ///
+/// A model read as another solver's matrices is updated over matrix groups: each of `sets` is
+/// `NAME=FILE`, the same model's matrices with the group's Young's modulus and density doubled
+/// ([`crate::external::matrix_groups`]).
+///
 /// # Errors
-/// A model read as another solver's matrices (no elements to update), unknown sets,
-/// `tuned = 0`, and those of [`localise_update_check`].
+/// Unknown sets (or group files), `tuned = 0`, and those of [`localise_update_check`].
 pub fn update_loaded(
     model: &LoadedModel,
     test: &LoadedTest,
@@ -197,15 +202,23 @@ pub fn update_loaded(
     before: Option<&ModeSet>,
     progress: impl FnMut(&Iteration),
 ) -> Result<UpdateStudy, StudyError> {
-    if let Some(origin) = &model.matrices {
-        return Err(StudyError::in_file(
-            &model.path,
-            "updating",
-            format!(
-                "the model is {}: updating changes element matrices group by group, and matrices read whole have no elements (correlate, estimate, expand and frf run on it)",
-                origin.source.name()
-            ),
-        ));
+    if model.matrices.is_some() {
+        let groups = crate::external::matrix_groups(model, &request.sets)?;
+        let names: Vec<&str> = groups.iter().map(|g| g.0.as_str()).collect();
+        let options = request.options(test.data.modes.len(), eigen)?;
+        return localise_update_check_with(
+            &model.model,
+            &names,
+            &test.layout,
+            &test.data.modes,
+            before,
+            Candidates::Matrices {
+                base: &model.sys,
+                groups: &groups,
+            },
+            &options,
+            progress,
+        );
     }
     let names = resolve_sets(model, &request.sets)?;
     let names: Vec<&str> = names.iter().map(String::as_str).collect();
@@ -358,6 +371,49 @@ pub fn localise_update_check(
     before: Option<&ModeSet>,
     assembly: Option<(&Assembler, &SystemMatrices)>,
     options: &UpdateStudyOptions,
+    progress: impl FnMut(&Iteration),
+) -> Result<UpdateStudy, StudyError> {
+    localise_update_check_with(
+        model,
+        candidates,
+        layout,
+        test,
+        before,
+        Candidates::ElementSets(assembly),
+        options,
+        progress,
+    )
+}
+
+/// What the candidates of [`localise_update_check_with`] are.
+#[derive(Clone, Copy)]
+pub enum Candidates<'a> {
+    /// Element sets of the model, by name; with the caller's assembler and consistent-mass
+    /// matrices when it has them.
+    ElementSets(Option<(&'a Assembler, &'a SystemMatrices)>),
+    /// Groups given as assembled matrices on `base`'s DOFs (`name`, `K_g`, `M_g`), for a model of
+    /// another solver's matrices.
+    Matrices {
+        /// The nominal matrices.
+        base: &'a SystemMatrices,
+        /// The groups, named as the candidates are.
+        groups: &'a [(String, femu_sparse::SparseMatrix, femu_sparse::SparseMatrix)],
+    },
+}
+
+/// [`localise_update_check`] over element sets or over matrix groups ([`Candidates`]).
+///
+/// # Errors
+/// As [`localise_update_check`].
+#[allow(clippy::too_many_arguments)]
+pub fn localise_update_check_with(
+    model: &Model,
+    candidates: &[&str],
+    layout: &SensorLayout,
+    test: &TestModes,
+    before: Option<&ModeSet>,
+    groups: Candidates<'_>,
+    options: &UpdateStudyOptions,
     mut progress: impl FnMut(&Iteration),
 ) -> Result<UpdateStudy, StudyError> {
     if options.tuned == 0 || options.tuned > test.len() {
@@ -375,7 +431,7 @@ pub fn localise_update_check(
         None,
         test.shapes.as_ref().subcols(0, options.tuned).to_owned(),
     )?;
-    let build = |sets: &[&str]| update_model(model, sets, assembly);
+    let build = |sets: &[&str]| update_model(model, sets, groups);
     let mut nominal = build(candidates)?;
     // a test of frequencies alone: the selection and the fit use the frequencies; SB-EBE and the
     // residual ranking, which expand the shapes, cannot run
@@ -539,12 +595,36 @@ pub fn localise_update_check(
 }
 
 /// The updating model of `model` over the element sets `sets` (stiffness factors, consistent
-/// mass), on the caller's assembly when it has a consistent-mass one.
+/// mass), on the caller's assembly when it has a consistent-mass one; or over the matrix groups
+/// of those names.
 fn update_model<'m>(
     model: &'m Model,
     sets: &[&str],
-    assembly: Option<(&Assembler, &SystemMatrices)>,
+    candidates: Candidates<'_>,
 ) -> Result<UpdateModel<'m>, StudyError> {
+    let assembly = match candidates {
+        Candidates::ElementSets(assembly) => assembly,
+        Candidates::Matrices { base, groups } => {
+            let chosen =
+                sets.iter()
+                    .map(|s| {
+                        groups.iter().find(|g| g.0 == *s).cloned().ok_or_else(|| {
+                            StudyError::invalid("matrix group", format!("no group {s}"))
+                        })
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+            let groups = ParameterGroups::from_matrices(base, chosen)?;
+            // the assembler of a model without elements is never used by matrix groups
+            let asm = Assembler::new(model)?;
+            return Ok(UpdateModel::from_assembly(
+                model,
+                groups,
+                Corrections::Stiffness,
+                asm,
+                base.clone(),
+            )?);
+        }
+    };
     Ok(match assembly {
         Some((asm, base)) if base.mass_kind == MassKind::Consistent => {
             let groups = ParameterGroups::from_element_sets(model, sets, MassKind::Consistent)?;
@@ -678,7 +758,8 @@ fn judge_update(
     let tuned_idx: Vec<usize> = (0..options.tuned).collect();
     let mut truth_check =
         truth_check(before, after, test, layout, &tuned_idx, &Default::default())?;
-    let discretisation = if options.discretisation {
+    // a model of another solver's matrices has no mesh to refine
+    let discretisation = if options.discretisation && model.mesh().element_count() > 0 {
         estimate_discretisation(model, before, &options.eigen)?
     } else {
         None

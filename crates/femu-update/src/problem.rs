@@ -151,7 +151,11 @@ impl<'m> UpdateModel<'m> {
                 reason: "no group to update".into(),
             });
         }
-        if base.mass_kind != groups.mass_kind() || base.k.rows() != asm.dofs().free_count() {
+        // groups given as matrices carry their own numbering (the base's), not an assembler's
+        let matrices = groups.from_assembled_matrices();
+        if base.mass_kind != groups.mass_kind()
+            || (!matrices && base.k.rows() != asm.dofs().free_count())
+        {
             return Err(UpdateError::Invalid {
                 what: "nominal matrices",
                 reason: "not the assembler's assembly with the groups' mass kind".into(),
@@ -183,6 +187,11 @@ impl<'m> UpdateModel<'m> {
             }
         }
         let n_groups = groups.len();
+        let nominal_mass = if matrices {
+            femu_fem::groups::translational_mass(&base.m, &base.dofs)
+        } else {
+            model.total_mass()?
+        };
         Ok(Self {
             model,
             asm,
@@ -196,7 +205,7 @@ impl<'m> UpdateModel<'m> {
             q: vec![0.0; n_groups],
             symbolic: None,
             last_shift: None,
-            nominal_mass: model.total_mass()?,
+            nominal_mass,
         })
     }
 
