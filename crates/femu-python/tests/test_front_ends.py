@@ -244,7 +244,7 @@ def test_another_solvers_matrices_are_a_model_everywhere(case):
 
 def test_another_solvers_modes_are_the_model_side_everywhere(case):
     """CalculiX's modes of the bar (a .frd from *NODE FILE, U) correlated with the test by the
-    command line and by Python: the same report; and the same pairs as femu's own modes of the
+    command line, a study file and Python: the same report; and the same pairs as femu's own modes of the
     deck, with frequencies within 1e-6 of femu's (two codes on one deck)."""
     deck = (case / "bar.inp").read_text()
     (case / "ccx").mkdir(exist_ok=True)
@@ -259,6 +259,11 @@ def test_another_solvers_modes_are_the_model_side_everywhere(case):
     assert len(results) == 12 and results.shapes.shape == (3 * len(results.node_ids), 12)
     py = femu.correlate(results, femu.read_test(case / "test.csv", results))
     assert_same(py, read(case / "frd.json"))
+    (case / "study_frd.toml").write_text('model = "ccx/bar.frd"\ntest = "test.csv"\n')
+    done = subprocess.run([str(FEMU), "run", "study_frd.toml", "--out", "study_frd", "--quiet"],
+                          cwd=case, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert_same(read(case / "study_frd" / "correlation.json"), py)
     model = femu.read_model(case / "bar.inp")
     own = femu.correlate(model, femu.read_test(case / "test.csv", model), count=12)
     assert [(p["test"], p["model"]) for p in py["pairing"]["pairs"]] == \

@@ -251,9 +251,11 @@ impl StudyFile {
 /// What a study file produced.
 #[derive(Debug, Clone, Serialize)]
 pub struct StudyRun {
-    /// The correlation (`estimate.correlation`, also written as `correlation.json`) and the
-    /// estimators (`estimate.json`).
-    pub estimate: EstimateResult,
+    /// The correlation (`correlation.json`).
+    pub correlation: femu_correlate::CorrelationReport,
+    /// The estimators (`estimate.json`); none for a model that is another solver's modes, which
+    /// has no `K` and `M` to estimate with.
+    pub estimate: Option<EstimateResult>,
     /// Expansion (`expansion.json`, `expanded.vtu`, `figure1/`).
     pub expansion: Option<ExpansionReport>,
     /// Updating (`update.json`).
@@ -304,6 +306,9 @@ pub fn run_study_file(
         Some(e) => e.options(base).map_err(|e| StudyError::within(path, e))?,
         None => EigenOptions::default(),
     };
+    if femu_io::Format::from_path(&base.join(&s.model)) == Some(femu_io::Format::Results) {
+        return correlate_results(&s, path, base, out, &options, &mut progress);
+    }
     let model = load_model(&base.join(&s.model), &options).map_err(named)?;
     let test = load_test_with(
         &base.join(&s.test),
@@ -427,13 +432,90 @@ pub fn run_study_file(
         None => None,
     };
     Ok(StudyRun {
-        estimate,
+        correlation: estimate.correlation.clone(),
+        estimate: Some(estimate),
         expansion,
         update,
         frf,
         modes,
         model_assemblies: model.asm.assemblies(),
         warnings: model.warnings,
+        files,
+    })
+}
+
+/// [`run_study_file`] for a model that is another solver's modes
+/// ([`crate::external::load_result_modes`]): the test mapped onto its nodes and correlated
+/// (`correlation.json`); a step that needs `K` and `M` is refused, not skipped.
+fn correlate_results(
+    s: &StudyFile,
+    path: &Path,
+    base: &Path,
+    out: &Path,
+    options: &ModelOptions,
+    progress: &mut impl FnMut(&str),
+) -> Result<StudyRun, StudyError> {
+    let needs: Vec<&str> = [
+        ("[expansion]", s.expansion.is_some()),
+        ("[update]", s.update.is_some()),
+        ("[frf]", s.frf.is_some()),
+    ]
+    .iter()
+    .filter(|(_, given)| *given)
+    .map(|(name, _)| *name)
+    .collect();
+    if !needs.is_empty() {
+        return Err(StudyError::in_file(
+            path,
+            "study",
+            format!(
+                "the model is another solver's modes: a study of it correlates them with the test; {} need K and M (give the solver's matrices instead: CalculiX's job.sti, or MatrixMarket with a DOF table)",
+                needs.join(", ")
+            ),
+        ));
+    }
+    progress("reading the modes");
+    let results =
+        crate::external::load_result_modes(&base.join(&s.model), options.nodes.as_deref())?;
+    let test = crate::load::load_test_on(
+        &base.join(&s.test),
+        results.model.mesh(),
+        &results.dofs,
+        &TestOptions {
+            map: s.map.clone(),
+            test_units: s
+                .test_units
+                .as_deref()
+                .map(crate::load::length_unit)
+                .transpose()?,
+        },
+    )?;
+    progress("correlating");
+    let pairing = s.pairing.unwrap_or_default().options();
+    let correlation =
+        femu_correlate::correlate(&results.modes, &test.data.modes, &test.layout, &pairing)?;
+    create_dir(out)?;
+    let mut files = Vec::new();
+    if let Some(m) = &test.mapping {
+        write_text(&out.join("mapping.txt"), &m.to_string(), &mut files)?;
+        let p = out.join("mapping.json");
+        write_json(&p, m)?;
+        files.push(p);
+    }
+    let p = out.join("correlation.json");
+    write_json(&p, &correlation)?;
+    files.push(p);
+    let mut warnings = results.warnings;
+    warnings.extend(test.warnings);
+    Ok(StudyRun {
+        correlation,
+        estimate: None,
+        expansion: None,
+        update: None,
+        frf: None,
+        modes: results.modes,
+        model_assemblies: 0,
+        warnings,
         files,
     })
 }

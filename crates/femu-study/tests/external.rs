@@ -343,8 +343,8 @@ fn calculix_shell_matrices_are_refused() {
 /// in its `*FREQUENCY` step: a `.frd` of 6 significant digits per value, 10 per frequency) and a
 /// "test" of femu's own modes of the same deck at the tip's nodes in y and z. The two codes'
 /// modes pair one to one with MAC above 1 - 1e-10 (1 - 4.6e-12 measured) and frequencies within
-/// 1e-9 (1.3e-10 measured: the `.frd`'s 10 digits); asked for K and M, the `.frd` is refused
-/// with what to give instead.
+/// 1e-9 (1.3e-10 measured: the `.frd`'s 10 digits); a study file of the `.frd` gives the same
+/// correlation; asked for K and M, the `.frd` is refused with what to give instead.
 #[test]
 fn calculix_modes_are_the_model_side() {
     if !femu_testkit::ccx::available() {
@@ -419,6 +419,32 @@ fn calculix_modes_are_the_model_side() {
         .to_string();
     assert!(
         e.contains("femu correlate") && e.contains("SOLVER=MATRIXSTORAGE"),
+        "{e}"
+    );
+    // a study file of the .frd correlates, and the same report; a step that needs K and M refused
+    std::fs::write(
+        d.join("study.toml"),
+        "model = \"job.frd\"\ntest = \"test.csv\"\n",
+    )
+    .unwrap();
+    let run = femu_study::study_file::run_study_file(&d.join("study.toml"), &d.join("out"), |_| {})
+        .unwrap();
+    assert_eq!(run.correlation, report);
+    assert!(run.estimate.is_none());
+    let written: femu_correlate::CorrelationReport =
+        serde_json::from_str(&std::fs::read_to_string(d.join("out/correlation.json")).unwrap())
+            .unwrap();
+    assert_eq!(written.pairing.pairs.len(), 6);
+    std::fs::write(
+        d.join("study.toml"),
+        "model = \"job.frd\"\ntest = \"test.csv\"\n[update]\nsets = [\"a\"]\n",
+    )
+    .unwrap();
+    let e = femu_study::study_file::run_study_file(&d.join("study.toml"), &d.join("out"), |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("study.toml") && e.contains("[update]") && e.contains("need K and M"),
         "{e}"
     );
     let _ = std::fs::remove_dir_all(&d);

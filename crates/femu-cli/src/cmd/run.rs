@@ -59,13 +59,15 @@ pub fn run(a: &RunArgs, quiet: bool) -> Result<(), CliError> {
     if quiet {
         return Ok(());
     }
-    println!("# correlation\n\n{}", r.estimate.correlation);
-    println!(
-        "# estimators ({} expansion)\n\n{}\n{}\n",
-        r.estimate.expansion,
-        r.estimate.table2(),
-        femu::study::estimate::table2_legend()
-    );
+    println!("# correlation\n\n{}", r.correlation);
+    if let Some(estimate) = &r.estimate {
+        println!(
+            "# estimators ({} expansion)\n\n{}\n{}\n",
+            estimate.expansion,
+            estimate.table2(),
+            femu::study::estimate::table2_legend()
+        );
+    }
     if let Some(e) = &r.expansion {
         println!(
             "\n# expansion ({})\n\nrho_M (s^-2) per test mode: {:?}",
