@@ -800,21 +800,24 @@ fn correlate<'py>(
 /// against the model's at the same DOFs and lines, by modal superposition of the modes up to
 /// `modes_up_to` times the highest line with the residual flexibility of those above: FRAC per
 /// function, CSAC and CSF per line, as a dict. Damping: `damping_ratio` (viscous, default 0.01)
-/// or `loss_factor`. Releases the GIL.
+/// or `loss_factor`; `damping_from`, a test of identified modes with damping ratios, gives each
+/// paired model mode its test's ratio (the others `damping_ratio`). Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (model, path, *, damping_ratio=None, loss_factor=None, modes_up_to=2.0))]
+#[pyo3(signature = (model, path, *, damping_ratio=None, loss_factor=None, damping_from=None, modes_up_to=2.0))]
 fn frf<'py>(
     py: Python<'py>,
     model: &Model,
     path: PathBuf,
     damping_ratio: Option<f64>,
     loss_factor: Option<f64>,
+    damping_from: Option<PathBuf>,
     modes_up_to: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
     let request = femu_study::frf::FrfRequest {
         file: None,
         damping_ratio,
         loss_factor,
+        damping_from,
         modes_up_to,
     };
     let result = py

@@ -35,6 +35,15 @@ pub struct FrfRequest {
         arg(long, value_name = "ETA", conflicts_with = "damping_ratio")
     )]
     pub loss_factor: Option<f64>,
+    /// The test's identified modes with their damping ratios (CSV with a `damping` column,
+    /// universal file dataset 55, JSON): each model mode paired with a test mode (MAC) takes its
+    /// ratio, the others `damping_ratio` (default 0.01). In a study file relative to the study
+    /// file.
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "TEST", conflicts_with = "loss_factor")
+    )]
+    pub damping_from: Option<std::path::PathBuf>,
     /// Model modes up to this multiple of the highest line; those above enter by their residual
     /// flexibility.
     #[cfg_attr(
@@ -50,6 +59,7 @@ impl Default for FrfRequest {
             file: None,
             damping_ratio: None,
             loss_factor: None,
+            damping_from: None,
             modes_up_to: 2.0,
         }
     }
@@ -70,6 +80,60 @@ impl FrfRequest {
             (z, None) => Ok(Damping::Ratio(z.unwrap_or(0.01))),
         }
     }
+}
+
+/// The test's identified damping on the model modes it pairs with (MAC pairing with the
+/// defaults, [`femu_correlate::correlate`]), `request.damping_ratio` (default 0.01) on the others.
+///
+/// # Errors
+/// A loss factor given too, a test without damping ratios, the test's and the pairing's errors.
+fn test_damping(
+    model: &LoadedModel,
+    test: &Path,
+    request: &FrfRequest,
+    modes: &femu_sparse::eigen::Modes,
+    notes: &mut Vec<String>,
+) -> Result<Damping, StudyError> {
+    if request.loss_factor.is_some() {
+        return Err(StudyError::invalid(
+            "damping",
+            "the test's damping ratios are viscous: give them or a loss factor, not both",
+        ));
+    }
+    let t = crate::load::load_test(test, model)?;
+    let Some(ratios) = &t.data.modes.damping_ratios else {
+        return Err(StudyError::in_file(
+            test,
+            "damping",
+            "the test gives no damping ratios (a damping column in CSV, dataset 55's ratios)",
+        ));
+    };
+    let report = femu_correlate::correlate(
+        &femu_correlate::ModeSet::from_modes(modes),
+        &t.data.modes,
+        &t.layout,
+        &femu_correlate::PairingOptions::default(),
+    )?;
+    let default = request.damping_ratio.unwrap_or(0.01);
+    let mut z = vec![default; modes.values.len()];
+    let mut paired = Vec::new();
+    for p in &report.pairing.pairs {
+        z[p.model] = ratios[p.test];
+        paired.push(format!(
+            "model {} <- test {} ({:.3} %)",
+            p.model + 1,
+            p.test + 1,
+            100.0 * ratios[p.test]
+        ));
+    }
+    notes.push(format!(
+        "damping: the test's ratios on {} paired mode{} ({}), {default} on the other {}",
+        paired.len(),
+        if paired.len() == 1 { "" } else { "s" },
+        paired.join(", "),
+        z.len() - paired.len()
+    ));
+    Ok(Damping::Ratios(z))
 }
 
 /// One measured FRF and its FRAC with the model's.
@@ -273,8 +337,14 @@ pub fn frf_correlation(
             &inputs,
         )?)
     };
-    let damping = request.damping()?;
-    if request.damping_ratio.is_none() && request.loss_factor.is_none() {
+    let damping = match &request.damping_from {
+        Some(test) => test_damping(model, test, request, &modes, &mut notes)?,
+        None => request.damping()?,
+    };
+    if request.damping_ratio.is_none()
+        && request.loss_factor.is_none()
+        && request.damping_from.is_none()
+    {
         notes.push("damping: 1 % viscous on every mode (the default; --damping-ratio or --loss-factor give another)".into());
     }
     let options = FrfOptions {

@@ -417,8 +417,13 @@ pub fn run_study_file(
                     ),
                 )
             })?;
-            let c =
-                crate::frf::frf_correlation(&model, &base.join(file), r, &eigen).map_err(named)?;
+            let c = {
+                let r = crate::frf::FrfRequest {
+                    damping_from: r.damping_from.as_ref().map(|t| base.join(t)),
+                    ..r.clone()
+                };
+                crate::frf::frf_correlation(&model, &base.join(file), &r, &eigen).map_err(named)?
+            };
             let p = out.join("frf.json");
             write_json(&p, &c)?;
             files.push(p);

@@ -146,6 +146,7 @@ def frf(
     *,
     damping_ratio: Optional[float] = None,
     loss_factor: Optional[float] = None,
+    damping_from: Optional[_Path] = None,
     modes_up_to: float = 2.0,
 ) -> Dict[str, Any]: ...
 def removal_study(model: Model, test: Test, *, expansion: str = "dynamic") -> Dict[str, Any]: ...
