@@ -24,9 +24,9 @@ pub enum Format {
     /// `job.sti` (with `job.mas`, `job.dof`) or MatrixMarket `X_K.mtx` (with `X_M.mtx`,
     /// `X_dofs.csv`); [`crate::matrices`].
     Matrices,
-    /// Another solver's modes: CalculiX's `.frd` ([`crate::frd`]) or Nastran's `.f06`
-    /// ([`crate::f06`], the grids from its deck), the model side of a correlation only (no `K`
-    /// and `M`).
+    /// Another solver's modes: CalculiX's `.frd` ([`crate::frd`]) or Nastran's `.f06` or `.op2`
+    /// ([`crate::f06`], [`crate::op2`], the grids from its deck), the model side of a correlation
+    /// only (no `K` and `M`).
     Results,
 }
 
@@ -93,7 +93,7 @@ pub const FORMATS: &[FormatInfo] = &[
     },
     FormatInfo {
         format: Format::Results,
-        extensions: &["frd", "f06"],
+        extensions: &["frd", "f06", "op2"],
         model: true,
         deck: true,
         test: false,
@@ -182,13 +182,13 @@ mod tests {
         assert!(Format::Inp.info().deck && !Format::Gmsh.info().deck);
         assert_eq!(
             described(true),
-            "Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh), universal files (.unv, .uff), stiffness and mass matrices with their DOF table (.sti, .mtx) and another solver's modes (.frd, .f06)"
+            "Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh), universal files (.unv, .uff), stiffness and mass matrices with their DOF table (.sti, .mtx) and another solver's modes (.frd, .f06, .op2)"
         );
         assert_eq!(
             described(false),
             "universal files (.unv, .uff), JSON (.json) and CSV (.csv, .txt)"
         );
-        assert_eq!(all_extensions().len(), 14);
+        assert_eq!(all_extensions().len(), 15);
         assert_eq!(
             Format::from_path(Path::new("job.sti")),
             Some(Format::Matrices)

@@ -19,6 +19,7 @@ pub mod inp;
 pub mod json;
 pub mod matrices;
 pub mod nastran;
+pub mod op2;
 mod spelling;
 pub mod test_data;
 pub mod uff;

@@ -4,7 +4,9 @@
 //! pyNastran 1.4.1 reads from the run's OP2 (`mode_solid_shell_bar.modes.json`, written by
 //! `reference_modes.py` beside it): the three eigenvalues to 1e-6 and every grid's six components
 //! to 1e-6 of the mode's largest (the `.f06` prints 7 digits, the OP2 holds single precision).
-//! The grids come from the run's deck, whatever its elements (`read_grids`).
+//! The grids come from the run's deck, whatever its elements (`read_grids`). femu's reading of the
+//! OP2 itself equals pyNastran's to the last bit (both widen the file's single precision; the
+//! reference's decimal text is parsed to within an ulp).
 
 use std::path::PathBuf;
 
@@ -96,4 +98,35 @@ fn displacement_frames_of_grids() {
         [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn nastran_op2_modes_equal_pynastran_s_reading() {
+    let op2 = femu_io::op2::read_op2(fixtures().join("mode_solid_shell_bar.op2")).unwrap();
+    let text = std::fs::read_to_string(fixtures().join("mode_solid_shell_bar.modes.json")).unwrap();
+    let reference: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(op2.modes.len(), 3);
+    for (j, mode) in op2.modes.iter().enumerate() {
+        assert_eq!(mode.number, j + 1);
+        let r = reference["eigenvalues"][j].as_f64().unwrap();
+        assert!((mode.eigenvalue - r).abs() <= 2.0 * f64::EPSILON * r);
+        assert_eq!(mode.points.len(), 25);
+        for (k, (id, v)) in mode.points.iter().enumerate() {
+            assert_eq!(*id, reference["nodes"][k].as_u64().unwrap());
+            for c in 0..6 {
+                // the same single-precision value; serde_json's decimal parsing may miss by an ulp
+                let r = reference["vectors"][j][k][c].as_f64().unwrap();
+                assert!(
+                    (v[c] - r).abs() <= 2.0 * f64::EPSILON * r.abs(),
+                    "{} vs {r}",
+                    v[c]
+                );
+            }
+        }
+    }
+    // the same run's .f06 prints the same modes to its 7 digits
+    let f06 = femu_io::f06::read_f06(fixtures().join("mode_solid_shell_bar.f06")).unwrap();
+    for (a, b) in op2.modes.iter().zip(&f06.modes) {
+        assert!((a.eigenvalue / b.eigenvalue - 1.0).abs() < 1e-6);
+    }
 }

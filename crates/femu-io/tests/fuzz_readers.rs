@@ -1,7 +1,8 @@
-//! Fuzzing of the Nastran, Universal File, CalculiX result and Nastran printed-output readers on
-//! the stable toolchain, in CI: decks and files of the corpus (`fixtures/`, the seed corpus of `fuzz/run.sh`, files up to 16 KiB) mutated
-//! by proptest (bytes replaced by the characters their formats are made of, lines deleted,
-//! duplicated, swapped and cut, fields inserted) must give a model or an error, never a panic;
+//! Fuzzing of the Nastran, Universal File, CalculiX result, Nastran printed-output and OP2
+//! readers on the stable toolchain, in CI: decks and files of the corpus (`fixtures/`, the seed
+//! corpus of `fuzz/run.sh`, files up to 16 KiB) mutated by proptest (bytes replaced by the
+//! characters their formats are made of, lines deleted, duplicated, swapped and cut, fields
+//! inserted) must give a model or an error, never a panic;
 //! a model that reads must also give its DOF map. `FEMU_FUZZ_CASES` sets the cases per reader
 //! (default 192, a few seconds); `fuzz/run.sh` runs libFuzzer for longer on the nightly toolchain.
 
@@ -216,5 +217,24 @@ fn f06_reader_never_panics() {
     proptest!(config, |(edits in prop::collection::vec(edit(), 1..6))| {
         let bytes = apply(pages.as_bytes(), &edits);
         let _ = femu_io::f06::parse_f06(&String::from_utf8_lossy(&bytes), &path);
+    });
+}
+
+/// Nastran's OP2 reader on mutated bytes of a real run's OP2
+/// (`fixtures/nastran/pynastran/mode_solid_shell_bar.op2`): record lengths, markers and values
+/// changed, records cut, must give modes or an error.
+#[test]
+fn op2_reader_never_panics() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/nastran/pynastran/mode_solid_shell_bar.op2");
+    let bytes = std::fs::read(&path).unwrap();
+    assert!(femu_io::op2::parse_op2(&bytes, &path).is_ok());
+    let config = ProptestConfig {
+        cases: cases(),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    };
+    proptest!(config, |(edits in prop::collection::vec(edit(), 1..6))| {
+        let _ = femu_io::op2::parse_op2(&apply(&bytes, &edits), &path);
     });
 }

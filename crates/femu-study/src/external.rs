@@ -34,7 +34,8 @@ pub struct ResultModes {
 }
 
 /// Reads another solver's modes: CalculiX's `.frd` ([`femu_io::frd::read_frd`], its own nodes),
-/// or Nastran's `.f06` ([`femu_io::f06::read_f06`]) with the grids of its deck
+/// or Nastran's `.f06` or `.op2` ([`femu_io::f06::read_f06`], [`femu_io::op2::read_op2`]) with
+/// the grids of its deck
 /// ([`femu_io::nastran::read_grids`]: `nodes`, or the `.bdf`, `.dat` or `.nas` of the same name
 /// beside it), each grid's printed translations turned from its displacement frame (CD) into the
 /// basic frame. The model's nodes are the grids the modes print (a grid the output leaves out is
@@ -47,7 +48,7 @@ pub fn load_result_modes(path: &Path, nodes: Option<&Path>) -> Result<ResultMode
     let is_f06 = path
         .extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("f06"));
+        .is_some_and(|e| e.eq_ignore_ascii_case("f06") || e.eq_ignore_ascii_case("op2"));
     let (points, modes, mut warnings) = if is_f06 {
         f06_modes(path, nodes)?
     } else {
@@ -126,7 +127,14 @@ fn f06_modes(
     ),
     StudyError,
 > {
-    let f06 = femu_io::f06::read_f06(path)?;
+    let op2 = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("op2"));
+    let f06 = if op2 {
+        femu_io::op2::read_op2(path)?
+    } else {
+        femu_io::f06::read_f06(path)?
+    };
     let deck = match nodes {
         Some(p) => p.to_path_buf(),
         None => ["bdf", "dat", "nas", "BDF", "DAT", "NAS"]
@@ -137,7 +145,7 @@ fn f06_modes(
                 StudyError::in_file(
                     path,
                     "nodes",
-                    "the modes need their grids' positions: no .bdf, .dat or .nas of the same name beside the .f06; name the run's deck with --nodes (nodes = \"...\" in a study file)",
+                    "the modes need their grids' positions: no .bdf, .dat or .nas of the same name beside the results; name the run's deck with --nodes (nodes = \"...\" in a study file)",
                 )
             })?,
     };

@@ -188,16 +188,19 @@ fn describe_results(
     warnings: &mut Vec<String>,
 ) -> Result<(), StudyError> {
     let r = crate::external::load_result_modes(path, None)?;
-    let f06 = path
+    let ext = path
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("f06"));
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
     let _ = writeln!(
         s,
         "format: {}",
-        if f06 {
-            "Nastran printed output (.f06): real eigenvectors, the grids from the run's deck"
-        } else {
-            "CalculiX results (.frd)"
+        match ext.as_deref() {
+            Some("f06") => {
+                "Nastran printed output (.f06): real eigenvectors, the grids from the run's deck"
+            }
+            Some("op2") => "Nastran OP2: real eigenvectors (OUGV1), the grids from the run's deck",
+            _ => "CalculiX results (.frd)",
         }
     );
     let _ = writeln!(s, "nodes: {}", r.model.mesh().node_count());

@@ -450,7 +450,8 @@ fn calculix_modes_are_the_model_side() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// MSC Nastran's modes (a `.f06` from pyNastran's models, its grids from the run's deck, which
+/// MSC Nastran's modes (the `.f06` and the `.op2` of a run from pyNastran's models, their grids
+/// from the run's deck, which
 /// holds shells, bars, beams and rods) as the model side, against a test written from pyNastran's
 /// reading of the same run's OP2 (an independent reader of another file): translations of grids
 /// 1-13 in x, y and z. They pair one to one with MAC 1 to 1e-9 and the same frequencies to 1e-6.
@@ -478,29 +479,29 @@ fn nastran_modes_are_the_model_side() {
         }
     }
     std::fs::write(d.join("test.csv"), csv).unwrap();
-    let results =
-        femu_study::external::load_result_modes(&fixtures.join("mode_solid_shell_bar.f06"), None)
-            .unwrap();
-    assert_eq!(results.model.mesh().node_count(), 25);
-    let test = femu_study::load::load_test_on(
-        &d.join("test.csv"),
-        results.model.mesh(),
-        &results.dofs,
-        &Default::default(),
-    )
-    .unwrap();
-    let report = correlate(
-        &results.modes,
-        &test.data.modes,
-        &test.layout,
-        &PairingOptions::default(),
-    )
-    .unwrap();
-    assert_eq!(report.pairing.pairs.len(), 3);
-    for p in &report.pairing.pairs {
-        assert_eq!(p.test, p.model);
-        assert!(p.mac.unwrap() > 1.0 - 1e-9, "{p:?}");
-        assert!(p.frequency_error.abs() < 1e-6, "{p:?}");
+    for file in ["mode_solid_shell_bar.f06", "mode_solid_shell_bar.op2"] {
+        let results = femu_study::external::load_result_modes(&fixtures.join(file), None).unwrap();
+        assert_eq!(results.model.mesh().node_count(), 25);
+        let test = femu_study::load::load_test_on(
+            &d.join("test.csv"),
+            results.model.mesh(),
+            &results.dofs,
+            &Default::default(),
+        )
+        .unwrap();
+        let report = correlate(
+            &results.modes,
+            &test.data.modes,
+            &test.layout,
+            &PairingOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(report.pairing.pairs.len(), 3);
+        for p in &report.pairing.pairs {
+            assert_eq!(p.test, p.model);
+            assert!(p.mac.unwrap() > 1.0 - 1e-9, "{file}: {p:?}");
+            assert!(p.frequency_error.abs() < 1e-6, "{file}: {p:?}");
+        }
     }
     // without the deck beside it, the .f06 says what it needs
     std::fs::copy(
