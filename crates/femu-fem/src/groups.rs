@@ -68,6 +68,20 @@ fn positions(pattern: &SparseMatrix, a: &SparseMatrix) -> Result<Vec<usize>, (us
         .collect()
 }
 
+/// `base`'s mass as values on its stiffness pattern (zeros where the mass has no entry).
+fn mass_on_stiffness_pattern(base: &SystemMatrices) -> Result<Vec<f64>, FemError> {
+    let mut m_on_k = vec![0.0; base.k.nnz()];
+    femu_sparse::csc::for_entries_within(&base.k, &base.m, |pm, pk| {
+        m_on_k[pk] = base.m.data()[pm];
+    })
+    .map_err(|_| FemError::LengthMismatch {
+        what: "base mass pattern inside the stiffness pattern",
+        expected: base.k.nnz(),
+        got: base.m.nnz(),
+    })?;
+    Ok(m_on_k)
+}
+
 /// `t^T M t` for the unit translation `t` along x of every node (the free x DOFs): the mass that
 /// moves with the structure along x, kg.
 pub fn translational_mass(m: &SparseMatrix, dofs: &crate::dof::DofMap) -> f64 {
@@ -456,15 +470,7 @@ impl ParameterGroups {
         if lumped {
             out.m.data_mut().copy_from_slice(base.m.data());
         } else {
-            m_on_k = vec![0.0; base.k.nnz()];
-            femu_sparse::csc::for_entries_within(&base.k, &base.m, |pm, pk| {
-                m_on_k[pk] = base.m.data()[pm];
-            })
-            .map_err(|_| FemError::LengthMismatch {
-                what: "base mass pattern inside the stiffness pattern",
-                expected: base.k.nnz(),
-                got: base.m.nnz(),
-            })?;
+            m_on_k = mass_on_stiffness_pattern(base)?;
         }
         let mesh = model.mesh();
         for (g, group) in self.groups.iter().enumerate() {
@@ -537,15 +543,7 @@ impl ParameterGroups {
             }
             return Ok(());
         }
-        let mut m_on_k = vec![0.0; base.k.nnz()];
-        femu_sparse::csc::for_entries_within(&base.k, &base.m, |pm, pk| {
-            m_on_k[pk] = base.m.data()[pm];
-        })
-        .map_err(|_| FemError::LengthMismatch {
-            what: "base mass pattern inside the stiffness pattern",
-            expected: base.k.nnz(),
-            got: base.m.nnz(),
-        })?;
+        let mut m_on_k = mass_on_stiffness_pattern(base)?;
         for (g, m) in mg.m.iter().enumerate() {
             if q[g] != 0.0 {
                 for (at, v) in mg.m_at[g].iter().zip(m.data()) {

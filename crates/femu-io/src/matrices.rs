@@ -421,25 +421,31 @@ fn parse_chunk(
     Ok(chunk)
 }
 
+/// The rows of a CSV table: `(line, trimmed text, fields)`, without blank and `#` lines and
+/// without a first line whose first field is `header`.
+fn csv_rows<'a>(
+    text: &'a str,
+    header: &'a str,
+) -> impl Iterator<Item = (usize, &'a str, Vec<&'a str>)> + 'a {
+    let mut first = true;
+    text.lines().enumerate().filter_map(move |(i, raw)| {
+        let t = raw.trim();
+        if t.is_empty() || t.starts_with('#') {
+            return None;
+        }
+        let f: Vec<&str> = t.split(',').map(str::trim).collect();
+        let is_header = first && f.first().is_some_and(|s| s.eq_ignore_ascii_case(header));
+        first = false;
+        (!is_header).then_some((i + 1, t, f))
+    })
+}
+
 /// `X_dofs.csv`: `row,node,component`, rows 1..n in order.
 fn read_dof_csv(path: &Path) -> Result<Vec<DofLabel>, IoError> {
     let text = read_text(path)?;
     let mut dofs = Vec::new();
     let mut seen = HashMap::new();
-    let mut header = false;
-    for (i, raw) in text.lines().enumerate() {
-        let t = raw.trim();
-        if t.is_empty() || t.starts_with('#') {
-            continue;
-        }
-        let line = i + 1;
-        let f: Vec<&str> = t.split(',').map(str::trim).collect();
-        if !header {
-            header = true;
-            if f.first().is_some_and(|s| s.eq_ignore_ascii_case("row")) {
-                continue;
-            }
-        }
+    for (line, t, f) in csv_rows(&text, "row") {
         let bad = || {
             parse_error(
                 path,
@@ -513,20 +519,7 @@ fn read_node_csv(path: &Path) -> Result<Vec<(u64, [f64; 3])>, IoError> {
     let text = read_text(path)?;
     let mut nodes = Vec::new();
     let mut seen = HashMap::new();
-    let mut header = false;
-    for (i, raw) in text.lines().enumerate() {
-        let t = raw.trim();
-        if t.is_empty() || t.starts_with('#') {
-            continue;
-        }
-        let line = i + 1;
-        let f: Vec<&str> = t.split(',').map(str::trim).collect();
-        if !header {
-            header = true;
-            if f.first().is_some_and(|s| s.eq_ignore_ascii_case("node")) {
-                continue;
-            }
-        }
+    for (line, t, f) in csv_rows(&text, "node") {
         let bad = || parse_error(path, line, format!("expected 'node,x,y,z', got {t:?}"));
         if f.len() != 4 {
             return Err(bad());

@@ -257,9 +257,17 @@ impl Model {
         self.loaded.sys.mass_kind == femu_fem::assembly::MassKind::Lumped
     }
 
-    /// Total mass (kg): the elements' `rho V` plus point and rigid masses.
+    /// Total mass (kg): the elements' `rho V` plus point and rigid masses. Not known for a model
+    /// read as another solver's matrices (its `M` leaves out the mass at fixed DOFs): an error.
     #[getter]
     fn total_mass(&self) -> PyResult<f64> {
+        if let Some(origin) = &self.loaded.matrices {
+            return Err(FemuError::new_err(format!(
+                "{}: the model is {}: its total mass is not known (M holds the free DOFs' mass only)",
+                self.loaded.path.display(),
+                origin.source.name()
+            )));
+        }
         self.loaded.model.total_mass().map_err(err)
     }
 

@@ -216,6 +216,8 @@ def test_another_solvers_matrices_are_a_model_everywhere(case):
     done = run("run", "study_mtx.toml", "--out", "study_mtx")
     assert done.returncode == 0, done.stderr
     model = femu.read_model(case / "bar_K.mtx", nodes=case / "bar_nodes.csv")
+    with pytest.raises(femu.FemuError, match="total mass is not known"):
+        model.total_mass
     test = femu.read_test(case / "test.csv", model)
     py = femu.estimate(model, test, count=16)
     assert_same(py["assessments"], read(case / "estimate_mtx.json"))

@@ -248,6 +248,23 @@ impl StudyFile {
     }
 }
 
+impl StudyFile {
+    /// How the study's test is placed on the model: its `[map]` and `test_units`.
+    ///
+    /// # Errors
+    /// A length unit femu does not know.
+    fn test_options(&self) -> Result<TestOptions, StudyError> {
+        Ok(TestOptions {
+            map: self.map.clone(),
+            test_units: self
+                .test_units
+                .as_deref()
+                .map(crate::load::length_unit)
+                .transpose()?,
+        })
+    }
+}
+
 /// What a study file produced.
 #[derive(Debug, Clone, Serialize)]
 pub struct StudyRun {
@@ -310,26 +327,11 @@ pub fn run_study_file(
         return correlate_results(&s, path, base, out, &options, &mut progress);
     }
     let model = load_model(&base.join(&s.model), &options).map_err(named)?;
-    let test = load_test_with(
-        &base.join(&s.test),
-        &model,
-        &TestOptions {
-            map: s.map.clone(),
-            test_units: s
-                .test_units
-                .as_deref()
-                .map(crate::load::length_unit)
-                .transpose()?,
-        },
-    )
-    .map_err(named)?;
+    let test = load_test_with(&base.join(&s.test), &model, &s.test_options()?).map_err(named)?;
     create_dir(out)?;
     let mut files = Vec::new();
     if let Some(m) = &test.mapping {
-        write_text(&out.join("mapping.txt"), &m.to_string(), &mut files)?;
-        let p = out.join("mapping.json");
-        write_json(&p, m)?;
-        files.push(p);
+        write_mapping(out, m, &mut files)?;
     }
     let n_test = test.data.modes.len();
     let options = EstimateOptions {
@@ -449,6 +451,19 @@ pub fn run_study_file(
     })
 }
 
+/// The mapping table of a test on its own wireframe (`mapping.txt`, `mapping.json`).
+fn write_mapping(
+    out: &Path,
+    m: &crate::mapping::Mapping,
+    files: &mut Vec<PathBuf>,
+) -> Result<(), StudyError> {
+    write_text(&out.join("mapping.txt"), &m.to_string(), files)?;
+    let p = out.join("mapping.json");
+    write_json(&p, m)?;
+    files.push(p);
+    Ok(())
+}
+
 /// [`run_study_file`] for a model that is another solver's modes
 /// ([`crate::external::load_result_modes`]): the test mapped onto its nodes and correlated
 /// (`correlation.json`); a step that needs `K` and `M` is refused, not skipped.
@@ -486,14 +501,7 @@ fn correlate_results(
         &base.join(&s.test),
         results.model.mesh(),
         &results.dofs,
-        &TestOptions {
-            map: s.map.clone(),
-            test_units: s
-                .test_units
-                .as_deref()
-                .map(crate::load::length_unit)
-                .transpose()?,
-        },
+        &s.test_options()?,
     )?;
     progress("correlating");
     let pairing = s.pairing.unwrap_or_default().options();
@@ -502,10 +510,7 @@ fn correlate_results(
     create_dir(out)?;
     let mut files = Vec::new();
     if let Some(m) = &test.mapping {
-        write_text(&out.join("mapping.txt"), &m.to_string(), &mut files)?;
-        let p = out.join("mapping.json");
-        write_json(&p, m)?;
-        files.push(p);
+        write_mapping(out, m, &mut files)?;
     }
     let p = out.join("correlation.json");
     write_json(&p, &correlation)?;

@@ -27,6 +27,27 @@ fn lowest(path: &Path, count: usize) -> (Vec<f64>, femu_study::load::LoadedModel
     (modes.values, loaded)
 }
 
+/// Another solver's modes correlated with the test at `test` placed on their nodes.
+fn correlate_on(
+    results: &femu_study::external::ResultModes,
+    test: &Path,
+) -> femu_correlate::CorrelationReport {
+    let test = femu_study::load::load_test_on(
+        test,
+        results.model.mesh(),
+        &results.dofs,
+        &Default::default(),
+    )
+    .unwrap();
+    correlate(
+        &results.modes,
+        &test.data.modes,
+        &test.layout,
+        &PairingOptions::default(),
+    )
+    .unwrap()
+}
+
 /// The largest entry of `a - b` over the largest of `b`.
 fn relative_difference(a: &femu_sparse::SparseMatrix, b: &femu_sparse::SparseMatrix) -> f64 {
     let (da, db) = (femu_sparse::csc::to_dense(a), femu_sparse::csc::to_dense(b));
@@ -394,20 +415,7 @@ fn calculix_modes_are_the_model_side() {
     std::fs::write(d.join("test.csv"), csv).unwrap();
     let results = femu_study::external::load_result_modes(&d.join("job.frd"), None).unwrap();
     assert_eq!(results.modes.len(), 6);
-    let test = femu_study::load::load_test_on(
-        &d.join("test.csv"),
-        results.model.mesh(),
-        &results.dofs,
-        &Default::default(),
-    )
-    .unwrap();
-    let report = correlate(
-        &results.modes,
-        &test.data.modes,
-        &test.layout,
-        &PairingOptions::default(),
-    )
-    .unwrap();
+    let report = correlate_on(&results, &d.join("test.csv"));
     assert_eq!(report.pairing.pairs.len(), 6);
     for p in &report.pairing.pairs {
         assert_eq!(p.test, p.model);
@@ -451,10 +459,10 @@ fn calculix_modes_are_the_model_side() {
 }
 
 /// MSC Nastran's modes (the `.f06` and the `.op2` of a run from pyNastran's models, their grids
-/// from the run's deck, which
-/// holds shells, bars, beams and rods) as the model side, against a test written from pyNastran's
-/// reading of the same run's OP2 (an independent reader of another file): translations of grids
-/// 1-13 in x, y and z. They pair one to one with MAC 1 to 1e-9 and the same frequencies to 1e-6.
+/// from the run's deck, which holds shells, bars, beams and rods) as the model side, against a
+/// test written from pyNastran's reading of the same run's OP2 (an independent reader): the
+/// translations of grids 1-13 in x, y and z. Each pairs one to one with MAC 1 to 1e-9 and the
+/// same frequencies to 1e-6.
 #[test]
 fn nastran_modes_are_the_model_side() {
     let fixtures =
@@ -482,20 +490,7 @@ fn nastran_modes_are_the_model_side() {
     for file in ["mode_solid_shell_bar.f06", "mode_solid_shell_bar.op2"] {
         let results = femu_study::external::load_result_modes(&fixtures.join(file), None).unwrap();
         assert_eq!(results.model.mesh().node_count(), 25);
-        let test = femu_study::load::load_test_on(
-            &d.join("test.csv"),
-            results.model.mesh(),
-            &results.dofs,
-            &Default::default(),
-        )
-        .unwrap();
-        let report = correlate(
-            &results.modes,
-            &test.data.modes,
-            &test.layout,
-            &PairingOptions::default(),
-        )
-        .unwrap();
+        let report = correlate_on(&results, &d.join("test.csv"));
         assert_eq!(report.pairing.pairs.len(), 3);
         for p in &report.pairing.pairs {
             assert_eq!(p.test, p.model);
