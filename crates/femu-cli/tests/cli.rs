@@ -1196,6 +1196,26 @@ fn bricks_with_incompatible_modes_from_the_command_line() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A deck read and assembled (consistent mass), with `K` and `M` dense.
+fn dense_deck(
+    path: &std::path::Path,
+) -> (
+    femu_fem::model::Model,
+    femu_fem::assembly::SystemMatrices,
+    faer::Mat<f64>,
+    faer::Mat<f64>,
+) {
+    let model = femu_io::inp::read_inp(path).unwrap().to_model().unwrap();
+    let sys = model
+        .assemble(femu_fem::assembly::MassKind::Consistent)
+        .unwrap();
+    let (k, m) = (
+        femu_sparse::csc::to_dense(&sys.k),
+        femu_sparse::csc::to_dense(&sys.m),
+    );
+    (model, sys, k, m)
+}
+
 /// Receptances of the dense pencil at `outputs` (free DOFs) for a unit force at `force`, on
 /// `count` lines from `min` by `step` Hz, by a dense complex solve of
 /// `(K - w^2 M + i D(w)) x = f` per line, `D(w)` the damping's imaginary part (`eta K` for a loss
@@ -1304,17 +1324,7 @@ fn frf_damping_from_the_test() {
     let dir = std::env::temp_dir().join(format!("femu-cli-frf-zeta-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("bar.inp"), beam.deck("C3D8", 2.1e11)).unwrap();
-    let model = femu_io::inp::read_inp(dir.join("bar.inp"))
-        .unwrap()
-        .to_model()
-        .unwrap();
-    let sys = model
-        .assemble(femu_fem::assembly::MassKind::Consistent)
-        .unwrap();
-    let (k, m) = (
-        femu_sparse::csc::to_dense(&sys.k),
-        femu_sparse::csc::to_dense(&sys.m),
-    );
+    let (model, sys, k, m) = dense_deck(&dir.join("bar.inp"));
     let eig = femu_sparse::dense::generalized_symmetric_eigen(k.as_ref(), m.as_ref()).unwrap();
     let zeta = [0.004, 0.03, 0.012, 0.02];
     let n = k.nrows();
@@ -1435,17 +1445,7 @@ fn frf_correlation_against_a_direct_solve() {
     std::fs::write(dir.join("bar.inp"), deck(2.1e11)).unwrap();
     std::fs::write(dir.join("stiffer.inp"), deck(2.31e11)).unwrap();
     // the "measurement": a dense complex solve with a loss factor of 0.02
-    let model = femu_io::inp::read_inp(dir.join("bar.inp"))
-        .unwrap()
-        .to_model()
-        .unwrap();
-    let sys = model
-        .assemble(femu_fem::assembly::MassKind::Consistent)
-        .unwrap();
-    let (k, m) = (
-        femu_sparse::csc::to_dense(&sys.k),
-        femu_sparse::csc::to_dense(&sys.m),
-    );
+    let (model, sys, k, m) = dense_deck(&dir.join("bar.inp"));
     let eta = 0.02;
     let free = |node: u64, c: usize| {
         sys.dofs
