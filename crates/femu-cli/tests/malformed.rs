@@ -158,6 +158,10 @@ fn info_describes_every_format() {
         "uff/plate_test.unv",
         "uff/pyuff/testlab_161_164_18_15_82.uff",
         "csv/two_modes.csv",
+        "frd/cantilever.frd",
+        "calculix/cantilever.sti",
+        "nastran/pynastran/mode_solid_shell_bar.f06",
+        "nastran/pynastran/mode_solid_shell_bar.op2",
     ] {
         let o = Command::cargo_bin("femu")
             .unwrap()

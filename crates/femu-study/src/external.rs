@@ -3,7 +3,8 @@
 //! ([`femu_io::matrices::read_matrices`]) and the nodes' coordinates, made into a model of nodes
 //! without elements whose free DOFs are exactly the matrices' rows. Every workflow that needs `K`,
 //! `M` and the node positions runs on it: modes with their Sturm proof, correlation, the
-//! estimators, expansion, sensor removal, FRFs; updating, which needs element matrices, refuses.
+//! estimators, expansion, sensor removal, FRFs, and updating over groups given as the same
+//! model's matrices with the group's modulus and density doubled ([`matrix_groups`]).
 
 use crate::StudyError;
 use crate::load::LoadedModel;

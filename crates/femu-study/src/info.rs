@@ -165,7 +165,7 @@ fn describe_matrices(
             );
             let _ = writeln!(
                 s,
-                "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, expand, frf; not update, which needs element matrices)",
+                "femu would: use it as a model with {} free DOFs (femu modes, correlate, estimate, expand, frf; update over groups given as NAME=FILE, the same model's matrices with the group's modulus and density doubled)",
                 sys.dofs.free_count()
             );
         }
@@ -187,11 +187,45 @@ fn describe_results(
     s: &mut String,
     warnings: &mut Vec<String>,
 ) -> Result<(), StudyError> {
-    let r = crate::external::load_result_modes(path, None)?;
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
+    let nastran = matches!(ext.as_deref(), Some("f06" | "op2"));
+    let deck_beside = ["bdf", "dat", "nas", "BDF", "DAT", "NAS"]
+        .iter()
+        .any(|e| path.with_extension(e).exists());
+    if nastran && !deck_beside {
+        // the modes alone: their grids' positions are in the run's deck
+        let modes = if ext.as_deref() == Some("op2") {
+            femu_io::op2::read_op2(path)?
+        } else {
+            femu_io::f06::read_f06(path)?
+        };
+        let hz: Vec<f64> = modes
+            .modes
+            .iter()
+            .map(|m| m.eigenvalue.max(0.0).sqrt() / (2.0 * std::f64::consts::PI))
+            .collect();
+        let _ = writeln!(
+            s,
+            "format: Nastran results (.{}): real eigenvectors",
+            ext.as_deref().unwrap_or("")
+        );
+        let _ = writeln!(
+            s,
+            "modes: {} at {} grids; Hz: {}",
+            modes.modes.len(),
+            modes.modes[0].points.len(),
+            frequencies(&hz)
+        );
+        let _ = writeln!(
+            s,
+            "femu would: use them as the model's modes in femu correlate given the run's deck for the grids' positions (none of the same name beside it: --nodes DECK)"
+        );
+        return Ok(());
+    }
+    let r = crate::external::load_result_modes(path, None)?;
     let _ = writeln!(
         s,
         "format: {}",

@@ -508,6 +508,12 @@ fn nastran_modes_are_the_model_side() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("--nodes") && e.contains(".bdf"), "{e}");
+    // femu info describes the modes alone and says what it needs for the grids
+    let info = femu_study::info::describe(&d.join("alone.f06")).unwrap();
+    assert!(
+        info.contains("modes: 3 at 25 grids") && info.contains("--nodes DECK"),
+        "{info}"
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
 
