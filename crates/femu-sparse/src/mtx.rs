@@ -72,7 +72,7 @@ pub fn read_matrix_market(path: impl AsRef<Path>) -> Result<SparseMatrix, Sparse
         }
     };
     let mut size: Option<(usize, usize, usize)> = None;
-    let mut tri = sprs::TriMat::new((0, 0));
+    let mut entries: Vec<(usize, usize, f64)> = Vec::new();
     let mut count = 0;
     for (i, line) in lines {
         let line = line.map_err(io)?;
@@ -88,10 +88,8 @@ pub fn read_matrix_market(path: impl AsRef<Path>) -> Result<SparseMatrix, Sparse
                 match nums {
                     Ok(v) if v.len() == 3 => {
                         size = Some((v[0], v[1], v[2]));
-                        tri = sprs::TriMat::with_capacity(
-                            (v[0], v[1]),
-                            if symmetric { 2 * v[2] } else { v[2] },
-                        );
+                        // the announced count, within reason: a header is not a promise
+                        entries.reserve((if symmetric { 2 * v[2] } else { v[2] }).min(1 << 24));
                     }
                     _ => {
                         return Err(parse_err(
@@ -139,9 +137,9 @@ pub fn read_matrix_market(path: impl AsRef<Path>) -> Result<SparseMatrix, Sparse
                         format!("more entries than the {nnz} announced"),
                     ));
                 }
-                tri.add_triplet(r, c, v);
+                entries.push((r, c, v));
                 if symmetric && r != c {
-                    tri.add_triplet(c, r, v);
+                    entries.push((c, r, v));
                 }
             }
         }
@@ -153,7 +151,7 @@ pub fn read_matrix_market(path: impl AsRef<Path>) -> Result<SparseMatrix, Sparse
             0,
             format!("{count} entries found, {nnz} announced"),
         )),
-        Some(_) => Ok(tri.to_csc()),
+        Some((rows, cols, _)) => Ok(crate::csc::from_entries(rows, cols, &entries)),
     }
 }
 
