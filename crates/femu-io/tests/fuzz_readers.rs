@@ -120,6 +120,15 @@ fn cases() -> u32 {
         .unwrap_or(192)
 }
 
+/// Every reader's run: [`cases`] cases, no failure file.
+fn config() -> ProptestConfig {
+    ProptestConfig {
+        cases: cases(),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    }
+}
+
 /// The Nastran reader, strict and lenient, on mutated decks (`INCLUDE`s are left out: they name
 /// files).
 #[test]
@@ -138,11 +147,7 @@ SPC1,1,123,2,,,,,,+S\n+S,3\nEIGRL,2,,,3\nPARAM,COUPMASS,1\nCONM2,5,4,,1.,.1\nEND
             .to_vec(),
     ));
     let n = decks.len();
-    let config = ProptestConfig {
-        cases: cases(),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    };
+    let config = config();
     proptest!(config, |(k in 0..n, edits in prop::collection::vec(edit(), 1..6))| {
         let bytes = apply(&decks[k].1, &edits);
         let text = String::from_utf8_lossy(&bytes);
@@ -162,11 +167,7 @@ SPC1,1,123,2,,,,,,+S\n+S,3\nEIGRL,2,,,3\nPARAM,COUPMASS,1\nCONM2,5,4,,1.,.1\nEND
 fn universal_file_reader_never_panics() {
     let files = corpus(&["uff", "uff/pyuff", "malformed/test"], &["unv", "uff"]);
     let n = files.len();
-    let config = ProptestConfig {
-        cases: cases(),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    };
+    let config = config();
     proptest!(config, |(k in 0..n, edits in prop::collection::vec(edit(), 1..6))| {
         let bytes = apply(&files[k].1, &edits);
         let path: &Path = &files[k].0;
@@ -183,11 +184,7 @@ fn universal_file_reader_never_panics() {
 fn frd_reader_never_panics() {
     let files = corpus(&["frd"], &["frd"]);
     let n = files.len();
-    let config = ProptestConfig {
-        cases: cases(),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    };
+    let config = config();
     proptest!(config, |(k in 0..n, edits in prop::collection::vec(edit(), 1..6))| {
         let bytes = apply(&files[k].1, &edits);
         let _ = femu_io::frd::parse_frd(&String::from_utf8_lossy(&bytes), &files[k].0);
@@ -209,11 +206,7 @@ fn f06_reader_never_panics() {
         .map(|l| format!("{l}\n"))
         .collect();
     assert!(femu_io::f06::parse_f06(&pages, &path).is_ok());
-    let config = ProptestConfig {
-        cases: cases(),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    };
+    let config = config();
     proptest!(config, |(edits in prop::collection::vec(edit(), 1..6))| {
         let bytes = apply(pages.as_bytes(), &edits);
         let _ = femu_io::f06::parse_f06(&String::from_utf8_lossy(&bytes), &path);
@@ -229,11 +222,7 @@ fn op2_reader_never_panics() {
         .join("../../fixtures/nastran/pynastran/mode_solid_shell_bar.op2");
     let bytes = std::fs::read(&path).unwrap();
     assert!(femu_io::op2::parse_op2(&bytes, &path).is_ok());
-    let config = ProptestConfig {
-        cases: cases(),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    };
+    let config = config();
     proptest!(config, |(edits in prop::collection::vec(edit(), 1..6))| {
         let _ = femu_io::op2::parse_op2(&apply(&bytes, &edits), &path);
     });

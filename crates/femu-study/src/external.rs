@@ -43,15 +43,12 @@ pub struct ResultModes {
 /// not there to be measured); rotations are not kept (a test measures translations).
 ///
 /// # Errors
-/// The readers' errors; a printed grid the deck does not define; no deck beside the `.f06`;
+/// The readers' errors; a printed grid the deck does not define; no deck beside the results;
 /// modes whose frequencies do not ascend (named).
 pub fn load_result_modes(path: &Path, nodes: Option<&Path>) -> Result<ResultModes, StudyError> {
-    let is_f06 = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("f06") || e.eq_ignore_ascii_case("op2"));
-    let (points, modes, mut warnings) = if is_f06 {
-        f06_modes(path, nodes)?
+    let nastran = nastran_results(path);
+    let (points, modes, mut warnings) = if nastran {
+        nastran_modes(path, nodes)?
     } else {
         let frd = femu_io::frd::read_frd(path)?;
         let warnings: Vec<String> = frd
@@ -78,7 +75,7 @@ pub fn load_result_modes(path: &Path, nodes: Option<&Path>) -> Result<ResultMode
             .collect();
         (frd.nodes, modes, warnings)
     };
-    if nodes.is_some() && !is_f06 {
+    if nodes.is_some() && !nastran {
         warnings.push(format!(
             "{}: the .frd holds its nodes: the given node file is not used",
             path.display()
@@ -115,9 +112,41 @@ pub fn load_result_modes(path: &Path, nodes: Option<&Path>) -> Result<ResultMode
 }
 
 /// Nodes, modes `(eigenvalue, line, translations per node in the basic frame)` and warnings of a
-/// `.f06` with the grids of its deck.
+/// Whether `path` is Nastran's results (`.f06` or `.op2`), by its extension.
+pub fn nastran_results(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("f06") || e.eq_ignore_ascii_case("op2"))
+}
+
+/// The real modes of Nastran's results, by extension: an `.op2`'s ([`femu_io::op2::read_op2`])
+/// or an `.f06`'s ([`femu_io::f06::read_f06`]).
+///
+/// # Errors
+/// The readers' errors.
+pub fn read_nastran_modes(path: &Path) -> Result<femu_io::f06::F06, StudyError> {
+    let op2 = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("op2"));
+    Ok(if op2 {
+        femu_io::op2::read_op2(path)?
+    } else {
+        femu_io::f06::read_f06(path)?
+    })
+}
+
+/// The run's deck beside Nastran's results: the `.bdf`, `.dat` or `.nas` of the same name.
+pub fn nastran_deck_beside(path: &Path) -> Option<PathBuf> {
+    ["bdf", "dat", "nas", "BDF", "DAT", "NAS"]
+        .iter()
+        .map(|e| path.with_extension(e))
+        .find(|p| p.exists())
+}
+
+/// Nodes, modes `(eigenvalue, line, translations per node in the basic frame)` and warnings of
+/// Nastran's results with the grids of the run's deck.
 #[allow(clippy::type_complexity)]
-fn f06_modes(
+fn nastran_modes(
     path: &Path,
     nodes: Option<&Path>,
 ) -> Result<
@@ -128,21 +157,10 @@ fn f06_modes(
     ),
     StudyError,
 > {
-    let op2 = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("op2"));
-    let f06 = if op2 {
-        femu_io::op2::read_op2(path)?
-    } else {
-        femu_io::f06::read_f06(path)?
-    };
+    let f06 = read_nastran_modes(path)?;
     let deck = match nodes {
         Some(p) => p.to_path_buf(),
-        None => ["bdf", "dat", "nas", "BDF", "DAT", "NAS"]
-            .iter()
-            .map(|e| path.with_extension(e))
-            .find(|p| p.exists())
-            .ok_or_else(|| {
+        None => nastran_deck_beside(path).ok_or_else(|| {
                 StudyError::in_file(
                     path,
                     "nodes",

@@ -191,17 +191,11 @@ fn describe_results(
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let nastran = matches!(ext.as_deref(), Some("f06" | "op2"));
-    let deck_beside = ["bdf", "dat", "nas", "BDF", "DAT", "NAS"]
-        .iter()
-        .any(|e| path.with_extension(e).exists());
-    if nastran && !deck_beside {
+    if crate::external::nastran_results(path)
+        && crate::external::nastran_deck_beside(path).is_none()
+    {
         // the modes alone: their grids' positions are in the run's deck
-        let modes = if ext.as_deref() == Some("op2") {
-            femu_io::op2::read_op2(path)?
-        } else {
-            femu_io::f06::read_f06(path)?
-        };
+        let modes = crate::external::read_nastran_modes(path)?;
         let hz: Vec<f64> = modes
             .modes
             .iter()
