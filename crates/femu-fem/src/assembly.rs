@@ -199,6 +199,26 @@ fn effective_points(dofs: &DofMap, nodes: &[usize], out: &mut Vec<usize>) {
     out.dedup();
 }
 
+/// The DOF map's points of a structural element's `(node, part)` blocks: the node itself for its
+/// translations, its rotation point for its rotations.
+///
+/// # Panics
+/// If a node the element turns has no rotations (the model gives them when it adds the element).
+pub(crate) fn structural_points(
+    dofs: &DofMap,
+    parts: &[(usize, crate::structural::Part)],
+) -> Vec<usize> {
+    parts
+        .iter()
+        .map(|(n, p)| match p {
+            crate::structural::Part::Translations => *n,
+            crate::structural::Part::Rotations => dofs
+                .rotation_point(*n)
+                .expect("Model::add_structural gives the node rotations"),
+        })
+        .collect()
+}
+
 fn bad_jacobian(id: u64) -> impl Fn(BadJacobian) -> FemError {
     move |b| FemError::InvertedElement {
         element: id,
@@ -238,6 +258,10 @@ impl Assembler {
             let mut pts = vec![r.node];
             pts.extend(dofs.rotation_point(r.node));
             effective_points(&dofs, &pts, &mut buf);
+            extra.push(buf.clone());
+        }
+        for s in model.structural() {
+            effective_points(&dofs, &structural_points(&dofs, &s.parts()), &mut buf);
             extra.push(buf.clone());
         }
         if dofs.has_dependents() {
@@ -807,6 +831,26 @@ impl Assembler {
             }
             let local: Vec<f64> = r.matrix.iter().flatten().copied().collect();
             self.scatter(&[r.node, rp], |at, l, w| ms.add(at, w * local[l]));
+        }
+        // beams, rods, springs and bushings, on their nodes' translations and rotations
+        for s in model.structural() {
+            let sm = s.matrices(mesh.coords(), mass)?;
+            let pts = structural_points(&self.dofs, &sm.parts);
+            match mass {
+                MassKind::Consistent => self.scatter(&pts, |at, l, w| {
+                    ks.add(at, w * sm.k[l]);
+                    ms.add(at, w * sm.m[l]);
+                }),
+                MassKind::Lumped => {
+                    self.scatter(&pts, |at, l, w| ks.add(at, w * sm.k[l]));
+                    let nd = sm.k.len().isqrt();
+                    self.scatter_lumped(
+                        &pts,
+                        |a, i| sm.m[(3 * a + i) * nd + 3 * a + i],
+                        |at, v| ms.add(at, v),
+                    );
+                }
+            }
         }
         // point masses: the 3x3 block of their node (the lumped mass keeps its diagonal; an
         // off-diagonal coupling needs the consistent pattern)

@@ -155,6 +155,14 @@ pub enum FemError {
         /// What is wrong.
         reason: String,
     },
+    /// A structural element (beam, rod, spring, bushing) with invalid values or geometry.
+    #[error("element {element}: {reason}")]
+    InvalidStructural {
+        /// The element's id.
+        element: u64,
+        /// What is wrong.
+        reason: String,
+    },
     /// A multipoint constraint that cannot be applied: a DOF made dependent twice or also fixed, a
     /// cycle of dependencies, a term on a missing DOF (`label` names the card or keyword, its id
     /// and where it was read).

@@ -17,8 +17,22 @@ use rayon::prelude::*;
 pub struct ParameterGroup {
     /// Name: the element set's name, or `"E<id>"` for a single element.
     pub name: String,
-    /// Internal element indices.
+    /// Internal indices of solid elements.
     pub elements: Vec<usize>,
+    /// Indices of structural elements (beams, rods, springs, bushings; [`Model::structural`]):
+    /// a spring's or bushing's stiffness, a beam's modulus.
+    pub structural: Vec<usize>,
+}
+
+impl ParameterGroup {
+    /// A group of solid elements.
+    pub fn solids(name: impl Into<String>, elements: Vec<usize>) -> Self {
+        Self {
+            name: name.into(),
+            elements,
+            structural: Vec::new(),
+        }
+    }
 }
 
 /// Parameter groups with their element matrices, on a model's pattern.
@@ -28,6 +42,10 @@ pub struct ParameterGroups {
     mass_kind: MassKind,
     /// slot of each mesh element, `usize::MAX` if in no group
     slot: Vec<usize>,
+    /// slot of each structural element, `usize::MAX` if in no group
+    structural_slot: Vec<usize>,
+    /// the DOF map's points of each slot (solid elements: their nodes)
+    points: Vec<Vec<usize>>,
     slot_offset: Vec<usize>,
     ke: Vec<f64>,
     me: Vec<f64>,
@@ -173,15 +191,14 @@ impl ParameterGroups {
             mg.mass.push(translational_mass(&m, &base.dofs));
             mg.k.push(k);
             mg.m.push(m);
-            named.push(ParameterGroup {
-                name,
-                elements: Vec::new(),
-            });
+            named.push(ParameterGroup::solids(name, Vec::new()));
         }
         Ok(Self {
             groups: named,
             mass_kind: base.mass_kind,
             slot: Vec::new(),
+            structural_slot: Vec::new(),
+            points: Vec::new(),
             slot_offset: Vec::new(),
             ke: Vec::new(),
             me: Vec::new(),
@@ -207,10 +224,13 @@ impl ParameterGroups {
         mass_kind: MassKind,
     ) -> Result<Self, FemError> {
         let ne = model.mesh().element_count();
+        let ns = model.structural().len();
         let mut slot = vec![usize::MAX; ne];
+        let mut structural_slot = vec![usize::MAX; ns];
         let mut slot_element = Vec::new();
+        let mut slot_structural = Vec::new();
         for g in &groups {
-            if g.elements.is_empty() {
+            if g.elements.is_empty() && g.structural.is_empty() {
                 return Err(FemError::InvalidGroup {
                     name: g.name.clone(),
                     reason: "no elements".into(),
@@ -228,12 +248,28 @@ impl ParameterGroups {
                     slot_element.push(e);
                 }
             }
+            for &e in &g.structural {
+                if e >= ns {
+                    return Err(FemError::InvalidGroup {
+                        name: g.name.clone(),
+                        reason: format!("structural element index {e} out of range"),
+                    });
+                }
+                if structural_slot[e] == usize::MAX {
+                    structural_slot[e] = slot_element.len() + slot_structural.len();
+                    slot_structural.push(e);
+                }
+            }
         }
         let mats: Vec<(Vec<f64>, Vec<f64>)> = slot_element
             .par_iter()
             .map(|e| element_matrices(model, *e, mass_kind))
             .collect::<Result<_, _>>()?;
-        let mut slot_offset = Vec::with_capacity(mats.len() + 1);
+        let mut points: Vec<Vec<usize>> = slot_element
+            .iter()
+            .map(|e| model.mesh().element(*e).nodes.to_vec())
+            .collect();
+        let mut slot_offset = Vec::with_capacity(mats.len() + slot_structural.len() + 1);
         slot_offset.push(0);
         let (mut ke, mut me) = (Vec::new(), Vec::new());
         for (k, m) in mats {
@@ -241,10 +277,22 @@ impl ParameterGroups {
             me.extend_from_slice(&m);
             slot_offset.push(ke.len());
         }
+        if !slot_structural.is_empty() {
+            let dofs = model.dof_map()?;
+            for &e in &slot_structural {
+                let sm = model.structural()[e].matrices(model.mesh().coords(), mass_kind)?;
+                points.push(crate::assembly::structural_points(&dofs, &sm.parts));
+                ke.extend_from_slice(&sm.k);
+                me.extend_from_slice(&sm.m);
+                slot_offset.push(ke.len());
+            }
+        }
         Ok(Self {
             groups,
             mass_kind,
             slot,
+            structural_slot,
+            points,
             slot_offset,
             ke,
             me,
@@ -257,18 +305,27 @@ impl ParameterGroups {
     /// # Errors
     /// As [`ParameterGroups::new`].
     pub fn elementwise(model: &Model, mass_kind: MassKind) -> Result<Self, FemError> {
-        let groups = model
+        let mut groups: Vec<ParameterGroup> = model
             .mesh()
             .elements()
-            .map(|el| ParameterGroup {
-                name: format!("E{}", el.id),
-                elements: vec![el.index],
-            })
+            .map(|el| ParameterGroup::solids(format!("E{}", el.id), vec![el.index]))
             .collect();
+        groups.extend(
+            model
+                .structural()
+                .iter()
+                .enumerate()
+                .map(|(i, s)| ParameterGroup {
+                    name: format!("E{}", s.id),
+                    elements: Vec::new(),
+                    structural: vec![i],
+                }),
+        );
         Self::new(model, groups, mass_kind)
     }
 
-    /// One group per named element set.
+    /// One group per named element set (its solid and its structural elements:
+    /// [`Model::element_set_members`]).
     ///
     /// # Errors
     /// [`FemError::UnknownElementSet`], and as [`ParameterGroups::new`].
@@ -280,9 +337,11 @@ impl ParameterGroups {
         let groups = sets
             .iter()
             .map(|s| {
+                let (elements, structural) = model.element_set_members(s)?;
                 Ok(ParameterGroup {
                     name: (*s).into(),
-                    elements: model.mesh().element_set(s)?.to_vec(),
+                    elements,
+                    structural,
                 })
             })
             .collect::<Result<_, FemError>>()?;
@@ -304,10 +363,22 @@ impl ParameterGroups {
         &self.groups
     }
 
-    fn element_slices(&self, e: usize) -> (&[f64], &[f64]) {
-        let s = self.slot[e];
+    fn slot_slices(&self, s: usize) -> (&[usize], &[f64], &[f64]) {
         let r = self.slot_offset[s]..self.slot_offset[s + 1];
-        (&self.ke[r.clone()], &self.me[r])
+        (&self.points[s], &self.ke[r.clone()], &self.me[r])
+    }
+
+    /// The points, stiffness and mass of each element of a group, solid and structural.
+    fn items<'a>(
+        &'a self,
+        group: &'a ParameterGroup,
+    ) -> impl Iterator<Item = (&'a [usize], &'a [f64], &'a [f64])> + 'a {
+        group
+            .elements
+            .iter()
+            .map(|&e| self.slot[e])
+            .chain(group.structural.iter().map(|&e| self.structural_slot[e]))
+            .map(|s| self.slot_slices(s))
     }
 
     fn check_group(&self, g: usize) -> Result<&ParameterGroup, FemError> {
@@ -320,7 +391,7 @@ impl ParameterGroups {
     /// `y += alpha K_g x` (stiffness) or `y += alpha M_g x` (mass), on free-DOF vectors.
     fn product(
         &self,
-        model: &Model,
+        _model: &Model,
         asm: &Assembler,
         g: usize,
         mass: bool,
@@ -349,17 +420,14 @@ impl ParameterGroups {
             }
             return Ok(());
         }
-        let mesh = model.mesh();
         let dm = asm.dofs();
         // y += alpha T_e^T A_e T_e x: gather the element's DOFs through T, multiply, scatter back
         let mut xe = Vec::with_capacity(60);
-        for &e in &group.elements {
-            let nodes = mesh.element(e).nodes;
+        for (nodes, ke, me) in self.items(group) {
             xe.clear();
             xe.extend(nodes.iter().flat_map(|nd| {
                 (0..3).map(|c| dm.terms(*nd, c).iter().map(|(f, w)| w * x[*f]).sum::<f64>())
             }));
-            let (ke, me) = self.element_slices(e);
             let a = if mass { me } else { ke };
             let nd = xe.len();
             for (r, nd_r) in nodes
@@ -420,7 +488,7 @@ impl ParameterGroups {
     /// [`FemError::LengthMismatch`] for `p`, `q` or a pattern that is not the assembler's.
     pub fn write_parameterized(
         &self,
-        model: &Model,
+        _model: &Model,
         asm: &Assembler,
         base: &SystemMatrices,
         p: &[f64],
@@ -472,11 +540,8 @@ impl ParameterGroups {
         } else {
             m_on_k = mass_on_stiffness_pattern(base)?;
         }
-        let mesh = model.mesh();
         for (g, group) in self.groups.iter().enumerate() {
-            for &e in &group.elements {
-                let nodes = mesh.element(e).nodes;
-                let (ke, me) = self.element_slices(e);
+            for (nodes, ke, me) in self.items(group) {
                 if p[g] != 0.0 {
                     let kd = out.k.data_mut();
                     asm.scatter(nodes, |i, l, w| kd[i] += p[g] * w * ke[l]);
@@ -589,12 +654,14 @@ impl ParameterGroups {
             return Ok(mg.mass[g]);
         }
         let mut total = 0.0;
-        for &e in &group.elements {
-            let nn = model.mesh().element(e).nodes.len();
+        let nodes = model.mesh().node_count();
+        for (points, _, me) in self.items(group) {
+            let nn = points.len();
             let nd = 3 * nn;
-            let me = self.element_slices(e).1;
-            for a in 0..nn {
-                for b in 0..nn {
+            // translations only: a structural element's rotation points hold rotary inertia
+            let moving: Vec<usize> = (0..nn).filter(|a| points[*a] < nodes).collect();
+            for &a in &moving {
+                for &b in &moving {
                     total += me[3 * a * nd + 3 * b];
                 }
             }
@@ -608,7 +675,7 @@ impl ParameterGroups {
     /// [`FemError::InvalidGroup`].
     pub fn group_dofs(
         &self,
-        model: &Model,
+        _model: &Model,
         asm: &Assembler,
         g: usize,
     ) -> Result<Vec<usize>, FemError> {
@@ -616,10 +683,9 @@ impl ParameterGroups {
         if let Some(mg) = &self.matrices {
             return Ok(mg.dofs[g].clone());
         }
-        let mut dofs: Vec<usize> = group
-            .elements
-            .iter()
-            .flat_map(|&e| model.mesh().element(e).nodes.iter())
+        let mut dofs: Vec<usize> = self
+            .items(group)
+            .flat_map(|(points, _, _)| points.iter())
             .flat_map(|nd| (0..3).flat_map(move |c| asm.dofs().terms(*nd, c).iter().map(|t| t.0)))
             .collect();
         dofs.sort_unstable();
@@ -638,7 +704,7 @@ impl ParameterGroups {
     /// [`FemError::InvalidGroup`].
     pub fn group_stiffness(
         &self,
-        model: &Model,
+        _model: &Model,
         asm: &Assembler,
         g: usize,
     ) -> Result<SparseMatrix, FemError> {
@@ -647,9 +713,8 @@ impl ParameterGroups {
             return Ok(mg.k[g].clone());
         }
         let mut v = vec![0.0; asm.nnz()];
-        for &e in &group.elements {
-            let ke = self.element_slices(e).0;
-            asm.scatter(model.mesh().element(e).nodes, |i, l, w| v[i] += w * ke[l]);
+        for (points, ke, _) in self.items(group) {
+            asm.scatter(points, |i, l, w| v[i] += w * ke[l]);
         }
         Ok(asm.pattern_matrix(v))
     }

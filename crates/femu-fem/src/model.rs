@@ -7,7 +7,8 @@ use crate::dof::{DofMap, LinearConstraint};
 use crate::element::{ElementKind, Formulation};
 use crate::material::Material;
 use crate::mesh::Mesh;
-use std::collections::BTreeSet;
+use crate::structural::{Part, StructuralElement};
+use std::collections::{BTreeMap, BTreeSet};
 
 /// A finite element model ready to assemble.
 #[derive(Debug, Clone)]
@@ -22,6 +23,10 @@ pub struct Model {
     rigid_masses: Vec<RigidMass>,
     /// per element, when any is not [`Formulation::Full`] (empty: all full)
     formulations: Vec<Formulation>,
+    /// Beams, rods, springs and bushings ([`crate::structural`]).
+    structural: Vec<StructuralElement>,
+    /// Named sets of structural elements (indices into `structural`).
+    structural_sets: BTreeMap<String, Vec<usize>>,
 }
 
 /// A rigid body's mass on a node that carries rotations (a rigid link's reference, where Nastran
@@ -75,7 +80,154 @@ impl Model {
             constraints: Vec::new(),
             rigid_masses: Vec::new(),
             formulations: Vec::new(),
+            structural: Vec::new(),
+            structural_sets: BTreeMap::new(),
         })
+    }
+
+    /// Adds a beam, rod, spring or bushing; its nodes get rotations where it acts on them
+    /// ([`Model::add_rotations`]). Its matrices are formed once here, so that a bad value or
+    /// geometry (coincident ends, an orientation vector along the axis) is refused now.
+    ///
+    /// # Errors
+    /// [`FemError::DuplicateElementId`] for an id a solid or structural element has;
+    /// [`FemError::InvalidStructural`] for invalid values or geometry, or a node index out of
+    /// range.
+    pub fn add_structural(&mut self, element: StructuralElement) -> Result<usize, FemError> {
+        let id = element.id;
+        if self.mesh.element_index(id).is_some() || self.structural_index(id).is_some() {
+            return Err(FemError::DuplicateElementId { id });
+        }
+        let nn = self.mesh.node_count();
+        let parts = element.parts();
+        if element.nodes.is_empty()
+            || element
+                .nodes
+                .iter()
+                .chain(parts.iter().map(|p| &p.0))
+                .any(|n| *n >= nn)
+        {
+            return Err(FemError::InvalidStructural {
+                element: id,
+                reason: format!("its nodes {:?} are not nodes of the mesh", element.nodes),
+            });
+        }
+        element.matrices(self.mesh.coords(), crate::assembly::MassKind::Consistent)?;
+        for (n, part) in parts {
+            if part == Part::Rotations && !self.rotation_nodes.contains(&n) {
+                self.rotation_nodes.push(n);
+            }
+        }
+        self.structural.push(element);
+        Ok(self.structural.len() - 1)
+    }
+
+    /// The beams, rods, springs and bushings.
+    pub fn structural(&self) -> &[StructuralElement] {
+        &self.structural
+    }
+
+    /// The index of the structural element with user id `id`.
+    pub fn structural_index(&self, id: u64) -> Option<usize> {
+        self.structural.iter().position(|s| s.id == id)
+    }
+
+    /// Replaces structural element `index` by `element` (new values, same nodes and parts: a
+    /// parameter study or a test).
+    ///
+    /// # Errors
+    /// [`FemError::InvalidStructural`] for an index out of range, different nodes or parts, or
+    /// invalid values.
+    pub fn set_structural(
+        &mut self,
+        index: usize,
+        element: StructuralElement,
+    ) -> Result<(), FemError> {
+        let bad = |reason: String| FemError::InvalidStructural {
+            element: element.id,
+            reason,
+        };
+        let old = self
+            .structural
+            .get(index)
+            .ok_or_else(|| bad(format!("no structural element at index {index}")))?;
+        if old.nodes != element.nodes || old.parts() != element.parts() || old.id != element.id {
+            return Err(bad(
+                "a replacement must keep the element's id, nodes and the DOFs it acts on".into(),
+            ));
+        }
+        element.matrices(self.mesh.coords(), crate::assembly::MassKind::Consistent)?;
+        self.structural[index] = element;
+        Ok(())
+    }
+
+    /// Names a set of structural elements by their ids (a property's elements); a set of the same
+    /// name adds to it.
+    ///
+    /// # Errors
+    /// [`FemError::UnknownElement`] for an id that is not a structural element.
+    pub fn add_structural_set(
+        &mut self,
+        name: impl Into<String>,
+        ids: &[u64],
+    ) -> Result<(), FemError> {
+        let idx = ids
+            .iter()
+            .map(|id| {
+                self.structural_index(*id)
+                    .ok_or(FemError::UnknownElement { element: *id })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let set = self.structural_sets.entry(name.into()).or_default();
+        set.extend(idx);
+        set.sort_unstable();
+        set.dedup();
+        Ok(())
+    }
+
+    /// The named sets of structural elements.
+    pub fn structural_sets(&self) -> &BTreeMap<String, Vec<usize>> {
+        &self.structural_sets
+    }
+
+    /// The names of every element set: the mesh's and the structural elements', sorted, once.
+    pub fn element_set_names(&self) -> Vec<String> {
+        let mut v: Vec<String> = self
+            .mesh
+            .element_sets()
+            .keys()
+            .chain(self.structural_sets.keys())
+            .cloned()
+            .collect();
+        v.sort();
+        v.dedup();
+        v
+    }
+
+    /// The solid elements and the structural elements of set `name` (internal indices).
+    ///
+    /// # Errors
+    /// [`FemError::UnknownElementSet`] when neither the mesh nor the structural elements have it.
+    pub fn element_set_members(&self, name: &str) -> Result<(Vec<usize>, Vec<usize>), FemError> {
+        let solids = self.mesh.element_sets().get(name).cloned();
+        let structural = self.structural_sets.get(name).cloned();
+        if solids.is_none() && structural.is_none() {
+            return Err(FemError::UnknownElementSet { name: name.into() });
+        }
+        Ok((solids.unwrap_or_default(), structural.unwrap_or_default()))
+    }
+
+    /// Whether node `n` (internal index) has rotations that a structural element acts on.
+    pub fn structural_rotations(&self) -> Vec<bool> {
+        let mut v = vec![false; self.mesh.node_count()];
+        for s in &self.structural {
+            for (n, p) in s.parts() {
+                if p == Part::Rotations {
+                    v[n] = true;
+                }
+            }
+        }
+        v
     }
 
     /// The mesh.
@@ -629,8 +781,14 @@ impl Model {
 
     /// Per rotation node, the Gram matrix of the rotation coefficients of the constraints that use
     /// its rotations as terms, when all three rotations are free and independent.
+    ///
+    /// A structural element that acts on the node's rotations adds its stiffness block there,
+    /// `K_rr / max |K_rr|`: a direction no element stiffens and no constraint reaches (the bending
+    /// rotations of a rod's node with torsion, a spring on one rotation) is a mechanism, fixed as
+    /// Nastran's AUTOSPC fixes it.
     fn rotation_grams(&self) -> Vec<(usize, nalgebra::Matrix3<f64>)> {
         let mut out = Vec::new();
+        let elastic = self.structural_rotation_blocks();
         for &n in &self.rotation_nodes {
             let busy = (3..6).any(|c| {
                 self.fixed.contains(&(n, c))
@@ -649,7 +807,38 @@ impl Model {
                 }
                 g += a * a.transpose();
             }
+            let top = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if top > 0.0 {
+                g /= top;
+            }
+            if let Some(k) = elastic.get(&n) {
+                g += k;
+            }
             out.push((n, g));
+        }
+        out
+    }
+
+    /// Per node whose rotations a structural element acts on, the sum of the elements' stiffness
+    /// blocks on those rotations, each divided by its largest entry.
+    fn structural_rotation_blocks(&self) -> BTreeMap<usize, nalgebra::Matrix3<f64>> {
+        let mut out: BTreeMap<usize, nalgebra::Matrix3<f64>> = BTreeMap::new();
+        for s in &self.structural {
+            // the element was checked when it was added: its matrices exist
+            let Ok(sm) = s.matrices(self.mesh.coords(), crate::assembly::MassKind::Lumped) else {
+                continue;
+            };
+            let nd = 3 * sm.parts.len();
+            for (b, (n, part)) in sm.parts.iter().enumerate() {
+                if *part != Part::Rotations {
+                    continue;
+                }
+                let block = nalgebra::Matrix3::from_fn(|i, j| sm.k[(3 * b + i) * nd + 3 * b + j]);
+                let top = block.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                if top > 0.0 {
+                    *out.entry(*n).or_insert_with(nalgebra::Matrix3::zeros) += block / top;
+                }
+            }
         }
         out
     }
@@ -745,6 +934,9 @@ impl Model {
             m += (p.mass[0][0] + p.mass[1][1] + p.mass[2][2]) / 3.0;
         }
         m += self.rigid_masses.iter().map(|r| r.mass).sum::<f64>();
+        for s in &self.structural {
+            m += s.mass(self.mesh.coords());
+        }
         Ok(m)
     }
 }

@@ -12,4 +12,5 @@ mod fem {
     mod mesh;
     mod pyramids;
     mod refine;
+    mod structural;
 }

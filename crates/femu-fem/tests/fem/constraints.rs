@@ -354,10 +354,7 @@ fn parameter_groups_act_through_the_constraints() {
         let base = asm.assemble(&model, kind).unwrap();
         let groups = ParameterGroups::new(
             &model,
-            vec![ParameterGroup {
-                name: "tip".into(),
-                elements: last.clone(),
-            }],
+            vec![ParameterGroup::solids("tip", last.clone())],
             kind,
         )
         .unwrap();

@@ -1,0 +1,688 @@
+//! Structural elements on nodes with rotations: two-node beams (Timoshenko, with Euler-Bernoulli
+//! as the shear-rigid limit), rods, scalar springs and bushings (docs/MATH.md, "Beams, springs
+//! and bushings").
+//!
+//! Each element's matrices are formed in closed form (beams: the exact stiffness of a uniform
+//! Timoshenko beam and the consistent mass of its interdependent interpolation) on the DOFs it
+//! reaches: `(node, translations)` and `(node, rotations)` pairs, which the assembly maps to the
+//! DOF map's points ([`crate::dof::DofMap::rotation_point`]). Everything is in the basic frame.
+//!
+//! Nodes a structural element turns get three rotations ([`crate::model::Model::add_rotations`]),
+//! so the DOF map, constraints, point masses with inertia ([`crate::model::RigidMass`]) and
+//! sensors see them as they see a rigid link's reference node.
+
+use crate::FemError;
+use crate::assembly::MassKind;
+
+/// Which three DOFs of a node an element reaches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Part {
+    /// The translations `u_x, u_y, u_z`.
+    Translations,
+    /// The rotations `theta_x, theta_y, theta_z` (radians).
+    Rotations,
+}
+
+/// A beam section: area, second moments, torsion constant, shear factors and mass per length.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BeamSection {
+    /// Area `A` (m^2).
+    pub area: f64,
+    /// `I1`: the second moment for bending in plane 1, the element's x-y plane (about local z;
+    /// Nastran's I1, Abaqus' I11 for its 1-direction), m^4.
+    pub i1: f64,
+    /// `I2`: the second moment for bending in plane 2, the x-z plane (about local y), m^4.
+    pub i2: f64,
+    /// Torsion constant `J` (m^4).
+    pub j: f64,
+    /// Shear area factors `(K1, K2)` of planes 1 and 2 (the shear area is `K A`); `None`: no
+    /// shear flexibility and no rotary inertia, the Euler-Bernoulli beam.
+    pub shear: Option<[f64; 2]>,
+    /// Non-structural mass per length (kg/m).
+    pub nsm: f64,
+}
+
+/// A two-node beam: material, section, the orientation of its cross-section and rigid offsets.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Beam {
+    /// Young's modulus (Pa).
+    pub e: f64,
+    /// Shear modulus (Pa).
+    pub g: f64,
+    /// Density (kg/m^3).
+    pub rho: f64,
+    /// The section.
+    pub section: BeamSection,
+    /// A vector (basic frame) in plane 1, not parallel to the axis: local `z = x cross v`,
+    /// `y = z cross x` (Nastran's orientation vector `v`, Abaqus' `n1` direction).
+    pub orientation: [f64; 3],
+    /// The offsets (basic frame) from each node to its end of the beam, rigid.
+    pub offsets: [[f64; 3]; 2],
+}
+
+/// A rod: axial stiffness `E A` and, when `J > 0`, torsion `G J`; no bending.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rod {
+    /// Young's modulus (Pa).
+    pub e: f64,
+    /// Shear modulus (Pa).
+    pub g: f64,
+    /// Density (kg/m^3).
+    pub rho: f64,
+    /// Area (m^2).
+    pub area: f64,
+    /// Torsion constant (m^4); 0 for none.
+    pub j: f64,
+    /// Non-structural mass per length (kg/m).
+    pub nsm: f64,
+}
+
+/// One end of a scalar spring: a node's translations or rotations along a direction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpringEnd {
+    /// Internal node index.
+    pub node: usize,
+    /// Which DOFs.
+    pub part: Part,
+    /// The unit direction (basic frame): the spring acts on `direction . u`.
+    pub direction: [f64; 3],
+}
+
+/// A scalar spring `k (d_a . u_a - d_b . u_b)^2 / 2` between two DOFs, or to ground (Nastran
+/// CELAS1/CELAS2, Abaqus SPRING1/SPRING2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spring {
+    /// Stiffness (N/m or N m/rad).
+    pub k: f64,
+    /// Structural damping coefficient (`GE`), kept for frequency responses.
+    pub ge: f64,
+    /// The first end.
+    pub a: SpringEnd,
+    /// The second end; `None`: grounded.
+    pub b: Option<SpringEnd>,
+}
+
+/// A bushing: six stiffnesses along and about the axes of a frame, between two nodes or one node
+/// and ground, acting at a point on the line between them (Nastran CBUSH with PBUSH).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bushing {
+    /// Stiffnesses `K1..K3` (N/m) along and `K4..K6` (N m/rad) about the frame's axes.
+    pub k: [f64; 6],
+    /// Viscous damping `B1..B6` (N s/m, N m s/rad), kept for frequency responses.
+    pub b: [f64; 6],
+    /// Structural damping `GE`.
+    pub ge: f64,
+    /// The frame's axes in basic components (`axes[i]`: axis `i`).
+    pub axes: [[f64; 3]; 3],
+    /// Where the spring acts (basic frame), joined to each node by a rigid arm (so that the
+    /// nodes' rotations take part); `None`: at the nodes themselves, on their relative motion.
+    pub point: Option<[f64; 3]>,
+}
+
+/// What a structural element is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StructuralKind {
+    /// A two-node beam.
+    Beam(Beam),
+    /// A two-node rod.
+    Rod(Rod),
+    /// A scalar spring.
+    Spring(Spring),
+    /// A bushing.
+    Bushing(Bushing),
+}
+
+/// A structural element: the user's id, its nodes (internal indices) and what it is.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StructuralElement {
+    /// The user's element id (shared with the mesh's solid elements: ids are unique in a model).
+    pub id: u64,
+    /// Internal node indices: two for beams and rods, one or two for springs and bushings.
+    pub nodes: Vec<usize>,
+    /// The element.
+    pub kind: StructuralKind,
+}
+
+type V3 = [f64; 3];
+
+fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn add(a: V3, b: V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn cross(a: V3, b: V3) -> V3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn norm(a: V3) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+fn scale(a: V3, s: f64) -> V3 {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+
+/// The local axes of a line element from `a` to `b` with orientation vector `v`: rows x, y, z.
+///
+/// # Errors
+/// A message for a zero length or a `v` parallel to the axis (within 1e-6 radians).
+pub fn line_axes(a: V3, b: V3, v: V3) -> Result<(f64, [V3; 3]), String> {
+    let d = sub(b, a);
+    let l = norm(d);
+    if !(l > 0.0 && l.is_finite()) {
+        return Err(format!("its ends coincide (length {l:e})"));
+    }
+    let x = scale(d, 1.0 / l);
+    let nv = norm(v);
+    let z = cross(x, v);
+    let nz = norm(z);
+    if !(nv > 0.0 && nz > 1e-6 * nv) {
+        return Err(format!(
+            "its orientation vector {v:?} is parallel to its axis {x:?} (or zero): the cross-section's axes are undefined"
+        ));
+    }
+    let z = scale(z, 1.0 / nz);
+    let y = cross(z, x);
+    Ok((l, [x, y, z]))
+}
+
+/// The interdependent shape functions of a two-node Timoshenko beam in one plane, at `xi = x / L`
+/// with `phi = 12 E I / (k G A L^2)`: the deflection `w` and the section rotation `theta` (with
+/// `theta = dw/dx` when `phi = 0`) against the DOFs `(w_1, theta_1, w_2, theta_2)`. They solve
+/// the homogeneous beam equations exactly, so the stiffness they give is the exact one.
+pub fn timoshenko_shape(xi: f64, l: f64, phi: f64) -> ([f64; 4], [f64; 4]) {
+    let c = 1.0 / (1.0 + phi);
+    let (x2, x3) = (xi * xi, xi * xi * xi);
+    let w = [
+        c * (2.0 * x3 - 3.0 * x2 - phi * xi + 1.0 + phi),
+        c * l * (x3 - (2.0 + phi / 2.0) * x2 + (1.0 + phi / 2.0) * xi),
+        -c * (2.0 * x3 - 3.0 * x2 - phi * xi),
+        c * l * (x3 - (1.0 - phi / 2.0) * x2 - phi / 2.0 * xi),
+    ];
+    let t = [
+        6.0 * c / l * (x2 - xi),
+        c * (3.0 * x2 - (4.0 + phi) * xi + 1.0 + phi),
+        -6.0 * c / l * (x2 - xi),
+        c * (3.0 * x2 - (2.0 - phi) * xi),
+    ];
+    (w, t)
+}
+
+/// The plane stiffness and consistent mass of a uniform Timoshenko beam on `(w_1, theta_1, w_2,
+/// theta_2)`: `K = E I / ((1 + phi) L^3) [[12, 6L, -12, 6L], [6L, (4 + phi) L^2, -6L, (2 - phi)
+/// L^2], ...]`, and `M = int (m N_w^T N_w + r N_theta^T N_theta) dx` for mass per length `m` and
+/// rotary inertia per length `r`, integrated exactly (the integrands are of degree 6; four Gauss
+/// points).
+fn plane_matrices(ei: f64, phi: f64, l: f64, m: f64, r: f64) -> ([[f64; 4]; 4], [[f64; 4]; 4]) {
+    let c = ei / ((1.0 + phi) * l * l * l);
+    let k = [
+        [12.0, 6.0 * l, -12.0, 6.0 * l],
+        [6.0 * l, (4.0 + phi) * l * l, -6.0 * l, (2.0 - phi) * l * l],
+        [-12.0, -6.0 * l, 12.0, -6.0 * l],
+        [6.0 * l, (2.0 - phi) * l * l, -6.0 * l, (4.0 + phi) * l * l],
+    ]
+    .map(|row| row.map(|v| c * v));
+    let mut mm = [[0.0; 4]; 4];
+    let (gp, gw) = crate::quadrature::gauss_legendre(4);
+    for (x, w) in gp.iter().zip(&gw) {
+        let xi = 0.5 * (x + 1.0);
+        let (nw, nt) = timoshenko_shape(xi, l, phi);
+        let f = 0.5 * w * l;
+        for i in 0..4 {
+            for j in 0..4 {
+                mm[i][j] += f * (m * nw[i] * nw[j] + r * nt[i] * nt[j]);
+            }
+        }
+    }
+    (k, mm)
+}
+
+/// `[[I, -S(w)], [0, I]]`: the rigid offset `w` from a node to an element's end, on the node's
+/// translations and rotations (`u_end = u + theta x w`).
+fn offset_map(w: V3) -> [[f64; 6]; 6] {
+    let mut t = [[0.0; 6]; 6];
+    for (i, row) in t.iter_mut().enumerate() {
+        row[i] = 1.0;
+    }
+    // -S(w): theta x w = -w x theta
+    let s = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]];
+    for i in 0..3 {
+        for j in 0..3 {
+            t[i][3 + j] = -s[i][j];
+        }
+    }
+    t
+}
+
+/// `B^T A B` for square `A` (`n x n`) and `B` (`n x m`), row-major.
+fn congruence(a: &[f64], b: &[f64], n: usize, m: usize) -> Vec<f64> {
+    let mut ab = vec![0.0; n * m];
+    for i in 0..n {
+        for k in 0..n {
+            let v = a[i * n + k];
+            if v != 0.0 {
+                for j in 0..m {
+                    ab[i * m + j] += v * b[k * m + j];
+                }
+            }
+        }
+    }
+    let mut out = vec![0.0; m * m];
+    for k in 0..n {
+        for i in 0..m {
+            let v = b[k * m + i];
+            if v != 0.0 {
+                for j in 0..m {
+                    out[i * m + j] += v * ab[k * m + j];
+                }
+            }
+        }
+    }
+    // exactly symmetric, as the assembly requires
+    for i in 0..m {
+        for j in 0..i {
+            let s = 0.5 * (out[i * m + j] + out[j * m + i]);
+            out[i * m + j] = s;
+            out[j * m + i] = s;
+        }
+    }
+    out
+}
+
+/// An element's matrices on the DOF groups it reaches.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StructuralMatrices {
+    /// `(internal node, part)` of each block of three DOFs, in the matrices' order.
+    pub parts: Vec<(usize, Part)>,
+    /// Stiffness, row-major, `3 parts` square.
+    pub k: Vec<f64>,
+    /// Mass (diagonal for a lumped mass), row-major, `3 parts` square.
+    pub m: Vec<f64>,
+}
+
+fn check_positive(element: u64, what: &str, v: f64, allow_zero: bool) -> Result<(), FemError> {
+    if !v.is_finite() || v < 0.0 || (!allow_zero && v == 0.0) {
+        return Err(FemError::InvalidStructural {
+            element,
+            reason: format!(
+                "{what} is {v}; it must be {}",
+                if allow_zero {
+                    "zero or positive"
+                } else {
+                    "positive"
+                }
+            ),
+        });
+    }
+    Ok(())
+}
+
+impl StructuralElement {
+    /// Checks the element's values: positive moduli, areas and stiffnesses where they act,
+    /// finite everything.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidStructural`] naming the element and the value.
+    pub fn validate(&self) -> Result<(), FemError> {
+        let id = self.id;
+        match &self.kind {
+            StructuralKind::Beam(b) => {
+                check_positive(id, "Young's modulus E", b.e, false)?;
+                check_positive(id, "the shear modulus G", b.g, false)?;
+                check_positive(id, "the density", b.rho, true)?;
+                let s = &b.section;
+                check_positive(id, "the area A", s.area, false)?;
+                check_positive(id, "I1", s.i1, false)?;
+                check_positive(id, "I2", s.i2, false)?;
+                check_positive(id, "the torsion constant J", s.j, false)?;
+                check_positive(id, "the non-structural mass", s.nsm, true)?;
+                if let Some(k) = s.shear
+                    && !(k[0] > 0.0 && k[1] > 0.0)
+                {
+                    // an infinite factor is a shear-rigid plane
+                    return Err(FemError::InvalidStructural {
+                        element: id,
+                        reason: format!("its shear factors {k:?} must be positive"),
+                    });
+                }
+                if b.orientation
+                    .iter()
+                    .chain(b.offsets.iter().flatten())
+                    .any(|v| !v.is_finite())
+                {
+                    return Err(FemError::InvalidStructural {
+                        element: id,
+                        reason: "its orientation vector or offsets are not finite".into(),
+                    });
+                }
+            }
+            StructuralKind::Rod(r) => {
+                check_positive(id, "Young's modulus E", r.e, false)?;
+                check_positive(id, "the density", r.rho, true)?;
+                check_positive(id, "the area A", r.area, false)?;
+                check_positive(id, "the torsion constant J", r.j, true)?;
+                check_positive(id, "the non-structural mass", r.nsm, true)?;
+                if r.j > 0.0 {
+                    check_positive(id, "the shear modulus G", r.g, false)?;
+                }
+            }
+            StructuralKind::Spring(s) => {
+                if !s.k.is_finite() || s.k == 0.0 || !s.ge.is_finite() {
+                    return Err(FemError::InvalidStructural {
+                        element: id,
+                        reason: format!(
+                            "its stiffness is {} (and GE {}): a spring needs a finite, non-zero stiffness",
+                            s.k, s.ge
+                        ),
+                    });
+                }
+            }
+            StructuralKind::Bushing(b) => {
+                if b.k.iter().chain(&b.b).any(|v| !v.is_finite() || *v < 0.0)
+                    || !b.ge.is_finite()
+                    || b.point.iter().flatten().any(|v| !v.is_finite())
+                {
+                    return Err(FemError::InvalidStructural {
+                        element: id,
+                        reason: format!(
+                            "stiffnesses {:?} and damping {:?} must be finite and not negative",
+                            b.k, b.b
+                        ),
+                    });
+                }
+                if b.k.iter().all(|v| *v == 0.0) {
+                    return Err(FemError::InvalidStructural {
+                        element: id,
+                        reason: "it has no stiffness (K1 to K6 all zero or blank)".into(),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The `(node, part)` blocks the element reaches, in its matrices' order (nodes as given, and
+    /// rotations only where the element acts on them).
+    pub fn parts(&self) -> Vec<(usize, Part)> {
+        let both = |n: usize| [(n, Part::Translations), (n, Part::Rotations)];
+        match &self.kind {
+            StructuralKind::Beam(_) => self.nodes.iter().flat_map(|n| both(*n)).collect(),
+            StructuralKind::Rod(r) => {
+                if r.j > 0.0 {
+                    self.nodes.iter().flat_map(|n| both(*n)).collect()
+                } else {
+                    self.nodes
+                        .iter()
+                        .map(|n| (*n, Part::Translations))
+                        .collect()
+                }
+            }
+            StructuralKind::Spring(s) => {
+                let mut v = vec![(s.a.node, s.a.part)];
+                v.extend(s.b.map(|b| (b.node, b.part)));
+                v
+            }
+            StructuralKind::Bushing(b) => {
+                if self.bushing_needs_rotations(b) {
+                    self.nodes.iter().flat_map(|n| both(*n)).collect()
+                } else {
+                    self.nodes
+                        .iter()
+                        .map(|n| (*n, Part::Translations))
+                        .collect()
+                }
+            }
+        }
+    }
+
+    /// A bushing reaches its nodes' rotations when it has a rotational stiffness or acts at a
+    /// point joined to them by rigid arms.
+    fn bushing_needs_rotations(&self, b: &Bushing) -> bool {
+        b.k[3..].iter().any(|v| *v != 0.0) || b.point.is_some()
+    }
+
+    /// The element's mass (kg): `(rho A + nsm) L` for beams and rods (between the nodes, offsets
+    /// aside), zero for springs and bushings.
+    pub fn mass(&self, coords: &[[f64; 3]]) -> f64 {
+        let length = || norm(sub(coords[self.nodes[1]], coords[self.nodes[0]]));
+        match &self.kind {
+            StructuralKind::Beam(b) => {
+                let l = norm(sub(
+                    add(coords[self.nodes[1]], b.offsets[1]),
+                    add(coords[self.nodes[0]], b.offsets[0]),
+                ));
+                (b.rho * b.section.area + b.section.nsm) * l
+            }
+            StructuralKind::Rod(r) => (r.rho * r.area + r.nsm) * length(),
+            StructuralKind::Spring(_) | StructuralKind::Bushing(_) => 0.0,
+        }
+    }
+
+    /// Whether the element acts on its nodes' rotations (so they must carry them).
+    pub fn needs_rotations(&self) -> bool {
+        self.parts().iter().any(|(_, p)| *p == Part::Rotations)
+    }
+
+    /// The element's stiffness and mass (`mass` lumped: half the mass on each node's
+    /// translations, none on rotations, Nastran's lumped convention) at node positions `coords`
+    /// (indexed by internal node).
+    ///
+    /// # Errors
+    /// [`FemError::InvalidStructural`]: invalid values, coincident ends, an orientation vector
+    /// parallel to the axis.
+    pub fn matrices(
+        &self,
+        coords: &[[f64; 3]],
+        mass: MassKind,
+    ) -> Result<StructuralMatrices, FemError> {
+        self.validate()?;
+        let bad = |reason: String| FemError::InvalidStructural {
+            element: self.id,
+            reason,
+        };
+        let parts = self.parts();
+        let nd = 3 * parts.len();
+        match &self.kind {
+            StructuralKind::Beam(b) => {
+                let ends = [
+                    add(coords[self.nodes[0]], b.offsets[0]),
+                    add(coords[self.nodes[1]], b.offsets[1]),
+                ];
+                let (l, axes) = line_axes(ends[0], ends[1], b.orientation).map_err(bad)?;
+                let (kl, ml) = beam_local(b, l, mass);
+                let mut t = vec![0.0; 144];
+                for end in 0..2 {
+                    let e = offset_map(b.offsets[end]);
+                    // local DOFs (R u_end, R theta) = R E (u, theta)
+                    for blk in 0..2 {
+                        for i in 0..3 {
+                            for j in 0..6 {
+                                let v: f64 = (0..3).map(|k| axes[i][k] * e[3 * blk + k][j]).sum();
+                                t[(6 * end + 3 * blk + i) * 12 + 6 * end + j] = v;
+                            }
+                        }
+                    }
+                }
+                let k = congruence(&kl, &t, 12, 12);
+                let m = match mass {
+                    MassKind::Consistent => congruence(&ml, &t, 12, 12),
+                    MassKind::Lumped => ml,
+                };
+                Ok(StructuralMatrices { parts, k, m })
+            }
+            StructuralKind::Rod(r) => {
+                let (a, bpos) = (coords[self.nodes[0]], coords[self.nodes[1]]);
+                let d = sub(bpos, a);
+                let l = norm(d);
+                if !(l > 0.0) {
+                    return Err(bad(format!("its ends coincide (length {l:e})")));
+                }
+                let x = scale(d, 1.0 / l);
+                let mut k = vec![0.0; nd * nd];
+                let mut m = vec![0.0; nd * nd];
+                let ea = r.e * r.area / l;
+                let mass_total = (r.rho * r.area + r.nsm) * l;
+                let torsion = r.j > 0.0;
+                // block offsets of node a's and b's translations (and rotations)
+                let (ta, tb) = if torsion { (0, 6) } else { (0, 3) };
+                for i in 0..3 {
+                    for j in 0..3 {
+                        let v = ea * x[i] * x[j];
+                        k[(ta + i) * nd + ta + j] += v;
+                        k[(tb + i) * nd + tb + j] += v;
+                        k[(ta + i) * nd + tb + j] -= v;
+                        k[(tb + i) * nd + ta + j] -= v;
+                        if torsion {
+                            let gj = r.g * r.j / l * x[i] * x[j];
+                            k[(3 + i) * nd + 3 + j] += gj;
+                            k[(9 + i) * nd + 9 + j] += gj;
+                            k[(3 + i) * nd + 9 + j] -= gj;
+                            k[(9 + i) * nd + 3 + j] -= gj;
+                        }
+                    }
+                    match mass {
+                        MassKind::Consistent => {
+                            m[(ta + i) * nd + ta + i] += mass_total / 3.0;
+                            m[(tb + i) * nd + tb + i] += mass_total / 3.0;
+                            m[(ta + i) * nd + tb + i] += mass_total / 6.0;
+                            m[(tb + i) * nd + ta + i] += mass_total / 6.0;
+                        }
+                        MassKind::Lumped => {
+                            m[(ta + i) * nd + ta + i] += mass_total / 2.0;
+                            m[(tb + i) * nd + tb + i] += mass_total / 2.0;
+                        }
+                    }
+                }
+                if torsion && mass == MassKind::Consistent {
+                    // polar moment of a rod's section: J stands for it (a circular section)
+                    let ip = r.rho * r.j * l;
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            let v = ip * x[i] * x[j];
+                            m[(3 + i) * nd + 3 + j] += v / 3.0;
+                            m[(9 + i) * nd + 9 + j] += v / 3.0;
+                            m[(3 + i) * nd + 9 + j] += v / 6.0;
+                            m[(9 + i) * nd + 3 + j] += v / 6.0;
+                        }
+                    }
+                }
+                Ok(StructuralMatrices { parts, k, m })
+            }
+            StructuralKind::Spring(s) => {
+                let mut g = vec![0.0; nd];
+                g[..3].copy_from_slice(&s.a.direction);
+                if let Some(b) = &s.b {
+                    for i in 0..3 {
+                        g[3 + i] = -b.direction[i];
+                    }
+                }
+                let k: Vec<f64> = (0..nd * nd)
+                    .map(|ij| s.k * g[ij / nd] * g[ij % nd])
+                    .collect();
+                Ok(StructuralMatrices {
+                    parts,
+                    k,
+                    m: vec![0.0; nd * nd],
+                })
+            }
+            StructuralKind::Bushing(b) => {
+                // relative motion at the spring point in the bushing's axes:
+                // delta = R [(u_b + theta_b x (P - x_b)) - (u_a + theta_a x (P - x_a))],
+                // delta_theta = R (theta_b - theta_a); grounded: the b terms are absent
+                let rot = parts.len() == 2 * self.nodes.len();
+                let mut bm = vec![0.0; 6 * nd];
+                for (end, &n) in self.nodes.iter().enumerate() {
+                    let sign = if end == 0 { -1.0 } else { 1.0 };
+                    let e = offset_map(b.point.map_or([0.0; 3], |p| sub(p, coords[n])));
+                    let cols = if rot { 6 } else { 3 };
+                    let base = end * cols;
+                    for i in 0..3 {
+                        for j in 0..cols {
+                            let (mut vt, mut vr) = (0.0, 0.0);
+                            for kx in 0..3 {
+                                vt += b.axes[i][kx] * e[kx][j];
+                                vr += b.axes[i][kx] * e[3 + kx][j];
+                            }
+                            bm[i * nd + base + j] += sign * vt;
+                            bm[(3 + i) * nd + base + j] += sign * vr;
+                        }
+                    }
+                }
+                let d: Vec<f64> = (0..36)
+                    .map(|ij| if ij / 6 == ij % 6 { b.k[ij / 6] } else { 0.0 })
+                    .collect();
+                let k = congruence(&d, &bm, 6, nd);
+                Ok(StructuralMatrices {
+                    parts,
+                    k,
+                    m: vec![0.0; nd * nd],
+                })
+            }
+        }
+    }
+}
+
+/// A beam's local stiffness and mass (12 x 12 on `(u, v, w, theta_x, theta_y, theta_z)` of each
+/// end, local axes): axial, torsion and the two bending planes. Plane 1 (x-y) bends with `I1`
+/// and `theta_z = dv/dx`; plane 2 (x-z) with `I2` and `theta_y = -dw/dx`.
+fn beam_local(b: &Beam, l: f64, mass: MassKind) -> (Vec<f64>, Vec<f64>) {
+    let s = &b.section;
+    let mut k = vec![0.0; 144];
+    let mut m = vec![0.0; 144];
+    let mpl = b.rho * s.area + s.nsm;
+    let put = |a: &mut Vec<f64>, i: usize, j: usize, v: f64| a[i * 12 + j] += v;
+    let ea = b.e * s.area / l;
+    let gj = b.g * s.j / l;
+    for (i, j, sign) in [(0, 0, 1.0), (6, 6, 1.0), (0, 6, -1.0), (6, 0, -1.0)] {
+        put(&mut k, i, j, sign * ea);
+        put(&mut k, i + 3, j + 3, sign * gj);
+    }
+    match mass {
+        MassKind::Lumped => {
+            for end in 0..2 {
+                for i in 0..3 {
+                    put(&mut m, 6 * end + i, 6 * end + i, mpl * l / 2.0);
+                }
+            }
+            // the lumped mass stays on translations: rotations only through k below
+        }
+        MassKind::Consistent => {
+            let ip = b.rho * (s.i1 + s.i2);
+            for (i, j, f) in [(0, 0, 2.0), (6, 6, 2.0), (0, 6, 1.0), (6, 0, 1.0)] {
+                put(&mut m, i, j, f * mpl * l / 6.0);
+                put(&mut m, i + 3, j + 3, f * ip * l / 6.0);
+            }
+        }
+    }
+    // plane 1: (v1, theta_z1, v2, theta_z2) = DOFs (1, 5, 7, 11), signs +
+    // plane 2: (w1, -theta_y1, w2, -theta_y2) = DOFs (2, 4, 8, 10), signs (+, -, +, -)
+    let planes = [
+        (s.i1, 0, [1usize, 5, 7, 11], [1.0, 1.0, 1.0, 1.0]),
+        (s.i2, 1, [2usize, 4, 8, 10], [1.0, -1.0, 1.0, -1.0]),
+    ];
+    for (i_plane, p, dofs, signs) in planes {
+        let (phi, rotary) = match s.shear {
+            Some(kf) => (12.0 * b.e * i_plane / (kf[p] * b.g * s.area * l * l), true),
+            None => (0.0, false),
+        };
+        let r = if rotary { b.rho * i_plane } else { 0.0 };
+        let (kp, mp) = plane_matrices(b.e * i_plane, phi, l, mpl, r);
+        for a in 0..4 {
+            for c in 0..4 {
+                let sg = signs[a] * signs[c];
+                put(&mut k, dofs[a], dofs[c], sg * kp[a][c]);
+                if mass == MassKind::Consistent {
+                    put(&mut m, dofs[a], dofs[c], sg * mp[a][c]);
+                }
+            }
+        }
+    }
+    (k, m)
+}

@@ -1,0 +1,518 @@
+//! Beams, rods, springs and bushings against hand-written matrices, analytic beam theory
+//! (Euler-Bernoulli and Timoshenko) and spring-mass systems solved by hand.
+
+use femu_fem::assembly::MassKind;
+use femu_fem::mesh::Mesh;
+use femu_fem::model::Model;
+use femu_fem::structural::{
+    Beam, BeamSection, Bushing, Part, Rod, Spring, SpringEnd, StructuralElement, StructuralKind,
+    timoshenko_shape,
+};
+use femu_sparse::dense::generalized_symmetric_eigenvalues;
+use femu_sparse::eigen::{EigenOptions, Which};
+use std::f64::consts::PI;
+
+const E: f64 = 210e9;
+const NU: f64 = 0.3;
+const RHO: f64 = 7850.0;
+
+fn g() -> f64 {
+    E / (2.0 * (1.0 + NU))
+}
+
+/// A rectangular section `b x h` (plane 1 bends over the height `h` along local y).
+fn rect(b: f64, h: f64, shear: bool) -> BeamSection {
+    // Roark's torsion constant of a rectangle, a = long side, c = short side
+    let (a, c) = if b > h { (b, h) } else { (h, b) };
+    let j = a * c.powi(3) * (1.0 / 3.0 - 0.21 * c / a * (1.0 - c.powi(4) / (12.0 * a.powi(4))));
+    BeamSection {
+        area: b * h,
+        i1: b * h.powi(3) / 12.0,
+        i2: h * b.powi(3) / 12.0,
+        j,
+        shear: shear.then_some([5.0 / 6.0, 5.0 / 6.0]),
+        nsm: 0.0,
+    }
+}
+
+fn beam(section: BeamSection, orientation: [f64; 3]) -> StructuralKind {
+    StructuralKind::Beam(Beam {
+        e: E,
+        g: g(),
+        rho: RHO,
+        section,
+        orientation,
+        offsets: [[0.0; 3]; 2],
+    })
+}
+
+/// A straight beam of `n` elements from the origin along `dir` (unit), nodes 1..=n+1.
+fn beam_model(n: usize, length: f64, dir: [f64; 3], kind: StructuralKind) -> Model {
+    let mut mesh = Mesh::new();
+    for i in 0..=n {
+        let s = length * i as f64 / n as f64;
+        mesh.add_node(i as u64 + 1, [s * dir[0], s * dir[1], s * dir[2]])
+            .unwrap();
+    }
+    let mut model = Model::new(mesh).unwrap();
+    for i in 0..n {
+        model
+            .add_structural(StructuralElement {
+                id: 100 + i as u64,
+                nodes: vec![i, i + 1],
+                kind,
+            })
+            .unwrap();
+    }
+    model
+}
+
+fn lowest(model: &Model, mass: MassKind, count: usize) -> Vec<f64> {
+    let sys = model.assemble(mass).unwrap();
+    sys.modes(Which::Lowest(count), &EigenOptions::default())
+        .unwrap()
+        .values
+}
+
+fn element_matrices(
+    el: &StructuralElement,
+    coords: &[[f64; 3]],
+) -> (faer::Mat<f64>, faer::Mat<f64>) {
+    let m = el.matrices(coords, MassKind::Consistent).unwrap();
+    let n = 3 * m.parts.len();
+    (
+        faer::Mat::from_fn(n, n, |i, j| m.k[i * n + j]),
+        faer::Mat::from_fn(n, n, |i, j| m.m[i * n + j]),
+    )
+}
+
+/// The closed-form stiffness is the energy of the interdependent shape functions (differentiated
+/// here by central differences, integrated by a 2,000-interval midpoint rule): the shape
+/// functions the mass is built from belong to that stiffness.
+#[test]
+fn the_timoshenko_shape_functions_carry_the_exact_stiffness() {
+    let (l, ei, kga) = (0.7, 3.0e5, 2.0e6);
+    let phi = 12.0 * ei / (kga * l * l);
+    let n = 2000;
+    let h = 1e-6;
+    let mut k = [[0.0; 4]; 4];
+    for s in 0..n {
+        let xi = (s as f64 + 0.5) / n as f64;
+        let (w, t) = timoshenko_shape(xi, l, phi);
+        let (_, tp) = timoshenko_shape(xi + h, l, phi);
+        let (_, tm) = timoshenko_shape(xi - h, l, phi);
+        let (wp, _) = timoshenko_shape(xi + h, l, phi);
+        let (wm, _) = timoshenko_shape(xi - h, l, phi);
+        let _ = w;
+        for a in 0..4 {
+            for b in 0..4 {
+                let kappa = |i: usize| (tp[i] - tm[i]) / (2.0 * h * l);
+                let gamma = |i: usize| (wp[i] - wm[i]) / (2.0 * h * l) - t[i];
+                k[a][b] += l / n as f64 * (ei * kappa(a) * kappa(b) + kga * gamma(a) * gamma(b));
+            }
+        }
+    }
+    let c = ei / ((1.0 + phi) * l.powi(3));
+    let exact = [
+        [12.0, 6.0 * l, -12.0, 6.0 * l],
+        [6.0 * l, (4.0 + phi) * l * l, -6.0 * l, (2.0 - phi) * l * l],
+        [-12.0, -6.0 * l, 12.0, -6.0 * l],
+        [6.0 * l, (2.0 - phi) * l * l, -6.0 * l, (4.0 + phi) * l * l],
+    ];
+    for a in 0..4 {
+        for b in 0..4 {
+            let want = c * exact[a][b];
+            assert!(
+                (k[a][b] - want).abs() < 1e-6 * c * 12.0 * l * l,
+                "K[{a}][{b}] = {} against {want}",
+                k[a][b]
+            );
+        }
+    }
+}
+
+/// A cantilever of one element under a tip load deflects `P L^3 / (3 E I) + P L / (k G A)`
+/// (Timoshenko's flexibility, exact), in both planes of a beam turned in space; axial and
+/// torsional flexibilities are `L / (E A)` and `L / (G J)`.
+#[test]
+fn one_element_cantilever_has_the_exact_flexibility() {
+    let sec = rect(0.03, 0.05, true);
+    let dir = [1.0 / 3f64.sqrt(), 1.0 / 3f64.sqrt(), 1.0 / 3f64.sqrt()];
+    let v = [0.0, 0.0, 1.0];
+    let l = 0.4;
+    let el = StructuralElement {
+        id: 1,
+        nodes: vec![0, 1],
+        kind: beam(sec, v),
+    };
+    let coords = [[0.0; 3], [l * dir[0], l * dir[1], l * dir[2]]];
+    let (k, _) = element_matrices(&el, &coords);
+    // free end: rows 6..12
+    let kff = nalgebra::DMatrix::from_fn(6, 6, |i, j| k[(6 + i, 6 + j)]);
+    let flex = kff.try_inverse().unwrap();
+    let (_, axes) = femu_fem::structural::line_axes(coords[0], coords[1], v).unwrap();
+    let ga = g() * sec.area * 5.0 / 6.0;
+    let cases = [
+        (axes[0], 0, l / (E * sec.area)),
+        (axes[1], 0, l.powi(3) / (3.0 * E * sec.i1) + l / ga),
+        (axes[2], 0, l.powi(3) / (3.0 * E * sec.i2) + l / ga),
+        (axes[0], 3, l / (g() * sec.j)),
+    ];
+    for (d, block, want) in cases {
+        let mut got = 0.0;
+        for i in 0..3 {
+            for j in 0..3 {
+                got += d[i] * flex[(block + i, block + j)] * d[j];
+            }
+        }
+        assert!((got / want - 1.0).abs() < 1e-10, "{got} against {want}");
+    }
+}
+
+/// With `phi = 0` the consistent mass is the textbook Euler-Bernoulli one, `rho A L / 420 [[156,
+/// 22L, 54, -13L], ...]`, and the axial block `rho A L / 6 [[2, 1], [1, 2]]`.
+#[test]
+fn euler_bernoulli_mass_is_the_textbook_matrix() {
+    let sec = rect(0.02, 0.04, false);
+    let l = 0.5;
+    let el = StructuralElement {
+        id: 1,
+        nodes: vec![0, 1],
+        kind: beam(sec, [0.0, 1.0, 0.0]),
+    };
+    let (_, m) = element_matrices(&el, &[[0.0; 3], [l, 0.0, 0.0]]);
+    let c = RHO * sec.area * l / 420.0;
+    // plane 1: (v1, theta_z1, v2, theta_z2) = (1, 5, 7, 11)
+    let book = [
+        [156.0, 22.0 * l, 54.0, -13.0 * l],
+        [22.0 * l, 4.0 * l * l, 13.0 * l, -3.0 * l * l],
+        [54.0, 13.0 * l, 156.0, -22.0 * l],
+        [-13.0 * l, -3.0 * l * l, -22.0 * l, 4.0 * l * l],
+    ];
+    let d = [1, 5, 7, 11];
+    for a in 0..4 {
+        for b in 0..4 {
+            assert!(
+                (m[(d[a], d[b])] - c * book[a][b]).abs() < 1e-12 * c * 156.0,
+                "M[{a}][{b}]"
+            );
+        }
+    }
+    let axial = RHO * sec.area * l / 6.0;
+    assert!((m[(0, 0)] - 2.0 * axial).abs() < 1e-12 * axial);
+    assert!((m[(0, 6)] - axial).abs() < 1e-12 * axial);
+}
+
+/// A free beam element turned in space, with offsets, has exactly six zero eigenvalues (dense,
+/// against its mass), and its rigid translations carry `rho A L`.
+#[test]
+fn a_free_beam_has_six_rigid_body_modes() {
+    let sec = BeamSection {
+        nsm: 0.7,
+        ..rect(0.02, 0.05, true)
+    };
+    let el = StructuralElement {
+        id: 1,
+        nodes: vec![0, 1],
+        kind: StructuralKind::Beam(Beam {
+            e: E,
+            g: g(),
+            rho: RHO,
+            section: sec,
+            orientation: [0.3, -1.0, 0.2],
+            offsets: [[0.0, 0.01, 0.02], [0.01, -0.02, 0.0]],
+        }),
+    };
+    let coords = [[0.1, 0.2, 0.3], [0.5, 0.6, 0.1]];
+    let (k, m) = element_matrices(&el, &coords);
+    let vals = generalized_symmetric_eigenvalues(k.as_ref(), m.as_ref()).unwrap();
+    let top = vals.last().unwrap();
+    let zeros = vals.iter().filter(|v| v.abs() < 1e-9 * top).count();
+    assert_eq!(zeros, 6, "{vals:?}");
+    let ends: [[f64; 3]; 2] = [[0.1, 0.21, 0.32], [0.51, 0.58, 0.1]];
+    let l = ((0..3)
+        .map(|i| (ends[1][i] - ends[0][i]).powi(2))
+        .sum::<f64>())
+    .sqrt();
+    let total = (RHO * sec.area + 0.7) * l;
+    for dir in 0..3 {
+        let u: Vec<f64> = (0..12)
+            .map(|i| if i % 6 == dir { 1.0 } else { 0.0 })
+            .collect();
+        let mut mu = 0.0;
+        for i in 0..12 {
+            for j in 0..12 {
+                mu += u[i] * m[(i, j)] * u[j];
+            }
+        }
+        assert!((mu / total - 1.0).abs() < 1e-12, "{mu} against {total}");
+    }
+}
+
+/// A cantilever's bending frequencies converge to Euler-Bernoulli's, `(beta_n L)^2 sqrt(E I /
+/// (rho A L^4))` with `beta L = 1.8751, 4.6941, 7.8548, 10.9955` (roots of `cos cosh = -1`), in both
+/// planes of a beam along a skew axis.
+#[test]
+fn cantilever_frequencies_converge_to_euler_bernoulli() {
+    let (b, h, l) = (0.01, 0.02, 1.0);
+    let sec = rect(b, h, false);
+    let dir = [0.6, 0.0, 0.8];
+    let mut model = beam_model(40, l, dir, beam(sec, [0.0, 1.0, 0.0]));
+    model.fix_node_dofs(1, &[0, 1, 2, 3, 4, 5]).unwrap();
+    let vals = lowest(&model, MassKind::Consistent, 6);
+    // cos(x) cosh(x) = -1 solved here by bisection
+    let root = |lo: f64, hi: f64| {
+        let f = |x: f64| x.cos() * x.cosh() + 1.0;
+        let (mut a, mut c) = (lo, hi);
+        for _ in 0..200 {
+            let m = 0.5 * (a + c);
+            if f(a) * f(m) <= 0.0 { c = m } else { a = m }
+        }
+        0.5 * (a + c)
+    };
+    let betas = [
+        root(1.0, 3.0),
+        root(4.0, 5.5),
+        root(7.0, 9.0),
+        root(10.0, 12.0),
+    ];
+    let mut expected: Vec<f64> = Vec::new();
+    for i in [sec.i1, sec.i2] {
+        for bl in betas {
+            expected.push(bl.powi(4) * E * i / (RHO * sec.area * l.powi(4)));
+        }
+    }
+    // the first torsion mode and the axial mode are far above these six
+    expected.sort_by(f64::total_cmp);
+    for (got, want) in vals.iter().zip(&expected[..6]) {
+        // 6.7e-9 on the first two, 2.6e-7 and 2.1e-6 on the next (the error falls as h^4)
+        assert!((got / want - 1.0).abs() < 1e-5, "{got} against {want}");
+    }
+}
+
+/// A simply supported deep beam (L/h = 5) against Timoshenko's frequency equation with shear and
+/// rotary inertia, `(rho A w^2 - k G A q^2)(rho I w^2 - E I q^2 - k G A) = (k G A q)^2` for
+/// `q = n pi / L`, which differs from Euler-Bernoulli's by 3-13 % on these modes.
+#[test]
+fn deep_simply_supported_beam_matches_timoshenko() {
+    let (b, h, l) = (0.1, 0.2, 1.0);
+    let sec = rect(b, h, true);
+    let mut model = beam_model(120, l, [1.0, 0.0, 0.0], beam(sec, [0.0, 1.0, 0.0]));
+    model.fix_node_dofs(1, &[0, 1, 2, 3]).unwrap();
+    model.fix_node_dofs(121, &[1, 2]).unwrap();
+    let vals = lowest(&model, MassKind::Consistent, 6);
+    let kga = 5.0 / 6.0 * g() * sec.area;
+    let timoshenko = |i: f64, n: f64| {
+        let q = n * PI / l;
+        // a x^2 + b x + c = 0 in x = w^2
+        let a = RHO * sec.area * RHO * i;
+        let bb = -(RHO * sec.area * (E * i * q * q + kga) + kga * q * q * RHO * i);
+        let c = kga * q * q * E * i * q * q;
+        (-bb - (bb * bb - 4.0 * a * c).sqrt()) / (2.0 * a)
+    };
+    let eb = |i: f64, n: f64| (n * PI / l).powi(4) * E * i / (RHO * sec.area);
+    let mut bending: Vec<(f64, f64)> = Vec::new();
+    for i in [sec.i1, sec.i2] {
+        for n in [1.0, 2.0, 3.0] {
+            bending.push((timoshenko(i, n), eb(i, n)));
+        }
+    }
+    bending.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // the bending modes among the model's lowest (the axial and torsional ones are interleaved
+    // above the first few): each Timoshenko value is matched by one computed value
+    for (want, eb) in bending.iter().take(3) {
+        let got = vals
+            .iter()
+            .min_by(|a, b| (*a / want - 1.0).abs().total_cmp(&(*b / want - 1.0).abs()))
+            .unwrap();
+        // the shear strain is constant in an element, so the error falls as h^2: 1.4e-6, 5.1e-6
+        // and 2.0e-5 on these three with 120 elements, four times that with 60
+        assert!((got / want - 1.0).abs() < 3e-5, "{got} against {want}");
+        assert!(
+            (eb / want - 1.0).abs() > 0.03,
+            "shear matters here: {eb} {want}"
+        );
+    }
+}
+
+/// Two masses on a spring along a skew direction: `w^2 = k (m1 + m2) / (m1 m2)`; the same
+/// spring to ground under one mass: `w^2 = k / m`; a grounded bushing with rotated axes under a
+/// rigid mass with inertia: `k_i / m` along each axis and `k_{3+i} / J_i` about it.
+#[test]
+fn springs_and_bushings_match_hand_solved_oscillators() {
+    let d = [0.0, 0.6, 0.8];
+    let mut mesh = Mesh::new();
+    mesh.add_node(1, [0.0; 3]).unwrap();
+    mesh.add_node(2, [0.0, 0.3, 0.4]).unwrap();
+    let mut model = Model::new(mesh).unwrap();
+    let (k, m1, m2) = (4.0e4, 2.0, 3.0);
+    let end = |node| SpringEnd {
+        node,
+        part: Part::Translations,
+        direction: d,
+    };
+    model
+        .add_structural(StructuralElement {
+            id: 1,
+            nodes: vec![0, 1],
+            kind: StructuralKind::Spring(Spring {
+                k,
+                ge: 0.0,
+                a: end(0),
+                b: Some(end(1)),
+            }),
+        })
+        .unwrap();
+    model.add_point_mass(1, m1).unwrap();
+    model.add_point_mass(2, m2).unwrap();
+    let vals = lowest(&model, MassKind::Consistent, 6);
+    // five rigid motions (the spring acts along d only), one oscillation
+    let want = k * (m1 + m2) / (m1 * m2);
+    assert!((vals[5] / want - 1.0).abs() < 1e-10, "{vals:?}");
+    assert!(vals[4].abs() < 1e-8 * want);
+
+    // a bushing to ground, axes turned about z by 30 degrees, at the node
+    let (c, s) = ((PI / 6.0).cos(), (PI / 6.0).sin());
+    let axes = [[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]];
+    let kb = [1.0e4, 2.0e4, 3.0e4, 500.0, 700.0, 900.0];
+    let mut mesh = Mesh::new();
+    mesh.add_node(7, [0.2, 0.1, 0.0]).unwrap();
+    let mut model = Model::new(mesh).unwrap();
+    model
+        .add_structural(StructuralElement {
+            id: 5,
+            nodes: vec![0],
+            kind: StructuralKind::Bushing(Bushing {
+                k: kb,
+                b: [0.0; 6],
+                ge: 0.0,
+                axes,
+                point: None,
+            }),
+        })
+        .unwrap();
+    // inertia diagonal in the bushing's axes: J = R^T diag(j) R in basic axes
+    let jd = [0.5, 0.7, 0.9];
+    let mut jb = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            jb[i][j] = (0..3).map(|a| axes[a][i] * jd[a] * axes[a][j]).sum();
+        }
+    }
+    let mass = 10.0;
+    model.add_rigid_mass(7, mass, [0.0; 3], jb).unwrap();
+    let vals = lowest(&model, MassKind::Consistent, 6);
+    let mut want: Vec<f64> = (0..3)
+        .map(|i| kb[i] / mass)
+        .chain((0..3).map(|i| kb[3 + i] / jd[i]))
+        .collect();
+    want.sort_by(f64::total_cmp);
+    for (g, w) in vals.iter().zip(&want) {
+        assert!((g / w - 1.0).abs() < 1e-10, "{vals:?} against {want:?}");
+    }
+}
+
+/// A rod's axial frequencies, fixed-free: `w_n = (2n - 1) pi / (2 L) sqrt(E / rho)`, converged
+/// with 40 consistent-mass elements (error of order `(h w)^2`); torsion of the same rod with
+/// `J = I_p` (a circular section) the same with `G`. The rotations no element stiffens are fixed
+/// by the model, so that nothing is singular.
+#[test]
+fn rod_axial_and_torsion_frequencies_converge() {
+    let (r, l) = (0.01, 2.0);
+    let area = PI * r * r;
+    let j = PI * r.powi(4) / 2.0;
+    let kind = StructuralKind::Rod(Rod {
+        e: E,
+        g: g(),
+        rho: RHO,
+        area,
+        j,
+        nsm: 0.0,
+    });
+    let mut model = beam_model(40, l, [0.0, 0.0, 1.0], kind);
+    model.fix_node_dofs(1, &[0, 1, 2, 3, 4, 5]).unwrap();
+    // transverse translations have no stiffness: fixed here; the rotations about x and y have
+    // none either, and the model fixes them itself (as Nastran's AUTOSPC would)
+    for n in 2..=41 {
+        model.fix_node_dofs(n, &[0, 1]).unwrap();
+    }
+    let vals = lowest(&model, MassKind::Consistent, 4);
+    let mut want: Vec<f64> = [1.0, 3.0]
+        .iter()
+        .flat_map(|k| {
+            let w = k * PI / (2.0 * l);
+            [w * w * E / RHO, w * w * g() / RHO]
+        })
+        .collect();
+    want.sort_by(f64::total_cmp);
+    for (got, w) in vals.iter().zip(&want) {
+        assert!((got / w - 1.0).abs() < 2e-3, "{got} against {w}");
+    }
+}
+
+/// Bad values and geometry are refused with the element's id: a zero area, an orientation
+/// vector along the axis, a bushing without stiffness, coincident beam ends, a duplicate id.
+#[test]
+fn bad_structural_elements_are_refused_by_id() {
+    let mut mesh = Mesh::new();
+    mesh.add_node(1, [0.0; 3]).unwrap();
+    mesh.add_node(2, [1.0, 0.0, 0.0]).unwrap();
+    mesh.add_node(3, [0.0; 3]).unwrap();
+    let mut model = Model::new(mesh).unwrap();
+    let try_add = |model: &mut Model, id: u64, nodes: Vec<usize>, kind| {
+        model
+            .add_structural(StructuralElement { id, nodes, kind })
+            .map_err(|e| e.to_string())
+    };
+    let zero_area = BeamSection {
+        area: 0.0,
+        ..rect(0.01, 0.01, false)
+    };
+    let e = try_add(&mut model, 9, vec![0, 1], beam(zero_area, [0.0, 1.0, 0.0])).unwrap_err();
+    assert!(e.contains("element 9") && e.contains("area"), "{e}");
+    let e = try_add(
+        &mut model,
+        9,
+        vec![0, 1],
+        beam(rect(0.01, 0.01, false), [2.0, 0.0, 0.0]),
+    )
+    .unwrap_err();
+    assert!(e.contains("parallel"), "{e}");
+    let e = try_add(
+        &mut model,
+        9,
+        vec![0, 2],
+        beam(rect(0.01, 0.01, false), [0.0, 1.0, 0.0]),
+    )
+    .unwrap_err();
+    assert!(e.contains("coincide"), "{e}");
+    let e = try_add(
+        &mut model,
+        9,
+        vec![0, 2],
+        StructuralKind::Bushing(Bushing {
+            k: [0.0; 6],
+            b: [1.0; 6],
+            ge: 0.0,
+            axes: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            point: None,
+        }),
+    )
+    .unwrap_err();
+    assert!(e.contains("no stiffness"), "{e}");
+    try_add(
+        &mut model,
+        9,
+        vec![0, 1],
+        beam(rect(0.01, 0.01, false), [0.0, 1.0, 0.0]),
+    )
+    .unwrap();
+    let e = try_add(
+        &mut model,
+        9,
+        vec![0, 1],
+        beam(rect(0.01, 0.01, false), [0.0, 1.0, 0.0]),
+    )
+    .unwrap_err();
+    assert!(e.contains("duplicate element id 9"), "{e}");
+}
