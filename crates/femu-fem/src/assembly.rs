@@ -826,7 +826,12 @@ impl Assembler {
                 continue;
             };
             if mass == MassKind::Lumped && !self.lumped_on_pattern() {
-                self.scatter_lumped(&[r.node], |_, c| r.matrix[c][c], |at, v| ms.add(at, v));
+                // the diagonal: the mass on the translations, the inertia on the rotations
+                self.scatter_lumped(
+                    &[r.node, rp],
+                    |a, c| r.matrix[3 * a + c][3 * a + c],
+                    |at, v| ms.add(at, v),
+                );
                 continue;
             }
             let local: Vec<f64> = r.matrix.iter().flatten().copied().collect();

@@ -58,6 +58,10 @@ pub struct Beam {
     pub orientation: [f64; 3],
     /// The offsets (basic frame) from each node to its end of the beam, rigid.
     pub offsets: [[f64; 3]; 2],
+    /// Whether the lumped mass carries the section's polar inertia `rho (I1 + I2) L / 2` on each
+    /// end's rotation about the axis (Nastran's CBEAM does, its CBAR does not); the lumped mass
+    /// never carries bending rotary inertia.
+    pub lumped_torsion: bool,
 }
 
 /// A rod: axial stiffness `E A` and, when `J > 0`, torsion `G J`; no bending.
@@ -513,7 +517,22 @@ impl StructuralElement {
                 let k = congruence(&kl, &t, 12, 12);
                 let m = match mass {
                     MassKind::Consistent => congruence(&ml, &t, 12, 12),
-                    MassKind::Lumped => ml,
+                    // a lumped translational mass is the same in every frame; the torsional
+                    // inertia turns with the axis (its diagonal in the basic frame is kept, the
+                    // lumped mass being diagonal)
+                    MassKind::Lumped => {
+                        let mut d = ml;
+                        if b.lumped_torsion {
+                            for end in 0..2 {
+                                let j = d[(6 * end + 3) * 12 + 6 * end + 3];
+                                for i in 0..3 {
+                                    d[(6 * end + 3 + i) * 12 + 6 * end + 3 + i] =
+                                        j * axes[0][i] * axes[0][i];
+                                }
+                            }
+                        }
+                        d
+                    }
                 };
                 Ok(StructuralMatrices { parts, k, m })
             }
@@ -650,8 +669,15 @@ fn beam_local(b: &Beam, l: f64, mass: MassKind) -> (Vec<f64>, Vec<f64>) {
                 for i in 0..3 {
                     put(&mut m, 6 * end + i, 6 * end + i, mpl * l / 2.0);
                 }
+                if b.lumped_torsion {
+                    put(
+                        &mut m,
+                        6 * end + 3,
+                        6 * end + 3,
+                        b.rho * (s.i1 + s.i2) * l / 2.0,
+                    );
+                }
             }
-            // the lumped mass stays on translations: rotations only through k below
         }
         MassKind::Consistent => {
             let ip = b.rho * (s.i1 + s.i2);

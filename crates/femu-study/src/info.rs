@@ -34,6 +34,29 @@ fn mesh_lines(s: &mut String, mesh: &Mesh) {
     }
 }
 
+/// The beams, rods, springs and bushings, when there are any, and their sets.
+fn structural_lines(s: &mut String, model: &femu_fem::model::Model) {
+    use femu_fem::structural::StructuralKind;
+    let all = model.structural();
+    if all.is_empty() {
+        return;
+    }
+    let count = |f: fn(&StructuralKind) -> bool| all.iter().filter(|e| f(&e.kind)).count();
+    let _ = writeln!(
+        s,
+        "structural elements: {} ({} beams, {} rods, {} springs, {} bushings; nodes with rotations: {})",
+        all.len(),
+        count(|k| matches!(k, StructuralKind::Beam(_))),
+        count(|k| matches!(k, StructuralKind::Rod(_))),
+        count(|k| matches!(k, StructuralKind::Spring(_))),
+        count(|k| matches!(k, StructuralKind::Bushing(_))),
+        model.rotation_nodes().len()
+    );
+    for (name, set) in model.structural_sets() {
+        let _ = writeln!(s, "element set {name}: {} structural elements", set.len());
+    }
+}
+
 /// The 8-node bricks built with incompatible modes, when there are any.
 fn formulation_line(s: &mut String, model: &femu_fem::model::Model) {
     let n = (0..model.mesh().element_count())
@@ -256,11 +279,12 @@ fn describe_nastran(
     let _ = writeln!(s, "format: Nastran bulk data");
     let model = &deck.model;
     mesh_lines(s, model.mesh());
+    structural_lines(s, model);
     formulation_line(s, model);
     let _ = writeln!(
         s,
         "point masses (CONM2): {}; constrained DOFs: {} (SPC set {}, permanent constraints of {} grids); dependent DOFs (RBE2, RBE3, blank mid-side grids): {}",
-        model.point_masses().len(),
+        model.point_masses().len() + model.rigid_masses().len(),
         model.fixed_dofs().count(),
         deck.spc_set
             .map_or("none selected".to_string(), |s| s.to_string()),

@@ -327,6 +327,14 @@ pub(crate) fn units_hint(model: &Model, path: &Path) -> Option<String> {
             seen.2.min(m.density),
         );
     }
+    for st in model.structural() {
+        let (e, rho) = match &st.kind {
+            femu_fem::structural::StructuralKind::Beam(b) => (b.e, b.rho),
+            femu_fem::structural::StructuralKind::Rod(r) => (r.e, r.rho),
+            _ => continue,
+        };
+        seen = (seen.0.min(e), seen.1.max(e), seen.2.min(rho));
+    }
     let (e_min, _, rho) = seen;
     if !e_min.is_finite() || !rho.is_finite() {
         return None;
@@ -360,6 +368,11 @@ fn leave_out_orphans(
     let mut used = model.constrained_nodes();
     for el in mesh.elements() {
         for n in el.nodes {
+            used[*n] = true;
+        }
+    }
+    for s in model.structural() {
+        for n in &s.nodes {
             used[*n] = true;
         }
     }

@@ -43,6 +43,7 @@ fn beam(section: BeamSection, orientation: [f64; 3]) -> StructuralKind {
         section,
         orientation,
         offsets: [[0.0; 3]; 2],
+        lumped_torsion: false,
     })
 }
 
@@ -221,6 +222,7 @@ fn a_free_beam_has_six_rigid_body_modes() {
             section: sec,
             orientation: [0.3, -1.0, 0.2],
             offsets: [[0.0, 0.01, 0.02], [0.01, -0.02, 0.0]],
+            lumped_torsion: false,
         }),
     };
     let coords = [[0.1, 0.2, 0.3], [0.5, 0.6, 0.1]];

@@ -85,6 +85,11 @@ pub(super) fn add_masses(
             connected[*n] = true;
         }
     }
+    for s in model.structural() {
+        for n in &s.nodes {
+            connected[*n] = true;
+        }
+    }
     for c in conm2 {
         let g = c.id(1, "G")?;
         let m = c
@@ -96,7 +101,7 @@ pub(super) fn add_masses(
         };
         if !connected[gi] {
             let text = format!(
-                "{} is on GRID {g}, which no solid element or rigid link connects: it would have no stiffness",
+                "{} is on GRID {g}, which no element or rigid link connects: it would have no stiffness",
                 c.field(0)
             );
             if lenient {

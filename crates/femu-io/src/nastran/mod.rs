@@ -47,6 +47,7 @@ mod geometry;
 mod links;
 mod masses;
 mod materials;
+mod structural;
 
 use crate::{IoError, Warning};
 pub use cards::real;
@@ -97,7 +98,7 @@ const NO_EFFECT: &[&str] = &[
     "TABLED2", "TABLED3", "TABLED4", "TABDMP1", "FREQ", "FREQ1", "FREQ2", "GRAV", "TEMP", "TEMPD",
     "PLOAD", "PLOAD2", "PLOAD4", "EIGR", "EIGRL", "SPOINT", "DAREA", "NSM", "SET1", "DESVAR",
     "DRESP1", "DCONSTR", "MONPNT1", "ASET", "ASET1", "OMIT", "OMIT1", "SUPORT", "SUPORT1",
-    "MDLPRM", "LSEQ", "RLOAD1", "RLOAD2",
+    "MDLPRM", "LSEQ", "RLOAD1", "RLOAD2", "USET", "USET1",
 ];
 
 /// Cards that change `K` or `M` and that femu cannot model yet, with what they are.
@@ -110,21 +111,22 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("CTRIAR", "shells"),
     ("PSHELL", "shells"),
     ("PCOMP", "shells"),
-    ("CBAR", "beams"),
-    ("CBEAM", "beams"),
-    ("CROD", "rods"),
-    ("CONROD", "rods"),
-    ("PBAR", "beams"),
-    ("PBARL", "beams"),
-    ("PBEAM", "beams"),
-    ("PBEAML", "beams"),
-    ("PROD", "rods"),
-    ("CELAS1", "springs"),
-    ("CELAS2", "springs"),
-    ("CBUSH", "springs"),
-    ("PELAS", "springs"),
-    ("PBUSH", "springs"),
     ("CONM1", "general mass matrices"),
+    ("CELAS3", "scalar springs on scalar points"),
+    ("CELAS4", "scalar springs on scalar points"),
+    ("CDAMP1", "scalar dampers"),
+    ("CDAMP2", "scalar dampers"),
+    ("CVISC", "viscous dampers"),
+    ("PVISC", "viscous dampers"),
+    ("CBUSH1D", "one-dimensional bushings"),
+    ("PBUSH1D", "one-dimensional bushings"),
+    ("CTUBE", "tubes"),
+    ("PTUBE", "tubes"),
+    ("CBEND", "curved beams"),
+    ("PBEND", "curved beams"),
+    ("PBCOMP", "composite beams"),
+    ("PBRSECT", "arbitrary beam sections"),
+    ("PBMSECT", "arbitrary beam sections"),
     ("CMASS1", "scalar masses"),
     ("CMASS2", "scalar masses"),
     ("RBAR", "rigid links"),
@@ -250,6 +252,7 @@ struct Sorted<'a> {
     spcs: Vec<&'a Card>,
     conm2: Vec<&'a Card>,
     links: Vec<&'a Card>,
+    structural: structural::StructuralCards<'a>,
     /// `EIGRL` and `EIGR` cards by set id.
     methods: BTreeMap<i64, &'a Card>,
     wtmass: f64,
@@ -311,8 +314,10 @@ fn known_cards() -> Vec<&'static str> {
     let mut v: Vec<&'static str> = vec![
         "GRID", "GRDSET", "CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S", "CHEXA",
         "CPENTA", "CTETRA", "CPYRAM", "PSOLID", "MAT1", "MAT9", "SPC", "SPC1", "SPCADD", "CONM2",
-        "RBE2", "RBE3", "PARAM", "EIGRL", "EIGR",
+        "RBE2", "RBE3", "PARAM", "EIGRL", "EIGR", "BAROR", "BEAMOR",
     ];
+    v.extend(structural::ELEMENTS);
+    v.extend(structural::PROPERTIES);
     v.extend(NO_EFFECT);
     v.extend(UNSUPPORTED.iter().map(|(n, _)| *n));
     v.extend(OTHER_SOLUTIONS.iter().map(|(n, _)| *n));
@@ -371,6 +376,7 @@ fn sort<'a>(
                 }
             }
             "PARAM" => param(c, &mut s, &mut warned, warnings)?,
+            _ if s.structural.take(c)? => {}
             name => {
                 if let Some((card, kind)) = UNSUPPORTED.iter().find(|(n, _)| *n == name) {
                     let e = unsupported.entry(kind).or_insert((0, Vec::new(), c));
@@ -426,7 +432,7 @@ fn sort<'a>(
             .min_by_key(|c| c.line)
             .expect("non-empty");
         let text = format!(
-            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, CONM2 point masses, RBE2 and RBE3 links and SPC constraints",
+            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, bars and beams (CBAR, CBEAM with PBAR, PBARL, PBEAM, PBEAML), rods (CROD, CONROD), springs and bushings (CELAS1, CELAS2, CBUSH), CONM2 masses, RBE2 and RBE3 links and SPC constraints",
             list.join(", ")
         );
         if options.lenient {
@@ -711,11 +717,11 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
     } = grids_into_mesh(&mut geometry)?;
     let max_grid = geometry.grid_of.keys().copied().max().unwrap_or(0);
     let els = elements::add_elements(&sorted.elements, &mut mesh, max_grid)?;
-    if mesh.element_count() == 0 {
+    if mesh.element_count() == 0 && sorted.structural.elements.is_empty() {
         return Err(IoError::Content {
             path: path.to_path_buf(),
             reason: format!(
-                "the deck defines {} GRID{} and no solid element (CHEXA, CPENTA, CTETRA, CPYRAM)",
+                "the deck defines {} GRID{} and no element (solids: CHEXA, CPENTA, CTETRA, CPYRAM; bars, beams, rods, springs: CBAR, CBEAM, CROD, CONROD, CELAS1, CELAS2, CBUSH)",
                 mesh.node_count(),
                 if mesh.node_count() == 1 { "" } else { "s" }
             ),
@@ -727,6 +733,18 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
         &sorted,
         &mut geometry,
         path,
+        &mut warnings,
+    )?;
+    structural::add_structural(
+        &sorted.structural,
+        &mut model,
+        &mut structural::Context {
+            geometry: &mut geometry,
+            materials: &sorted.materials,
+            turned: &turned,
+            wtmass: sorted.wtmass,
+            mat1: HashMap::new(),
+        },
         &mut warnings,
     )?;
     for (id, ga, gb, label) in &els.ties {

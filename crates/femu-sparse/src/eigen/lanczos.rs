@@ -74,6 +74,14 @@ pub(super) struct Lanczos<'p, 'a> {
     /// Set when the hook of [`with_interrupt`] asked to stop.
     pub(super) stop: bool,
     pub(super) rng: u64,
+    /// Whether `M` has a zero (or negative) diagonal entry: massless DOFs (a lumped beam's
+    /// rotations). Random vectors are then purified, `OP r` instead of `r`, so that the basis
+    /// stays in the range of `OP`, where the `M` inner product is definite (Nour-Omid, Parlett,
+    /// Ericsson and Jensen, "How to implement the spectral transformation", 1987).
+    pub(super) m_singular: bool,
+    /// The dimension of the space the basis can span: `n`, or with massless DOFs the number of
+    /// DOFs with mass (the finite eigenvalues are no more).
+    pub(super) rank: usize,
 }
 
 impl<'p, 'a> Lanczos<'p, 'a> {
@@ -100,7 +108,17 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             probed: None,
             stop: false,
             rng: params.seed,
+            m_singular: false,
+            rank: pencil.dim(),
         };
+        let with_mass = crate::csc::diagonal(pencil.m)
+            .iter()
+            .filter(|d| **d > 0.0)
+            .count();
+        if with_mass < lanczos.n {
+            lanczos.m_singular = true;
+            lanczos.rank = with_mass;
+        }
         for k in known {
             lanczos.x.push(&k.x);
             lanczos.mx.push(&k.mx);
@@ -112,6 +130,20 @@ impl<'p, 'a> Lanczos<'p, 'a> {
     }
 
     pub(super) fn random_vector(&mut self) -> Vec<f64> {
+        let r = self.plain_random_vector();
+        if !self.m_singular {
+            return r;
+        }
+        let Some(op) = self.op.as_ref() else {
+            return r;
+        };
+        let image = self.m_times(&r);
+        let mut mr = faer::Mat::from_fn(self.n, 1, |i, _| image[i]);
+        op.solve_in_place(mr.as_mut());
+        (0..self.n).map(|i| mr[(i, 0)]).collect()
+    }
+
+    fn plain_random_vector(&mut self) -> Vec<f64> {
         (0..self.n)
             .map(|_| {
                 self.rng = self.rng.wrapping_add(0x9E37_79B9_7F4A_7C15);
@@ -267,7 +299,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         stats: &mut EigenStats,
     ) -> usize {
         let p = self.params.block_size.max(1);
-        let cap = self.n - self.values.len();
+        let cap = self.rank.saturating_sub(self.values.len());
         while applied < basis.len() && applied < max_basis {
             let hi = (applied + p).min(basis.len()).min(max_basis);
             let block = hi - applied;
@@ -346,7 +378,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         before: &[f64],
     ) {
         let (len0, block) = (coef0.nrows(), coef0.ncols());
-        let cap = self.n - self.values.len();
+        let cap = self.rank.saturating_sub(self.values.len());
         // near dependence: CGS2 of each column against the block's columns before it, then
         // M-normalised, a vanished column replaced
         let mut kept = 0;
@@ -425,11 +457,11 @@ impl<'p, 'a> Lanczos<'p, 'a> {
         let room = self.basis_size(count).max(size) + p;
         basis.reserve(room);
         mbasis.reserve(room);
-        for _ in 0..p.min(self.n) {
+        for _ in 0..p.min(self.rank) {
             let r = self.random_vector();
             self.append(r, &mut basis, &mut mbasis);
         }
-        let max_basis = size.min(self.n);
+        let max_basis = size.min(self.rank);
         let m = self.expand(&mut basis, &mut mbasis, &mut h, 0, max_basis, stats);
         if self.stop {
             return Vec::new();
@@ -461,7 +493,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
     /// rigid-body modes given, 73 solved vectors and no restart at 59 columns, 75 at 77.
     pub(super) fn basis_size(&self, want: usize) -> usize {
         let p = self.params.block_size.max(1);
-        let cap = self.n - self.values.len();
+        let cap = self.rank.saturating_sub(self.values.len());
         if self.params.max_basis > 0 {
             self.params.max_basis
         } else {
@@ -500,7 +532,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             if need == 0 {
                 return Ok(());
             }
-            let cap = self.n - self.values.len();
+            let cap = self.rank.saturating_sub(self.values.len());
             let max_basis = self.basis_size(want);
             // the whole basis at once (measured: 50 MB of the peak at 47,628 DOF when the basis
             // and its images doubled from 64 to 128 columns)

@@ -1,0 +1,886 @@
+//! Bars, beams, rods, springs and bushings: `CBAR` (`PBAR`, `PBARL`), `CBEAM` (`PBEAM`,
+//! `PBEAML`, prismatic), `CROD` (`PROD`), `CONROD`, `CELAS1` (`PELAS`), `CELAS2`, `CBUSH`
+//! (`PBUSH`), with `BAROR` and `BEAMOR` defaults, read as the Quick Reference Guide defines them
+//! (cited by card) into femu's structural elements ([`femu_fem::structural`]). What femu cannot
+//! represent is refused with card and line: pin flags, tapered beams, warping, shear-centre and
+//! mass offsets, products of inertia, offsets in the element frame, scalar points.
+
+use super::cards::Card;
+use super::geometry::Geometry;
+use crate::{IoError, Warning};
+use femu_fem::model::Model;
+use femu_fem::structural::{
+    Beam, BeamSection, Bushing, Part, Rod, Spring, SpringEnd, StructuralElement, StructuralKind,
+};
+use std::collections::{BTreeMap, HashMap};
+use std::f64::consts::PI;
+
+/// The structural cards of a deck, sorted.
+#[derive(Default)]
+pub(super) struct StructuralCards<'a> {
+    /// `CBAR`, `CBEAM`, `CROD`, `CONROD`, `CELAS1`, `CELAS2`, `CBUSH` in file order.
+    pub(super) elements: Vec<&'a Card>,
+    /// `PBAR`, `PBARL`, `PBEAM`, `PBEAML`, `PROD`, `PELAS`, `PBUSH` by property id (a `PELAS`
+    /// may define two).
+    pub(super) properties: HashMap<u64, &'a Card>,
+    /// `BAROR` and `BEAMOR`.
+    pub(super) bar_defaults: Option<&'a Card>,
+    pub(super) beam_defaults: Option<&'a Card>,
+}
+
+/// The structural element card names.
+pub(super) const ELEMENTS: &[&str] = &[
+    "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CBUSH",
+];
+/// The structural property card names.
+pub(super) const PROPERTIES: &[&str] =
+    &["PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PELAS", "PBUSH"];
+
+impl<'a> StructuralCards<'a> {
+    /// Files one card if it is structural; `false` otherwise.
+    pub(super) fn take(&mut self, c: &'a Card) -> Result<bool, IoError> {
+        let name = c.name.as_str();
+        if ELEMENTS.contains(&name) {
+            self.elements.push(c);
+        } else if name == "PELAS" {
+            // QRG PELAS: two properties per card, fields 1-4 and 5-8
+            for first in [0, 4] {
+                if first == 4 && c.field(4).is_empty() {
+                    break;
+                }
+                let pid = c.id(first, "PID")?;
+                self.property(pid, c)?;
+            }
+        } else if PROPERTIES.contains(&name) {
+            let pid = c.id(0, "PID")?;
+            self.property(pid, c)?;
+        } else if name == "BAROR" || name == "BEAMOR" {
+            let slot = if name == "BAROR" {
+                &mut self.bar_defaults
+            } else {
+                &mut self.beam_defaults
+            };
+            if let Some(first) = slot.replace(c) {
+                return Err(c.err(format!(
+                    "appears twice (first at line {}): a deck has one",
+                    first.line
+                )));
+            }
+        } else {
+            return Ok(false);
+        }
+        Ok(true)
+    }
+
+    fn property(&mut self, pid: u64, c: &'a Card) -> Result<(), IoError> {
+        if let Some(first) = self.properties.insert(pid, c) {
+            return Err(c.err(format!(
+                "{pid} is defined twice (first by {} at line {})",
+                first.name, first.line
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// What the reader needs beside the cards.
+pub(super) struct Context<'g, 'a> {
+    pub(super) geometry: &'g mut Geometry<'a>,
+    pub(super) materials: &'g HashMap<u64, &'a Card>,
+    /// Grids whose displacement frame is turned, with the frame.
+    pub(super) turned: &'g HashMap<u64, i64>,
+    pub(super) wtmass: f64,
+    /// MAT1s read so far: `(E, G, rho)`, each read (and warned about) once.
+    pub(super) mat1: HashMap<u64, (f64, f64, f64)>,
+}
+
+/// `E`, `G` and `rho` of a MAT1 (QRG MAT1: one of `E`, `G`, `NU` blank is completed from the
+/// other two; `RHO` times `WTMASS`).
+fn mat1(ctx: &mut Context<'_, '_>, mid: u64, by: &Card) -> Result<(f64, f64, f64), IoError> {
+    if let Some(v) = ctx.mat1.get(&mid) {
+        return Ok(*v);
+    }
+    let m = ctx.materials.get(&mid).ok_or_else(|| {
+        by.err(format!(
+            "{} refers to MAT1 {mid}, which the deck does not define",
+            by.field(0)
+        ))
+    })?;
+    if m.name != "MAT1" {
+        return Err(by.err(format!(
+            "{} refers to {} {mid}: beams, rods and bars take a MAT1",
+            by.field(0),
+            m.name
+        )));
+    }
+    // a beam uses E and G as given (its torsion and shear take G, its bending and axial E);
+    // a blank one is completed from the other and NU (QRG MAT1, remarks)
+    let (e, g, nu) = (m.real(1, "E")?, m.real(2, "G")?, m.real(3, "NU")?);
+    let (e, g) = match (e, g, nu) {
+        (Some(e), Some(g), _) => (e, g),
+        (Some(e), None, Some(nu)) => (e, e / (2.0 * (1.0 + nu))),
+        (None, Some(g), Some(nu)) => (2.0 * g * (1.0 + nu), g),
+        _ => {
+            return Err(m.err(format!(
+                "{mid}: a beam or rod needs E and G (or one of them with NU); Nastran sets the blank pair to 0, a material with no stiffness in torsion or tension"
+            )));
+        }
+    };
+    let rho = m.real(4, "RHO")?.unwrap_or(0.0) * ctx.wtmass;
+    ctx.mat1.insert(mid, (e, g, rho));
+    Ok((e, g, rho))
+}
+
+/// The axes of grid `g`'s displacement frame at its position, columns the axes (the identity for
+/// the basic frame).
+fn cd_axes(
+    ctx: &mut Context<'_, '_>,
+    model: &Model,
+    g: u64,
+    by: &Card,
+) -> Result<[[f64; 3]; 3], IoError> {
+    let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let Some(cd) = ctx.turned.get(&g) else {
+        return Ok(identity);
+    };
+    let n = model
+        .mesh()
+        .node_index(g)
+        .expect("turned grids are in the mesh");
+    let x = model.mesh().coords()[n];
+    Ok(ctx.geometry.frame(*cd, by)?.axes_at(x))
+}
+
+fn apply(a: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|i| (0..3).map(|j| a[i][j] * v[j]).sum())
+}
+
+fn node(model: &Model, g: u64, c: &Card, what: &str) -> Result<usize, IoError> {
+    model.mesh().node_index(g).ok_or_else(|| {
+        c.err(format!(
+            "{}: {what} is GRID {g}, which the deck does not define (scalar points are not modelled)",
+            c.field(0)
+        ))
+    })
+}
+
+/// A section's properties from a `PBARL` or `PBEAML` shape (QRG PBARL, figure of the types; the
+/// section's `y` axis along `DIM2` of a BAR, its height): `(A, I1, I2, J, [K1, K2])`.
+///
+/// Torsion constants: exact for ROD and TUBE, Roark's series for a rectangle, Bredt's for the
+/// BOX's closed wall, `sum b t^3 / 3` for the open walls of I and CHAN. Shear factors: 0.9 for a
+/// ROD (Nastran's own, as its PBAR replacing a PBARL says), 5/6 for a rectangle, 1/2 for a thin
+/// tube, and the web's (or flanges') share of the area for I, CHAN and BOX. Nastran computes its
+/// own factors for the other types; they change the shear deflection only, a small share of a
+/// slender beam's.
+fn shape(c: &Card, kind: &str, d: &[f64]) -> Result<(f64, f64, f64, f64, [f64; 2]), IoError> {
+    let bad = |reason: String| c.err(format!("{} ({kind}): {reason}", c.field(0)));
+    if let Some(v) = d.iter().find(|v| !(**v > 0.0)) {
+        return Err(bad(format!("dimension {v} must be positive")));
+    }
+    Ok(match kind {
+        "ROD" => {
+            let r = d[0];
+            let a = PI * r * r;
+            let i = PI * r.powi(4) / 4.0;
+            // Nastran's own factor for a ROD (its PBAR replacing a PBARL ROD says 0.9)
+            (a, i, i, 2.0 * i, [0.9, 0.9])
+        }
+        "TUBE" => {
+            let (ro, ri) = (d[0], d[1]);
+            if ri >= ro {
+                return Err(bad(format!(
+                    "inner radius {ri} is not below outer radius {ro}"
+                )));
+            }
+            let a = PI * (ro * ro - ri * ri);
+            let i = PI * (ro.powi(4) - ri.powi(4)) / 4.0;
+            (a, i, i, 2.0 * i, [0.5, 0.5])
+        }
+        "BAR" => {
+            // DIM1 along z, DIM2 along y
+            let (bz, hy) = (d[0], d[1]);
+            let (long, short) = if bz > hy { (bz, hy) } else { (hy, bz) };
+            let j = long
+                * short.powi(3)
+                * (1.0 / 3.0 - 0.21 * short / long * (1.0 - short.powi(4) / (12.0 * long.powi(4))));
+            (
+                bz * hy,
+                bz * hy.powi(3) / 12.0,
+                hy * bz.powi(3) / 12.0,
+                j,
+                [5.0 / 6.0, 5.0 / 6.0],
+            )
+        }
+        "BOX" => {
+            // DIM1 width (z), DIM2 height (y), DIM3 horizontal walls, DIM4 vertical walls
+            let (b, h, t1, t2) = (d[0], d[1], d[2], d[3]);
+            if 2.0 * t2 >= b || 2.0 * t1 >= h {
+                return Err(bad(format!(
+                    "walls {t1}, {t2} leave no hollow in {b} x {h}"
+                )));
+            }
+            let (bi, hi) = (b - 2.0 * t2, h - 2.0 * t1);
+            let a = b * h - bi * hi;
+            let j = 2.0 * t1 * t2 * (b - t2).powi(2) * (h - t1).powi(2)
+                / (b * t2 + h * t1 - t2 * t2 - t1 * t1);
+            let web = 2.0 * t2 * hi;
+            let flanges = 2.0 * t1 * b;
+            (
+                a,
+                (b * h.powi(3) - bi * hi.powi(3)) / 12.0,
+                (h * b.powi(3) - hi * bi.powi(3)) / 12.0,
+                j,
+                [web / a, flanges / a],
+            )
+        }
+        "I" => {
+            // DIM1 height (y), DIM2 bottom flange width, DIM3 top flange width, DIM4 web,
+            // DIM5 bottom flange thickness, DIM6 top flange thickness
+            let (h, wb, wt, tw, tb, tt) = (d[0], d[1], d[2], d[3], d[4], d[5]);
+            let hw = h - tb - tt;
+            if hw <= 0.0 {
+                return Err(bad(format!("flanges {tb} + {tt} fill the height {h}")));
+            }
+            // rectangles (width along z, height along y, centre y), from the bottom
+            let parts = [
+                (wb, tb, tb / 2.0),
+                (tw, hw, tb + hw / 2.0),
+                (wt, tt, h - tt / 2.0),
+            ];
+            let (a, i1, i2) = rectangles(&parts, |_| 0.0);
+            let j = (wb * tb.powi(3) + wt * tt.powi(3) + hw * tw.powi(3)) / 3.0;
+            (a, i1, i2, j, [tw * hw / a, (wb * tb + wt * tt) / a])
+        }
+        "CHAN" => {
+            // DIM1 flange width (z), DIM2 height (y), DIM3 web thickness, DIM4 flange thickness
+            let (w, h, tw, tf) = (d[0], d[1], d[2], d[3]);
+            let hw = h - 2.0 * tf;
+            if hw <= 0.0 || tw >= w {
+                return Err(bad(format!(
+                    "flanges {tf} or web {tw} fill the section {w} x {h}"
+                )));
+            }
+            let parts = [(w, tf, tf / 2.0), (tw, hw, h / 2.0), (w, tf, h - tf / 2.0)];
+            // z centres: the flanges from the web's back, the web at its own mid-thickness
+            let zc = [w / 2.0, tw / 2.0, w / 2.0];
+            let (a, i1, i2) = rectangles(&parts, |k| zc[k]);
+            let j = (2.0 * w * tf.powi(3) + hw * tw.powi(3)) / 3.0;
+            (a, i1, i2, j, [tw * hw / a, 2.0 * w * tf / a])
+        }
+        other => {
+            return Err(c.err(format!(
+                "{}: section type {other} is not read (femu reads ROD, TUBE, BAR, BOX, I and CHAN)",
+                c.field(0)
+            )));
+        }
+    })
+}
+
+/// Area and second moments about the centroid of rectangles `(width along z, height along y,
+/// centre y)` with centre z `zc(k)`: `(A, I1 = int (y - yc)^2, I2 = int (z - zc)^2)`.
+fn rectangles(parts: &[(f64, f64, f64)], zc: impl Fn(usize) -> f64) -> (f64, f64, f64) {
+    let a: f64 = parts.iter().map(|p| p.0 * p.1).sum();
+    let yc = parts.iter().map(|p| p.0 * p.1 * p.2).sum::<f64>() / a;
+    let z0 = parts
+        .iter()
+        .enumerate()
+        .map(|(k, p)| p.0 * p.1 * zc(k))
+        .sum::<f64>()
+        / a;
+    let mut i1 = 0.0;
+    let mut i2 = 0.0;
+    for (k, &(w, h, y)) in parts.iter().enumerate() {
+        i1 += w * h.powi(3) / 12.0 + w * h * (y - yc).powi(2);
+        i2 += h * w.powi(3) / 12.0 + w * h * (zc(k) - z0).powi(2);
+    }
+    (a, i1, i2)
+}
+
+/// The number of dimensions of a section type.
+fn dims_of(kind: &str) -> Option<usize> {
+    Some(match kind {
+        "ROD" => 1,
+        "TUBE" | "BAR" => 2,
+        "BOX" | "CHAN" => 4,
+        "I" => 6,
+        _ => return None,
+    })
+}
+
+/// A beam's material and section from its property card: `(E, G, rho, section)`.
+fn beam_property(
+    ctx: &mut Context<'_, '_>,
+    p: &Card,
+    warnings: &mut Vec<Warning>,
+    warned: &mut Vec<u64>,
+) -> Result<(f64, f64, f64, BeamSection), IoError> {
+    let pid = p.id(0, "PID")?;
+    let mid = p.id(1, "MID")?;
+    let (e, g, rho) = mat1(ctx, mid, p)?;
+    let wt = ctx.wtmass;
+    let r = |i: usize, what: &str| -> Result<f64, IoError> { Ok(p.real(i, what)?.unwrap_or(0.0)) };
+    let section = match p.name.as_str() {
+        "PBAR" => {
+            // QRG PBAR: PID MID A I1 I2 J NSM / C1..F2 / K1 K2 I12
+            if r(18, "I12")? != 0.0 {
+                return Err(p.err(format!(
+                    "{pid}: I12 = {} couples the two bending planes; femu builds beams on principal axes (give I1 and I2 in them, with the orientation vector along axis 1)",
+                    r(18, "I12")?
+                )));
+            }
+            // K1, K2 blank: infinite shear stiffness (QRG PBAR, remarks)
+            let k1 = p.real(16, "K1")?;
+            let k2 = p.real(17, "K2")?;
+            let shear = match (k1, k2) {
+                (None, None) => None,
+                (a, b) => Some([
+                    a.filter(|v| *v != 0.0).unwrap_or(f64::INFINITY),
+                    b.filter(|v| *v != 0.0).unwrap_or(f64::INFINITY),
+                ]),
+            };
+            BeamSection {
+                area: r(2, "A")?,
+                i1: r(3, "I1")?,
+                i2: r(4, "I2")?,
+                j: r(5, "J")?,
+                shear,
+                nsm: r(6, "NSM")? * wt,
+            }
+        }
+        "PBEAM" => pbeam(p, pid, wt)?,
+        "PBARL" | "PBEAML" => {
+            if !p.field(2).is_empty() && !p.field(2).eq_ignore_ascii_case("MSCBML0") {
+                return Err(p.err(format!(
+                    "{pid}: GROUP {} is not the standard library MSCBML0 (femu reads its ROD, TUBE, BAR, BOX, I and CHAN)",
+                    p.field(2)
+                )));
+            }
+            let kind = p.field(3).to_ascii_uppercase();
+            let n = dims_of(&kind).ok_or_else(|| {
+                p.err(format!(
+                    "{pid}: section type {kind} is not read (femu reads ROD, TUBE, BAR, BOX, I and CHAN)"
+                ))
+            })?;
+            let d = (0..n)
+                .map(|k| {
+                    p.real(8 + k, "DIM")?
+                        .ok_or_else(|| p.err(format!("{pid}: DIM{} of {kind} is missing", k + 1)))
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            let nsm = r(8 + n, "NSM")?;
+            if p.name == "PBEAML" {
+                // further stations (SO, X/XB, DIMs, NSM) must repeat end A's
+                let rest: Vec<&str> = (9 + n..p.fields.len()).map(|i| p.field(i)).collect();
+                let mut k = 0;
+                while k < rest.len() {
+                    if rest[k].is_empty() {
+                        k += 1;
+                        continue;
+                    }
+                    // SO at rest[k], X/XB at k + 1, then n DIMs and NSM
+                    for (m, want) in d.iter().chain([&nsm]).enumerate() {
+                        let v = rest.get(k + 2 + m).and_then(|s| super::cards::real(s));
+                        if v.is_some_and(|v| (v - want).abs() > 1e-12 * want.abs()) {
+                            return Err(p.err(format!(
+                                "{pid}: the section changes along the beam (a tapered PBEAML); femu builds prismatic beams"
+                            )));
+                        }
+                    }
+                    k += n + 3;
+                }
+            }
+            let (area, i1, i2, j, k) = shape(p, &kind, &d)?;
+            if !warned.contains(&pid) {
+                warned.push(pid);
+                warnings.push(Warning {
+                    path: p.path.clone(),
+                    line: p.line,
+                    message: format!(
+                        "{} {pid} ({kind}): A = {area:.6e}, I1 = {i1:.6e}, I2 = {i2:.6e}, J = {j:.6e}, shear factors K1 = {:.4}, K2 = {:.4} (femu's formulas, docs/MATH.md; Nastran computes its own J and shear factors, which may differ slightly)",
+                        p.name, k[0], k[1]
+                    ),
+                });
+            }
+            BeamSection {
+                area,
+                i1,
+                i2,
+                j,
+                shear: Some(k),
+                nsm: nsm * wt,
+            }
+        }
+        other => {
+            return Err(p.err(format!("{pid} is a {other}, not a bar or beam property")));
+        }
+    };
+    Ok((e, g, rho, section))
+}
+
+/// A prismatic `PBEAM` (QRG PBEAM): end A's `A I1 I2 I12 J NSM`, stations that repeat them, then
+/// `K1 K2` (default 1.0; 0.0 is rigid in shear) and the shear relief, warping and offset fields,
+/// which must be blank or zero.
+fn pbeam(p: &Card, pid: u64, wt: f64) -> Result<BeamSection, IoError> {
+    let r = |i: usize| -> Result<f64, IoError> { Ok(p.real(i, "PBEAM field")?.unwrap_or(0.0)) };
+    let (a, i1, i2, i12, j, nsm) = (r(2)?, r(3)?, r(4)?, r(5)?, r(6)?, r(7)?);
+    if i12 != 0.0 {
+        return Err(p.err(format!(
+            "{pid}: I12 = {i12} couples the two bending planes; femu builds beams on principal axes"
+        )));
+    }
+    // stations: blocks starting with SO (YES, YESA, NO); 16 fields with SO = YES, else 8
+    let mut at = 16;
+    loop {
+        let so = p.field(at).to_ascii_uppercase();
+        if !matches!(so.as_str(), "YES" | "YESA" | "NO") {
+            break;
+        }
+        for (k, want) in [a, i1, i2, i12, j, nsm].iter().enumerate() {
+            if let Some(v) = p.real(at + 2 + k, "station value")?
+                && (v - want).abs() > 1e-12 * want.abs().max(f64::MIN_POSITIVE)
+            {
+                return Err(p.err(format!(
+                    "{pid}: the section changes along the beam (a tapered PBEAM: field {} is {v}, end A's {want}); femu builds prismatic beams",
+                    at + 2 + k + 2
+                )));
+            }
+        }
+        at += if so == "YES" { 16 } else { 8 };
+    }
+    let k1 = p.real(at, "K1")?.unwrap_or(1.0);
+    let k2 = p.real(at + 1, "K2")?.unwrap_or(1.0);
+    let names = [
+        "S1", "S2", "NSI(A)", "NSI(B)", "CW(A)", "CW(B)", "M1(A)", "M2(A)", "M1(B)", "M2(B)",
+        "N1(A)", "N2(A)", "N1(B)", "N2(B)",
+    ];
+    for (k, name) in names.iter().enumerate() {
+        let v = p.real(at + 2 + k, name)?.unwrap_or(0.0);
+        if v != 0.0 {
+            return Err(p.err(format!(
+                "{pid}: {name} = {v} (shear relief, non-structural inertia, warping or an offset of the centre of mass or neutral axis) is not modelled by femu's beams"
+            )));
+        }
+    }
+    let rigid = |k: f64| if k == 0.0 { f64::INFINITY } else { k };
+    Ok(BeamSection {
+        area: a,
+        i1,
+        i2,
+        j,
+        shear: Some([rigid(k1), rigid(k2)]),
+        nsm: nsm * wt,
+    })
+}
+
+/// The orientation vector of a CBAR or CBEAM (fields 4-6: `X1 X2 X3`, or `G0` as an integer in
+/// field 4 and blanks after it), from the element or its `BAROR`/`BEAMOR`, in the basic frame;
+/// and the `OFFT` code.
+fn orientation(
+    ctx: &mut Context<'_, '_>,
+    model: &Model,
+    c: &Card,
+    defaults: Option<&Card>,
+    ga: u64,
+) -> Result<([f64; 3], String), IoError> {
+    let own = (4..7).any(|i| !c.field(i).is_empty());
+    let src = if own {
+        c
+    } else {
+        defaults.ok_or_else(|| {
+            c.err(format!(
+                "{}: no orientation vector (X1, X2, X3 or G0) and no {} default",
+                c.field(0),
+                if c.name == "CBAR" { "BAROR" } else { "BEAMOR" }
+            ))
+        })?
+    };
+    let offt = {
+        let own = c.field(7).to_ascii_uppercase();
+        if own.is_empty() {
+            defaults.map_or(String::new(), |d| d.field(7).to_ascii_uppercase())
+        } else {
+            own
+        }
+    };
+    let offt = if offt.is_empty() {
+        "GGG".to_string()
+    } else {
+        offt
+    };
+    let is_g0 = !src.field(4).contains('.')
+        && !src.field(4).contains(['e', 'E'])
+        && src.field(5).is_empty()
+        && src.field(6).is_empty();
+    let xa = model.mesh().coords()[node(model, ga, c, "GA")?];
+    if is_g0 {
+        let g0 = src.id(4, "G0")?;
+        let x0 = model.mesh().coords()[node(model, g0, c, "G0")?];
+        return Ok(([x0[0] - xa[0], x0[1] - xa[1], x0[2] - xa[2]], offt));
+    }
+    let v = [
+        src.real(4, "X1")?.unwrap_or(0.0),
+        src.real(5, "X2")?.unwrap_or(0.0),
+        src.real(6, "X3")?.unwrap_or(0.0),
+    ];
+    // QRG CBAR: v in GA's displacement frame unless OFFT starts with B (basic)
+    let v = match offt.chars().next() {
+        Some('B') => v,
+        Some('G') => apply(&cd_axes(ctx, model, ga, c)?, v),
+        _ => {
+            return Err(c.err(format!(
+                "{}: OFFT {offt} is not one of Nastran's codes (GGG, BGG, GGO, BOG, ...)",
+                c.field(0)
+            )));
+        }
+    };
+    Ok((v, offt))
+}
+
+/// Reads the structural elements into `model` (each property's into the structural set
+/// `PID<n>`); returns how many.
+///
+/// # Errors
+/// A malformed card, an unknown grid, property or material, and what femu cannot represent.
+pub(super) fn add_structural(
+    cards: &StructuralCards<'_>,
+    model: &mut Model,
+    ctx: &mut Context<'_, '_>,
+    warnings: &mut Vec<Warning>,
+) -> Result<usize, IoError> {
+    let mut sets: BTreeMap<u64, Vec<u64>> = BTreeMap::new();
+    let mut warned = Vec::new();
+    for c in &cards.elements {
+        let eid = c.id(0, "EID")?;
+        let prop = |pid: u64, kinds: &[&str]| -> Result<&Card, IoError> {
+            let p = cards.properties.get(&pid).ok_or_else(|| {
+                c.err(format!(
+                    "{eid} refers to property {pid}, which the deck does not define"
+                ))
+            })?;
+            if !kinds.contains(&p.name.as_str()) {
+                return Err(c.err(format!(
+                    "{eid} refers to {} {pid}; a {} takes {}",
+                    p.name,
+                    c.name,
+                    kinds.join(" or ")
+                )));
+            }
+            Ok(p)
+        };
+        let (kind, nodes, pid) = match c.name.as_str() {
+            "CBAR" | "CBEAM" => {
+                let defaults = if c.name == "CBAR" {
+                    cards.bar_defaults
+                } else {
+                    cards.beam_defaults
+                };
+                let pid = match c.int(1, "PID")? {
+                    Some(p) if p > 0 => p as u64,
+                    Some(p) => return Err(c.err(format!("{eid}: PID {p} must be positive"))),
+                    None => match defaults.and_then(|d| d.int(1, "PID").ok().flatten()) {
+                        Some(p) if p > 0 => p as u64,
+                        _ => eid,
+                    },
+                };
+                let kinds: &[&str] = if c.name == "CBAR" {
+                    &["PBAR", "PBARL"]
+                } else {
+                    &["PBEAM", "PBEAML"]
+                };
+                let p = prop(pid, kinds)?;
+                let (ga, gb) = (c.id(2, "GA")?, c.id(3, "GB")?);
+                let (na, nb) = (node(model, ga, c, "GA")?, node(model, gb, c, "GB")?);
+                let (v, offt) = orientation(ctx, model, c, defaults, ga)?;
+                // PA, PB: pin flags (released DOFs)
+                for (i, what) in [(8, "PA"), (9, "PB")] {
+                    if !c.field(i).is_empty() && c.field(i) != "0" {
+                        return Err(c.err(format!(
+                            "{eid}: {what} = {} releases DOFs at an end (pin flags), which femu does not model",
+                            c.field(i)
+                        )));
+                    }
+                }
+                if c.name == "CBEAM" && (!c.field(16).is_empty() || !c.field(17).is_empty()) {
+                    return Err(c.err(format!(
+                        "{eid}: SA, SB are warping scalar points, which femu does not model"
+                    )));
+                }
+                let mut offsets = [[0.0; 3]; 2];
+                for (end, (g, first)) in [(ga, 10), (gb, 13)].into_iter().enumerate() {
+                    let w = [
+                        c.real(first, "W1")?.unwrap_or(0.0),
+                        c.real(first + 1, "W2")?.unwrap_or(0.0),
+                        c.real(first + 2, "W3")?.unwrap_or(0.0),
+                    ];
+                    if w.iter().all(|x| *x == 0.0) {
+                        continue;
+                    }
+                    offsets[end] = match offt.chars().nth(1 + end) {
+                        Some('G') => apply(&cd_axes(ctx, model, g, c)?, w),
+                        Some('B') => w,
+                        _ => {
+                            return Err(c.err(format!(
+                                "{eid}: offsets in the element frame (OFFT {offt}) are not read; give them in the grids' frames (OFFT GGG)"
+                            )));
+                        }
+                    };
+                }
+                let (e, g, rho, section) = beam_property(ctx, p, warnings, &mut warned)?;
+                let kind = StructuralKind::Beam(Beam {
+                    e,
+                    g,
+                    rho,
+                    section,
+                    orientation: v,
+                    offsets,
+                    // Nastran's lumped CBEAM mass carries the polar inertia, its CBAR's does not
+                    // (the grid point weight of pyNastran's beam_modes run: docs/VERIFICATION.md)
+                    lumped_torsion: c.name == "CBEAM",
+                });
+                (kind, vec![na, nb], pid)
+            }
+            "CROD" | "CONROD" => {
+                let conrod = c.name == "CONROD";
+                let (f1, f2) = if conrod { (1, 2) } else { (2, 3) };
+                let (g1, g2) = (c.id(f1, "G1")?, c.id(f2, "G2")?);
+                let (n1, n2) = (node(model, g1, c, "G1")?, node(model, g2, c, "G2")?);
+                // CONROD: EID G1 G2 MID A J C NSM; PROD: PID MID A J C NSM
+                let (src, base, pid) = if conrod {
+                    (*c, 3, eid)
+                } else {
+                    let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
+                    (prop(pid, &["PROD"])?, 1, pid)
+                };
+                let mid = src.id(base, "MID")?;
+                let (e, g, rho) = mat1(ctx, mid, src)?;
+                let r = |i: usize, w: &str| -> Result<f64, IoError> {
+                    Ok(src.real(base + i, w)?.unwrap_or(0.0))
+                };
+                let kind = StructuralKind::Rod(Rod {
+                    e,
+                    g,
+                    rho,
+                    area: r(1, "A")?,
+                    j: r(2, "J")?,
+                    nsm: r(4, "NSM")? * ctx.wtmass,
+                });
+                (kind, vec![n1, n2], pid)
+            }
+            "CELAS1" | "CELAS2" => {
+                // CELAS1: EID PID G1 C1 G2 C2; CELAS2: EID K G1 C1 G2 C2 GE S
+                let (k, ge, pid) = if c.name == "CELAS1" {
+                    let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
+                    let p = prop(pid, &["PELAS"])?;
+                    // the property's own four fields: the first or the second PID on the card
+                    let first = if p.int(0, "PID")? == Some(pid as i64) {
+                        0
+                    } else {
+                        4
+                    };
+                    (
+                        p.real(first + 1, "K")?.unwrap_or(0.0),
+                        p.real(first + 2, "GE")?.unwrap_or(0.0),
+                        pid,
+                    )
+                } else {
+                    (
+                        c.real(1, "K")?.unwrap_or(0.0),
+                        c.real(6, "GE")?.unwrap_or(0.0),
+                        eid,
+                    )
+                };
+                let mut ends = Vec::new();
+                for (gf, cf) in [(2, 3), (4, 5)] {
+                    let g = c.int(gf, "G")?.unwrap_or(0);
+                    if g <= 0 {
+                        continue;
+                    }
+                    let comp = c.int(cf, "C")?.unwrap_or(0);
+                    if !(1..=6).contains(&comp) {
+                        return Err(c.err(format!(
+                            "{eid}: component {comp} of GRID {g} is not 1 to 6 (scalar points are not modelled)"
+                        )));
+                    }
+                    let n = node(model, g as u64, c, "G")?;
+                    let axes = cd_axes(ctx, model, g as u64, c)?;
+                    let axis = ((comp - 1) % 3) as usize;
+                    ends.push(SpringEnd {
+                        node: n,
+                        part: if comp > 3 {
+                            Part::Rotations
+                        } else {
+                            Part::Translations
+                        },
+                        direction: [axes[0][axis], axes[1][axis], axes[2][axis]],
+                    });
+                }
+                let Some(a) = ends.first().copied() else {
+                    return Err(c.err(format!("{eid}: neither grid is given")));
+                };
+                let nodes: Vec<usize> = ends.iter().map(|e| e.node).collect();
+                let kind = StructuralKind::Spring(Spring {
+                    k,
+                    ge,
+                    a,
+                    b: ends.get(1).copied(),
+                });
+                (kind, nodes, pid)
+            }
+            "CBUSH" => {
+                let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
+                let p = prop(pid, &["PBUSH"])?;
+                let (kind, nodes) = cbush(c, eid, pid, p, model, ctx)?;
+                (kind, nodes, pid)
+            }
+            _ => unreachable!("sorted as structural"),
+        };
+        model
+            .add_structural(StructuralElement {
+                id: eid,
+                nodes,
+                kind,
+            })
+            .map_err(c.located())?;
+        sets.entry(pid).or_default().push(eid);
+    }
+    for (pid, ids) in &sets {
+        model
+            .add_structural_set(format!("PID{pid}"), ids)
+            .map_err(|e| IoError::Content {
+                path: cards.elements[0].path.clone(),
+                reason: e.to_string(),
+            })?;
+    }
+    Ok(cards.elements.len())
+}
+
+/// A CBUSH (QRG CBUSH: `EID PID GA GB GO/X1 X2 X3 CID / S OCID S1 S2 S3`) with its PBUSH's `K`,
+/// `B` and `GE` lines. The element axes are `CID`'s when given, else `x` from GA to GB and the
+/// orientation vector; the spring acts at `S` (default 0.5) along GA-GB, joined to both grids
+/// rigidly, or at the grids themselves when they coincide or GB is blank.
+fn cbush(
+    c: &Card,
+    eid: u64,
+    pid: u64,
+    p: &Card,
+    model: &Model,
+    ctx: &mut Context<'_, '_>,
+) -> Result<(StructuralKind, Vec<usize>), IoError> {
+    let ga = c.id(2, "GA")?;
+    let na = node(model, ga, c, "GA")?;
+    let gb = c.int(3, "GB")?.filter(|g| *g > 0).map(|g| g as u64);
+    let nb = gb.map(|g| node(model, g, c, "GB")).transpose()?;
+    let xa = model.mesh().coords()[na];
+    let xb = nb.map(|n| model.mesh().coords()[n]);
+    let length = xb.map_or(0.0, |b| {
+        ((0..3).map(|i| (b[i] - xa[i]).powi(2)).sum::<f64>()).sqrt()
+    });
+    let cid = c.int(7, "CID")?;
+    let axes = match cid {
+        Some(cid) if cid >= 0 => {
+            let a = if cid == 0 {
+                [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+            } else {
+                ctx.geometry.frame(cid, c)?.axes_at(xa)
+            };
+            [
+                [a[0][0], a[1][0], a[2][0]],
+                [a[0][1], a[1][1], a[2][1]],
+                [a[0][2], a[1][2], a[2][2]],
+            ]
+        }
+        _ => {
+            // QRG CBUSH: with CID blank the axes come from GA-GB and the orientation vector;
+            // coincident grids (closer than 1e-4) or a grounded bushing need a CID
+            let Some(b) = xb.filter(|_| length >= 1e-4) else {
+                return Err(c.err(format!(
+                    "{eid}: its grids coincide or GB is blank, so its axes need a CID (field 9)"
+                )));
+            };
+            if (4..7).all(|i| c.field(i).is_empty()) {
+                return Err(c.err(format!(
+                    "{eid}: with CID blank, its axes need an orientation vector (GO or X1, X2, X3)"
+                )));
+            }
+            let is_g0 = !c.field(4).contains('.') && c.field(5).is_empty() && c.field(6).is_empty();
+            let v = if is_g0 {
+                let g0 = c.id(4, "GO")?;
+                let x0 = model.mesh().coords()[node(model, g0, c, "GO")?];
+                [x0[0] - xa[0], x0[1] - xa[1], x0[2] - xa[2]]
+            } else {
+                let v = [
+                    c.real(4, "X1")?.unwrap_or(0.0),
+                    c.real(5, "X2")?.unwrap_or(0.0),
+                    c.real(6, "X3")?.unwrap_or(0.0),
+                ];
+                apply(&cd_axes(ctx, model, ga, c)?, v)
+            };
+            let (_, axes) = femu_fem::structural::line_axes(xa, b, v)
+                .map_err(|r| c.err(format!("{eid}: {r}")))?;
+            axes
+        }
+    };
+    let ocid = c.int(9, "OCID")?.unwrap_or(-1);
+    if ocid != -1 && (10..13).any(|i| !c.field(i).is_empty()) {
+        return Err(c.err(format!(
+            "{eid}: a spring location given by OCID {ocid} and S1, S2, S3 is not read (leave OCID blank: the location S along GA-GB)"
+        )));
+    }
+    let s = c.real(8, "S")?.unwrap_or(0.5);
+    let point = match xb {
+        Some(b) if length >= 1e-4 => Some(std::array::from_fn(|i| xa[i] + s * (b[i] - xa[i]))),
+        _ => None,
+    };
+    // PBUSH: keyword lines K, B, GE, RCV (and M, refused)
+    let mut k = [0.0; 6];
+    let mut b = [0.0; 6];
+    let mut ge = 0.0;
+    let mut i = 1;
+    while i < p.fields.len() {
+        let key = p.field(i).to_ascii_uppercase();
+        let values = |from: usize, n: usize| -> Result<Vec<f64>, IoError> {
+            (from..from + n)
+                .map(|j| Ok(p.real(j, &key)?.unwrap_or(0.0)))
+                .collect()
+        };
+        match key.as_str() {
+            "K" => {
+                k.copy_from_slice(&values(i + 1, 6)?);
+                i += 7;
+            }
+            "B" => {
+                b.copy_from_slice(&values(i + 1, 6)?);
+                i += 7;
+            }
+            "GE" => {
+                ge = values(i + 1, 1)?[0];
+                i += 7;
+            }
+            "RCV" => i += 5,
+            "M" => {
+                return Err(p.err(format!(
+                    "{pid}: a bushing mass (M) is not read; give it as CONM2 on the grids"
+                )));
+            }
+            "" => i += 1,
+            other => {
+                return Err(p.err(format!(
+                    "{pid}: {other} is not a PBUSH keyword femu reads (K, B, GE, RCV)"
+                )));
+            }
+        }
+    }
+    let mut nodes = vec![na];
+    nodes.extend(nb);
+    Ok((
+        StructuralKind::Bushing(Bushing {
+            k,
+            b,
+            ge,
+            axes,
+            point,
+        }),
+        nodes,
+    ))
+}

@@ -1,0 +1,300 @@
+//! Bars, beams, rods, springs and bushings read from Nastran bulk data: a Simcenter Nastran run of
+//! pyNastran's beam model (its `.f06` eigenvalues and grid point weight), hand-solved spring-mass
+//! decks, section properties by hand, and bad decks refused with card and line.
+
+use femu_fem::assembly::MassKind;
+use femu_fem::structural::StructuralKind;
+use femu_io::nastran::{BdfOptions, parse_bdf, read_bdf};
+use femu_sparse::eigen::{EigenOptions, Which};
+use std::f64::consts::PI;
+
+fn fixture(name: &str) -> std::path::PathBuf {
+    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/nastran/pynastran")
+        .join(name)
+}
+
+/// pyNastran's `beam_modes.dat` (BSD), run by Simcenter Nastran 2019.2 (its `beam_modes.f06`):
+/// nine CBAR with a PBARL ROD, one CBEAM with a PBEAML ROD, a CONM2 with inertia at the tip,
+/// clamped, lumped mass (no COUPMASS). Nastran replaced the PBARL by a PBAR with K1 = K2 = 0.9,
+/// as femu reads it. All ten eigenvalues agree with the `.f06` to its seven printed digits, and
+/// the mass with its grid point weight.
+#[test]
+fn beam_modes_against_simcenter_nastran() {
+    let deck = read_bdf(fixture("beam_modes.dat"), &BdfOptions::default()).unwrap();
+    assert_eq!(deck.mass, MassKind::Lumped);
+    let mut model = deck.model.clone();
+    assert_eq!(model.mesh().element_count(), 0);
+    assert_eq!(model.structural().len(), 10);
+    let StructuralKind::Beam(b) = &model.structural()[0].kind else {
+        panic!("CBAR 1 is a beam");
+    };
+    // PBAR 1 as Nastran's IFP9A message prints it: 3.1416E+00 7.8540E-01 7.8540E-01 1.5708E+00, K 0.9
+    assert!((b.section.area - PI).abs() < 1e-12);
+    assert!((b.section.i1 - PI / 4.0).abs() < 1e-12 && (b.section.j - PI / 2.0).abs() < 1e-12);
+    assert_eq!(b.section.shear, Some([0.9, 0.9]));
+    // GRID 12 belongs to no element: Nastran's AUTOSPC removes it, femu's loader too
+    model.fix_nodes(&[12], &[0, 1, 2]).unwrap();
+    // O U T P U T   F R O M   G R I D   P O I N T   W E I G H T   G E N E R A T O R: 2.610514E-02
+    let mass = model.total_mass().unwrap();
+    assert!((mass / 2.610514e-2 - 1.0).abs() < 5e-7, "{mass}");
+    let nastran = [
+        8.232777E+06,
+        8.232777E+06,
+        2.824056E+08,
+        2.824056E+08,
+        4.989076E+08,
+        8.021004E+08,
+        1.733310E+09,
+        1.733310E+09,
+        4.874295E+09,
+        4.874295E+09,
+    ];
+    let sys = model.assemble(MassKind::Lumped).unwrap();
+    let modes = sys
+        .modes(Which::Lowest(10), &EigenOptions::default())
+        .unwrap();
+    for (got, want) in modes.values.iter().zip(nastran) {
+        assert!(
+            (got / want - 1.0).abs() < 6e-7,
+            "{got:e} against Nastran's {want:e}"
+        );
+    }
+}
+
+/// A CELAS2 to ground under a CONM2: `w^2 = k / m`; a CELAS1 between two masses along a turned
+/// displacement frame: `w^2 = k (m1 + m2) / (m1 m2)` on the frame's axis; a CBUSH with a CID and
+/// six stiffnesses between a clamped grid and a CONM2 with inertia: `k_i / m` and `k_{3+i} / J_i`.
+#[test]
+fn springs_and_bushings_give_hand_solved_frequencies() {
+    let deck = "\
+SOL 103
+CEND
+SPC = 1
+BEGIN BULK
+GRID,1,,0.,0.,0.
+GRID,2,,1.,0.,0.,3
+GRID,3,,1.,1.,0.,3
+CORD2R,3,,0.,0.,0.,0.,0.,1.,+F
++F,1.,1.,0.
+CELAS2,10,4.+4,1,3
+CONM2,11,1,,2.5
+CELAS1,20,21,2,1,3,1
+PELAS,21,9.+4,0.02,,22,1.+3
+CONM2,23,2,,2.
+CONM2,24,3,,3.
+SPC1,1,12,1
+ENDDATA
+";
+    let d = parse_bdf(deck, "springs.bdf", &BdfOptions::default()).unwrap();
+    let model = d.model.clone();
+    // grid 1: x, y fixed, z on its spring; grids 2 and 3: five free motions and one along frame
+    // 3's x axis
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let modes = sys
+        .modes(Which::Lowest(7), &EigenOptions::default())
+        .unwrap();
+    let want = [4.0e4 / 2.5, 9.0e4 * (2.0 + 3.0) / 6.0];
+    assert!(modes.values[4].abs() < 1e-8 * want[0], "{:?}", modes.values);
+    for (g, w) in modes.values[5..].iter().zip(want) {
+        assert!(
+            (g / w - 1.0).abs() < 1e-10,
+            "{:?} against {want:?}",
+            modes.values
+        );
+    }
+    let StructuralKind::Spring(s) = &model.structural()[1].kind else {
+        panic!("CELAS1 20 is a spring");
+    };
+    assert_eq!(s.ge, 0.02);
+    // frame 3's x axis is (1, 1, 0)/sqrt 2 in basic: the spring's direction
+    let r = 0.5f64.sqrt();
+    assert!(
+        (s.a.direction[0] - r).abs() < 1e-12 && (s.a.direction[1] - r).abs() < 1e-12,
+        "{s:?}"
+    );
+
+    let deck = "\
+SOL 103
+CEND
+SPC = 1
+BEGIN BULK
+GRID,1,,0.,0.,0.
+GRID,2,,0.,0.,0.
+CORD2R,5,,0.,0.,0.,0.,0.,1.,+F
++F,0.866025403784,0.5,0.
+CBUSH,7,8,1,2,,,,5
+PBUSH,8,K,1.+4,2.+4,3.+4,500.,700.,900.
+,B,1.,2.,3.,4.,5.,6.
+CONM2,9,2,5,10.,,,,,+C
++C,0.5,,0.7,,,0.9
+SPC1,1,123456,1
+ENDDATA
+";
+    let d = parse_bdf(deck, "bush.bdf", &BdfOptions::default()).unwrap();
+    let sys = d.model.assemble(MassKind::Consistent).unwrap();
+    let modes = sys
+        .modes(Which::Lowest(6), &EigenOptions::default())
+        .unwrap();
+    let mut want = [
+        1e4 / 10.0,
+        2e4 / 10.0,
+        3e4 / 10.0,
+        500.0 / 0.5,
+        700.0 / 0.7,
+        900.0 / 0.9,
+    ];
+    want.sort_by(f64::total_cmp);
+    for (g, w) in modes.values.iter().zip(want) {
+        assert!(
+            (g / w - 1.0).abs() < 1e-10,
+            "{:?} against {want:?}",
+            modes.values
+        );
+    }
+    let StructuralKind::Bushing(b) = &d.model.structural()[0].kind else {
+        panic!("CBUSH 7 is a bushing");
+    };
+    assert_eq!(b.b, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+    // CID 5's x axis, turned 30 degrees about z
+    assert!((b.axes[0][0] - 0.75f64.sqrt()).abs() < 1e-11 && (b.axes[0][1] - 0.5).abs() < 1e-11);
+}
+
+/// PBARL and PBEAML sections against hand formulas: a BAR's `b h^3 / 12` with DIM2 along y, a
+/// TUBE's `pi (ro^4 - ri^4) / 4`, an I's parallel-axis sum, a BOX's, a CHAN's centroid shift; and
+/// a PBEAM's K1, K2 (1.0 when blank).
+#[test]
+fn sections_are_read_as_the_quick_reference_guide_draws_them() {
+    let deck = "\
+BEGIN BULK
+GRID,1,,0.,0.,0.
+GRID,2,,1.,0.,0.
+MAT1,1,2.1+11,,0.3,7850.
+CBAR,1,1,1,2,0.,1.,0.
+CBAR,2,2,1,2,0.,1.,0.
+CBEAM,3,3,1,2,0.,1.,0.
+CBAR,4,4,1,2,0.,1.,0.
+CBAR,5,5,1,2,0.,1.,0.
+CBEAM,6,6,1,2,0.,1.,0.
+PBARL,1,1,,BAR
+,0.02,0.05
+PBARL,2,1,,TUBE
+,0.03,0.025
+PBEAML,3,1,,I
+,0.2,0.1,0.12,0.01,0.015,0.02
+PBARL,4,1,,BOX
+,0.1,0.2,0.01,0.015
+PBARL,5,1,,CHAN
+,0.08,0.2,0.01,0.012
+PBEAM,6,1,0.01,2.e-5,1.e-5,,3.e-5,0.5
+ENDDATA
+";
+    let d = parse_bdf(deck, "sections.bdf", &BdfOptions::default()).unwrap();
+    let section = |i: usize| match &d.model.structural()[i].kind {
+        StructuralKind::Beam(b) => b.section,
+        _ => panic!("a beam"),
+    };
+    let close = |a: f64, b: f64| (a / b - 1.0).abs() < 1e-12;
+    // BAR: DIM1 = 0.02 along z, DIM2 = 0.05 along y
+    let s = section(0);
+    assert!(close(s.area, 0.001) && close(s.i1, 0.02 * 0.05f64.powi(3) / 12.0));
+    assert!(close(s.i2, 0.05 * 0.02f64.powi(3) / 12.0));
+    let s = section(1);
+    assert!(close(s.i1, PI * (0.03f64.powi(4) - 0.025f64.powi(4)) / 4.0));
+    // I: bottom flange 0.1 x 0.015, web 0.01 x 0.165, top flange 0.12 x 0.02
+    let s = section(2);
+    let parts = [
+        (0.1 * 0.015, 0.015 / 2.0, 0.1 * 0.015f64.powi(3) / 12.0),
+        (
+            0.01 * 0.165,
+            0.015 + 0.165 / 2.0,
+            0.01 * 0.165f64.powi(3) / 12.0,
+        ),
+        (0.12 * 0.02, 0.2 - 0.01, 0.12 * 0.02f64.powi(3) / 12.0),
+    ];
+    let a: f64 = parts.iter().map(|p| p.0).sum();
+    let yc = parts.iter().map(|p| p.0 * p.1).sum::<f64>() / a;
+    let i1: f64 = parts.iter().map(|p| p.2 + p.0 * (p.1 - yc).powi(2)).sum();
+    let i2 = (0.015 * 0.1f64.powi(3) + 0.165 * 0.01f64.powi(3) + 0.02 * 0.12f64.powi(3)) / 12.0;
+    assert!(
+        close(s.area, a) && close(s.i1, i1) && close(s.i2, i2),
+        "{s:?}"
+    );
+    // BOX: 0.1 wide, 0.2 high, horizontal walls 0.01, vertical 0.015
+    let s = section(3);
+    assert!(close(s.i1, (0.1 * 0.008 - 0.07 * 0.18f64.powi(3)) / 12.0));
+    // CHAN: flanges 0.08 x 0.012, web 0.01 x 0.176; z centroid from the web's back
+    let s = section(4);
+    let (af, aw): (f64, f64) = (0.08 * 0.012, 0.01 * 0.176);
+    let z0 = (2.0 * af * 0.04 + aw * 0.005) / (2.0 * af + aw);
+    let i2 = 2.0 * (0.012 * 0.08f64.powi(3) / 12.0 + af * (0.04 - z0).powi(2))
+        + 0.176 * 0.01f64.powi(3) / 12.0
+        + aw * (0.005 - z0).powi(2);
+    assert!(close(s.area, 2.0 * af + aw) && close(s.i2, i2), "{s:?}");
+    let s = section(5);
+    assert_eq!(s.shear, Some([1.0, 1.0]));
+    assert!(close(s.nsm, 0.5) && close(s.j, 3e-5));
+}
+
+/// What femu cannot build, or a deck gets wrong, is refused with the card and its line.
+#[test]
+fn bad_structural_cards_are_refused_with_card_and_line() {
+    let base = "\
+BEGIN BULK
+GRID,1,,0.,0.,0.
+GRID,2,,1.,0.,0.
+MAT1,1,2.1+11,,0.3,7850.
+";
+    let cases = [
+        (
+            "CBAR,1,1,1,2,1.,0.,0.\nPBAR,1,1,1.e-4,1.e-8,1.e-8,1.e-8\n",
+            "bad.bdf:5",
+            "parallel",
+        ),
+        (
+            "CBAR,1,1,1,2,0.,1.,0.\nPBARL,1,1,,HAT\n,0.1,0.01,0.05,0.02\n",
+            "bad.bdf:6",
+            "section type HAT is not read",
+        ),
+        (
+            "CBAR,1,1,1,2,0.,1.,0.\nPBAR,1,1,0.,1.e-8,1.e-8,1.e-8\n",
+            "bad.bdf:5",
+            "area",
+        ),
+        (
+            "CBAR,1,1,1,2,0.,1.,0.,,+P\n+P,123\nPBAR,1,1,1.e-4,1.e-8,1.e-8,1.e-8\n",
+            "bad.bdf:5",
+            "PA = 123",
+        ),
+        (
+            "CBAR,1,1,1,2,0.,1.,0.\nPBAR,1,1,1.e-4,1.e-8,1.e-8,1.e-8,,,+P\n+P,,,,,,,,,+Q\n+Q,,,1.e-9\n",
+            "bad.bdf:6",
+            "I12",
+        ),
+        (
+            "CBUSH,1,2,1,2,,,,0\nPBUSH,2,B,1.,1.\n",
+            "bad.bdf:5",
+            "no stiffness",
+        ),
+        ("CBUSH,1,2,1,1\nPBUSH,2,K,1.e4\n", "bad.bdf:5", "need a CID"),
+        ("CELAS2,1,1.e4,1,7\n", "bad.bdf:5", "component 7"),
+        (
+            "CBEAM,1,1,1,2,0.,1.,0.\nPBEAM,1,1,1.e-4,1.e-8,1.e-8,,1.e-8,,+A\n+A,,,,,,,,,+B\n+B,YESA,1.,2.e-4\n",
+            "bad.bdf:6",
+            "tapered PBEAM",
+        ),
+        (
+            "CROD,1,9,1,2\nPBAR,9,1,1.e-4,1.e-8,1.e-8,1.e-8\n",
+            "bad.bdf:5",
+            "refers to PBAR 9; a CROD takes PROD",
+        ),
+    ];
+    for (cards, at, what) in cases {
+        let text = format!("{base}{cards}ENDDATA\n");
+        let e = parse_bdf(&text, "bad.bdf", &BdfOptions::default())
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(at) && e.contains(what), "{cards}: {e}");
+    }
+}
