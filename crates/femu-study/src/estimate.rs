@@ -248,8 +248,10 @@ pub fn estimate_with_bounds(
 ) -> Result<EstimateResult, StudyError> {
     let correlation = correlate(modes, test, layout, &options.pairing)?;
     let lambdas = test.eigenvalues();
-    // element by element; a model without elements (another solver's matrices) by inertia
-    let (lambda_max, mu_min) = if model.mesh().element_count() > 0 {
+    // element by element for solids; by inertia for a model without them (another solver's
+    // matrices) or with beams, rods, springs or bushings, which the element bounds do not cover
+    let (lambda_max, mu_min) = if model.mesh().element_count() > 0 && model.structural().is_empty()
+    {
         let eb = element_bounds(model, sys.mass_kind)?;
         (eb.lambda_max_upper, Some(eb.mu_min_lower))
     } else {

@@ -855,21 +855,18 @@ fn judge_update(
 /// # Errors
 /// A set the model does not have, naming the model file and the sets it has.
 pub fn resolve_sets(model: &LoadedModel, sets: &[String]) -> Result<Vec<String>, StudyError> {
-    let known = model.model.mesh().element_sets();
+    let known = model.model.element_set_names();
     sets.iter()
         .map(|s| {
             known
-                .keys()
+                .iter()
                 .find(|k| k.eq_ignore_ascii_case(s))
                 .cloned()
                 .ok_or_else(|| {
                     StudyError::in_file(
                         &model.path,
                         "element sets",
-                        format!(
-                            "no element set {s} (the model has: {})",
-                            known.keys().cloned().collect::<Vec<_>>().join(", ")
-                        ),
+                        format!("no element set {s} (the model has: {})", known.join(", ")),
                     )
                 })
         })

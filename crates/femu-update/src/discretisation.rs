@@ -36,6 +36,12 @@ pub const REFERENCE_DOF_LIMIT: usize = 3_000_000;
 /// quadratic mesh with pyramids (not split), or a reference above [`REFERENCE_DOF_LIMIT`]
 /// (its size estimated from the node count).
 pub fn not_estimated(model: &Model) -> Option<String> {
+    if !model.structural().is_empty() {
+        return Some(format!(
+            "the model has {} beams, rods, springs or bushings, which femu's refinement does not carry (their own discretisation error: compare with a mesh of more beam elements)",
+            model.structural().len()
+        ));
+    }
     let mesh = model.mesh();
     let quadratic = mesh.elements().all(|e| e.kind.is_quadratic());
     if quadratic
@@ -74,6 +80,9 @@ pub fn estimate(
     modes: &ModeSet,
     eigen: &EigenOptions,
 ) -> Result<Option<DiscretisationEstimate>, UpdateError> {
+    if !model.structural().is_empty() {
+        return Ok(None);
+    }
     let mesh = model.mesh();
     // a linear (or mixed) mesh against itself with quadratic elements; a quadratic one against
     // itself split once, each child placed by its parent's shape functions

@@ -27,6 +27,13 @@ pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String,
         path: PathBuf::from("<model>"),
         reason,
     };
+    if let Some(s) = model.structural().first() {
+        return Err(unwritable(format!(
+            "the model has {} beams, rods, springs or bushings (the first: element {}), which femu does not write as .inp (keep the deck they came from)",
+            model.structural().len(),
+            s.id
+        )));
+    }
     if let Some(e) = mesh
         .elements()
         .find(|e| matches!(e.kind, ElementKind::Pyramid5 | ElementKind::Pyramid13))
