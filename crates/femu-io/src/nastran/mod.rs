@@ -18,7 +18,8 @@
 //!   named as skipped.
 //! - **Constraints** (`constraints.rs`): the selected SPC set (`SPC`, `SPC1`, `SPCADD`) and the
 //!   permanent constraints of GRID field 8 (`PS`), with `GRDSET`'s CP, CD and PS for grids that
-//!   leave them blank. Components 4-6 act on grids with rotations (RBE2 reference grids) only.
+//!   leave them blank. Components 4-6 act on grids with rotations (those of beams, springs and
+//!   bushings, RBE2 reference grids) only.
 //! - **Elements**: `CHEXA` (8/20), `CPENTA` (6/15), `CTETRA` (4/10), `CPYRAM` (5/13) in Nastran's
 //!   grid order; blank mid-side grids make a straight edge (a node at its midpoint tied to the
 //!   average of its ends, docs/MATH.md "Multipoint constraints"). MSC integrates 8-node CHEXA and
@@ -27,14 +28,19 @@
 //! - **Materials** (`materials.rs`): `PSOLID` with `MAT1` completed as the QRG's MAT1 remarks say
 //!   (three moduli that are not isotropic within 1 % refused) or `MAT9` in the material frame
 //!   `CORDM` (a rectangular system; cylindrical, spherical and the element frame refused).
+//! - **Bars, beams, rods, springs, bushings** (`structural.rs`): `CBAR`, `CBEAM`, `CROD`,
+//!   `CONROD`, `CELAS1`, `CELAS2`, `CBUSH` with `PBAR`, `PBARL`, `PBEAM`, `PBEAML`, `PROD`,
+//!   `PELAS`, `PBUSH` and `BAROR`/`BEAMOR` defaults, into femu's structural elements on grids with
+//!   rotations (docs/MATH.md, "Beams, springs and bushings"); each property's elements are the set
+//!   `PID<n>`.
 //! - **Links and masses** (`links.rs`, `masses.rs`): `RBE2`, `RBE3`, `CONM2` (a rigid mass with
-//!   offset, `CID` frame and inertia on a grid with rotations, or on a grid an RBE2 moves in all
-//!   six components, carried to its reference; elsewhere the translational mass, as `AUTOSPC`
-//!   leaves it).
+//!   offset, `CID` frame and inertia on a grid with rotations (a beam's, a bushing's, an RBE2
+//!   reference), or on a grid an RBE2 moves in all six components, carried to its reference;
+//!   elsewhere the translational mass, as `AUTOSPC` leaves it).
 //! - **Unknown cards** are errors naming the nearest known card; cards that cannot change `K` or
 //!   `M` (loads, output requests, tables) and cards that act only in other solutions (contact,
 //!   nonlinear controls, temperature-dependent materials) are warnings, once per card name. Cards
-//!   that change `K` or `M` and that femu cannot model (shells, bars, springs, RBAR and MPC, other
+//!   that change `K` or `M` and that femu cannot model (shells, scalar dampers, RBAR and MPC, other
 //!   materials) are an error that counts them by kind. [`BdfOptions::lenient`] reads the rest
 //!   with a warning (unknown cards skipped; for the unsupported ones, that `K` and `M` are then
 //!   incomplete).
