@@ -1,5 +1,7 @@
-//! VTK XML unstructured grids (`.vtu`) for ParaView: the mesh (all six cell types), mode shapes
-//! as point vectors, element indicators as cell data, and a `.pvd` collection of several files.
+//! VTK XML unstructured grids (`.vtu`) for ParaView: the mesh (all six cell types), beams, rods,
+//! springs and bushings as lines (vertices when grounded) with their sections as cell data, mode
+//! shapes as point vectors, element indicators as cell data, and a `.pvd` collection of several
+//! files.
 //!
 //! Node orderings: VTK's linear and quadratic tetrahedra and hexahedra use Abaqus's order; a
 //! wedge's first triangle must point away from the second in VTK and towards it in Abaqus, so
@@ -8,6 +10,7 @@
 use crate::IoError;
 use femu_fem::element::ElementKind;
 use femu_fem::mesh::Mesh;
+use femu_fem::structural::{StructuralElement, StructuralKind};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -62,6 +65,34 @@ pub fn vtu_string(
     points: &[PointField<'_>],
     cells: &[CellField<'_>],
 ) -> Result<String, IoError> {
+    vtu_string_with(mesh, &[], points, cells)
+}
+
+/// The section values written as cell data of structural elements: `(area, I1, I2, J,
+/// stiffness)`, zero where they do not apply (a spring's stiffness, a bushing's largest).
+fn section_values(s: &StructuralElement) -> [f64; 5] {
+    match &s.kind {
+        StructuralKind::Beam(b) => [b.section.area, b.section.i1, b.section.i2, b.section.j, 0.0],
+        StructuralKind::Rod(r) => [r.area, 0.0, 0.0, r.j, 0.0],
+        StructuralKind::Spring(k) => [0.0, 0.0, 0.0, 0.0, k.k],
+        StructuralKind::Bushing(b) => [0.0, 0.0, 0.0, 0.0, b.k.iter().fold(0.0, |m, v| v.max(m))],
+    }
+}
+
+/// [`vtu_string`] for a model with beams, rods, springs and bushings (`structural`, after the
+/// mesh's cells: lines, or vertices for grounded ones), their area, `I1`, `I2`, `J` and
+/// stiffness as cell data. A cell field has a value per solid element (the structural cells get
+/// 0), or per solid and structural element.
+///
+/// # Errors
+/// As [`vtu_string`].
+pub fn vtu_string_with(
+    mesh: &Mesh,
+    structural: &[StructuralElement],
+    points: &[PointField<'_>],
+    cells: &[CellField<'_>],
+) -> Result<String, IoError> {
+    let all = mesh.element_count() + structural.len();
     let bad = |reason: String| IoError::Content {
         path: "<vtu>".into(),
         reason,
@@ -87,19 +118,23 @@ pub fn vtu_string(
         }
     }
     for c in cells {
-        if c.values.len() != mesh.element_count() {
+        if c.values.len() != mesh.element_count() && c.values.len() != all {
             return Err(bad(format!(
                 "cell field {} has {} values for {} elements",
                 c.name,
                 c.values.len(),
-                mesh.element_count()
+                all
             )));
         }
         if let Some(i) = c.values.iter().position(|v| !v.is_finite()) {
-            return Err(bad(format!(
-                "cell field {} is not finite at element {}",
-                c.name,
+            let id = if i < mesh.element_count() {
                 mesh.element(i).id
+            } else {
+                structural[i - mesh.element_count()].id
+            };
+            return Err(bad(format!(
+                "cell field {} is not finite at element {id}",
+                c.name
             )));
         }
     }
@@ -112,7 +147,7 @@ pub fn vtu_string(
         s,
         "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
         mesh.node_count(),
-        mesh.element_count()
+        all
     );
     s.push_str(
         "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n",
@@ -131,6 +166,14 @@ pub fn vtu_string(
         off += order.len();
         offsets.push(off);
         types.push(ty);
+    }
+    for st in structural {
+        let ids: Vec<String> = st.nodes.iter().map(ToString::to_string).collect();
+        let _ = writeln!(s, "{}", ids.join(" "));
+        off += st.nodes.len();
+        offsets.push(off);
+        // VTK_LINE, or VTK_VERTEX for a grounded spring or bushing
+        types.push(if st.nodes.len() == 2 { 3 } else { 1 });
     }
     s.push_str("</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
     for o in offsets {
@@ -163,7 +206,12 @@ pub fn vtu_string(
         s.push_str("</DataArray>\n");
     }
     s.push_str("</PointData>\n<CellData>\n");
-    let eids: Vec<String> = mesh.elements().map(|e| e.id.to_string()).collect();
+    let eids: Vec<String> = mesh
+        .elements()
+        .map(|e| e.id)
+        .chain(structural.iter().map(|s| s.id))
+        .map(|id| id.to_string())
+        .collect();
     let _ = writeln!(
         s,
         "<DataArray type=\"Int64\" Name=\"element_id\" format=\"ascii\">\n{}\n</DataArray>",
@@ -175,8 +223,30 @@ pub fn vtu_string(
             "<DataArray type=\"Float64\" Name=\"{}\" format=\"ascii\">",
             xml_escape(c.name)
         );
-        let v: Vec<String> = c.values.iter().map(|x| format!("{x:?}")).collect();
+        let pad = all - c.values.len();
+        let v: Vec<String> = c
+            .values
+            .iter()
+            .chain(std::iter::repeat_n(&0.0, pad))
+            .map(|x| format!("{x:?}"))
+            .collect();
         let _ = writeln!(s, "{}\n</DataArray>", v.join(" "));
+    }
+    if !structural.is_empty() {
+        for (k, name) in ["area", "I1", "I2", "J", "stiffness"].iter().enumerate() {
+            let v: Vec<String> = std::iter::repeat_n("0".to_string(), mesh.element_count())
+                .chain(
+                    structural
+                        .iter()
+                        .map(|st| format!("{:?}", section_values(st)[k])),
+                )
+                .collect();
+            let _ = writeln!(
+                s,
+                "<DataArray type=\"Float64\" Name=\"{name}\" format=\"ascii\">\n{}\n</DataArray>",
+                v.join(" ")
+            );
+        }
     }
     s.push_str("</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
     Ok(s)
@@ -199,7 +269,21 @@ pub fn write_vtu(
     cells: &[CellField<'_>],
     path: impl AsRef<Path>,
 ) -> Result<(), IoError> {
-    let text = vtu_string(mesh, points, cells)?;
+    write_vtu_with(mesh, &[], points, cells, path)
+}
+
+/// Writes [`vtu_string_with`] to `path`.
+///
+/// # Errors
+/// As [`vtu_string_with`], or [`IoError::Io`].
+pub fn write_vtu_with(
+    mesh: &Mesh,
+    structural: &[StructuralElement],
+    points: &[PointField<'_>],
+    cells: &[CellField<'_>],
+    path: impl AsRef<Path>,
+) -> Result<(), IoError> {
+    let text = vtu_string_with(mesh, structural, points, cells)?;
     std::fs::write(path.as_ref(), text).map_err(|e| IoError::io(path.as_ref(), e))
 }
 

@@ -176,3 +176,108 @@ fn cells_follow_vtk_conventions() {
     let pvd = pvd_string(&[(100.0, "mode1.vtu"), (250.5, "mode2.vtu")]);
     assert!(pvd.contains("timestep=\"250.5\" file=\"mode2.vtu\""));
 }
+
+/// Beams and springs are lines after the solids (a grounded spring a vertex), with their section
+/// as cell data (zero on the solids) and the element ids of both; a cell field given per solid is
+/// padded with zeros, one given per cell is written whole.
+#[test]
+fn structural_elements_are_lines_with_their_sections() {
+    use femu_fem::structural::{
+        Beam, BeamSection, Part, Spring, SpringEnd, StructuralElement, StructuralKind,
+    };
+    use femu_io::vtk::vtu_string_with;
+    let mesh = box_mesh(&BoxSpec::new(
+        [1.0, 1.0, 1.0],
+        [1, 1, 1],
+        BoxCells::Hex,
+        false,
+    ))
+    .unwrap();
+    let section = BeamSection {
+        area: 2e-4,
+        i1: 3e-9,
+        i2: 4e-9,
+        j: 5e-9,
+        shear: None,
+        nsm: 0.0,
+    };
+    let beam = StructuralElement {
+        id: 77,
+        nodes: vec![0, 1],
+        kind: StructuralKind::Beam(Beam {
+            e: 2e11,
+            g: 8e10,
+            rho: 7800.0,
+            section,
+            orientation: [0.0, 0.0, 1.0],
+            offsets: [[0.0; 3]; 2],
+            lumped_torsion: false,
+        }),
+    };
+    let spring = StructuralElement {
+        id: 78,
+        nodes: vec![2],
+        kind: StructuralKind::Spring(Spring {
+            k: 1234.0,
+            ge: 0.0,
+            a: SpringEnd {
+                node: 2,
+                part: Part::Translations,
+                direction: [0.0, 0.0, 1.0],
+            },
+            b: None,
+        }),
+    };
+    let structural = [beam, spring];
+    let per_solid = [0.5];
+    let per_cell = [1.0, 2.0, 3.0];
+    let text = vtu_string_with(
+        &mesh,
+        &structural,
+        &[],
+        &[
+            CellField {
+                name: "solid",
+                values: &per_solid,
+            },
+            CellField {
+                name: "all",
+                values: &per_cell,
+            },
+        ],
+    )
+    .unwrap();
+    let (conn, offsets, types) = arrays(&text);
+    assert_eq!(types, vec![12, 3, 1]);
+    assert_eq!(offsets, vec![8, 10, 11]);
+    assert_eq!(&conn[8..], &[0, 1, 2]);
+    let values = |name: &str| -> Vec<f64> {
+        let start = text.find(&format!("Name=\"{name}\"")).unwrap();
+        let body = &text[start..];
+        let open = body.find('>').unwrap() + 1;
+        let close = body.find("</DataArray>").unwrap();
+        body[open..close]
+            .split_whitespace()
+            .map(|s| s.parse().unwrap())
+            .collect()
+    };
+    assert_eq!(values("element_id"), vec![1.0, 77.0, 78.0]);
+    assert_eq!(values("area"), vec![0.0, 2e-4, 0.0]);
+    assert_eq!(values("J"), vec![0.0, 5e-9, 0.0]);
+    assert_eq!(values("stiffness"), vec![0.0, 0.0, 1234.0]);
+    assert_eq!(values("solid"), vec![0.5, 0.0, 0.0]);
+    assert_eq!(values("all"), per_cell.to_vec());
+    let wrong = [1.0, 2.0];
+    let e = vtu_string_with(
+        &mesh,
+        &structural,
+        &[],
+        &[CellField {
+            name: "short",
+            values: &wrong,
+        }],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("2 values for 3 elements"), "{e}");
+}

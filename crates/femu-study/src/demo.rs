@@ -183,7 +183,7 @@ fn write_maps(
     let vtu = opts.out.join("plate.vtu");
     write_shapes_vtu(
         &vtu,
-        model.mesh(),
+        model,
         dofs,
         updated.shapes.as_ref().subcols(6, 4),
         &names,

@@ -6,8 +6,7 @@ use crate::chart::method_label;
 use faer::MatRef;
 use femu_correlate::study::StudyPoint;
 use femu_fem::dof::DofMap;
-use femu_fem::mesh::Mesh;
-use femu_io::vtk::{CellField, PointField, write_vtu};
+use femu_io::vtk::{CellField, PointField, write_vtu_with};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -60,13 +59,14 @@ pub fn study_csv(points: &[StudyPoint]) -> String {
 
 /// Writes the columns of `x` (free-DOF vectors, e.g. mode shapes) as 3-component point fields
 /// named `names`, scattered to the nodes by [`DofMap::expand`] (zero on fixed DOFs), with the
-/// cell fields `cells`, to a VTK `.vtu` file for ParaView.
+/// cell fields `cells`, to a VTK `.vtu` file for ParaView: the model's solids, and its beams,
+/// rods, springs and bushings as lines with their sections ([`femu_io::vtk::vtu_string_with`]).
 ///
 /// # Errors
 /// Sizes that do not match the DOF map or the names, and the writer's errors (naming the file).
 pub fn write_shapes_vtu(
     path: &Path,
-    mesh: &Mesh,
+    model: &femu_fem::model::Model,
     dofs: &DofMap,
     x: MatRef<'_, f64>,
     names: &[String],
@@ -90,5 +90,11 @@ pub fn write_shapes_vtu(
             values: v,
         })
         .collect();
-    Ok(write_vtu(mesh, &points, cells, path)?)
+    Ok(write_vtu_with(
+        model.mesh(),
+        model.structural(),
+        &points,
+        cells,
+        path,
+    )?)
 }

@@ -361,7 +361,7 @@ pub fn run_study_file(
             let vtu = out.join("expanded.vtu");
             write_shapes_vtu(
                 &vtu,
-                model.model.mesh(),
+                &model.model,
                 &model.sys.dofs,
                 x.as_ref(),
                 &expanded_names(modes_t),

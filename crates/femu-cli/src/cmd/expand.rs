@@ -76,7 +76,7 @@ pub fn run(a: &ExpandArgs, quiet: bool) -> Result<(), CliError> {
     if let Some(path) = &a.vtu {
         write_shapes_vtu(
             path,
-            loaded.model.mesh(),
+            &loaded.model,
             &loaded.sys.dofs,
             x.as_ref(),
             &expanded_names(modes),

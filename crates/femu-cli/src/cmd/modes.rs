@@ -134,7 +134,7 @@ pub fn run(a: &ModesArgs, quiet: bool) -> Result<(), CliError> {
             .collect();
         write_shapes_vtu(
             path,
-            loaded.model.mesh(),
+            &loaded.model,
             &loaded.sys.dofs,
             result.vectors.as_ref(),
             &names,
