@@ -10,7 +10,9 @@
 //! is dependent), `*KINEMATIC COUPLING` and `*COUPLING` with `*KINEMATIC` (rigid links: the
 //! reference node gets rotations) or `*DISTRIBUTING` (weighted averages, with the weights of a
 //! `*SURFACE, TYPE=NODE`), `*INCLUDE`, `*STEP`, `*FREQUENCY`, `*END STEP` (docs/MATH.md,
-//! "Multipoint constraints").
+//! "Multipoint constraints"); beams `B31` and `B33` with `*BEAM SECTION` (`RECT`, `CIRC`, `PIPE`)
+//! or `*BEAM GENERAL SECTION` (`GENERAL`), springs `SPRING1`, `SPRING2`, `SPRINGA` with `*SPRING`
+//! (`structural.rs`; their nodes get rotations, which `*BOUNDARY` DOFs 4-6 then fix).
 //!
 //! The writer states multipoint constraints as `*EQUATION`s; the rotations of a rigid link's
 //! reference are the DOFs 1-3 of an extra node (set `FEMU_ROT`), as CalculiX's rotational nodes.
@@ -21,7 +23,7 @@
 //!   GENERTE`) is an error naming the nearest known spelling;
 //! - a keyword that cannot change `K` or `M` (output requests, loads, amplitudes, other steps) is
 //!   skipped with a warning;
-//! - a keyword that would change `K` or `M` and that femu cannot model (shells, beams, springs,
+//! - a keyword that would change `K` or `M` and that femu cannot model (shells, three-node beams,
 //!   `*RIGID BODY`, `*TIE`, parts and instances, other materials) is an error;
 //! - any other keyword is unknown: an error naming the nearest known spelling (`*BOUNDRY`: did you
 //!   mean `*BOUNDARY`?), or a warning with [`InpOptions::lenient`].
@@ -40,6 +42,7 @@ use std::path::{Path, PathBuf};
 
 mod model;
 mod parse;
+mod structural;
 mod write;
 
 use parse::*;
@@ -87,6 +90,9 @@ const READ: &[(&str, &[&str])] = &[
         ],
     ),
     ("INCLUDE", &["INPUT"]),
+    ("BEAM SECTION", &["ELSET", "MATERIAL", "SECTION"]),
+    ("BEAM GENERAL SECTION", &["ELSET", "SECTION", "DENSITY"]),
+    ("SPRING", &["ELSET"]),
     ("EQUATION", &[]),
     ("KINEMATIC COUPLING", &["REF NODE"]),
     (
@@ -177,14 +183,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
         "part/instance input: flatten the deck (nodes and elements at the top level)",
     ),
     (
-        "BEAM SECTION",
-        "beam elements are not supported (solids only)",
-    ),
-    (
-        "BEAM GENERAL SECTION",
-        "beam elements are not supported (solids only)",
-    ),
-    (
         "CONTACT PAIR",
         "contact changes the stiffness and is not supported",
     ),
@@ -223,7 +221,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
         "SHELL SECTION",
         "shell elements are not supported (solids only)",
     ),
-    ("SPRING", "spring elements are not supported yet"),
     ("TIE", "tied surfaces are not supported yet"),
     (
         "TRANSFORM",
@@ -428,6 +425,8 @@ pub struct InpDeck {
     pub warnings: Vec<Warning>,
     /// where each element was defined (for errors found later)
     element_lines: HashMap<u64, Location>,
+    /// beams and springs, their sections and sets
+    structural: structural::StructuralRecords,
     /// the file read (for errors that concern the whole deck)
     path: PathBuf,
 }

@@ -76,6 +76,7 @@ impl InpDeck {
                     source,
                 })?;
         }
+        structural::add_structural(&self.structural, &self.materials, &mut model)?;
         self.apply_links(&mut model)?;
         for b in &self.boundaries {
             let all: Vec<usize> = (b.first - 1..b.last).collect();
@@ -134,6 +135,11 @@ impl InpDeck {
         let mut connected = model.constrained_nodes();
         for el in model.mesh().elements() {
             for n in el.nodes {
+                connected[*n] = true;
+            }
+        }
+        for s in model.structural() {
+            for n in &s.nodes {
                 connected[*n] = true;
             }
         }

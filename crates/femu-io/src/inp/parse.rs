@@ -126,6 +126,11 @@ struct DeckBuilder {
     block: String,
     block_params: HashMap<String, String>,
     element_kind_now: Option<(ElementKind, Formulation, usize)>,
+    /// a beam or spring block: its type and node count
+    structural_now: Option<(structural::StructuralType, usize)>,
+    /// the first *BOUNDARY line that names rotations
+    rotation_boundary: Option<Location>,
+    structural: structural::StructuralRecords,
     incompatible_modes: Vec<u64>,
     element_buffer: Vec<String>,
     element_start: usize,
@@ -165,6 +170,7 @@ impl DeckBuilder {
         self.finish_material()?;
         self.block = String::new();
         self.element_kind_now = None;
+        self.structural_now = None;
         Ok(())
     }
 
@@ -212,6 +218,7 @@ impl DeckBuilder {
         self.block = name.clone();
         self.block_params = params.clone();
         self.element_kind_now = None;
+        self.structural_now = None;
         self.mass_block = None;
         let is_mass_element = || {
             params
@@ -230,6 +237,51 @@ impl DeckBuilder {
             "MATERIAL" => self.material_keyword(&params, l),
             "ELASTIC" | "DENSITY" => self.material_option_keyword(&name, &params, l),
             "SOLID SECTION" => self.section_keyword(&params, l),
+            "BEAM SECTION" | "BEAM GENERAL SECTION" => {
+                let elset = params
+                    .get("ELSET")
+                    .ok_or_else(|| err(l, format!("*{name} without ELSET=")))?;
+                let density = match params.get("DENSITY") {
+                    Some(d) => Some(
+                        parse_f64(d)
+                            .ok_or_else(|| err(l, format!("DENSITY={d:?} is not a number")))?,
+                    ),
+                    None => None,
+                };
+                self.structural.sections.push(structural::BeamSectionCard {
+                    elset: elset.to_ascii_uppercase(),
+                    material: params.get("MATERIAL").map(|m| m.to_ascii_uppercase()),
+                    section: params
+                        .get("SECTION")
+                        .map(|s| s.to_ascii_uppercase())
+                        .unwrap_or_default(),
+                    general: {
+                        if name == "BEAM GENERAL SECTION" {
+                            warn(
+                                warnings,
+                                l,
+                                "*BEAM GENERAL SECTION: the shear area of its B31 elements is taken as A (shear factor 1); femu's *BEAM SECTION shapes use 5/6 (RECT), 0.9 (CIRC), 1/2 (PIPE)".into(),
+                            );
+                        }
+                        name == "BEAM GENERAL SECTION"
+                    },
+                    density,
+                    lines: Vec::new(),
+                    line: at(l),
+                });
+                Ok(())
+            }
+            "SPRING" => {
+                let elset = params
+                    .get("ELSET")
+                    .ok_or_else(|| err(l, "*SPRING without ELSET=".into()))?;
+                self.structural.springs.push(structural::SpringCard {
+                    elset: elset.to_ascii_uppercase(),
+                    lines: Vec::new(),
+                    line: at(l),
+                });
+                Ok(())
+            }
             "BOUNDARY" => {
                 self.boundary_keyword(&params, l, warnings);
                 Ok(())
@@ -381,8 +433,16 @@ impl DeckBuilder {
         let ty = params
             .get("TYPE")
             .ok_or_else(|| err(l, "*ELEMENT without TYPE=".into()))?;
+        if let Some(st) = structural::StructuralType::of(ty).map_err(|r| err(l, r))? {
+            self.structural_now = Some(st);
+            if let Some(s) = params.get("ELSET") {
+                self.elem_set_of_block
+                    .push((s.to_ascii_uppercase(), Vec::new()));
+            }
+            return Ok(());
+        }
         let (kind, formulation, approx) = element_kind(ty).ok_or_else(|| {
-            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS)"))
+            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; B31, B33, SPRING1, SPRING2, SPRINGA)"))
         })?;
         if approx {
             warn(
@@ -512,7 +572,20 @@ impl DeckBuilder {
         match self.block.as_str() {
             "NODE" => self.node_line(&f, l, li, t),
             "ELEMENT" if self.mass_block.is_some() => self.mass_element_line(&f, l, li, t),
+            "ELEMENT" if self.structural_now.is_some() => self.structural_line(&f, l, t),
             "ELEMENT" => self.element_line(&f, lines, li),
+            "BEAM SECTION" | "BEAM GENERAL SECTION" => {
+                if let Some(c) = self.structural.sections.last_mut() {
+                    c.lines.push(f.iter().map(|s| s.to_string()).collect());
+                }
+                Ok(())
+            }
+            "SPRING" => {
+                if let Some(c) = self.structural.springs.last_mut() {
+                    c.lines.push(f.iter().map(|s| s.to_string()).collect());
+                }
+                Ok(())
+            }
             "MASS" => self.mass_line(&f, l, t),
             "NSET" | "ELSET" => {
                 let last = self.sets.last_mut().expect("set with the keyword");
@@ -611,6 +684,34 @@ impl DeckBuilder {
                 .and_then(|s| parse_f64(s))
                 .filter(|m| *m > 0.0)
                 .ok_or_else(|| err(l, format!("*MASS needs a positive mass, got {t:?}")))?;
+        }
+        Ok(())
+    }
+
+    /// A beam's or spring's line: its id and nodes.
+    fn structural_line(&mut self, f: &[&str], l: &Line, t: &str) -> Result<(), IoError> {
+        let (ty, nn) = self.structural_now.expect("checked");
+        let ids: Vec<u64> = f
+            .iter()
+            .filter(|s| !s.is_empty())
+            .map(|s| s.parse::<u64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| err(l, format!("element line has a non-integer entry: {t:?}")))?;
+        if ids.len() != nn + 1 {
+            return Err(err(
+                l,
+                format!("an element of this type is an id and {nn} nodes, got {t:?}"),
+            ));
+        }
+        self.structural
+            .elements
+            .push((ids[0], ty, ids[1..].to_vec(), at(l)));
+        if let Some(last) = self
+            .elem_set_of_block
+            .last_mut()
+            .filter(|_| self.block_params.contains_key("ELSET"))
+        {
+            last.1.push(ids[0]);
         }
         Ok(())
     }
@@ -744,8 +845,9 @@ impl DeckBuilder {
                 "DOFs above 6 (temperature, pressure) do not exist here: ignored".into(),
             );
         }
-        if last > 3 {
-            warn(warnings, l, "DOFs 4-6 (rotations) exist only on coupling reference nodes: ignored on other nodes".into());
+        if last > 3 && self.rotation_boundary.is_none() {
+            // said at the end, when no beam or spring gave nodes rotations
+            self.rotation_boundary = Some(at(l));
         }
         if first <= 6 {
             self.boundaries.push(Boundary {
@@ -901,6 +1003,13 @@ impl DeckBuilder {
             });
         }
         self.finish_material()?;
+        if let (Some(l), true) = (&self.rotation_boundary, self.structural.elements.is_empty()) {
+            warnings.push(Warning {
+                path: l.path.clone(),
+                line: l.line,
+                message: "DOFs 4-6 (rotations) exist only on coupling reference nodes, beams and springs: ignored on other nodes".into(),
+            });
+        }
         if let Some(c) = self.mass_cards.iter().find(|c| c.mass.is_nan()) {
             return Err(IoError::Parse {
                 path: c.line.path.clone(),
@@ -921,7 +1030,7 @@ impl DeckBuilder {
                 "the deck defines no nodes (*NODE)".into()
             }));
         }
-        if self.elements.is_empty() {
+        if self.elements.is_empty() && self.structural.elements.is_empty() {
             return Err(whole(format!(
                 "the deck defines {} nodes and no elements (*ELEMENT, TYPE=C3D8 and the other solids)",
                 self.nodes.len()
@@ -932,9 +1041,19 @@ impl DeckBuilder {
             mesh.add_node_set(name.clone(), ids)
                 .map_err(|e| whole(format!("node set {name}: {e}")))?;
         }
+        // a set's solids are a mesh set, its beams and springs a structural one
+        let structural_ids: std::collections::HashSet<u64> =
+            self.structural.elements.iter().map(|e| e.0).collect();
         for (name, ids) in &elem_sets {
-            mesh.add_element_set(name.clone(), ids)
-                .map_err(|e| whole(format!("element set {name}: {e}")))?;
+            let (beams, solids): (Vec<u64>, Vec<u64>) =
+                ids.iter().partition(|id| structural_ids.contains(id));
+            if !solids.is_empty() || beams.is_empty() {
+                mesh.add_element_set(name.clone(), &solids)
+                    .map_err(|e| whole(format!("element set {name}: {e}")))?;
+            }
+            if !beams.is_empty() {
+                self.structural.sets.insert(name.clone(), beams);
+            }
         }
         let point_masses = self.point_masses(lines, &mesh, &elem_sets)?;
         Ok(InpDeck {
@@ -949,6 +1068,7 @@ impl DeckBuilder {
             incompatible_modes: self.incompatible_modes,
             warnings: std::mem::take(warnings),
             element_lines,
+            structural: std::mem::take(&mut self.structural),
             path: path.to_path_buf(),
         })
     }
@@ -992,15 +1112,18 @@ impl DeckBuilder {
         for set in self.sets.drain(..) {
             let l = &lines[set.line];
             let ids = if set.generate {
-                generated_ids(&set, l, mesh)?
+                generated_ids(&set, l, mesh, self.structural.elements.len())?
             } else {
                 let known = if set.is_node { &node_sets } else { &elem_sets };
                 listed_ids(&set, l, known)?
             };
+            let structural = &self.structural.elements;
             let (what, exists): (&str, &dyn Fn(&u64) -> bool) = if set.is_node {
                 ("node", &|id| mesh.node_index(*id).is_some())
             } else {
-                ("element", &|id| mesh.element_index(*id).is_some())
+                ("element", &|id| {
+                    mesh.element_index(*id).is_some() || structural.iter().any(|e| e.0 == *id)
+                })
             };
             // every id listed here must exist: the error names this set and its line
             if let Some(bad) = ids.iter().find(|id| !exists(id)) {
@@ -1086,7 +1209,12 @@ impl DeckBuilder {
 
 /// `*NSET/*ELSET, GENERATE`: first, last[, increment] ranges; a range longer than the model is an
 /// error before it is an allocation.
-fn generated_ids(set: &SetBlock, l: &Line, mesh: &Mesh) -> Result<Vec<u64>, IoError> {
+fn generated_ids(
+    set: &SetBlock,
+    l: &Line,
+    mesh: &Mesh,
+    structural: usize,
+) -> Result<Vec<u64>, IoError> {
     let tokens = &set.tokens;
     let nums: Result<Vec<u64>, _> = tokens.iter().map(|s| s.parse::<u64>()).collect();
     let nums = nums.map_err(|_| err(l, format!("GENERATE needs integers, got {tokens:?}")))?;
@@ -1106,7 +1234,7 @@ fn generated_ids(set: &SetBlock, l: &Line, mesh: &Mesh) -> Result<Vec<u64>, IoEr
         let (have, what) = if set.is_node {
             (mesh.node_count(), "nodes")
         } else {
-            (mesh.element_count(), "elements")
+            (mesh.element_count() + structural, "elements")
         };
         let count = (b - a) / inc + 1;
         if count > have as u64 {

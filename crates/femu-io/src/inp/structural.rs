@@ -1,0 +1,510 @@
+//! Beams and springs of an Abaqus/CalculiX deck: `B31` (shear-flexible) and `B33`
+//! (Euler-Bernoulli) two-node beams with `*BEAM SECTION` (`RECT`, `CIRC`, `PIPE`) or `*BEAM
+//! GENERAL SECTION` (`GENERAL`), and `SPRING1`, `SPRING2`, `SPRINGA` with `*SPRING`, as the
+//! Abaqus Keywords Reference defines them, into femu's structural elements
+//! (docs/MATH.md, "Beams, springs and bushings").
+//!
+//! Section axes: Abaqus' `n1` (the second data line; `(0, 0, -1)` when omitted, Abaqus' default)
+//! is femu's orientation vector, so femu's local `y` is the section's 1-axis and `z` its 2-axis;
+//! femu's `I1` (bending with displacement along `y`) is Abaqus' `I22`, its `I2` is `I11`.
+
+use super::{Location, Material};
+use crate::IoError;
+use femu_fem::material::Elasticity;
+use femu_fem::model::Model;
+use femu_fem::structural::{
+    Beam, BeamSection, Part, Spring, SpringEnd, StructuralElement, StructuralKind,
+};
+use std::collections::{BTreeMap, HashMap};
+use std::f64::consts::PI;
+
+/// The structural element types femu reads from a deck.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum StructuralType {
+    /// Shear-flexible two-node beam.
+    B31,
+    /// Euler-Bernoulli two-node beam.
+    B33,
+    /// A spring from a DOF to ground.
+    Spring1,
+    /// A spring between two DOFs.
+    Spring2,
+    /// An axial spring between two nodes.
+    SpringA,
+}
+
+impl StructuralType {
+    /// The type of an `*ELEMENT, TYPE=` and its node count; `Err` with the reason for a beam,
+    /// pipe or truss type femu does not read; `Ok(None)` for any other type.
+    pub(super) fn of(ty: &str) -> Result<Option<(Self, usize)>, String> {
+        Ok(Some(match ty.to_ascii_uppercase().as_str() {
+            "B31" | "B31H" => (Self::B31, 2),
+            "B33" | "B33H" => (Self::B33, 2),
+            "SPRING1" => (Self::Spring1, 1),
+            "SPRING2" => (Self::Spring2, 2),
+            "SPRINGA" => (Self::SpringA, 2),
+            t @ ("B32" | "B32H" | "B31OS" | "B32OS" | "PIPE31" | "PIPE32" | "B21" | "B22"
+            | "B23" | "T3D2" | "T3D3" | "T2D2") => {
+                return Err(format!(
+                    "element type {t} is not read: femu's beams are the two-node B31 and B33 in space (three-node, open-section, pipe, planar beams and trusses are not built)"
+                ));
+            }
+            _ => return Ok(None),
+        }))
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Self::B31 => "B31",
+            Self::B33 => "B33",
+            Self::Spring1 => "SPRING1",
+            Self::Spring2 => "SPRING2",
+            Self::SpringA => "SPRINGA",
+        }
+    }
+}
+
+/// A `*BEAM SECTION` or `*BEAM GENERAL SECTION` with its data lines.
+#[derive(Debug, Clone)]
+pub(super) struct BeamSectionCard {
+    pub(super) elset: String,
+    pub(super) material: Option<String>,
+    pub(super) section: String,
+    pub(super) general: bool,
+    pub(super) density: Option<f64>,
+    pub(super) lines: Vec<Vec<String>>,
+    pub(super) line: Location,
+}
+
+/// A `*SPRING` with its data lines.
+#[derive(Debug, Clone)]
+pub(super) struct SpringCard {
+    pub(super) elset: String,
+    pub(super) lines: Vec<Vec<String>>,
+    pub(super) line: Location,
+}
+
+/// The structural records of a deck: elements `(id, type, node ids, where)`, sections,
+/// springs and the sets of structural element ids.
+#[derive(Debug, Clone, Default)]
+pub(super) struct StructuralRecords {
+    pub(super) elements: Vec<(u64, StructuralType, Vec<u64>, Location)>,
+    pub(super) sections: Vec<BeamSectionCard>,
+    pub(super) springs: Vec<SpringCard>,
+    pub(super) sets: BTreeMap<String, Vec<u64>>,
+}
+
+fn at_err(l: &Location, reason: String) -> IoError {
+    IoError::Parse {
+        path: l.path.clone(),
+        line: l.line,
+        reason,
+    }
+}
+
+fn number(l: &Location, what: &str, s: &str) -> Result<f64, IoError> {
+    super::parse_f64(s).ok_or_else(|| at_err(l, format!("{what}: {s:?} is not a number")))
+}
+
+/// `(E, G, rho)` of a material.
+fn moduli(m: &Material) -> Result<(f64, f64, f64), String> {
+    match m.elasticity {
+        Elasticity::Isotropic { e, nu } => Ok((e, e / (2.0 * (1.0 + nu)), m.density)),
+        _ => Err(format!(
+            "material {} is anisotropic: a beam takes an isotropic *ELASTIC",
+            m.name
+        )),
+    }
+}
+
+/// A section's `(A, femu I1, femu I2, J, shear factors)` and its material `(E, G, rho)`.
+type SectionValues = ((f64, f64, f64, f64, [f64; 2]), (f64, f64, f64));
+
+fn section_values(
+    c: &BeamSectionCard,
+    materials: &BTreeMap<String, Material>,
+) -> Result<SectionValues, IoError> {
+    let l = &c.line;
+    let dims: Vec<f64> = c
+        .lines
+        .first()
+        .ok_or_else(|| {
+            at_err(
+                l,
+                "the section's dimensions (its first data line) are missing".into(),
+            )
+        })?
+        .iter()
+        .filter(|s| !s.is_empty())
+        .map(|s| number(l, "a section dimension", s))
+        .collect::<Result<_, _>>()?;
+    let need = |n: usize| -> Result<(), IoError> {
+        if dims.len() < n || dims[..n].iter().any(|d| !(*d > 0.0)) {
+            return Err(at_err(
+                l,
+                format!(
+                    "SECTION={} needs {n} positive values on its first data line, got {dims:?}",
+                    c.section
+                ),
+            ));
+        }
+        Ok(())
+    };
+    let material = |name: &Option<String>| -> Result<(f64, f64, f64), IoError> {
+        let name = name
+            .as_ref()
+            .ok_or_else(|| at_err(l, "*BEAM SECTION without MATERIAL=".into()))?;
+        let m = materials.get(name).ok_or_else(|| {
+            at_err(
+                l,
+                format!("*BEAM SECTION names material {name}, which no *MATERIAL defines"),
+            )
+        })?;
+        moduli(m).map_err(|r| at_err(l, r))
+    };
+    let values = match (c.general, c.section.as_str()) {
+        (false, "RECT") => {
+            need(2)?;
+            // a along the 1-axis (femu's y), b along the 2-axis
+            let (a, b) = (dims[0], dims[1]);
+            let (long, short) = if a > b { (a, b) } else { (b, a) };
+            let j = long
+                * short.powi(3)
+                * (1.0 / 3.0 - 0.21 * short / long * (1.0 - short.powi(4) / (12.0 * long.powi(4))));
+            (
+                (
+                    a * b,
+                    b * a.powi(3) / 12.0,
+                    a * b.powi(3) / 12.0,
+                    j,
+                    [5.0 / 6.0; 2],
+                ),
+                material(&c.material)?,
+            )
+        }
+        (false, "CIRC") => {
+            need(1)?;
+            let r = dims[0];
+            let i = PI * r.powi(4) / 4.0;
+            (
+                (PI * r * r, i, i, 2.0 * i, [0.9; 2]),
+                material(&c.material)?,
+            )
+        }
+        (false, "PIPE") => {
+            need(2)?;
+            let (r, t) = (dims[0], dims[1]);
+            if t >= r {
+                return Err(at_err(
+                    l,
+                    format!("PIPE wall {t} is not thinner than its radius {r}"),
+                ));
+            }
+            let ri = r - t;
+            let i = PI * (r.powi(4) - ri.powi(4)) / 4.0;
+            (
+                (PI * (r * r - ri * ri), i, i, 2.0 * i, [0.5; 2]),
+                material(&c.material)?,
+            )
+        }
+        (true, "GENERAL") => {
+            // A, I11, I12, I22, J; then n1; then E, G
+            if dims.len() < 5
+                || [dims[0], dims[1], dims[3], dims[4]]
+                    .iter()
+                    .any(|d| !(*d > 0.0))
+            {
+                return Err(at_err(
+                    l,
+                    format!(
+                        "SECTION=GENERAL needs A, I11, I12, I22, J (positive but I12), got {dims:?}"
+                    ),
+                ));
+            }
+            if dims[2] != 0.0 {
+                return Err(at_err(
+                    l,
+                    format!(
+                        "I12 = {} couples the bending planes; femu builds beams on principal axes",
+                        dims[2]
+                    ),
+                ));
+            }
+            let eg: Vec<f64> = c
+                .lines
+                .get(2)
+                .ok_or_else(|| {
+                    at_err(
+                        l,
+                        "SECTION=GENERAL needs E and G on its third data line".into(),
+                    )
+                })?
+                .iter()
+                .filter(|s| !s.is_empty())
+                .map(|s| number(l, "E or G", s))
+                .collect::<Result<_, _>>()?;
+            let [e, g, ..] = eg[..] else {
+                return Err(at_err(
+                    l,
+                    "SECTION=GENERAL needs E and G on its third data line".into(),
+                ));
+            };
+            let rho = c.density.unwrap_or(0.0);
+            ((dims[0], dims[3], dims[1], dims[4], [1.0; 2]), (e, g, rho))
+        }
+        (general, other) => {
+            return Err(at_err(
+                l,
+                format!(
+                    "{} SECTION={other} is not read (femu reads {})",
+                    if general {
+                        "*BEAM GENERAL SECTION,"
+                    } else {
+                        "*BEAM SECTION,"
+                    },
+                    if general {
+                        "GENERAL"
+                    } else {
+                        "RECT, CIRC and PIPE"
+                    }
+                ),
+            ));
+        }
+    };
+    Ok(values)
+}
+
+/// The section's `n1` (its second data line), or Abaqus' default `(0, 0, -1)`.
+fn n1(c: &BeamSectionCard) -> Result<[f64; 3], IoError> {
+    let Some(line) = c.lines.get(1) else {
+        return Ok([0.0, 0.0, -1.0]);
+    };
+    let v: Vec<f64> = line
+        .iter()
+        .filter(|s| !s.is_empty())
+        .map(|s| number(&c.line, "a component of n1", s))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [a, b, c3, ..] => Ok([a, b, c3]),
+        _ => Err(at_err(
+            &c.line,
+            format!("n1 needs three components, got {v:?}"),
+        )),
+    }
+}
+
+/// Adds the deck's beams and springs to `model` and their element sets.
+///
+/// # Errors
+/// An element without a section (or spring definition), an unknown material, a bad value, and
+/// the model's errors, each with the line that defined it.
+pub(super) fn add_structural(
+    records: &StructuralRecords,
+    materials: &BTreeMap<String, Material>,
+    model: &mut Model,
+) -> Result<(), IoError> {
+    // the section (or spring card) of each element, by its set
+    let mut section_of: HashMap<u64, usize> = HashMap::new();
+    for (k, c) in records.sections.iter().enumerate() {
+        let ids = records.sets.get(&c.elset).ok_or_else(|| {
+            at_err(
+                &c.line,
+                format!(
+                    "the section names element set {}, which holds no beam of the deck",
+                    c.elset
+                ),
+            )
+        })?;
+        for id in ids {
+            section_of.entry(*id).or_insert(k);
+        }
+    }
+    let mut spring_of: HashMap<u64, usize> = HashMap::new();
+    for (k, c) in records.springs.iter().enumerate() {
+        let ids = records.sets.get(&c.elset).ok_or_else(|| {
+            at_err(
+                &c.line,
+                format!(
+                    "*SPRING names element set {}, which holds no spring of the deck",
+                    c.elset
+                ),
+            )
+        })?;
+        for id in ids {
+            spring_of.entry(*id).or_insert(k);
+        }
+    }
+    let mut values: HashMap<usize, SectionValues> = HashMap::new();
+    for (id, ty, node_ids, l) in &records.elements {
+        let nodes = node_ids
+            .iter()
+            .map(|n| {
+                model.mesh().node_index(*n).ok_or_else(|| {
+                    at_err(
+                        l,
+                        format!("element {id} refers to node {n}, which the deck does not define"),
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let kind = match ty {
+            StructuralType::B31 | StructuralType::B33 => {
+                let k = *section_of.get(id).ok_or_else(|| {
+                    at_err(
+                        l,
+                        format!(
+                            "{} element {id} has no *BEAM SECTION (none names a set that holds it)",
+                            ty.name()
+                        ),
+                    )
+                })?;
+                let c = &records.sections[k];
+                let ((area, i1, i2, j, kf), (e, g, rho)) = match values.entry(k) {
+                    std::collections::hash_map::Entry::Occupied(v) => *v.get(),
+                    std::collections::hash_map::Entry::Vacant(v) => {
+                        *v.insert(section_values(c, materials)?)
+                    }
+                };
+                StructuralKind::Beam(Beam {
+                    e,
+                    g,
+                    rho,
+                    section: BeamSection {
+                        area,
+                        i1,
+                        i2,
+                        j,
+                        shear: (*ty == StructuralType::B31).then_some(kf),
+                        nsm: 0.0,
+                    },
+                    orientation: n1(c)?,
+                    offsets: [[0.0; 3]; 2],
+                    lumped_torsion: false,
+                })
+            }
+            _ => {
+                let k = *spring_of.get(id).ok_or_else(|| {
+                    at_err(
+                        l,
+                        format!(
+                            "{} element {id} has no *SPRING (none names a set that holds it)",
+                            ty.name()
+                        ),
+                    )
+                })?;
+                spring(&records.springs[k], *ty, *id, &nodes, model)?
+            }
+        };
+        model
+            .add_structural(StructuralElement {
+                id: *id,
+                nodes,
+                kind,
+            })
+            .map_err(|source| IoError::Model {
+                path: l.path.clone(),
+                line: l.line,
+                source,
+            })?;
+    }
+    for (name, ids) in &records.sets {
+        model
+            .add_structural_set(name.clone(), ids)
+            .map_err(|e| IoError::Content {
+                path: records
+                    .elements
+                    .first()
+                    .map(|e| e.3.path.clone())
+                    .unwrap_or_default(),
+                reason: e.to_string(),
+            })?;
+    }
+    Ok(())
+}
+
+/// A spring element from its `*SPRING`: SPRING1 (a DOF to ground) and SPRING2 (two DOFs) take the
+/// DOFs on the first data line and the stiffness on the second; SPRINGA (along the line between
+/// its nodes) its stiffness on the one data line (an empty first line is not kept).
+fn spring(
+    c: &SpringCard,
+    ty: StructuralType,
+    id: u64,
+    nodes: &[usize],
+    model: &Model,
+) -> Result<StructuralKind, IoError> {
+    let l = &c.line;
+    let value = |row: usize, k: usize, what: &str| -> Result<&str, IoError> {
+        c.lines
+            .get(row)
+            .and_then(|r| r.get(k))
+            .map(String::as_str)
+            .filter(|s| !s.is_empty())
+            .ok_or_else(|| {
+                at_err(
+                    l,
+                    format!("*SPRING for element {id} ({}) lacks {what}", ty.name()),
+                )
+            })
+    };
+    let dof = |k: usize| -> Result<(Part, [f64; 3]), IoError> {
+        let s = value(0, k, "its degree of freedom")?;
+        let d: usize = s
+            .parse()
+            .ok()
+            .filter(|d| (1..=6).contains(d))
+            .ok_or_else(|| at_err(l, format!("*SPRING: degree of freedom {s:?} is not 1 to 6")))?;
+        let mut dir = [0.0; 3];
+        dir[(d - 1) % 3] = 1.0;
+        Ok((
+            if d > 3 {
+                Part::Rotations
+            } else {
+                Part::Translations
+            },
+            dir,
+        ))
+    };
+    let (a, b, k) = match ty {
+        StructuralType::Spring1 => {
+            let (p, d) = dof(0)?;
+            let k = number(l, "the stiffness", value(1, 0, "its stiffness")?)?;
+            ((p, d), None, k)
+        }
+        StructuralType::Spring2 => {
+            let (pa, da) = dof(0)?;
+            let (pb, db) = dof(1)?;
+            let k = number(l, "the stiffness", value(1, 0, "its stiffness")?)?;
+            ((pa, da), Some((pb, db)), k)
+        }
+        _ => {
+            let x = model.mesh().coords();
+            let (xa, xb) = (x[nodes[0]], x[nodes[1]]);
+            let d = [xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]];
+            let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            if !(n > 0.0) {
+                return Err(at_err(
+                    l,
+                    format!("SPRINGA element {id}: its nodes coincide, so it has no axis"),
+                ));
+            }
+            let d = [d[0] / n, d[1] / n, d[2] / n];
+            let row = c.lines.len().saturating_sub(1);
+            let k = number(l, "the stiffness", value(row, 0, "its stiffness")?)?;
+            ((Part::Translations, d), Some((Part::Translations, d)), k)
+        }
+    };
+    Ok(StructuralKind::Spring(Spring {
+        k,
+        ge: 0.0,
+        a: SpringEnd {
+            node: nodes[0],
+            part: a.0,
+            direction: a.1,
+        },
+        b: b.map(|(part, direction)| SpringEnd {
+            node: *nodes.last().expect("two nodes"),
+            part,
+            direction,
+        }),
+    }))
+}
