@@ -336,6 +336,25 @@ impl StructuralElement {
     /// [`FemError::InvalidStructural`] naming the element and the value.
     pub fn validate(&self) -> Result<(), FemError> {
         let id = self.id;
+        let count = self.nodes.len();
+        let wanted = match &self.kind {
+            StructuralKind::Beam(_) | StructuralKind::Rod(_) => count == 2,
+            StructuralKind::Spring(s) => {
+                let mut ends = vec![s.a.node];
+                ends.extend(s.b.map(|b| b.node));
+                ends.iter().all(|n| self.nodes.contains(n)) && (1..=2).contains(&count)
+            }
+            StructuralKind::Bushing(_) => (1..=2).contains(&count),
+        };
+        if !wanted {
+            return Err(FemError::InvalidStructural {
+                element: id,
+                reason: format!(
+                    "{count} nodes {:?} do not fit the element (beams and rods two, springs and bushings one or two, a spring's ends among them)",
+                    self.nodes
+                ),
+            });
+        }
         match &self.kind {
             StructuralKind::Beam(b) => {
                 check_positive(id, "Young's modulus E", b.e, false)?;

@@ -146,6 +146,18 @@ PSOLID,1,1,3,2,,FULL\nCORD2R,3,0,0.,0.,0.,0.,0.,1.\n,1.,0.,0.\nMAT1,1,2.1+11,8.+
 SPC1,1,123,2,,,,,,+S\n+S,3\nEIGRL,2,,,3\nPARAM,COUPMASS,1\nCONM2,5,4,,1.,.1\nENDDATA\n"
             .to_vec(),
     ));
+    // bars, beams, rods, springs and bushings with their properties (assembled when read)
+    decks.push((
+        PathBuf::from("structural.bdf"),
+        b"SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.,7\nGRID,3,,2.,0.,0.\n\
+GRID,4,,2.,1.,0.\nCORD2R,7,,0.,0.,0.,0.,0.,1.,+C\n+C,1.,1.,0.\nMAT1,1,2.1+11,,0.3,7850.\n\
+CBAR,1,1,1,2,0.,1.,0.,,+B\n+B,,,0.,0.,0.1\nPBAR,1,1,1.e-4,1.e-8,2.e-8,3.e-8,0.5,,+P\n+P,,,,,,,,,+Q\n+Q,0.8,0.8\n\
+CBEAM,2,2,2,3,4\nPBEAML,2,1,,I\n,0.2,0.1,0.1,0.01,0.01,0.01\nCROD,3,3,1,3\nPROD,3,1,1.e-4,1.e-8\n\
+CONROD,4,1,2,1,2.e-4\nCELAS1,5,6,2,4,3,4\nPELAS,6,1.e3,0.01\nCELAS2,7,2.e3,3,2\n\
+CBUSH,8,9,3,4,,,,7\nPBUSH,9,K,1.e4,1.e4,1.e4,1.e2,1.e2,1.e2\n,B,1.\nBAROR,,1,,,0.,0.,1.\n\
+CONM2,10,3,,1.,,,,,+M\n+M,0.1,,0.1,,,0.1\nSPC1,1,123456,1\nENDDATA\n"
+            .to_vec(),
+    ));
     let n = decks.len();
     let config = config();
     proptest!(config, |(k in 0..n, edits in prop::collection::vec(edit(), 1..6))| {
@@ -156,6 +168,9 @@ SPC1,1,123,2,,,,,,+S\n+S,3\nEIGRL,2,,,3\nPARAM,COUPMASS,1\nCONM2,5,4,,1.,.1\nEND
                 let options = femu_io::nastran::BdfOptions { lenient };
                 if let Ok(deck) = femu_io::nastran::parse_bdf(&text, &decks[k].0, &options) {
                     let _ = deck.model.dof_map();
+                    if !deck.model.structural().is_empty() {
+                        let _ = deck.model.assemble(deck.mass);
+                    }
                 }
             }
         }

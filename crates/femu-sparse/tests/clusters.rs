@@ -610,3 +610,46 @@ fn massless_dofs_leave_the_condensed_spectrum() {
         );
     }
 }
+
+/// The same chain with few masses, asked for up to every finite eigenvalue: the request is
+/// measured against the DOFs with mass (six here, among 13 DOFs), not the matrix's order, so
+/// that asking five or six of six converges and asking seven is refused as too many.
+#[test]
+fn massless_dofs_with_requests_near_the_finite_count() {
+    let masses = 6;
+    let n = 2 * masses + 1;
+    let mut k = TriMat::new((n, n));
+    let mut m = TriMat::new((n, n));
+    for i in 0..n {
+        k.add_triplet(i, i, 2.0);
+        if i + 1 < n {
+            k.add_triplet(i, i + 1, -1.0);
+            k.add_triplet(i + 1, i, -1.0);
+        }
+        m.add_triplet(i, i, if i % 2 == 1 { 1.0 } else { 0.0 });
+    }
+    let (k, m): (SparseMatrix, SparseMatrix) = (k.to_csc(), m.to_csc());
+    for want in [3, 4, 5, 6] {
+        let modes = eigs(&k, &m, Which::Lowest(want), &EigenOptions::default()).unwrap();
+        assert!(modes.sturm.verified(), "{want}: {:?}", modes.sturm);
+        assert_eq!(modes.vectors.nrows(), n);
+        for (j, got) in modes.values.iter().enumerate() {
+            let exact = 1.0 - ((j + 1) as f64 * std::f64::consts::PI / (masses + 1) as f64).cos();
+            assert!(
+                (got / exact - 1.0).abs() < 1e-10,
+                "{want}: mode {j}: {got} against {exact}"
+            );
+        }
+    }
+    let e = eigs(&k, &m, Which::Lowest(7), &EigenOptions::default()).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            SparseError::TooManyModes {
+                requested: 7,
+                dim: 6
+            }
+        ),
+        "{e}"
+    );
+}

@@ -520,7 +520,12 @@ impl<'a> Pencil<'a> {
         stats: &mut EigenStats,
         started: Instant,
     ) -> Result<Modes, SparseError> {
-        let n = self.dim();
+        // the number of finite eigenvalues: the DOFs with mass (massless DOFs, a lumped beam's
+        // rotations, have a zero row in M and an infinite eigenvalue)
+        let n = crate::csc::diagonal(self.m)
+            .iter()
+            .filter(|d| **d > 0.0)
+            .count();
         let requested = match which {
             Which::Lowest(k) => k,
             Which::Nearest { count, .. } => count,
@@ -643,7 +648,7 @@ impl<'a> Pencil<'a> {
             }
         }
         if want == 0 {
-            return Ok(no_modes(n, requested, sigma, band, stats));
+            return Ok(no_modes(self.dim(), requested, sigma, band, stats));
         }
         let mut lanczos = Lanczos::new(self, op, sigma, params, &known);
         lanczos.probed = probed;
