@@ -1,6 +1,6 @@
 //! Structural elements on nodes with rotations: two-node beams (Timoshenko, with Euler-Bernoulli
 //! as the shear-rigid limit), rods, scalar springs and bushings (docs/MATH.md, "Beams, springs
-//! and bushings").
+//! and bushings"), and 4-node shells ([`crate::shell`]).
 //!
 //! Each element's matrices are formed in closed form (beams: the exact stiffness of a uniform
 //! Timoshenko beam and the consistent mass of its interdependent interpolation) on the DOFs it
@@ -134,6 +134,8 @@ pub enum StructuralKind {
     Spring(Spring),
     /// A bushing.
     Bushing(Bushing),
+    /// A 4-node shell ([`crate::shell`]).
+    Shell(crate::shell::Shell),
 }
 
 /// A structural element: the user's id, its nodes (internal indices) and what it is.
@@ -345,17 +347,21 @@ impl StructuralElement {
                 ends.iter().all(|n| self.nodes.contains(n)) && (1..=2).contains(&count)
             }
             StructuralKind::Bushing(_) => (1..=2).contains(&count),
+            StructuralKind::Shell(_) => {
+                count == 4 && (0..4).all(|i| (0..i).all(|j| self.nodes[i] != self.nodes[j]))
+            }
         };
         if !wanted {
             return Err(FemError::InvalidStructural {
                 element: id,
                 reason: format!(
-                    "{count} nodes {:?} do not fit the element (beams and rods two, springs and bushings one or two, a spring's ends among them)",
+                    "{count} nodes {:?} do not fit the element (beams and rods two, springs and bushings one or two, a spring's ends among them, shells four distinct)",
                     self.nodes
                 ),
             });
         }
         match &self.kind {
+            StructuralKind::Shell(s) => s.validate(id)?,
             StructuralKind::Beam(b) => {
                 check_positive(id, "Young's modulus E", b.e, false)?;
                 check_positive(id, "the shear modulus G", b.g, false)?;
@@ -436,7 +442,9 @@ impl StructuralElement {
     pub fn parts(&self) -> Vec<(usize, Part)> {
         let both = |n: usize| [(n, Part::Translations), (n, Part::Rotations)];
         match &self.kind {
-            StructuralKind::Beam(_) => self.nodes.iter().flat_map(|n| both(*n)).collect(),
+            StructuralKind::Beam(_) | StructuralKind::Shell(_) => {
+                self.nodes.iter().flat_map(|n| both(*n)).collect()
+            }
             StructuralKind::Rod(r) => {
                 if r.j > 0.0 {
                     self.nodes.iter().flat_map(|n| both(*n)).collect()
@@ -485,6 +493,13 @@ impl StructuralElement {
             }
             StructuralKind::Rod(r) => (r.rho * r.area + r.nsm) * length(),
             StructuralKind::Spring(_) | StructuralKind::Bushing(_) => 0.0,
+            StructuralKind::Shell(s) => {
+                // the two triangles of the quadrilateral
+                let x = |i: usize| coords[self.nodes[i]];
+                let tri = |a: V3, b: V3, c: V3| 0.5 * norm(cross(sub(b, a), sub(c, a)));
+                let area = tri(x(0), x(1), x(2)) + tri(x(0), x(2), x(3));
+                (s.rho * s.t + s.nsm) * area
+            }
         }
     }
 
@@ -513,6 +528,11 @@ impl StructuralElement {
         let parts = self.parts();
         let nd = 3 * parts.len();
         match &self.kind {
+            StructuralKind::Shell(s) => {
+                let x: [[f64; 3]; 4] = std::array::from_fn(|i| coords[self.nodes[i]]);
+                let (k, m) = crate::shell::matrices(s, &x, mass).map_err(bad)?;
+                Ok(StructuralMatrices { parts, k, m })
+            }
             StructuralKind::Beam(b) => {
                 let ends = [
                     add(coords[self.nodes[0]], b.offsets[0]),

@@ -12,5 +12,6 @@ mod fem {
     mod mesh;
     mod pyramids;
     mod refine;
+    mod shell;
     mod structural;
 }

@@ -70,12 +70,27 @@ pub fn vtu_string(
 
 /// The section values written as cell data of structural elements: `(area, I1, I2, J,
 /// stiffness)`, zero where they do not apply (a spring's stiffness, a bushing's largest).
-fn section_values(s: &StructuralElement) -> [f64; 5] {
+fn section_values(s: &StructuralElement) -> [f64; 6] {
     match &s.kind {
-        StructuralKind::Beam(b) => [b.section.area, b.section.i1, b.section.i2, b.section.j, 0.0],
-        StructuralKind::Rod(r) => [r.area, 0.0, 0.0, r.j, 0.0],
-        StructuralKind::Spring(k) => [0.0, 0.0, 0.0, 0.0, k.k],
-        StructuralKind::Bushing(b) => [0.0, 0.0, 0.0, 0.0, b.k.iter().fold(0.0, |m, v| v.max(m))],
+        StructuralKind::Beam(b) => [
+            b.section.area,
+            b.section.i1,
+            b.section.i2,
+            b.section.j,
+            0.0,
+            0.0,
+        ],
+        StructuralKind::Rod(r) => [r.area, 0.0, 0.0, r.j, 0.0, 0.0],
+        StructuralKind::Spring(k) => [0.0, 0.0, 0.0, 0.0, k.k, 0.0],
+        StructuralKind::Bushing(b) => [
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            b.k.iter().fold(0.0, |m, v| v.max(m)),
+            0.0,
+        ],
+        StructuralKind::Shell(sh) => [0.0, 0.0, 0.0, 0.0, 0.0, sh.t],
     }
 }
 
@@ -172,8 +187,12 @@ pub fn vtu_string_with(
         let _ = writeln!(s, "{}", ids.join(" "));
         off += st.nodes.len();
         offsets.push(off);
-        // VTK_LINE, or VTK_VERTEX for a grounded spring or bushing
-        types.push(if st.nodes.len() == 2 { 3 } else { 1 });
+        // VTK_QUAD for a shell, VTK_LINE, or VTK_VERTEX for a grounded spring or bushing
+        types.push(match st.nodes.len() {
+            4 => 9,
+            2 => 3,
+            _ => 1,
+        });
     }
     s.push_str("</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
     for o in offsets {
@@ -233,7 +252,10 @@ pub fn vtu_string_with(
         let _ = writeln!(s, "{}\n</DataArray>", v.join(" "));
     }
     if !structural.is_empty() {
-        for (k, name) in ["area", "I1", "I2", "J", "stiffness"].iter().enumerate() {
+        for (k, name) in ["area", "I1", "I2", "J", "stiffness", "thickness"]
+            .iter()
+            .enumerate()
+        {
             let v: Vec<String> = std::iter::repeat_n("0".to_string(), mesh.element_count())
                 .chain(
                     structural

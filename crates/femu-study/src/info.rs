@@ -44,8 +44,9 @@ fn structural_lines(s: &mut String, model: &femu_fem::model::Model) {
     let count = |f: fn(&StructuralKind) -> bool| all.iter().filter(|e| f(&e.kind)).count();
     let _ = writeln!(
         s,
-        "structural elements: {} ({} beams, {} rods, {} springs, {} bushings; nodes with rotations: {})",
+        "structural elements: {} ({} shells, {} beams, {} rods, {} springs, {} bushings; nodes with rotations: {})",
         all.len(),
+        count(|k| matches!(k, StructuralKind::Shell(_))),
         count(|k| matches!(k, StructuralKind::Beam(_))),
         count(|k| matches!(k, StructuralKind::Rod(_))),
         count(|k| matches!(k, StructuralKind::Spring(_))),

@@ -1,0 +1,373 @@
+//! The 4-node flat shell: a bilinear membrane, a Reissner-Mindlin plate whose transverse shear is
+//! interpolated from tying points (MITC4, Bathe and Dvorkin 1985), free of shear locking, and a
+//! drilling stiffness tying each node's in-plane rotation to the membrane's rotation
+//! (docs/MATH.md, "Shells").
+//!
+//! The element is formed in its own plane: `e1` along the mean of the edges 1-2 and 4-3, `n` the
+//! normal of the two mid-lines, `e2 = n x e1`; nodes off that plane (a warped quadrilateral) are
+//! projected onto it, up to a warp of [`MAX_WARP`].
+
+use crate::FemError;
+use crate::assembly::MassKind;
+
+/// The largest warp femu builds a flat quadrilateral for: the largest distance of a corner from
+/// the element's mean plane over the square root of its area (Nastran warns above 0.05).
+pub const MAX_WARP: f64 = 0.05;
+
+/// A shell's material and section (Nastran PSHELL with an isotropic MAT1, Abaqus *SHELL
+/// SECTION).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shell {
+    /// Young's modulus (Pa).
+    pub e: f64,
+    /// Poisson's ratio.
+    pub nu: f64,
+    /// Density (kg/m^3).
+    pub rho: f64,
+    /// Thickness (m).
+    pub t: f64,
+    /// The bending stiffness's factor over a solid section's `t^3 / 12` (Nastran's `12I/T^3`).
+    pub bending: f64,
+    /// The transverse shear factor (Nastran's `TS/T`, 5/6 for a solid section); `None`: no shear
+    /// flexibility (Nastran's blank MID3), built as a shear stiffness 1,000 times a solid
+    /// section's, which the tying points keep from locking.
+    pub shear: Option<f64>,
+    /// Non-structural mass per area (kg/m^2).
+    pub nsm: f64,
+}
+
+type V3 = [f64; 3];
+
+fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dot(a: V3, b: V3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: V3, b: V3) -> V3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn unit(a: V3) -> Option<V3> {
+    let n = dot(a, a).sqrt();
+    (n > 0.0 && n.is_finite()).then(|| [a[0] / n, a[1] / n, a[2] / n])
+}
+
+const CORNERS: [(f64, f64); 4] = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+
+/// Shape functions and their derivatives in `(xi, eta)`.
+fn shape(xi: f64, eta: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
+    let mut n = [0.0; 4];
+    let mut dxi = [0.0; 4];
+    let mut deta = [0.0; 4];
+    for (i, (a, b)) in CORNERS.iter().enumerate() {
+        n[i] = 0.25 * (1.0 + a * xi) * (1.0 + b * eta);
+        dxi[i] = 0.25 * a * (1.0 + b * eta);
+        deta[i] = 0.25 * b * (1.0 + a * xi);
+    }
+    (n, dxi, deta)
+}
+
+/// The axes of a shell's plane (rows `e1`, `e2`, `n`), its corners in that plane, and its warp.
+pub type ShellFrame = ([V3; 3], [[f64; 2]; 4], f64);
+
+/// The element's plane: its axes (rows `e1`, `e2`, `n`), its corners in that plane, and its warp.
+///
+/// # Errors
+/// A message for a degenerate quadrilateral.
+pub fn frame(x: &[V3; 4]) -> Result<ShellFrame, String> {
+    let c: V3 = std::array::from_fn(|k| 0.25 * (x[0][k] + x[1][k] + x[2][k] + x[3][k]));
+    let g1: V3 = std::array::from_fn(|k| 0.5 * (x[1][k] - x[0][k] + x[2][k] - x[3][k]));
+    let g2: V3 = std::array::from_fn(|k| 0.5 * (x[2][k] - x[1][k] + x[3][k] - x[0][k]));
+    let n = unit(cross(g1, g2))
+        .ok_or("its corners do not span a quadrilateral (collinear or coincident)")?;
+    let e1 = unit(g1).ok_or("its corners do not span a quadrilateral")?;
+    let e2 = cross(n, e1);
+    let mut local = [[0.0; 2]; 4];
+    let mut h: f64 = 0.0;
+    for i in 0..4 {
+        let d = sub(x[i], c);
+        local[i] = [dot(d, e1), dot(d, e2)];
+        h = h.max(dot(d, n).abs());
+    }
+    // area of the projected quadrilateral (shoelace)
+    let area = 0.5
+        * (0..4)
+            .map(|i| {
+                let j = (i + 1) % 4;
+                local[i][0] * local[j][1] - local[j][0] * local[i][1]
+            })
+            .sum::<f64>();
+    if !(area > 0.0) {
+        return Err(format!(
+            "its corners are not in order around it (area {area:e} in its own plane)"
+        ));
+    }
+    Ok(([e1, e2, n], local, h / area.sqrt()))
+}
+
+/// The shell's stiffness and mass (24 x 24, row-major) on `(u, v, w, theta_x, theta_y,
+/// theta_z)` of each corner in the basic frame. The lumped mass puts a quarter of the mass on
+/// each corner's translations and nothing on rotations; the consistent mass carries the section's
+/// rotary inertia on the bending rotations, none on the drilling rotation (a massless DOF).
+///
+/// # Errors
+/// A message for a degenerate, inverted (a non-positive Jacobian at a Gauss point) or warped
+/// quadrilateral.
+pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let (axes, p, warp) = frame(x)?;
+    if warp > MAX_WARP {
+        return Err(format!(
+            "it is warped: a corner lies {warp:.3} times the square root of its area from its mean plane, above femu's limit of {MAX_WARP} for a flat shell (split it into flatter elements)"
+        ));
+    }
+    let (e, nu, t) = (s.e, s.nu, s.t);
+    let g = e / (2.0 * (1.0 + nu));
+    let dm = e * t / (1.0 - nu * nu);
+    let db = s.bending * e * t.powi(3) / (12.0 * (1.0 - nu * nu));
+    let ds = s.shear.map_or(1000.0 * 5.0 / 6.0, |k| k) * g * t;
+    let plane = |d: f64| {
+        [
+            [d, d * nu, 0.0],
+            [d * nu, d, 0.0],
+            [0.0, 0.0, d * (1.0 - nu) / 2.0],
+        ]
+    };
+    let (cm, cb) = (plane(dm), plane(db));
+    let mut k = vec![0.0; 576];
+    let mut m = vec![0.0; 576];
+    let jac = |xi: f64, eta: f64| {
+        let (_, dxi, deta) = shape(xi, eta);
+        let mut j = [[0.0; 2]; 2];
+        for i in 0..4 {
+            j[0][0] += dxi[i] * p[i][0];
+            j[0][1] += dxi[i] * p[i][1];
+            j[1][0] += deta[i] * p[i][0];
+            j[1][1] += deta[i] * p[i][1];
+        }
+        j
+    };
+    // the covariant shear strain rows at a point: gamma_xi (along xi) or gamma_eta
+    let shear_row = |xi: f64, eta: f64, along_xi: bool| -> [f64; 24] {
+        let (nn, dxi, deta) = shape(xi, eta);
+        let j = jac(xi, eta);
+        let (d, r) = if along_xi { (dxi, j[0]) } else { (deta, j[1]) };
+        let mut row = [0.0; 24];
+        for i in 0..4 {
+            row[6 * i + 2] = d[i];
+            // beta_x = theta_y, beta_y = -theta_x: gamma = w_,s + beta . x_,s
+            row[6 * i + 4] = nn[i] * r[0];
+            row[6 * i + 3] = -nn[i] * r[1];
+        }
+        row
+    };
+    let (a_row, c_row) = (shear_row(0.0, 1.0, true), shear_row(0.0, -1.0, true));
+    let (b_row, d_row) = (shear_row(1.0, 0.0, false), shear_row(-1.0, 0.0, false));
+    let gp = 1.0 / 3f64.sqrt();
+    let mut area = 0.0;
+    let add = |k: &mut Vec<f64>, b: &[[f64; 24]], d: &[[f64; 3]; 3], n: usize, w: f64| {
+        for r in 0..24 {
+            for c in 0..24 {
+                let mut v = 0.0;
+                for a in 0..n {
+                    for bb in 0..n {
+                        v += b[a][r] * d[a][bb] * b[bb][c];
+                    }
+                }
+                k[r * 24 + c] += w * v;
+            }
+        }
+    };
+    for (xi, eta) in [(-gp, -gp), (gp, -gp), (gp, gp), (-gp, gp)] {
+        let (nn, dxi, deta) = shape(xi, eta);
+        let j = jac(xi, eta);
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if !(det > 0.0) {
+            return Err(format!(
+                "its Jacobian is {det:e} at a Gauss point: the quadrilateral is inverted or degenerate"
+            ));
+        }
+        area += det;
+        let inv = [
+            [j[1][1] / det, -j[0][1] / det],
+            [-j[1][0] / det, j[0][0] / det],
+        ];
+        let mut nx = [0.0; 4];
+        let mut ny = [0.0; 4];
+        for i in 0..4 {
+            nx[i] = inv[0][0] * dxi[i] + inv[0][1] * deta[i];
+            ny[i] = inv[1][0] * dxi[i] + inv[1][1] * deta[i];
+        }
+        let mut bm = [[0.0; 24]; 3];
+        let mut bb = [[0.0; 24]; 3];
+        for i in 0..4 {
+            bm[0][6 * i] = nx[i];
+            bm[1][6 * i + 1] = ny[i];
+            bm[2][6 * i] = ny[i];
+            bm[2][6 * i + 1] = nx[i];
+            // kappa = (beta_x,x, beta_y,y, beta_x,y + beta_y,x), beta_x = theta_y, beta_y = -theta_x
+            bb[0][6 * i + 4] = nx[i];
+            bb[1][6 * i + 3] = -ny[i];
+            bb[2][6 * i + 4] = ny[i];
+            bb[2][6 * i + 3] = -nx[i];
+        }
+        // MITC4: gamma_xi from A (0, 1) and C (0, -1), gamma_eta from B (1, 0) and D (-1, 0),
+        // then (gamma_xz, gamma_yz) = J^-1 (gamma_xi, gamma_eta)
+        let mut gxi = [0.0; 24];
+        let mut geta = [0.0; 24];
+        for c in 0..24 {
+            gxi[c] = 0.5 * (1.0 + eta) * a_row[c] + 0.5 * (1.0 - eta) * c_row[c];
+            geta[c] = 0.5 * (1.0 + xi) * b_row[c] + 0.5 * (1.0 - xi) * d_row[c];
+        }
+        let mut bs = [[0.0; 24]; 2];
+        for c in 0..24 {
+            bs[0][c] = inv[0][0] * gxi[c] + inv[0][1] * geta[c];
+            bs[1][c] = inv[1][0] * gxi[c] + inv[1][1] * geta[c];
+        }
+        add(&mut k, &bm, &cm, 3, det);
+        add(&mut k, &bb, &cb, 3, det);
+        let cs = [[ds, 0.0, 0.0], [0.0, ds, 0.0], [0.0, 0.0, 0.0]];
+        add(&mut k, &bs, &cs, 2, det);
+        if mass == MassKind::Consistent {
+            let (mt, mr) = (s.rho * t + s.nsm, s.rho * s.bending * t.powi(3) / 12.0);
+            for a in 0..4 {
+                for b in 0..4 {
+                    let v = nn[a] * nn[b] * det;
+                    for c in 0..3 {
+                        m[(6 * a + c) * 24 + 6 * b + c] += mt * v;
+                    }
+                    for c in 3..5 {
+                        m[(6 * a + c) * 24 + 6 * b + c] += mr * v;
+                    }
+                }
+            }
+        }
+    }
+    if mass == MassKind::Lumped {
+        let each = (s.rho * t + s.nsm) * area / 4.0;
+        for a in 0..4 {
+            for c in 0..3 {
+                m[(6 * a + c) * 24 + 6 * a + c] = each;
+            }
+        }
+    }
+    // drilling: k_d (theta_z,i - omega)^2 at each corner, omega = (v_,x - u_,y) / 2 at the centre
+    let (_, dxi, deta) = shape(0.0, 0.0);
+    let j = jac(0.0, 0.0);
+    let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+    let inv = [
+        [j[1][1] / det, -j[0][1] / det],
+        [-j[1][0] / det, j[0][0] / det],
+    ];
+    let mut omega = [0.0; 24];
+    for i in 0..4 {
+        let nx = inv[0][0] * dxi[i] + inv[0][1] * deta[i];
+        let ny = inv[1][0] * dxi[i] + inv[1][1] * deta[i];
+        omega[6 * i + 1] = 0.5 * nx;
+        omega[6 * i] = -0.5 * ny;
+    }
+    let kd = 1e-3 * g * t * area;
+    for i in 0..4 {
+        let mut d = omega.map(|v| -v);
+        d[6 * i + 5] += 1.0;
+        for r in 0..24 {
+            for c in 0..24 {
+                k[r * 24 + c] += kd * d[r] * d[c];
+            }
+        }
+    }
+    // to the basic frame: local DOFs = R (global), R's rows the axes
+    let mut tm = vec![0.0; 576];
+    for blk in 0..8 {
+        for r in 0..3 {
+            for c in 0..3 {
+                tm[(3 * blk + r) * 24 + 3 * blk + c] = axes[r][c];
+            }
+        }
+    }
+    let kg = congruence24(&k, &tm);
+    let mg = match mass {
+        MassKind::Consistent => congruence24(&m, &tm),
+        // a lumped translational mass is the same in every frame
+        MassKind::Lumped => m,
+    };
+    Ok((kg, mg))
+}
+
+/// `T^T A T` for 24 x 24 row-major matrices, symmetrised.
+fn congruence24(a: &[f64], t: &[f64]) -> Vec<f64> {
+    let n = 24;
+    let mut at = vec![0.0; n * n];
+    for i in 0..n {
+        for k in 0..n {
+            let v = a[i * n + k];
+            if v != 0.0 {
+                for j in 0..n {
+                    at[i * n + j] += v * t[k * n + j];
+                }
+            }
+        }
+    }
+    let mut out = vec![0.0; n * n];
+    for k in 0..n {
+        for i in 0..n {
+            let v = t[k * n + i];
+            if v != 0.0 {
+                for j in 0..n {
+                    out[i * n + j] += v * at[k * n + j];
+                }
+            }
+        }
+    }
+    for i in 0..n {
+        for j in 0..i {
+            let s = 0.5 * (out[i * n + j] + out[j * n + i]);
+            out[i * n + j] = s;
+            out[j * n + i] = s;
+        }
+    }
+    out
+}
+
+impl Shell {
+    /// Checks the values.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidStructural`] naming `element`.
+    pub fn validate(&self, element: u64) -> Result<(), FemError> {
+        let bad = |reason: String| Err(FemError::InvalidStructural { element, reason });
+        if !(self.t > 0.0 && self.t.is_finite()) {
+            return bad(format!(
+                "its thickness is {}; a shell needs a positive thickness",
+                self.t
+            ));
+        }
+        if !(self.e > 0.0 && self.e.is_finite() && self.nu > -1.0 && self.nu < 0.5) {
+            return bad(format!(
+                "E = {} and nu = {} are not a material",
+                self.e, self.nu
+            ));
+        }
+        if !(self.rho >= 0.0 && self.nsm >= 0.0 && self.rho.is_finite() && self.nsm.is_finite()) {
+            return bad(format!(
+                "density {} and nsm {} must not be negative",
+                self.rho, self.nsm
+            ));
+        }
+        if !(self.bending > 0.0 && self.bending.is_finite())
+            || self.shear.is_some_and(|k| !(k > 0.0))
+        {
+            return bad(format!(
+                "its bending factor {} and shear factor {:?} must be positive",
+                self.bending, self.shear
+            ));
+        }
+        Ok(())
+    }
+}
