@@ -1,6 +1,6 @@
-//! Bars, beams, rods, springs and bushings: `CBAR` (`PBAR`, `PBARL`), `CBEAM` (`PBEAM`,
+//! Bars, beams, rods, springs, bushings and shells: `CBAR` (`PBAR`, `PBARL`), `CBEAM` (`PBEAM`,
 //! `PBEAML`, prismatic), `CROD` (`PROD`), `CONROD`, `CELAS1` (`PELAS`), `CELAS2`, `CBUSH`
-//! (`PBUSH`), with `BAROR` and `BEAMOR` defaults, read as the Quick Reference Guide defines them
+//! (`PBUSH`), `CQUAD4` (`PSHELL` of one isotropic MAT1), with `BAROR` and `BEAMOR` defaults, read as the Quick Reference Guide defines them
 //! (cited by card) into femu's structural elements ([`femu_fem::structural`]). What femu cannot
 //! represent is refused with card and line: pin flags, tapered beams, warping, shear-centre and
 //! mass offsets, products of inertia, offsets in the element frame, scalar points.
@@ -30,11 +30,12 @@ pub(super) struct StructuralCards<'a> {
 
 /// The structural element card names.
 pub(super) const ELEMENTS: &[&str] = &[
-    "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CBUSH",
+    "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CBUSH", "CQUAD4",
 ];
 /// The structural property card names.
-pub(super) const PROPERTIES: &[&str] =
-    &["PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PELAS", "PBUSH"];
+pub(super) const PROPERTIES: &[&str] = &[
+    "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PELAS", "PBUSH", "PSHELL",
+];
 
 impl<'a> StructuralCards<'a> {
     /// Files one card if it is structural; `false` otherwise.
@@ -727,6 +728,35 @@ pub(super) fn add_structural(
                 });
                 (kind, nodes, pid)
             }
+            "CQUAD4" => {
+                let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
+                let p = prop(pid, &["PSHELL"])?;
+                let nodes = (2..6)
+                    .map(|i| node(model, c.id(i, "G")?, c, "a corner"))
+                    .collect::<Result<Vec<_>, _>>()?;
+                let zoffs = c.real(7, "ZOFFS")?.unwrap_or(0.0);
+                if zoffs != 0.0 {
+                    return Err(c.err(format!(
+                        "{eid}: ZOFFS = {zoffs} offsets the shell from its grids, which femu does not model"
+                    )));
+                }
+                let shell = pshell(p, pid, ctx)?;
+                // T1-T4: corner thicknesses, refused unless they are the property's
+                let tflag = c.int(10, "TFLAG")?.unwrap_or(0);
+                for k in 0..4 {
+                    if let Some(tk) = c.real(11 + k, "T")? {
+                        let t = if tflag == 1 { tk * shell.t } else { tk };
+                        if (t - shell.t).abs() > 1e-12 * shell.t {
+                            return Err(c.err(format!(
+                                "{eid}: corner thickness T{} = {t} differs from PSHELL {pid}'s {}; femu's shells have one thickness",
+                                k + 1,
+                                shell.t
+                            )));
+                        }
+                    }
+                }
+                (StructuralKind::Shell(shell), nodes, pid)
+            }
             "CBUSH" => {
                 let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
                 let p = prop(pid, &["PBUSH"])?;
@@ -753,6 +783,65 @@ pub(super) fn add_structural(
             })?;
     }
     Ok(cards.elements.len())
+}
+
+/// A PSHELL (QRG PSHELL: `PID MID1 T MID2 12I/T^3 MID3 TS/T NSM / Z1 Z2 MID4`) of one
+/// isotropic MAT1 for membrane, bending and (when given) transverse shear; a blank MID3 is no
+/// shear flexibility. Different materials in MID1-MID3, a membrane or a plate alone, and MID4
+/// coupling are refused.
+fn pshell(
+    p: &Card,
+    pid: u64,
+    ctx: &mut Context<'_, '_>,
+) -> Result<femu_fem::shell::Shell, IoError> {
+    let mid1 = p.int(1, "MID1")?.filter(|m| *m > 0);
+    let mid2 = p.int(3, "MID2")?.filter(|m| *m > 0);
+    let mid3 = p.int(5, "MID3")?.filter(|m| *m > 0);
+    let mid4 = p.int(10, "MID4")?.filter(|m| *m > 0);
+    let (Some(m1), Some(m2)) = (mid1, mid2) else {
+        return Err(p.err(format!(
+            "{pid}: MID1 = {mid1:?} and MID2 = {mid2:?}: femu's shells have both membrane and bending stiffness (a membrane or a plate alone is not built)"
+        )));
+    };
+    if m1 != m2 || mid3.is_some_and(|m3| m3 != m1) {
+        return Err(p.err(format!(
+            "{pid}: MID1 {m1}, MID2 {m2}, MID3 {mid3:?} name different materials; femu's shells take one isotropic material"
+        )));
+    }
+    if let Some(m4) = mid4 {
+        return Err(p.err(format!(
+            "{pid}: MID4 = {m4} couples membrane and bending, which femu does not model"
+        )));
+    }
+    let t = p
+        .real(2, "T")?
+        .filter(|t| *t > 0.0)
+        .ok_or_else(|| p.err(format!("{pid}: a shell needs a positive thickness T")))?;
+    let m = ctx.materials.get(&(m1 as u64)).ok_or_else(|| {
+        p.err(format!(
+            "{pid} refers to MAT1 {m1}, which the deck does not define"
+        ))
+    })?;
+    if m.name != "MAT1" {
+        return Err(p.err(format!(
+            "{pid} refers to {} {m1}: femu's shells take a MAT1",
+            m.name
+        )));
+    }
+    let mut scratch = Vec::new();
+    let (e, nu) = super::materials::mat1_moduli(m, &mut scratch)?;
+    let rho = m.real(4, "RHO")?.unwrap_or(0.0) * ctx.wtmass;
+    let bending = p.real(4, "12I/T**3")?.unwrap_or(1.0);
+    let ts = p.real(6, "TS/T")?.unwrap_or(0.833_333);
+    Ok(femu_fem::shell::Shell {
+        e,
+        nu,
+        rho,
+        t,
+        bending,
+        shear: mid3.map(|_| ts),
+        nsm: p.real(7, "NSM")?.unwrap_or(0.0) * ctx.wtmass,
+    })
 }
 
 /// A CBUSH (QRG CBUSH: `EID PID GA GB GO/X1 X2 X3 CID / S OCID S1 S2 S3`) with its PBUSH's `K`,
