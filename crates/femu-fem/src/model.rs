@@ -824,6 +824,19 @@ impl Model {
     fn structural_rotation_blocks(&self) -> BTreeMap<usize, nalgebra::Matrix3<f64>> {
         let mut out: BTreeMap<usize, nalgebra::Matrix3<f64>> = BTreeMap::new();
         for s in &self.structural {
+            // a beam or a shell stiffens all three rotations of each of its nodes (torsion and two
+            // bending planes; two bending rotations and the drilling one): no need to form it
+            if matches!(
+                s.kind,
+                crate::structural::StructuralKind::Beam(_)
+                    | crate::structural::StructuralKind::Shell(_)
+            ) {
+                for n in &s.nodes {
+                    *out.entry(*n).or_insert_with(nalgebra::Matrix3::zeros) +=
+                        nalgebra::Matrix3::identity();
+                }
+                continue;
+            }
             // the element was checked when it was added: its matrices exist
             let Ok(sm) = s.matrices(self.mesh.coords(), crate::assembly::MassKind::Lumped) else {
                 continue;
