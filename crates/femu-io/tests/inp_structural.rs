@@ -210,3 +210,84 @@ fn bad_beam_and_spring_decks_are_refused_with_their_line() {
         assert!(e.contains(at) && e.contains(what), "{cards}: {e}");
     }
 }
+
+/// NAFEMS FV16 (a cantilevered square plate of `n x n` S4 shells): femu's frequencies, and
+/// CalculiX's of the same deck.
+fn fv16(n: usize) -> String {
+    let mut s = String::from("*HEADING\nfv16\n*NODE\n");
+    for j in 0..=n {
+        for i in 0..=n {
+            s.push_str(&format!(
+                "{}, {}, {}, 0.\n",
+                1 + i + (n + 1) * j,
+                10.0 * i as f64 / n as f64,
+                10.0 * j as f64 / n as f64
+            ));
+        }
+    }
+    s.push_str("*ELEMENT, TYPE=S4, ELSET=PLATE\n");
+    let g = |i: usize, j: usize| 1 + i + (n + 1) * j;
+    for j in 0..n {
+        for i in 0..n {
+            s.push_str(&format!(
+                "{}, {}, {}, {}, {}\n",
+                1 + i + n * j,
+                g(i, j),
+                g(i + 1, j),
+                g(i + 1, j + 1),
+                g(i, j + 1)
+            ));
+        }
+    }
+    s.push_str("*NSET, NSET=CLAMP\n");
+    for j in 0..=n {
+        s.push_str(&format!("{}\n", g(0, j)));
+    }
+    s.push_str(
+        "*MATERIAL, NAME=STEEL\n*ELASTIC\n2.e11, 0.3\n*DENSITY\n8000.\n\
+         *SHELL SECTION, ELSET=PLATE, MATERIAL=STEEL\n0.05\n*BOUNDARY\nCLAMP, 1, 6\n\
+         *STEP\n*FREQUENCY\n6\n*END STEP\n",
+    );
+    s
+}
+
+/// S4 shells read from a deck: NAFEMS FV16's frequencies (0.421, 1.029, 2.582, 3.306, 3.753,
+/// 6.555 Hz) to 1 % with 16 x 16 shells; and CalculiX on the same deck, which expands each S4 into
+/// a brick through the thickness and converges to femu's shells as the mesh is refined: its
+/// frequencies exceed femu's by up to 11 % with 16 x 16 shells and by under 1 % with 32 x 32
+/// (0.2-0.6 % measured on modes 2-6).
+#[test]
+fn s4_plate_against_nafems_fv16_and_calculix() {
+    let (values, _, _) = lowest(&fv16(16), 6);
+    for (l, r) in values
+        .iter()
+        .zip([0.421, 1.029, 2.582, 3.306, 3.753, 6.555])
+    {
+        let f = l.sqrt() / (2.0 * std::f64::consts::PI);
+        assert!((f / r - 1.0).abs() < 1e-2, "{f} Hz against {r}");
+    }
+    if !femu_testkit::ccx::available() {
+        return;
+    }
+    let mut previous: Option<f64> = None;
+    for n in [16, 32] {
+        let text = fv16(n);
+        let dir = std::env::temp_dir().join(format!("femu-s4-{n}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("job.inp"), &text).unwrap();
+        femu_testkit::ccx::run(&dir, "job");
+        let ccx =
+            femu_testkit::ccx::eigenvalues(&std::fs::read_to_string(dir.join("job.dat")).unwrap());
+        let _ = std::fs::remove_dir_all(&dir);
+        let (femu, _, _) = lowest(&text, 6);
+        let worst = femu
+            .iter()
+            .zip(&ccx)
+            .map(|(f, c)| (c / f).sqrt() - 1.0)
+            .fold(0.0f64, |m, d| m.max(d.abs()));
+        if let Some(p) = previous {
+            assert!(worst < 0.25 * p && worst < 1e-2, "{n}: {worst} after {p}");
+        }
+        previous = Some(worst);
+    }
+}

@@ -12,7 +12,8 @@
 //! `*SURFACE, TYPE=NODE`), `*INCLUDE`, `*STEP`, `*FREQUENCY`, `*END STEP` (docs/MATH.md,
 //! "Multipoint constraints"); beams `B31` and `B33` with `*BEAM SECTION` (`RECT`, `CIRC`, `PIPE`)
 //! or `*BEAM GENERAL SECTION` (`GENERAL`), springs `SPRING1`, `SPRING2`, `SPRINGA` with `*SPRING`
-//! (`structural.rs`; their nodes get rotations, which `*BOUNDARY` DOFs 4-6 then fix).
+//! (`structural.rs`; their nodes get rotations, which `*BOUNDARY` DOFs 4-6 then fix), and 4-node
+//! shells `S4`, `S4R` with `*SHELL SECTION` (one isotropic material, its thickness).
 //!
 //! The writer states multipoint constraints as `*EQUATION`s; the rotations of a rigid link's
 //! reference are the DOFs 1-3 of an extra node (set `FEMU_ROT`), as CalculiX's rotational nodes.
@@ -93,6 +94,10 @@ const READ: &[(&str, &[&str])] = &[
     ("BEAM SECTION", &["ELSET", "MATERIAL", "SECTION"]),
     ("BEAM GENERAL SECTION", &["ELSET", "SECTION", "DENSITY"]),
     ("SPRING", &["ELSET"]),
+    (
+        "SHELL SECTION",
+        &["ELSET", "MATERIAL", "SECTION INTEGRATION", "OFFSET"],
+    ),
     ("EQUATION", &[]),
     ("KINEMATIC COUPLING", &["REF NODE"]),
     (
@@ -216,10 +221,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     (
         "ROTARY INERTIA",
         "rotary inertia is not supported (solid elements have no rotations)",
-    ),
-    (
-        "SHELL SECTION",
-        "shell elements are not supported (solids only)",
     ),
     ("TIE", "tied surfaces are not supported yet"),
     (

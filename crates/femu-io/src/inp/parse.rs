@@ -271,6 +271,36 @@ impl DeckBuilder {
                 });
                 Ok(())
             }
+            "SHELL SECTION" => {
+                let elset = params
+                    .get("ELSET")
+                    .ok_or_else(|| err(l, "*SHELL SECTION without ELSET=".into()))?;
+                let material = params
+                    .get("MATERIAL")
+                    .ok_or_else(|| err(l, "*SHELL SECTION without MATERIAL=".into()))?;
+                if let Some(o) = params.get("OFFSET")
+                    && !matches!(
+                        o.to_ascii_uppercase().as_str(),
+                        "0" | "0." | "0.0" | "MIDSURFACE"
+                    )
+                {
+                    return Err(err(
+                        l,
+                        format!(
+                            "*SHELL SECTION, OFFSET={o}: femu's shells lie on their nodes' surface (OFFSET=0)"
+                        ),
+                    ));
+                }
+                self.structural
+                    .shell_sections
+                    .push(structural::ShellSectionCard {
+                        elset: elset.to_ascii_uppercase(),
+                        material: material.to_ascii_uppercase(),
+                        lines: Vec::new(),
+                        line: at(l),
+                    });
+                Ok(())
+            }
             "SPRING" => {
                 let elset = params
                     .get("ELSET")
@@ -442,7 +472,7 @@ impl DeckBuilder {
             return Ok(());
         }
         let (kind, formulation, approx) = element_kind(ty).ok_or_else(|| {
-            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; B31, B33, SPRING1, SPRING2, SPRINGA)"))
+            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; B31, B33, SPRING1, SPRING2, SPRINGA; S4, S4R)"))
         })?;
         if approx {
             warn(
@@ -576,6 +606,12 @@ impl DeckBuilder {
             "ELEMENT" => self.element_line(&f, lines, li),
             "BEAM SECTION" | "BEAM GENERAL SECTION" => {
                 if let Some(c) = self.structural.sections.last_mut() {
+                    c.lines.push(f.iter().map(|s| s.to_string()).collect());
+                }
+                Ok(())
+            }
+            "SHELL SECTION" => {
+                if let Some(c) = self.structural.shell_sections.last_mut() {
                     c.lines.push(f.iter().map(|s| s.to_string()).collect());
                 }
                 Ok(())

@@ -31,6 +31,8 @@ pub(super) enum StructuralType {
     Spring2,
     /// An axial spring between two nodes.
     SpringA,
+    /// A 4-node shell (S4, and S4R built fully integrated).
+    S4,
 }
 
 impl StructuralType {
@@ -43,6 +45,13 @@ impl StructuralType {
             "SPRING1" => (Self::Spring1, 1),
             "SPRING2" => (Self::Spring2, 2),
             "SPRINGA" => (Self::SpringA, 2),
+            "S4" | "S4R" => (Self::S4, 4),
+            t @ ("S3" | "S3R" | "S8R" | "S8R5" | "S4R5" | "S9R5" | "STRI3" | "STRI65" | "M3D4"
+            | "M3D4R" | "M3D3" | "SC8R") => {
+                return Err(format!(
+                    "element type {t} is not read: femu's shells are the 4-node S4 and S4R (triangular, 8-node, thin-only, membrane and continuum shells are not built)"
+                ));
+            }
             t @ ("B32" | "B32H" | "B31OS" | "B32OS" | "PIPE31" | "PIPE32" | "B21" | "B22"
             | "B23" | "T3D2" | "T3D3" | "T2D2") => {
                 return Err(format!(
@@ -60,6 +69,7 @@ impl StructuralType {
             Self::Spring1 => "SPRING1",
             Self::Spring2 => "SPRING2",
             Self::SpringA => "SPRINGA",
+            Self::S4 => "S4",
         }
     }
 }
@@ -84,12 +94,22 @@ pub(super) struct SpringCard {
     pub(super) line: Location,
 }
 
+/// A `*SHELL SECTION` with its data lines (the thickness first).
+#[derive(Debug, Clone)]
+pub(super) struct ShellSectionCard {
+    pub(super) elset: String,
+    pub(super) material: String,
+    pub(super) lines: Vec<Vec<String>>,
+    pub(super) line: Location,
+}
+
 /// The structural records of a deck: elements `(id, type, node ids, where)`, sections,
 /// springs and the sets of structural element ids.
 #[derive(Debug, Clone, Default)]
 pub(super) struct StructuralRecords {
     pub(super) elements: Vec<(u64, StructuralType, Vec<u64>, Location)>,
     pub(super) sections: Vec<BeamSectionCard>,
+    pub(super) shell_sections: Vec<ShellSectionCard>,
     pub(super) springs: Vec<SpringCard>,
     pub(super) sets: BTreeMap<String, Vec<u64>>,
 }
@@ -334,6 +354,21 @@ pub(super) fn add_structural(
             spring_of.entry(*id).or_insert(k);
         }
     }
+    let mut shell_of: HashMap<u64, usize> = HashMap::new();
+    for (k, c) in records.shell_sections.iter().enumerate() {
+        let ids = records.sets.get(&c.elset).ok_or_else(|| {
+            at_err(
+                &c.line,
+                format!(
+                    "*SHELL SECTION names element set {}, which holds no shell of the deck",
+                    c.elset
+                ),
+            )
+        })?;
+        for id in ids {
+            shell_of.entry(*id).or_insert(k);
+        }
+    }
     let mut values: HashMap<usize, SectionValues> = HashMap::new();
     for (id, ty, node_ids, l) in &records.elements {
         let nodes = node_ids
@@ -382,6 +417,17 @@ pub(super) fn add_structural(
                     lumped_torsion: false,
                 })
             }
+            StructuralType::S4 => {
+                let k = *shell_of.get(id).ok_or_else(|| {
+                    at_err(
+                        l,
+                        format!(
+                            "S4 element {id} has no *SHELL SECTION (none names a set that holds it)"
+                        ),
+                    )
+                })?;
+                shell(&records.shell_sections[k], materials)?
+            }
             _ => {
                 let k = *spring_of.get(id).ok_or_else(|| {
                     at_err(
@@ -420,6 +466,54 @@ pub(super) fn add_structural(
             })?;
     }
     Ok(())
+}
+
+/// A shell of a `*SHELL SECTION`: its material's `E`, `nu`, density and the thickness on its
+/// first data line; the transverse shear factor 5/6 of a homogeneous section.
+fn shell(
+    c: &ShellSectionCard,
+    materials: &BTreeMap<String, Material>,
+) -> Result<StructuralKind, IoError> {
+    let l = &c.line;
+    let t = c
+        .lines
+        .first()
+        .and_then(|r| r.first())
+        .filter(|s| !s.is_empty())
+        .ok_or_else(|| {
+            at_err(
+                l,
+                "*SHELL SECTION needs the thickness on its data line".into(),
+            )
+        })
+        .and_then(|s| number(l, "the thickness", s))?;
+    let m = materials.get(&c.material).ok_or_else(|| {
+        at_err(
+            l,
+            format!(
+                "*SHELL SECTION names material {}, which no *MATERIAL defines",
+                c.material
+            ),
+        )
+    })?;
+    let Elasticity::Isotropic { e, nu } = m.elasticity else {
+        return Err(at_err(
+            l,
+            format!(
+                "material {} is anisotropic: femu's shells take an isotropic *ELASTIC",
+                m.name
+            ),
+        ));
+    };
+    Ok(StructuralKind::Shell(femu_fem::shell::Shell {
+        e,
+        nu,
+        rho: m.density,
+        t,
+        bending: 1.0,
+        shear: Some(5.0 / 6.0),
+        nsm: 0.0,
+    }))
 }
 
 /// A spring element from its `*SPRING`: SPRING1 (a DOF to ground) and SPRING2 (two DOFs) take the
