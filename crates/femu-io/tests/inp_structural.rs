@@ -175,6 +175,11 @@ fn bad_beam_and_spring_decks_are_refused_with_their_line() {
             "B32 is not read",
         ),
         (
+            "*ELEMENT, TYPE=S3, ELSET=B\n1, 1, 2, 2\n",
+            "deck.inp:9",
+            "S3 is not read",
+        ),
+        (
             "*ELEMENT, TYPE=B31, ELSET=B\n1, 1, 2\n*BEAM SECTION, ELSET=B, MATERIAL=STEEL, SECTION=HEX\n0.1, 0.01\n",
             "deck.inp:11",
             "SECTION=HEX is not read",

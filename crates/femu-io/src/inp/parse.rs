@@ -736,7 +736,7 @@ impl DeckBuilder {
         if ids.len() != nn + 1 {
             return Err(err(
                 l,
-                format!("an element of this type is an id and {nn} nodes, got {t:?}"),
+                format!("a {} element is an id and {nn} nodes, got {t:?}", ty.name()),
             ));
         }
         self.structural

@@ -62,7 +62,7 @@ impl StructuralType {
         }))
     }
 
-    fn name(self) -> &'static str {
+    pub(super) fn name(self) -> &'static str {
         match self {
             Self::B31 => "B31",
             Self::B33 => "B33",
