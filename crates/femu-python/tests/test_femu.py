@@ -348,3 +348,17 @@ def test_bricks_with_incompatible_modes(tmp_path):
     assert plain[0] > with_modes[0]
     with pytest.raises(ValueError, match="incompatible_modes"):
         femu.read_model(msh, bricks="C3D8I", **steel)
+
+
+def test_a_nastran_beam_model_gives_nastrans_eigenvalues():
+    # pyNastran's beam model (CBAR, CBEAM on PBARL/PBEAML, a CONM2 with inertia) and Simcenter
+    # Nastran's eigenvalues from its .f06: the same model through the Python front end
+    m = femu.read_model(ROOT / "fixtures" / "nastran" / "pynastran" / "beam_modes.dat")
+    comps = set(int(c) for c in m.dofs[:, 1])
+    assert {3, 4, 5} <= comps  # the beams' rotations
+    assert m.total_mass == pytest.approx(2.610514e-2, rel=5e-7)
+    nastran = [8.232777e6, 8.232777e6, 2.824056e8, 2.824056e8, 4.989076e8,
+               8.021004e8, 1.733310e9, 1.733310e9, 4.874295e9, 4.874295e9]
+    modes = m.modes(10)
+    assert modes.sturm["verified"]
+    np.testing.assert_allclose(modes.values, nastran, rtol=6e-7)

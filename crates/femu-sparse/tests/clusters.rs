@@ -576,15 +576,9 @@ fn a_krylov_space_that_breaks_down_continues_with_fresh_directions() {
     }
 }
 
-/// A fixed-fixed chain of unit springs whose every other DOF is massless (a lumped beam's
-/// rotations stand in the same place): the massless DOFs condense exactly, leaving a chain of
-/// springs of stiffness 1/2 between unit masses, whose eigenvalues are
-/// `2 k (1 - cos(j pi / (n + 1)))` with `k = 1/2` (n masses). The solver keeps its basis in the
-/// range of the operator (the M inner product is only semi-definite), returns these to 1e-10
-/// and proves them by the Sturm count.
-#[test]
-fn massless_dofs_leave_the_condensed_spectrum() {
-    let masses = 150;
+/// The chain of `2 masses + 1` unit springs' DOFs between two fixed ends: `K` tridiagonal
+/// `(-1, 2, -1)`, `M` diagonal with a unit mass on DOFs 1, 3, 5, ... and none on 0, 2, 4, ...
+fn half_massless_chain(masses: usize) -> (SparseMatrix, SparseMatrix) {
     let n = 2 * masses + 1;
     let mut k = TriMat::new((n, n));
     let mut m = TriMat::new((n, n));
@@ -594,10 +588,21 @@ fn massless_dofs_leave_the_condensed_spectrum() {
             k.add_triplet(i, i + 1, -1.0);
             k.add_triplet(i + 1, i, -1.0);
         }
-        // DOFs 1, 3, 5, ... carry the masses; 0, 2, 4, ... none
         m.add_triplet(i, i, if i % 2 == 1 { 1.0 } else { 0.0 });
     }
-    let (k, m): (SparseMatrix, SparseMatrix) = (k.to_csc(), m.to_csc());
+    (k.to_csc(), m.to_csc())
+}
+
+/// A fixed-fixed chain of unit springs whose every other DOF is massless (a lumped beam's
+/// rotations stand in the same place): the massless DOFs condense exactly, leaving a chain of
+/// springs of stiffness 1/2 between unit masses, whose eigenvalues are
+/// `2 k (1 - cos(j pi / (n + 1)))` with `k = 1/2` (n masses). The solver keeps its basis in the
+/// range of the operator (the M inner product is only semi-definite), returns these to 1e-10
+/// and proves them by the Sturm count.
+#[test]
+fn massless_dofs_leave_the_condensed_spectrum() {
+    let masses = 150;
+    let (k, m) = half_massless_chain(masses);
     let want = 12;
     let modes = eigs(&k, &m, Which::Lowest(want), &EigenOptions::default()).unwrap();
     assert!(modes.sturm.verified(), "{:?}", modes.sturm);
@@ -618,17 +623,7 @@ fn massless_dofs_leave_the_condensed_spectrum() {
 fn massless_dofs_with_requests_near_the_finite_count() {
     let masses = 6;
     let n = 2 * masses + 1;
-    let mut k = TriMat::new((n, n));
-    let mut m = TriMat::new((n, n));
-    for i in 0..n {
-        k.add_triplet(i, i, 2.0);
-        if i + 1 < n {
-            k.add_triplet(i, i + 1, -1.0);
-            k.add_triplet(i + 1, i, -1.0);
-        }
-        m.add_triplet(i, i, if i % 2 == 1 { 1.0 } else { 0.0 });
-    }
-    let (k, m): (SparseMatrix, SparseMatrix) = (k.to_csc(), m.to_csc());
+    let (k, m) = half_massless_chain(masses);
     for want in [3, 4, 5, 6] {
         let modes = eigs(&k, &m, Which::Lowest(want), &EigenOptions::default()).unwrap();
         assert!(modes.sturm.verified(), "{want}: {:?}", modes.sturm);
