@@ -291,18 +291,17 @@ pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec
             }
         }
     }
-    let kg = congruence24(&k, &tm);
+    let kg = congruence(&k, &tm, 24);
     let mg = match mass {
-        MassKind::Consistent => congruence24(&m, &tm),
+        MassKind::Consistent => congruence(&m, &tm, 24),
         // a lumped translational mass is the same in every frame
         MassKind::Lumped => m,
     };
     Ok((kg, mg))
 }
 
-/// `T^T A T` for 24 x 24 row-major matrices, symmetrised.
-fn congruence24(a: &[f64], t: &[f64]) -> Vec<f64> {
-    let n = 24;
+/// `T^T A T` for `n x n` row-major matrices, symmetrised.
+fn congruence(a: &[f64], t: &[f64], n: usize) -> Vec<f64> {
     let mut at = vec![0.0; n * n];
     for i in 0..n {
         for k in 0..n {
@@ -333,6 +332,175 @@ fn congruence24(a: &[f64], t: &[f64]) -> Vec<f64> {
         }
     }
     out
+}
+
+/// The 3-node shell (MITC3, Lee and Bathe 2004) on `(u, v, w, theta_x, theta_y, theta_z)` of
+/// each corner in the basic frame (18 x 18, row-major): a constant-strain membrane, constant
+/// curvatures, and the transverse shear tied at the edges' midpoints. With `gamma_r = w_,r +
+/// beta . x_,r` and `gamma_s` likewise, and `c = (gamma_s(0, 1/2) - gamma_r(1/2, 0)) -
+/// (gamma_s(1/2, 1/2) - gamma_r(1/2, 1/2))`, the element's strains are `gamma_r(1/2, 0) + c s`
+/// and `gamma_s(0, 1/2) - c r`: each edge's tangential shear is its midpoint's. Drilling and
+/// mass are the 4-node shell's (docs/MATH.md, "Shells").
+///
+/// # Errors
+/// A message for corners that do not span a triangle.
+pub fn matrices3(s: &Shell, x: &[V3; 3], mass: MassKind) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let g1 = sub(x[1], x[0]);
+    let g2 = sub(x[2], x[0]);
+    let n = unit(cross(g1, g2))
+        .ok_or("its corners do not span a triangle (collinear or coincident)")?;
+    let e1 = unit(g1).ok_or("its corners do not span a triangle")?;
+    let e2 = cross(n, e1);
+    let p: [[f64; 2]; 3] = std::array::from_fn(|i| {
+        let d = sub(x[i], x[0]);
+        [dot(d, e1), dot(d, e2)]
+    });
+    // J = [[x_,r, y_,r], [x_,s, y_,s]], constant
+    let j = [
+        [p[1][0] - p[0][0], p[1][1] - p[0][1]],
+        [p[2][0] - p[0][0], p[2][1] - p[0][1]],
+    ];
+    let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+    if !(det > 0.0) {
+        return Err(format!("its area is {:e}", det / 2.0));
+    }
+    let area = det / 2.0;
+    let inv = [
+        [j[1][1] / det, -j[0][1] / det],
+        [-j[1][0] / det, j[0][0] / det],
+    ];
+    let (dr, ds) = ([-1.0, 1.0, 0.0], [-1.0, 0.0, 1.0]);
+    let nx: [f64; 3] = std::array::from_fn(|i| inv[0][0] * dr[i] + inv[0][1] * ds[i]);
+    let ny: [f64; 3] = std::array::from_fn(|i| inv[1][0] * dr[i] + inv[1][1] * ds[i]);
+    let (e, nu, t) = (s.e, s.nu, s.t);
+    let g = e / (2.0 * (1.0 + nu));
+    let dm = e * t / (1.0 - nu * nu);
+    let db = s.bending * e * t.powi(3) / (12.0 * (1.0 - nu * nu));
+    let dsh = s.shear.map_or(1000.0 * 5.0 / 6.0, |k| k) * g * t;
+    let plane = |d: f64| {
+        [
+            [d, d * nu, 0.0],
+            [d * nu, d, 0.0],
+            [0.0, 0.0, d * (1.0 - nu) / 2.0],
+        ]
+    };
+    let (cm, cb) = (plane(dm), plane(db));
+    let nd = 18;
+    let mut k = vec![0.0; nd * nd];
+    let mut m = vec![0.0; nd * nd];
+    let add = |k: &mut Vec<f64>, b: &[[f64; 18]], d: &[[f64; 3]; 3], rows: usize, w: f64| {
+        for r in 0..nd {
+            for c in 0..nd {
+                let mut v = 0.0;
+                for a in 0..rows {
+                    for bb in 0..rows {
+                        v += b[a][r] * d[a][bb] * b[bb][c];
+                    }
+                }
+                k[r * nd + c] += w * v;
+            }
+        }
+    };
+    // membrane and bending: constant
+    let mut bm = [[0.0; 18]; 3];
+    let mut bb = [[0.0; 18]; 3];
+    for i in 0..3 {
+        bm[0][6 * i] = nx[i];
+        bm[1][6 * i + 1] = ny[i];
+        bm[2][6 * i] = ny[i];
+        bm[2][6 * i + 1] = nx[i];
+        bb[0][6 * i + 4] = nx[i];
+        bb[1][6 * i + 3] = -ny[i];
+        bb[2][6 * i + 4] = ny[i];
+        bb[2][6 * i + 3] = -nx[i];
+    }
+    add(&mut k, &bm, &cm, 3, area);
+    add(&mut k, &bb, &cb, 3, area);
+    // covariant shear rows at (r, s): gamma_r (along r) or gamma_s
+    let shape3 = |r: f64, s: f64| [1.0 - r - s, r, s];
+    let row = |r: f64, s: f64, along_r: bool| -> [f64; 18] {
+        let nn = shape3(r, s);
+        let (d, jr) = if along_r { (dr, j[0]) } else { (ds, j[1]) };
+        let mut out = [0.0; 18];
+        for i in 0..3 {
+            out[6 * i + 2] = d[i];
+            out[6 * i + 4] = nn[i] * jr[0];
+            out[6 * i + 3] = -nn[i] * jr[1];
+        }
+        out
+    };
+    let (r1, s2) = (row(0.5, 0.0, true), row(0.0, 0.5, false));
+    let (r3, s3) = (row(0.5, 0.5, true), row(0.5, 0.5, false));
+    let c: [f64; 18] = std::array::from_fn(|q| (s2[q] - r1[q]) - (s3[q] - r3[q]));
+    let (mt, mr) = (s.rho * t + s.nsm, s.rho * s.bending * t.powi(3) / 12.0);
+    for (r, sp) in [
+        (1.0 / 6.0, 1.0 / 6.0),
+        (2.0 / 3.0, 1.0 / 6.0),
+        (1.0 / 6.0, 2.0 / 3.0),
+    ] {
+        let w = det / 6.0;
+        let gr: [f64; 18] = std::array::from_fn(|q| r1[q] + c[q] * sp);
+        let gs: [f64; 18] = std::array::from_fn(|q| s2[q] - c[q] * r);
+        let mut bs = [[0.0; 18]; 2];
+        for q in 0..18 {
+            bs[0][q] = inv[0][0] * gr[q] + inv[0][1] * gs[q];
+            bs[1][q] = inv[1][0] * gr[q] + inv[1][1] * gs[q];
+        }
+        let cs = [[dsh, 0.0, 0.0], [0.0, dsh, 0.0], [0.0, 0.0, 0.0]];
+        add(&mut k, &bs, &cs, 2, w);
+        if mass == MassKind::Consistent {
+            let nn = shape3(r, sp);
+            for a in 0..3 {
+                for b in 0..3 {
+                    let v = nn[a] * nn[b] * w;
+                    for q in 0..3 {
+                        m[(6 * a + q) * nd + 6 * b + q] += mt * v;
+                    }
+                    for q in 3..5 {
+                        m[(6 * a + q) * nd + 6 * b + q] += mr * v;
+                    }
+                }
+            }
+        }
+    }
+    if mass == MassKind::Lumped {
+        for a in 0..3 {
+            for q in 0..3 {
+                m[(6 * a + q) * nd + 6 * a + q] = mt * area / 3.0;
+            }
+        }
+    }
+    // drilling: k_d (theta_z,i - omega)^2, omega = (v_,x - u_,y) / 2
+    let mut omega = [0.0; 18];
+    for i in 0..3 {
+        omega[6 * i + 1] = 0.5 * nx[i];
+        omega[6 * i] = -0.5 * ny[i];
+    }
+    let kd = 1e-3 * g * t * area;
+    for i in 0..3 {
+        let mut d = omega.map(|v| -v);
+        d[6 * i + 5] += 1.0;
+        for r in 0..nd {
+            for c2 in 0..nd {
+                k[r * nd + c2] += kd * d[r] * d[c2];
+            }
+        }
+    }
+    let axes = [e1, e2, n];
+    let mut tm = vec![0.0; nd * nd];
+    for blk in 0..6 {
+        for r in 0..3 {
+            for c2 in 0..3 {
+                tm[(3 * blk + r) * nd + 3 * blk + c2] = axes[r][c2];
+            }
+        }
+    }
+    let kg = congruence(&k, &tm, nd);
+    let mg = match mass {
+        MassKind::Consistent => congruence(&m, &tm, nd),
+        MassKind::Lumped => m,
+    };
+    Ok((kg, mg))
 }
 
 impl Shell {

@@ -348,14 +348,15 @@ impl StructuralElement {
             }
             StructuralKind::Bushing(_) => (1..=2).contains(&count),
             StructuralKind::Shell(_) => {
-                count == 4 && (0..4).all(|i| (0..i).all(|j| self.nodes[i] != self.nodes[j]))
+                (3..=4).contains(&count)
+                    && (0..count).all(|i| (0..i).all(|j| self.nodes[i] != self.nodes[j]))
             }
         };
         if !wanted {
             return Err(FemError::InvalidStructural {
                 element: id,
                 reason: format!(
-                    "{count} nodes {:?} do not fit the element (beams and rods two, springs and bushings one or two, a spring's ends among them, shells four distinct)",
+                    "{count} nodes {:?} do not fit the element (beams and rods two, springs and bushings one or two, a spring's ends among them, shells three or four distinct)",
                     self.nodes
                 ),
             });
@@ -497,7 +498,12 @@ impl StructuralElement {
                 // the two triangles of the quadrilateral
                 let x = |i: usize| coords[self.nodes[i]];
                 let tri = |a: V3, b: V3, c: V3| 0.5 * norm(cross(sub(b, a), sub(c, a)));
-                let area = tri(x(0), x(1), x(2)) + tri(x(0), x(2), x(3));
+                let area = tri(x(0), x(1), x(2))
+                    + if self.nodes.len() == 4 {
+                        tri(x(0), x(2), x(3))
+                    } else {
+                        0.0
+                    };
                 (s.rho * s.t + s.nsm) * area
             }
         }
@@ -529,8 +535,14 @@ impl StructuralElement {
         let nd = 3 * parts.len();
         match &self.kind {
             StructuralKind::Shell(s) => {
-                let x: [[f64; 3]; 4] = std::array::from_fn(|i| coords[self.nodes[i]]);
-                let (k, m) = crate::shell::matrices(s, &x, mass).map_err(bad)?;
+                let (k, m) = if self.nodes.len() == 3 {
+                    let x: [[f64; 3]; 3] = std::array::from_fn(|i| coords[self.nodes[i]]);
+                    crate::shell::matrices3(s, &x, mass)
+                } else {
+                    let x: [[f64; 3]; 4] = std::array::from_fn(|i| coords[self.nodes[i]]);
+                    crate::shell::matrices(s, &x, mass)
+                }
+                .map_err(bad)?;
                 Ok(StructuralMatrices { parts, k, m })
             }
             StructuralKind::Beam(b) => {

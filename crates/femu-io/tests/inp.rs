@@ -180,9 +180,9 @@ fn malformed_decks_name_the_line() {
             "TYPE",
         ),
         (
-            format!("{nodes}*ELEMENT, TYPE=S3\n1, 1, 2, 3\n"),
+            format!("{nodes}*ELEMENT, TYPE=S8R\n1, 1, 2, 3, 4, 5, 6, 7, 8\n"),
             10,
-            "S3 is not read",
+            "S8R is not read",
         ),
         (
             format!("{nodes}*ELEMENT, TYPE=C3D8\n1, 1, 2, 3, 4, 5, 6, 7, 8, 9\n"),

@@ -304,8 +304,8 @@ fn bad_decks_name_the_card_and_line() {
             "cube.bdf:3: SPC = 300 selects a set that no SPC, SPC1 or SPCADD defines",
         ),
         (
-            base.replace("PARAM    WTMASS  1.", "CTRIA3   2       1       1       2       3\nRBAR     3       7       6       123456\nCTRIA3   4       1       5       6       7\nPARAM    WTMASS  1."),
-            "cube.bdf:23: the deck has cards that change the stiffness or the mass and that femu cannot model: 1 rigid links (RBAR), 2 shells (CTRIA3)",
+            base.replace("PARAM    WTMASS  1.", "CTRIA6   2       1       1       2       3\nRBAR     3       7       6       123456\nCTRIA6   4       1       5       6       7\nPARAM    WTMASS  1."),
+            "cube.bdf:23: the deck has cards that change the stiffness or the mass and that femu cannot model: 1 rigid links (RBAR), 2 shells (CTRIA6)",
         ),
     ];
     for (text, want) in cases {
@@ -317,7 +317,7 @@ fn bad_decks_name_the_card_and_line() {
     // lenient: the rest is read, with a warning that K and M are incomplete
     let with_shell = base.replace(
         "PARAM    WTMASS  1.",
-        "CTRIA3   2       1       1       2       3\nPARAM    WTMASS  1.",
+        "CTRIA6   2       1       1       2       3\nPARAM    WTMASS  1.",
     );
     let deck = parse_bdf(&with_shell, "cube.bdf", &BdfOptions { lenient: true }).unwrap();
     assert_eq!(deck.model.mesh().element_count(), 1);

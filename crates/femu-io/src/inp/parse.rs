@@ -472,7 +472,7 @@ impl DeckBuilder {
             return Ok(());
         }
         let (kind, formulation, approx) = element_kind(ty).ok_or_else(|| {
-            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; B31, B33, SPRING1, SPRING2, SPRINGA; S4, S4R)"))
+            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; B31, B33, SPRING1, SPRING2, SPRINGA; S4, S4R, S3, S3R)"))
         })?;
         if approx {
             warn(

@@ -33,6 +33,8 @@ pub(super) enum StructuralType {
     SpringA,
     /// A 4-node shell (S4, and S4R built fully integrated).
     S4,
+    /// A 3-node shell (S3, S3R).
+    S3,
 }
 
 impl StructuralType {
@@ -46,10 +48,11 @@ impl StructuralType {
             "SPRING2" => (Self::Spring2, 2),
             "SPRINGA" => (Self::SpringA, 2),
             "S4" | "S4R" => (Self::S4, 4),
-            t @ ("S3" | "S3R" | "S8R" | "S8R5" | "S4R5" | "S9R5" | "STRI3" | "STRI65" | "M3D4"
-            | "M3D4R" | "M3D3" | "SC8R") => {
+            "S3" | "S3R" => (Self::S3, 3),
+            t @ ("S8R" | "S8R5" | "S4R5" | "S9R5" | "STRI3" | "STRI65" | "M3D4" | "M3D4R"
+            | "M3D3" | "SC8R") => {
                 return Err(format!(
-                    "element type {t} is not read: femu's shells are the 4-node S4 and S4R (triangular, 8-node, thin-only, membrane and continuum shells are not built)"
+                    "element type {t} is not read: femu's shells are S4, S4R, S3 and S3R (8-node, thin-only, membrane and continuum shells are not built)"
                 ));
             }
             t @ ("B32" | "B32H" | "B31OS" | "B32OS" | "PIPE31" | "PIPE32" | "B21" | "B22"
@@ -70,6 +73,7 @@ impl StructuralType {
             Self::Spring2 => "SPRING2",
             Self::SpringA => "SPRINGA",
             Self::S4 => "S4",
+            Self::S3 => "S3",
         }
     }
 }
@@ -417,12 +421,13 @@ pub(super) fn add_structural(
                     lumped_torsion: false,
                 })
             }
-            StructuralType::S4 => {
+            StructuralType::S4 | StructuralType::S3 => {
                 let k = *shell_of.get(id).ok_or_else(|| {
                     at_err(
                         l,
                         format!(
-                            "S4 element {id} has no *SHELL SECTION (none names a set that holds it)"
+                            "{} element {id} has no *SHELL SECTION (none names a set that holds it)",
+                            ty.name()
                         ),
                     )
                 })?;

@@ -1,6 +1,7 @@
 //! Bars, beams, rods, springs, bushings and shells: `CBAR` (`PBAR`, `PBARL`), `CBEAM` (`PBEAM`,
 //! `PBEAML`, prismatic), `CROD` (`PROD`), `CONROD`, `CELAS1` (`PELAS`), `CELAS2`, `CBUSH`
-//! (`PBUSH`), `CQUAD4` (`PSHELL` of one isotropic MAT1), with `BAROR` and `BEAMOR` defaults, read as the Quick Reference Guide defines them
+//! (`PBUSH`), `CQUAD4` and `CTRIA3` (`PSHELL` of one isotropic MAT1), with `BAROR` and
+//! `BEAMOR` defaults, read as the Quick Reference Guide defines them
 //! (cited by card) into femu's structural elements ([`femu_fem::structural`]). What femu cannot
 //! represent is refused with card and line: pin flags, tapered beams, warping, shear-centre and
 //! mass offsets, products of inertia, offsets in the element frame, scalar points.
@@ -30,7 +31,7 @@ pub(super) struct StructuralCards<'a> {
 
 /// The structural element card names.
 pub(super) const ELEMENTS: &[&str] = &[
-    "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CBUSH", "CQUAD4",
+    "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CBUSH", "CQUAD4", "CTRIA3",
 ];
 /// The structural property card names.
 pub(super) const PROPERTIES: &[&str] = &[
@@ -728,10 +729,11 @@ pub(super) fn add_structural(
                 });
                 (kind, nodes, pid)
             }
-            "CQUAD4" => {
+            "CQUAD4" | "CTRIA3" => {
                 let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
                 let p = prop(pid, &["PSHELL"])?;
-                let nodes = (2..6)
+                let corners = if c.name == "CQUAD4" { 4 } else { 3 };
+                let nodes = (2..2 + corners)
                     .map(|i| node(model, c.id(i, "G")?, c, "a corner"))
                     .collect::<Result<Vec<_>, _>>()?;
                 let zoffs = c.real(7, "ZOFFS")?.unwrap_or(0.0);
@@ -743,7 +745,7 @@ pub(super) fn add_structural(
                 let shell = pshell(p, pid, ctx)?;
                 // T1-T4: corner thicknesses, refused unless they are the property's
                 let tflag = c.int(10, "TFLAG")?.unwrap_or(0);
-                for k in 0..4 {
+                for k in 0..corners {
                     if let Some(tk) = c.real(11 + k, "T")? {
                         let t = if tflag == 1 { tk * shell.t } else { tk };
                         if (t - shell.t).abs() > 1e-12 * shell.t {
