@@ -77,6 +77,30 @@ fn shape(xi: f64, eta: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
 /// The axes of a shell's plane (rows `e1`, `e2`, `n`), its corners in that plane, and its warp.
 pub type ShellFrame = ([V3; 3], [[f64; 2]; 4], f64);
 
+/// `D (1, nu, 0; nu, 1, 0; 0, 0, (1 - nu) / 2)`: plane stress of stiffness `d`.
+fn plane_stress(d: f64, nu: f64) -> [[f64; 3]; 3] {
+    [
+        [d, d * nu, 0.0],
+        [d * nu, d, 0.0],
+        [0.0, 0.0, d * (1.0 - nu) / 2.0],
+    ]
+}
+
+/// `k += w B^T D B` for the first `rows` rows of `b` (each `N` columns) and `d`, row-major `k`.
+fn add_btdb<const N: usize>(k: &mut [f64], b: &[[f64; N]], d: &[[f64; 3]; 3], rows: usize, w: f64) {
+    for r in 0..N {
+        for c in 0..N {
+            let mut v = 0.0;
+            for a in 0..rows {
+                for bb in 0..rows {
+                    v += b[a][r] * d[a][bb] * b[bb][c];
+                }
+            }
+            k[r * N + c] += w * v;
+        }
+    }
+}
+
 /// The element's plane: its axes (rows `e1`, `e2`, `n`), its corners in that plane, and its warp.
 ///
 /// # Errors
@@ -132,14 +156,7 @@ pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec
     let dm = e * t / (1.0 - nu * nu);
     let db = s.bending * e * t.powi(3) / (12.0 * (1.0 - nu * nu));
     let ds = s.shear.map_or(1000.0 * 5.0 / 6.0, |k| k) * g * t;
-    let plane = |d: f64| {
-        [
-            [d, d * nu, 0.0],
-            [d * nu, d, 0.0],
-            [0.0, 0.0, d * (1.0 - nu) / 2.0],
-        ]
-    };
-    let (cm, cb) = (plane(dm), plane(db));
+    let (cm, cb) = (plane_stress(dm, nu), plane_stress(db, nu));
     let mut k = vec![0.0; 576];
     let mut m = vec![0.0; 576];
     let jac = |xi: f64, eta: f64| {
@@ -171,19 +188,6 @@ pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec
     let (b_row, d_row) = (shear_row(1.0, 0.0, false), shear_row(-1.0, 0.0, false));
     let gp = 1.0 / 3f64.sqrt();
     let mut area = 0.0;
-    let add = |k: &mut Vec<f64>, b: &[[f64; 24]], d: &[[f64; 3]; 3], n: usize, w: f64| {
-        for r in 0..24 {
-            for c in 0..24 {
-                let mut v = 0.0;
-                for a in 0..n {
-                    for bb in 0..n {
-                        v += b[a][r] * d[a][bb] * b[bb][c];
-                    }
-                }
-                k[r * 24 + c] += w * v;
-            }
-        }
-    };
     for (xi, eta) in [(-gp, -gp), (gp, -gp), (gp, gp), (-gp, gp)] {
         let (nn, dxi, deta) = shape(xi, eta);
         let j = jac(xi, eta);
@@ -230,10 +234,10 @@ pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec
             bs[0][c] = inv[0][0] * gxi[c] + inv[0][1] * geta[c];
             bs[1][c] = inv[1][0] * gxi[c] + inv[1][1] * geta[c];
         }
-        add(&mut k, &bm, &cm, 3, det);
-        add(&mut k, &bb, &cb, 3, det);
+        add_btdb(&mut k, &bm, &cm, 3, det);
+        add_btdb(&mut k, &bb, &cb, 3, det);
         let cs = [[ds, 0.0, 0.0], [0.0, ds, 0.0], [0.0, 0.0, 0.0]];
-        add(&mut k, &bs, &cs, 2, det);
+        add_btdb(&mut k, &bs, &cs, 2, det);
         if mass == MassKind::Consistent {
             let (mt, mr) = (s.rho * t + s.nsm, s.rho * s.bending * t.powi(3) / 12.0);
             for a in 0..4 {
@@ -291,47 +295,13 @@ pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec
             }
         }
     }
-    let kg = congruence(&k, &tm, 24);
+    let kg = crate::structural::congruence(&k, &tm, 24, 24);
     let mg = match mass {
-        MassKind::Consistent => congruence(&m, &tm, 24),
+        MassKind::Consistent => crate::structural::congruence(&m, &tm, 24, 24),
         // a lumped translational mass is the same in every frame
         MassKind::Lumped => m,
     };
     Ok((kg, mg))
-}
-
-/// `T^T A T` for `n x n` row-major matrices, symmetrised.
-fn congruence(a: &[f64], t: &[f64], n: usize) -> Vec<f64> {
-    let mut at = vec![0.0; n * n];
-    for i in 0..n {
-        for k in 0..n {
-            let v = a[i * n + k];
-            if v != 0.0 {
-                for j in 0..n {
-                    at[i * n + j] += v * t[k * n + j];
-                }
-            }
-        }
-    }
-    let mut out = vec![0.0; n * n];
-    for k in 0..n {
-        for i in 0..n {
-            let v = t[k * n + i];
-            if v != 0.0 {
-                for j in 0..n {
-                    out[i * n + j] += v * at[k * n + j];
-                }
-            }
-        }
-    }
-    for i in 0..n {
-        for j in 0..i {
-            let s = 0.5 * (out[i * n + j] + out[j * n + i]);
-            out[i * n + j] = s;
-            out[j * n + i] = s;
-        }
-    }
-    out
 }
 
 /// The 3-node shell (MITC3, Lee and Bathe 2004) on `(u, v, w, theta_x, theta_y, theta_z)` of
@@ -377,30 +347,10 @@ pub fn matrices3(s: &Shell, x: &[V3; 3], mass: MassKind) -> Result<(Vec<f64>, Ve
     let dm = e * t / (1.0 - nu * nu);
     let db = s.bending * e * t.powi(3) / (12.0 * (1.0 - nu * nu));
     let dsh = s.shear.map_or(1000.0 * 5.0 / 6.0, |k| k) * g * t;
-    let plane = |d: f64| {
-        [
-            [d, d * nu, 0.0],
-            [d * nu, d, 0.0],
-            [0.0, 0.0, d * (1.0 - nu) / 2.0],
-        ]
-    };
-    let (cm, cb) = (plane(dm), plane(db));
+    let (cm, cb) = (plane_stress(dm, nu), plane_stress(db, nu));
     let nd = 18;
     let mut k = vec![0.0; nd * nd];
     let mut m = vec![0.0; nd * nd];
-    let add = |k: &mut Vec<f64>, b: &[[f64; 18]], d: &[[f64; 3]; 3], rows: usize, w: f64| {
-        for r in 0..nd {
-            for c in 0..nd {
-                let mut v = 0.0;
-                for a in 0..rows {
-                    for bb in 0..rows {
-                        v += b[a][r] * d[a][bb] * b[bb][c];
-                    }
-                }
-                k[r * nd + c] += w * v;
-            }
-        }
-    };
     // membrane and bending: constant
     let mut bm = [[0.0; 18]; 3];
     let mut bb = [[0.0; 18]; 3];
@@ -414,8 +364,8 @@ pub fn matrices3(s: &Shell, x: &[V3; 3], mass: MassKind) -> Result<(Vec<f64>, Ve
         bb[2][6 * i + 4] = ny[i];
         bb[2][6 * i + 3] = -nx[i];
     }
-    add(&mut k, &bm, &cm, 3, area);
-    add(&mut k, &bb, &cb, 3, area);
+    add_btdb(&mut k, &bm, &cm, 3, area);
+    add_btdb(&mut k, &bb, &cb, 3, area);
     // covariant shear rows at (r, s): gamma_r (along r) or gamma_s
     let shape3 = |r: f64, s: f64| [1.0 - r - s, r, s];
     let row = |r: f64, s: f64, along_r: bool| -> [f64; 18] {
@@ -447,7 +397,7 @@ pub fn matrices3(s: &Shell, x: &[V3; 3], mass: MassKind) -> Result<(Vec<f64>, Ve
             bs[1][q] = inv[1][0] * gr[q] + inv[1][1] * gs[q];
         }
         let cs = [[dsh, 0.0, 0.0], [0.0, dsh, 0.0], [0.0, 0.0, 0.0]];
-        add(&mut k, &bs, &cs, 2, w);
+        add_btdb(&mut k, &bs, &cs, 2, w);
         if mass == MassKind::Consistent {
             let nn = shape3(r, sp);
             for a in 0..3 {
@@ -495,9 +445,9 @@ pub fn matrices3(s: &Shell, x: &[V3; 3], mass: MassKind) -> Result<(Vec<f64>, Ve
             }
         }
     }
-    let kg = congruence(&k, &tm, nd);
+    let kg = crate::structural::congruence(&k, &tm, nd, nd);
     let mg = match mass {
-        MassKind::Consistent => congruence(&m, &tm, nd),
+        MassKind::Consistent => crate::structural::congruence(&m, &tm, nd, nd),
         MassKind::Lumped => m,
     };
     Ok((kg, mg))

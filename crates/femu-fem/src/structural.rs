@@ -267,8 +267,8 @@ fn offset_map(w: V3) -> [[f64; 6]; 6] {
     t
 }
 
-/// `B^T A B` for square `A` (`n x n`) and `B` (`n x m`), row-major.
-fn congruence(a: &[f64], b: &[f64], n: usize, m: usize) -> Vec<f64> {
+/// `B^T A B` for square `A` (`n x n`) and `B` (`n x m`), row-major, exactly symmetric.
+pub(crate) fn congruence(a: &[f64], b: &[f64], n: usize, m: usize) -> Vec<f64> {
     let mut ab = vec![0.0; n * m];
     for i in 0..n {
         for k in 0..n {
