@@ -101,6 +101,68 @@ fn add_btdb<const N: usize>(k: &mut [f64], b: &[[f64; N]], d: &[[f64; 3]; 3], ro
     }
 }
 
+/// The membrane rows `(u_,x, v_,y, u_,y + v_,x)` and the curvature rows `(beta_x,x, beta_y,y,
+/// beta_x,y + beta_y,x)` (`beta_x = theta_y`, `beta_y = -theta_x`) of the corners with gradients
+/// `(nx, ny)`, on `N = 6 corners` DOFs.
+fn strain_rows<const N: usize>(nx: &[f64], ny: &[f64]) -> ([[f64; N]; 3], [[f64; N]; 3]) {
+    let mut bm = [[0.0; N]; 3];
+    let mut bb = [[0.0; N]; 3];
+    for i in 0..nx.len() {
+        bm[0][6 * i] = nx[i];
+        bm[1][6 * i + 1] = ny[i];
+        bm[2][6 * i] = ny[i];
+        bm[2][6 * i + 1] = nx[i];
+        bb[0][6 * i + 4] = nx[i];
+        bb[1][6 * i + 3] = -ny[i];
+        bb[2][6 * i + 4] = ny[i];
+        bb[2][6 * i + 3] = -nx[i];
+    }
+    (bm, bb)
+}
+
+/// The drilling stiffness `kd sum_i (theta_z,i - omega)^2`, `omega = (v_,x - u_,y) / 2` from the
+/// corners' gradients `(nx, ny)` (at the centre), added to `k`.
+fn add_drilling<const N: usize>(k: &mut [f64], nx: &[f64], ny: &[f64], kd: f64) {
+    let mut omega = [0.0; N];
+    for i in 0..nx.len() {
+        omega[6 * i + 1] = 0.5 * nx[i];
+        omega[6 * i] = -0.5 * ny[i];
+    }
+    for i in 0..nx.len() {
+        let mut d = omega.map(|v| -v);
+        d[6 * i + 5] += 1.0;
+        for r in 0..N {
+            for c in 0..N {
+                k[r * N + c] += kd * d[r] * d[c];
+            }
+        }
+    }
+}
+
+/// The element's stiffness and mass turned from its axes (rows of `axes`) to the basic frame; a
+/// lumped (translational) mass is the same in every frame.
+fn to_basic<const N: usize>(
+    k: &[f64],
+    m: Vec<f64>,
+    axes: &[V3; 3],
+    mass: MassKind,
+) -> (Vec<f64>, Vec<f64>) {
+    let mut tm = vec![0.0; N * N];
+    for blk in 0..N / 3 {
+        for r in 0..3 {
+            for c in 0..3 {
+                tm[(3 * blk + r) * N + 3 * blk + c] = axes[r][c];
+            }
+        }
+    }
+    let kg = crate::structural::congruence(k, &tm, N, N);
+    let mg = match mass {
+        MassKind::Consistent => crate::structural::congruence(&m, &tm, N, N),
+        MassKind::Lumped => m,
+    };
+    (kg, mg)
+}
+
 /// The element's plane: its axes (rows `e1`, `e2`, `n`), its corners in that plane, and its warp.
 ///
 /// # Errors
@@ -208,19 +270,7 @@ pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec
             nx[i] = inv[0][0] * dxi[i] + inv[0][1] * deta[i];
             ny[i] = inv[1][0] * dxi[i] + inv[1][1] * deta[i];
         }
-        let mut bm = [[0.0; 24]; 3];
-        let mut bb = [[0.0; 24]; 3];
-        for i in 0..4 {
-            bm[0][6 * i] = nx[i];
-            bm[1][6 * i + 1] = ny[i];
-            bm[2][6 * i] = ny[i];
-            bm[2][6 * i + 1] = nx[i];
-            // kappa = (beta_x,x, beta_y,y, beta_x,y + beta_y,x), beta_x = theta_y, beta_y = -theta_x
-            bb[0][6 * i + 4] = nx[i];
-            bb[1][6 * i + 3] = -ny[i];
-            bb[2][6 * i + 4] = ny[i];
-            bb[2][6 * i + 3] = -nx[i];
-        }
+        let (bm, bb) = strain_rows::<24>(&nx, &ny);
         // MITC4: gamma_xi from A (0, 1) and C (0, -1), gamma_eta from B (1, 0) and D (-1, 0),
         // then (gamma_xz, gamma_yz) = J^-1 (gamma_xi, gamma_eta)
         let mut gxi = [0.0; 24];
@@ -269,39 +319,10 @@ pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec
         [j[1][1] / det, -j[0][1] / det],
         [-j[1][0] / det, j[0][0] / det],
     ];
-    let mut omega = [0.0; 24];
-    for i in 0..4 {
-        let nx = inv[0][0] * dxi[i] + inv[0][1] * deta[i];
-        let ny = inv[1][0] * dxi[i] + inv[1][1] * deta[i];
-        omega[6 * i + 1] = 0.5 * nx;
-        omega[6 * i] = -0.5 * ny;
-    }
-    let kd = 1e-3 * g * t * area;
-    for i in 0..4 {
-        let mut d = omega.map(|v| -v);
-        d[6 * i + 5] += 1.0;
-        for r in 0..24 {
-            for c in 0..24 {
-                k[r * 24 + c] += kd * d[r] * d[c];
-            }
-        }
-    }
-    // to the basic frame: local DOFs = R (global), R's rows the axes
-    let mut tm = vec![0.0; 576];
-    for blk in 0..8 {
-        for r in 0..3 {
-            for c in 0..3 {
-                tm[(3 * blk + r) * 24 + 3 * blk + c] = axes[r][c];
-            }
-        }
-    }
-    let kg = crate::structural::congruence(&k, &tm, 24, 24);
-    let mg = match mass {
-        MassKind::Consistent => crate::structural::congruence(&m, &tm, 24, 24),
-        // a lumped translational mass is the same in every frame
-        MassKind::Lumped => m,
-    };
-    Ok((kg, mg))
+    let nx: [f64; 4] = std::array::from_fn(|i| inv[0][0] * dxi[i] + inv[0][1] * deta[i]);
+    let ny: [f64; 4] = std::array::from_fn(|i| inv[1][0] * dxi[i] + inv[1][1] * deta[i]);
+    add_drilling::<24>(&mut k, &nx, &ny, 1e-3 * g * t * area);
+    Ok(to_basic::<24>(&k, m, &axes, mass))
 }
 
 /// The 3-node shell (MITC3, Lee and Bathe 2004) on `(u, v, w, theta_x, theta_y, theta_z)` of
@@ -352,18 +373,7 @@ pub fn matrices3(s: &Shell, x: &[V3; 3], mass: MassKind) -> Result<(Vec<f64>, Ve
     let mut k = vec![0.0; nd * nd];
     let mut m = vec![0.0; nd * nd];
     // membrane and bending: constant
-    let mut bm = [[0.0; 18]; 3];
-    let mut bb = [[0.0; 18]; 3];
-    for i in 0..3 {
-        bm[0][6 * i] = nx[i];
-        bm[1][6 * i + 1] = ny[i];
-        bm[2][6 * i] = ny[i];
-        bm[2][6 * i + 1] = nx[i];
-        bb[0][6 * i + 4] = nx[i];
-        bb[1][6 * i + 3] = -ny[i];
-        bb[2][6 * i + 4] = ny[i];
-        bb[2][6 * i + 3] = -nx[i];
-    }
+    let (bm, bb) = strain_rows::<18>(&nx, &ny);
     add_btdb(&mut k, &bm, &cm, 3, area);
     add_btdb(&mut k, &bb, &cb, 3, area);
     // covariant shear rows at (r, s): gamma_r (along r) or gamma_s
@@ -421,36 +431,8 @@ pub fn matrices3(s: &Shell, x: &[V3; 3], mass: MassKind) -> Result<(Vec<f64>, Ve
         }
     }
     // drilling: k_d (theta_z,i - omega)^2, omega = (v_,x - u_,y) / 2
-    let mut omega = [0.0; 18];
-    for i in 0..3 {
-        omega[6 * i + 1] = 0.5 * nx[i];
-        omega[6 * i] = -0.5 * ny[i];
-    }
-    let kd = 1e-3 * g * t * area;
-    for i in 0..3 {
-        let mut d = omega.map(|v| -v);
-        d[6 * i + 5] += 1.0;
-        for r in 0..nd {
-            for c2 in 0..nd {
-                k[r * nd + c2] += kd * d[r] * d[c2];
-            }
-        }
-    }
-    let axes = [e1, e2, n];
-    let mut tm = vec![0.0; nd * nd];
-    for blk in 0..6 {
-        for r in 0..3 {
-            for c2 in 0..3 {
-                tm[(3 * blk + r) * nd + 3 * blk + c2] = axes[r][c2];
-            }
-        }
-    }
-    let kg = crate::structural::congruence(&k, &tm, nd, nd);
-    let mg = match mass {
-        MassKind::Consistent => crate::structural::congruence(&m, &tm, nd, nd),
-        MassKind::Lumped => m,
-    };
-    Ok((kg, mg))
+    add_drilling::<18>(&mut k, &nx, &ny, 1e-3 * g * t * area);
+    Ok(to_basic::<18>(&k, m, &[e1, e2, n], mass))
 }
 
 impl Shell {
