@@ -162,6 +162,7 @@ fn info_describes_every_format() {
         "calculix/cantilever.sti",
         "nastran/pynastran/mode_solid_shell_bar.f06",
         "nastran/pynastran/mode_solid_shell_bar.op2",
+        "nastran/pynastran/beam_modes.dat",
     ] {
         let o = Command::cargo_bin("femu")
             .unwrap()

@@ -489,7 +489,9 @@ fn param<'a>(
                 return Ok(());
             }
             warned.push(key);
-            let why = if PARAM_NO_EFFECT.contains(&name.as_str()) {
+            let why = if name == "K6ROT" {
+                "femu's shells have their own drilling stiffness (docs/MATH.md, \"Shells\"), which this value does not change"
+            } else if PARAM_NO_EFFECT.contains(&name.as_str()) {
                 "it does not change the stiffness or the mass of a solid model"
             } else {
                 "femu does not know this parameter; check that it changes neither stiffness nor mass"
