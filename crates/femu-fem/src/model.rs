@@ -19,6 +19,8 @@ pub struct Model {
     fixed: BTreeSet<(usize, usize)>,
     point_masses: Vec<PointMass>,
     rotation_nodes: Vec<usize>,
+    /// Whether each node (internal index) is in `rotation_nodes`.
+    has_rotation: Vec<bool>,
     constraints: Vec<LinearConstraint>,
     rigid_masses: Vec<RigidMass>,
     /// per element, when any is not [`Formulation::Full`] (empty: all full)
@@ -27,6 +29,8 @@ pub struct Model {
     structural: Vec<StructuralElement>,
     /// Named sets of structural elements (indices into `structural`).
     structural_sets: BTreeMap<String, Vec<usize>>,
+    /// The index in `structural` of each structural element id.
+    structural_lookup: std::collections::HashMap<u64, usize>,
 }
 
 /// A rigid body's mass on a node that carries rotations (a rigid link's reference, where Nastran
@@ -70,6 +74,7 @@ impl Model {
     pub fn new(mesh: Mesh) -> Result<Self, FemError> {
         mesh.validate()?;
         let n = mesh.element_count();
+        let nodes = mesh.node_count();
         Ok(Self {
             mesh,
             materials: Vec::new(),
@@ -77,11 +82,13 @@ impl Model {
             fixed: BTreeSet::new(),
             point_masses: Vec::new(),
             rotation_nodes: Vec::new(),
+            has_rotation: vec![false; nodes],
             constraints: Vec::new(),
             rigid_masses: Vec::new(),
             formulations: Vec::new(),
             structural: Vec::new(),
             structural_sets: BTreeMap::new(),
+            structural_lookup: std::collections::HashMap::new(),
         })
     }
 
@@ -114,10 +121,11 @@ impl Model {
         }
         element.matrices(self.mesh.coords(), crate::assembly::MassKind::Consistent)?;
         for (n, part) in parts {
-            if part == Part::Rotations && !self.rotation_nodes.contains(&n) {
-                self.rotation_nodes.push(n);
+            if part == Part::Rotations {
+                self.give_rotations(n);
             }
         }
+        self.structural_lookup.insert(id, self.structural.len());
         self.structural.push(element);
         Ok(self.structural.len() - 1)
     }
@@ -129,7 +137,7 @@ impl Model {
 
     /// The index of the structural element with user id `id`.
     pub fn structural_index(&self, id: u64) -> Option<usize> {
-        self.structural.iter().position(|s| s.id == id)
+        self.structural_lookup.get(&id).copied()
     }
 
     /// Replaces structural element `index` by `element` (new values, same nodes and parts: a
@@ -329,7 +337,7 @@ impl Model {
     pub fn fix_node_dofs(&mut self, node_id: u64, components: &[usize]) -> Result<(), FemError> {
         let n = self.node(node_id)?;
         for &c in components {
-            if c > 5 || (c > 2 && !self.rotation_nodes.contains(&n)) {
+            if c > 5 || (c > 2 && !self.has_rotation[n]) {
                 return Err(FemError::InvalidComponent {
                     node: node_id,
                     component: c,
@@ -449,7 +457,7 @@ impl Model {
             name: format!("rigid mass on node {node_id}"),
             reason,
         };
-        if !self.rotation_nodes.contains(&node) {
+        if !self.has_rotation[node] {
             return Err(bad(
                 "the node has no rotations (only a rigid link's reference node has them)".into(),
             ));
@@ -509,10 +517,21 @@ impl Model {
     /// [`FemError::UnknownNode`].
     pub fn add_rotations(&mut self, node_id: u64) -> Result<(), FemError> {
         let n = self.node(node_id)?;
-        if !self.rotation_nodes.contains(&n) {
+        self.give_rotations(n);
+        Ok(())
+    }
+
+    /// Node `n` (internal index) gets rotations, once.
+    fn give_rotations(&mut self, n: usize) {
+        if !self.has_rotation[n] {
+            self.has_rotation[n] = true;
             self.rotation_nodes.push(n);
         }
-        Ok(())
+    }
+
+    /// Whether node `n` (internal index) carries rotations.
+    pub fn has_rotations(&self, n: usize) -> bool {
+        self.has_rotation.get(n).copied().unwrap_or(false)
     }
 
     /// The nodes with rotational DOFs (internal indices).
@@ -536,7 +555,7 @@ impl Model {
     ) -> Result<(), FemError> {
         let dof = |(id, c): (u64, usize)| -> Result<(usize, usize), FemError> {
             let n = self.node(id)?;
-            if c > 5 || (c > 2 && !self.rotation_nodes.contains(&n)) {
+            if c > 5 || (c > 2 && !self.has_rotation[n]) {
                 return Err(FemError::Constraint {
                     label: label.into(),
                     reason: format!(
@@ -708,7 +727,7 @@ impl Model {
             .flat_map(|(b, _)| b.iter())
             .fold(0.0f64, |m, v| m.max(v.abs()));
         for &c in components {
-            if c > 5 || (c > 2 && !self.rotation_nodes.contains(&r)) {
+            if c > 5 || (c > 2 && !self.has_rotation[r]) {
                 return Err(bad(format!(
                     "node {reference} has no DOF {} to make dependent",
                     c + 1
@@ -789,24 +808,35 @@ impl Model {
     fn rotation_grams(&self) -> Vec<(usize, nalgebra::Matrix3<f64>)> {
         let mut out = Vec::new();
         let elastic = self.structural_rotation_blocks();
+        // one pass over the fixed DOFs and the constraints (a model may have a rotation node per
+        // shell node and thousands of links): nodes with a fixed or dependent rotation, and each
+        // node's Gram matrix of the rotation coefficients of the constraints using it
+        let mut busy = vec![false; self.mesh.node_count()];
+        for &(n, c) in &self.fixed {
+            busy[n] |= c >= 3;
+        }
+        let mut grams: std::collections::HashMap<usize, nalgebra::Matrix3<f64>> =
+            std::collections::HashMap::new();
+        for k in &self.constraints {
+            busy[k.dependent.0] |= k.dependent.1 >= 3;
+            let mut rows: BTreeMap<usize, nalgebra::Vector3<f64>> = BTreeMap::new();
+            for ((m, c), w) in &k.terms {
+                if *c >= 3 {
+                    rows.entry(*m).or_insert_with(nalgebra::Vector3::zeros)[*c - 3] += w;
+                }
+            }
+            for (m, a) in rows {
+                *grams.entry(m).or_insert_with(nalgebra::Matrix3::zeros) += a * a.transpose();
+            }
+        }
         for &n in &self.rotation_nodes {
-            let busy = (3..6).any(|c| {
-                self.fixed.contains(&(n, c))
-                    || self.constraints.iter().any(|k| k.dependent == (n, c))
-            });
-            if busy {
+            if busy[n] {
                 continue;
             }
-            let mut g = nalgebra::Matrix3::<f64>::zeros();
-            for k in &self.constraints {
-                let mut a = nalgebra::Vector3::<f64>::zeros();
-                for ((m, c), w) in &k.terms {
-                    if *m == n && *c >= 3 {
-                        a[*c - 3] += w;
-                    }
-                }
-                g += a * a.transpose();
-            }
+            let mut g = grams
+                .get(&n)
+                .copied()
+                .unwrap_or_else(nalgebra::Matrix3::zeros);
             let top = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             if top > 0.0 {
                 g /= top;

@@ -89,7 +89,7 @@ impl InpDeck {
                     Target::Set(s) => self.mesh.node_sets().get(s).cloned().unwrap_or_default(),
                 };
                 for n in nodes {
-                    if model.rotation_nodes().contains(&n) {
+                    if model.has_rotations(n) {
                         let id = model.mesh().node_id(n);
                         model
                             .fix_node_dofs(id, &rotations)
@@ -284,7 +284,7 @@ impl InpDeck {
                             let has = model
                                 .mesh()
                                 .node_index(id)
-                                .is_some_and(|n| model.rotation_nodes().contains(&n));
+                                .is_some_and(|n| model.has_rotations(n));
                             if has && id != *reference {
                                 for d in all.iter().filter(|d| **d > 3) {
                                     model
@@ -315,7 +315,7 @@ impl InpDeck {
                         let has_rot = model
                             .mesh()
                             .node_index(*reference)
-                            .is_some_and(|n| model.rotation_nodes().contains(&n));
+                            .is_some_and(|n| model.has_rotations(n));
                         let all: &[usize] = if dofs.is_empty() {
                             &[1, 2, 3, 4, 5, 6]
                         } else {

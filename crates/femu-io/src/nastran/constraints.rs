@@ -32,7 +32,7 @@ pub(super) fn fix_components(
             "constrains GRID {g}, which the deck does not define"
         )));
     };
-    let has_rotations = model.rotation_nodes().contains(&gi);
+    let has_rotations = model.has_rotations(gi);
     let comps: Vec<usize> = comps
         .iter()
         .copied()

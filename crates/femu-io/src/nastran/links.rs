@@ -106,7 +106,7 @@ pub(super) fn read_links(
             let rot: Vec<usize> = cm.iter().copied().filter(|k| *k >= 3).collect();
             for &g in &gm {
                 let gi = grid(model, c, g)?;
-                if model.rotation_nodes().contains(&gi) {
+                if model.has_rotations(gi) {
                     for &k in &rot {
                         model
                             .add_constraint((g, k), &[((gn, k), 1.0)], &label)
@@ -177,7 +177,7 @@ pub(super) fn read_links(
                     return Err(c.err(format!("{eid}: weight {w} has no grids")));
                 }
             }
-            let has_rot = model.rotation_nodes().contains(&refi);
+            let has_rot = model.has_rotations(refi);
             let comps: Vec<usize> = refc.iter().copied().filter(|k| *k < 3 || has_rot).collect();
             model
                 .add_weighted_average(refgrid, &comps, &nodes, &label)

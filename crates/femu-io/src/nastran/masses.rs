@@ -115,7 +115,7 @@ pub(super) fn add_masses(
         let offset = d.iter().any(|v| *v != 0.0);
         let inertia = j.iter().flatten().any(|v| *v != 0.0);
         let scaled = j.map(|r| r.map(|v| v * wtmass));
-        if model.rotation_nodes().contains(&gi) {
+        if model.has_rotations(gi) {
             // a rigid link's reference: offset and inertia act on its rotations
             model
                 .add_rigid_mass(g, m * wtmass, d, scaled)
@@ -128,7 +128,7 @@ pub(super) fn add_masses(
             && (offset || inertia)
             && (0..6).all(|k| cm.contains(&k))
             && let Some(ni) = model.mesh().node_index(*gn)
-            && model.rotation_nodes().contains(&ni)
+            && model.has_rotations(ni)
         {
             let xn = model.mesh().coords()[ni];
             let from_reference: [f64; 3] = std::array::from_fn(|i| xg[i] + d[i] - xn[i]);
