@@ -92,9 +92,10 @@ impl Model {
         })
     }
 
-    /// Adds a beam, rod, spring or bushing; its nodes get rotations where it acts on them
-    /// ([`Model::add_rotations`]). Its matrices are formed once here, so that a bad value or
-    /// geometry (coincident ends, an orientation vector along the axis) is refused now.
+    /// Adds a beam, rod, spring, bushing or shell; its nodes get rotations where it acts on them
+    /// ([`Model::add_rotations`]). Its values and geometry are checked here
+    /// ([`StructuralElement::check_geometry`]), so that a bad one (coincident ends, an orientation
+    /// vector along the axis, a warped shell) is refused now, with its id.
     ///
     /// # Errors
     /// [`FemError::DuplicateElementId`] for an id a solid or structural element has;
@@ -119,7 +120,7 @@ impl Model {
                 reason: format!("its nodes {:?} are not nodes of the mesh", element.nodes),
             });
         }
-        element.matrices(self.mesh.coords(), crate::assembly::MassKind::Consistent)?;
+        element.check_geometry(self.mesh.coords())?;
         for (n, part) in parts {
             if part == Part::Rotations {
                 self.give_rotations(n);
@@ -164,7 +165,7 @@ impl Model {
                 "a replacement must keep the element's id, nodes and the DOFs it acts on".into(),
             ));
         }
-        element.matrices(self.mesh.coords(), crate::assembly::MassKind::Consistent)?;
+        element.check_geometry(self.mesh.coords())?;
         self.structural[index] = element;
         Ok(())
     }

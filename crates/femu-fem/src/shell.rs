@@ -163,6 +163,57 @@ fn to_basic<const N: usize>(
     (kg, mg)
 }
 
+/// The Jacobian `[[x_,xi, y_,xi], [x_,eta, y_,eta]]` of the map from `(xi, eta)` to the
+/// element's plane, whose corners are `p`.
+fn jacobian(p: &[[f64; 2]; 4], xi: f64, eta: f64) -> [[f64; 2]; 2] {
+    let (_, dxi, deta) = shape(xi, eta);
+    let mut j = [[0.0; 2]; 2];
+    for i in 0..4 {
+        j[0][0] += dxi[i] * p[i][0];
+        j[0][1] += dxi[i] * p[i][1];
+        j[1][0] += deta[i] * p[i][0];
+        j[1][1] += deta[i] * p[i][1];
+    }
+    j
+}
+
+/// A quadrilateral's axes and corners in its plane ([`frame`]), refused when it is warped beyond
+/// [`MAX_WARP`] or its Jacobian is not positive at every 2 x 2 Gauss point.
+fn checked_quad(x: &[V3; 4]) -> Result<([V3; 3], [[f64; 2]; 4]), String> {
+    let (axes, p, warp) = frame(x)?;
+    if warp > MAX_WARP {
+        return Err(format!(
+            "it is warped: a corner lies {warp:.3} times the square root of its area from its mean plane, above femu's limit of {MAX_WARP} for a flat shell (split it into flatter elements)"
+        ));
+    }
+    let gp = 1.0 / 3f64.sqrt();
+    for (xi, eta) in [(-gp, -gp), (gp, -gp), (gp, gp), (-gp, gp)] {
+        let j = jacobian(&p, xi, eta);
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if !(det > 0.0) {
+            return Err(format!(
+                "its Jacobian is {det:e} at a Gauss point: the quadrilateral is inverted or degenerate"
+            ));
+        }
+    }
+    Ok((axes, p))
+}
+
+/// Checks a shell's corners (three or four, basic frame) without forming its matrices: a
+/// triangle that spans an area, a quadrilateral as [`checked_quad`] has it.
+///
+/// # Errors
+/// The message [`matrices`] or [`matrices3`] would give for the geometry.
+pub fn check(x: &[V3]) -> Result<(), String> {
+    match x {
+        [a, b, c, d] => checked_quad(&[*a, *b, *c, *d]).map(|_| ()),
+        [a, b, c] => unit(cross(sub(*b, *a), sub(*c, *a)))
+            .map(|_| ())
+            .ok_or_else(|| "its corners do not span a triangle (collinear or coincident)".into()),
+        _ => Err(format!("a shell has 3 or 4 corners, not {}", x.len())),
+    }
+}
+
 /// The element's plane: its axes (rows `e1`, `e2`, `n`), its corners in that plane, and its warp.
 ///
 /// # Errors
@@ -207,12 +258,7 @@ pub fn frame(x: &[V3; 4]) -> Result<ShellFrame, String> {
 /// A message for a degenerate, inverted (a non-positive Jacobian at a Gauss point) or warped
 /// quadrilateral.
 pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec<f64>), String> {
-    let (axes, p, warp) = frame(x)?;
-    if warp > MAX_WARP {
-        return Err(format!(
-            "it is warped: a corner lies {warp:.3} times the square root of its area from its mean plane, above femu's limit of {MAX_WARP} for a flat shell (split it into flatter elements)"
-        ));
-    }
+    let (axes, p) = checked_quad(x)?;
     let (e, nu, t) = (s.e, s.nu, s.t);
     let g = e / (2.0 * (1.0 + nu));
     let dm = e * t / (1.0 - nu * nu);
@@ -221,17 +267,7 @@ pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec
     let (cm, cb) = (plane_stress(dm, nu), plane_stress(db, nu));
     let mut k = vec![0.0; 576];
     let mut m = vec![0.0; 576];
-    let jac = |xi: f64, eta: f64| {
-        let (_, dxi, deta) = shape(xi, eta);
-        let mut j = [[0.0; 2]; 2];
-        for i in 0..4 {
-            j[0][0] += dxi[i] * p[i][0];
-            j[0][1] += dxi[i] * p[i][1];
-            j[1][0] += deta[i] * p[i][0];
-            j[1][1] += deta[i] * p[i][1];
-        }
-        j
-    };
+    let jac = |xi: f64, eta: f64| jacobian(&p, xi, eta);
     // the covariant shear strain rows at a point: gamma_xi (along xi) or gamma_eta
     let shear_row = |xi: f64, eta: f64, along_xi: bool| -> [f64; 24] {
         let (nn, dxi, deta) = shape(xi, eta);
@@ -253,12 +289,8 @@ pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec
     for (xi, eta) in [(-gp, -gp), (gp, -gp), (gp, gp), (-gp, gp)] {
         let (nn, dxi, deta) = shape(xi, eta);
         let j = jac(xi, eta);
+        // positive at every Gauss point: checked_quad
         let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-        if !(det > 0.0) {
-            return Err(format!(
-                "its Jacobian is {det:e} at a Gauss point: the quadrilateral is inverted or degenerate"
-            ));
-        }
         area += det;
         let inv = [
             [j[1][1] / det, -j[0][1] / det],

@@ -480,6 +480,42 @@ impl StructuralElement {
         b.k[3..].iter().any(|v| *v != 0.0) || b.point.is_some()
     }
 
+    /// Checks the element's values ([`StructuralElement::validate`]) and geometry at node
+    /// positions `coords` (coincident ends, an orientation vector along the axis, a degenerate,
+    /// inverted or warped shell) without forming its matrices.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidStructural`] naming the element.
+    pub fn check_geometry(&self, coords: &[[f64; 3]]) -> Result<(), FemError> {
+        self.validate()?;
+        let bad = |reason: String| FemError::InvalidStructural {
+            element: self.id,
+            reason,
+        };
+        match &self.kind {
+            StructuralKind::Beam(b) => line_axes(
+                add(coords[self.nodes[0]], b.offsets[0]),
+                add(coords[self.nodes[1]], b.offsets[1]),
+                b.orientation,
+            )
+            .map(|_| ())
+            .map_err(bad),
+            StructuralKind::Rod(_) => {
+                let l = norm(sub(coords[self.nodes[1]], coords[self.nodes[0]]));
+                if l > 0.0 {
+                    Ok(())
+                } else {
+                    Err(bad(format!("its ends coincide (length {l:e})")))
+                }
+            }
+            StructuralKind::Shell(_) => {
+                let x: Vec<[f64; 3]> = self.nodes.iter().map(|n| coords[*n]).collect();
+                crate::shell::check(&x).map_err(bad)
+            }
+            StructuralKind::Spring(_) | StructuralKind::Bushing(_) => Ok(()),
+        }
+    }
+
     /// The element's mass (kg): `(rho A + nsm) L` for beams and rods (between the nodes, offsets
     /// aside), zero for springs and bushings.
     pub fn mass(&self, coords: &[[f64; 3]]) -> f64 {
