@@ -226,19 +226,6 @@ impl Model {
         Ok((solids.unwrap_or_default(), structural.unwrap_or_default()))
     }
 
-    /// Whether node `n` (internal index) has rotations that a structural element acts on.
-    pub fn structural_rotations(&self) -> Vec<bool> {
-        let mut v = vec![false; self.mesh.node_count()];
-        for s in &self.structural {
-            for (n, p) in s.parts() {
-                if p == Part::Rotations {
-                    v[n] = true;
-                }
-            }
-        }
-        v
-    }
-
     /// The mesh.
     pub fn mesh(&self) -> &Mesh {
         &self.mesh

@@ -200,7 +200,8 @@ fn checked_quad(x: &[V3; 4]) -> Result<([V3; 3], [[f64; 2]; 4]), String> {
 }
 
 /// Checks a shell's corners (three or four, basic frame) without forming its matrices: a
-/// triangle that spans an area, a quadrilateral as [`checked_quad`] has it.
+/// triangle that spans an area; a quadrilateral whose corners go round it, warped no more than
+/// [`MAX_WARP`], with a positive Jacobian at every Gauss point.
 ///
 /// # Errors
 /// The message [`matrices`] or [`matrices3`] would give for the geometry.
