@@ -12,16 +12,34 @@ use crate::model::Model;
 use femu_sparse::SparseMatrix;
 use rayon::prelude::*;
 
+/// How a group's parameter enters its elements' matrices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum GroupLaw {
+    /// `K(p) = K_0 + p K_g` and `M(q) = M_0 + q M_g`: a factor on the group's stiffness (a
+    /// modulus, a spring's stiffness) and, separately, on its mass (a density).
+    #[default]
+    Scale,
+    /// The relative change `p` of the thickness of a group of shells: `t -> t (1 + p)`, with
+    /// the membrane, shear and drilling stiffness and the mass `rho t` scaled by `1 + p`, the
+    /// bending stiffness and the rotary inertia by `(1 + p)^3`, the non-structural mass kept
+    /// (docs/MATH.md, "Thickness parameters"). One parameter moves stiffness and mass; the group
+    /// has no separate mass factor.
+    Thickness,
+}
+
 /// A named set of elements (internal indices) whose stiffness and mass are scaled together.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ParameterGroup {
-    /// Name: the element set's name, or `"E<id>"` for a single element.
+    /// Name: the element set's name, or `"E<id>"` for a single element; `"t:<set>"` for the
+    /// thickness of a set's shells.
     pub name: String,
     /// Internal indices of solid elements.
     pub elements: Vec<usize>,
-    /// Indices of structural elements (beams, rods, springs, bushings; [`Model::structural`]):
-    /// a spring's or bushing's stiffness, a beam's modulus.
+    /// Indices of structural elements (beams, rods, springs, bushings, shells;
+    /// [`Model::structural`]): a spring's or bushing's stiffness, a beam's or shell's modulus.
     pub structural: Vec<usize>,
+    /// How the group's parameter acts.
+    pub law: GroupLaw,
 }
 
 impl ParameterGroup {
@@ -31,8 +49,33 @@ impl ParameterGroup {
             name: name.into(),
             elements,
             structural: Vec::new(),
+            law: GroupLaw::Scale,
         }
     }
+
+    /// The thickness of the shells `structural` (indices in [`Model::structural`]), named
+    /// `name`.
+    pub fn thickness(name: impl Into<String>, structural: Vec<usize>) -> Self {
+        Self {
+            name: name.into(),
+            elements: Vec::new(),
+            structural,
+            law: GroupLaw::Thickness,
+        }
+    }
+}
+
+/// The prefix of a thickness group's name: `"t:SKIN"` is the thickness of set `SKIN`'s shells.
+pub const THICKNESS_PREFIX: &str = "t:";
+
+/// A shell's matrices split by their order in the thickness
+/// ([`crate::structural::StructuralElement::thickness_parts`]).
+#[derive(Debug, Clone)]
+struct ThicknessParts {
+    k1: Vec<f64>,
+    m1: Vec<f64>,
+    k3: Vec<f64>,
+    m3: Vec<f64>,
 }
 
 /// Parameter groups with their element matrices, on a model's pattern.
@@ -49,6 +92,8 @@ pub struct ParameterGroups {
     slot_offset: Vec<usize>,
     ke: Vec<f64>,
     me: Vec<f64>,
+    /// The thickness parts of each slot in a thickness group (`None` elsewhere).
+    thickness: Vec<Option<Box<ThicknessParts>>>,
     /// Groups given as assembled matrices instead of elements ([`ParameterGroups::from_matrices`]).
     matrices: Option<MatrixGroups>,
 }
@@ -113,6 +158,27 @@ pub fn translational_mass(m: &SparseMatrix, dofs: &crate::dof::DofMap) -> f64 {
         .filter(|(i, j, _)| along_x[*i] && along_x[*j])
         .map(|(_, _, v)| v)
         .sum()
+}
+
+/// The group a set name stands for: the set's elements scaled, or with [`THICKNESS_PREFIX`]
+/// the thickness of its shells.
+///
+/// # Errors
+/// [`FemError::UnknownElementSet`].
+pub fn group_of_set(model: &Model, name: &str) -> Result<ParameterGroup, FemError> {
+    if let Some(set) = name.strip_prefix(THICKNESS_PREFIX) {
+        let (elements, structural) = model.element_set_members(set)?;
+        let mut g = ParameterGroup::thickness(name, structural);
+        g.elements = elements;
+        return Ok(g);
+    }
+    let (elements, structural) = model.element_set_members(name)?;
+    Ok(ParameterGroup {
+        name: name.into(),
+        elements,
+        structural,
+        law: GroupLaw::Scale,
+    })
 }
 
 impl ParameterGroups {
@@ -202,6 +268,7 @@ impl ParameterGroups {
             slot_offset: Vec::new(),
             ke: Vec::new(),
             me: Vec::new(),
+            thickness: Vec::new(),
             matrices: Some(mg),
         })
     }
@@ -235,6 +302,31 @@ impl ParameterGroups {
                     name: g.name.clone(),
                     reason: "no elements".into(),
                 });
+            }
+            if g.law == GroupLaw::Thickness {
+                let bad = |reason: String| FemError::InvalidGroup {
+                    name: g.name.clone(),
+                    reason,
+                };
+                if let Some(&e) = g.elements.first() {
+                    let id = model.mesh().element(e.min(ne.saturating_sub(1))).id;
+                    return Err(bad(format!(
+                        "a thickness applies to shells; solid element {id} has none"
+                    )));
+                }
+                for &e in &g.structural {
+                    let el = model
+                        .structural()
+                        .get(e)
+                        .ok_or_else(|| bad(format!("structural element index {e} out of range")))?;
+                    if !matches!(el.kind, crate::structural::StructuralKind::Shell(_)) {
+                        return Err(bad(format!(
+                            "a thickness applies to shells; element {} is a {}",
+                            el.id,
+                            el.kind.name()
+                        )));
+                    }
+                }
             }
             for &e in &g.elements {
                 if e >= ne {
@@ -277,14 +369,34 @@ impl ParameterGroups {
             me.extend_from_slice(&m);
             slot_offset.push(ke.len());
         }
+        let mut thickness: Vec<Option<Box<ThicknessParts>>> = vec![None; slot_offset.len() - 1];
         if !slot_structural.is_empty() {
             let dofs = model.dof_map()?;
+            let thick: std::collections::HashSet<usize> = groups
+                .iter()
+                .filter(|g| g.law == GroupLaw::Thickness)
+                .flat_map(|g| g.structural.iter().copied())
+                .collect();
+            let coords = model.mesh().coords();
             for &e in &slot_structural {
-                let sm = model.structural()[e].matrices(model.mesh().coords(), mass_kind)?;
+                let el = &model.structural()[e];
+                let sm = el.matrices(coords, mass_kind)?;
                 points.push(crate::assembly::structural_points(&dofs, &sm.parts));
                 ke.extend_from_slice(&sm.k);
                 me.extend_from_slice(&sm.m);
                 slot_offset.push(ke.len());
+                thickness.push(if thick.contains(&e) {
+                    el.thickness_parts(coords, mass_kind)?.map(|[l, c]| {
+                        Box::new(ThicknessParts {
+                            k1: l.k,
+                            m1: l.m,
+                            k3: c.k,
+                            m3: c.m,
+                        })
+                    })
+                } else {
+                    None
+                });
             }
         }
         Ok(Self {
@@ -296,6 +408,7 @@ impl ParameterGroups {
             slot_offset,
             ke,
             me,
+            thickness,
             matrices: None,
         })
     }
@@ -319,13 +432,15 @@ impl ParameterGroups {
                     name: format!("E{}", s.id),
                     elements: Vec::new(),
                     structural: vec![i],
+                    law: GroupLaw::Scale,
                 }),
         );
         Self::new(model, groups, mass_kind)
     }
 
     /// One group per named element set (its solid and its structural elements:
-    /// [`Model::element_set_members`]).
+    /// [`Model::element_set_members`]); a name `"t:SET"` ([`THICKNESS_PREFIX`]) is the
+    /// thickness of set `SET`'s shells ([`GroupLaw::Thickness`]).
     ///
     /// # Errors
     /// [`FemError::UnknownElementSet`], and as [`ParameterGroups::new`].
@@ -336,14 +451,7 @@ impl ParameterGroups {
     ) -> Result<Self, FemError> {
         let groups = sets
             .iter()
-            .map(|s| {
-                let (elements, structural) = model.element_set_members(s)?;
-                Ok(ParameterGroup {
-                    name: (*s).into(),
-                    elements,
-                    structural,
-                })
-            })
+            .map(|s| group_of_set(model, s))
             .collect::<Result<_, FemError>>()?;
         Self::new(model, groups, mass_kind)
     }
@@ -381,6 +489,19 @@ impl ParameterGroups {
             .map(|s| self.slot_slices(s))
     }
 
+    /// The points and thickness parts of each shell of a thickness group.
+    fn thickness_items<'a>(
+        &'a self,
+        group: &'a ParameterGroup,
+    ) -> impl Iterator<Item = (&'a [usize], &'a ThicknessParts)> + 'a {
+        group.structural.iter().filter_map(|&e| {
+            let s = self.structural_slot[e];
+            self.thickness[s]
+                .as_deref()
+                .map(|t| (&self.points[s][..], t))
+        })
+    }
+
     fn check_group(&self, g: usize) -> Result<&ParameterGroup, FemError> {
         self.groups.get(g).ok_or_else(|| FemError::InvalidGroup {
             name: format!("#{g}"),
@@ -388,14 +509,16 @@ impl ParameterGroups {
         })
     }
 
-    /// `y += alpha K_g x` (stiffness) or `y += alpha M_g x` (mass), on free-DOF vectors.
+    /// `y += dK/dp_g x` (stiffness) or `y += dM/dp_g x` (mass) at `p_g = at`, on free-DOF
+    /// vectors: `K_g x` or `M_g x` for a [`GroupLaw::Scale`] group (whatever `at`), `(K_1 +
+    /// 3 (1 + at)^2 K_3) x` or its mass's for a thickness group.
+    #[allow(clippy::too_many_arguments)]
     fn product(
         &self,
-        _model: &Model,
         asm: &Assembler,
         g: usize,
         mass: bool,
-        alpha: f64,
+        at: f64,
         x: &[f64],
         y: &mut [f64],
     ) -> Result<(), FemError> {
@@ -416,40 +539,75 @@ impl ParameterGroups {
         if let Some(mg) = &self.matrices {
             let a = if mass { &mg.m[g] } else { &mg.k[g] };
             for (i, j, v) in femu_sparse::csc::entries(a) {
-                y[i] += alpha * v * x[j];
+                y[i] += v * x[j];
             }
             return Ok(());
         }
         let dm = asm.dofs();
-        // y += alpha T_e^T A_e T_e x: gather the element's DOFs through T, multiply, scatter back
         let mut xe = Vec::with_capacity(60);
-        for (nodes, ke, me) in self.items(group) {
-            xe.clear();
-            xe.extend(nodes.iter().flat_map(|nd| {
-                (0..3).map(|c| dm.terms(*nd, c).iter().map(|(f, w)| w * x[*f]).sum::<f64>())
-            }));
-            let a = if mass { me } else { ke };
-            let nd = xe.len();
-            for (r, nd_r) in nodes
-                .iter()
-                .flat_map(|n| (0..3).map(move |c| (*n, c)))
-                .enumerate()
-            {
-                let t = dm.terms(nd_r.0, nd_r.1);
-                if t.is_empty() {
-                    continue;
+        match group.law {
+            GroupLaw::Scale => {
+                for (nodes, ke, me) in self.items(group) {
+                    let a = if mass { me } else { ke };
+                    element_product(dm, nodes, a, 1.0, x, y, &mut xe);
                 }
-                let row = &a[r * nd..(r + 1) * nd];
-                let s: f64 = row.iter().zip(&xe).map(|(v, xv)| v * xv).sum();
-                for (f, w) in t {
-                    y[*f] += alpha * w * s;
+            }
+            GroupLaw::Thickness => {
+                let cubic = 3.0 * (1.0 + at) * (1.0 + at);
+                for (nodes, t) in self.thickness_items(group) {
+                    let (a1, a3) = if mass { (&t.m1, &t.m3) } else { (&t.k1, &t.k3) };
+                    element_product(dm, nodes, a1, 1.0, x, y, &mut xe);
+                    element_product(dm, nodes, a3, cubic, x, y, &mut xe);
                 }
             }
         }
         Ok(())
     }
 
-    /// `y += K_g x` for group `g` (free-DOF vectors): the SB-EBE sensitivity column of docs/MATH.md.
+    /// `y += dK/dp_g x` at `p_g = at`: `K_g x` for a group that scales its elements' stiffness,
+    /// `(K_1 + 3 (1 + at)^2 K_3) x` for a thickness group ([`GroupLaw::Thickness`]); the
+    /// derivative of the residual `(K(p) - lambda M) x` that SB-EBE's Gauss-Newton steps use
+    /// at the current parameters.
+    ///
+    /// # Errors
+    /// [`FemError::LengthMismatch`] or [`FemError::InvalidGroup`].
+    pub fn stiffness_derivative_product(
+        &self,
+        asm: &Assembler,
+        g: usize,
+        at: f64,
+        x: &[f64],
+        y: &mut [f64],
+    ) -> Result<(), FemError> {
+        self.product(asm, g, false, at, x, y)
+    }
+
+    /// `y += dM/dp_g x` at `p_g = at`: `M_g x` for a mass factor, `(M_1 + 3 (1 + at)^2 M_3) x`
+    /// for a thickness group.
+    ///
+    /// # Errors
+    /// [`FemError::LengthMismatch`] or [`FemError::InvalidGroup`].
+    pub fn mass_derivative_product(
+        &self,
+        asm: &Assembler,
+        g: usize,
+        at: f64,
+        x: &[f64],
+        y: &mut [f64],
+    ) -> Result<(), FemError> {
+        self.product(asm, g, true, at, x, y)
+    }
+
+    /// The law of group `g`'s parameter.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidGroup`].
+    pub fn law(&self, g: usize) -> Result<GroupLaw, FemError> {
+        Ok(self.check_group(g)?.law)
+    }
+
+    /// `y += K_g x` for group `g` (free-DOF vectors): the SB-EBE sensitivity column of docs/MATH.md
+    /// (for a thickness group, the derivative at the nominal thickness).
     ///
     /// # Errors
     /// [`FemError::LengthMismatch`] or [`FemError::InvalidGroup`].
@@ -461,7 +619,8 @@ impl ParameterGroups {
         x: &[f64],
         y: &mut [f64],
     ) -> Result<(), FemError> {
-        self.product(model, asm, g, false, 1.0, x, y)
+        let _ = model;
+        self.product(asm, g, false, 0.0, x, y)
     }
 
     /// `y += M_g x` for group `g`.
@@ -476,7 +635,8 @@ impl ParameterGroups {
         x: &[f64],
         y: &mut [f64],
     ) -> Result<(), FemError> {
-        self.product(model, asm, g, true, 1.0, x, y)
+        let _ = model;
+        self.product(asm, g, true, 0.0, x, y)
     }
 
     /// Writes `K(p) = K_0 + sum_g p_g K_g` and `M(q) = M_0 + sum_g q_g M_g` into `out`, whose
@@ -541,6 +701,45 @@ impl ParameterGroups {
             m_on_k = mass_on_stiffness_pattern(base)?;
         }
         for (g, group) in self.groups.iter().enumerate() {
+            if group.law == GroupLaw::Thickness {
+                if q[g] != 0.0 {
+                    return Err(FemError::InvalidGroup {
+                        name: group.name.clone(),
+                        reason: format!(
+                            "a thickness group has no mass factor (q = {}): its thickness moves its mass",
+                            q[g]
+                        ),
+                    });
+                }
+                if p[g] == 0.0 {
+                    continue;
+                }
+                let (c1, c3) = (p[g], (1.0 + p[g]).powi(3) - 1.0);
+                for (nodes, t) in self.thickness_items(group) {
+                    let kd = out.k.data_mut();
+                    asm.scatter(nodes, |i, l, w| kd[i] += w * (c1 * t.k1[l] + c3 * t.k3[l]));
+                    match self.mass_kind {
+                        MassKind::Consistent => {
+                            asm.scatter(nodes, |i, l, w| {
+                                m_on_k[i] += w * (c1 * t.m1[l] + c3 * t.m3[l]);
+                            });
+                        }
+                        MassKind::Lumped => {
+                            let nd = 3 * nodes.len();
+                            let md = out.m.data_mut();
+                            asm.scatter_lumped(
+                                nodes,
+                                |a, i| {
+                                    let d = (3 * a + i) * nd + 3 * a + i;
+                                    c1 * t.m1[d] + c3 * t.m3[d]
+                                },
+                                |f, v| md[f] += v,
+                            );
+                        }
+                    }
+                }
+                continue;
+            }
             for (nodes, ke, me) in self.items(group) {
                 if p[g] != 0.0 {
                     let kd = out.k.data_mut();
@@ -655,7 +854,15 @@ impl ParameterGroups {
         }
         let mut total = 0.0;
         let nodes = model.mesh().node_count();
-        for (points, _, me) in self.items(group) {
+        // a thickness group's mass that moves with its parameter: rho t, not the NSM
+        let items: Vec<(&[usize], &[f64])> = match group.law {
+            GroupLaw::Scale => self.items(group).map(|(p, _, m)| (p, m)).collect(),
+            GroupLaw::Thickness => self
+                .thickness_items(group)
+                .map(|(p, t)| (p, &t.m1[..]))
+                .collect(),
+        };
+        for (points, me) in items {
             let nn = points.len();
             let nd = 3 * nn;
             // translations only: a structural element's rotation points hold rotary inertia
@@ -698,7 +905,8 @@ impl ParameterGroups {
         self.mass_kind
     }
 
-    /// The assembled `K_g` of one group alone, on the stiffness pattern (for inspection and tests).
+    /// The assembled `K_g` of one group alone, on the stiffness pattern (for inspection and tests;
+    /// for a thickness group `dK/dp` at the nominal thickness, `K_1 + 3 K_3`).
     ///
     /// # Errors
     /// [`FemError::InvalidGroup`].
@@ -713,9 +921,51 @@ impl ParameterGroups {
             return Ok(mg.k[g].clone());
         }
         let mut v = vec![0.0; asm.nnz()];
-        for (points, ke, _) in self.items(group) {
-            asm.scatter(points, |i, l, w| v[i] += w * ke[l]);
+        match group.law {
+            GroupLaw::Scale => {
+                for (points, ke, _) in self.items(group) {
+                    asm.scatter(points, |i, l, w| v[i] += w * ke[l]);
+                }
+            }
+            GroupLaw::Thickness => {
+                for (points, t) in self.thickness_items(group) {
+                    asm.scatter(points, |i, l, w| v[i] += w * (t.k1[l] + 3.0 * t.k3[l]));
+                }
+            }
         }
         Ok(asm.pattern_matrix(v))
+    }
+}
+
+/// `y += alpha T^T A T x` for one element's matrix `a` on `nodes` (the DOF map's points): gather
+/// the element's DOFs through `T`, multiply, scatter back. `xe` is scratch.
+fn element_product(
+    dm: &crate::dof::DofMap,
+    nodes: &[usize],
+    a: &[f64],
+    alpha: f64,
+    x: &[f64],
+    y: &mut [f64],
+    xe: &mut Vec<f64>,
+) {
+    xe.clear();
+    xe.extend(nodes.iter().flat_map(|nd| {
+        (0..3).map(|c| dm.terms(*nd, c).iter().map(|(f, w)| w * x[*f]).sum::<f64>())
+    }));
+    let nd = xe.len();
+    for (r, nd_r) in nodes
+        .iter()
+        .flat_map(|n| (0..3).map(move |c| (*n, c)))
+        .enumerate()
+    {
+        let t = dm.terms(nd_r.0, nd_r.1);
+        if t.is_empty() {
+            continue;
+        }
+        let row = &a[r * nd..(r + 1) * nd];
+        let s: f64 = row.iter().zip(xe.iter()).map(|(v, xv)| v * xv).sum();
+        for (f, w) in t {
+            y[*f] += alpha * w * s;
+        }
     }
 }

@@ -253,18 +253,51 @@ pub fn frame(x: &[V3; 4]) -> Result<ShellFrame, String> {
 /// The shell's stiffness and mass (24 x 24, row-major) on `(u, v, w, theta_x, theta_y,
 /// theta_z)` of each corner in the basic frame. The lumped mass puts a quarter of the mass on
 /// each corner's translations and nothing on rotations; the consistent mass carries the section's
-/// rotary inertia on the bending rotations, none on the drilling rotation (a massless DOF).
+/// rotary inertia `rho I` on every rotation, the drilling one included (it makes the consistent
+/// mass positive definite, so that the `M^-1` norms of the estimators exist; the low modes move by
+/// `O((t / L)^2)` of the bending rotary inertia's own small effect: docs/MATH.md, "Shells").
 ///
 /// # Errors
 /// A message for a degenerate, inverted (a non-positive Jacobian at a Gauss point) or warped
 /// quadrilateral.
 pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec<f64>), String> {
+    matrices_scaled(s, x, mass, Scales::ALL)
+}
+
+/// Multipliers of the parts of a shell's matrices by how they depend on the thickness `t`: the
+/// membrane, transverse shear and drilling stiffness and the mass `rho t` are linear in `t`, the
+/// bending stiffness and the rotary inertia cubic, the non-structural mass independent of it.
+/// `Scales::ALL` gives the element's matrices; `(1, 0, 0)` and `(0, 1, 0)` its parts, from which
+/// the matrices at any thickness `t (1 + p)` are `(1 + p) K_1 + (1 + p)^3 K_3` exactly
+/// (docs/MATH.md, "Thickness parameters").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Scales {
+    pub linear: f64,
+    pub cubic: f64,
+    pub nsm: f64,
+}
+
+impl Scales {
+    pub const ALL: Scales = Scales {
+        linear: 1.0,
+        cubic: 1.0,
+        nsm: 1.0,
+    };
+}
+
+/// [`matrices`] with its parts scaled by `sc`.
+pub(crate) fn matrices_scaled(
+    s: &Shell,
+    x: &[V3; 4],
+    mass: MassKind,
+    sc: Scales,
+) -> Result<(Vec<f64>, Vec<f64>), String> {
     let (axes, p) = checked_quad(x)?;
     let (e, nu, t) = (s.e, s.nu, s.t);
     let g = e / (2.0 * (1.0 + nu));
-    let dm = e * t / (1.0 - nu * nu);
-    let db = s.bending * e * t.powi(3) / (12.0 * (1.0 - nu * nu));
-    let ds = s.shear.map_or(1000.0 * 5.0 / 6.0, |k| k) * g * t;
+    let dm = sc.linear * e * t / (1.0 - nu * nu);
+    let db = sc.cubic * s.bending * e * t.powi(3) / (12.0 * (1.0 - nu * nu));
+    let ds = sc.linear * s.shear.map_or(1000.0 * 5.0 / 6.0, |k| k) * g * t;
     let (cm, cb) = (plane_stress(dm, nu), plane_stress(db, nu));
     let mut k = vec![0.0; 576];
     let mut m = vec![0.0; 576];
@@ -322,14 +355,17 @@ pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec
         let cs = [[ds, 0.0, 0.0], [0.0, ds, 0.0], [0.0, 0.0, 0.0]];
         add_btdb(&mut k, &bs, &cs, 2, det);
         if mass == MassKind::Consistent {
-            let (mt, mr) = (s.rho * t + s.nsm, s.rho * s.bending * t.powi(3) / 12.0);
+            let (mt, mr) = (
+                sc.linear * s.rho * t + sc.nsm * s.nsm,
+                sc.cubic * s.rho * s.bending * t.powi(3) / 12.0,
+            );
             for a in 0..4 {
                 for b in 0..4 {
                     let v = nn[a] * nn[b] * det;
                     for c in 0..3 {
                         m[(6 * a + c) * 24 + 6 * b + c] += mt * v;
                     }
-                    for c in 3..5 {
+                    for c in 3..6 {
                         m[(6 * a + c) * 24 + 6 * b + c] += mr * v;
                     }
                 }
@@ -337,7 +373,7 @@ pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec
         }
     }
     if mass == MassKind::Lumped {
-        let each = (s.rho * t + s.nsm) * area / 4.0;
+        let each = (sc.linear * s.rho * t + sc.nsm * s.nsm) * area / 4.0;
         for a in 0..4 {
             for c in 0..3 {
                 m[(6 * a + c) * 24 + 6 * a + c] = each;
@@ -354,7 +390,7 @@ pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec
     ];
     let nx: [f64; 4] = std::array::from_fn(|i| inv[0][0] * dxi[i] + inv[0][1] * deta[i]);
     let ny: [f64; 4] = std::array::from_fn(|i| inv[1][0] * dxi[i] + inv[1][1] * deta[i]);
-    add_drilling::<24>(&mut k, &nx, &ny, 1e-3 * g * t * area);
+    add_drilling::<24>(&mut k, &nx, &ny, sc.linear * 1e-3 * g * t * area);
     Ok(to_basic::<24>(&k, m, &axes, mass))
 }
 
@@ -369,6 +405,16 @@ pub fn matrices(s: &Shell, x: &[V3; 4], mass: MassKind) -> Result<(Vec<f64>, Vec
 /// # Errors
 /// A message for corners that do not span a triangle.
 pub fn matrices3(s: &Shell, x: &[V3; 3], mass: MassKind) -> Result<(Vec<f64>, Vec<f64>), String> {
+    matrices3_scaled(s, x, mass, Scales::ALL)
+}
+
+/// [`matrices3`] with its parts scaled by `sc`.
+pub(crate) fn matrices3_scaled(
+    s: &Shell,
+    x: &[V3; 3],
+    mass: MassKind,
+    sc: Scales,
+) -> Result<(Vec<f64>, Vec<f64>), String> {
     let g1 = sub(x[1], x[0]);
     let g2 = sub(x[2], x[0]);
     let n = unit(cross(g1, g2))
@@ -398,9 +444,9 @@ pub fn matrices3(s: &Shell, x: &[V3; 3], mass: MassKind) -> Result<(Vec<f64>, Ve
     let ny: [f64; 3] = std::array::from_fn(|i| inv[1][0] * dr[i] + inv[1][1] * ds[i]);
     let (e, nu, t) = (s.e, s.nu, s.t);
     let g = e / (2.0 * (1.0 + nu));
-    let dm = e * t / (1.0 - nu * nu);
-    let db = s.bending * e * t.powi(3) / (12.0 * (1.0 - nu * nu));
-    let dsh = s.shear.map_or(1000.0 * 5.0 / 6.0, |k| k) * g * t;
+    let dm = sc.linear * e * t / (1.0 - nu * nu);
+    let db = sc.cubic * s.bending * e * t.powi(3) / (12.0 * (1.0 - nu * nu));
+    let dsh = sc.linear * s.shear.map_or(1000.0 * 5.0 / 6.0, |k| k) * g * t;
     let (cm, cb) = (plane_stress(dm, nu), plane_stress(db, nu));
     let nd = 18;
     let mut k = vec![0.0; nd * nd];
@@ -425,7 +471,10 @@ pub fn matrices3(s: &Shell, x: &[V3; 3], mass: MassKind) -> Result<(Vec<f64>, Ve
     let (r1, s2) = (row(0.5, 0.0, true), row(0.0, 0.5, false));
     let (r3, s3) = (row(0.5, 0.5, true), row(0.5, 0.5, false));
     let c: [f64; 18] = std::array::from_fn(|q| (s2[q] - r1[q]) - (s3[q] - r3[q]));
-    let (mt, mr) = (s.rho * t + s.nsm, s.rho * s.bending * t.powi(3) / 12.0);
+    let (mt, mr) = (
+        sc.linear * s.rho * t + sc.nsm * s.nsm,
+        sc.cubic * s.rho * s.bending * t.powi(3) / 12.0,
+    );
     for (r, sp) in [
         (1.0 / 6.0, 1.0 / 6.0),
         (2.0 / 3.0, 1.0 / 6.0),
@@ -449,7 +498,7 @@ pub fn matrices3(s: &Shell, x: &[V3; 3], mass: MassKind) -> Result<(Vec<f64>, Ve
                     for q in 0..3 {
                         m[(6 * a + q) * nd + 6 * b + q] += mt * v;
                     }
-                    for q in 3..5 {
+                    for q in 3..6 {
                         m[(6 * a + q) * nd + 6 * b + q] += mr * v;
                     }
                 }
@@ -464,7 +513,7 @@ pub fn matrices3(s: &Shell, x: &[V3; 3], mass: MassKind) -> Result<(Vec<f64>, Ve
         }
     }
     // drilling: k_d (theta_z,i - omega)^2, omega = (v_,x - u_,y) / 2
-    add_drilling::<18>(&mut k, &nx, &ny, 1e-3 * g * t * area);
+    add_drilling::<18>(&mut k, &nx, &ny, sc.linear * 1e-3 * g * t * area);
     Ok(to_basic::<18>(&k, m, &[e1, e2, n], mass))
 }
 

@@ -138,6 +138,19 @@ pub enum StructuralKind {
     Shell(crate::shell::Shell),
 }
 
+impl StructuralKind {
+    /// What the element is, in a word: `"beam"`, `"rod"`, `"spring"`, `"bushing"`, `"shell"`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            StructuralKind::Beam(_) => "beam",
+            StructuralKind::Rod(_) => "rod",
+            StructuralKind::Spring(_) => "spring",
+            StructuralKind::Bushing(_) => "bushing",
+            StructuralKind::Shell(_) => "shell",
+        }
+    }
+}
+
 /// A structural element: the user's id, its nodes (internal indices) and what it is.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StructuralElement {
@@ -545,6 +558,61 @@ impl StructuralElement {
         }
     }
 
+    /// A shell's matrices with their parts scaled (`crate::shell::Scales`).
+    fn shell_matrices(
+        &self,
+        s: &crate::shell::Shell,
+        coords: &[[f64; 3]],
+        mass: MassKind,
+        sc: crate::shell::Scales,
+    ) -> Result<(Vec<f64>, Vec<f64>), String> {
+        if self.nodes.len() == 3 {
+            let x: [[f64; 3]; 3] = std::array::from_fn(|i| coords[self.nodes[i]]);
+            crate::shell::matrices3_scaled(s, &x, mass, sc)
+        } else {
+            let x: [[f64; 3]; 4] = std::array::from_fn(|i| coords[self.nodes[i]]);
+            crate::shell::matrices_scaled(s, &x, mass, sc)
+        }
+    }
+
+    /// A shell's matrices split by how they depend on its thickness `t`: the part linear in `t`
+    /// (membrane, transverse shear and drilling stiffness; the mass `rho t`) and the part cubic
+    /// in it (bending stiffness; rotary inertia), the non-structural mass in neither. At
+    /// thickness `t (1 + p)` the element's stiffness is `(1 + p) K_1 + (1 + p)^3 K_3` and its
+    /// mass `(1 + p) M_1 + (1 + p)^3 M_3 + M_nsm` (docs/MATH.md, "Thickness parameters").
+    /// `None` for an element that is not a shell.
+    ///
+    /// # Errors
+    /// As [`StructuralElement::matrices`].
+    pub fn thickness_parts(
+        &self,
+        coords: &[[f64; 3]],
+        mass: MassKind,
+    ) -> Result<Option<[StructuralMatrices; 2]>, FemError> {
+        let StructuralKind::Shell(s) = &self.kind else {
+            return Ok(None);
+        };
+        self.validate()?;
+        let bad = |reason: String| FemError::InvalidStructural {
+            element: self.id,
+            reason,
+        };
+        let part = |linear: f64, cubic: f64| -> Result<StructuralMatrices, FemError> {
+            let sc = crate::shell::Scales {
+                linear,
+                cubic,
+                nsm: 0.0,
+            };
+            let (k, m) = self.shell_matrices(s, coords, mass, sc).map_err(bad)?;
+            Ok(StructuralMatrices {
+                parts: self.parts(),
+                k,
+                m,
+            })
+        };
+        Ok(Some([part(1.0, 0.0)?, part(0.0, 1.0)?]))
+    }
+
     /// Whether the element acts on its nodes' rotations (so they must carry them).
     pub fn needs_rotations(&self) -> bool {
         self.parts().iter().any(|(_, p)| *p == Part::Rotations)
@@ -571,14 +639,9 @@ impl StructuralElement {
         let nd = 3 * parts.len();
         match &self.kind {
             StructuralKind::Shell(s) => {
-                let (k, m) = if self.nodes.len() == 3 {
-                    let x: [[f64; 3]; 3] = std::array::from_fn(|i| coords[self.nodes[i]]);
-                    crate::shell::matrices3(s, &x, mass)
-                } else {
-                    let x: [[f64; 3]; 4] = std::array::from_fn(|i| coords[self.nodes[i]]);
-                    crate::shell::matrices(s, &x, mass)
-                }
-                .map_err(bad)?;
+                let (k, m) = self
+                    .shell_matrices(s, coords, mass, crate::shell::Scales::ALL)
+                    .map_err(bad)?;
                 Ok(StructuralMatrices { parts, k, m })
             }
             StructuralKind::Beam(b) => {

@@ -26,9 +26,11 @@ use serde::{Deserialize, Serialize};
 #[cfg_attr(feature = "clap", derive(clap::Args))]
 #[serde(deny_unknown_fields)]
 pub struct UpdateRequest {
-    /// Candidate element sets (comma-separated); localisation selects among them. For a model of
-    /// another solver's matrices, groups as `NAME=FILE`: FILE the same model's matrices with the
-    /// group's Young's modulus and density doubled (relative to the model's folder).
+    /// Candidate element sets (comma-separated); localisation selects among them. A set scales
+    /// its elements' stiffness (`k:SET`); `t:SET` is the thickness of the set's shells (bending
+    /// with its cube, membrane and mass linearly). For a model of another solver's matrices,
+    /// groups as `NAME=FILE`: FILE the same model's matrices with the group's Young's modulus and
+    /// density doubled (relative to the model's folder).
     #[cfg_attr(feature = "clap", arg(long, value_delimiter = ',', required = true))]
     pub sets: Vec<String>,
     /// The first N test modes are tuned, the others held out (default: all but the last third).
@@ -850,18 +852,26 @@ fn judge_update(
 }
 
 /// The model's element sets named by `sets` (Abaqus names are case-insensitive; the reader keeps
-/// them upper case).
+/// them upper case); `t:SET` names the thickness of set `SET`'s shells
+/// (`femu_fem::groups::GroupLaw::Thickness`).
 ///
 /// # Errors
 /// A set the model does not have, naming the model file and the sets it has.
 pub fn resolve_sets(model: &LoadedModel, sets: &[String]) -> Result<Vec<String>, StudyError> {
+    use femu_fem::groups::THICKNESS_PREFIX;
     let known = model.model.element_set_names();
     sets.iter()
         .map(|s| {
+            let (prefix, set) = match s.get(..THICKNESS_PREFIX.len()) {
+                Some(p) if p.eq_ignore_ascii_case(THICKNESS_PREFIX) => {
+                    (THICKNESS_PREFIX, &s[THICKNESS_PREFIX.len()..])
+                }
+                _ => ("", s.as_str()),
+            };
             known
                 .iter()
-                .find(|k| k.eq_ignore_ascii_case(s))
-                .cloned()
+                .find(|k| k.eq_ignore_ascii_case(set))
+                .map(|k| format!("{prefix}{k}"))
                 .ok_or_else(|| {
                     StudyError::in_file(
                         &model.path,

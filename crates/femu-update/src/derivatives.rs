@@ -58,15 +58,11 @@ pub fn eigenpair_derivatives(
         rhs[(pinned, k)] = 0.0;
     }
     factor.solve_in_place(rhs.as_mut());
-    let params = up.parameters();
+    let quadratics = up.mass_quadratics(phi)?;
     let vectors = (0..np)
         .map(|k| {
             let v: Vec<f64> = rhs.col(k).iter().copied().collect();
-            let mut a = -v.iter().zip(&m_phi).map(|(x, y)| x * y).sum::<f64>();
-            if params[k].mass {
-                // c_k = -lambda M_k phi, so phi^T M_k phi = -d lambda_k / lambda
-                a += d_values[k] / (2.0 * lambda);
-            }
+            let a = -v.iter().zip(&m_phi).map(|(x, y)| x * y).sum::<f64>() - 0.5 * quadratics[k];
             v.iter().zip(phi).map(|(x, p)| x + a * p).collect()
         })
         .collect();

@@ -263,7 +263,7 @@ pub fn localise(
     let r_f = femu_correlate::residues::force_residuals(&sys.k, &sys.m, lambdas, xs.as_ref())?;
     let solver = StiffnessSolver::new(&sys.k, &sys.m)?;
     let r_d = solver.displacement_residuals(r_f.as_ref())?;
-    let w: Vec<f64> = femu_sparse::csc::diagonal(&sys.m)
+    let w: Vec<f64> = femu_correlate::expansion::residual_metric(&sys.m)?
         .iter()
         .map(|m| 1.0 / m)
         .collect();
@@ -361,7 +361,7 @@ pub fn localise_expanded(
     })?;
     let sys = up.matrices();
     let n = sys.dofs.free_count();
-    let w_inv = femu_sparse::csc::diagonal(&sys.m);
+    let w_inv = femu_correlate::expansion::residual_metric(&sys.m)?;
     let w: Vec<f64> = w_inv.iter().map(|v| 1.0 / v).collect();
     let lambdas = test.eigenvalues();
     let groups = up.groups().len();

@@ -5,7 +5,7 @@ use crate::UpdateError;
 use faer::{Mat, MatRef};
 use femu_correlate::expansion::Expander;
 use femu_fem::assembly::{Assembler, MassKind, SystemMatrices};
-use femu_fem::groups::{ParameterGroup, ParameterGroups};
+use femu_fem::groups::{GroupLaw, ParameterGroup, ParameterGroups};
 use femu_fem::model::Model;
 use femu_sparse::cholesky::SymbolicFactor;
 use femu_sparse::ordering::Ordering;
@@ -24,14 +24,16 @@ pub enum Corrections {
     StiffnessAndMass,
 }
 
-/// One updating parameter: a stiffness or mass factor of a group.
+/// One updating parameter: a stiffness or mass factor of a group, or the relative thickness
+/// change of a group of shells.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Parameter {
-    /// `"k:<group>"` or `"m:<group>"`.
+    /// `"k:<group>"` or `"m:<group>"`; a thickness group's own name, `"t:<set>"`.
     pub name: String,
     /// Group index.
     pub group: usize,
-    /// `true` for a mass factor `q_g`, `false` for a stiffness factor `p_g`.
+    /// `true` for a mass factor `q_g`, `false` for a stiffness factor `p_g` or a thickness change
+    /// (which moves both the group's stiffness and its mass).
     pub mass: bool,
     /// Lower bound (default -0.9: a group keeps at least 10 % of its stiffness or mass).
     pub lower: f64,
@@ -169,6 +171,17 @@ impl<'m> UpdateModel<'m> {
         }
         let mut params = Vec::new();
         for (g, group) in groups.groups().iter().enumerate() {
+            if group.law == GroupLaw::Thickness {
+                // one parameter whatever the corrections: the thickness moves stiffness and mass
+                params.push(Parameter {
+                    name: group.name.clone(),
+                    group: g,
+                    mass: false,
+                    lower: -0.9,
+                    upper: 2.0,
+                });
+                continue;
+            }
             for (flag, prefix) in [(false, "k"), (true, "m")] {
                 let wanted = match corrections {
                     Corrections::Stiffness => !flag,
@@ -405,9 +418,10 @@ impl<'m> UpdateModel<'m> {
     }
 
     /// The sensitivity columns of every parameter for one vector `x` at eigenvalue `lambda`:
-    /// `K_g x` for a stiffness factor, `-lambda M_g x` for a mass factor (the derivative of
-    /// `R = (K(p) - lambda M(q)) x`), formed element by element (SB-EBE: no eigenvector
-    /// derivative, no assembled `K_g`).
+    /// `K_g x` for a stiffness factor, `-lambda M_g x` for a mass factor, `(K_g' - lambda M_g')
+    /// x` at the current thickness for a thickness change (the derivative of `R = (K(p) - lambda
+    /// M(q)) x`), formed element by element (SB-EBE: no eigenvector derivative, no assembled
+    /// `K_g`).
     ///
     /// # Errors
     /// A wrong length of `x`.
@@ -417,13 +431,78 @@ impl<'m> UpdateModel<'m> {
         self.params
             .iter()
             .map(|par| {
+                if self.is_thickness(par.group) {
+                    return self.thickness_column(par.group, lambda, x, &mut y);
+                }
                 let s = if par.mass { -lambda } else { 1.0 };
                 self.group_column(par.group, par.mass, s, x, &mut y)
             })
             .collect()
     }
 
-    /// `K_g v` for every group, whatever the corrections (the localisation's strain energies).
+    fn is_thickness(&self, g: usize) -> bool {
+        self.groups.groups()[g].law == GroupLaw::Thickness
+    }
+
+    /// `(dK/dp - lambda dM/dp) x` of a thickness group at its current thickness; `y` is zero on
+    /// entry and on return.
+    fn thickness_column(
+        &self,
+        g: usize,
+        lambda: f64,
+        x: &[f64],
+        y: &mut [f64],
+    ) -> Result<SparseColumn, UpdateError> {
+        let at = self.p[g];
+        self.groups
+            .stiffness_derivative_product(&self.asm, g, at, x, y)?;
+        let mut z = vec![0.0; y.len()];
+        self.groups
+            .mass_derivative_product(&self.asm, g, at, x, &mut z)?;
+        let dofs = &self.group_dofs[g];
+        let values = dofs
+            .iter()
+            .map(|&d| {
+                let v = y[d] - lambda * z[d];
+                y[d] = 0.0;
+                v
+            })
+            .collect();
+        Ok(SparseColumn {
+            dofs: dofs.clone(),
+            values,
+        })
+    }
+
+    /// `phi^T (dM/dtheta_k) phi` for each parameter: 0 for a stiffness factor, `phi^T M_g phi`
+    /// for a mass factor, `phi^T M_g' phi` at the current thickness for a thickness change (the
+    /// eigenvector derivative's normalisation term).
+    ///
+    /// # Errors
+    /// A wrong length of `phi`.
+    pub fn mass_quadratics(&self, phi: &[f64]) -> Result<Vec<f64>, UpdateError> {
+        let mut y = vec![0.0; self.base.dofs.free_count()];
+        self.params
+            .iter()
+            .map(|par| {
+                if !par.mass && !self.is_thickness(par.group) {
+                    return Ok(0.0);
+                }
+                y.iter_mut().for_each(|v| *v = 0.0);
+                self.groups.mass_derivative_product(
+                    &self.asm,
+                    par.group,
+                    self.p[par.group],
+                    phi,
+                    &mut y,
+                )?;
+                Ok(y.iter().zip(phi).map(|(a, b)| a * b).sum())
+            })
+            .collect()
+    }
+
+    /// `K_g v` for every group, whatever the corrections (the localisation's strain energies; a
+    /// thickness group's `dK/dp v` at its current thickness).
     ///
     /// # Errors
     /// A wrong length of `v`.
@@ -443,11 +522,13 @@ impl<'m> UpdateModel<'m> {
         x: &[f64],
         y: &mut [f64],
     ) -> Result<SparseColumn, UpdateError> {
+        let at = self.p[g];
         if mass {
-            self.groups.mass_product(self.model, &self.asm, g, x, y)?;
+            self.groups
+                .mass_derivative_product(&self.asm, g, at, x, y)?;
         } else {
             self.groups
-                .stiffness_product(self.model, &self.asm, g, x, y)?;
+                .stiffness_derivative_product(&self.asm, g, at, x, y)?;
         }
         let dofs = &self.group_dofs[g];
         let values = dofs
@@ -465,7 +546,9 @@ impl<'m> UpdateModel<'m> {
     }
 
     /// The total-mass constraint row: `c^T theta` is the mass added by the mass factors
-    /// (`c_i = m_g` for a mass factor of group `g`, 0 for a stiffness factor).
+    /// (`c_i = m_g` for a mass factor of group `g`, 0 for a stiffness factor). A thickness change
+    /// moves mass too, but with stiffness in a fixed proportion that cannot scale a mode away:
+    /// it is outside the guard (0), as a stiffness factor is.
     pub fn mass_row(&self) -> Vec<f64> {
         self.params
             .iter()

@@ -316,7 +316,7 @@ pub fn sb_ebe(
     let lambdas = test.eigenvalues();
     let m0 = up.nominal().m.clone();
     let n = m0.rows();
-    let w_inv = femu_sparse::csc::diagonal(&m0);
+    let w_inv = femu_correlate::expansion::residual_metric(&m0)?;
     let w: Vec<f64> = w_inv.iter().map(|v| 1.0 / v).collect();
     // K's pattern does not change with the parameters: one symbolic analysis serves every
     // expansion of every iteration

@@ -587,3 +587,39 @@ impl clap::ValueEnum for Method {
         }
     }
 }
+
+/// The diagonal metric `W^-1 = diag(M)` of the minimum-residual expansion, SB-EBE and the
+/// localisation, with each DOF that has no mass (a shell's drilling rotation, a lumped beam's
+/// rotations) given the smallest positive diagonal entry instead: a massless DOF has no inertia
+/// force, so its residual is held to zero as strongly as the stiffest-weighted DOF's
+/// (docs/MATH.md, "The residual metric on massless DOFs").
+///
+/// # Errors
+/// [`CorrelateError::Invalid`] when no diagonal entry is positive, or one is negative or not
+/// finite (a mass that is not positive semi-definite), with its index.
+pub fn residual_metric(m: &SparseMatrix) -> Result<Vec<f64>, CorrelateError> {
+    let mut d = femu_sparse::csc::diagonal(m);
+    if let Some(i) = d.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+        return Err(CorrelateError::Invalid {
+            what: "mass diagonal",
+            reason: format!("entry {i} = {} must be zero or positive", d[i]),
+        });
+    }
+    let floor = d
+        .iter()
+        .copied()
+        .filter(|v| *v > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    if !floor.is_finite() {
+        return Err(CorrelateError::Invalid {
+            what: "mass diagonal",
+            reason: "no DOF has mass".into(),
+        });
+    }
+    for v in &mut d {
+        if *v == 0.0 {
+            *v = floor;
+        }
+    }
+    Ok(d)
+}

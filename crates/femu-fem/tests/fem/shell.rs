@@ -516,3 +516,109 @@ fn solid_and_shell_joined_by_rigid_links() {
         "a hinged joint {hinged:?} against the linked {linked:?}"
     );
 }
+
+/// A thickness group (`t:SET`) is exact: `K(p)` and `M(p)` written from the shells' parts equal
+/// the assembly of the same plate whose set has shells of thickness `t (1 + p)` (formed from
+/// scratch at that thickness), consistent and lumped, quadrilaterals and triangles, with a
+/// non-structural mass that does not scale; and the derivative products equal the central
+/// difference of that direct assembly (a cubic in `p`: the difference's error is `h^2 K_3`).
+#[test]
+fn thickness_groups_equal_shells_of_the_changed_thickness() {
+    use femu_fem::assembly::Assembler;
+    use femu_fem::groups::{GroupLaw, ParameterGroups};
+    let check = || {
+        let mut s = steel(0.004);
+        s.nsm = 3.0;
+        s.bending = 0.8;
+        let mut model = plate(0.4, 0.3, 4, 3, s, |i, j| {
+            [0.01 * ((i * 7 + j * 3) % 5) as f64 / 5.0, 0.0]
+        });
+        let ids: Vec<u64> = model.structural().iter().take(5).map(|e| e.id).collect();
+        model.add_structural_set("SKIN", &ids).unwrap();
+        let with_thickness = |factor: f64| {
+            let mut m = model.clone();
+            for id in &ids {
+                let i = m.structural_index(*id).unwrap();
+                let mut el = m.structural()[i].clone();
+                let StructuralKind::Shell(mut sh) = el.kind else {
+                    unreachable!()
+                };
+                sh.t *= factor;
+                el.kind = StructuralKind::Shell(sh);
+                m.set_structural(i, el).unwrap();
+            }
+            m
+        };
+        for mass in [MassKind::Consistent, MassKind::Lumped] {
+            let asm = Assembler::new(&model).unwrap();
+            let base = asm.assemble(&model, mass).unwrap();
+            let groups = ParameterGroups::from_element_sets(&model, &["t:SKIN"], mass).unwrap();
+            assert_eq!(groups.law(0).unwrap(), GroupLaw::Thickness);
+            let p = -0.15;
+            let got = groups
+                .parameterized(&model, &asm, &base, &[p], &[0.0])
+                .unwrap();
+            let direct = asm.assemble(&with_thickness(1.0 + p), mass).unwrap();
+            for (what, a, b) in [("K", &got.k, &direct.k), ("M", &got.m, &direct.m)] {
+                let scale = b.data().iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+                let worst = femu_sparse::csc::entries(a)
+                    .zip(femu_sparse::csc::entries(b))
+                    .map(|((i, j, x), (k, l, y))| {
+                        assert_eq!((i, j), (k, l), "{what} patterns differ");
+                        (x - y).abs()
+                    })
+                    .fold(0.0_f64, f64::max);
+                assert!(
+                    worst <= 1e-13 * scale,
+                    "{mass:?} {what}: {worst:e} of {scale:e}"
+                );
+            }
+            // derivative products against the central difference of direct assemblies
+            let n = base.k.rows();
+            let x: Vec<f64> = (0..n).map(|i| ((i * 37 % 11) as f64 - 5.0) / 5.0).collect();
+            let h = 1e-4;
+            let (up, down) = (
+                asm.assemble(&with_thickness(1.0 + p + h), mass).unwrap(),
+                asm.assemble(&with_thickness(1.0 + p - h), mass).unwrap(),
+            );
+            for stiffness in [true, false] {
+                let mut y = vec![0.0; n];
+                if stiffness {
+                    groups
+                        .stiffness_derivative_product(&asm, 0, p, &x, &mut y)
+                        .unwrap();
+                } else {
+                    groups
+                        .mass_derivative_product(&asm, 0, p, &x, &mut y)
+                        .unwrap();
+                }
+                let (a, b) = if stiffness {
+                    (&up.k, &down.k)
+                } else {
+                    (&up.m, &down.m)
+                };
+                let (mut ya, mut yb) = (vec![0.0; n], vec![0.0; n]);
+                femu_sparse::csc::mul_vec(a, &x, &mut ya).unwrap();
+                femu_sparse::csc::mul_vec(b, &x, &mut yb).unwrap();
+                let fd: Vec<f64> = ya
+                    .iter()
+                    .zip(&yb)
+                    .map(|(u, d)| (u - d) / (2.0 * h))
+                    .collect();
+                let norm = fd.iter().map(|v| v * v).sum::<f64>().sqrt();
+                let err = y
+                    .iter()
+                    .zip(&fd)
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum::<f64>()
+                    .sqrt();
+                assert!(
+                    norm > 0.0 && err <= 1e-6 * norm,
+                    "{mass:?} stiffness {stiffness}: {err:e} of {norm:e}"
+                );
+            }
+        }
+    };
+    check();
+    with_triangles(check);
+}
