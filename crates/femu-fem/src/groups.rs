@@ -25,6 +25,9 @@ pub enum GroupLaw {
     /// (docs/MATH.md, "Thickness parameters"). One parameter moves stiffness and mass; the group
     /// has no separate mass factor.
     Thickness,
+    /// A factor `q` on a set of concentrated masses ([`crate::model::MassRef`]): `M(q) = M_0 +
+    /// q M_g`, no stiffness (docs/MATH.md, "Mass parameters").
+    Mass,
 }
 
 /// A named set of elements (internal indices) whose stiffness and mass are scaled together.
@@ -38,6 +41,8 @@ pub struct ParameterGroup {
     /// Indices of structural elements (beams, rods, springs, bushings, shells;
     /// [`Model::structural`]): a spring's or bushing's stiffness, a beam's or shell's modulus.
     pub structural: Vec<usize>,
+    /// Concentrated masses (a [`GroupLaw::Mass`] group's).
+    pub masses: Vec<crate::model::MassRef>,
     /// How the group's parameter acts.
     pub law: GroupLaw,
 }
@@ -49,6 +54,7 @@ impl ParameterGroup {
             name: name.into(),
             elements,
             structural: Vec::new(),
+            masses: Vec::new(),
             law: GroupLaw::Scale,
         }
     }
@@ -60,13 +66,28 @@ impl ParameterGroup {
             name: name.into(),
             elements: Vec::new(),
             structural,
+            masses: Vec::new(),
             law: GroupLaw::Thickness,
+        }
+    }
+
+    /// The concentrated masses `masses`, named `name` ([`GroupLaw::Mass`]).
+    pub fn masses(name: impl Into<String>, masses: Vec<crate::model::MassRef>) -> Self {
+        Self {
+            name: name.into(),
+            elements: Vec::new(),
+            structural: Vec::new(),
+            masses,
+            law: GroupLaw::Mass,
         }
     }
 }
 
 /// The prefix of a thickness group's name: `"t:SKIN"` is the thickness of set `SKIN`'s shells.
 pub const THICKNESS_PREFIX: &str = "t:";
+
+/// A concentrated mass's points (the DOF map's) and its mass matrix, row-major.
+type MassItem = (Vec<usize>, Vec<f64>);
 
 /// A shell's matrices split by their order in the thickness
 /// ([`crate::structural::StructuralElement::thickness_parts`]).
@@ -94,6 +115,9 @@ pub struct ParameterGroups {
     me: Vec<f64>,
     /// The thickness parts of each slot in a thickness group (`None` elsewhere).
     thickness: Vec<Option<Box<ThicknessParts>>>,
+    /// Per group, the points and mass matrix of each of its concentrated masses (a
+    /// [`GroupLaw::Mass`] group's; empty for the others).
+    mass_items: Vec<Vec<MassItem>>,
     /// Groups given as assembled matrices instead of elements ([`ParameterGroups::from_matrices`]).
     matrices: Option<MatrixGroups>,
 }
@@ -161,7 +185,7 @@ pub fn translational_mass(m: &SparseMatrix, dofs: &crate::dof::DofMap) -> f64 {
 }
 
 /// The group a set name stands for: the set's elements scaled, or with [`THICKNESS_PREFIX`]
-/// the thickness of its shells.
+/// the thickness of its shells; a mass set's masses ([`Model::mass_set`]) scaled.
 ///
 /// # Errors
 /// [`FemError::UnknownElementSet`].
@@ -172,11 +196,17 @@ pub fn group_of_set(model: &Model, name: &str) -> Result<ParameterGroup, FemErro
         g.elements = elements;
         return Ok(g);
     }
+    if let Some(masses) = model.mass_set(name)
+        && !model.element_set_names().iter().any(|s| s == name)
+    {
+        return Ok(ParameterGroup::masses(name, masses.to_vec()));
+    }
     let (elements, structural) = model.element_set_members(name)?;
     Ok(ParameterGroup {
         name: name.into(),
         elements,
         structural,
+        masses: Vec::new(),
         law: GroupLaw::Scale,
     })
 }
@@ -269,6 +299,7 @@ impl ParameterGroups {
             ke: Vec::new(),
             me: Vec::new(),
             thickness: Vec::new(),
+            mass_items: Vec::new(),
             matrices: Some(mg),
         })
     }
@@ -297,10 +328,28 @@ impl ParameterGroups {
         let mut slot_element = Vec::new();
         let mut slot_structural = Vec::new();
         for g in &groups {
-            if g.elements.is_empty() && g.structural.is_empty() {
+            if g.elements.is_empty() && g.structural.is_empty() && g.masses.is_empty() {
                 return Err(FemError::InvalidGroup {
                     name: g.name.clone(),
                     reason: "no elements".into(),
+                });
+            }
+            if (g.law == GroupLaw::Mass) != g.masses.is_empty() {
+                // a mass group holds masses only; masses belong in a mass group
+            } else {
+                return Err(FemError::InvalidGroup {
+                    name: g.name.clone(),
+                    reason: if g.law == GroupLaw::Mass {
+                        "a mass group has no masses".into()
+                    } else {
+                        "concentrated masses are updated in a mass group of their own".into()
+                    },
+                });
+            }
+            if g.law == GroupLaw::Mass && !(g.elements.is_empty() && g.structural.is_empty()) {
+                return Err(FemError::InvalidGroup {
+                    name: g.name.clone(),
+                    reason: "a mass group holds masses, not elements".into(),
                 });
             }
             if g.law == GroupLaw::Thickness {
@@ -399,6 +448,7 @@ impl ParameterGroups {
                 });
             }
         }
+        let mass_items = mass_group_items(model, &groups, mass_kind)?;
         Ok(Self {
             groups,
             mass_kind,
@@ -409,6 +459,7 @@ impl ParameterGroups {
             ke,
             me,
             thickness,
+            mass_items,
             matrices: None,
         })
     }
@@ -432,6 +483,7 @@ impl ParameterGroups {
                     name: format!("E{}", s.id),
                     elements: Vec::new(),
                     structural: vec![i],
+                    masses: Vec::new(),
                     law: GroupLaw::Scale,
                 }),
         );
@@ -558,6 +610,13 @@ impl ParameterGroups {
                     let (a1, a3) = if mass { (&t.m1, &t.m3) } else { (&t.k1, &t.k3) };
                     element_product(dm, nodes, a1, 1.0, x, y, &mut xe);
                     element_product(dm, nodes, a3, cubic, x, y, &mut xe);
+                }
+            }
+            GroupLaw::Mass => {
+                if mass {
+                    for (points, a) in &self.mass_items[g] {
+                        element_product(dm, points, a, 1.0, x, y, &mut xe);
+                    }
                 }
             }
         }
@@ -701,6 +760,34 @@ impl ParameterGroups {
             m_on_k = mass_on_stiffness_pattern(base)?;
         }
         for (g, group) in self.groups.iter().enumerate() {
+            if group.law == GroupLaw::Mass {
+                if p[g] != 0.0 {
+                    return Err(FemError::InvalidGroup {
+                        name: group.name.clone(),
+                        reason: format!("a mass group has no stiffness factor (p = {})", p[g]),
+                    });
+                }
+                if q[g] == 0.0 {
+                    continue;
+                }
+                for (points, a) in &self.mass_items[g] {
+                    match self.mass_kind {
+                        MassKind::Consistent => {
+                            asm.scatter(points, |i, l, w| m_on_k[i] += q[g] * w * a[l]);
+                        }
+                        MassKind::Lumped => {
+                            let nd = 3 * points.len();
+                            let md = out.m.data_mut();
+                            asm.scatter_lumped(
+                                points,
+                                |b, i| a[(3 * b + i) * nd + 3 * b + i],
+                                |f, v| md[f] += q[g] * v,
+                            );
+                        }
+                    }
+                }
+                continue;
+            }
             if group.law == GroupLaw::Thickness {
                 if q[g] != 0.0 {
                     return Err(FemError::InvalidGroup {
@@ -857,6 +944,10 @@ impl ParameterGroups {
         // a thickness group's mass that moves with its parameter: rho t, not the NSM
         let items: Vec<(&[usize], &[f64])> = match group.law {
             GroupLaw::Scale => self.items(group).map(|(p, _, m)| (p, m)).collect(),
+            GroupLaw::Mass => self.mass_items[g]
+                .iter()
+                .map(|(p, m)| (&p[..], &m[..]))
+                .collect(),
             GroupLaw::Thickness => self
                 .thickness_items(group)
                 .map(|(p, t)| (p, &t.m1[..]))
@@ -893,6 +984,11 @@ impl ParameterGroups {
         let mut dofs: Vec<usize> = self
             .items(group)
             .flat_map(|(points, _, _)| points.iter())
+            .chain(
+                self.mass_items[g]
+                    .iter()
+                    .flat_map(|(points, _)| points.iter()),
+            )
             .flat_map(|nd| (0..3).flat_map(move |c| asm.dofs().terms(*nd, c).iter().map(|t| t.0)))
             .collect();
         dofs.sort_unstable();
@@ -932,6 +1028,7 @@ impl ParameterGroups {
                     asm.scatter(points, |i, l, w| v[i] += w * (t.k1[l] + 3.0 * t.k3[l]));
                 }
             }
+            GroupLaw::Mass => {}
         }
         Ok(asm.pattern_matrix(v))
     }
@@ -968,4 +1065,69 @@ fn element_product(
             y[*f] += alpha * w * s;
         }
     }
+}
+
+/// The points and mass matrices of each [`GroupLaw::Mass`] group's masses (empty lists for the
+/// other groups): a point mass's 3 x 3 on its node, a rigid mass's 6 x 6 on its node and its
+/// rotation point, as the assembly adds them. With a lumped mass only diagonal masses can be
+/// scaled on the lumped (diagonal) pattern; an offset or a coupled matrix is refused.
+fn mass_group_items(
+    model: &Model,
+    groups: &[ParameterGroup],
+    mass_kind: MassKind,
+) -> Result<Vec<Vec<MassItem>>, FemError> {
+    use crate::model::MassRef;
+    if groups.iter().all(|g| g.law != GroupLaw::Mass) {
+        return Ok(vec![Vec::new(); groups.len()]);
+    }
+    let dofs = model.dof_map()?;
+    groups
+        .iter()
+        .map(|g| {
+            if g.law != GroupLaw::Mass {
+                return Ok(Vec::new());
+            }
+            let mut items = Vec::with_capacity(g.masses.len());
+            for m in &g.masses {
+                let (points, a): (Vec<usize>, Vec<f64>) = match *m {
+                    MassRef::Point(i) => {
+                        let p = model.point_masses().get(i).ok_or_else(|| {
+                            FemError::InvalidGroup {
+                                name: g.name.clone(),
+                                reason: format!("point mass {i} out of range"),
+                            }
+                        })?;
+                        (vec![p.node], p.mass.iter().flatten().copied().collect())
+                    }
+                    MassRef::Rigid(i) => {
+                        let r = model.rigid_masses().get(i).ok_or_else(|| {
+                            FemError::InvalidGroup {
+                                name: g.name.clone(),
+                                reason: format!("rigid mass {i} out of range"),
+                            }
+                        })?;
+                        // the assembly skips a rigid mass whose node lost its rotations
+                        let Some(rp) = dofs.rotation_point(r.node) else {
+                            continue;
+                        };
+                        (vec![r.node, rp], r.matrix.iter().flatten().copied().collect())
+                    }
+                };
+                let nd = 3 * points.len();
+                if mass_kind == MassKind::Lumped
+                    && (0..nd).any(|i| (0..nd).any(|j| i != j && a[i * nd + j] != 0.0))
+                {
+                    return Err(FemError::InvalidGroup {
+                        name: g.name.clone(),
+                        reason: format!(
+                            "the mass on node {} has an offset or coupled terms, which a lumped mass cannot scale: update it with the consistent mass",
+                            model.mesh().node_id(points[0])
+                        ),
+                    });
+                }
+                items.push((points, a));
+            }
+            Ok(items)
+        })
+        .collect()
 }

@@ -31,6 +31,17 @@ pub struct Model {
     structural_sets: BTreeMap<String, Vec<usize>>,
     /// The index in `structural` of each structural element id.
     structural_lookup: std::collections::HashMap<u64, usize>,
+    /// Named sets of point and rigid masses (a Nastran CONM2, an Abaqus `*MASS` element set).
+    mass_sets: BTreeMap<String, Vec<MassRef>>,
+}
+
+/// A concentrated mass of a model: [`Model::point_masses`] or [`Model::rigid_masses`] by index.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum MassRef {
+    /// A point mass (translations only).
+    Point(usize),
+    /// A rigid mass (translations and rotations).
+    Rigid(usize),
 }
 
 /// A rigid body's mass on a node that carries rotations (a rigid link's reference, where Nastran
@@ -89,6 +100,7 @@ impl Model {
             structural: Vec::new(),
             structural_sets: BTreeMap::new(),
             structural_lookup: std::collections::HashMap::new(),
+            mass_sets: BTreeMap::new(),
         })
     }
 
@@ -422,6 +434,53 @@ impl Model {
     /// The point masses.
     pub fn point_masses(&self) -> &[PointMass] {
         &self.point_masses
+    }
+
+    /// The last mass added ([`Model::add_point_mass`], [`Model::add_rigid_mass`]), to name it in
+    /// a mass set.
+    pub fn last_mass(&self, rigid: bool) -> Option<MassRef> {
+        if rigid {
+            self.rigid_masses.len().checked_sub(1).map(MassRef::Rigid)
+        } else {
+            self.point_masses.len().checked_sub(1).map(MassRef::Point)
+        }
+    }
+
+    /// Adds masses to the mass set `name` (created if new): a group of concentrated masses whose
+    /// value can be updated (docs/MATH.md, "Mass parameters").
+    ///
+    /// # Errors
+    /// [`FemError::InvalidGroup`] for a mass that does not exist.
+    pub fn add_mass_set(
+        &mut self,
+        name: impl Into<String>,
+        masses: &[MassRef],
+    ) -> Result<(), FemError> {
+        let name = name.into();
+        for m in masses {
+            let ok = match m {
+                MassRef::Point(i) => *i < self.point_masses.len(),
+                MassRef::Rigid(i) => *i < self.rigid_masses.len(),
+            };
+            if !ok {
+                return Err(FemError::InvalidGroup {
+                    name,
+                    reason: format!("{m:?} is not a mass of the model"),
+                });
+            }
+        }
+        self.mass_sets.entry(name).or_default().extend(masses);
+        Ok(())
+    }
+
+    /// The masses of mass set `name`, if it exists.
+    pub fn mass_set(&self, name: &str) -> Option<&[MassRef]> {
+        self.mass_sets.get(name).map(Vec::as_slice)
+    }
+
+    /// The names of the mass sets, sorted.
+    pub fn mass_set_names(&self) -> Vec<String> {
+        self.mass_sets.keys().cloned().collect()
     }
 
     /// Adds a rigid body of mass `m` (kg) whose centre of gravity is at `offset` (m, basic frame)

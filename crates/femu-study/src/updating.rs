@@ -28,7 +28,8 @@ use serde::{Deserialize, Serialize};
 pub struct UpdateRequest {
     /// Candidate element sets (comma-separated); localisation selects among them. A set scales
     /// its elements' stiffness (`k:SET`); `t:SET` is the thickness of the set's shells (bending
-    /// with its cube, membrane and mass linearly). For a model of another solver's matrices,
+    /// with its cube, membrane and mass linearly); a mass set (a Nastran CONM2 as `CONM2_<EID>`)
+    /// scales its masses (`m:SET`). For a model of another solver's matrices,
     /// groups as `NAME=FILE`: FILE the same model's matrices with the group's Young's modulus and
     /// density doubled (relative to the model's folder).
     #[cfg_attr(feature = "clap", arg(long, value_delimiter = ',', required = true))]
@@ -859,7 +860,8 @@ fn judge_update(
 /// A set the model does not have, naming the model file and the sets it has.
 pub fn resolve_sets(model: &LoadedModel, sets: &[String]) -> Result<Vec<String>, StudyError> {
     use femu_fem::groups::THICKNESS_PREFIX;
-    let known = model.model.element_set_names();
+    let mut known = model.model.element_set_names();
+    known.extend(model.model.mass_set_names());
     sets.iter()
         .map(|s| {
             let (prefix, set) = match s.get(..THICKNESS_PREFIX.len()) {

@@ -278,12 +278,12 @@ pub fn localise(
         let ri: Vec<f64> = r_f.col(i).iter().copied().collect();
         objective += ri.iter().zip(&w).map(|(r, w)| r * r * w).sum::<f64>();
         let xi: Vec<f64> = xs.col(i).iter().copied().collect();
-        for (g, c) in up.group_stiffness_columns(&xi)?.iter().enumerate() {
+        for (g, c) in up.group_columns(&xi, lambdas[i])?.iter().enumerate() {
             num[g] += c.weighted_dot_full(&ri, &w);
             den[g] += c.weighted_dot(c, &w);
         }
         let rd: Vec<f64> = r_d.col(i).iter().copied().collect();
-        let kg_rd = up.group_stiffness_columns(&rd)?;
+        let kg_rd = up.group_columns(&rd, 0.0)?;
         for g in 0..groups.len() {
             energy[g] += kg_rd[g].weighted_dot_full(&rd, &ones);
             force[g] += up
@@ -313,14 +313,15 @@ fn explained_fraction(num: f64, den: f64, objective: f64, (lo, hi): (f64, f64)) 
     }
 }
 
-/// Each group's stiffness-factor bounds: those of the model's stiffness parameter of the group,
-/// unbounded where it has none.
+/// Each group's own parameter's bounds (a stiffness factor's, a thickness's, a mass group's
+/// factor's), unbounded where it has none.
 fn stiffness_bounds(up: &UpdateModel<'_>) -> Vec<(f64, f64)> {
     (0..up.groups().len())
         .map(|g| {
+            let masses = up.groups()[g].law == femu_fem::groups::GroupLaw::Mass;
             up.parameters()
                 .iter()
-                .find(|p| p.group == g && !p.mass)
+                .find(|p| p.group == g && (!p.mass || masses))
                 .map_or((f64::NEG_INFINITY, f64::INFINITY), |p| (p.lower, p.upper))
         })
         .collect()
@@ -373,9 +374,9 @@ pub fn localise_expanded(
         &w_inv,
         rule.test_error,
         None,
-        |_, xj| {
+        |j, xj| {
             Ok(crate::problem::dense_columns(
-                &up.group_stiffness_columns(xj)?,
+                &up.group_columns(xj, lambdas[j])?,
                 n,
             ))
         },
@@ -444,7 +445,7 @@ pub fn localise_expanded(
                 .sum::<f64>();
         }
         let rd: Vec<f64> = r_d.col(i).iter().copied().collect();
-        for (g, c) in up.group_stiffness_columns(&rd)?.iter().enumerate() {
+        for (g, c) in up.group_columns(&rd, 0.0)?.iter().enumerate() {
             energy[g] += c.weighted_dot_full(&rd, &ones);
         }
     }

@@ -182,6 +182,17 @@ impl<'m> UpdateModel<'m> {
                 });
                 continue;
             }
+            if group.law == GroupLaw::Mass {
+                // a set of concentrated masses: its mass factor, whatever the corrections
+                params.push(Parameter {
+                    name: format!("m:{}", group.name),
+                    group: g,
+                    mass: true,
+                    lower: -0.9,
+                    upper: 2.0,
+                });
+                continue;
+            }
             for (flag, prefix) in [(false, "k"), (true, "m")] {
                 let wanted = match corrections {
                     Corrections::Stiffness => !flag,
@@ -501,15 +512,21 @@ impl<'m> UpdateModel<'m> {
             .collect()
     }
 
-    /// `K_g v` for every group, whatever the corrections (the localisation's strain energies; a
-    /// thickness group's `dK/dp v` at its current thickness).
+    /// Each group's own sensitivity column at eigenvalue `lambda`, whatever the corrections (the
+    /// localisation's): `K_g v` for a group that scales its elements, `(K' - lambda M') v` at
+    /// the current thickness for a thickness group, `-lambda M_g v` for a mass group. With
+    /// `lambda = 0`, the stiffness part alone (the strain energies of a displacement residual).
     ///
     /// # Errors
     /// A wrong length of `v`.
-    pub fn group_stiffness_columns(&self, v: &[f64]) -> Result<Vec<SparseColumn>, UpdateError> {
+    pub fn group_columns(&self, v: &[f64], lambda: f64) -> Result<Vec<SparseColumn>, UpdateError> {
         let mut y = vec![0.0; self.base.dofs.free_count()];
         (0..self.groups.len())
-            .map(|g| self.group_column(g, false, 1.0, v, &mut y))
+            .map(|g| match self.groups.groups()[g].law {
+                GroupLaw::Scale => self.group_column(g, false, 1.0, v, &mut y),
+                GroupLaw::Thickness => self.thickness_column(g, lambda, v, &mut y),
+                GroupLaw::Mass => self.group_column(g, true, -lambda, v, &mut y),
+            })
             .collect()
     }
 
@@ -548,12 +565,12 @@ impl<'m> UpdateModel<'m> {
     /// The total-mass constraint row: `c^T theta` is the mass added by the mass factors
     /// (`c_i = m_g` for a mass factor of group `g`, 0 for a stiffness factor). A thickness change
     /// moves mass too, but with stiffness in a fixed proportion that cannot scale a mode away:
-    /// it is outside the guard (0), as a stiffness factor is.
+    /// it is outside the guard (0), as a stiffness factor is; so is a mass group's factor.
     pub fn mass_row(&self) -> Vec<f64> {
         self.params
             .iter()
             .map(|p| {
-                if p.mass {
+                if self.is_guarded(p) {
                     self.group_mass[p.group]
                 } else {
                     0.0
@@ -564,7 +581,14 @@ impl<'m> UpdateModel<'m> {
 
     /// Whether any parameter is a mass factor.
     pub fn has_mass_parameters(&self) -> bool {
-        self.params.iter().any(|p| p.mass)
+        self.params.iter().any(|p| self.is_guarded(p))
+    }
+
+    /// Whether a parameter is a mass factor of a group of elements: the factors the total-mass
+    /// guard holds. A mass group's factor on concentrated masses cannot scale a mode away with
+    /// the stiffness, and is outside it.
+    fn is_guarded(&self, p: &Parameter) -> bool {
+        p.mass && self.groups.groups()[p.group].law == GroupLaw::Scale
     }
 }
 

@@ -696,3 +696,60 @@ fn nafems_fv32_cantilevered_tapered_membrane() {
         assert!(*f < 1.2e-2, "{fine:?}");
     }
 }
+
+/// A mass group scales its concentrated masses exactly: `M(q)` of a set holding a rigid mass
+/// (offset and inertia) and a point mass equals the assembly of the plate with both masses made
+/// `1 + q` times heavier (formed anew by the model), and `K` is untouched. With a lumped mass the
+/// rigid mass's offset cannot be scaled on the diagonal and the group is refused.
+#[test]
+fn mass_groups_equal_heavier_masses() {
+    use femu_fem::assembly::Assembler;
+    use femu_fem::groups::ParameterGroups;
+    let build = |factor: f64| {
+        let mut model = plate(0.4, 0.3, 4, 3, steel(0.004), |_, _| [0.0, 0.0]);
+        let inertia = [[2e-3, 1e-4, 0.0], [1e-4, 3e-3, 0.0], [0.0, 0.0, 4e-3]];
+        model
+            .add_rigid_mass(
+                7,
+                0.5 * factor,
+                [0.01, -0.02, 0.03],
+                inertia.map(|r| r.map(|v| v * factor)),
+            )
+            .unwrap();
+        let rigid = model.last_mass(true).unwrap();
+        model.add_point_mass(13, 0.2 * factor).unwrap();
+        let point = model.last_mass(false).unwrap();
+        model.add_mass_set("EQUIPMENT", &[rigid, point]).unwrap();
+        model
+    };
+    let model = build(1.0);
+    let asm = Assembler::new(&model).unwrap();
+    let base = asm.assemble(&model, MassKind::Consistent).unwrap();
+    let groups =
+        ParameterGroups::from_element_sets(&model, &["EQUIPMENT"], MassKind::Consistent).unwrap();
+    let q = 0.4;
+    let got = groups
+        .parameterized(&model, &asm, &base, &[0.0], &[q])
+        .unwrap();
+    let direct = asm.assemble(&build(1.0 + q), MassKind::Consistent).unwrap();
+    for (what, a, b) in [("K", &got.k, &direct.k), ("M", &got.m, &direct.m)] {
+        let scale = b.data().iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let (ea, eb): (Vec<_>, Vec<_>) = (
+            femu_sparse::csc::entries(a).collect(),
+            femu_sparse::csc::entries(b).collect(),
+        );
+        assert_eq!(ea.len(), eb.len(), "{what}");
+        for ((i, j, x), (k, l, y)) in ea.iter().zip(&eb) {
+            assert_eq!((i, j), (k, l), "{what}");
+            assert!(
+                (x - y).abs() <= 1e-14 * scale,
+                "{what} at ({i}, {j}): {x} {y}"
+            );
+        }
+    }
+    assert_eq!(groups.group_mass(&model, 0).unwrap(), 0.7);
+    let err = ParameterGroups::from_element_sets(&model, &["EQUIPMENT"], MassKind::Lumped)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("offset") && err.contains("node 7"), "{err}");
+}

@@ -91,6 +91,9 @@ pub(super) fn add_masses(
         }
     }
     for c in conm2 {
+        let eid = c.id(0, "EID")?;
+        // each CONM2 is a mass set of its own, `CONM2_<EID>`, for updating its mass
+        let set = format!("CONM2_{eid}");
         let g = c.id(1, "G")?;
         let m = c
             .real(3, "M")?
@@ -120,6 +123,8 @@ pub(super) fn add_masses(
             model
                 .add_rigid_mass(g, m * wtmass, d, scaled)
                 .map_err(c.located())?;
+            let added = model.last_mass(true).into_iter().collect::<Vec<_>>();
+            model.add_mass_set(set, &added).map_err(c.located())?;
             continue;
         }
         // a grid an RBE2 moves rigidly in all six components: the mass moves with the link's
@@ -135,6 +140,8 @@ pub(super) fn add_masses(
             model
                 .add_rigid_mass(*gn, m * wtmass, from_reference, scaled)
                 .map_err(c.located())?;
+            let added = model.last_mass(true).into_iter().collect::<Vec<_>>();
+            model.add_mass_set(set, &added).map_err(c.located())?;
             continue;
         }
         if offset || inertia {
@@ -153,6 +160,8 @@ pub(super) fn add_masses(
             );
         }
         model.add_point_mass(g, m * wtmass).map_err(c.located())?;
+        let added = model.last_mass(false).into_iter().collect::<Vec<_>>();
+        model.add_mass_set(set, &added).map_err(c.located())?;
     }
     Ok(())
 }
