@@ -44,6 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         bending: 1.0,
         shear: Some(5.0 / 6.0),
         nsm: 0.0,
+        material: None,
     };
     for j in 0..n {
         for i in 0..n {

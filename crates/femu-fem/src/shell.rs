@@ -34,7 +34,100 @@ pub struct Shell {
     pub shear: Option<f64>,
     /// Non-structural mass per area (kg/m^2).
     pub nsm: f64,
+    /// An anisotropic section (Nastran MAT2 or MAT8, or different materials for membrane,
+    /// bending and shear): its matrices replace `e` and `nu`'s (docs/MATH.md, "Shells").
+    pub material: Option<ShellMaterial>,
 }
+
+/// A shell section's material matrices in its material axes, and the material's first axis.
+/// The membrane stiffness is `t membrane`, the bending stiffness `bending t^3 / 12 bending`, the
+/// transverse shear `TS/T t shear` (Nastran's PSHELL with the MID1, MID2 and MID3 materials).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShellMaterial {
+    /// The membrane material (Pa) on `(eps_11, eps_22, gamma_12)` in the material axes.
+    pub membrane: [[f64; 3]; 3],
+    /// The bending material (Pa), in the same order.
+    pub bending: [[f64; 3]; 3],
+    /// The transverse shear material (Pa) on `(gamma_1z, gamma_2z)`.
+    pub shear: [[f64; 2]; 2],
+    /// The material's first axis (basic frame); the element projects it onto its plane.
+    pub axis: [f64; 3],
+}
+
+/// The section's membrane, bending and transverse shear matrices in the element's axes `e` (rows
+/// `e1`, `e2`, `n`) with the parts scaled by `sc`, and the shear modulus of the drilling
+/// stiffness.
+fn section(s: &Shell, e: &[V3; 3], sc: Scales) -> Result<SectionMatrices, String> {
+    let t = s.t;
+    let shear_factor = s.shear.unwrap_or(1000.0 * 5.0 / 6.0);
+    let Some(mat) = &s.material else {
+        let (e, nu) = (s.e, s.nu);
+        let g = e / (2.0 * (1.0 + nu));
+        let ds = sc.linear * shear_factor * g * t;
+        return Ok((
+            plane_stress(sc.linear * e * t / (1.0 - nu * nu), nu),
+            plane_stress(
+                sc.cubic * s.bending * e * t.powi(3) / (12.0 * (1.0 - nu * nu)),
+                nu,
+            ),
+            [[ds, 0.0], [0.0, ds]],
+            g,
+        ));
+    };
+    // the material axis in the element's plane: cos and sin of its angle from e1
+    let a = mat.axis;
+    let (c, sn) = (dot(a, e[0]), dot(a, e[1]));
+    let len = (c * c + sn * sn).sqrt();
+    if !(len > 1e-6 * dot(a, a).sqrt()) {
+        return Err("its material axis is normal to the element".into());
+    }
+    let (c, sn) = (c / len, sn / len);
+    // engineering strains in the material axes from the element's: eps_m = T eps_e
+    let tr = [
+        [c * c, sn * sn, c * sn],
+        [sn * sn, c * c, -c * sn],
+        [-2.0 * c * sn, 2.0 * c * sn, c * c - sn * sn],
+    ];
+    let turn = |d: &[[f64; 3]; 3], f: f64| -> [[f64; 3]; 3] {
+        std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                let mut v = 0.0;
+                for a in 0..3 {
+                    for b in 0..3 {
+                        v += tr[a][i] * d[a][b] * tr[b][j];
+                    }
+                }
+                f * v
+            })
+        })
+    };
+    let cm = turn(&mat.membrane, sc.linear * t);
+    let cb = turn(&mat.bending, sc.cubic * s.bending * t.powi(3) / 12.0);
+    let g = turn(&mat.membrane, 1.0)[2][2];
+    let rs = [[c, sn], [-sn, c]];
+    let cs: [[f64; 2]; 2] = match s.shear {
+        Some(k) => std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                let mut v = 0.0;
+                for a in 0..2 {
+                    for b in 0..2 {
+                        v += rs[a][i] * mat.shear[a][b] * rs[b][j];
+                    }
+                }
+                sc.linear * k * t * v
+            })
+        }),
+        None => {
+            let ds = sc.linear * shear_factor * g * t;
+            [[ds, 0.0], [0.0, ds]]
+        }
+    };
+    Ok((cm, cb, cs, g))
+}
+
+/// Membrane, bending and shear matrices of a section in an element's axes, and the drilling's
+/// shear modulus.
+type SectionMatrices = ([[f64; 3]; 3], [[f64; 3]; 3], [[f64; 2]; 2], f64);
 
 type V3 = [f64; 3];
 
@@ -293,12 +386,8 @@ pub(crate) fn matrices_scaled(
     sc: Scales,
 ) -> Result<(Vec<f64>, Vec<f64>), String> {
     let (axes, p) = checked_quad(x)?;
-    let (e, nu, t) = (s.e, s.nu, s.t);
-    let g = e / (2.0 * (1.0 + nu));
-    let dm = sc.linear * e * t / (1.0 - nu * nu);
-    let db = sc.cubic * s.bending * e * t.powi(3) / (12.0 * (1.0 - nu * nu));
-    let ds = sc.linear * s.shear.map_or(1000.0 * 5.0 / 6.0, |k| k) * g * t;
-    let (cm, cb) = (plane_stress(dm, nu), plane_stress(db, nu));
+    let t = s.t;
+    let (cm, cb, ds, g) = section(s, &axes, sc)?;
     let mut k = vec![0.0; 576];
     let mut m = vec![0.0; 576];
     let jac = |xi: f64, eta: f64| jacobian(&p, xi, eta);
@@ -352,7 +441,11 @@ pub(crate) fn matrices_scaled(
         }
         add_btdb(&mut k, &bm, &cm, 3, det);
         add_btdb(&mut k, &bb, &cb, 3, det);
-        let cs = [[ds, 0.0, 0.0], [0.0, ds, 0.0], [0.0, 0.0, 0.0]];
+        let cs = [
+            [ds[0][0], ds[0][1], 0.0],
+            [ds[1][0], ds[1][1], 0.0],
+            [0.0, 0.0, 0.0],
+        ];
         add_btdb(&mut k, &bs, &cs, 2, det);
         if mass == MassKind::Consistent {
             let (mt, mr) = (
@@ -442,12 +535,8 @@ pub(crate) fn matrices3_scaled(
     let (dr, ds) = ([-1.0, 1.0, 0.0], [-1.0, 0.0, 1.0]);
     let nx: [f64; 3] = std::array::from_fn(|i| inv[0][0] * dr[i] + inv[0][1] * ds[i]);
     let ny: [f64; 3] = std::array::from_fn(|i| inv[1][0] * dr[i] + inv[1][1] * ds[i]);
-    let (e, nu, t) = (s.e, s.nu, s.t);
-    let g = e / (2.0 * (1.0 + nu));
-    let dm = sc.linear * e * t / (1.0 - nu * nu);
-    let db = sc.cubic * s.bending * e * t.powi(3) / (12.0 * (1.0 - nu * nu));
-    let dsh = sc.linear * s.shear.map_or(1000.0 * 5.0 / 6.0, |k| k) * g * t;
-    let (cm, cb) = (plane_stress(dm, nu), plane_stress(db, nu));
+    let t = s.t;
+    let (cm, cb, dsh, g) = section(s, &[e1, e2, n], sc)?;
     let nd = 18;
     let mut k = vec![0.0; nd * nd];
     let mut m = vec![0.0; nd * nd];
@@ -488,7 +577,11 @@ pub(crate) fn matrices3_scaled(
             bs[0][q] = inv[0][0] * gr[q] + inv[0][1] * gs[q];
             bs[1][q] = inv[1][0] * gr[q] + inv[1][1] * gs[q];
         }
-        let cs = [[dsh, 0.0, 0.0], [0.0, dsh, 0.0], [0.0, 0.0, 0.0]];
+        let cs = [
+            [dsh[0][0], dsh[0][1], 0.0],
+            [dsh[1][0], dsh[1][1], 0.0],
+            [0.0, 0.0, 0.0],
+        ];
         add_btdb(&mut k, &bs, &cs, 2, w);
         if mass == MassKind::Consistent {
             let nn = shape3(r, sp);
@@ -530,11 +623,43 @@ impl Shell {
                 self.t
             ));
         }
-        if !(self.e > 0.0 && self.e.is_finite() && self.nu > -1.0 && self.nu < 0.5) {
-            return bad(format!(
-                "E = {} and nu = {} are not a material",
-                self.e, self.nu
-            ));
+        match &self.material {
+            None => {
+                if !(self.e > 0.0 && self.e.is_finite() && self.nu > -1.0 && self.nu < 0.5) {
+                    return bad(format!(
+                        "E = {} and nu = {} are not a material",
+                        self.e, self.nu
+                    ));
+                }
+            }
+            Some(m) => {
+                for (what, d) in [("membrane", &m.membrane), ("bending", &m.bending)] {
+                    let a = nalgebra::Matrix3::from_fn(|i, j| d[i][j]);
+                    let scale = a.iter().fold(0.0f64, |x, v| x.max(v.abs()));
+                    if a.iter().any(|v| !v.is_finite())
+                        || (a - a.transpose()).iter().any(|v| v.abs() > 1e-9 * scale)
+                        || !(a.symmetric_eigenvalues().min() > 1e-12 * scale)
+                    {
+                        return bad(format!(
+                            "its {what} material {d:?} is not symmetric positive definite"
+                        ));
+                    }
+                }
+                let sh = m.shear;
+                if self.shear.is_some()
+                    && !(sh[0][0] > 0.0
+                        && sh[1][1] > 0.0
+                        && (sh[0][1] - sh[1][0]).abs() <= 1e-9 * sh[0][0].max(sh[1][1])
+                        && sh[0][0] * sh[1][1] > sh[0][1] * sh[1][0])
+                {
+                    return bad(format!(
+                        "its transverse shear material {sh:?} is not symmetric positive definite"
+                    ));
+                }
+                if !m.axis.iter().all(|v| v.is_finite()) || m.axis.iter().all(|v| *v == 0.0) {
+                    return bad(format!("its material axis {:?} is not a direction", m.axis));
+                }
+            }
         }
         if !(self.rho >= 0.0 && self.nsm >= 0.0 && self.rho.is_finite() && self.nsm.is_finite()) {
             return bad(format!(

@@ -411,9 +411,29 @@ MAT1,2,7.+10,,0.3,2700.
             "a membrane or a plate alone",
         ),
         (
-            "CQUAD4,1,1,1,2,3,4\nPSHELL,1,1,0.01,2\n",
+            "CTRIA3,1,1,1,2,3,,0.01\nPSHELL,1,1,0.01,1\n",
+            "bad.bdf:9",
+            "ZOFFS",
+        ),
+        (
+            "CQUAD4,1,1,1,2,3,4\nPSHELL,1,1,0.01,9\nMAT9,9,1.+11,,,,,,1.+11,+M\n+M,,,,,1.+11,,,,+N\n+N,,,,1.+10,,,1.+10,,+O\n+O,1.+10,7850.\n",
             "bad.bdf:10",
-            "different materials",
+            "a shell takes a MAT1, a MAT2 or a MAT8",
+        ),
+        (
+            "CQUAD4,1,1,1,2,3,4\nPSHELL,1,8,0.01,8\nMAT8,8,1.+10,1.+10,1.5,5.+9,,,1600.\n",
+            "bad.bdf:11",
+            "is not a material",
+        ),
+        (
+            "CQUAD4,1,1,1,2,3,4,5\nPSHELL,1,8,0.01,8\nMAT8,8,1.4+11,1.+10,0.3,5.+9,,,1600.\nCORD2R,5,,0.,0.,0.,1.,0.,0.,+C\n+C,0.,0.,1.\n",
+            "bad.bdf:9",
+            "normal to the element",
+        ),
+        (
+            "CTETRA,1,1,1,2,4,6\nPSOLID,1,8\nMAT8,8,1.4+11,1.+10,0.3,5.+9,,,1600.\nGRID,6,,0.,0.,1.\n",
+            "bad.bdf:10",
+            "a solid takes a MAT1 or a MAT9",
         ),
         (
             "CQUAD4,1,1,1,2,5,4\nPSHELL,1,1,0.01,1\n",
@@ -529,5 +549,106 @@ ENDDATA
     dense.sort_by(f64::total_cmp);
     for (got, want) in modes.values.iter().zip(&dense) {
         assert!((got / want - 1.0).abs() < 1e-9, "{got} against {want}");
+    }
+}
+
+/// A simply supported orthotropic plate as Nastran decks: CQUAD4 on a PSHELL whose MID1, MID2 and
+/// MID3 are one MAT8 (E1 = 140 GPa, E2 = 10 GPa, NU12 = 0.3, G12 = G1Z = G2Z = 5 GPa). With
+/// THETA blank (the ply along G1-G2, x) the first two frequencies are within 0.5 % and 1.5 % of
+/// the classical orthotropic plate's (Jones 5.5, computed here), and with THETA = 90 of the same
+/// with D11 and D22 exchanged (the element-level convergence is in femu-fem's shell tests); an
+/// MCID whose x axis is basic y gives THETA = 90's model, and a MAT2 holding the MAT8's `Q`
+/// (with its G1Z, G2Z as MID3's MAT2) THETA blank's, to 1e-10.
+#[test]
+fn orthotropic_shells_as_nastran_decks() {
+    let (a, b, n, t): (f64, f64, usize, f64) = (1.0, 0.8, 24, 0.004);
+    let deck = |orientation: &str, materials: &str| -> Vec<f64> {
+        let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
+        let g = |i: usize, j: usize| 1 + i + (n + 1) * j;
+        for j in 0..=n {
+            for i in 0..=n {
+                s.push_str(&format!(
+                    "GRID,{},,{:.10},{:.10},0.\n",
+                    g(i, j),
+                    a * i as f64 / n as f64,
+                    b * j as f64 / n as f64
+                ));
+                let comps = match (i == 0 || i == n, j == 0 || j == n) {
+                    (true, true) => "12345",
+                    (true, false) => "1234",
+                    (false, true) => "1235",
+                    _ => "",
+                };
+                if !comps.is_empty() {
+                    s.push_str(&format!("SPC1,1,{comps},{}\n", g(i, j)));
+                }
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                s.push_str(&format!(
+                    "CQUAD4,{},1,{},{},{},{},{orientation}\n",
+                    1 + i + n * j,
+                    g(i, j),
+                    g(i + 1, j),
+                    g(i + 1, j + 1),
+                    g(i, j + 1)
+                ));
+            }
+        }
+        s.push_str(&format!(
+            "{materials}CORD2R,5,,0.,0.,0.,0.,0.,1.,+C\n+C,0.,1.,0.\nENDDATA\n"
+        ));
+        let d = parse_bdf(&s, "ply.bdf", &BdfOptions::default()).unwrap();
+        let sys = d.model.assemble(d.mass).unwrap();
+        sys.modes(Which::Lowest(2), &EigenOptions::default())
+            .unwrap()
+            .values
+    };
+    let mat8 = format!("PSHELL,1,8,{t},8,,8\nMAT8,8,1.4+11,1.+10,0.3,5.+9,5.+9,5.+9,1600.\n");
+    let (e1, e2, nu12, g12) = (140e9, 10e9, 0.3, 5e9);
+    let den = 1.0 - nu12 * nu12 * e2 / e1;
+    let (q11, q12, q22) = (e1 / den, nu12 * e2 / den, e2 / den);
+    let mat2 = format!(
+        "PSHELL,1,2,{t},2,,3\nMAT2,2,{q11:.12e},{q12:.12e},0.,{q22:.12e},0.,{g12:e},1600.\nMAT2,3,5.+9,0.,0.,5.+9,0.,0.,1600.\n"
+    );
+    let classical = |along_y: bool| -> Vec<f64> {
+        let d = |q: f64| q * t.powi(3) / 12.0;
+        let (d11, d22) = if along_y {
+            (d(q22), d(q11))
+        } else {
+            (d(q11), d(q22))
+        };
+        let mut w: Vec<f64> = (1..6)
+            .flat_map(|m| (1..6).map(move |k| (m as f64 / a, k as f64 / b)))
+            .map(|(p, r)| {
+                PI.powi(4)
+                    * (d11 * p.powi(4)
+                        + 2.0 * (d(q12) + 2.0 * d(g12)) * p * p * r * r
+                        + d22 * r.powi(4))
+                    / (1600.0 * t)
+            })
+            .collect();
+        w.sort_by(f64::total_cmp);
+        w
+    };
+    let along_x = deck("", &mat8);
+    let theta_90 = deck("90.", &mat8);
+    let mcid = deck("5", &mat8);
+    let as_mat2 = deck("", &mat2);
+    for (got, along_y) in [(&along_x, false), (&theta_90, true)] {
+        let want = classical(along_y);
+        for (k, tol) in [(0, 5e-3), (1, 1.5e-2)] {
+            let err = got[k] / want[k] - 1.0;
+            assert!(
+                err > -2e-3 && err < tol,
+                "along y {along_y}: {got:?} against {want:?}"
+            );
+        }
+    }
+    for (x, y) in [(&theta_90, &mcid), (&along_x, &as_mat2)] {
+        for (p, r) in x.iter().zip(y.iter()) {
+            assert!((p / r - 1.0).abs() < 1e-10, "{x:?} {y:?}");
+        }
     }
 }

@@ -518,6 +518,7 @@ fn shell(
         bending: 1.0,
         shear: Some(5.0 / 6.0),
         nsm: 0.0,
+        material: None,
     }))
 }
 

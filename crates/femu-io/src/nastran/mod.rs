@@ -135,8 +135,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("RBAR", "rigid links"),
     ("MPC", "multipoint constraints"),
     ("MPCADD", "multipoint constraints"),
-    ("MAT2", "anisotropic materials"),
-    ("MAT8", "orthotropic materials"),
     ("CORD3G", "coordinate systems"),
     ("GENEL", "general elements"),
     ("DMIG", "direct matrix input"),
@@ -316,8 +314,8 @@ const OTHER_SOLUTIONS: &[(&str, &str)] = &[
 fn known_cards() -> Vec<&'static str> {
     let mut v: Vec<&'static str> = vec![
         "GRID", "GRDSET", "CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S", "CHEXA",
-        "CPENTA", "CTETRA", "CPYRAM", "PSOLID", "MAT1", "MAT9", "SPC", "SPC1", "SPCADD", "CONM2",
-        "RBE2", "RBE3", "PARAM", "EIGRL", "EIGR", "BAROR", "BEAMOR",
+        "CPENTA", "CTETRA", "CPYRAM", "PSOLID", "MAT1", "MAT9", "MAT2", "MAT8", "SPC", "SPC1",
+        "SPCADD", "CONM2", "RBE2", "RBE3", "PARAM", "EIGRL", "EIGR", "BAROR", "BEAMOR",
     ];
     v.extend(structural::ELEMENTS);
     v.extend(structural::PROPERTIES);
@@ -363,10 +361,13 @@ fn sort<'a>(
                     return Err(c.err(format!("{pid} is defined twice")));
                 }
             }
-            "MAT1" | "MAT9" => {
+            "MAT1" | "MAT9" | "MAT2" | "MAT8" => {
                 let mid = c.id(0, "MID")?;
-                if s.materials.insert(mid, c).is_some() {
-                    return Err(c.err(format!("{mid} is defined twice (MAT1 and MAT9 share ids)")));
+                if let Some(first) = s.materials.insert(mid, c) {
+                    return Err(c.err(format!(
+                        "{mid} is defined twice (first as {} at line {}: MAT1, MAT2, MAT8 and MAT9 share ids)",
+                        first.name, first.line
+                    )));
                 }
             }
             "SPC" | "SPC1" | "SPCADD" => s.spcs.push(c),
@@ -592,6 +593,12 @@ fn model_with_materials(
                 "{pid} refers to MAT1 {mid}, which the deck does not define (femu reads MAT1 and MAT9)"
             ))
         })?;
+        if m.name != "MAT1" && m.name != "MAT9" {
+            return Err(pc.err(format!(
+                "{pid} refers to {} {mid}: a solid takes a MAT1 or a MAT9 ({} is a shell's material)",
+                m.name, m.name
+            )));
+        }
         let material = materials::material(m, pc, geometry, sorted.wtmass, warnings)?;
         model
             .set_material(Some(&format!("PID{pid}")), material)

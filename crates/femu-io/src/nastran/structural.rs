@@ -1,6 +1,7 @@
 //! Bars, beams, rods, springs, bushings and shells: `CBAR` (`PBAR`, `PBARL`), `CBEAM` (`PBEAM`,
 //! `PBEAML`, prismatic), `CROD` (`PROD`), `CONROD`, `CELAS1` (`PELAS`), `CELAS2`, `CBUSH`
-//! (`PBUSH`), `CQUAD4` and `CTRIA3` (`PSHELL` of one isotropic MAT1), with `BAROR` and
+//! (`PBUSH`), `CQUAD4` and `CTRIA3` (`PSHELL` of MAT1, MAT2 or MAT8 materials, THETA or MCID
+//! material axes), with `BAROR` and
 //! `BEAMOR` defaults, read as the Quick Reference Guide defines them
 //! (cited by card) into femu's structural elements ([`femu_fem::structural`]). What femu cannot
 //! represent is refused with card and line: pin flags, tapered beams, warping, shear-centre and
@@ -736,13 +737,20 @@ pub(super) fn add_structural(
                 let nodes = (2..2 + corners)
                     .map(|i| node(model, c.id(i, "G")?, c, "a corner"))
                     .collect::<Result<Vec<_>, _>>()?;
-                let zoffs = c.real(7, "ZOFFS")?.unwrap_or(0.0);
+                // THETA/MCID and ZOFFS follow the corners: fields 8 and 9 of a CQUAD4, 7 and 8
+                // of a CTRIA3
+                let zoffs = c.real(corners + 3, "ZOFFS")?.unwrap_or(0.0);
                 if zoffs != 0.0 {
                     return Err(c.err(format!(
                         "{eid}: ZOFFS = {zoffs} offsets the shell from its grids, which femu does not model"
                     )));
                 }
-                let shell = pshell(p, pid, ctx)?;
+                let mut shell = pshell(p, pid, ctx)?;
+                if let Some(m) = &mut shell.material {
+                    let x: Vec<[f64; 3]> =
+                        nodes.iter().map(|n| model.mesh().coords()[*n]).collect();
+                    m.axis = shell_axis(c, corners + 2, &x, ctx)?;
+                }
                 // T1-T4: corner thicknesses, refused unless they are the property's
                 let tflag = c.int(10, "TFLAG")?.unwrap_or(0);
                 for k in 0..corners {
@@ -787,10 +795,13 @@ pub(super) fn add_structural(
     Ok(cards.elements.len())
 }
 
-/// A PSHELL (QRG PSHELL: `PID MID1 T MID2 12I/T^3 MID3 TS/T NSM / Z1 Z2 MID4`) of one
-/// isotropic MAT1 for membrane, bending and (when given) transverse shear; a blank MID3 is no
-/// shear flexibility. Different materials in MID1-MID3, a membrane or a plate alone, and MID4
-/// coupling are refused.
+/// A PSHELL (QRG PSHELL: `PID MID1 T MID2 12I/T^3 MID3 TS/T NSM / Z1 Z2 MID4 MCSID SCSID
+/// ZOFFS`): the membrane material MID1, the bending material MID2 (its stiffness `12I/T^3 T^3 /
+/// 12` times it), the transverse shear material MID3 (`TS/T T` times it; blank: no shear
+/// flexibility), each a MAT1, a MAT2 or a MAT8; the density is MID1's. One MAT1 in all three is
+/// the isotropic shell; anything else an anisotropic section whose material axis each element
+/// sets (its THETA or MCID: [`shell_axis`]). A membrane or a plate alone, MID4 coupling, a
+/// property offset ZOFFS and an anisotropic section's MCSID are refused.
 fn pshell(
     p: &Card,
     pid: u64,
@@ -805,45 +816,236 @@ fn pshell(
             "{pid}: MID1 = {mid1:?} and MID2 = {mid2:?}: femu's shells have both membrane and bending stiffness (a membrane or a plate alone is not built)"
         )));
     };
-    if m1 != m2 || mid3.is_some_and(|m3| m3 != m1) {
-        return Err(p.err(format!(
-            "{pid}: MID1 {m1}, MID2 {m2}, MID3 {mid3:?} name different materials; femu's shells take one isotropic material"
-        )));
-    }
     if let Some(m4) = mid4 {
         return Err(p.err(format!(
             "{pid}: MID4 = {m4} couples membrane and bending, which femu does not model"
+        )));
+    }
+    if let Some(z) = p.real(13, "ZOFFS")?.filter(|z| *z != 0.0) {
+        return Err(p.err(format!(
+            "{pid}: ZOFFS = {z} offsets its shells from their grids, which femu does not model"
         )));
     }
     let t = p
         .real(2, "T")?
         .filter(|t| *t > 0.0)
         .ok_or_else(|| p.err(format!("{pid}: a shell needs a positive thickness T")))?;
-    let m = ctx.materials.get(&(m1 as u64)).ok_or_else(|| {
-        p.err(format!(
-            "{pid} refers to MAT1 {m1}, which the deck does not define"
-        ))
-    })?;
-    if m.name != "MAT1" {
-        return Err(p.err(format!(
-            "{pid} refers to {} {m1}: femu's shells take a MAT1",
-            m.name
-        )));
-    }
-    let mut scratch = Vec::new();
-    let (e, nu) = super::materials::mat1_moduli(m, &mut scratch)?;
-    let rho = m.real(4, "RHO")?.unwrap_or(0.0) * ctx.wtmass;
+    let card = |mid: i64| -> Result<&Card, IoError> {
+        ctx.materials.get(&(mid as u64)).copied().ok_or_else(|| {
+            p.err(format!(
+                "{pid} refers to material {mid}, which the deck does not define"
+            ))
+        })
+    };
     let bending = p.real(4, "12I/T**3")?.unwrap_or(1.0);
     let ts = p.real(6, "TS/T")?.unwrap_or(0.833_333);
+    let nsm = p.real(7, "NSM")?.unwrap_or(0.0) * ctx.wtmass;
+    let (c1, c2) = (card(m1)?, card(m2)?);
+    let c3 = mid3.map(card).transpose()?;
+    let rho = shell_density(c1, pid, p)? * ctx.wtmass;
+    if c1.name == "MAT1" && m1 == m2 && mid3.is_none_or(|m3| m3 == m1) {
+        let mut scratch = Vec::new();
+        let (e, nu) = super::materials::mat1_moduli(c1, &mut scratch)?;
+        return Ok(femu_fem::shell::Shell {
+            e,
+            nu,
+            rho,
+            t,
+            bending,
+            shear: mid3.map(|_| ts),
+            nsm,
+            material: None,
+        });
+    }
+    if let Some(cs) = p.int(11, "MCSID")?.filter(|c| *c >= 0) {
+        return Err(p.err(format!(
+            "{pid}: MCSID = {cs} sets the material axes of its anisotropic section for every element, which femu does not read (give THETA or MCID on the elements)"
+        )));
+    }
+    let membrane = plane_material(c1, pid, p)?;
+    let bending_m = plane_material(c2, pid, p)?;
+    let (shear, ts) = match c3 {
+        None => ([[0.0; 2]; 2], None),
+        Some(c3) => match shear_material(c3, pid, p)? {
+            Some(g) => (g, Some(ts)),
+            // a MAT8 with G1Z and G2Z blank: no shear flexibility, as a blank MID3
+            None => ([[0.0; 2]; 2], None),
+        },
+    };
     Ok(femu_fem::shell::Shell {
-        e,
-        nu,
+        e: 0.0,
+        nu: 0.0,
         rho,
         t,
         bending,
-        shear: mid3.map(|_| ts),
-        nsm: p.real(7, "NSM")?.unwrap_or(0.0) * ctx.wtmass,
+        shear: ts,
+        nsm,
+        material: Some(femu_fem::shell::ShellMaterial {
+            membrane,
+            bending: bending_m,
+            shear,
+            axis: [1.0, 0.0, 0.0],
+        }),
     })
+}
+
+/// The density of a shell's membrane material (MAT1 field 5, MAT2 and MAT8 field 8).
+fn shell_density(m: &Card, pid: u64, p: &Card) -> Result<f64, IoError> {
+    let field = match m.name.as_str() {
+        "MAT1" => 4,
+        "MAT2" | "MAT8" => 7,
+        other => {
+            return Err(p.err(format!(
+                "{pid} refers to {other} {}: a shell takes a MAT1, a MAT2 or a MAT8",
+                m.field(0)
+            )));
+        }
+    };
+    Ok(m.real(field, "RHO")?.unwrap_or(0.0))
+}
+
+/// A shell's plane-stress material (Pa) on `(eps_11, eps_22, gamma_12)` in the material axes:
+/// a MAT1's isotropic one, a MAT2's `G11 G12 G13 G22 G23 G33`, a MAT8's orthotropic `Q` from `E1
+/// E2 NU12 G12` (`Q11 = E1 / (1 - NU12 NU21)`, `NU21 = NU12 E2 / E1`).
+fn plane_material(m: &Card, pid: u64, p: &Card) -> Result<[[f64; 3]; 3], IoError> {
+    let mid = m.field(0);
+    match m.name.as_str() {
+        "MAT1" => {
+            let mut scratch = Vec::new();
+            let (e, nu) = super::materials::mat1_moduli(m, &mut scratch)?;
+            let d = e / (1.0 - nu * nu);
+            Ok([
+                [d, d * nu, 0.0],
+                [d * nu, d, 0.0],
+                [0.0, 0.0, e / (2.0 * (1.0 + nu))],
+            ])
+        }
+        "MAT2" => {
+            let g = |i: usize, what: &str| -> Result<f64, IoError> {
+                Ok(m.real(i, what)?.unwrap_or(0.0))
+            };
+            let (g11, g12, g13) = (g(1, "G11")?, g(2, "G12")?, g(3, "G13")?);
+            let (g22, g23, g33) = (g(4, "G22")?, g(5, "G23")?, g(6, "G33")?);
+            Ok([[g11, g12, g13], [g12, g22, g23], [g13, g23, g33]])
+        }
+        "MAT8" => {
+            let need = |i: usize, what: &str| -> Result<f64, IoError> {
+                m.real(i, what)?
+                    .filter(|v| *v > 0.0)
+                    .ok_or_else(|| m.err(format!("{mid}: {what} must be given and positive")))
+            };
+            let (e1, e2, g12) = (need(1, "E1")?, need(2, "E2")?, need(4, "G12")?);
+            let nu12 = m.real(3, "NU12")?.unwrap_or(0.0);
+            let nu21 = nu12 * e2 / e1;
+            let den = 1.0 - nu12 * nu21;
+            if !(den > 0.0) {
+                return Err(m.err(format!(
+                    "{mid}: NU12 = {nu12} with E1 = {e1:e} and E2 = {e2:e} is not a material (1 - NU12 NU21 = {den})"
+                )));
+            }
+            Ok([
+                [e1 / den, nu12 * e2 / den, 0.0],
+                [nu12 * e2 / den, e2 / den, 0.0],
+                [0.0, 0.0, g12],
+            ])
+        }
+        other => Err(p.err(format!(
+            "{pid} refers to {other} {mid}: a shell takes a MAT1, a MAT2 or a MAT8"
+        ))),
+    }
+}
+
+/// A shell's transverse shear material (Pa) on `(gamma_1z, gamma_2z)`: a MAT1's `G`, a MAT2's `G11
+/// G12 G22` (QRG PSHELL, remarks), a MAT8's `G1Z`, `G2Z`; `None` for a MAT8 with both blank
+/// (infinite shear moduli: no shear flexibility).
+fn shear_material(m: &Card, pid: u64, p: &Card) -> Result<Option<[[f64; 2]; 2]>, IoError> {
+    let mid = m.field(0);
+    match m.name.as_str() {
+        "MAT1" => {
+            let mut scratch = Vec::new();
+            let (e, nu) = super::materials::mat1_moduli(m, &mut scratch)?;
+            let g = e / (2.0 * (1.0 + nu));
+            Ok(Some([[g, 0.0], [0.0, g]]))
+        }
+        "MAT2" => {
+            let g = |i: usize, what: &str| -> Result<f64, IoError> {
+                Ok(m.real(i, what)?.unwrap_or(0.0))
+            };
+            let (g11, g12, g22) = (g(1, "G11")?, g(2, "G12")?, g(4, "G22")?);
+            Ok(Some([[g11, g12], [g12, g22]]))
+        }
+        "MAT8" => match (m.real(5, "G1Z")?, m.real(6, "G2Z")?) {
+            (None, None) => Ok(None),
+            (Some(a), Some(b)) if a > 0.0 && b > 0.0 => Ok(Some([[a, 0.0], [0.0, b]])),
+            (a, b) => Err(m.err(format!(
+                "{mid}: G1Z = {a:?} and G2Z = {b:?}: as a transverse shear material both must be positive (or both blank: no shear flexibility)"
+            ))),
+        },
+        other => Err(p.err(format!(
+            "{pid} refers to {other} {mid}: a shell takes a MAT1, a MAT2 or a MAT8"
+        ))),
+    }
+}
+
+/// The material axis (basic frame) of a shell with an anisotropic section, from its THETA or
+/// MCID field (QRG CQUAD4, CTRIA3): a real THETA turns the edge G1-G2 by THETA degrees about the
+/// normal (blank: THETA = 0); an integer MCID projects the x axis of coordinate system MCID (at
+/// the element's centre) onto the element's plane.
+fn shell_axis(
+    c: &Card,
+    field: usize,
+    x: &[[f64; 3]],
+    ctx: &mut Context<'_, '_>,
+) -> Result<[f64; 3], IoError> {
+    let eid = c.field(0);
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let unit = |a: [f64; 3]| {
+        let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        [a[0] / l, a[1] / l, a[2] / l]
+    };
+    // the normal: the triangle's, or the quadrilateral's diagonals'
+    let n = if x.len() == 4 {
+        unit(cross(sub(x[2], x[0]), sub(x[3], x[1])))
+    } else {
+        unit(cross(sub(x[1], x[0]), sub(x[2], x[0])))
+    };
+    let text = c.field(field);
+    let is_int = !text.is_empty() && text.parse::<i64>().is_ok();
+    if is_int {
+        let mcid = c.int(field, "MCID")?.unwrap_or(0);
+        let centre: [f64; 3] =
+            std::array::from_fn(|k| x.iter().map(|p| p[k]).sum::<f64>() / x.len() as f64);
+        let a = if mcid == 0 {
+            [1.0, 0.0, 0.0]
+        } else {
+            let f = ctx.geometry.frame(mcid, c)?.axes_at(centre);
+            [f[0][0], f[1][0], f[2][0]]
+        };
+        let d = a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
+        let along = [a[0] - d * n[0], a[1] - d * n[1], a[2] - d * n[2]];
+        if (along[0].powi(2) + along[1].powi(2) + along[2].powi(2)).sqrt() < 1e-6 {
+            return Err(c.err(format!(
+                "{eid}: the x axis of MCID {mcid} is normal to the element, so it sets no material axis"
+            )));
+        }
+        return Ok(unit(along));
+    }
+    let theta = c.real(field, "THETA")?.unwrap_or(0.0).to_radians();
+    let e1 = {
+        let g = sub(x[1], x[0]);
+        let d = g[0] * n[0] + g[1] * n[1] + g[2] * n[2];
+        unit([g[0] - d * n[0], g[1] - d * n[1], g[2] - d * n[2]])
+    };
+    let e2 = cross(n, e1);
+    let (cs, sn) = (theta.cos(), theta.sin());
+    Ok(std::array::from_fn(|k| cs * e1[k] + sn * e2[k]))
 }
 
 /// A CBUSH (QRG CBUSH: `EID PID GA GB GO/X1 X2 X3 CID / S OCID S1 S2 S3`) with its PBUSH's `K`,
