@@ -45,6 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         shear: Some(5.0 / 6.0),
         nsm: 0.0,
         material: None,
+        offset: 0.0,
     };
     for j in 0..n {
         for i in 0..n {

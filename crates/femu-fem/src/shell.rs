@@ -37,6 +37,9 @@ pub struct Shell {
     /// An anisotropic section (Nastran MAT2 or MAT8, or different materials for membrane,
     /// bending and shear): its matrices replace `e` and `nu`'s (docs/MATH.md, "Shells").
     pub material: Option<ShellMaterial>,
+    /// The reference plane's offset from the grids along the element's normal (m; Nastran's
+    /// ZOFFS): the grids drive it through rigid links (docs/MATH.md, "Shells").
+    pub offset: f64,
 }
 
 /// A shell section's material matrices in its material axes, and the material's first axis.
@@ -239,12 +242,24 @@ fn to_basic<const N: usize>(
     m: Vec<f64>,
     axes: &[V3; 3],
     mass: MassKind,
+    offset: f64,
 ) -> (Vec<f64>, Vec<f64>) {
     let mut tm = vec![0.0; N * N];
     for blk in 0..N / 3 {
         for r in 0..3 {
             for c in 0..3 {
                 tm[(3 * blk + r) * N + 3 * blk + c] = axes[r][c];
+            }
+        }
+    }
+    // an offset reference plane: u_ref = u + theta x (z n), in the element's axes (u_x += z
+    // theta_y, u_y -= z theta_x), on each corner's translations from its rotations
+    if offset != 0.0 {
+        for corner in 0..N / 6 {
+            let (u, th) = (6 * corner, 6 * corner + 3);
+            for c in 0..3 {
+                tm[u * N + th + c] += offset * axes[1][c];
+                tm[(u + 1) * N + th + c] -= offset * axes[0][c];
             }
         }
     }
@@ -484,7 +499,7 @@ pub(crate) fn matrices_scaled(
     let nx: [f64; 4] = std::array::from_fn(|i| inv[0][0] * dxi[i] + inv[0][1] * deta[i]);
     let ny: [f64; 4] = std::array::from_fn(|i| inv[1][0] * dxi[i] + inv[1][1] * deta[i]);
     add_drilling::<24>(&mut k, &nx, &ny, sc.linear * 1e-3 * g * t * area);
-    Ok(to_basic::<24>(&k, m, &axes, mass))
+    Ok(to_basic::<24>(&k, m, &axes, mass, s.offset))
 }
 
 /// The 3-node shell (MITC3, Lee and Bathe 2004) on `(u, v, w, theta_x, theta_y, theta_z)` of
@@ -607,7 +622,7 @@ pub(crate) fn matrices3_scaled(
     }
     // drilling: k_d (theta_z,i - omega)^2, omega = (v_,x - u_,y) / 2
     add_drilling::<18>(&mut k, &nx, &ny, sc.linear * 1e-3 * g * t * area);
-    Ok(to_basic::<18>(&k, m, &[e1, e2, n], mass))
+    Ok(to_basic::<18>(&k, m, &[e1, e2, n], mass, s.offset))
 }
 
 impl Shell {
@@ -660,6 +675,9 @@ impl Shell {
                     return bad(format!("its material axis {:?} is not a direction", m.axis));
                 }
             }
+        }
+        if !self.offset.is_finite() {
+            return bad(format!("its offset {} is not a number", self.offset));
         }
         if !(self.rho >= 0.0 && self.nsm >= 0.0 && self.rho.is_finite() && self.nsm.is_finite()) {
             return bad(format!(

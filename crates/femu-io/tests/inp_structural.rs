@@ -322,3 +322,53 @@ fn s4_plate_against_nafems_fv16_and_calculix() {
         previous = Some(worst);
     }
 }
+
+/// `*SHELL SECTION, OFFSET=` as Abaqus defines it (the nodes' surface from the midsurface, a
+/// fraction of the thickness): two S4 layers 0.05 thick on the same nodes, one `OFFSET=SNEG`
+/// (the nodes on its bottom face), the other `OFFSET=SPOS`, are the FV16 plate 0.1 thick (its
+/// six lowest frequencies to 1e-6); with `OFFSET=0.5` on both their midsurfaces coincide, two
+/// plates 0.05 thick with a quarter of its bending stiffness per mass (the first eigenvalue a
+/// quarter of the plate's).
+#[test]
+fn shell_section_offsets_make_one_plate_of_two() {
+    let n = 8;
+    let base = fv16(n);
+    let single = base.replace("MATERIAL=STEEL\n0.05\n", "MATERIAL=STEEL\n0.1\n");
+    let layered = |top: &str, bottom: &str| {
+        let mut lower = String::from("*ELEMENT, TYPE=S4, ELSET=LOWER\n");
+        let g = |i: usize, j: usize| 1 + i + (n + 1) * j;
+        for j in 0..n {
+            for i in 0..n {
+                lower.push_str(&format!(
+                    "{}, {}, {}, {}, {}\n",
+                    1000 + i + n * j,
+                    g(i, j),
+                    g(i + 1, j),
+                    g(i + 1, j + 1),
+                    g(i, j + 1)
+                ));
+            }
+        }
+        base.replace(
+            "*NSET, NSET=CLAMP\n",
+            &format!("{lower}*NSET, NSET=CLAMP\n"),
+        )
+        .replace(
+            "*SHELL SECTION, ELSET=PLATE, MATERIAL=STEEL\n0.05\n",
+            &format!(
+                "*SHELL SECTION, ELSET=PLATE, MATERIAL=STEEL, OFFSET={top}\n0.05\n\
+                     *SHELL SECTION, ELSET=LOWER, MATERIAL=STEEL, OFFSET={bottom}\n0.05\n"
+            ),
+        )
+    };
+    let (want, _, _) = lowest(&single, 6);
+    let (got, _, _) = lowest(&layered("SNEG", "SPOS"), 6);
+    let (same_side, _, _) = lowest(&layered("0.5", "0.5"), 6);
+    for (w, g) in want.iter().zip(&got) {
+        assert!((g / w - 1.0).abs() < 1e-6, "{got:?} against {want:?}");
+    }
+    assert!(
+        same_side[0] / want[0] < 0.3,
+        "{same_side:?} against {want:?}"
+    );
+}

@@ -391,7 +391,7 @@ MAT1,2,7.+10,,0.3,2700.
 ";
     let cases = [
         (
-            "CQUAD4,1,1,1,2,3,4,,0.01\nPSHELL,1,1,0.01,1\n",
+            "CQUAD4,1,1,1,2,3,4,,MIDDLE\nPSHELL,1,1,0.01,1\n",
             "bad.bdf:9",
             "ZOFFS",
         ),
@@ -411,7 +411,7 @@ MAT1,2,7.+10,,0.3,2700.
             "a membrane or a plate alone",
         ),
         (
-            "CTRIA3,1,1,1,2,3,,0.01\nPSHELL,1,1,0.01,1\n",
+            "CTRIA3,1,1,1,2,3,,nan\nPSHELL,1,1,0.01,1\n",
             "bad.bdf:9",
             "ZOFFS",
         ),
@@ -649,6 +649,82 @@ fn orthotropic_shells_as_nastran_decks() {
     for (x, y) in [(&theta_90, &mcid), (&along_x, &as_mat2)] {
         for (p, r) in x.iter().zip(y.iter()) {
             assert!((p / r - 1.0).abs() < 1e-10, "{x:?} {y:?}");
+        }
+    }
+}
+
+/// ZOFFS as Nastran reads it: two CQUAD4 layers of thickness `t` on the same grids, one with
+/// ZOFFS = `t/2` on the element, the other taking `BOTTOM` (`-t/2`) from its PSHELL's ZOFFS,
+/// are the plate `2t` thick of one PSHELL (a cantilever's four lowest frequencies to 1e-6, with
+/// Nastran's lumped mass and with the coupled mass); the same layers without offsets are half as
+/// stiff per mass in bending.
+#[test]
+fn offset_layers_as_a_nastran_deck() {
+    let n = 8;
+    let deck = |layers: &str, coupled: bool| -> Vec<f64> {
+        let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\n");
+        if coupled {
+            s.push_str("PARAM,COUPMASS,1\n");
+        }
+        let g = |i: usize, j: usize| 1 + i + (n + 1) * j;
+        for j in 0..=n {
+            for i in 0..=n {
+                s.push_str(&format!(
+                    "GRID,{},,{:.10},{:.10},0.\n",
+                    g(i, j),
+                    i as f64 / n as f64,
+                    j as f64 / n as f64
+                ));
+            }
+            s.push_str(&format!("SPC1,1,123456,{}\n", g(0, j)));
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let id = 1 + i + n * j;
+                let corners = format!(
+                    "{},{},{},{}",
+                    g(i, j),
+                    g(i + 1, j),
+                    g(i + 1, j + 1),
+                    g(i, j + 1)
+                );
+                match layers {
+                    "single" => s.push_str(&format!("CQUAD4,{id},1,{corners}\n")),
+                    "offset" => s.push_str(&format!(
+                        "CQUAD4,{id},2,{corners},,0.005\nCQUAD4,{},3,{corners}\n",
+                        id + 1000
+                    )),
+                    _ => s.push_str(&format!(
+                        "CQUAD4,{id},2,{corners}\nCQUAD4,{},2,{corners}\n",
+                        id + 1000
+                    )),
+                }
+            }
+        }
+        s.push_str(
+            "PSHELL,1,1,0.02,1,,1\nPSHELL,2,1,0.01,1,,1\nPSHELL,3,1,0.01,1,,1,,,+P\n+P,,,,,,BOTTOM\nMAT1,1,2.1+11,,0.3,7850.\nENDDATA\n",
+        );
+        let d = parse_bdf(&s, "layers.bdf", &BdfOptions::default()).unwrap();
+        let sys = d.model.assemble(d.mass).unwrap();
+        sys.modes(Which::Lowest(4), &EigenOptions::default())
+            .unwrap()
+            .values
+    };
+    for coupled in [false, true] {
+        let (single, offset, loose) = (
+            deck("single", coupled),
+            deck("offset", coupled),
+            deck("loose", coupled),
+        );
+        for ((a, b), l) in single.iter().zip(&offset).zip(&loose) {
+            assert!(
+                (b / a - 1.0).abs() < 1e-6,
+                "coupled {coupled}: {offset:?} against {single:?}"
+            );
+            assert!(
+                l / a < 0.26,
+                "coupled {coupled}: {loose:?} against {single:?}"
+            );
         }
     }
 }

@@ -13,7 +13,8 @@
 //! "Multipoint constraints"); beams `B31` and `B33` with `*BEAM SECTION` (`RECT`, `CIRC`, `PIPE`)
 //! or `*BEAM GENERAL SECTION` (`GENERAL`), springs `SPRING1`, `SPRING2`, `SPRINGA` with `*SPRING`
 //! (`structural.rs`; their nodes get rotations, which `*BOUNDARY` DOFs 4-6 then fix), and shells
-//! `S4`, `S4R`, `S3`, `S3R` with `*SHELL SECTION` (one isotropic material, its thickness).
+//! `S4`, `S4R`, `S3`, `S3R` with `*SHELL SECTION` (one isotropic material, its thickness, its
+//! `OFFSET`).
 //!
 //! The writer states multipoint constraints as `*EQUATION`s; the rotations of a rigid link's
 //! reference are the DOFs 1-3 of an extra node (set `FEMU_ROT`), as CalculiX's rotational nodes.

@@ -278,24 +278,30 @@ impl DeckBuilder {
                 let material = params
                     .get("MATERIAL")
                     .ok_or_else(|| err(l, "*SHELL SECTION without MATERIAL=".into()))?;
-                if let Some(o) = params.get("OFFSET")
-                    && !matches!(
-                        o.to_ascii_uppercase().as_str(),
-                        "0" | "0." | "0.0" | "MIDSURFACE"
-                    )
-                {
-                    return Err(err(
-                        l,
-                        format!(
-                            "*SHELL SECTION, OFFSET={o}: femu's shells lie on their nodes' surface (OFFSET=0)"
-                        ),
-                    ));
-                }
+                // OFFSET: the nodes' surface from the midsurface, a fraction of the thickness
+                // along the normal (SPOS the top surface, SNEG the bottom one)
+                let offset = match params.get("OFFSET").map(|o| o.to_ascii_uppercase()) {
+                    None => 0.0,
+                    Some(o) => match o.as_str() {
+                        "MIDSURFACE" => 0.0,
+                        "SPOS" => 0.5,
+                        "SNEG" => -0.5,
+                        _ => o.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
+                            err(
+                                l,
+                                format!(
+                                    "*SHELL SECTION, OFFSET={o}: a fraction of the thickness, SPOS, SNEG or MIDSURFACE"
+                                ),
+                            )
+                        })?,
+                    },
+                };
                 self.structural
                     .shell_sections
                     .push(structural::ShellSectionCard {
                         elset: elset.to_ascii_uppercase(),
                         material: material.to_ascii_uppercase(),
+                        offset,
                         lines: Vec::new(),
                         line: at(l),
                     });

@@ -103,6 +103,8 @@ pub(super) struct SpringCard {
 pub(super) struct ShellSectionCard {
     pub(super) elset: String,
     pub(super) material: String,
+    /// `OFFSET`: the nodes' surface from the midsurface, a fraction of the thickness.
+    pub(super) offset: f64,
     pub(super) lines: Vec<Vec<String>>,
     pub(super) line: Location,
 }
@@ -474,7 +476,9 @@ pub(super) fn add_structural(
 }
 
 /// A shell of a `*SHELL SECTION`: its material's `E`, `nu`, density and the thickness on its
-/// first data line; the transverse shear factor 5/6 of a homogeneous section.
+/// first data line; the transverse shear factor 5/6 of a homogeneous section; `OFFSET` (a
+/// fraction of the thickness, `SPOS` 0.5, `SNEG` -0.5) puts the nodes that far above the
+/// midsurface.
 fn shell(
     c: &ShellSectionCard,
     materials: &BTreeMap<String, Material>,
@@ -519,6 +523,8 @@ fn shell(
         shear: Some(5.0 / 6.0),
         nsm: 0.0,
         material: None,
+        // the nodes OFFSET t above the midsurface: the midsurface is -OFFSET t from them
+        offset: -c.offset * t,
     }))
 }
 

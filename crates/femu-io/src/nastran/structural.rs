@@ -739,13 +739,10 @@ pub(super) fn add_structural(
                     .collect::<Result<Vec<_>, _>>()?;
                 // THETA/MCID and ZOFFS follow the corners: fields 8 and 9 of a CQUAD4, 7 and 8
                 // of a CTRIA3
-                let zoffs = c.real(corners + 3, "ZOFFS")?.unwrap_or(0.0);
-                if zoffs != 0.0 {
-                    return Err(c.err(format!(
-                        "{eid}: ZOFFS = {zoffs} offsets the shell from its grids, which femu does not model"
-                    )));
-                }
                 let mut shell = pshell(p, pid, ctx)?;
+                if let Some(z) = zoffs(c, corners + 3, shell.t)? {
+                    shell.offset = z;
+                }
                 if let Some(m) = &mut shell.material {
                     let x: Vec<[f64; 3]> =
                         nodes.iter().map(|n| model.mesh().coords()[*n]).collect();
@@ -796,12 +793,12 @@ pub(super) fn add_structural(
 }
 
 /// A PSHELL (QRG PSHELL: `PID MID1 T MID2 12I/T^3 MID3 TS/T NSM / Z1 Z2 MID4 MCSID SCSID
-/// ZOFFS`): the membrane material MID1, the bending material MID2 (its stiffness `12I/T^3 T^3 /
+/// ZOFFS`; the offset its elements take when theirs is blank): the membrane material MID1, the bending material MID2 (its stiffness `12I/T^3 T^3 /
 /// 12` times it), the transverse shear material MID3 (`TS/T T` times it; blank: no shear
 /// flexibility), each a MAT1, a MAT2 or a MAT8; the density is MID1's. One MAT1 in all three is
 /// the isotropic shell; anything else an anisotropic section whose material axis each element
 /// sets (its THETA or MCID: [`shell_axis`]). A membrane or a plate alone, MID4 coupling, a
-/// property offset ZOFFS and an anisotropic section's MCSID are refused.
+/// an anisotropic section's MCSID are refused.
 fn pshell(
     p: &Card,
     pid: u64,
@@ -821,15 +818,11 @@ fn pshell(
             "{pid}: MID4 = {m4} couples membrane and bending, which femu does not model"
         )));
     }
-    if let Some(z) = p.real(13, "ZOFFS")?.filter(|z| *z != 0.0) {
-        return Err(p.err(format!(
-            "{pid}: ZOFFS = {z} offsets its shells from their grids, which femu does not model"
-        )));
-    }
     let t = p
         .real(2, "T")?
         .filter(|t| *t > 0.0)
         .ok_or_else(|| p.err(format!("{pid}: a shell needs a positive thickness T")))?;
+    let offset = zoffs(p, 13, t)?.unwrap_or(0.0);
     let card = |mid: i64| -> Result<&Card, IoError> {
         ctx.materials.get(&(mid as u64)).copied().ok_or_else(|| {
             p.err(format!(
@@ -855,6 +848,7 @@ fn pshell(
             shear: mid3.map(|_| ts),
             nsm,
             material: None,
+            offset,
         });
     }
     if let Some(cs) = p.int(11, "MCSID")?.filter(|c| *c >= 0) {
@@ -886,7 +880,20 @@ fn pshell(
             shear,
             axis: [1.0, 0.0, 0.0],
         }),
+        offset,
     })
+}
+
+/// A ZOFFS field (QRG CQUAD4, PSHELL): the reference plane's offset from the grids along the
+/// element's normal, a number or `TOP` / `BOTTOM` (half the thickness `t` above or below);
+/// `None` when blank.
+fn zoffs(c: &Card, field: usize, t: f64) -> Result<Option<f64>, IoError> {
+    match c.field(field).to_ascii_uppercase().as_str() {
+        "" => Ok(None),
+        "TOP" => Ok(Some(t / 2.0)),
+        "BOTTOM" => Ok(Some(-t / 2.0)),
+        _ => c.real(field, "ZOFFS"),
+    }
 }
 
 /// The density of a shell's membrane material (MAT1 field 5, MAT2 and MAT8 field 8).
