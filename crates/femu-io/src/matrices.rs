@@ -10,6 +10,13 @@
 //!   general) and `X_dofs.csv` (`row,node,component`, component `x`, `y`, `z`, `rx`, `ry`, `rz` or
 //!   1-6), as `femu matrices` writes them and as any solver's matrices can be written by a short
 //!   script.
+//! - **Abaqus** `*MATRIX GENERATE, STIFFNESS, MASS` with `*MATRIX OUTPUT, FORMAT=MATRIX INPUT`
+//!   (the default) writes `job_STIF<n>.mtx` and `job_MASS<n>.mtx`, one entry `row node, row DOF,
+//!   column node, column DOF, value` per line (the Keywords Reference's `*MATRIX INPUT` data
+//!   lines), a symmetric matrix by one triangle or both; the rows are the labels the two files
+//!   use. A DOF Abaqus constrained is written as a unit diagonal stiffness without mass: such a
+//!   row is left out. Internal nodes (negative numbers: Lagrange multipliers, internal element
+//!   nodes) and DOFs beyond 6 are refused.
 //!
 //! The node coordinates come from a separate table ([`read_node_table`]): the deck's `*NODE` lines
 //! (`job.inp`), or `X_nodes.csv` (`node,x,y,z`).
@@ -35,6 +42,8 @@ pub enum MatrixSource {
     Calculix,
     /// MatrixMarket `_K.mtx`, `_M.mtx` with `_dofs.csv`.
     MatrixMarket,
+    /// Abaqus's `_STIF<n>.mtx` and `_MASS<n>.mtx` (labelled entries).
+    Abaqus,
 }
 
 impl MatrixSource {
@@ -43,6 +52,7 @@ impl MatrixSource {
         match self {
             MatrixSource::Calculix => "CalculiX's stored matrices",
             MatrixSource::MatrixMarket => "MatrixMarket matrices with a DOF table",
+            MatrixSource::Abaqus => "Abaqus's generated matrices (*MATRIX OUTPUT)",
         }
     }
 }
@@ -58,15 +68,31 @@ pub struct ExternalMatrices {
     pub dofs: Vec<DofLabel>,
     /// The solver's format.
     pub source: MatrixSource,
-    /// The files read: stiffness, mass, DOF table.
+    /// The files read: stiffness, mass, DOF table (for Abaqus, whose entries carry their labels,
+    /// the stiffness file again).
     pub files: [PathBuf; 3],
 }
 
-/// The files of a matrix set named by one of them: `job.sti` (CalculiX) or `X_K.mtx`
-/// (MatrixMarket with a DOF table); `None` for any other name.
+/// The files of a matrix set named by one of them: `job.sti` (CalculiX), `job_STIF1.mtx`
+/// (Abaqus) or `X_K.mtx` (MatrixMarket with a DOF table); `None` for any other name.
 pub fn matrix_files(path: &Path) -> Option<(MatrixSource, [PathBuf; 3])> {
     let name = path.file_name()?.to_str()?;
     let lower = name.to_ascii_lowercase();
+    if let Some((job, step)) = abaqus_name(&lower) {
+        let stem = &name[..job.len()];
+        let stif = path.with_file_name(format!("{stem}_STIF{step}.mtx"));
+        let mass = path.with_file_name(format!("{stem}_MASS{step}.mtx"));
+        // the names as Abaqus writes them, or as given when the case differs
+        let given = |p: PathBuf, tag: &str| {
+            if p.exists() || !lower.contains(tag) {
+                p
+            } else {
+                path.to_path_buf()
+            }
+        };
+        let stif = given(stif, "_stif");
+        return Some((MatrixSource::Abaqus, [stif.clone(), mass, stif]));
+    }
     if let Some(stem) = lower.strip_suffix(".sti").map(|s| &name[..s.len()]) {
         let sibling = |ext: &str| path.with_file_name(format!("{stem}.{ext}"));
         return Some((
@@ -92,7 +118,23 @@ pub fn default_node_table(path: &Path) -> Option<PathBuf> {
             let name = files[2].file_name()?.to_str()?;
             files[2].with_file_name(format!("{}_nodes.csv", name.strip_suffix("_dofs.csv")?))
         }
+        MatrixSource::Abaqus => {
+            let name = files[0].file_name()?.to_str()?;
+            let lower = name.to_ascii_lowercase();
+            let job = abaqus_name(&lower)?.0.len();
+            files[0].with_file_name(format!("{}.inp", &name[..job]))
+        }
     })
+}
+
+/// `(job, step)` of an Abaqus matrix file name `job_STIF<step>.mtx` or `job_MASS<step>.mtx`
+/// (lower case given).
+fn abaqus_name(lower: &str) -> Option<(&str, &str)> {
+    let stem = lower.strip_suffix(".mtx")?;
+    let (job, tail) = stem
+        .rsplit_once("_stif")
+        .or_else(|| stem.rsplit_once("_mass"))?;
+    (!tail.is_empty() && tail.bytes().all(|b| b.is_ascii_digit())).then_some((job, tail))
 }
 
 /// Reads the matrix set named by `path` ([`matrix_files`]).
@@ -105,7 +147,7 @@ pub fn read_matrices(path: &Path) -> Result<ExternalMatrices, IoError> {
     let Some((source, files)) = matrix_files(path) else {
         return Err(IoError::Content {
             path: path.to_path_buf(),
-            reason: "femu reads matrices as CalculiX's job.sti (with job.mas and job.dof beside it) or as MatrixMarket X_K.mtx (with X_M.mtx and X_dofs.csv beside it)".into(),
+            reason: "femu reads matrices as CalculiX's job.sti (with job.mas and job.dof beside it), Abaqus's job_STIF1.mtx (with job_MASS1.mtx beside it) or MatrixMarket X_K.mtx (with X_M.mtx and X_dofs.csv beside it)".into(),
         });
     };
     let (k, m, dofs) = match source {
@@ -144,6 +186,7 @@ pub fn read_matrices(path: &Path) -> Result<ExternalMatrices, IoError> {
             };
             (read(&files[0])?, read(&files[1])?, dofs)
         }
+        MatrixSource::Abaqus => read_abaqus_pair(&files[0], &files[1])?,
     };
     Ok(ExternalMatrices {
         k,
@@ -563,6 +606,183 @@ pub fn write_node_table(path: &Path, nodes: &[(u64, [f64; 3])]) -> Result<(), Io
     std::fs::write(path, s).map_err(|e| IoError::io(path, e))
 }
 
+/// One labelled entry of an Abaqus matrix file, with its line.
+type LabelledEntry = (DofLabel, DofLabel, f64, usize);
+
+/// The entries of an Abaqus `*MATRIX INPUT` text file: `row node, row DOF, column node, column
+/// DOF, value` per line; `**` comments and blank lines skipped.
+fn read_abaqus_entries(path: &Path) -> Result<Vec<LabelledEntry>, IoError> {
+    let text = read_text(path)?;
+    let mut out = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let t = raw.trim();
+        if t.is_empty() || t.starts_with("**") {
+            continue;
+        }
+        let f: Vec<&str> = t
+            .split(|c: char| c == ',' || c.is_whitespace())
+            .filter(|s| !s.is_empty())
+            .collect();
+        if f.len() != 5 {
+            return Err(parse_error(
+                path,
+                line,
+                format!(
+                    "expected `node, DOF, node, DOF, value` (Abaqus's FORMAT=MATRIX INPUT), got {} fields in {t:?}{}",
+                    f.len(),
+                    if f.len() == 3 {
+                        ": FORMAT=COORDINATE has no node labels; write the matrices with FORMAT=MATRIX INPUT"
+                    } else {
+                        ""
+                    }
+                ),
+            ));
+        }
+        let dof = |n: &str, c: &str| -> Result<DofLabel, IoError> {
+            let node: i64 = n
+                .parse()
+                .map_err(|_| parse_error(path, line, format!("node {n:?} is not an integer")))?;
+            if node <= 0 {
+                return Err(parse_error(
+                    path,
+                    line,
+                    format!(
+                        "node {node} is an Abaqus internal node (a Lagrange multiplier or an element's internal node), which has no place in the model: generate the matrices of a model without them"
+                    ),
+                ));
+            }
+            let c: usize = c
+                .parse()
+                .ok()
+                .filter(|c| (1..=6).contains(c))
+                .ok_or_else(|| {
+                    parse_error(
+                        path,
+                        line,
+                        format!(
+                            "DOF {c:?} of node {node} is not 1 to 6 (displacements and rotations)"
+                        ),
+                    )
+                })?;
+            Ok(DofLabel {
+                node: node as u64,
+                component: c - 1,
+            })
+        };
+        let (r, c) = (dof(f[0], f[1])?, dof(f[2], f[3])?);
+        let v = f[4]
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| parse_error(path, line, format!("value {:?} is not a number", f[4])))?;
+        out.push((r, c, v, line));
+    }
+    Ok(out)
+}
+
+/// Abaqus's stiffness and mass files: the rows are the labels either uses, sorted by node and
+/// component, less the DOFs Abaqus constrained (a unit diagonal stiffness alone, no mass).
+fn read_abaqus_pair(
+    stif: &Path,
+    mass: &Path,
+) -> Result<(SparseMatrix, SparseMatrix, Vec<DofLabel>), IoError> {
+    let (k, m) = rayon::join(|| read_abaqus_entries(stif), || read_abaqus_entries(mass));
+    let (k, m) = (k?, m?);
+    // a constrained DOF: its only stiffness entry the unit diagonal, and no mass
+    let mut stiff_rows: HashMap<DofLabel, (usize, bool)> = HashMap::new();
+    for &(r, c, v, _) in &k {
+        for d in [r, c] {
+            let e = stiff_rows.entry(d).or_insert((0, true));
+            e.0 += 1;
+            e.1 &= r == c && v == 1.0;
+        }
+    }
+    let with_mass: std::collections::HashSet<DofLabel> = m
+        .iter()
+        .flat_map(|&(r, c, v, _)| [(r, v), (c, v)])
+        .filter(|(_, v)| *v != 0.0)
+        .map(|(d, _)| d)
+        .collect();
+    let constrained =
+        |d: &DofLabel| !with_mass.contains(d) && stiff_rows.get(d).is_some_and(|&(_, unit)| unit);
+    let mut dofs: Vec<DofLabel> = k
+        .iter()
+        .chain(&m)
+        .flat_map(|&(r, c, _, _)| [r, c])
+        .filter(|d| !constrained(d))
+        .collect();
+    dofs.sort_unstable_by_key(|d| (d.node, d.component));
+    dofs.dedup();
+    if dofs.is_empty() {
+        return Err(IoError::Content {
+            path: stif.to_path_buf(),
+            reason: "no unconstrained DOF in the matrices".into(),
+        });
+    }
+    let index: HashMap<DofLabel, usize> = dofs.iter().enumerate().map(|(i, d)| (*d, i)).collect();
+    let n = dofs.len();
+    let assemble = |path: &Path, entries: &[LabelledEntry], keep_zeros: bool| {
+        // each unordered pair once, or twice (both triangles) with the same value to round-off of
+        // the largest entry (kept as their mean)
+        let scale = entries.iter().fold(0.0f64, |m, e| m.max(e.2.abs()));
+        let mut pairs: HashMap<(usize, usize), (f64, usize, bool)> =
+            HashMap::with_capacity(entries.len());
+        for &(r, c, v, line) in entries {
+            let (Some(&i), Some(&j)) = (index.get(&r), index.get(&c)) else {
+                // a constrained DOF's unit diagonal
+                continue;
+            };
+            let key = (i.min(j), i.max(j));
+            let lower = i >= j;
+            match pairs.get(&key) {
+                None => {
+                    pairs.insert(key, (v, line, lower));
+                }
+                Some(&(w, first, was_lower)) => {
+                    let first_lower = was_lower;
+                    if i == j || was_lower == lower {
+                        return Err(parse_error(
+                            path,
+                            line,
+                            format!(
+                                "the entry of {} and {} is given again (first at line {first})",
+                                label(r),
+                                label(c)
+                            ),
+                        ));
+                    }
+                    if (v - w).abs() > 1e-10 * scale {
+                        return Err(parse_error(
+                            path,
+                            line,
+                            format!(
+                                "the matrix is not symmetric: the entry of {} and {} is {v:e} here and {w:e} at line {first} ({:.1e} of its largest entry apart)",
+                                label(r),
+                                label(c),
+                                (v - w).abs() / scale
+                            ),
+                        ));
+                    }
+                    pairs.insert(key, (0.5 * (v + w), first, first_lower));
+                }
+            }
+        }
+        let entries: Vec<(usize, usize, f64)> = pairs
+            .into_iter()
+            .filter(|(_, (v, _, _))| keep_zeros || *v != 0.0)
+            .flat_map(|((i, j), (v, _, _))| {
+                let mirror = (i != j).then_some((j, i, v));
+                std::iter::once((i, j, v)).chain(mirror)
+            })
+            .collect();
+        Ok(femu_sparse::csc::from_entry_iter(n, n, entries.into_iter()))
+    };
+    let km = assemble(stif, &k, true)?;
+    let mm = assemble(mass, &m, false)?;
+    Ok((km, mm, dofs))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -592,7 +812,18 @@ mod tests {
             default_node_table(Path::new("/a/plate_K.mtx")).unwrap(),
             Path::new("/a/plate_nodes.csv")
         );
-        assert!(matrix_files(Path::new("/a/job_STIF2.mtx")).is_none());
+        // Abaqus: named by either file; its labels are in the entries (no DOF table)
+        for name in ["/a/Job_STIF2.mtx", "/a/Job_MASS2.mtx"] {
+            let (s, f) = matrix_files(Path::new(name)).unwrap();
+            assert_eq!(s, MatrixSource::Abaqus);
+            assert_eq!(f[0], Path::new("/a/Job_STIF2.mtx"));
+            assert_eq!(f[1], Path::new("/a/Job_MASS2.mtx"));
+        }
+        assert_eq!(
+            default_node_table(Path::new("/a/Job_MASS2.mtx")).unwrap(),
+            Path::new("/a/Job.inp")
+        );
+        assert!(matrix_files(Path::new("/a/job_STIFF.mtx")).is_none());
     }
 
     /// A 2-DOF CalculiX set written by hand: the upper triangle mirrored, labels read.

@@ -740,3 +740,127 @@ fn updating_calculix_matrices_recovers_a_calculix_change() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Abaqus's generated matrices (`*MATRIX OUTPUT, FORMAT=MATRIX INPUT`: `node, DOF, node, DOF,
+/// value` lines) written here from femu's own assembly of a cantilever with a rigid link and a
+/// rotating tip node: the stiffness by its lower triangle with the clamped DOFs as Abaqus writes
+/// them (a unit diagonal, no mass), the mass by both triangles, a `**` comment. They read back
+/// entry by entry, by node and component (to 1e-15 of the largest entry: femu's assembly is
+/// symmetric to round-off, not bit for bit), their eigenvalues are the model's to 1e-12
+/// with the Sturm proof, and the node coordinates come from `job.inp` beside them. A file that is
+/// not symmetric, an internal node, a DOF beyond 6 and the label-less coordinate format are
+/// refused with file and line.
+#[test]
+fn abaqus_generated_matrices_are_the_model() {
+    let spec = BoxSpec::new([0.3, 0.05, 0.05], [6, 1, 1], BoxCells::Hex, false);
+    let mut mesh = box_mesh(&spec).unwrap();
+    let tip: Vec<u64> = mesh
+        .node_set("xmax")
+        .unwrap()
+        .iter()
+        .map(|&n| mesh.node_id(n))
+        .collect();
+    mesh.add_node(9999, [0.35, 0.025, 0.025]).unwrap();
+    let mut model = Model::new(mesh).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+    model.add_rotations(9999).unwrap();
+    model
+        .add_rigid_link(9999, &tip, &[0, 1, 2], "tip link")
+        .unwrap();
+    model.add_point_mass(9999, 0.3).unwrap();
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let own = sys
+        .modes(Which::Lowest(8), &EigenOptions::default())
+        .unwrap()
+        .values;
+    let mesh = model.mesh();
+    let labels: Vec<(u64, usize)> = (0..sys.dofs.free_count())
+        .map(|f| {
+            let (p, c) = sys.dofs.free_dof(f);
+            let (n, rotation) = sys.dofs.point_node(p);
+            (mesh.node_id(n), c + 1 + if rotation { 3 } else { 0 })
+        })
+        .collect();
+    let d = dir("abaqus");
+    let mut stif = String::from("** the lower triangle, as Abaqus writes it\n");
+    for (i, j, v) in femu_sparse::csc::entries(&sys.k).filter(|(i, j, _)| i >= j) {
+        let (a, b) = (labels[i], labels[j]);
+        stif.push_str(&format!("{}, {}, {}, {}, {v:e}\n", a.0, a.1, b.0, b.1));
+    }
+    for (n, c) in model.fixed_dofs() {
+        stif.push_str(&format!(
+            "{0}, {1}, {0}, {1}, 1.0\n",
+            mesh.node_id(n),
+            c + 1
+        ));
+    }
+    let mut mass = String::new();
+    for (i, j, v) in femu_sparse::csc::entries(&sys.m) {
+        let (a, b) = (labels[i], labels[j]);
+        mass.push_str(&format!("{},{},{},{},{v:e}\n", a.0, a.1, b.0, b.1));
+    }
+    std::fs::write(d.join("job_STIF2.mtx"), &stif).unwrap();
+    std::fs::write(d.join("job_MASS2.mtx"), &mass).unwrap();
+    let mut nodes = String::from("*NODE\n");
+    for i in 0..mesh.node_count() {
+        let x = mesh.coords()[i];
+        nodes.push_str(&format!(
+            "{}, {}, {}, {}\n",
+            mesh.node_id(i),
+            x[0],
+            x[1],
+            x[2]
+        ));
+    }
+    std::fs::write(d.join("job.inp"), nodes).unwrap();
+    // exact read-back, entry by entry through the labels
+    let ext = femu_io::matrices::read_matrices(&d.join("job_STIF2.mtx")).unwrap();
+    assert_eq!(ext.source, femu_io::matrices::MatrixSource::Abaqus);
+    assert_eq!(ext.dofs.len(), labels.len());
+    let row: std::collections::HashMap<(u64, usize), usize> = ext
+        .dofs
+        .iter()
+        .enumerate()
+        .map(|(r, l)| ((l.node, l.component + 1), r))
+        .collect();
+    // to the round-off by which femu's own assembly is not symmetric (1e-15 of the largest
+    // entry): the stiffness's upper triangle is its lower one's mirror, the mass's the mean
+    for (ours, theirs, tol) in [(&sys.k, &ext.k, 1e-15), (&sys.m, &ext.m, 1e-15)] {
+        assert_eq!(ours.nnz(), theirs.nnz());
+        let scale = ours.data().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (i, j, v) in femu_sparse::csc::entries(ours) {
+            let (r, c) = (row[&labels[i]], row[&labels[j]]);
+            let got = theirs.get(r, c).copied().unwrap();
+            assert!((got - v).abs() <= tol * scale, "{got} {v}");
+        }
+    }
+    let (back, loaded) = lowest(&d.join("job_STIF2.mtx"), 8);
+    assert_eq!(loaded.sys.dofs.free_count(), sys.dofs.free_count());
+    for j in 0..8 {
+        assert!((back[j] / own[j] - 1.0).abs() < 1e-12, "{back:?} {own:?}");
+    }
+    // refusals, with file and line
+    let cases = [
+        (
+            "1, 1, 1, 1, 2.0\n2, 1, 1, 1, 0.5\n1, 1, 2, 1, 0.6\n2, 1, 2, 1, 2.0\n",
+            3,
+            "not symmetric",
+        ),
+        ("1, 1, 1, 1, 2.0\n-3, 1, 1, 1, 0.5\n", 2, "internal node"),
+        ("1, 1, 1, 1, 2.0\n1, 8, 1, 8, 2.0\n", 2, "not 1 to 6"),
+        ("1 1 2.0\n", 1, "FORMAT=COORDINATE"),
+    ];
+    for (text, line, what) in cases {
+        std::fs::write(d.join("bad_STIF1.mtx"), text).unwrap();
+        std::fs::write(d.join("bad_MASS1.mtx"), "1, 1, 1, 1, 1.0\n").unwrap();
+        let e = femu_io::matrices::read_matrices(&d.join("bad_STIF1.mtx"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!("bad_STIF1.mtx:{line}")) && e.contains(what),
+            "{text}: {e}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
