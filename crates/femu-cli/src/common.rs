@@ -38,8 +38,9 @@ pub struct ModelArgs {
     #[arg(long, value_enum, default_value = "full")]
     pub bricks: femu::fem::element::Formulation,
     /// Models given as another solver's matrices (CalculiX `job.sti`, Abaqus `job_STIF1.mtx`,
-    /// MatrixMarket `X_K.mtx`): the nodes' coordinates, a deck's `*NODE` lines (`.inp`) or a
-    /// table (`.csv`: node,x,y,z); by default `job.inp` or `X_nodes.csv` beside the matrices.
+    /// Nastran DMIG `job.pch`, MatrixMarket `X_K.mtx`): the nodes' coordinates, a deck's `*NODE`
+    /// lines (`.inp`) or GRIDs (`.bdf`, `.dat`, `.nas`) or a table (`.csv`: node,x,y,z); by
+    /// default the deck or `X_nodes.csv` beside the matrices.
     #[arg(long, value_name = "FILE")]
     pub nodes: Option<PathBuf>,
 }

@@ -85,7 +85,7 @@ pub const FORMATS: &[FormatInfo] = &[
     },
     FormatInfo {
         format: Format::Matrices,
-        extensions: &["sti", "mtx"],
+        extensions: &["sti", "mtx", "pch"],
         model: true,
         deck: true,
         test: false,
@@ -182,13 +182,13 @@ mod tests {
         assert!(Format::Inp.info().deck && !Format::Gmsh.info().deck);
         assert_eq!(
             described(true),
-            "Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh), universal files (.unv, .uff), stiffness and mass matrices with their DOF table (.sti, .mtx) and another solver's modes (.frd, .f06, .op2)"
+            "Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh), universal files (.unv, .uff), stiffness and mass matrices with their DOF table (.sti, .mtx, .pch) and another solver's modes (.frd, .f06, .op2)"
         );
         assert_eq!(
             described(false),
             "universal files (.unv, .uff), JSON (.json) and CSV (.csv, .txt)"
         );
-        assert_eq!(all_extensions().len(), 15);
+        assert_eq!(all_extensions().len(), 16);
         assert_eq!(
             Format::from_path(Path::new("job.sti")),
             Some(Format::Matrices)

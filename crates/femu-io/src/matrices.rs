@@ -17,6 +17,11 @@
 //!   use. A DOF Abaqus constrained is written as a unit diagonal stiffness without mass: such a
 //!   row is left out. Internal nodes (negative numbers: Lagrange multipliers, internal element
 //!   nodes) and DOFs beyond 6 are refused.
+//! - **Nastran** `DMIG` matrices in a punch file (`job.pch`, as `PARAM,EXTOUT,DMIGPCH` writes
+//!   them): the stiffness `KAAX` and the mass `MAAX` (or the one matrix whose name starts with K,
+//!   and with M), each entry labelled by grid and component ([`crate::nastran::read_dmig`]). The
+//!   grids come from the deck beside it (`job.bdf`, `.dat` or `.nas`); components in a turned
+//!   displacement frame (CD) are refused, as femu's rows are in the basic frame.
 //!
 //! The node coordinates come from a separate table ([`read_node_table`]): the deck's `*NODE` lines
 //! (`job.inp`), or `X_nodes.csv` (`node,x,y,z`).
@@ -44,6 +49,8 @@ pub enum MatrixSource {
     MatrixMarket,
     /// Abaqus's `_STIF<n>.mtx` and `_MASS<n>.mtx` (labelled entries).
     Abaqus,
+    /// Nastran's DMIG punch file (`KAAX`, `MAAX`).
+    NastranDmig,
 }
 
 impl MatrixSource {
@@ -53,6 +60,7 @@ impl MatrixSource {
             MatrixSource::Calculix => "CalculiX's stored matrices",
             MatrixSource::MatrixMarket => "MatrixMarket matrices with a DOF table",
             MatrixSource::Abaqus => "Abaqus's generated matrices (*MATRIX OUTPUT)",
+            MatrixSource::NastranDmig => "Nastran's DMIG matrices (KAAX, MAAX)",
         }
     }
 }
@@ -78,6 +86,10 @@ pub struct ExternalMatrices {
 pub fn matrix_files(path: &Path) -> Option<(MatrixSource, [PathBuf; 3])> {
     let name = path.file_name()?.to_str()?;
     let lower = name.to_ascii_lowercase();
+    if lower.ends_with(".pch") {
+        let p = path.to_path_buf();
+        return Some((MatrixSource::NastranDmig, [p.clone(), p.clone(), p]));
+    }
     if let Some((job, step)) = abaqus_name(&lower) {
         let stem = &name[..job.len()];
         let stif = path.with_file_name(format!("{stem}_STIF{step}.mtx"));
@@ -118,6 +130,11 @@ pub fn default_node_table(path: &Path) -> Option<PathBuf> {
             let name = files[2].file_name()?.to_str()?;
             files[2].with_file_name(format!("{}_nodes.csv", name.strip_suffix("_dofs.csv")?))
         }
+        MatrixSource::NastranDmig => ["bdf", "dat", "nas", "BDF", "DAT", "NAS"]
+            .iter()
+            .map(|e| files[0].with_extension(e))
+            .find(|p| p.exists())
+            .unwrap_or_else(|| files[0].with_extension("bdf")),
         MatrixSource::Abaqus => {
             let name = files[0].file_name()?.to_str()?;
             let lower = name.to_ascii_lowercase();
@@ -187,6 +204,7 @@ pub fn read_matrices(path: &Path) -> Result<ExternalMatrices, IoError> {
             (read(&files[0])?, read(&files[1])?, dofs)
         }
         MatrixSource::Abaqus => read_abaqus_pair(&files[0], &files[1])?,
+        MatrixSource::NastranDmig => read_dmig_pair(&files[0])?,
     };
     Ok(ExternalMatrices {
         k,
@@ -551,9 +569,22 @@ pub fn read_node_table(path: &Path) -> Result<Vec<(u64, [f64; 3])>, IoError> {
     match ext.as_deref() {
         Some("inp") => crate::inp::read_nodes(path),
         Some("csv") => read_node_csv(path),
+        Some("bdf" | "dat" | "nas") => {
+            let grids = crate::nastran::read_grids(path)?;
+            if let Some(g) = grids.iter().find(|g| g.cd != 0) {
+                return Err(IoError::Content {
+                    path: path.to_path_buf(),
+                    reason: format!(
+                        "GRID {} has its displacements in frame CD = {}: another solver's matrices on it are in that frame, and femu's rows are in the basic one (give the grids CD = 0, or the matrices in the basic frame)",
+                        g.id, g.cd
+                    ),
+                });
+            }
+            Ok(grids.iter().map(|g| (g.id, g.position)).collect())
+        }
         _ => Err(IoError::Content {
             path: path.to_path_buf(),
-            reason: "node coordinates are read from an Abaqus/CalculiX deck (.inp, its *NODE lines) or a CSV table (.csv: node,x,y,z)".into(),
+            reason: "node coordinates are read from an Abaqus/CalculiX deck (.inp, its *NODE lines), a Nastran deck's GRIDs (.bdf, .dat, .nas) or a CSV table (.csv: node,x,y,z)".into(),
         }),
     }
 }
@@ -688,10 +719,64 @@ fn read_abaqus_pair(
     mass: &Path,
 ) -> Result<(SparseMatrix, SparseMatrix, Vec<DofLabel>), IoError> {
     let (k, m) = rayon::join(|| read_abaqus_entries(stif), || read_abaqus_entries(mass));
-    let (k, m) = (k?, m?);
+    labelled_pair((stif, &k?), (mass, &m?), true)
+}
+
+/// A punch file's DMIG stiffness and mass: `KAAX` and `MAAX`, or the one matrix whose name starts
+/// with K and the one with M.
+fn read_dmig_pair(path: &Path) -> Result<(SparseMatrix, SparseMatrix, Vec<DofLabel>), IoError> {
+    let all = crate::nastran::read_dmig(path)?;
+    let names: Vec<&String> = all.keys().collect();
+    let pick = |exact: &str, first: char| -> Result<&crate::nastran::Dmig, IoError> {
+        if let Some(m) = all.get(exact) {
+            return Ok(m);
+        }
+        let mut like = all.values().filter(|m| m.name.starts_with(first));
+        match (like.next(), like.next()) {
+            (Some(m), None) => Ok(m),
+            _ => Err(IoError::Content {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "no DMIG {exact} (and not one matrix named {first}...): the file has {names:?}; PARAM,EXTOUT,DMIGPCH writes KAAX and MAAX"
+                ),
+            }),
+        }
+    };
+    let labelled = |m: &crate::nastran::Dmig| -> Vec<LabelledEntry> {
+        m.entries
+            .iter()
+            .map(|&(g, c, gj, cj, v, line)| {
+                (
+                    DofLabel {
+                        node: g,
+                        component: c - 1,
+                    },
+                    DofLabel {
+                        node: gj,
+                        component: cj - 1,
+                    },
+                    v,
+                    line,
+                )
+            })
+            .collect()
+    };
+    let (k, m) = (pick("KAAX", 'K')?, pick("MAAX", 'M')?);
+    labelled_pair((path, &labelled(k)), (path, &labelled(m)), false)
+}
+
+/// The stiffness and mass of labelled entries: the rows are the labels either uses, sorted by
+/// node and component; with `constrained_rule`, less the DOFs whose only stiffness entry is a
+/// unit diagonal and which have no mass (Abaqus's constrained DOFs). Each unordered pair is given
+/// once, or twice (both triangles) with one value.
+fn labelled_pair(
+    (stif, k): (&Path, &[LabelledEntry]),
+    (mass, m): (&Path, &[LabelledEntry]),
+    constrained_rule: bool,
+) -> Result<(SparseMatrix, SparseMatrix, Vec<DofLabel>), IoError> {
     // a constrained DOF: its only stiffness entry the unit diagonal, and no mass
     let mut stiff_rows: HashMap<DofLabel, (usize, bool)> = HashMap::new();
-    for &(r, c, v, _) in &k {
+    for &(r, c, v, _) in k {
         for d in [r, c] {
             let e = stiff_rows.entry(d).or_insert((0, true));
             e.0 += 1;
@@ -704,11 +789,14 @@ fn read_abaqus_pair(
         .filter(|(_, v)| *v != 0.0)
         .map(|(d, _)| d)
         .collect();
-    let constrained =
-        |d: &DofLabel| !with_mass.contains(d) && stiff_rows.get(d).is_some_and(|&(_, unit)| unit);
+    let constrained = |d: &DofLabel| {
+        constrained_rule
+            && !with_mass.contains(d)
+            && stiff_rows.get(d).is_some_and(|&(_, unit)| unit)
+    };
     let mut dofs: Vec<DofLabel> = k
         .iter()
-        .chain(&m)
+        .chain(m)
         .flat_map(|&(r, c, _, _)| [r, c])
         .filter(|d| !constrained(d))
         .collect();
@@ -778,8 +866,8 @@ fn read_abaqus_pair(
             .collect();
         Ok(femu_sparse::csc::from_entry_iter(n, n, entries.into_iter()))
     };
-    let km = assemble(stif, &k, true)?;
-    let mm = assemble(mass, &m, false)?;
+    let km = assemble(stif, k, true)?;
+    let mm = assemble(mass, m, false)?;
     Ok((km, mm, dofs))
 }
 

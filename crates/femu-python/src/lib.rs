@@ -122,7 +122,8 @@ struct Model {
 /// material (`young` Pa, `poisson`, `density` kg/m^3) and may clamp node sets (`fix`); its 8-node
 /// bricks are fully integrated unless `bricks="incompatible_modes"` (a deck states its own).
 /// Another solver's matrices (CalculiX `job.sti`, Abaqus `job_STIF1.mtx` with `job_MASS1.mtx`,
-/// MatrixMarket `X_K.mtx` with `X_M.mtx` and `X_dofs.csv`) are a model too, with their nodes' coordinates from `nodes` (a deck or a
+/// Nastran DMIG `job.pch`, MatrixMarket `X_K.mtx` with `X_M.mtx` and `X_dofs.csv`) are a model
+/// too, with their nodes' coordinates from `nodes` (a deck or a
 /// `node,x,y,z` table; by default `job.inp` or `X_nodes.csv` beside them).
 #[pyfunction]
 #[pyo3(signature = (path, *, lumped=false, lenient=false, young=None, poisson=None, density=None, fix=None, bricks="full", nodes=None))]

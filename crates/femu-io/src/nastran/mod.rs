@@ -48,6 +48,7 @@
 mod cards;
 mod case_control;
 mod constraints;
+mod dmig;
 mod elements;
 mod geometry;
 mod links;
@@ -58,6 +59,7 @@ mod structural;
 use crate::{IoError, Warning};
 pub use cards::real;
 use cards::{Card, Line};
+pub use dmig::{Dmig, read_dmig};
 use femu_fem::assembly::MassKind;
 use femu_fem::element::Formulation;
 use femu_fem::mesh::Mesh;
