@@ -362,3 +362,46 @@ def test_a_nastran_beam_model_gives_nastrans_eigenvalues():
     modes = m.modes(10)
     assert modes.sturm["verified"]
     np.testing.assert_allclose(modes.values, nastran, rtol=6e-7)
+
+
+def panel_deck(path, t2, mass, nx=8, ny=6):
+    """A Nastran panel clamped along x = 0: CQUAD4 in PSHELL 1 (inner half) and 2 (outer half,
+    thickness `t2`), a CONM2 of `mass` at a free corner."""
+    g = lambda i, j: 1 + i + (nx + 1) * j
+    lines = ["SOL 103", "CEND", "SPC = 1", "BEGIN BULK", "PARAM,COUPMASS,1"]
+    for j in range(ny + 1):
+        for i in range(nx + 1):
+            lines.append(f"GRID,{g(i, j)},,{0.6 * i / nx!r},{0.4 * j / ny!r},0.")
+        lines.append(f"SPC1,1,123456,{g(0, j)}")
+    for j in range(ny):
+        for i in range(nx):
+            pid = 1 if 2 * i < nx else 2
+            lines.append(f"CQUAD4,{1000 + i + nx * j},{pid},{g(i, j)},{g(i + 1, j)},"
+                         f"{g(i + 1, j + 1)},{g(i, j + 1)}")
+    lines += ["PSHELL,1,1,0.003,1,,1", f"PSHELL,2,1,{t2!r},1,,1", "MAT1,1,2.1+11,,0.3,7850.",
+              f"CONM2,7000,{g(nx, 0)},,{mass!r}", "ENDDATA"]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_update_finds_a_shell_thickness_and_a_conm2_mass(tmp_path):
+    # the real panel's outer half 10 % thinner and its CONM2 half as heavy again, formed by femu
+    # at that thickness and mass; the update reaches them through the thickness law (t:PID2)
+    # and the CONM2's mass set from Python as from the CLI
+    real = femu.read_model(panel_deck(tmp_path / "real.bdf", 0.9 * 0.003, 0.3))
+    modes = real.modes(6)
+    rows = {(int(n), int(c)): r for r, (n, c) in enumerate(real.dofs)}
+    csv = ["mode,frequency_hz,node,direction,value"]
+    for j, f in enumerate(modes.frequencies_hz):
+        # z at every other grid off the clamp
+        for node in (1 + i + 9 * k for k in range(0, 7, 2) for i in range(2, 9, 2)):
+            z = float(modes.vectors[rows[(node, 2)], j])
+            csv.append(f"{j + 1},{float(f)!r},{node},z,{z!r}")
+    (tmp_path / "test.csv").write_text("\n".join(csv) + "\n")
+    model = femu.read_model(panel_deck(tmp_path / "panel.bdf", 0.003, 0.2))
+    test = femu.read_test(tmp_path / "test.csv", model)
+    study = femu.update(model, test, ["t:PID1", "t:PID2", "CONM2_7000"], select="all")
+    got = dict(zip(study["result"]["names"], study["result"]["theta"]))
+    assert got["t:PID2"] == pytest.approx(-0.1, abs=1e-6), got
+    assert got["m:CONM2_7000"] == pytest.approx(0.5, abs=1e-6), got
+    assert abs(got["t:PID1"]) < 1e-6, got

@@ -58,6 +58,26 @@ fn structural_lines(s: &mut String, model: &femu_fem::model::Model) {
     }
 }
 
+/// The mass sets (a Nastran CONM2 each, an Abaqus `*MASS` element set), when there are any: the
+/// names that update concentrated masses.
+fn mass_set_lines(s: &mut String, model: &femu_fem::model::Model) {
+    let names = model.mass_set_names();
+    if names.is_empty() {
+        return;
+    }
+    let shown: Vec<&str> = names.iter().take(8).map(String::as_str).collect();
+    let _ = writeln!(
+        s,
+        "mass sets (updating candidates for their masses): {}{}",
+        shown.join(", "),
+        if names.len() > shown.len() {
+            format!(" and {} more", names.len() - shown.len())
+        } else {
+            String::new()
+        }
+    );
+}
+
 /// The 8-node bricks built with incompatible modes, when there are any.
 fn formulation_line(s: &mut String, model: &femu_fem::model::Model) {
     let n = (0..model.mesh().element_count())
@@ -135,6 +155,16 @@ fn describe_inp(path: &Path, s: &mut String, warnings: &mut Vec<String>) -> Resu
             s,
             "material {name}: {elastic}, density {} kg/m^3",
             m.density
+        );
+    }
+    let mut mass_sets = deck.point_mass_sets.clone();
+    mass_sets.sort();
+    mass_sets.dedup();
+    if !mass_sets.is_empty() {
+        let _ = writeln!(
+            s,
+            "mass sets (updating candidates for their masses): {}",
+            mass_sets.join(", ")
         );
     }
     let _ = writeln!(s, "solid sections: {}", deck.sections.len());
@@ -281,6 +311,7 @@ fn describe_nastran(
     let model = &deck.model;
     mesh_lines(s, model.mesh());
     structural_lines(s, model);
+    mass_set_lines(s, model);
     formulation_line(s, model);
     let _ = writeln!(
         s,

@@ -71,16 +71,21 @@ fn deck(nx: usize, ny: usize, t2: f64, k: f64, m: f64) -> String {
     s
 }
 
-/// The nominal deck's (`nx x ny` shells) update against the real fine one's first `modes` modes, `z` at
-/// every other coarse grid off the clamp; `sets` the candidates, `select` the selection.
-fn update(
+/// The nominal deck (`nx x ny` shells) read, and the test made of the real deck's (refined
+/// `real_refinement` times) first eight modes, `z` at every other coarse grid off the clamp; the
+/// real panel's total mass; the folder to remove.
+fn case(
     (nx, ny): (usize, usize),
     real_refinement: usize,
-    sets: &str,
-    select: &str,
-) -> femu_study::updating::UpdateStudy {
+    tag: &str,
+) -> (
+    femu_study::load::LoadedModel,
+    femu_study::load::LoadedTest,
+    f64,
+    std::path::PathBuf,
+) {
     let dir = std::env::temp_dir().join(format!(
-        "femu-thickness-update-{nx}-{real_refinement}-{select}-{}",
+        "femu-thickness-update-{nx}-{real_refinement}-{tag}-{}",
         std::process::id()
     ));
     std::fs::create_dir_all(&dir).unwrap();
@@ -122,6 +127,19 @@ fn update(
     std::fs::write(&model_path, deck(nx, ny, T, K_BUSH, MASS)).unwrap();
     let loaded = load_model(&model_path, &ModelOptions::default()).unwrap();
     let test = load_test(&test_path, &loaded).unwrap();
+    let real_mass = real.model.total_mass().unwrap();
+    (loaded, test, real_mass, dir)
+}
+
+/// The nominal deck's update against the real one ([`case`]); `sets` the candidates, `select`
+/// the selection.
+fn update(
+    (nx, ny): (usize, usize),
+    real_refinement: usize,
+    sets: &str,
+    select: &str,
+) -> femu_study::updating::UpdateStudy {
+    let (loaded, test, _, dir) = case((nx, ny), real_refinement, select);
     let request: femu_study::updating::UpdateRequest =
         toml::from_str(&format!("sets = [{sets}]\nselect = \"{select}\"")).unwrap();
     let study = femu_study::updating::update_loaded(
@@ -204,4 +222,57 @@ fn a_thickness_of_beams_is_refused() {
         err.contains("t:PID10") && err.contains("element 5000 is a beam"),
         "{err}"
     );
+}
+
+/// SB-EBE with a thickness and a CONM2 mass: without the measured total mass the study refuses it
+/// (its force residual shrinks with the model: unguarded, both went to their lower bound), and
+/// with the real panel's weighed mass as the guard it finds the thinner half, the softer bushing
+/// and the heavier CONM2 on the same mesh (-0.1, -0.25, +0.5 to 1e-4).
+#[test]
+fn sbebe_takes_a_thickness_with_the_measured_mass() {
+    use femu_fem::assembly::MassKind;
+    use femu_update::{Corrections, MassGuard, SbebeOptions, UpdateModel, UpdateOptions, sb_ebe};
+    let (loaded, test, real_mass, dir) = case((8, 6), 1, "sbebe");
+    let request: femu_study::updating::UpdateRequest = toml::from_str(&format!(
+        "sets = [{SETS}]\nselect = \"all\"\nmethod = \"sbebe\""
+    ))
+    .unwrap();
+    let e = femu_study::updating::update_loaded(
+        &loaded,
+        &test,
+        &request,
+        &EigenOptions::default(),
+        None,
+        |_| {},
+    )
+    .map(|_| ())
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("measured total mass"), "{e}");
+    let sets = ["t:PID1", "t:PID2", "PID10", "PID30", "CONM2_7000"];
+    let mut up = UpdateModel::from_element_sets(
+        &loaded.model,
+        &sets,
+        MassKind::Consistent,
+        Corrections::Stiffness,
+    )
+    .unwrap();
+    let options = SbebeOptions {
+        update: UpdateOptions {
+            mass_guard: MassGuard::Measured(real_mass),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let r = sb_ebe(&mut up, &test.layout, &test.data.modes, &options, |_| {}).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    let want = [0.0, -0.1, 0.0, -0.25, 0.5];
+    for (k, w) in want.iter().enumerate() {
+        assert!(
+            (r.theta[k] - w).abs() < 1e-4,
+            "{:?} = {:?}",
+            r.names,
+            r.theta
+        );
+    }
 }

@@ -373,13 +373,15 @@ impl UpdateOptions {
 /// One bounded, regularised, nondimensionalised least-squares step:
 /// `min 1/2 theta^T H theta - g^T theta + alpha/2 mean(diag H) ||theta||^2` subject to the bounds
 /// and the mass guard, solved in the variables `D theta` with `D = sqrt(diag H)` so that stiffness
-/// and mass columns of very different magnitudes weigh alike.
+/// and mass columns of very different magnitudes weigh alike. `model_scaling`: the guard holds
+/// thickness changes and mass groups too ([`crate::UpdateModel::guard_row`]; SB-EBE).
 pub(crate) fn bounded_step(
     up: &crate::problem::UpdateModel<'_>,
     mut h: Mat<f64>,
     mut g: Vec<f64>,
     start: &[f64],
     options: &UpdateOptions,
+    model_scaling: bool,
 ) -> Result<Vec<f64>, UpdateError> {
     let n = g.len();
     let mean_diag = (0..n).map(|i| h[(i, i)]).sum::<f64>() / n as f64;
@@ -393,14 +395,14 @@ pub(crate) fn bounded_step(
     for i in 0..n {
         h[(i, i)] += alpha;
     }
-    if up.has_mass_parameters() {
+    let c = up.guard_row(model_scaling);
+    if c.iter().any(|v| *v != 0.0) {
         let target = match options.mass_guard {
             MassGuard::Fixed => Some(0.0),
             MassGuard::Measured(m) => Some(m - up.nominal_mass()),
             MassGuard::Free => None,
         };
         if let Some(target) = target {
-            let c = up.mass_row();
             let cc: f64 = c.iter().map(|v| v * v).sum();
             let omega = 1e6 * mean_diag / cc;
             for i in 0..n {

@@ -562,15 +562,14 @@ impl<'m> UpdateModel<'m> {
         })
     }
 
-    /// The total-mass constraint row: `c^T theta` is the mass added by the mass factors
-    /// (`c_i = m_g` for a mass factor of group `g`, 0 for a stiffness factor). A thickness change
-    /// moves mass too, but with stiffness in a fixed proportion that cannot scale a mode away:
-    /// it is outside the guard (0), as a stiffness factor is; so is a mass group's factor.
+    /// The total-mass constraint row: `c^T theta` is the mass the parameters add (`c_i = m_g` for
+    /// a mass factor of group `g`, a mass group's factor, or a thickness change, whose `rho t`
+    /// mass is linear in it; 0 for a stiffness factor).
     pub fn mass_row(&self) -> Vec<f64> {
         self.params
             .iter()
             .map(|p| {
-                if self.is_guarded(p) {
+                if self.moves_mass(p) {
                     self.group_mass[p.group]
                 } else {
                     0.0
@@ -579,16 +578,47 @@ impl<'m> UpdateModel<'m> {
             .collect()
     }
 
-    /// Whether any parameter is a mass factor.
+    /// Whether any parameter is a mass factor of a group of elements (what the total-mass guard
+    /// holds for both methods).
     pub fn has_mass_parameters(&self) -> bool {
-        self.params.iter().any(|p| self.is_guarded(p))
+        self.params
+            .iter()
+            .any(|p| p.mass && self.groups.groups()[p.group].law == GroupLaw::Scale)
     }
 
-    /// Whether a parameter is a mass factor of a group of elements: the factors the total-mass
-    /// guard holds. A mass group's factor on concentrated masses cannot scale a mode away with
-    /// the stiffness, and is outside it.
-    fn is_guarded(&self, p: &Parameter) -> bool {
-        p.mass && self.groups.groups()[p.group].law == GroupLaw::Scale
+    /// The total-mass guard's row: [`UpdateModel::mass_row`] for the mass factors of element
+    /// groups, and, when `model_scaling` (SB-EBE, whose residual shrinks with the whole model),
+    /// for thickness changes and mass groups' factors too; 0 elsewhere. Inverse eigensensitivity
+    /// guards only the mass factors, whose common scaling with the stiffness leaves every
+    /// eigenvalue unchanged.
+    pub fn guard_row(&self, model_scaling: bool) -> Vec<f64> {
+        self.mass_row()
+            .into_iter()
+            .zip(&self.params)
+            .map(|(c, p)| {
+                let scale_law = self.groups.groups()[p.group].law == GroupLaw::Scale;
+                if (p.mass && scale_law) || (model_scaling && !scale_law) {
+                    c
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+
+    /// Whether any parameter is a thickness change or a mass group's factor: parameters that move
+    /// mass without a mass factor's name, and with which the SB-EBE residual shrinks as the model
+    /// does (docs/MATH.md, "Thickness parameters").
+    pub fn has_thickness_or_mass_groups(&self) -> bool {
+        self.params
+            .iter()
+            .any(|p| self.groups.groups()[p.group].law != GroupLaw::Scale)
+    }
+
+    /// Whether a parameter moves the model's mass: a mass factor, a mass group's factor, a
+    /// thickness change.
+    fn moves_mass(&self, p: &Parameter) -> bool {
+        p.mass || self.is_thickness(p.group)
     }
 }
 

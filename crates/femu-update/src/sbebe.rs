@@ -293,6 +293,17 @@ pub fn sb_ebe(
     mut log: impl FnMut(&Iteration),
 ) -> Result<UpdateResult, UpdateError> {
     options.update.check()?;
+    if up.has_thickness_or_mass_groups()
+        && !matches!(
+            options.update.mass_guard,
+            crate::lsq::MassGuard::Measured(_)
+        )
+    {
+        return Err(UpdateError::Invalid {
+            what: "SB-EBE parameters",
+            reason: "a thickness or a mass group moves stiffness and mass together, and SB-EBE's force residual shrinks with the whole model (its least value is the thinnest, lightest one): SB-EBE takes them only with the structure's measured total mass (MassGuard::Measured); the inverse eigensensitivity method (the default) compares frequencies and shapes and needs no guard".into(),
+        });
+    }
     if options.test_error.is_some() && !options.projected {
         return Err(UpdateError::Invalid {
             what: "SB-EBE options",
@@ -416,7 +427,7 @@ pub fn sb_ebe(
         for k in 0..np {
             g[k] += (0..np).map(|l| h[(k, l)] * theta[l]).sum::<f64>();
         }
-        let mut trial = bounded_step(up, h, g, &theta, &options.update)?;
+        let mut trial = bounded_step(up, h, g, &theta, &options.update, true)?;
         let mut accepted = None;
         let mut failure = None;
         for _ in 0..7 {

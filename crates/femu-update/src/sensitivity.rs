@@ -396,7 +396,7 @@ pub fn inverse_eigensensitivity(
                         .map(|i| jac[(i, k)] * eval.residual[i])
                         .sum::<f64>();
             }
-            let trial = bounded_step(up, h, g, &theta, &options.update)?;
+            let trial = bounded_step(up, h, g, &theta, &options.update, false)?;
             up.set_theta(&trial)?;
             let e = evaluate(up, layout, test, options, it)?;
             if cost(&e) < current {

@@ -415,6 +415,9 @@ pub struct InpDeck {
     pub boundaries: Vec<Boundary>,
     /// Point masses: node id, mass (kg) and the `*MASS` that gave it.
     pub point_masses: Vec<(u64, f64, Location)>,
+    /// The element set of each point mass (its `*MASS`'s `ELSET`), in the same order: a mass set
+    /// of the model for updating.
+    pub point_mass_sets: Vec<String>,
     /// Multipoint constraints in file order.
     pub links: Vec<InpLink>,
     /// Node-based surfaces by upper-case name: targets and weights.

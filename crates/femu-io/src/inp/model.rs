@@ -143,7 +143,7 @@ impl InpDeck {
                 connected[*n] = true;
             }
         }
-        for (node, mass, at) in &self.point_masses {
+        for ((node, mass, at), set) in self.point_masses.iter().zip(&self.point_mass_sets) {
             let located = |reason: String| IoError::Parse {
                 path: at.path.clone(),
                 line: at.line,
@@ -159,13 +159,15 @@ impl InpDeck {
                     "*MASS on node {node}, which no solid element or constraint connects: it would have no stiffness"
                 )));
             }
-            model
-                .add_point_mass(*node, *mass)
-                .map_err(|source| IoError::Model {
-                    path: at.path.clone(),
-                    line: at.line,
-                    source,
-                })?;
+            let in_model = |source| IoError::Model {
+                path: at.path.clone(),
+                line: at.line,
+                source,
+            };
+            model.add_point_mass(*node, *mass).map_err(in_model)?;
+            // the *MASS's element set is a mass set for updating
+            let added: Vec<_> = model.last_mass(false).into_iter().collect();
+            model.add_mass_set(set.clone(), &added).map_err(in_model)?;
         }
         // every element needs a material
         for e in 0..model.mesh().element_count() {

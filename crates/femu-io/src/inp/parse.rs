@@ -1097,13 +1097,14 @@ impl DeckBuilder {
                 self.structural.sets.insert(name.clone(), beams);
             }
         }
-        let point_masses = self.point_masses(lines, &mesh, &elem_sets)?;
+        let (point_masses, point_mass_sets) = self.point_masses(lines, &mesh, &elem_sets)?;
         Ok(InpDeck {
             mesh,
             materials: self.materials,
             sections: self.sections,
             boundaries: self.boundaries,
             point_masses,
+            point_mass_sets,
             links: self.links,
             surfaces: self.surfaces,
             frequency: self.frequency,
@@ -1195,7 +1196,7 @@ impl DeckBuilder {
         lines: &[Line],
         mesh: &Mesh,
         elem_sets: &BTreeMap<String, Vec<u64>>,
-    ) -> Result<Vec<(u64, f64, Location)>, IoError> {
+    ) -> Result<PointMasses, IoError> {
         // mass elements: their nodes exist, their ids are not those of solids
         for (id, node, li) in &self.mass_elements {
             if mesh.node_index(*node).is_none() {
@@ -1212,6 +1213,7 @@ impl DeckBuilder {
             }
         }
         let mut point_masses = Vec::new();
+        let mut sets = Vec::new();
         for c in &self.mass_cards {
             let members = self.mass_sets.get(&c.elset).ok_or_else(|| {
                 let hint = crate::spelling::suggestion(
@@ -1243,9 +1245,10 @@ impl DeckBuilder {
                     .find(|e| e.0 == *id)
                     .expect("listed");
                 point_masses.push((*node, c.mass, c.line.clone()));
+                sets.push(c.elset.clone());
             }
         }
-        Ok(point_masses)
+        Ok((point_masses, sets))
     }
 }
 
@@ -1323,3 +1326,6 @@ fn listed_ids(
     }
     Ok(ids)
 }
+
+/// The point masses `(node, mass, the *MASS's line)` and the element set of each.
+type PointMasses = (Vec<(u64, f64, Location)>, Vec<String>);
