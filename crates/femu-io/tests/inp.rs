@@ -494,6 +494,12 @@ fn point_masses_in_decks() {
         .collect();
     assert_eq!(masses, vec![(7, 2.5), (6, 2.5)]);
     assert!((model.total_mass().unwrap() - (7800.0 + 5.0)).abs() < 1e-9);
+    // the *MASS's element set is a mass set of both masses, for updating
+    use femu_fem::model::MassRef;
+    assert_eq!(
+        model.mass_set("PM"),
+        Some(&[MassRef::Point(0), MassRef::Point(1)][..])
+    );
     let cases: Vec<(String, &str)> = vec![
         (
             format!("{base}*ELEMENT, TYPE=MASS\n101, 7\n"),
