@@ -771,20 +771,8 @@ impl ParameterGroups {
                     continue;
                 }
                 for (points, a) in &self.mass_items[g] {
-                    match self.mass_kind {
-                        MassKind::Consistent => {
-                            asm.scatter(points, |i, l, w| m_on_k[i] += q[g] * w * a[l]);
-                        }
-                        MassKind::Lumped => {
-                            let nd = 3 * points.len();
-                            let md = out.m.data_mut();
-                            asm.scatter_lumped(
-                                points,
-                                |b, i| a[(3 * b + i) * nd + 3 * b + i],
-                                |f, v| md[f] += q[g] * v,
-                            );
-                        }
-                    }
+                    let target = MassTarget::of(self.mass_kind, &mut m_on_k, &mut out.m);
+                    add_scaled_mass(asm, target, points, a, q[g]);
                 }
                 continue;
             }
@@ -805,24 +793,9 @@ impl ParameterGroups {
                 for (nodes, t) in self.thickness_items(group) {
                     let kd = out.k.data_mut();
                     asm.scatter(nodes, |i, l, w| kd[i] += w * (c1 * t.k1[l] + c3 * t.k3[l]));
-                    match self.mass_kind {
-                        MassKind::Consistent => {
-                            asm.scatter(nodes, |i, l, w| {
-                                m_on_k[i] += w * (c1 * t.m1[l] + c3 * t.m3[l]);
-                            });
-                        }
-                        MassKind::Lumped => {
-                            let nd = 3 * nodes.len();
-                            let md = out.m.data_mut();
-                            asm.scatter_lumped(
-                                nodes,
-                                |a, i| {
-                                    let d = (3 * a + i) * nd + 3 * a + i;
-                                    c1 * t.m1[d] + c3 * t.m3[d]
-                                },
-                                |f, v| md[f] += v,
-                            );
-                        }
+                    for (part, c) in [(&t.m1, c1), (&t.m3, c3)] {
+                        let target = MassTarget::of(self.mass_kind, &mut m_on_k, &mut out.m);
+                        add_scaled_mass(asm, target, nodes, part, c);
                     }
                 }
                 continue;
@@ -833,20 +806,8 @@ impl ParameterGroups {
                     asm.scatter(nodes, |i, l, w| kd[i] += p[g] * w * ke[l]);
                 }
                 if q[g] != 0.0 {
-                    match self.mass_kind {
-                        MassKind::Consistent => {
-                            asm.scatter(nodes, |i, l, w| m_on_k[i] += q[g] * w * me[l]);
-                        }
-                        MassKind::Lumped => {
-                            let nd = 3 * nodes.len();
-                            let md = out.m.data_mut();
-                            asm.scatter_lumped(
-                                nodes,
-                                |a, i| me[(3 * a + i) * nd + 3 * a + i],
-                                |f, v| md[f] += q[g] * v,
-                            );
-                        }
-                    }
+                    let target = MassTarget::of(self.mass_kind, &mut m_on_k, &mut out.m);
+                    add_scaled_mass(asm, target, nodes, me, q[g]);
                 }
             }
         }
@@ -1130,4 +1091,42 @@ fn mass_group_items(
             Ok(items)
         })
         .collect()
+}
+
+/// Where a scaled mass goes: the consistent mass's values on the stiffness pattern, or the lumped
+/// (diagonal) mass's values.
+enum MassTarget<'a> {
+    Consistent(&'a mut [f64]),
+    Lumped(&'a mut [f64]),
+}
+
+impl<'a> MassTarget<'a> {
+    fn of(kind: MassKind, on_k: &'a mut [f64], lumped: &'a mut SparseMatrix) -> Self {
+        match kind {
+            MassKind::Consistent => MassTarget::Consistent(on_k),
+            MassKind::Lumped => MassTarget::Lumped(lumped.data_mut()),
+        }
+    }
+}
+
+/// Adds `factor` times one item's mass matrix `a` (on the DOF map's `points`) to `target`: the
+/// whole matrix on the stiffness pattern, or its diagonal into a lumped mass.
+fn add_scaled_mass(
+    asm: &Assembler,
+    target: MassTarget<'_>,
+    points: &[usize],
+    a: &[f64],
+    factor: f64,
+) {
+    match target {
+        MassTarget::Consistent(m) => asm.scatter(points, |i, l, w| m[i] += factor * w * a[l]),
+        MassTarget::Lumped(md) => {
+            let nd = 3 * points.len();
+            asm.scatter_lumped(
+                points,
+                |b, i| a[(3 * b + i) * nd + 3 * b + i],
+                |f, v| md[f] += factor * v,
+            );
+        }
+    }
 }

@@ -229,11 +229,9 @@ fn a_spring_mass_chain_by_hand() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// `femu matrices`' set (K, M, DOF table with rotations, node table) of a cantilever whose tip is
-/// a rigid link to a reference node with rotations and a point mass: read back as a model, it has
-/// the same free DOFs, rotations included, and the eigenvalues of the model it was written from.
-#[test]
-fn femu_export_reads_back_with_rotations() {
+/// A clamped hex8 cantilever whose tip is a rigid link to a reference node (9999) with rotations
+/// and a point mass.
+fn linked_cantilever() -> Model {
     let spec = BoxSpec::new([0.3, 0.05, 0.05], [6, 1, 1], BoxCells::Hex, false);
     let mut mesh = box_mesh(&spec).unwrap();
     let tip: Vec<u64> = mesh
@@ -251,6 +249,15 @@ fn femu_export_reads_back_with_rotations() {
         .add_rigid_link(9999, &tip, &[0, 1, 2], "tip link")
         .unwrap();
     model.add_point_mass(9999, 0.3).unwrap();
+    model
+}
+
+/// `femu matrices`' set (K, M, DOF table with rotations, node table) of a cantilever whose tip is
+/// a rigid link to a reference node with rotations and a point mass: read back as a model, it has
+/// the same free DOFs, rotations included, and the eigenvalues of the model it was written from.
+#[test]
+fn femu_export_reads_back_with_rotations() {
+    let model = linked_cantilever();
     let d = dir("export");
     let sys = model.assemble(MassKind::Consistent).unwrap();
     let own = sys
@@ -752,23 +759,7 @@ fn updating_calculix_matrices_recovers_a_calculix_change() {
 /// refused with file and line.
 #[test]
 fn abaqus_generated_matrices_are_the_model() {
-    let spec = BoxSpec::new([0.3, 0.05, 0.05], [6, 1, 1], BoxCells::Hex, false);
-    let mut mesh = box_mesh(&spec).unwrap();
-    let tip: Vec<u64> = mesh
-        .node_set("xmax")
-        .unwrap()
-        .iter()
-        .map(|&n| mesh.node_id(n))
-        .collect();
-    mesh.add_node(9999, [0.35, 0.025, 0.025]).unwrap();
-    let mut model = Model::new(mesh).unwrap();
-    model.set_material(None, Material::steel()).unwrap();
-    model.fix_set("xmin", &[0, 1, 2]).unwrap();
-    model.add_rotations(9999).unwrap();
-    model
-        .add_rigid_link(9999, &tip, &[0, 1, 2], "tip link")
-        .unwrap();
-    model.add_point_mass(9999, 0.3).unwrap();
+    let model = linked_cantilever();
     let sys = model.assemble(MassKind::Consistent).unwrap();
     let own = sys
         .modes(Which::Lowest(8), &EigenOptions::default())
