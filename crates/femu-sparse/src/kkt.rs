@@ -2,7 +2,8 @@
 //! and `C` positive semi-definite (the optimality systems of femu's least-squares expansions,
 //! `docs/MATH.md`, "Expansion").
 //!
-//! The matrix is regularised to `[[A, B], [B^T, -C - delta I]]`, which is quasi-definite and so
+//! The matrix is regularised to `[[A, B], [B^T, -C - delta I]]` (`delta` one number, or one per
+//! row when the rows differ by orders of magnitude), which is quasi-definite and so
 //! factors stably by `LDL^T` in any symmetric order (Vanderbei 1995; Gill, Saunders and Shinnerl
 //! 1996), then the system with `delta = 0` is solved by iterative refinement with the exact
 //! matrix. Refinement stops at a normwise backward error of `1e-14`, or where it stagnates below
@@ -38,15 +39,37 @@ pub struct QuasiDefinite {
     a: SparseMatrix,
     /// size of the first block
     n1: usize,
-    delta: f64,
+    /// the regularisation of each row of the second block
+    delta: Vec<f64>,
 }
 
 impl QuasiDefinite {
     /// The `n x n` matrix of the triplets `t` (both triangles, duplicates summed) with `-delta`
     /// added on the diagonal of the second block (rows `n1..n`).
-    pub fn from_triplets(n: usize, n1: usize, delta: f64, mut t: sprs::TriMat<f64>) -> Self {
-        for i in n1..n {
-            t.add_triplet(i, i, -delta);
+    pub fn from_triplets(n: usize, n1: usize, delta: f64, t: sprs::TriMat<f64>) -> Self {
+        Self::from_triplets_per_row(n, n1, vec![delta; n.saturating_sub(n1)], t)
+    }
+
+    /// As [`QuasiDefinite::from_triplets`] with `-delta[i]` on row `n1 + i`: a regularisation in
+    /// proportion to each row's own scale, for a second block whose rows differ by orders of
+    /// magnitude (one `delta` for all would be negligible on the largest rows and dominate the
+    /// smallest, where iterative refinement then cannot remove it).
+    ///
+    /// # Panics
+    /// If `delta` does not have `n - n1` entries.
+    pub fn from_triplets_per_row(
+        n: usize,
+        n1: usize,
+        delta: Vec<f64>,
+        mut t: sprs::TriMat<f64>,
+    ) -> Self {
+        assert_eq!(
+            delta.len(),
+            n - n1,
+            "one regularisation per row of the second block"
+        );
+        for (i, d) in delta.iter().enumerate() {
+            t.add_triplet(n1 + i, n1 + i, -d);
         }
         Self {
             a: t.to_csc(),
@@ -118,7 +141,7 @@ impl QuasiDefinite {
             let mut r = Mat::from_fn(n, b.ncols(), |i, j| {
                 let a0 = az[(i, j)]
                     + if i >= self.n1 {
-                        self.delta * z[(i, j)]
+                        self.delta[i - self.n1] * z[(i, j)]
                     } else {
                         0.0
                     };

@@ -513,7 +513,7 @@ impl Expander<'_> {
         }
         let kp = self.k.indptr();
         let kp = kp.raw_storage();
-        let mut scale = 0.0_f64;
+        let mut norms = Vec::with_capacity(no);
         for (jo, &c) in self.part.omitted.iter().enumerate() {
             let mut s = 0.0;
             for p in kp[c]..kp[c + 1] {
@@ -523,9 +523,14 @@ impl Expander<'_> {
                 t.add_triplet(n + jo, r, -z);
                 s += z * z / mdiag[r];
             }
-            scale = scale.max(s);
+            norms.push(s);
         }
-        QuasiDefinite::from_triplets(n + no, n, 1e-8 * scale, t)
+        // each row regularised in proportion to its column's weighted norm (the Schur
+        // complement's diagonal): a thin shell's rotation columns, weighted by the inverse of a
+        // rotary inertia `(L/t)^2` smaller than the translations' mass, are that much larger
+        let scale = norms.iter().copied().fold(0.0_f64, f64::max);
+        let delta = norms.iter().map(|s| 1e-8 * s.max(1e-12 * scale)).collect();
+        QuasiDefinite::from_triplets_per_row(n + no, n, delta, t)
     }
 
     pub(super) fn minimum_residual_in(
