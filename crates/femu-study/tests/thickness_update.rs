@@ -164,6 +164,23 @@ fn case_with(
     (loaded, test, real_mass, dir)
 }
 
+/// The update study a request (study-file text) asks of `loaded` against `test`.
+fn study_of(
+    loaded: &femu_study::load::LoadedModel,
+    test: &femu_study::load::LoadedTest,
+    request: &str,
+) -> Result<femu_study::updating::UpdateStudy, femu_study::StudyError> {
+    let request: femu_study::updating::UpdateRequest = toml::from_str(request).unwrap();
+    femu_study::updating::update_loaded(
+        loaded,
+        test,
+        &request,
+        &EigenOptions::default(),
+        None,
+        |_| {},
+    )
+}
+
 /// The nominal deck's update against the real one ([`case`]); `sets` the candidates, `select`
 /// the selection.
 fn update(
@@ -173,15 +190,10 @@ fn update(
     select: &str,
 ) -> femu_study::updating::UpdateStudy {
     let (loaded, test, _, dir) = case((nx, ny), real_refinement, select);
-    let request: femu_study::updating::UpdateRequest =
-        toml::from_str(&format!("sets = [{sets}]\nselect = \"{select}\"")).unwrap();
-    let study = femu_study::updating::update_loaded(
+    let study = study_of(
         &loaded,
         &test,
-        &request,
-        &EigenOptions::default(),
-        None,
-        |_| {},
+        &format!("sets = [{sets}]\nselect = \"{select}\""),
     )
     .unwrap();
     let _ = std::fs::remove_dir_all(&dir);
@@ -266,17 +278,10 @@ fn sbebe_takes_a_thickness_with_the_measured_mass() {
     use femu_fem::assembly::MassKind;
     use femu_update::{Corrections, MassGuard, SbebeOptions, UpdateModel, UpdateOptions, sb_ebe};
     let (loaded, test, real_mass, dir) = case((8, 6), 1, "sbebe");
-    let request: femu_study::updating::UpdateRequest = toml::from_str(&format!(
-        "sets = [{SETS}]\nselect = \"all\"\nmethod = \"sbebe\""
-    ))
-    .unwrap();
-    let e = femu_study::updating::update_loaded(
+    let e = study_of(
         &loaded,
         &test,
-        &request,
-        &EigenOptions::default(),
-        None,
-        |_| {},
+        &format!("sets = [{SETS}]\nselect = \"all\"\nmethod = \"sbebe\""),
     )
     .map(|_| ())
     .unwrap_err()
@@ -325,16 +330,10 @@ fn a_thin_panel_with_a_checkerboard_of_sensors_updates() {
         .collect();
     assert_eq!(sensors.len(), 28);
     let (loaded, test, _, dir) = case_with((nx, ny), 1, "checkerboard", &sensors, true);
-    let request: femu_study::updating::UpdateRequest =
-        toml::from_str("sets = [\"t:PID1\", \"t:PID2\", \"CONM2_7000\"]\nselect = \"all\"")
-            .unwrap();
-    let study = femu_study::updating::update_loaded(
+    let study = study_of(
         &loaded,
         &test,
-        &request,
-        &EigenOptions::default(),
-        None,
-        |_| {},
+        "sets = [\"t:PID1\", \"t:PID2\", \"CONM2_7000\"]\nselect = \"all\"",
     )
     .unwrap();
     let _ = std::fs::remove_dir_all(&dir);
