@@ -358,9 +358,13 @@ impl ParameterGroups {
                     reason,
                 };
                 if let Some(&e) = g.elements.first() {
-                    let id = model.mesh().element(e.min(ne.saturating_sub(1))).id;
+                    let which = if e < ne {
+                        format!("solid element {}", model.mesh().element(e).id)
+                    } else {
+                        format!("solid element index {e} (out of range)")
+                    };
                     return Err(bad(format!(
-                        "a thickness applies to shells; solid element {id} has none"
+                        "a thickness applies to shells; {which} has none"
                     )));
                 }
                 for &e in &g.structural {

@@ -947,3 +947,20 @@ fn two_offset_layers_are_one_plate_twice_as_thick() {
         assert!(l / w < 0.51, "{loose:?} against {want:?}");
     }
 }
+
+/// A thickness group given by hand with a solid element index, in range or not, on a model without
+/// solids is refused with what is wrong (it once looked the element up before checking the range).
+#[test]
+fn a_thickness_group_of_solids_is_refused_without_a_panic() {
+    use femu_fem::groups::{ParameterGroup, ParameterGroups};
+    let model = plate(0.4, 0.3, 2, 2, steel(0.004), |_, _| [0.0, 0.0]);
+    let mut group = ParameterGroup::thickness("t:BAD", vec![0]);
+    group.elements = vec![3];
+    let e = ParameterGroups::new(&model, vec![group], MassKind::Consistent)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("t:BAD") && e.contains("index 3 (out of range)"),
+        "{e}"
+    );
+}
