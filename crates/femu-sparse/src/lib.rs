@@ -20,6 +20,7 @@
 //! ```
 
 pub mod cholesky;
+pub mod complex;
 pub mod csc;
 pub mod dense;
 pub mod eigen;
