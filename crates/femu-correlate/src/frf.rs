@@ -138,7 +138,9 @@ pub struct Frf {
 /// The model's FRFs between `outputs` and `inputs` at `lines_hz` by modal superposition of the
 /// mass-normalised `shapes` (free DOFs x modes) with eigenvalues `values` (s^-2), the damping
 /// and response of `options`, and the residual flexibility `residual` (`outputs x inputs`,
-/// receptance; [`residual_flexibility`]) of the modes left out when given.
+/// receptance; [`residual_flexibility`]) of the modes left out when given (divided by `1 + i eta`
+/// for a loss factor, which softens the static response of the modes left out as it does the
+/// others').
 ///
 /// # Errors
 /// Sizes that do not match, negative or non-finite lines or damping, a line on an undamped
@@ -203,9 +205,15 @@ pub fn modal_frf(
             }
         }
         if let Some(res) = residual {
+            // the left-out modes' static response is softened by a loss factor as theirs:
+            // `(K (1 + i eta))^-1 = K^-1 / (1 + i eta)`
+            let soft = match damping {
+                Damping::LossFactor(eta) => c64::new(1.0, 0.0) / c64::new(1.0, *eta),
+                _ => c64::new(1.0, 0.0),
+            };
             for i in 0..outputs.len() {
                 for j in 0..inputs.len() {
-                    hl[(i, j)] += c64::new(res[(i, j)], 0.0);
+                    hl[(i, j)] += soft * res[(i, j)];
                 }
             }
         }
@@ -238,6 +246,23 @@ pub fn residual_flexibility(
     outputs: &SensorLayout,
     inputs: &SensorLayout,
 ) -> Result<Mat<f64>, CorrelateError> {
+    residual_flexibility_analysed(k, None, values, shapes, outputs, inputs)
+}
+
+/// [`residual_flexibility`] on a symbolic analysis of `k`'s pattern already made (the one the
+/// assembly made beside `K`, [`femu_fem::assembly::SystemMatrices::analysis`]): no second
+/// ordering. An analysis of another pattern is not used.
+///
+/// # Errors
+/// As [`residual_flexibility`].
+pub fn residual_flexibility_analysed(
+    k: &SparseMatrix,
+    analysis: Option<femu_sparse::cholesky::SymbolicFactor>,
+    values: &[f64],
+    shapes: MatRef<'_, f64>,
+    outputs: &SensorLayout,
+    inputs: &SensorLayout,
+) -> Result<Mat<f64>, CorrelateError> {
     use femu_sparse::cholesky::{Factorization, SymbolicFactor};
     if let Some(r) = values.iter().position(|l| !(*l > 0.0)) {
         return Err(CorrelateError::Invalid {
@@ -249,7 +274,11 @@ pub fn residual_flexibility(
             ),
         });
     }
-    let llt = SymbolicFactor::new(k, Default::default())?.llt(k, "K")?;
+    let symbolic = match analysis.filter(|a| a.is_for(k)) {
+        Some(a) => a,
+        None => SymbolicFactor::new(k, Default::default())?,
+    };
+    let llt = symbolic.llt(k, "K")?;
     // K^-1 B^T: the inputs' rows as columns, solved together
     let mut cols = Mat::<f64>::zeros(k.rows(), inputs.len());
     for j in 0..inputs.len() {
@@ -269,6 +298,147 @@ pub fn residual_flexibility(
         }
     }
     Ok(r)
+}
+
+/// The matrices of the direct route: `K` and `M` (free DOFs), and the model's own dampers when it
+/// has them: discrete viscous dampers `C_d` (bushings' `B`) and element structural damping
+/// `K_4 = sum_e GE_e K_e` (springs' and bushings' `GE`), Nastran's `B` and `K4`.
+#[derive(Debug, Clone, Copy)]
+pub struct DirectSystem<'a> {
+    /// Stiffness.
+    pub k: &'a SparseMatrix,
+    /// Mass.
+    pub m: &'a SparseMatrix,
+    /// Discrete viscous damping `C_d` (N s/m), added to the damping's own.
+    pub viscous: Option<&'a SparseMatrix>,
+    /// Element structural damping `K_4` (N/m), entering as `i K_4`.
+    pub structural: Option<&'a SparseMatrix>,
+}
+
+/// The model's FRFs by the direct route, and how well each line was solved.
+#[derive(Debug, Clone)]
+pub struct DirectFrf {
+    /// The FRFs.
+    pub frf: Frf,
+    /// Per line, the normwise backward error of its solves after one step of iterative
+    /// refinement ([`femu_sparse::complex::Factored::solve_in_place`]).
+    pub backward_errors: Vec<f64>,
+}
+
+/// The model's FRFs between `outputs` and `inputs` at `lines_hz` by solving the dynamic stiffness
+/// at each line (docs/MATH.md, "Frequency responses, directly"):
+///
+/// `H(w) = C (K (1 + i eta) + i K_4 + i w (alpha M + beta K + C_d) - w^2 M)^-1 B^T`,
+///
+/// one sparse complex `LU` per line on one symbolic analysis. `options.damping` is a loss factor
+/// `eta` or Rayleigh coefficients (or a zero ratio: none); modal ratios have no matrix and are
+/// refused. `system`'s dampers are added to it: they are the route's reason to be, damping that
+/// the modes do not diagonalise.
+///
+/// # Errors
+/// Modal damping ratios, sizes, non-finite or negative lines and damping, a singular dynamic
+/// stiffness (an undamped resonance on a line).
+pub fn direct_frf(
+    system: &DirectSystem<'_>,
+    outputs: &SensorLayout,
+    inputs: &SensorLayout,
+    lines_hz: &[f64],
+    options: &FrfOptions,
+) -> Result<DirectFrf, CorrelateError> {
+    use femu_sparse::complex::Combination;
+    let (eta, alpha, beta) = match &options.damping {
+        Damping::LossFactor(eta) => (*eta, 0.0, 0.0),
+        Damping::Rayleigh { alpha, beta } => (0.0, *alpha, *beta),
+        Damping::Ratio(z) if *z == 0.0 => (0.0, 0.0, 0.0),
+        Damping::Ratio(_) | Damping::Ratios(_) => {
+            return Err(CorrelateError::Invalid {
+                what: "damping",
+                reason: "modal damping ratios have no damping matrix: the direct route takes a loss factor or Rayleigh coefficients (and the model's own dampers); ratios are for the modal route".into(),
+            });
+        }
+    };
+    options.damping.check(0)?;
+    if let Some(k) = lines_hz.iter().position(|f| !(f.is_finite() && *f >= 0.0)) {
+        return Err(CorrelateError::NonFinite {
+            what: "frequency line (Hz, finite and non-negative)",
+            index: k,
+        });
+    }
+    let n = system.k.rows();
+    for (what, len) in [
+        ("output sensors against K", outputs.dim()),
+        ("input sensors against K", inputs.dim()),
+    ] {
+        if len != n {
+            return Err(CorrelateError::DimensionMismatch {
+                what,
+                expected: n,
+                got: len,
+            });
+        }
+    }
+    let mut mats = vec![system.k, system.m];
+    let mut names = vec!["K", "M"];
+    if let Some(c) = system.viscous {
+        mats.push(c);
+        names.push("the dampers' C");
+    }
+    if let Some(k4) = system.structural {
+        mats.push(k4);
+        names.push("the elements' structural damping K4");
+    }
+    let comb = Combination::new(&mats, &names)?;
+    let mut h = Vec::with_capacity(lines_hz.len());
+    let mut backward_errors = Vec::with_capacity(lines_hz.len());
+    for (line, f) in lines_hz.iter().enumerate() {
+        let w = 2.0 * std::f64::consts::PI * f;
+        let mut c = vec![c64::new(1.0, eta + w * beta), c64::new(-w * w, w * alpha)];
+        if system.viscous.is_some() {
+            c.push(c64::new(0.0, w));
+        }
+        if system.structural.is_some() {
+            c.push(c64::new(0.0, 1.0));
+        }
+        let singular = |e: femu_sparse::SparseError| match e {
+            femu_sparse::SparseError::Singular { .. } => CorrelateError::Invalid {
+                what: "frequency line",
+                reason: format!(
+                    "line {} ({f} Hz): the dynamic stiffness is singular there (an undamped resonance on the line)",
+                    line + 1
+                ),
+            },
+            other => other.into(),
+        };
+        let mut fac = comb.factor(&c).map_err(singular)?;
+        let mut rhs = Mat::<c64>::zeros(n, inputs.len());
+        for j in 0..inputs.len() {
+            for (d, wgt) in inputs.row(j) {
+                rhs[(*d, j)] += c64::new(*wgt, 0.0);
+            }
+        }
+        backward_errors.push(fac.solve_in_place(rhs.as_mut()).map_err(singular)?);
+        let s = options.kind.factor(w);
+        let mut hl = Mat::<c64>::zeros(outputs.len(), inputs.len());
+        for i in 0..outputs.len() {
+            for j in 0..inputs.len() {
+                let v: c64 = outputs
+                    .row(i)
+                    .iter()
+                    .map(|(d, wgt)| rhs[(*d, j)] * *wgt)
+                    .sum();
+                hl[(i, j)] = v * s;
+            }
+        }
+        h.push(hl);
+    }
+    Ok(DirectFrf {
+        frf: Frf {
+            lines_hz: lines_hz.to_vec(),
+            kind: options.kind,
+            h,
+        },
+        backward_errors,
+    })
 }
 
 fn dot(a: &[c64], b: &[c64]) -> c64 {

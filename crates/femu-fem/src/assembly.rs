@@ -619,6 +619,52 @@ impl Assembler {
         SparseMatrix::new_csc((n, n), (0..=n).collect(), (0..n).collect(), diag)
     }
 
+    /// The model's own damping, on the stiffness pattern: the viscous damping `C_d` of its
+    /// bushings (`B1..B6`, formed as their stiffness with `B` for `K`) and the structural damping
+    /// `K_4 = sum_e GE_e K_e` of its springs and bushings (Nastran's `B` and `K4` matrices of a
+    /// direct frequency response; docs/MATH.md, "Frequency responses, directly"). Each is `None`
+    /// when no element has it.
+    ///
+    /// # Errors
+    /// The elements' own errors (as in assembly).
+    pub fn dampers(&self, model: &Model) -> Result<Dampers, FemError> {
+        use crate::structural::StructuralKind;
+        let coords = model.mesh().coords();
+        let (mut c, mut k4) = (None::<Vec<f64>>, None::<Vec<f64>>);
+        for s in model.structural() {
+            let (ge, viscous) = match &s.kind {
+                StructuralKind::Spring(sp) => (sp.ge, None),
+                StructuralKind::Bushing(b) => (
+                    b.ge,
+                    b.b.iter().any(|v| *v != 0.0).then(|| {
+                        let mut d = s.clone();
+                        if let StructuralKind::Bushing(db) = &mut d.kind {
+                            db.k = b.b;
+                        }
+                        d
+                    }),
+                ),
+                _ => (0.0, None),
+            };
+            if ge != 0.0 {
+                let sm = s.matrices(coords, MassKind::Lumped)?;
+                let pts = structural_points(&self.dofs, &sm.parts);
+                let v = k4.get_or_insert_with(|| vec![0.0; self.nnz()]);
+                self.scatter(&pts, |at, l, w| v[at] += ge * w * sm.k[l]);
+            }
+            if let Some(d) = viscous {
+                let sm = d.matrices(coords, MassKind::Lumped)?;
+                let pts = structural_points(&self.dofs, &sm.parts);
+                let v = c.get_or_insert_with(|| vec![0.0; self.nnz()]);
+                self.scatter(&pts, |at, l, w| v[at] += w * sm.k[l]);
+            }
+        }
+        Ok(Dampers {
+            viscous: c.map(|v| self.without_zeros(&v)),
+            structural: k4.map(|v| self.without_zeros(&v)),
+        })
+    }
+
     /// Assembles `K` and `M` for the model this pattern was built from (same mesh and constraints).
     ///
     /// # Errors
@@ -875,6 +921,15 @@ impl Assembler {
         }
         Ok(())
     }
+}
+
+/// The damping a model's elements carry ([`Assembler::dampers`]), on free DOFs.
+#[derive(Debug, Clone, Default)]
+pub struct Dampers {
+    /// Viscous damping `C_d` (N s/m) of the bushings' `B`.
+    pub viscous: Option<SparseMatrix>,
+    /// Structural damping `K_4 = sum_e GE_e K_e` (N/m) of the springs and bushings.
+    pub structural: Option<SparseMatrix>,
 }
 
 /// Per-thread scratch for element matrices.

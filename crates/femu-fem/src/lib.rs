@@ -46,7 +46,7 @@ pub use error::FemError;
 /// The types most programs need.
 pub mod prelude {
     pub use crate::FemError;
-    pub use crate::assembly::{Assembler, MassKind, SystemMatrices};
+    pub use crate::assembly::{Assembler, Dampers, MassKind, SystemMatrices};
     pub use crate::dof::DofMap;
     pub use crate::element::ElementKind;
     pub use crate::generate::{BoxCells, BoxSpec, PlateSpec, add_slab_sets, box_mesh, mixed_plate};
