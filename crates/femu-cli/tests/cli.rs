@@ -1552,5 +1552,122 @@ fn frf_correlation_against_a_direct_solve() {
     let stiffer = run("stiffer.inp", "stiffer.json");
     let low = fracs(&stiffer).into_iter().fold(1.0, f64::min);
     assert!(low < 0.9, "{:?}", fracs(&stiffer));
+    // the direct route solves the same dynamic stiffness as the measurement: every value to 1e-9
+    // of the largest response, no mode left out (the small y responses the force couples to are
+    // met to about 1e-17 absolute, 5e-9 of their own peak: both solves carry the conditioning of
+    // the dynamic stiffness, which near a resonance is 1 / eta times that of K)
+    femu()
+        .args(["frf", dir.join("bar.inp").to_str().unwrap()])
+        .arg(dir.join("frf.uff"))
+        .args(["--direct", "--loss-factor", "0.02", "--quiet", "--uff"])
+        .arg(dir.join("direct.uff"))
+        .arg("--json")
+        .arg(dir.join("direct.json"))
+        .assert()
+        .success();
+    let back = femu_io::uff::read_uff(dir.join("direct.uff")).unwrap();
+    let peak = values
+        .iter()
+        .flatten()
+        .map(|(a, b)| a.hypot(*b))
+        .fold(0.0, f64::max);
+    for (o, f) in back.functions.iter().enumerate() {
+        let Ordinate::Complex(v) = &f.ordinate else {
+            panic!("complex FRF expected")
+        };
+        let err = v
+            .iter()
+            .zip(&values[o])
+            .map(|((a, b), (c, d))| (a - c).hypot(b - d))
+            .fold(0.0, f64::max);
+        assert!(err < 1e-9 * peak, "function {o}: {err:e} against {peak:e}");
+    }
+    let direct = json_of(dir.join("direct.json"));
+    assert_eq!(direct["direct"], true);
+    assert!(direct["backward_error"].as_f64().unwrap() < 1e-13);
+    assert!(fracs(&direct).iter().all(|f| *f > 1.0 - 1e-12));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `femu frf --direct` on a Nastran deck whose damping is its own: a CONM2 of 10 kg on a
+/// grounded CBUSH with PBUSH stiffnesses, viscous `B` and structural `GE`. Along z the receptance
+/// is the single-DOF oscillator's `1 / (K3 (1 + i GE) - w^2 m + i w B3)`, written here by hand as
+/// the "measurement": the direct route reproduces it to 1e-9 of the peak (FRAC 1). Modal
+/// superposition, which leaves the deck's dampers out, says so and misses the peak's height.
+#[test]
+fn frf_direct_with_the_decks_own_dampers() {
+    use femu_io::uff::Ordinate;
+    let dir = std::env::temp_dir().join(format!("femu-cli-frf-bush-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let deck = "\
+SOL 103
+CEND
+SPC = 1
+BEGIN BULK
+GRID,1,,0.,0.,0.
+GRID,2,,0.,0.,0.
+CBUSH,7,8,1,2,,,,0
+PBUSH,8,K,1.+4,2.+4,3.+4,500.,700.,900.
+,B,1.,2.,30.,4.,5.,6.
+,GE,0.04
+CONM2,9,2,,10.,,,,,+C
++C,0.5,,0.7,,,0.9
+SPC1,1,123456,1
+ENDDATA
+";
+    std::fs::write(dir.join("bush.bdf"), deck).unwrap();
+    let (k3, b3, ge, m) = (3e4, 30.0, 0.04, 10.0);
+    let (min, step, count) = (1.0, 0.25, 80usize); // 1 to 20.75 Hz, the resonance at 8.72 Hz
+    let h: Vec<(f64, f64)> = (0..count)
+        .map(|l| {
+            let w = 2.0 * std::f64::consts::PI * (min + step * l as f64);
+            let (re, im) = (k3 - w * w * m, k3 * ge + w * b3);
+            let d = re * re + im * im;
+            (re / d, -im / d)
+        })
+        .collect();
+    write_frf_uff(
+        &dir.join("frf.uff"),
+        &[(2, 3)],
+        2,
+        min,
+        step,
+        std::slice::from_ref(&h),
+    );
+    femu()
+        .args(["frf", dir.join("bush.bdf").to_str().unwrap()])
+        .arg(dir.join("frf.uff"))
+        .args(["--direct", "--quiet", "--uff"])
+        .arg(dir.join("model.uff"))
+        .arg("--json")
+        .arg(dir.join("direct.json"))
+        .assert()
+        .success();
+    let back = femu_io::uff::read_uff(dir.join("model.uff")).unwrap();
+    let Ordinate::Complex(v) = &back.functions[0].ordinate else {
+        panic!("complex FRF expected")
+    };
+    let peak = h.iter().map(|(a, b)| a.hypot(*b)).fold(0.0, f64::max);
+    let err = v
+        .iter()
+        .zip(&h)
+        .map(|((a, b), (c, d))| (a - c).hypot(b - d))
+        .fold(0.0, f64::max);
+    assert!(err < 1e-9 * peak, "{err:e} against {peak:e}");
+    let direct = json_of(dir.join("direct.json"));
+    assert!(direct["functions"][0]["frac"].as_f64().unwrap() > 1.0 - 1e-12);
+    let notes = direct["notes"].to_string();
+    assert!(notes.contains("own dampers alone"), "{notes}");
+    // modal superposition leaves the dampers out (and says so): 1 % viscous is lighter than the
+    // deck's B (2.7 %) and GE (0.04), so its peak stands higher than the measured one
+    let out = femu()
+        .args(["frf", dir.join("bush.bdf").to_str().unwrap()])
+        .arg(dir.join("frf.uff"))
+        .arg("--json")
+        .arg(dir.join("modal.json"))
+        .assert()
+        .success();
+    let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
+    assert!(stderr.contains("--direct includes them"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }

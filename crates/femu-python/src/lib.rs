@@ -808,17 +808,23 @@ fn correlate<'py>(
 /// Measured FRFs (a universal file with dataset 58, function type 4, at the model's node ids)
 /// against the model's at the same DOFs and lines, by modal superposition of the modes up to
 /// `modes_up_to` times the highest line with the residual flexibility of those above: FRAC per
-/// function, CSAC and CSF per line, as a dict. Damping: `damping_ratio` (viscous, default 0.01)
-/// or `loss_factor`; `damping_from`, a test of identified modes with damping ratios, gives each
-/// paired model mode its test's ratio (the others `damping_ratio`). Releases the GIL.
+/// function, CSAC and CSF per line, as a dict. Damping: `damping_ratio` (viscous, default 0.01),
+/// `loss_factor` or `rayleigh=(alpha, beta)`; `damping_from`, a test of identified modes with
+/// damping ratios, gives each paired model mode its test's ratio (the others `damping_ratio`).
+/// `direct=True` solves the dynamic stiffness at each line instead (docs/MATH.md, "Frequency
+/// responses, directly"): the model's own dampers act, with a loss factor or Rayleigh damping.
+/// Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (model, path, *, damping_ratio=None, loss_factor=None, damping_from=None, modes_up_to=2.0))]
+#[pyo3(signature = (model, path, *, damping_ratio=None, loss_factor=None, rayleigh=None, direct=false, damping_from=None, modes_up_to=2.0))]
+#[allow(clippy::too_many_arguments)]
 fn frf<'py>(
     py: Python<'py>,
     model: &Model,
     path: PathBuf,
     damping_ratio: Option<f64>,
     loss_factor: Option<f64>,
+    rayleigh: Option<Vec<f64>>,
+    direct: bool,
     damping_from: Option<PathBuf>,
     modes_up_to: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
@@ -826,6 +832,8 @@ fn frf<'py>(
         file: None,
         damping_ratio,
         loss_factor,
+        rayleigh,
+        direct,
         damping_from,
         modes_up_to,
     };

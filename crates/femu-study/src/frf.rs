@@ -1,13 +1,15 @@
 //! The frf workflow: a test's measured frequency response functions (universal file dataset 58,
 //! function type 4) against the model's at the same DOFs and frequency lines, by modal
 //! superposition with the residual flexibility of the modes above (docs/MATH.md, "Frequency
-//! responses"): FRAC per function, CSAC and CSF per line and reference.
+//! responses") or by solving the dynamic stiffness at each line ("Frequency responses,
+//! directly"): FRAC per function, CSAC and CSF per line and reference.
 
 use crate::StudyError;
 use crate::load::LoadedModel;
 use faer::c64;
 use femu_correlate::frf::{
-    Damping, Frf, FrfOptions, ResponseKind, csac, csf, frac, modal_frf, residual_flexibility,
+    Damping, DirectSystem, Frf, FrfOptions, ResponseKind, csac, csf, direct_frf, frac, modal_frf,
+    residual_flexibility_analysed,
 };
 use femu_correlate::{Sensor, SensorLayout};
 use femu_io::uff::{Ordinate, UffDof, UffFunction};
@@ -35,6 +37,25 @@ pub struct FrfRequest {
         arg(long, value_name = "ETA", conflicts_with = "damping_ratio")
     )]
     pub loss_factor: Option<f64>,
+    /// Rayleigh damping `C = alpha M + beta K` instead: the two coefficients (s^-1 and s).
+    #[cfg_attr(
+        feature = "clap",
+        arg(
+            long,
+            value_name = "ALPHA,BETA",
+            value_delimiter = ',',
+            num_args = 2,
+            conflicts_with_all = ["damping_ratio", "loss_factor"]
+        )
+    )]
+    pub rayleigh: Option<Vec<f64>>,
+    /// Solve the dynamic stiffness `K (1 + i eta) + i K4 + i w C - w^2 M` at every line (one
+    /// sparse complex factorization each) instead of superposing modes: the model's own dampers
+    /// (bushings' B, springs' and bushings' GE) then act, and no mode is left out. Takes a loss
+    /// factor or Rayleigh damping (modal ratios have no matrix); default: a loss factor of 0.02
+    /// (1 % viscous at resonance) on a model without dampers, none on one with them.
+    #[cfg_attr(feature = "clap", arg(long, conflicts_with_all = ["damping_ratio", "damping_from"]))]
+    pub direct: bool,
     /// The test's identified modes with their damping ratios (CSV with a `damping` column,
     /// universal file dataset 55, JSON): each model mode paired with a test mode (MAC) takes its
     /// ratio, the others `damping_ratio` (default 0.01). In a study file relative to the study
@@ -59,6 +80,8 @@ impl Default for FrfRequest {
             file: None,
             damping_ratio: None,
             loss_factor: None,
+            rayleigh: None,
+            direct: false,
             damping_from: None,
             modes_up_to: 2.0,
         }
@@ -69,15 +92,35 @@ impl FrfRequest {
     /// The damping this request asks for.
     ///
     /// # Errors
-    /// Both a ratio and a loss factor.
+    /// More than one of a ratio, a loss factor and Rayleigh coefficients; Rayleigh coefficients
+    /// that are not two.
     pub fn damping(&self) -> Result<Damping, StudyError> {
-        match (self.damping_ratio, self.loss_factor) {
-            (Some(_), Some(_)) => Err(StudyError::invalid(
+        let given = [
+            self.damping_ratio.is_some(),
+            self.loss_factor.is_some(),
+            self.rayleigh.is_some(),
+        ];
+        if given.iter().filter(|g| **g).count() > 1 {
+            return Err(StudyError::invalid(
                 "damping",
-                "give a damping ratio or a loss factor, not both",
-            )),
-            (_, Some(eta)) => Ok(Damping::LossFactor(eta)),
-            (z, None) => Ok(Damping::Ratio(z.unwrap_or(0.01))),
+                "give one of a damping ratio, a loss factor and Rayleigh coefficients",
+            ));
+        }
+        if let Some(r) = &self.rayleigh {
+            let [alpha, beta] = r[..] else {
+                return Err(StudyError::invalid(
+                    "rayleigh",
+                    format!(
+                        "{} values: give the two coefficients alpha (of M) and beta (of K)",
+                        r.len()
+                    ),
+                ));
+            };
+            return Ok(Damping::Rayleigh { alpha, beta });
+        }
+        match self.loss_factor {
+            Some(eta) => Ok(Damping::LossFactor(eta)),
+            None => Ok(Damping::Ratio(self.damping_ratio.unwrap_or(0.01))),
         }
     }
 }
@@ -94,10 +137,10 @@ fn test_damping(
     modes: &femu_sparse::eigen::Modes,
     notes: &mut Vec<String>,
 ) -> Result<Damping, StudyError> {
-    if request.loss_factor.is_some() {
+    if request.loss_factor.is_some() || request.rayleigh.is_some() {
         return Err(StudyError::invalid(
             "damping",
-            "the test's damping ratios are viscous: give them or a loss factor, not both",
+            "the test's damping ratios are per mode: give them, a loss factor or Rayleigh coefficients, not two",
         ));
     }
     let t = crate::load::load_test(test, model)?;
@@ -173,8 +216,12 @@ pub struct FrfCorrelation {
     pub kind: ResponseKind,
     /// The model's damping.
     pub damping: Damping,
-    /// Model modes superposed, and the highest one's frequency (Hz).
+    /// Whether the FRFs were solved directly at each line instead of superposed from modes.
+    pub direct: bool,
+    /// Model modes superposed, and the highest one's frequency (Hz) (none for the direct route).
     pub modes: (usize, f64),
+    /// The direct route's largest backward error over the lines (after one refinement step).
+    pub backward_error: Option<f64>,
     /// Whether the residual flexibility of the modes above was added.
     pub residual_flexibility: bool,
     /// One row per measured FRF.
@@ -301,65 +348,27 @@ pub fn frf_correlation(
         .map_err(|e| StudyError::within(path, e))?;
     let inputs = SensorLayout::new(mesh, &model.sys.dofs, inputs)
         .map_err(|e| StudyError::within(path, e))?;
-    // the model's modes up to the request's multiple of the highest line
-    let f_max = lines.iter().copied().fold(0.0, f64::max);
-    let w_top = 2.0 * std::f64::consts::PI * request.modes_up_to * f_max;
-    if !(request.modes_up_to >= 1.0 && w_top.is_finite() && w_top > 0.0) {
-        return Err(StudyError::invalid(
-            "modes_up_to",
-            format!(
-                "{} times the highest line ({f_max} Hz): give a factor of at least 1 and lines above 0 Hz",
-                request.modes_up_to
-            ),
-        ));
-    }
-    let hi = w_top * w_top;
-    let modes = model.sys.modes(Which::Band { lo: -1e-6 * hi, hi }, eigen)?;
-    let top_hz = modes
-        .values
-        .last()
-        .map_or(0.0, |l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI));
-    let residual = if modes.values.first().is_some_and(|l| *l <= 0.0)
-        || modes.values.first().is_some_and(|l| {
-            // rigid-body eigenvalues are round-off far below the first elastic one
-            *l < 1e-8 * hi
-        }) {
-        notes.push(
-            "no residual flexibility: the model has rigid-body motions (it would need inertia relief); modes above the band are left out".into(),
-        );
-        None
+    let dampers = model.asm.dampers(&model.model)?;
+    let has_dampers = dampers.viscous.is_some() || dampers.structural.is_some();
+    let solved = if request.direct {
+        direct_route(
+            model, request, &dampers, &outputs, &inputs, &lines, kind, &mut notes,
+        )?
     } else {
-        Some(residual_flexibility(
-            &model.sys.k,
-            &modes.values,
-            modes.vectors.as_ref(),
-            &outputs,
-            &inputs,
-        )?)
+        if has_dampers {
+            notes.push("the model's own dampers (bushings' B, springs' and bushings' GE) are left out by modal superposition: --direct includes them".into());
+        }
+        modal_route(
+            model, request, eigen, &outputs, &inputs, &lines, kind, &mut notes,
+        )?
     };
-    let damping = match &request.damping_from {
-        Some(test) => test_damping(model, test, request, &modes, &mut notes)?,
-        None => request.damping()?,
-    };
-    if request.damping_ratio.is_none()
-        && request.loss_factor.is_none()
-        && request.damping_from.is_none()
-    {
-        notes.push("damping: 1 % viscous on every mode (the default; --damping-ratio or --loss-factor give another)".into());
-    }
-    let options = FrfOptions {
-        damping: damping.clone(),
-        kind,
-    };
-    let frf = modal_frf(
-        &modes.values,
-        modes.vectors.as_ref(),
-        residual.as_ref().map(|r| r.as_ref()),
-        &outputs,
-        &inputs,
-        &lines,
-        &options,
-    )?;
+    let Solved {
+        frf,
+        damping,
+        modes,
+        residual,
+        backward_error,
+    } = solved;
     let mut rows = Vec::with_capacity(pairs.len());
     for (f, oi, ii, values) in &pairs {
         let model_curve: Vec<c64> = frf.h.iter().map(|h| h[(*oi, *ii)]).collect();
@@ -393,8 +402,10 @@ pub fn frf_correlation(
     Ok(FrfCorrelation {
         kind,
         damping,
-        modes: (modes.values.len(), top_hz),
-        residual_flexibility: residual.is_some(),
+        direct: request.direct,
+        modes,
+        backward_error,
+        residual_flexibility: residual,
         functions: rows,
         lines: line_rows,
         notes,
@@ -403,26 +414,185 @@ pub fn frf_correlation(
     })
 }
 
+/// The model's FRFs and how they were formed.
+struct Solved {
+    frf: Frf,
+    damping: Damping,
+    modes: (usize, f64),
+    residual: bool,
+    backward_error: Option<f64>,
+}
+
+/// Modal superposition of the modes up to `request.modes_up_to` times the highest line, with the
+/// residual flexibility of those above when the model has no rigid-body motion.
+#[allow(clippy::too_many_arguments)]
+fn modal_route(
+    model: &LoadedModel,
+    request: &FrfRequest,
+    eigen: &EigenOptions,
+    outputs: &SensorLayout,
+    inputs: &SensorLayout,
+    lines: &[f64],
+    kind: ResponseKind,
+    notes: &mut Vec<String>,
+) -> Result<Solved, StudyError> {
+    // the model's modes up to the request's multiple of the highest line
+    let f_max = lines.iter().copied().fold(0.0, f64::max);
+    let w_top = 2.0 * std::f64::consts::PI * request.modes_up_to * f_max;
+    if !(request.modes_up_to >= 1.0 && w_top.is_finite() && w_top > 0.0) {
+        return Err(StudyError::invalid(
+            "modes_up_to",
+            format!(
+                "{} times the highest line ({f_max} Hz): give a factor of at least 1 and lines above 0 Hz",
+                request.modes_up_to
+            ),
+        ));
+    }
+    let hi = w_top * w_top;
+    let modes = model.sys.modes(Which::Band { lo: -1e-6 * hi, hi }, eigen)?;
+    let top_hz = modes
+        .values
+        .last()
+        .map_or(0.0, |l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI));
+    let residual = if modes.values.first().is_some_and(|l| *l <= 0.0)
+        || modes.values.first().is_some_and(|l| {
+            // rigid-body eigenvalues are round-off far below the first elastic one
+            *l < 1e-8 * hi
+        }) {
+        notes.push(
+            "no residual flexibility: the model has rigid-body motions (it would need inertia relief); modes above the band are left out".into(),
+        );
+        None
+    } else {
+        Some(residual_flexibility_analysed(
+            &model.sys.k,
+            model.sys.analysis(),
+            &modes.values,
+            modes.vectors.as_ref(),
+            outputs,
+            inputs,
+        )?)
+    };
+    let damping = match &request.damping_from {
+        Some(test) => test_damping(model, test, request, &modes, notes)?,
+        None => request.damping()?,
+    };
+    if request.damping_ratio.is_none()
+        && request.loss_factor.is_none()
+        && request.rayleigh.is_none()
+        && request.damping_from.is_none()
+    {
+        notes.push("damping: 1 % viscous on every mode (the default; --damping-ratio, --loss-factor or --rayleigh give another)".into());
+    }
+    let options = FrfOptions {
+        damping: damping.clone(),
+        kind,
+    };
+    let frf = modal_frf(
+        &modes.values,
+        modes.vectors.as_ref(),
+        residual.as_ref().map(|r| r.as_ref()),
+        outputs,
+        inputs,
+        lines,
+        &options,
+    )?;
+    Ok(Solved {
+        frf,
+        damping,
+        modes: (modes.values.len(), top_hz),
+        residual: residual.is_some(),
+        backward_error: None,
+    })
+}
+
+/// The dynamic stiffness solved at every line with the request's loss factor or Rayleigh damping
+/// and the model's own dampers.
+#[allow(clippy::too_many_arguments)]
+fn direct_route(
+    model: &LoadedModel,
+    request: &FrfRequest,
+    dampers: &femu_fem::assembly::Dampers,
+    outputs: &SensorLayout,
+    inputs: &SensorLayout,
+    lines: &[f64],
+    kind: ResponseKind,
+    notes: &mut Vec<String>,
+) -> Result<Solved, StudyError> {
+    let has_dampers = dampers.viscous.is_some() || dampers.structural.is_some();
+    if request.damping_ratio.is_some() || request.damping_from.is_some() {
+        return Err(StudyError::invalid(
+            "damping",
+            "modal damping ratios have no damping matrix: the direct route takes a loss factor or Rayleigh coefficients (and the model's own dampers)",
+        ));
+    }
+    let damping = if request.loss_factor.is_some() || request.rayleigh.is_some() {
+        request.damping()?
+    } else if has_dampers {
+        notes.push(
+            "damping: the model's own dampers alone (--loss-factor or --rayleigh add more)".into(),
+        );
+        Damping::Ratio(0.0)
+    } else {
+        notes.push("damping: a loss factor of 0.02 (the default of the direct route on a model without dampers: 1 % viscous at resonance; --loss-factor or --rayleigh give another)".into());
+        Damping::LossFactor(0.02)
+    };
+    let system = DirectSystem {
+        k: &model.sys.k,
+        m: &model.sys.m,
+        viscous: dampers.viscous.as_ref(),
+        structural: dampers.structural.as_ref(),
+    };
+    let options = FrfOptions {
+        damping: damping.clone(),
+        kind,
+    };
+    let d = direct_frf(&system, outputs, inputs, lines, &options)?;
+    let worst = d.backward_errors.iter().copied().fold(0.0, f64::max);
+    if worst > 1e-10 {
+        notes.push(format!(
+            "the direct solves reached a backward error of {worst:.1e} only (the dynamic stiffness is nearly singular at a line)"
+        ));
+    }
+    Ok(Solved {
+        frf: d.frf,
+        damping,
+        modes: (0, 0.0),
+        residual: false,
+        backward_error: Some(worst),
+    })
+}
+
 impl std::fmt::Display for FrfCorrelation {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let mut s = String::new();
-        let _ = writeln!(
-            s,
-            "{} of {} model modes (up to {:.2} Hz){}, damping: {}",
-            match self.kind {
-                ResponseKind::Receptance => "Receptance",
-                ResponseKind::Mobility => "Mobility",
-                ResponseKind::Accelerance => "Accelerance",
-            },
-            self.modes.0,
-            self.modes.1,
-            if self.residual_flexibility {
-                " with the residual flexibility of those above"
-            } else {
-                ""
-            },
-            self.damping
-        );
+        let what = match self.kind {
+            ResponseKind::Receptance => "Receptance",
+            ResponseKind::Mobility => "Mobility",
+            ResponseKind::Accelerance => "Accelerance",
+        };
+        if self.direct {
+            let _ = writeln!(
+                s,
+                "{what} solved directly at {} lines (largest backward error {:.1e}), damping: {}",
+                self.model.as_ref().map_or(0, |m| m.lines_hz.len()),
+                self.backward_error.unwrap_or(0.0),
+                self.damping
+            );
+        } else {
+            let _ = writeln!(
+                s,
+                "{what} of {} model modes (up to {:.2} Hz){}, damping: {}",
+                self.modes.0,
+                self.modes.1,
+                if self.residual_flexibility {
+                    " with the residual flexibility of those above"
+                } else {
+                    ""
+                },
+                self.damping
+            );
+        }
         let _ = writeln!(s, "\n| response | reference | FRAC |\n|---|---|---|");
         for r in &self.functions {
             let _ = writeln!(s, "| {} | {} | {:.4} |", r.response, r.reference, r.frac);

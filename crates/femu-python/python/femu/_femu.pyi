@@ -146,6 +146,8 @@ def frf(
     *,
     damping_ratio: Optional[float] = None,
     loss_factor: Optional[float] = None,
+    rayleigh: Optional[Sequence[float]] = None,
+    direct: bool = False,
     damping_from: Optional[_Path] = None,
     modes_up_to: float = 2.0,
 ) -> Dict[str, Any]: ...
