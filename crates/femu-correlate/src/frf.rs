@@ -388,6 +388,13 @@ pub fn direct_frf(
         names.push("the elements' structural damping K4");
     }
     let comb = Combination::new(&mats, &names)?;
+    // `B^T`: the inputs' unit forces, the same at every line
+    let mut forces = Mat::<c64>::zeros(n, inputs.len());
+    for j in 0..inputs.len() {
+        for (d, wgt) in inputs.row(j) {
+            forces[(*d, j)] += c64::new(*wgt, 0.0);
+        }
+    }
     let mut h = Vec::with_capacity(lines_hz.len());
     let mut backward_errors = Vec::with_capacity(lines_hz.len());
     for (line, f) in lines_hz.iter().enumerate() {
@@ -410,12 +417,7 @@ pub fn direct_frf(
             other => other.into(),
         };
         let mut fac = comb.factor(&c).map_err(singular)?;
-        let mut rhs = Mat::<c64>::zeros(n, inputs.len());
-        for j in 0..inputs.len() {
-            for (d, wgt) in inputs.row(j) {
-                rhs[(*d, j)] += c64::new(*wgt, 0.0);
-            }
-        }
+        let mut rhs = forces.clone();
         backward_errors.push(fac.solve_in_place(rhs.as_mut()).map_err(singular)?);
         let s = options.kind.factor(w);
         let mut hl = Mat::<c64>::zeros(outputs.len(), inputs.len());

@@ -932,6 +932,13 @@ pub struct Dampers {
     pub structural: Option<SparseMatrix>,
 }
 
+impl Dampers {
+    /// Whether the model has any damper.
+    pub fn any(&self) -> bool {
+        self.viscous.is_some() || self.structural.is_some()
+    }
+}
+
 /// Per-thread scratch for element matrices.
 #[derive(Default)]
 pub(crate) struct ElementBuffers {

@@ -73,6 +73,10 @@ struct Tree {
     children: Vec<Vec<usize>>,
     /// The supernode of each (new) column.
     super_of: Vec<usize>,
+    /// Roots of the subtrees factored in parallel ([`Tree::partition`]).
+    tasks: Vec<usize>,
+    /// The supernodes above them, increasing.
+    top: Vec<usize>,
 }
 
 /// A supernode eliminated: its index, its `L` columns and its update for its parent.
@@ -314,13 +318,17 @@ impl Tree {
                 children[super_of[ri[rp[k]]]].push(k);
             }
         }
-        Ok(Self {
+        let mut tree = Self {
             symbolic,
             fwd,
             inv,
             children,
             super_of,
-        })
+            tasks: Vec::new(),
+            top: Vec::new(),
+        };
+        tree.partition();
+        Ok(tree)
     }
 
     fn supernodes(
@@ -401,14 +409,11 @@ impl Tree {
         Some((fm.as_ref().subcols(0, c).to_owned(), update))
     }
 
-    /// The multifrontal `LDL^T` of the values on the union pattern (`None` at a zero pivot).
-    /// Disjoint subtrees of the supernodal tree, each with at most `1 / (8 threads)` of the work,
-    /// are eliminated on different threads (each front on one); the supernodes above them one
-    /// after another, with every thread in their GEMMs.
-    fn ldlt(&self, col_ptr: &[usize], row_idx: &[usize], values: &[c64]) -> Option<Vec<Mat<c64>>> {
-        use rayon::prelude::*;
+    /// Splits the supernodal tree into disjoint subtrees of at most `1 / (8 threads)` of the
+    /// work each (`tasks`, their roots) and the supernodes above them (`top`, increasing): the
+    /// largest subtree is replaced by its children's until none is too large.
+    fn partition(&mut self) {
         let ns = self.children.len();
-        let data = (col_ptr, row_idx, values);
         // work per subtree (complex multiply-adds of each front's elimination)
         let mut work = vec![0.0_f64; ns];
         for k in 0..ns {
@@ -420,7 +425,6 @@ impl Tree {
                 work[p] += w;
             }
         }
-        let mut is_top = vec![false; ns];
         let mut tasks: Vec<usize> = (0..ns).filter(|k| self.parent(*k).is_none()).collect();
         let total: f64 = tasks.iter().map(|k| work[*k]).sum();
         let limit = total / (8.0 * rayon::current_num_threads() as f64);
@@ -433,12 +437,24 @@ impl Tree {
             if work[k] <= limit {
                 break;
             }
-            is_top[k] = true;
+            self.top.push(k);
             tasks.swap_remove(i);
             tasks.extend_from_slice(&self.children[k]);
         }
+        self.top.sort_unstable();
+        self.tasks = tasks;
+    }
+
+    /// The multifrontal `LDL^T` of the values on the union pattern (`None` at a zero pivot): the
+    /// subtrees of [`Tree::partition`] on different threads (each front on one), then the
+    /// supernodes above them one after another, with every thread in their GEMMs.
+    fn ldlt(&self, col_ptr: &[usize], row_idx: &[usize], values: &[c64]) -> Option<Vec<Mat<c64>>> {
+        use rayon::prelude::*;
+        let ns = self.children.len();
+        let data = (col_ptr, row_idx, values);
         // each task: its subtree in increasing order (children before parents)
-        let done: Vec<Option<Vec<Eliminated>>> = tasks
+        let done: Vec<Option<Vec<Eliminated>>> = self
+            .tasks
             .par_iter()
             .map(|&root| {
                 let mut nodes = vec![root];
@@ -475,7 +491,7 @@ impl Tree {
                 updates[k] = u;
             }
         }
-        for k in (0..ns).filter(|k| is_top[*k]) {
+        for &k in &self.top {
             let kids: Vec<(usize, Mat<c64>)> = self.children[k]
                 .iter()
                 .map(|ch| Some((*ch, updates[*ch].take()?)))

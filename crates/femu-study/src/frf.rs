@@ -349,13 +349,12 @@ pub fn frf_correlation(
     let inputs = SensorLayout::new(mesh, &model.sys.dofs, inputs)
         .map_err(|e| StudyError::within(path, e))?;
     let dampers = model.asm.dampers(&model.model)?;
-    let has_dampers = dampers.viscous.is_some() || dampers.structural.is_some();
     let solved = if request.direct {
         direct_route(
             model, request, &dampers, &outputs, &inputs, &lines, kind, &mut notes,
         )?
     } else {
-        if has_dampers {
+        if dampers.any() {
             notes.push("the model's own dampers (bushings' B, springs' and bushings' GE) are left out by modal superposition: --direct includes them".into());
         }
         modal_route(
@@ -519,7 +518,6 @@ fn direct_route(
     kind: ResponseKind,
     notes: &mut Vec<String>,
 ) -> Result<Solved, StudyError> {
-    let has_dampers = dampers.viscous.is_some() || dampers.structural.is_some();
     if request.damping_ratio.is_some() || request.damping_from.is_some() {
         return Err(StudyError::invalid(
             "damping",
@@ -528,7 +526,7 @@ fn direct_route(
     }
     let damping = if request.loss_factor.is_some() || request.rayleigh.is_some() {
         request.damping()?
-    } else if has_dampers {
+    } else if dampers.any() {
         notes.push(
             "damping: the model's own dampers alone (--loss-factor or --rayleigh add more)".into(),
         );
