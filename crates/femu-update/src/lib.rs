@@ -14,6 +14,8 @@
 //!   weighted objective), and how stable that choice is under resampling.
 //! - [`sensitivity`]: inverse eigensensitivity (Levenberg-Marquardt on relative eigenvalue errors,
 //!   modes re-solved on the reused symbolic analysis).
+//! - [`frf`](mod@frf): localisation and SB-EBE from measured frequency responses (the paper's
+//!   FRF residue (4) on responses expanded at each line), with the loss factor.
 //! - [`truth`]: the held-out check that answers the paper's title.
 //!
 //! ```
@@ -47,6 +49,7 @@
 pub mod derivatives;
 pub mod discretisation;
 mod error;
+pub mod frf;
 pub mod localise;
 pub mod lsq;
 pub mod problem;
@@ -58,6 +61,10 @@ pub mod truth;
 
 pub use derivatives::{EigenpairDerivatives, eigenpair_derivatives};
 pub use error::UpdateError;
+pub use frf::{
+    FrfIteration, FrfMethod, FrfTest, FrfUpdate, FrfUpdateOptions, frf_errors, frf_localise,
+    frf_update,
+};
 pub use localise::{Indicator, Localisation, SelectionRule, localise, localise_expanded};
 pub use lsq::{MassGuard, UpdateOptions};
 pub use problem::{Corrections, Parameter, UpdateModel};

@@ -304,7 +304,7 @@ pub fn localise(
 /// its bounds `(lo, hi)`: `f(theta) = objective + 2 num theta + den theta^2` is least at
 /// `-num / den`, clamped to the bounds, where it has removed `-2 num theta - den theta^2` (the
 /// unbounded fit removed `num^2 / den` even where its factor left the physical range).
-fn explained_fraction(num: f64, den: f64, objective: f64, (lo, hi): (f64, f64)) -> f64 {
+pub(crate) fn explained_fraction(num: f64, den: f64, objective: f64, (lo, hi): (f64, f64)) -> f64 {
     if den > 0.0 && objective > 0.0 {
         let theta = (-num / den).clamp(lo, hi);
         ((-2.0 * num * theta - den * theta * theta) / objective).clamp(0.0, 1.0)
@@ -315,7 +315,7 @@ fn explained_fraction(num: f64, den: f64, objective: f64, (lo, hi): (f64, f64)) 
 
 /// Each group's own parameter's bounds (a stiffness factor's, a thickness's, a mass group's
 /// factor's), unbounded where it has none.
-fn stiffness_bounds(up: &UpdateModel<'_>) -> Vec<(f64, f64)> {
+pub(crate) fn stiffness_bounds(up: &UpdateModel<'_>) -> Vec<(f64, f64)> {
     (0..up.groups().len())
         .map(|g| {
             let masses = up.groups()[g].law == femu_fem::groups::GroupLaw::Mass;
@@ -327,7 +327,7 @@ fn stiffness_bounds(up: &UpdateModel<'_>) -> Vec<(f64, f64)> {
         .collect()
 }
 
-fn check_rule(rule: &SelectionRule) -> Result<(), UpdateError> {
+pub(crate) fn check_rule(rule: &SelectionRule) -> Result<(), UpdateError> {
     if !(rule.fraction > 0.0 && rule.fraction <= 1.0) || rule.max_groups == 0 {
         return Err(UpdateError::Invalid {
             what: "selection rule",
@@ -458,7 +458,7 @@ pub fn localise_expanded(
     Ok(loc)
 }
 
-fn rank(
+pub(crate) fn rank(
     up: &UpdateModel<'_>,
     energy: Vec<f64>,
     force: Vec<f64>,

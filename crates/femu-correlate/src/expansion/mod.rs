@@ -390,11 +390,13 @@ pub fn expand_shapes(
 
 mod basis;
 mod condensation;
+pub mod forced;
 mod mdre;
 mod minimum_residual;
 mod serep;
 
 pub use basis::SensorBasis;
+pub use forced::{DynamicStiffness, ForcedExpander, ForcedExpansion, ForcedLine};
 pub use minimum_residual::TestErrorExpansion;
 
 /// An expansion method: the one name for it in the expander, the sensor space, the

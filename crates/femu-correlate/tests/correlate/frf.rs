@@ -572,3 +572,120 @@ fn a_damped_bushing_is_a_single_dof_oscillator() {
     let none = pasm.dampers(&plain).unwrap();
     assert!(none.viscous.is_none() && none.structural.is_none());
 }
+
+/// The forced residue (4) of a response measured on a few DOFs of a clamped bar, against the
+/// dense Schur complement `R_a = (A_aa - A_ao A_oo^-1 A_oa) u_a - (f_a - A_ao A_oo^-1 f_o)`
+/// formed here (1e-10 relative, loss factor and Rayleigh, a force on a measured and on an omitted
+/// DOF); the bar's own response (the dense solve of `A u = f`) leaves no residue (1e-10 of
+/// `||f||`); the projection of a change `dA u` is the derivative of the re-expanded residue
+/// (central difference of the dense residue, 1e-6).
+#[test]
+fn forced_residue_against_the_dense_schur_complement() {
+    use femu_correlate::expansion::{DynamicStiffness, ForcedExpander};
+    let model = bar([4, 1, 1], true);
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let (k, m) = (dense(&sys.k), dense(&sys.m));
+    let n = k.nrows();
+    let measured: Vec<usize> = (0..n).filter(|d| d % 5 == 2 || d % 7 == 0).collect();
+    let omitted: Vec<usize> = (0..n).filter(|d| !measured.contains(d)).collect();
+    let forced = ForcedExpander::new(&sys.k, &sys.m, &measured).unwrap();
+    let e = full_eigen(&sys);
+    let w1 = e.values[0].sqrt();
+    // a stiffness change of the bar's first elements, for the derivative
+    let dk = {
+        let mut d = Mat::<f64>::zeros(n, n);
+        for i in 0..n {
+            for j in 0..n {
+                if i % 3 == 0 && j % 3 == 0 {
+                    d[(i, j)] = 0.1 * k[(i, j)];
+                }
+            }
+        }
+        d
+    };
+    for a in [
+        DynamicStiffness::loss_factor(0.7 * w1, 0.03),
+        DynamicStiffness::rayleigh(2.3 * w1, 4.0, 1e-6),
+        // undamped, below the first mode (at a mode, the bar's own response is not defined)
+        DynamicStiffness::loss_factor(0.45 * w1, 0.0),
+    ] {
+        let dense_a = |extra: f64| {
+            Mat::<c64>::from_fn(n, n, |i, j| {
+                a.k * c64::new(k[(i, j)] + extra * dk[(i, j)], 0.0) + a.m * c64::new(m[(i, j)], 0.0)
+            })
+        };
+        let amat = dense_a(0.0);
+        // two load cases: a force on a measured DOF and one on an omitted DOF
+        let f = Mat::<c64>::from_fn(n, 2, |i, j| match (i, j) {
+            (i, 0) if i == measured[3] => c64::new(1.0, 0.0),
+            (i, 1) if i == omitted[5] => c64::new(0.0, 2.0),
+            _ => c64::new(0.0, 0.0),
+        });
+        // a response that is not the bar's: smooth, complex
+        let ua = Mat::<c64>::from_fn(measured.len(), 2, |i, j| {
+            c64::new(
+                1e-6 * (i as f64 + 1.0).sin(),
+                1e-7 * (j as f64 + i as f64).cos(),
+            )
+        });
+        let sub = |a: &Mat<c64>, r: &[usize], c: &[usize]| {
+            Mat::<c64>::from_fn(r.len(), c.len(), |i, j| a[(r[i], c[j])])
+        };
+        let residue = |amat: &Mat<c64>, ua: &Mat<c64>| {
+            let (aaa, aao, aoa, aoo) = (
+                sub(amat, &measured, &measured),
+                sub(amat, &measured, &omitted),
+                sub(amat, &omitted, &measured),
+                sub(amat, &omitted, &omitted),
+            );
+            let fa = sub(&f, &measured, &[0, 1]);
+            let fo = sub(&f, &omitted, &[0, 1]);
+            let lu = aoo.as_ref().partial_piv_lu();
+            let rhs = &fo - &aoa * ua;
+            let uo = lu.solve(&rhs);
+            &aaa * ua + &aao * &uo - &fa
+        };
+        let reference = residue(&amat, &ua);
+        let mut line = forced.line(a).unwrap();
+        let got = line.expand(ua.as_ref(), f.as_ref()).unwrap();
+        assert!(max_rel(&got.residual, &reference) < 1e-10, "{a:?}");
+        // measured values kept
+        for (i, &d) in measured.iter().enumerate() {
+            assert_eq!(got.u[(d, 1)], ua[(i, 1)]);
+        }
+        // the bar's own response has no residue
+        let own = amat.as_ref().partial_piv_lu().solve(&f);
+        let own_a = sub(&own, &measured, &[0, 1]);
+        let none = line.expand(own_a.as_ref(), f.as_ref()).unwrap();
+        let worst = none
+            .residual
+            .col_iter()
+            .map(|c| c.norm_l2())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-10 * f.norm_l2(), "{worst}");
+        // the projection is the derivative of the residue of the re-expanded response
+        let du = {
+            let mut v = Mat::<c64>::zeros(n, 2);
+            for j in 0..2 {
+                for i in 0..n {
+                    v[(i, j)] = (0..n)
+                        .map(|l| a.k * c64::new(dk[(i, l)], 0.0) * got.u[(l, j)])
+                        .sum();
+                }
+            }
+            v
+        };
+        let projected = line.project(du.as_ref()).unwrap();
+        let h = 1e-4;
+        let fd = Mat::<c64>::from_fn(measured.len(), 2, |i, j| {
+            (residue(&dense_a(h), &ua)[(i, j)] - residue(&dense_a(-h), &ua)[(i, j)])
+                / c64::new(2.0 * h, 0.0)
+        });
+        assert!(
+            max_rel(&projected, &fd) < 1e-6,
+            "{}",
+            max_rel(&projected, &fd)
+        );
+        assert!(line.backward_error() < 1e-13);
+    }
+}

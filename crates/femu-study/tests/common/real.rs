@@ -123,3 +123,73 @@ pub fn measure_along(
         .collect();
     (TestModes::new(f, None, y).unwrap(), sensors)
 }
+
+/// Measured receptances: `real` with region stiffness factors `theta` and the structural loss
+/// factor `eta`, solved directly at each of `hz` (one sparse complex factorization per line), a
+/// unit force along z at the model's sensor node `reference` (an index into
+/// [`sensor_nodes`]), read at the model's sensor nodes in y and z, each value with complex
+/// noise of relative size `noise` (uniform, unit variance per part). Returns the response sensors
+/// (the model's node ids), the reference sensor and one `30 x 1` receptance per line.
+#[allow(clippy::too_many_arguments)]
+pub fn measure_frf(
+    real: &Model,
+    theta: &[f64],
+    eta: f64,
+    model: &Model,
+    reference: usize,
+    hz: &[f64],
+    noise: f64,
+    seed: u64,
+) -> (Vec<Sensor>, Sensor, Vec<Mat<faer::c64>>) {
+    use faer::c64;
+    let names = regions();
+    let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+    let mut up =
+        UpdateModel::from_element_sets(real, &sets, MassKind::Consistent, Corrections::Stiffness)
+            .unwrap();
+    up.set_theta(theta).unwrap();
+    let sys = up.matrices();
+    let nodes = sensor_nodes(model);
+    let real_dof = |id: u64, axis: usize| {
+        let x = model.mesh().coords()[model.mesh().node_index(id).unwrap()];
+        let layout = SensorLayout::new(
+            real.mesh(),
+            &sys.dofs,
+            vec![Sensor::axis(node_at(real.mesh(), x), axis)],
+        )
+        .unwrap();
+        layout.measured_dofs().unwrap()[0]
+    };
+    let mut sensors = Vec::new();
+    let mut dofs = Vec::new();
+    for id in &nodes {
+        for axis in [1, 2] {
+            sensors.push(Sensor::axis(*id, axis));
+            dofs.push(real_dof(*id, axis));
+        }
+    }
+    let force_dof = real_dof(nodes[reference], 2);
+    let combination =
+        femu_sparse::complex::Combination::new(&[&sys.k, &sys.m], &["K", "M"]).unwrap();
+    let mut rng = femu_testkit::Rng(seed);
+    let h = hz
+        .iter()
+        .map(|f| {
+            let w = 2.0 * std::f64::consts::PI * f;
+            let mut factor = combination
+                .factor(&[c64::new(1.0, eta), c64::new(-w * w, 0.0)])
+                .unwrap();
+            let mut u = Mat::<c64>::zeros(sys.k.rows(), 1);
+            u[(force_dof, 0)] = c64::new(1.0, 0.0);
+            factor.solve_in_place(u.as_mut()).unwrap();
+            Mat::from_fn(dofs.len(), 1, |i, _| {
+                let e = c64::new(
+                    noise * 3f64.sqrt() * rng.sym(),
+                    noise * 3f64.sqrt() * rng.sym(),
+                );
+                u[(dofs[i], 0)] * (c64::new(1.0, 0.0) + e)
+            })
+        })
+        .collect();
+    (sensors, Sensor::axis(nodes[reference], 2), h)
+}

@@ -1,0 +1,761 @@
+//! Localisation and updating from measured frequency responses: the paper's FRF residue (4) on
+//! responses expanded at each line, and SB-EBE on FRF data (docs/MATH.md, "The FRF residue" and
+//! "Updating from frequency responses").
+//!
+//! At each line `w` the test measured the receptance `H_a` (measured DOFs `a`) under a unit force
+//! at each reference DOF. The model's dynamic stiffness `A(w) = K(p) (1 + i eta) - w^2 M(q)`
+//! expands each column on the omitted DOFs by its own equilibrium
+//! ([`femu_correlate::expansion::ForcedExpander`]) and leaves the residue
+//! `R_a = A_aa u_a + A_ao u_o - f_a` on the measured DOFs. The objective is
+//! `J = sum_lines sum_refs ||R_a||_W^2` with `W = diag(M)^-1` on the measured DOFs (the residual
+//! force's metric of the modal localisation). Its exact derivative with respect to a parameter
+//! `theta_k` (the re-expansion included) is `P (dA/dtheta_k u)`, with
+//! `dA/dtheta_k = (1 + i eta) dK/dtheta_k - w^2 dM/dtheta_k` formed element by element and
+//! `dA/deta = i K(p)`: no eigenvector and no mode enters.
+//!
+//! - [`frf_localise`]: each group's explained fraction of `J` (the fraction its own factor removes,
+//!   bounded), the residual force on its DOFs and the strain energy of the displacement residual
+//!   `K R_D = R_F`, ranked and selected by the modal localisation's rule.
+//! - [`frf_update`]: Gauss-Newton on `J` over the model's parameters and, optionally, the loss
+//!   factor, within their bounds, with a backtracking line search.
+//! - [`frf_errors`]: the model's receptance against the measured one at each line (the truth check
+//!   on lines the fit did not use).
+
+use crate::UpdateError;
+use crate::localise::{Localisation, SelectionRule};
+use crate::problem::{SparseColumn, UpdateModel};
+use faer::{Mat, c64};
+use femu_correlate::expansion::{DynamicStiffness, ForcedExpander};
+use femu_sparse::complex::Combination;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Measured receptances at a model's free DOFs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrfTest {
+    /// The lines, rad/s (positive).
+    pub omegas: Vec<f64>,
+    /// The free DOFs of the responses (sensor order, no repeats).
+    pub measured: Vec<usize>,
+    /// The free DOF of each reference's unit force.
+    pub references: Vec<usize>,
+    /// At each line, the receptance (m/N): one row per measured DOF, one column per reference.
+    pub receptance: Vec<Mat<c64>>,
+}
+
+impl FrfTest {
+    /// Checks the sizes and values against a model of `n` free DOFs.
+    ///
+    /// # Errors
+    /// [`UpdateError::Invalid`] naming the line, DOF or value.
+    pub fn check(&self, n: usize) -> Result<(), UpdateError> {
+        let invalid = |reason: String| UpdateError::Invalid {
+            what: "measured FRFs",
+            reason,
+        };
+        if self.omegas.is_empty() {
+            return Err(invalid("no frequency line".into()));
+        }
+        if self.receptance.len() != self.omegas.len() {
+            return Err(invalid(format!(
+                "{} receptance matrices for {} lines",
+                self.receptance.len(),
+                self.omegas.len()
+            )));
+        }
+        if let Some(l) = self
+            .omegas
+            .iter()
+            .position(|w| !(w.is_finite() && *w > 0.0))
+        {
+            return Err(invalid(format!(
+                "line {} is {} rad/s: lines must be finite and above 0 Hz",
+                l + 1,
+                self.omegas[l]
+            )));
+        }
+        if self.references.is_empty() || self.measured.is_empty() {
+            return Err(invalid("no response or no reference DOF".into()));
+        }
+        if let Some(d) = self
+            .measured
+            .iter()
+            .chain(&self.references)
+            .find(|d| **d >= n)
+        {
+            return Err(invalid(format!(
+                "DOF {d} is not a free DOF of the model ({n})"
+            )));
+        }
+        for (l, h) in self.receptance.iter().enumerate() {
+            if h.nrows() != self.measured.len() || h.ncols() != self.references.len() {
+                return Err(invalid(format!(
+                    "line {}: {} x {} values for {} responses and {} references",
+                    l + 1,
+                    h.nrows(),
+                    h.ncols(),
+                    self.measured.len(),
+                    self.references.len()
+                )));
+            }
+            for j in 0..h.ncols() {
+                if let Some(i) = h
+                    .col(j)
+                    .iter()
+                    .position(|v| !(v.re.is_finite() && v.im.is_finite()))
+                {
+                    return Err(invalid(format!(
+                        "line {} ({} rad/s), response {} of reference {}: {} is not finite",
+                        l + 1,
+                        self.omegas[l],
+                        i + 1,
+                        j + 1,
+                        h[(i, j)]
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The lines `keep` of this test (in that order).
+    pub fn lines(&self, keep: &[usize]) -> FrfTest {
+        FrfTest {
+            omegas: keep.iter().map(|&l| self.omegas[l]).collect(),
+            measured: self.measured.clone(),
+            references: self.references.clone(),
+            receptance: keep.iter().map(|&l| self.receptance[l].clone()).collect(),
+        }
+    }
+
+    /// Unit forces at the references (full length `n`, one column per reference).
+    fn forces(&self, n: usize) -> Mat<c64> {
+        let mut f = Mat::<c64>::zeros(n, self.references.len());
+        for (j, &d) in self.references.iter().enumerate() {
+            f[(d, j)] = c64::new(1.0, 0.0);
+        }
+        f
+    }
+}
+
+/// What the FRF fit minimises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FrfMethod {
+    /// SB-EBE on FRF data (the paper's): the residue (4) of the responses expanded at each line,
+    /// `sum ||R_a||_W^2`. Quadratic in a stiffness factor's effect on each line (no resonance
+    /// has to be matched first), exact without noise; measurement noise enters multiplied by
+    /// the dynamic stiffness, which biases it when many groups are fitted from noisy data.
+    SbEbe,
+    /// The output error: the model's receptance against the measured one,
+    /// `sum |H_model - H_test|^2 / max(|H_test|, 1 % of the function's peak)^2` (relative, with a
+    /// floor at anti-resonances), its derivative `-[A^-1 (dA/dtheta) u]_a` from the line's
+    /// factorization. Unbiased under relative noise; needs a start whose resonances are within
+    /// a few bandwidths of the test's (the default starts it from SB-EBE).
+    #[default]
+    OutputError,
+}
+
+/// Which derivative columns an evaluation of the objective forms.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Columns {
+    /// None: the objective alone.
+    None,
+    /// One per parameter of the model (and the loss factor when it is fitted).
+    Parameters { loss_factor: bool },
+    /// One per group (the localisation's).
+    Groups,
+}
+
+/// The objective, its normal equations and what localisation needs, summed over the lines.
+struct Evaluation {
+    objective: f64,
+    /// `sum Re(B^H W B)` over the lines and references.
+    gram: Vec<Vec<f64>>,
+    /// `sum Re(B^H W R)`.
+    num: Vec<f64>,
+    /// The residues on the measured DOFs, per line (measured x references).
+    residuals: Vec<Mat<c64>>,
+    /// The largest backward error of the lines' solves.
+    backward_error: f64,
+}
+
+/// `dA/dtheta u` for each column family at one line: `(1 + i eta) K' u - w^2 M' u`, with `K' x`
+/// and `M' x` from the model's element-by-element columns at `lambda = 0` and `lambda = 1`.
+fn derivative_columns(
+    up: &UpdateModel<'_>,
+    which: Columns,
+    a: DynamicStiffness,
+    u: &[c64],
+) -> Result<Vec<Vec<c64>>, UpdateError> {
+    let n = u.len();
+    let re: Vec<f64> = u.iter().map(|v| v.re).collect();
+    let im: Vec<f64> = u.iter().map(|v| v.im).collect();
+    let cols = |x: &[f64], lambda: f64| -> Result<Vec<SparseColumn>, UpdateError> {
+        match which {
+            Columns::Groups => up.group_columns(x, lambda),
+            _ => up.columns(x, lambda),
+        }
+    };
+    let (k_re, k_im) = (cols(&re, 0.0)?, cols(&im, 0.0)?);
+    let (l_re, l_im) = (cols(&re, 1.0)?, cols(&im, 1.0)?);
+    let mut out = Vec::with_capacity(k_re.len() + 1);
+    for c in 0..k_re.len() {
+        let mut v = vec![c64::new(0.0, 0.0); n];
+        // K' u and M' u = (col(0) - col(1)) u, real and imaginary parts on the group's DOFs
+        for (idx, &d) in k_re[c].dofs.iter().enumerate() {
+            let ku = c64::new(k_re[c].values[idx], k_im[c].values[idx]);
+            let mu = c64::new(
+                k_re[c].values[idx] - l_re[c].values[idx],
+                k_im[c].values[idx] - l_im[c].values[idx],
+            );
+            v[d] = a.k * ku + a.m * mu;
+        }
+        out.push(v);
+    }
+    if let Columns::Parameters { loss_factor: true } = which {
+        // dA/deta u = i K(p) u
+        let k = &up.matrices().k;
+        let mut kr = vec![0.0; n];
+        let mut ki = vec![0.0; n];
+        femu_sparse::csc::mul_vec(k, &re, &mut kr)?;
+        femu_sparse::csc::mul_vec(k, &im, &mut ki)?;
+        out.push(kr.iter().zip(&ki).map(|(r, i)| c64::new(-i, *r)).collect());
+    }
+    Ok(out)
+}
+
+/// The objective (and, with `which`, its normal equations) at the model's current parameters and
+/// the loss factor `eta`.
+fn evaluate(
+    up: &UpdateModel<'_>,
+    test: &FrfTest,
+    eta: f64,
+    which: Columns,
+    method: FrfMethod,
+) -> Result<Evaluation, UpdateError> {
+    match method {
+        FrfMethod::SbEbe => evaluate_residue(up, test, eta, which),
+        FrfMethod::OutputError => evaluate_output(up, test, eta, which),
+    }
+}
+
+/// Sums per-line evaluations.
+fn total(per_line: Vec<Result<Evaluation, UpdateError>>) -> Result<Evaluation, UpdateError> {
+    let mut total = Evaluation {
+        objective: 0.0,
+        gram: Vec::new(),
+        num: Vec::new(),
+        residuals: Vec::with_capacity(per_line.len()),
+        backward_error: 0.0,
+    };
+    for e in per_line {
+        let e = e?;
+        total.objective += e.objective;
+        total.backward_error = total.backward_error.max(e.backward_error);
+        if total.gram.is_empty() {
+            total.gram = e.gram;
+            total.num = e.num;
+        } else {
+            for (a, b) in total.num.iter_mut().zip(&e.num) {
+                *a += b;
+            }
+            for (ra, rb) in total.gram.iter_mut().zip(&e.gram) {
+                for (a, b) in ra.iter_mut().zip(rb) {
+                    *a += b;
+                }
+            }
+        }
+        total.residuals.extend(e.residuals);
+    }
+    Ok(total)
+}
+
+/// Adds `Re(B^H W B)` and `Re(B^H W r)` of one load case to `gram` and `num` (sized on first
+/// use).
+fn accumulate(gram: &mut Vec<Vec<f64>>, num: &mut Vec<f64>, b: &Mat<c64>, r: &[c64], w: &[f64]) {
+    let p = b.ncols();
+    if gram.is_empty() {
+        *gram = vec![vec![0.0; p]; p];
+        *num = vec![0.0; p];
+    }
+    for c in 0..p {
+        num[c] += (0..w.len())
+            .map(|i| w[i] * (b[(i, c)].conj() * r[i]).re)
+            .sum::<f64>();
+        for c2 in c..p {
+            let g: f64 = (0..w.len())
+                .map(|i| w[i] * (b[(i, c)].conj() * b[(i, c2)]).re)
+                .sum();
+            gram[c][c2] += g;
+            if c2 != c {
+                gram[c2][c] += g;
+            }
+        }
+    }
+}
+
+/// The output error's weights: `1 / max(|H_test|, 1 % of the function's peak over the lines)^2`,
+/// per line, response and reference.
+fn output_weights(test: &FrfTest) -> Vec<Mat<f64>> {
+    let (rows, cols) = (test.measured.len(), test.references.len());
+    let peak = Mat::from_fn(rows, cols, |i, j| {
+        test.receptance
+            .iter()
+            .map(|h| h[(i, j)].norm())
+            .fold(0.0, f64::max)
+    });
+    test.receptance
+        .iter()
+        .map(|h| {
+            Mat::from_fn(rows, cols, |i, j| {
+                let s = h[(i, j)].norm().max(0.01 * peak[(i, j)]);
+                if s > 0.0 { 1.0 / (s * s) } else { 0.0 }
+            })
+        })
+        .collect()
+}
+
+/// The output error at the model's current parameters (see [`FrfMethod::OutputError`]).
+fn evaluate_output(
+    up: &UpdateModel<'_>,
+    test: &FrfTest,
+    eta: f64,
+    which: Columns,
+) -> Result<Evaluation, UpdateError> {
+    let sys = up.matrices();
+    let n = sys.dofs.free_count();
+    test.check(n)?;
+    let weights = output_weights(test);
+    let combination = Combination::new(&[&sys.k, &sys.m], &["K", "M"])?;
+    let f = test.forces(n);
+    let per_line: Vec<Result<Evaluation, UpdateError>> = (0..test.omegas.len())
+        .into_par_iter()
+        .map(|l| {
+            let omega = test.omegas[l];
+            let a = DynamicStiffness::loss_factor(omega, eta);
+            let mut factor = combination
+                .factor(&[a.k, a.m])
+                .map_err(|e| at_line(e.into(), l, omega))?;
+            let mut u = f.clone();
+            let mut backward_error = factor
+                .solve_in_place(u.as_mut())
+                .map_err(|e| at_line(e.into(), l, omega))?;
+            let h = &test.receptance[l];
+            let r = Mat::from_fn(h.nrows(), h.ncols(), |i, j| {
+                u[(test.measured[i], j)] - h[(i, j)]
+            });
+            let mut objective = 0.0;
+            for j in 0..r.ncols() {
+                for i in 0..r.nrows() {
+                    objective += weights[l][(i, j)] * r[(i, j)].norm_sqr();
+                }
+            }
+            let (mut gram, mut num) = (Vec::new(), Vec::new());
+            if which != Columns::None {
+                for j in 0..r.ncols() {
+                    let uj: Vec<c64> = u.col(j).iter().copied().collect();
+                    let v = derivative_columns(up, which, a, &uj)?;
+                    let mut z = Mat::from_fn(n, v.len(), |i, c| v[c][i]);
+                    backward_error = backward_error.max(
+                        factor
+                            .solve_in_place(z.as_mut())
+                            .map_err(|e| at_line(e.into(), l, omega))?,
+                    );
+                    // dH/dtheta = -[A^-1 (dA/dtheta) u]_a
+                    let b = Mat::from_fn(r.nrows(), v.len(), |i, c| -z[(test.measured[i], c)]);
+                    let rj: Vec<c64> = r.col(j).iter().copied().collect();
+                    let w: Vec<f64> = (0..r.nrows()).map(|i| weights[l][(i, j)]).collect();
+                    accumulate(&mut gram, &mut num, &b, &rj, &w);
+                }
+            }
+            Ok(Evaluation {
+                objective,
+                gram,
+                num,
+                residuals: vec![r],
+                backward_error,
+            })
+        })
+        .collect();
+    total(per_line)
+}
+
+/// The residue objective at the model's current parameters (see [`FrfMethod::SbEbe`]).
+fn evaluate_residue(
+    up: &UpdateModel<'_>,
+    test: &FrfTest,
+    eta: f64,
+    which: Columns,
+) -> Result<Evaluation, UpdateError> {
+    let sys = up.matrices();
+    let n = sys.dofs.free_count();
+    test.check(n)?;
+    let w_inv = femu_correlate::expansion::residual_metric(&sys.m)?;
+    let w: Vec<f64> = test.measured.iter().map(|&d| 1.0 / w_inv[d]).collect();
+    let forced = ForcedExpander::new(&sys.k, &sys.m, &test.measured)?;
+    let f = test.forces(n);
+    let per_line: Vec<Result<Evaluation, UpdateError>> = (0..test.omegas.len())
+        .into_par_iter()
+        .map(|l| {
+            let a = DynamicStiffness::loss_factor(test.omegas[l], eta);
+            let mut line = forced.line(a).map_err(|e| at_line(e, l, test.omegas[l]))?;
+            let e = line
+                .expand(test.receptance[l].as_ref(), f.as_ref())
+                .map_err(|e| at_line(e, l, test.omegas[l]))?;
+            let r = e.residual;
+            let mut objective = 0.0;
+            for j in 0..r.ncols() {
+                for (i, wi) in w.iter().enumerate() {
+                    objective += wi * r[(i, j)].norm_sqr();
+                }
+            }
+            let (mut gram, mut num) = (Vec::new(), Vec::new());
+            if which != Columns::None {
+                for j in 0..r.ncols() {
+                    let u: Vec<c64> = e.u.col(j).iter().copied().collect();
+                    let v = derivative_columns(up, which, a, &u)?;
+                    let vm = Mat::from_fn(n, v.len(), |i, c| v[c][i]);
+                    let b = line.project(vm.as_ref())?;
+                    let rj: Vec<c64> = r.col(j).iter().copied().collect();
+                    accumulate(&mut gram, &mut num, &b, &rj, &w);
+                }
+            }
+            Ok(Evaluation {
+                objective,
+                gram,
+                num,
+                residuals: vec![r],
+                backward_error: line.backward_error(),
+            })
+        })
+        .collect();
+    total(per_line)
+}
+
+fn at_line(e: femu_correlate::CorrelateError, l: usize, omega: f64) -> UpdateError {
+    UpdateError::Invalid {
+        what: "FRF residue",
+        reason: format!(
+            "line {} ({:.6} Hz): {e}",
+            l + 1,
+            omega / (2.0 * std::f64::consts::PI)
+        ),
+    }
+}
+
+/// Localisation from measured FRFs: every group's indicators from the residues (4) of the
+/// responses expanded at each line with the loss factor `eta`, ranked and selected by `rule`
+/// (its `test_error` does not apply: the measured values are imposed). The explained fraction
+/// (the default indicator) is the fraction of `J` the group's own factor removes within its
+/// bounds; [`Localisation::joint_fit`] fits several together from the same normal equations.
+///
+/// # Errors
+/// The test's sizes and values, a bad rule, a singular line (undamped, at an eigenvalue of the
+/// structure with its measured DOFs held), the static solve of the strain energy.
+pub fn frf_localise(
+    up: &UpdateModel<'_>,
+    test: &FrfTest,
+    eta: f64,
+    rule: &SelectionRule,
+) -> Result<Localisation, UpdateError> {
+    crate::localise::check_rule(rule)?;
+    check_eta(eta)?;
+    let e = evaluate_residue(up, test, eta, Columns::Groups)?;
+    let sys = up.matrices();
+    let n = sys.dofs.free_count();
+    let w_inv = femu_correlate::expansion::residual_metric(&sys.m)?;
+    let groups = up.groups().len();
+    // residual force on each group's DOFs, and the strain energy of K R_D = R_F
+    let mut force = vec![0.0; groups];
+    let mut r_f = Mat::<f64>::zeros(n, 2 * e.residuals.iter().map(|r| r.ncols()).sum::<usize>());
+    let mut c = 0;
+    let mut on_dof = vec![0.0; n];
+    for r in &e.residuals {
+        for j in 0..r.ncols() {
+            for (i, &d) in test.measured.iter().enumerate() {
+                r_f[(d, c)] = r[(i, j)].re;
+                r_f[(d, c + 1)] = r[(i, j)].im;
+                on_dof[d] += r[(i, j)].norm_sqr() / w_inv[d];
+            }
+            c += 2;
+        }
+    }
+    for (g, f) in force.iter_mut().enumerate() {
+        *f = up.group_dofs(g).iter().map(|&d| on_dof[d]).sum();
+    }
+    let solver = femu_correlate::StiffnessSolver::new(&sys.k, &sys.m)?;
+    let r_d = solver.displacement_residuals(r_f.as_ref())?;
+    let ones = vec![1.0; n];
+    let mut energy = vec![0.0; groups];
+    for j in 0..r_d.ncols() {
+        let rd: Vec<f64> = r_d.col(j).iter().copied().collect();
+        for (g, col) in up.group_columns(&rd, 0.0)?.iter().enumerate() {
+            energy[g] += col.weighted_dot_full(&rd, &ones);
+        }
+    }
+    let bounds = crate::localise::stiffness_bounds(up);
+    let explained = (0..groups)
+        .map(|g| {
+            crate::localise::explained_fraction(
+                e.num.get(g).copied().unwrap_or(0.0),
+                e.gram.get(g).map_or(0.0, |row| row[g]),
+                e.objective,
+                bounds[g],
+            )
+        })
+        .collect();
+    let mut loc = crate::localise::rank(up, energy, force, explained, rule);
+    loc.normal = Some((e.gram, e.num, e.objective));
+    Ok(loc)
+}
+
+fn check_eta(eta: f64) -> Result<(), UpdateError> {
+    if eta.is_finite() && (0.0..=1.0).contains(&eta) {
+        Ok(())
+    } else {
+        Err(UpdateError::Invalid {
+            what: "loss factor",
+            reason: format!("{eta}: a structural loss factor is in [0, 1]"),
+        })
+    }
+}
+
+/// The settings of [`frf_update`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrfUpdateOptions {
+    /// The model's structural loss factor (the starting value when it is fitted; default 0.02).
+    pub loss_factor: f64,
+    /// Fit the loss factor with the parameters (default true).
+    pub fit_loss_factor: bool,
+    /// At most this many Gauss-Newton steps (default 30).
+    pub max_iterations: usize,
+    /// Stop when a step lowers the objective by less than this fraction (default 1e-8).
+    pub tolerance: f64,
+    /// What is minimised (default: the output error, started from SB-EBE's solution).
+    pub method: FrfMethod,
+}
+
+impl Default for FrfUpdateOptions {
+    fn default() -> Self {
+        Self {
+            loss_factor: 0.02,
+            fit_loss_factor: true,
+            max_iterations: 30,
+            tolerance: 1e-8,
+            method: FrfMethod::OutputError,
+        }
+    }
+}
+
+/// One step of [`frf_update`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FrfIteration {
+    /// The objective minimised by the step.
+    pub method: FrfMethod,
+    /// The objective before the step.
+    pub objective: f64,
+    /// The parameters before the step.
+    pub theta: Vec<f64>,
+    /// The loss factor before the step.
+    pub loss_factor: f64,
+}
+
+/// What [`frf_update`] found.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FrfUpdate {
+    /// Parameter names (the model's).
+    pub names: Vec<String>,
+    /// The updated parameters.
+    pub theta: Vec<f64>,
+    /// The updated (or given) loss factor.
+    pub loss_factor: f64,
+    /// The objective minimised last.
+    pub method: FrfMethod,
+    /// That objective at the start and at the end.
+    pub objective: (f64, f64),
+    /// Every step's starting point.
+    pub history: Vec<FrfIteration>,
+    /// Whether the steps stopped by the tolerance (not by the iteration limit).
+    pub converged: bool,
+    /// The largest backward error of the lines' complex solves at the end.
+    pub backward_error: f64,
+}
+
+impl std::fmt::Display for FrfUpdate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "{} on FRFs: objective {:.4e} -> {:.4e} in {} steps{}",
+            match self.method {
+                FrfMethod::SbEbe => "SB-EBE",
+                FrfMethod::OutputError => "SB-EBE, then the output error,",
+            },
+            self.objective.0,
+            self.objective.1,
+            self.history.len(),
+            if self.converged {
+                ""
+            } else {
+                " (iteration limit)"
+            }
+        )?;
+        for (n, t) in self.names.iter().zip(&self.theta) {
+            writeln!(f, "  {n:<16} {t:+.4}")?;
+        }
+        write!(f, "  loss factor      {:.5}", self.loss_factor)
+    }
+}
+
+/// Updating from FRF data: Gauss-Newton over the model's parameters (stiffness, mass or
+/// thickness of its groups, as built) and, when asked, the structural loss factor, each step the
+/// least-squares solution of the linearised objective (the re-expansion included for SB-EBE)
+/// clamped to the bounds, shortened by halves until the objective decreases. With
+/// [`FrfMethod::OutputError`] (the default) SB-EBE runs first and the output error continues
+/// from its solution: SB-EBE needs no resonance matched to start, the output error is unbiased
+/// under noise. The model is left at the updated parameters.
+///
+/// # Errors
+/// The test's sizes and values, a loss factor outside `[0, 1]`, a singular line.
+pub fn frf_update(
+    up: &mut UpdateModel<'_>,
+    test: &FrfTest,
+    options: &FrfUpdateOptions,
+) -> Result<FrfUpdate, UpdateError> {
+    check_eta(options.loss_factor)?;
+    test.check(up.matrices().dofs.free_count())?;
+    let stages: &[FrfMethod] = match options.method {
+        FrfMethod::SbEbe => &[FrfMethod::SbEbe],
+        FrfMethod::OutputError => &[FrfMethod::SbEbe, FrfMethod::OutputError],
+    };
+    let start = evaluate(up, test, options.loss_factor, Columns::None, options.method)?.objective;
+    let mut eta = options.loss_factor;
+    let mut history = Vec::new();
+    let mut end = (start, 0.0, true);
+    for &method in stages {
+        end = gauss_newton(up, test, options, method, &mut eta, &mut history)?;
+    }
+    let (objective, backward_error, converged) = end;
+    Ok(FrfUpdate {
+        names: up.parameters().iter().map(|p| p.name.clone()).collect(),
+        theta: up.theta(),
+        loss_factor: eta,
+        method: options.method,
+        objective: (start, objective),
+        history,
+        converged,
+        backward_error,
+    })
+}
+
+/// Gauss-Newton steps of `method` from the model's parameters and `eta`; returns the final
+/// objective, the largest backward error at the end and whether the tolerance stopped it.
+fn gauss_newton(
+    up: &mut UpdateModel<'_>,
+    test: &FrfTest,
+    options: &FrfUpdateOptions,
+    method: FrfMethod,
+    eta: &mut f64,
+    history: &mut Vec<FrfIteration>,
+) -> Result<(f64, f64, bool), UpdateError> {
+    let fit_eta = options.fit_loss_factor;
+    let which = Columns::Parameters {
+        loss_factor: fit_eta,
+    };
+    let bounds: Vec<(f64, f64)> = up
+        .parameters()
+        .iter()
+        .map(|p| (p.lower, p.upper))
+        .chain(fit_eta.then_some((0.0, 1.0)))
+        .collect();
+    let mut theta = up.theta();
+    let mut e = evaluate(up, test, *eta, which, method)?;
+    for _ in 0..options.max_iterations {
+        history.push(FrfIteration {
+            method,
+            objective: e.objective,
+            theta: theta.clone(),
+            loss_factor: *eta,
+        });
+        if e.objective == 0.0 {
+            return Ok((0.0, e.backward_error, true));
+        }
+        let p = e.num.len();
+        let g = Mat::from_fn(p, p, |a, b| e.gram[a][b]);
+        let (inverse, _) = crate::lsq::symmetric_pseudo_inverse(g.as_ref())?;
+        let step: Vec<f64> = (0..p)
+            .map(|a| -(0..p).map(|b| inverse[(a, b)] * e.num[b]).sum::<f64>())
+            .collect();
+        let mut current: Vec<f64> = theta.clone();
+        current.extend(fit_eta.then_some(*eta));
+        let mut accepted = None;
+        let mut s = 1.0;
+        for _ in 0..8 {
+            let trial: Vec<f64> = current
+                .iter()
+                .zip(&step)
+                .zip(&bounds)
+                .map(|((c, d), (lo, hi))| (c + s * d).clamp(*lo, *hi))
+                .collect();
+            let (t, et) = split(&trial, theta.len(), *eta);
+            up.set_theta(&t)?;
+            let trial_objective = evaluate(up, test, et, Columns::None, method)?.objective;
+            if trial_objective < e.objective {
+                accepted = Some((t, et, trial_objective));
+                break;
+            }
+            s *= 0.5;
+        }
+        let Some((t, et, objective)) = accepted else {
+            up.set_theta(&theta)?;
+            return Ok((e.objective, e.backward_error, true));
+        };
+        let decrease = (e.objective - objective) / e.objective;
+        theta = t;
+        *eta = et;
+        e = evaluate(up, test, *eta, which, method)?;
+        if decrease < options.tolerance {
+            return Ok((e.objective, e.backward_error, true));
+        }
+    }
+    Ok((e.objective, e.backward_error, false))
+}
+
+/// The parameters and the loss factor of a stacked vector.
+fn split(v: &[f64], params: usize, eta: f64) -> (Vec<f64>, f64) {
+    (v[..params].to_vec(), v.get(params).copied().unwrap_or(eta))
+}
+
+/// The model's receptance at the test's DOFs against the measured one, per line:
+/// `||H_model - H_test||_F / ||H_test||_F`, the model solved directly (`K (1 + i eta) - w^2 M`,
+/// one complex factorization per line). The truth check of an FRF update on lines it did not
+/// use.
+///
+/// # Errors
+/// The test's sizes and values, a loss factor outside `[0, 1]`, a singular line.
+pub fn frf_errors(up: &UpdateModel<'_>, test: &FrfTest, eta: f64) -> Result<Vec<f64>, UpdateError> {
+    check_eta(eta)?;
+    let sys = up.matrices();
+    let n = sys.dofs.free_count();
+    test.check(n)?;
+    let combination = Combination::new(&[&sys.k, &sys.m], &["K", "M"])?;
+    let f = test.forces(n);
+    (0..test.omegas.len())
+        .into_par_iter()
+        .map(|l| {
+            let a = DynamicStiffness::loss_factor(test.omegas[l], eta);
+            let mut factor = combination.factor(&[a.k, a.m])?;
+            let mut u = f.clone();
+            factor.solve_in_place(u.as_mut())?;
+            let h = &test.receptance[l];
+            let (mut diff, mut norm) = (0.0, 0.0);
+            for j in 0..h.ncols() {
+                for (i, &d) in test.measured.iter().enumerate() {
+                    diff += (u[(d, j)] - h[(i, j)]).norm_sqr();
+                    norm += h[(i, j)].norm_sqr();
+                }
+            }
+            Ok((diff / norm).sqrt())
+        })
+        .collect()
+}
