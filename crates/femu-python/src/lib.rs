@@ -813,9 +813,14 @@ fn correlate<'py>(
 /// damping ratios, gives each paired model mode its test's ratio (the others `damping_ratio`).
 /// `direct=True` solves the dynamic stiffness at each line instead (docs/MATH.md, "Frequency
 /// responses, directly"): the model's own dampers act, with a loss factor or Rayleigh damping.
+/// `update`, candidate element sets, updates the model from the FRFs (docs/MATH.md, "Updating
+/// from frequency responses"): the sets ranked by the FRF residue on the lowest `tuned_lines`
+/// lines (default two-thirds), the selected ones (`update_all`: every one) and the loss factor
+/// fitted (SB-EBE, then the output error; `sb_ebe_only` stops after SB-EBE) on at most
+/// `update_lines` lines per band, and checked on the held-out lines (the dict's `update`).
 /// Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (model, path, *, damping_ratio=None, loss_factor=None, rayleigh=None, direct=false, damping_from=None, modes_up_to=2.0))]
+#[pyo3(signature = (model, path, *, damping_ratio=None, loss_factor=None, rayleigh=None, direct=false, damping_from=None, modes_up_to=2.0, update=None, tuned_lines=None, update_lines=24, update_all=false, sb_ebe_only=false))]
 #[allow(clippy::too_many_arguments)]
 fn frf<'py>(
     py: Python<'py>,
@@ -827,6 +832,11 @@ fn frf<'py>(
     direct: bool,
     damping_from: Option<PathBuf>,
     modes_up_to: f64,
+    update: Option<Vec<String>>,
+    tuned_lines: Option<usize>,
+    update_lines: usize,
+    update_all: bool,
+    sb_ebe_only: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let request = femu_study::frf::FrfRequest {
         file: None,
@@ -836,6 +846,11 @@ fn frf<'py>(
         direct,
         damping_from,
         modes_up_to,
+        update: update.unwrap_or_default(),
+        tuned_lines,
+        update_lines,
+        update_all,
+        sb_ebe_only,
     };
     let result = py
         .detach(|| {

@@ -203,6 +203,37 @@ def test_the_frf_correlation_is_one_pipeline(case):
     assert min(f["frac"] for f in py["functions"]) < 0.9
 
 
+def test_the_frf_update_is_one_pipeline(case):
+    """Updating from the FRFs (numpy's direct solve of the bar whose G1 has 0.8 of the modulus,
+    loss factor 0.02) over the four slabs from a loss factor of 0.01: the command line, a study
+    file's `[frf]` and Python give the same JSON; G1 is found (-0.2 to 1e-4), the others stay at
+    0, the loss factor is 0.02, and the held-out lines' error falls."""
+    run = lambda *args: subprocess.run([str(FEMU), *map(str, args), "--quiet"], cwd=case,
+                                       capture_output=True, text=True)
+    done = run("frf", "bar.inp", "frf.uff", "--loss-factor", 0.01, "--update", ",".join(SETS),
+               "--update-all", "--json", "frf_update.json")
+    assert done.returncode == 0, done.stderr
+    (case / "study_frf.toml").write_text(
+        'model = "bar.inp"\ntest = "test.csv"\n[frf]\nfile = "frf.uff"\nloss_factor = 0.01\n'
+        'update = ["G0", "G1", "G2", "G3"]\nupdate_all = true\n'
+    )
+    done = run("run", "study_frf.toml", "--out", "study_frf")
+    assert done.returncode == 0, done.stderr
+    model = femu.read_model(case / "bar.inp")
+    py = femu.frf(model, case / "frf.uff", loss_factor=0.01, update=SETS, update_all=True)
+    assert_same(py, read(case / "frf_update.json"))
+    assert_same(read(case / "study_frf" / "frf.json"), py)
+    u = py["update"]
+    assert u["result"]["names"] == [f"k:{s}" for s in SETS]
+    want = [0.0, -0.2, 0.0, 0.0]
+    assert np.allclose(u["result"]["theta"], want, atol=1e-4), u["result"]
+    assert abs(u["result"]["loss_factor"] - LOSS) < 1e-5
+    before, after = u["held_out_error"]
+    assert after < 1e-3 * before
+    with pytest.raises(femu.FemuError, match="NOPE"):
+        femu.frf(model, case / "frf.uff", update=["G1", "NOPE"])
+
+
 def test_another_solvers_matrices_are_a_model_everywhere(case):
     """The bar's K and M written by `femu matrices` (MatrixMarket, DOF table, node table) are a
     model for the command line, a study file and Python alike: the same estimate from each, the

@@ -72,6 +72,37 @@ pub struct FrfRequest {
         arg(long, value_name = "FACTOR", default_value_t = 2.0)
     )]
     pub modes_up_to: f64,
+    /// Update the model from the FRFs: candidate element sets (comma-separated), ranked by the
+    /// FRF residue (4) on the tuned lines; the selected sets' stiffness factors and the loss
+    /// factor are fitted (SB-EBE on FRFs, then the output error), and the model is checked on the
+    /// held-out lines. Starts from `--loss-factor` (default 0.02).
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "SETS", value_delimiter = ',', conflicts_with_all = ["damping_ratio", "rayleigh", "damping_from"])
+    )]
+    pub update: Vec<String>,
+    /// With `--update`: the lowest N lines are tuned and the others held out for the check
+    /// (default: the lowest two-thirds).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "N", requires = "update"))]
+    pub tuned_lines: Option<usize>,
+    /// With `--update`: at most this many lines of each band (tuned, held out), evenly picked,
+    /// enter the fit and the check (each line is one complex factorization per step).
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, value_name = "N", default_value_t = 24, requires = "update")
+    )]
+    pub update_lines: usize,
+    /// With `--update`: fit every candidate set instead of those the residue selects.
+    #[cfg_attr(feature = "clap", arg(long, requires = "update"))]
+    pub update_all: bool,
+    /// With `--update`: stop after SB-EBE on FRFs (the paper's method alone; without the output
+    /// error that follows it by default, it is biased by measurement noise).
+    #[cfg_attr(feature = "clap", arg(long, requires = "update"))]
+    pub sb_ebe_only: bool,
+}
+
+fn default_update_lines() -> usize {
+    24
 }
 
 impl Default for FrfRequest {
@@ -84,6 +115,11 @@ impl Default for FrfRequest {
             direct: false,
             damping_from: None,
             modes_up_to: 2.0,
+            update: Vec::new(),
+            tuned_lines: None,
+            update_lines: default_update_lines(),
+            update_all: false,
+            sb_ebe_only: false,
         }
     }
 }
@@ -228,6 +264,8 @@ pub struct FrfCorrelation {
     pub functions: Vec<FunctionCorrelation>,
     /// One row per line and reference.
     pub lines: Vec<LineCorrelation>,
+    /// The update from the FRFs, when asked (`--update`).
+    pub update: Option<FrfUpdateStudy>,
     /// What the reader and the workflow noticed.
     pub notes: Vec<String>,
     /// The model's FRFs at the test's lines (outputs x inputs per line), for the writers.
@@ -398,9 +436,31 @@ pub fn frf_correlation(
             });
         }
     }
+    let update = if request.update.is_empty() {
+        None
+    } else {
+        Some(
+            update_from_frfs(
+                model,
+                request,
+                &dampers,
+                &outputs,
+                &inputs,
+                &pairs
+                    .iter()
+                    .map(|p| (p.1, p.2, &p.3[..]))
+                    .collect::<Vec<_>>(),
+                &lines,
+                kind,
+                &mut notes,
+            )
+            .map_err(|e| StudyError::within(path, e))?,
+        )
+    };
     Ok(FrfCorrelation {
         kind,
         damping,
+        update,
         direct: request.direct,
         modes,
         backward_error,
@@ -410,6 +470,276 @@ pub fn frf_correlation(
         notes,
         model: Some(frf),
         measured: pairs.iter().map(|p| (*p.0).clone()).collect(),
+    })
+}
+
+/// What the update from FRFs found ([`FrfRequest::update`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct FrfUpdateStudy {
+    /// The candidate sets, ranked by the FRF residue on the tuned lines (explained fraction of the
+    /// residue objective, residual force, strain energy of the displacement residual).
+    pub ranking: Vec<femu_update::localise::GroupIndicator>,
+    /// The sets updated.
+    pub updated: Vec<String>,
+    /// The tuned band (Hz) and the lines of it used.
+    pub tuned: (f64, f64, usize),
+    /// The held-out band (Hz) and the lines of it used (none when every line is tuned).
+    pub held_out: Option<(f64, f64, usize)>,
+    /// The fit: parameters, loss factor, objective and steps.
+    pub result: femu_update::FrfUpdate,
+    /// RMS over the tuned lines of the receptance error `||H_model - H_test|| / ||H_test||`,
+    /// before and after.
+    pub tuned_error: (f64, f64),
+    /// The same over the held-out lines (the truth check), before and after.
+    pub held_out_error: Option<(f64, f64)>,
+}
+
+impl std::fmt::Display for FrfUpdateStudy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "\nUpdating from FRFs: {} lines tuned ({:.2}-{:.2} Hz)",
+            self.tuned.2, self.tuned.0, self.tuned.1
+        )?;
+        writeln!(
+            f,
+            "\n| set | explained | residual force | strain energy |\n|---|---|---|---|"
+        )?;
+        for r in &self.ranking {
+            writeln!(
+                f,
+                "| {} | {:.3} | {:.3e} | {:.3e} |",
+                r.name, r.explained, r.residual_force, r.strain_energy
+            )?;
+        }
+        writeln!(f, "\n{}", self.result)?;
+        writeln!(
+            f,
+            "receptance error on the tuned lines (RMS): {:.4} -> {:.4}",
+            self.tuned_error.0, self.tuned_error.1
+        )?;
+        match (self.held_out, self.held_out_error) {
+            (Some((lo, hi, n)), Some((before, after))) => writeln!(
+                f,
+                "on the {n} held-out lines ({lo:.2}-{hi:.2} Hz), the truth check: {before:.4} -> {after:.4}: {}",
+                if after < before {
+                    "the updated model predicts lines it was not tuned on better"
+                } else {
+                    "the updated model does NOT predict the held-out lines better: the change is not confirmed"
+                }
+            ),
+            _ => writeln!(f, "no held-out line: the update is not checked"),
+        }
+    }
+}
+
+/// At most `count` of `lines` (indices), evenly picked, the ends kept.
+fn pick(lines: &[usize], count: usize) -> Vec<usize> {
+    if lines.len() <= count || count < 2 {
+        return lines.iter().copied().take(count.max(1)).collect();
+    }
+    let mut out: Vec<usize> = (0..count)
+        .map(|i| lines[(i * (lines.len() - 1) + (count - 1) / 2) / (count - 1)])
+        .collect();
+    out.dedup();
+    out
+}
+
+/// The update of [`FrfRequest::update`]: the measured FRFs as receptances on the model's free
+/// DOFs, the lines split into a tuned and a held-out band, the candidate sets ranked by the FRF
+/// residue, the selected ones (or all) fitted with the loss factor, and the receptance error
+/// on both bands before and after.
+#[allow(clippy::too_many_arguments)]
+fn update_from_frfs(
+    model: &LoadedModel,
+    request: &FrfRequest,
+    dampers: &femu_fem::assembly::Dampers,
+    outputs: &SensorLayout,
+    inputs: &SensorLayout,
+    pairs: &[(usize, usize, &[c64])],
+    lines: &[f64],
+    kind: ResponseKind,
+    notes: &mut Vec<String>,
+) -> Result<FrfUpdateStudy, StudyError> {
+    use femu_update::{FrfMethod, FrfTest, FrfUpdateOptions, SelectionRule, UpdateModel};
+    if request.damping_ratio.is_some()
+        || request.rayleigh.is_some()
+        || request.damping_from.is_some()
+    {
+        return Err(StudyError::invalid(
+            "update",
+            "updating from FRFs fits a structural loss factor: give --loss-factor (its start), not damping ratios or Rayleigh coefficients",
+        ));
+    }
+    if dampers.any() {
+        return Err(StudyError::invalid(
+            "update",
+            "the model has its own dampers (bushings' B, springs' and bushings' GE), which updating from FRFs does not model: remove them or correlate only",
+        ));
+    }
+    if model.matrices.is_some() {
+        return Err(StudyError::invalid(
+            "update",
+            "updating from FRFs needs element sets: this model is another solver's matrices",
+        ));
+    }
+    // the measured DOFs: every sensor along a free axis
+    let dofs_of = |layout: &SensorLayout, what: &str| -> Result<Vec<usize>, StudyError> {
+        (0..layout.len())
+            .map(|s| match layout.row(s) {
+                [(d, w)] if (*w - 1.0).abs() < 1e-15 => Ok(*d),
+                [] => Err(StudyError::invalid(
+                    "update",
+                    format!("{what} {} is on a DOF the model holds (a constraint or a clamp): it has no response to fit", s + 1),
+                )),
+                _ => Err(StudyError::invalid(
+                    "update",
+                    format!("{what} {} is not along a free DOF", s + 1),
+                )),
+            })
+            .collect()
+    };
+    let measured = dofs_of(outputs, "response")?;
+    let references = dofs_of(inputs, "reference")?;
+    // the receptance matrix of every line: every response under every reference
+    let mut seen = vec![vec![false; references.len()]; measured.len()];
+    for (oi, ii, _) in pairs {
+        seen[*oi][*ii] = true;
+    }
+    if let Some((o, i)) = (0..measured.len())
+        .flat_map(|o| (0..references.len()).map(move |i| (o, i)))
+        .find(|(o, i)| !seen[*o][*i])
+    {
+        return Err(StudyError::invalid(
+            "update",
+            format!(
+                "response {} has no FRF for reference {}: updating fits the full matrix (every response under every reference)",
+                o + 1,
+                i + 1
+            ),
+        ));
+    }
+    let positive: Vec<usize> = (0..lines.len()).filter(|&l| lines[l] > 0.0).collect();
+    if positive.len() < lines.len() {
+        notes.push(format!(
+            "updating: {} line(s) at 0 Hz left out (no dynamic response)",
+            lines.len() - positive.len()
+        ));
+    }
+    if positive.is_empty() {
+        return Err(StudyError::invalid("update", "no line above 0 Hz"));
+    }
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let receptance: Vec<faer::Mat<c64>> = positive
+        .iter()
+        .map(|&l| {
+            let w = two_pi * lines[l];
+            let to_u = match kind {
+                ResponseKind::Receptance => c64::new(1.0, 0.0),
+                ResponseKind::Mobility => c64::new(0.0, w),
+                ResponseKind::Accelerance => c64::new(-w * w, 0.0),
+            };
+            let mut h = faer::Mat::<c64>::zeros(measured.len(), references.len());
+            for (oi, ii, values) in pairs {
+                h[(*oi, *ii)] = values[l] / to_u;
+            }
+            h
+        })
+        .collect();
+    let all = FrfTest {
+        omegas: positive.iter().map(|&l| two_pi * lines[l]).collect(),
+        measured,
+        references,
+        receptance,
+    };
+    let count = all.omegas.len();
+    let tuned_count = request
+        .tuned_lines
+        .unwrap_or((2 * count).div_ceil(3))
+        .min(count);
+    if tuned_count == 0 {
+        return Err(StudyError::invalid("tuned lines", "must be at least 1"));
+    }
+    if request.update_lines == 0 {
+        return Err(StudyError::invalid("update lines", "must be at least 1"));
+    }
+    let tuned_idx = pick(&(0..tuned_count).collect::<Vec<_>>(), request.update_lines);
+    let held_idx = pick(
+        &(tuned_count..count).collect::<Vec<_>>(),
+        request.update_lines,
+    );
+    let tuned = all.lines(&tuned_idx);
+    let held = (!held_idx.is_empty()).then(|| all.lines(&held_idx));
+    let hz = |t: &FrfTest| {
+        (
+            t.omegas[0] / two_pi,
+            t.omegas[t.omegas.len() - 1] / two_pi,
+            t.omegas.len(),
+        )
+    };
+    let eta = request.loss_factor.unwrap_or(0.02);
+    if request.loss_factor.is_none() {
+        notes.push(
+            "updating: the loss factor starts at 0.02 (--loss-factor gives another start)".into(),
+        );
+    }
+    let sets = crate::updating::resolve_sets(model, &request.update)?;
+    let set_refs: Vec<&str> = sets.iter().map(String::as_str).collect();
+    let build = |names: &[&str]| -> Result<UpdateModel<'_>, StudyError> {
+        let groups = femu_fem::groups::ParameterGroups::from_element_sets(
+            &model.model,
+            names,
+            model.sys.mass_kind,
+        )?;
+        Ok(UpdateModel::from_assembly(
+            &model.model,
+            groups,
+            femu_update::Corrections::Stiffness,
+            model.asm.clone(),
+            model.sys.clone(),
+        )?)
+    };
+    let candidates = build(&set_refs)?;
+    let localisation =
+        femu_update::frf_localise(&candidates, &tuned, eta, &SelectionRule::default())?;
+    let updated: Vec<&str> = if request.update_all {
+        set_refs.clone()
+    } else {
+        localisation.selected.iter().map(|&g| set_refs[g]).collect()
+    };
+    let mut up = build(&updated)?;
+    let rms = |v: &[f64]| (v.iter().map(|e| e * e).sum::<f64>() / v.len().max(1) as f64).sqrt();
+    let tuned_before = rms(&femu_update::frf_errors(&up, &tuned, eta)?);
+    let held_before = match &held {
+        Some(h) => Some(rms(&femu_update::frf_errors(&up, h, eta)?)),
+        None => None,
+    };
+    let options = FrfUpdateOptions {
+        loss_factor: eta,
+        method: if request.sb_ebe_only {
+            FrfMethod::SbEbe
+        } else {
+            FrfMethod::OutputError
+        },
+        ..Default::default()
+    };
+    let result = femu_update::frf_update(&mut up, &tuned, &options)?;
+    let tuned_after = rms(&femu_update::frf_errors(&up, &tuned, result.loss_factor)?);
+    let held_out_error = match (&held, held_before) {
+        (Some(h), Some(before)) => Some((
+            before,
+            rms(&femu_update::frf_errors(&up, h, result.loss_factor)?),
+        )),
+        _ => None,
+    };
+    Ok(FrfUpdateStudy {
+        ranking: localisation.ranking,
+        updated: updated.iter().map(|s| s.to_string()).collect(),
+        tuned: hz(&tuned),
+        held_out: held.as_ref().map(hz),
+        result,
+        tuned_error: (tuned_before, tuned_after),
+        held_out_error,
     })
 }
 
@@ -613,6 +943,9 @@ impl std::fmt::Display for FrfCorrelation {
                 worst.map_or("-".into(), |w| format!("{:.4} ({:.2})", w.csac, w.hz)),
                 l.iter().map(|x| x.csf).sum::<f64>() / n
             );
+        }
+        if let Some(u) = &self.update {
+            let _ = write!(s, "{u}");
         }
         f.write_str(&s)
     }

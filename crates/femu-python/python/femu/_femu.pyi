@@ -150,6 +150,11 @@ def frf(
     direct: bool = False,
     damping_from: Optional[_Path] = None,
     modes_up_to: float = 2.0,
+    update: Optional[Sequence[str]] = None,
+    tuned_lines: Optional[int] = None,
+    update_lines: int = 24,
+    update_all: bool = False,
+    sb_ebe_only: bool = False,
 ) -> Dict[str, Any]: ...
 def removal_study(model: Model, test: Test, *, expansion: str = "dynamic") -> Dict[str, Any]: ...
 def update(
