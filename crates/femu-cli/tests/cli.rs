@@ -1790,3 +1790,139 @@ fn frf_update_finds_the_softer_half() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Coherence (dataset 58, function type 6) in the file: the clamped bar's receptances by a dense
+/// solve, one function corrupted (its values turned by +90 and -90 degrees on alternate lines) over
+/// the band of its 40 largest values (the first resonance), where its coherence is written as 0.3
+/// (0.99 elsewhere).
+/// With the default threshold (0.8) those lines are left out of its FRAC and the line's CSAC and
+/// the FRAC is above 0.999, as for the clean functions; with `--min-coherence 0` the corrupted
+/// lines count and it falls below 0.9. A coherence above 1 or a threshold outside [0, 1] is
+/// refused.
+#[test]
+fn frf_lines_of_low_coherence_are_left_out() {
+    use femu_io::uff::Ordinate;
+    let nx = 10;
+    let beam = Cantilever::new(nx, [0.4, 0.04, 0.02]);
+    let dir = std::env::temp_dir().join(format!("femu-cli-coherence-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("bar.inp"), beam.deck("C3D8", 2.1e11)).unwrap();
+    let (model, sys, k, m) = dense_deck(&dir.join("bar.inp"));
+    let free = |node: u64, c: usize| {
+        sys.dofs
+            .free_index(model.mesh().node_index(node).unwrap(), c)
+            .unwrap()
+    };
+    let tip = beam.id(nx, 0, 1) as u64;
+    let outputs = [
+        (tip, 3i64),
+        (beam.id(nx / 2, 0, 1) as u64, 3),
+        (beam.id(nx / 2, 1, 1) as u64, 3),
+    ];
+    let out_free: Vec<usize> = outputs
+        .iter()
+        .map(|(node, d)| free(*node, (*d - 1) as usize))
+        .collect();
+    let (min, step, count) = (5.0, 2.5, 200usize);
+    let mut values = direct_frfs(&k, &m, &out_free, free(tip, 2), min, step, count, |_| {
+        faer::Mat::from_fn(k.nrows(), k.ncols(), |i, j| 0.02 * k[(i, j)])
+    });
+    // the band around the first resonance: its 40 lines of largest response
+    let mut order: Vec<usize> = (0..count).collect();
+    order.sort_by(|a, b| {
+        let h = |l: usize| values[1][l].0.hypot(values[1][l].1);
+        h(*b).total_cmp(&h(*a))
+    });
+    let band: Vec<usize> = order[..40].to_vec();
+    for &l in &band {
+        // turned by +-90 degrees on alternate lines: the band's contribution to the FRAC's
+        // numerator cancels
+        let (re, im) = values[1][l];
+        let s = if l % 2 == 0 { 1.0 } else { -1.0 };
+        values[1][l] = (-s * im, s * re);
+    }
+    write_frf_uff(&dir.join("frf.uff"), &outputs, tip, min, step, &values);
+    let uff = femu_io::uff::read_uff(dir.join("frf.uff")).unwrap();
+    let with_coherence = |bad: f64| {
+        let mut u = uff.clone();
+        let extra: Vec<_> = u
+            .functions
+            .iter()
+            .enumerate()
+            .map(|(o, f)| {
+                let mut c = f.clone();
+                c.function_type = 6;
+                c.numbers[0] += 10;
+                c.ids[0] = format!("coherence {o}");
+                c.axes[1].data_type = 0;
+                c.ordinate = Ordinate::Real(
+                    (0..count)
+                        .map(|l| {
+                            if o == 1 && band.contains(&l) {
+                                bad
+                            } else {
+                                0.99
+                            }
+                        })
+                        .collect(),
+                );
+                c
+            })
+            .collect();
+        u.functions.extend(extra);
+        u
+    };
+    femu_io::uff::write_uff(dir.join("coherent.uff"), &with_coherence(0.3)).unwrap();
+    let run = |file: &str, extra: &[&str]| {
+        femu()
+            .args(["frf", dir.join("bar.inp").to_str().unwrap()])
+            .arg(dir.join(file))
+            .args(["--loss-factor", "0.02", "--quiet"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let fracs = |extra: &[&str], json: &str| {
+        let out = run(
+            "coherent.uff",
+            &[extra, &["--json", dir.join(json).to_str().unwrap()]].concat(),
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v = json_of(dir.join(json));
+        v["functions"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| {
+                (
+                    f["frac"].as_f64().unwrap(),
+                    f["low_coherence_lines"].as_u64().unwrap(),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    let kept = fracs(&[], "kept.json");
+    assert!(kept.iter().all(|(f, _)| *f > 0.999), "{kept:?}");
+    assert_eq!(kept.iter().map(|k| k.1).collect::<Vec<_>>(), [0, 40, 0]);
+    let all = fracs(&["--min-coherence", "0"], "all.json");
+    assert!(all[1].0 < 0.9 && all[1].1 == 0, "{all:?}");
+    // bad input
+    femu_io::uff::write_uff(dir.join("above.uff"), &with_coherence(1.5)).unwrap();
+    let out = run("above.uff", &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("between 0 and 1"),
+        "{stderr}"
+    );
+    let out = run("coherent.uff", &["--min-coherence", "2"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("between 0 and 1"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -818,9 +818,11 @@ fn correlate<'py>(
 /// lines (default two-thirds), the selected ones (`update_all`: every one) and the loss factor
 /// fitted (SB-EBE, then the output error; `sb_ebe_only` stops after SB-EBE) on at most
 /// `update_lines` lines per band, and checked on the held-out lines (the dict's `update`).
+/// Where the file carries coherence (function type 6), lines below `min_coherence` (default 0.8)
+/// are left out.
 /// Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (model, path, *, damping_ratio=None, loss_factor=None, rayleigh=None, direct=false, damping_from=None, modes_up_to=2.0, update=None, tuned_lines=None, update_lines=24, update_all=false, sb_ebe_only=false))]
+#[pyo3(signature = (model, path, *, damping_ratio=None, loss_factor=None, rayleigh=None, direct=false, damping_from=None, modes_up_to=2.0, update=None, tuned_lines=None, update_lines=24, update_all=false, sb_ebe_only=false, min_coherence=None))]
 #[allow(clippy::too_many_arguments)]
 fn frf<'py>(
     py: Python<'py>,
@@ -837,6 +839,7 @@ fn frf<'py>(
     update_lines: usize,
     update_all: bool,
     sb_ebe_only: bool,
+    min_coherence: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let request = femu_study::frf::FrfRequest {
         file: None,
@@ -851,6 +854,7 @@ fn frf<'py>(
         update_lines,
         update_all,
         sb_ebe_only,
+        min_coherence,
     };
     let result = py
         .detach(|| {

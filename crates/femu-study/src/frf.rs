@@ -95,6 +95,11 @@ pub struct FrfRequest {
     /// With `--update`: fit every candidate set instead of those the residue selects.
     #[cfg_attr(feature = "clap", arg(long, requires = "update"))]
     pub update_all: bool,
+    /// Where the file carries coherence (dataset 58, function type 6) for a function, its lines
+    /// below this coherence are left out of its FRAC, of the line's CSAC and of updating (default
+    /// 0.8; 0 keeps every line).
+    #[cfg_attr(feature = "clap", arg(long, value_name = "GAMMA2"))]
+    pub min_coherence: Option<f64>,
     /// With `--update`: stop after SB-EBE on FRFs (the paper's method alone; without the output
     /// error that follows it by default, it is biased by measurement noise).
     #[cfg_attr(feature = "clap", arg(long, requires = "update"))]
@@ -120,6 +125,7 @@ impl Default for FrfRequest {
             update_lines: default_update_lines(),
             update_all: false,
             sb_ebe_only: false,
+            min_coherence: None,
         }
     }
 }
@@ -224,6 +230,8 @@ pub struct FunctionCorrelation {
     pub reference: String,
     /// The frequency response assurance criterion over the lines.
     pub frac: f64,
+    /// Lines left out of it for their coherence (below [`FrfRequest::min_coherence`]).
+    pub low_coherence_lines: usize,
     /// Its row among the model FRFs' outputs.
     #[serde(skip)]
     pub output: usize,
@@ -381,6 +389,15 @@ pub fn frf_correlation(
         };
         pairs.push((f, oi, ii, values));
     }
+    let measured_functions: Vec<&UffFunction> = pairs.iter().map(|p| *p.0).collect();
+    let coherent = coherence_masks(
+        &uff.functions,
+        &measured_functions,
+        &lines,
+        request,
+        &mut notes,
+    )
+    .map_err(in_file)?;
     let mesh = model.model.mesh();
     let outputs = SensorLayout::new(mesh, &model.sys.dofs, outputs)
         .map_err(|e| StudyError::within(path, e))?;
@@ -407,23 +424,38 @@ pub fn frf_correlation(
         backward_error,
     } = solved;
     let mut rows = Vec::with_capacity(pairs.len());
-    for (f, oi, ii, values) in &pairs {
-        let model_curve: Vec<c64> = frf.h.iter().map(|h| h[(*oi, *ii)]).collect();
+    for ((f, oi, ii, values), keep) in pairs.iter().zip(&coherent) {
+        let (test_curve, model_curve): (Vec<c64>, Vec<c64>) = values
+            .iter()
+            .zip(&frf.h)
+            .zip(keep)
+            .filter(|(_, k)| **k)
+            .map(|((v, h), _)| (*v, h[(*oi, *ii)]))
+            .unzip();
+        if test_curve.is_empty() {
+            return Err(in_file(format!(
+                "FRF {}: every line's coherence is below {} (--min-coherence)",
+                f.numbers[0],
+                request.min_coherence.unwrap_or(DEFAULT_MIN_COHERENCE)
+            )));
+        }
         rows.push(FunctionCorrelation {
             response: dof_name(&f.response),
             reference: dof_name(&f.reference),
-            frac: frac(values, &model_curve).map_err(|e| StudyError::within(path, e))?,
+            frac: frac(&test_curve, &model_curve).map_err(|e| StudyError::within(path, e))?,
+            low_coherence_lines: keep.iter().filter(|k| !**k).count(),
             output: *oi,
             input: *ii,
         });
     }
     let mut line_rows = Vec::new();
     for ii in 0..inputs.len() {
-        let of_ref: Vec<_> = pairs.iter().filter(|p| p.2 == ii).collect();
-        let reference = dof_name(&of_ref[0].0.reference);
+        let of_ref: Vec<usize> = (0..pairs.len()).filter(|&k| pairs[k].2 == ii).collect();
+        let reference = dof_name(&pairs[of_ref[0]].0.reference);
         for (l, hz) in lines.iter().enumerate() {
-            let t: Vec<c64> = of_ref.iter().map(|p| p.3[l]).collect();
-            let m: Vec<c64> = of_ref.iter().map(|p| frf.h[l][(p.1, ii)]).collect();
+            let here: Vec<usize> = of_ref.iter().copied().filter(|&k| coherent[k][l]).collect();
+            let t: Vec<c64> = here.iter().map(|&k| pairs[k].3[l]).collect();
+            let m: Vec<c64> = here.iter().map(|&k| frf.h[l][(pairs[k].1, ii)]).collect();
             // a line where the measured deflection is zero (a 0 Hz line of a mobility) has no shape
             let (Ok(a), Ok(s)) = (csac(&t, &m), csf(&t, &m)) else {
                 continue;
@@ -451,6 +483,9 @@ pub fn frf_correlation(
                     .map(|p| (p.1, p.2, &p.3[..]))
                     .collect::<Vec<_>>(),
                 &lines,
+                &(0..lines.len())
+                    .map(|l| coherent.iter().all(|c| c[l]))
+                    .collect::<Vec<_>>(),
                 kind,
                 &mut notes,
             )
@@ -558,6 +593,7 @@ fn update_from_frfs(
     inputs: &SensorLayout,
     pairs: &[(usize, usize, &[c64])],
     lines: &[f64],
+    coherent: &[bool],
     kind: ResponseKind,
     notes: &mut Vec<String>,
 ) -> Result<FrfUpdateStudy, StudyError> {
@@ -619,15 +655,26 @@ fn update_from_frfs(
             ),
         ));
     }
-    let positive: Vec<usize> = (0..lines.len()).filter(|&l| lines[l] > 0.0).collect();
-    if positive.len() < lines.len() {
+    let positive: Vec<usize> = (0..lines.len())
+        .filter(|&l| lines[l] > 0.0 && coherent[l])
+        .collect();
+    let at_zero = lines.iter().filter(|f| **f <= 0.0).count();
+    if at_zero > 0 {
         notes.push(format!(
-            "updating: {} line(s) at 0 Hz left out (no dynamic response)",
-            lines.len() - positive.len()
+            "updating: {at_zero} line(s) at 0 Hz left out (no dynamic response)"
+        ));
+    }
+    let incoherent = coherent.iter().filter(|c| !**c).count();
+    if incoherent > 0 {
+        notes.push(format!(
+            "updating: {incoherent} line(s) left out where a function's coherence is below the threshold"
         ));
     }
     if positive.is_empty() {
-        return Err(StudyError::invalid("update", "no line above 0 Hz"));
+        return Err(StudyError::invalid(
+            "update",
+            "no line above 0 Hz with every function's coherence above the threshold",
+        ));
     }
     let two_pi = 2.0 * std::f64::consts::PI;
     let receptance: Vec<faer::Mat<c64>> = positive
@@ -741,6 +788,74 @@ fn update_from_frfs(
         tuned_error: (tuned_before, tuned_after),
         held_out_error,
     })
+}
+
+/// [`FrfRequest::min_coherence`]'s default.
+const DEFAULT_MIN_COHERENCE: f64 = 0.8;
+
+/// For each measured FRF, whether each line's coherence (the file's dataset 58 of function type
+/// 6 with the same response and reference, if any) is at least the request's threshold.
+fn coherence_masks(
+    all: &[UffFunction],
+    measured: &[&UffFunction],
+    lines: &[f64],
+    request: &FrfRequest,
+    notes: &mut Vec<String>,
+) -> Result<Vec<Vec<bool>>, String> {
+    let threshold = request.min_coherence.unwrap_or(DEFAULT_MIN_COHERENCE);
+    if !(0.0..=1.0).contains(&threshold) {
+        return Err(format!(
+            "a minimum coherence of {threshold}: coherence is between 0 and 1"
+        ));
+    }
+    let coherence: Vec<&UffFunction> = all.iter().filter(|f| f.function_type == 6).collect();
+    let mut masks = vec![vec![true; lines.len()]; measured.len()];
+    if coherence.is_empty() {
+        return Ok(masks);
+    }
+    let (mut without, mut low) = (Vec::new(), 0usize);
+    for (f, mask) in measured.iter().zip(&mut masks) {
+        let Some(c) = coherence
+            .iter()
+            .find(|c| c.response == f.response && c.reference == f.reference)
+        else {
+            without.push(f.numbers[0].to_string());
+            continue;
+        };
+        if c.abscissa_values() != lines {
+            return Err(format!(
+                "coherence function {} has other lines than FRF {}",
+                c.numbers[0], f.numbers[0]
+            ));
+        }
+        let values: Vec<f64> = match &c.ordinate {
+            Ordinate::Real(v) => v.clone(),
+            Ordinate::Complex(v) => v.iter().map(|(re, _)| *re).collect(),
+        };
+        for (l, (gamma, keep)) in values.iter().zip(mask.iter_mut()).enumerate() {
+            // round-off of an estimator may leave a coherence a little above 1
+            if !(gamma.is_finite() && (-1e-6..=1.0 + 1e-6).contains(gamma)) {
+                return Err(format!(
+                    "coherence function {} at {} Hz is {gamma}: coherence is between 0 and 1",
+                    c.numbers[0], lines[l]
+                ));
+            }
+            *keep = *gamma >= threshold;
+            low += usize::from(!*keep);
+        }
+    }
+    if low > 0 {
+        notes.push(format!(
+            "{low} line(s) of the measured functions have a coherence below {threshold} and are left out (--min-coherence)"
+        ));
+    }
+    if !without.is_empty() {
+        notes.push(format!(
+            "the file carries coherence, but not for FRF {}: all their lines are used",
+            without.join(", ")
+        ));
+    }
+    Ok(masks)
 }
 
 /// The model's FRFs and how they were formed.

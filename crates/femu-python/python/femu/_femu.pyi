@@ -155,6 +155,7 @@ def frf(
     update_lines: int = 24,
     update_all: bool = False,
     sb_ebe_only: bool = False,
+    min_coherence: Optional[float] = None,
 ) -> Dict[str, Any]: ...
 def removal_study(model: Model, test: Test, *, expansion: str = "dynamic") -> Dict[str, Any]: ...
 def update(
