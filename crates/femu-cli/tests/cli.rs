@@ -1552,6 +1552,17 @@ fn frf_correlation_against_a_direct_solve() {
     let stiffer = run("stiffer.inp", "stiffer.json");
     let low = fracs(&stiffer).into_iter().fold(1.0, f64::min);
     assert!(low < 0.9, "{:?}", fracs(&stiffer));
+    // the alignment: a modulus 1.1 times the measured bar's scales every frequency by sqrt(1.1)
+    // and the receptance by 1 / 1.1 (FRAC does not see it), so the model at sqrt(1.1) f is the
+    // test at f; the measured bar itself aligns at 1
+    let factor = |v: &serde_json::Value| v["alignment"]["factor"].as_f64().unwrap();
+    assert!((factor(&same) - 1.0).abs() < 1e-6, "{}", same["alignment"]);
+    assert!(
+        (factor(&stiffer) - 1.1f64.sqrt()).abs() < 1e-6,
+        "{}",
+        stiffer["alignment"]
+    );
+    assert!(stiffer["alignment"]["mean_frac"].as_f64().unwrap() > 0.999);
     // the direct route solves the same dynamic stiffness as the measurement: every value to 1e-9
     // of the largest response, no mode left out (the small y responses the force couples to are
     // met to about 1e-17 absolute, 5e-9 of their own peak: both solves carry the conditioning of

@@ -272,6 +272,9 @@ pub struct FrfCorrelation {
     pub functions: Vec<FunctionCorrelation>,
     /// One row per line and reference.
     pub lines: Vec<LineCorrelation>,
+    /// The frequency scaling that best aligns the model's FRFs with the test's (the modal route;
+    /// the direct route would solve every line again for each trial).
+    pub alignment: Option<Alignment>,
     /// The update from the FRFs, when asked (`--update`).
     pub update: Option<FrfUpdateStudy>,
     /// What the reader and the workflow noticed.
@@ -422,7 +425,13 @@ pub fn frf_correlation(
         modes,
         residual,
         backward_error,
+        synthesis,
     } = solved;
+    let triples: Vec<(usize, usize, &[c64])> = pairs.iter().map(|p| (p.1, p.2, &p.3[..])).collect();
+    let alignment = match &synthesis {
+        Some(syn) => Some(align(syn, &outputs, &inputs, &lines, &triples, &coherent)?),
+        None => None,
+    };
     let mut rows = Vec::with_capacity(pairs.len());
     for ((f, oi, ii, values), keep) in pairs.iter().zip(&coherent) {
         let (test_curve, model_curve): (Vec<c64>, Vec<c64>) = values
@@ -478,10 +487,7 @@ pub fn frf_correlation(
                 &dampers,
                 &outputs,
                 &inputs,
-                &pairs
-                    .iter()
-                    .map(|p| (p.1, p.2, &p.3[..]))
-                    .collect::<Vec<_>>(),
+                &triples,
                 &lines,
                 &(0..lines.len())
                     .map(|l| coherent.iter().all(|c| c[l]))
@@ -495,6 +501,7 @@ pub fn frf_correlation(
     Ok(FrfCorrelation {
         kind,
         damping,
+        alignment,
         update,
         direct: request.direct,
         modes,
@@ -865,6 +872,105 @@ struct Solved {
     modes: (usize, f64),
     residual: bool,
     backward_error: Option<f64>,
+    /// The modal route's ingredients, to evaluate the model at other lines (the alignment).
+    synthesis: Option<Synthesis>,
+}
+
+/// What modal superposition needs to evaluate the model's FRFs at any line.
+struct Synthesis {
+    values: Vec<f64>,
+    vectors: faer::Mat<f64>,
+    residual: Option<faer::Mat<f64>>,
+    options: FrfOptions,
+}
+
+/// The frequency scaling that best aligns the model's FRFs with the test's.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Alignment {
+    /// `kappa`: the model's FRFs evaluated at `kappa f` match the test's at `f` best (mean FRAC
+    /// over the functions); above 1 the model's resonances are high (the model is stiff).
+    pub factor: f64,
+    /// The mean FRAC at that scaling.
+    pub mean_frac: f64,
+    /// The mean FRAC unscaled.
+    pub mean_frac_unscaled: f64,
+}
+
+/// The scaling `kappa` in `[0.8, 1.25]` that maximises the mean FRAC of the model's FRFs at
+/// `kappa f` against the test's at `f` (coherent lines only): a geometric grid of 91 points, then
+/// golden-section search between the best point's neighbours.
+fn align(
+    synthesis: &Synthesis,
+    outputs: &SensorLayout,
+    inputs: &SensorLayout,
+    lines: &[f64],
+    pairs: &[(usize, usize, &[c64])],
+    coherent: &[Vec<bool>],
+) -> Result<Alignment, StudyError> {
+    let mean_frac = |kappa: f64| -> Result<f64, StudyError> {
+        let shifted: Vec<f64> = lines.iter().map(|f| kappa * f).collect();
+        let frf = modal_frf(
+            &synthesis.values,
+            synthesis.vectors.as_ref(),
+            synthesis.residual.as_ref().map(|r| r.as_ref()),
+            outputs,
+            inputs,
+            &shifted,
+            &synthesis.options,
+        )?;
+        let mut sum = 0.0;
+        for ((oi, ii, values), keep) in pairs.iter().zip(coherent) {
+            let (t, m): (Vec<c64>, Vec<c64>) = values
+                .iter()
+                .zip(&frf.h)
+                .zip(keep)
+                .filter(|(_, k)| **k)
+                .map(|((v, h), _)| (*v, h[(*oi, *ii)]))
+                .unzip();
+            sum += frac(&t, &m).unwrap_or(0.0);
+        }
+        Ok(sum / pairs.len().max(1) as f64)
+    };
+    let (lo, hi, n) = (0.8f64, 1.25f64, 91);
+    let grid: Vec<f64> = (0..n)
+        .map(|i| lo * (hi / lo).powf(i as f64 / (n - 1) as f64))
+        .collect();
+    let scores = grid
+        .iter()
+        .map(|k| mean_frac(*k))
+        .collect::<Result<Vec<_>, _>>()?;
+    let best = (0..n)
+        .max_by(|a, b| scores[*a].total_cmp(&scores[*b]))
+        .unwrap_or(0);
+    let (mut a, mut b) = (grid[best.saturating_sub(1)], grid[(best + 1).min(n - 1)]);
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
+    let (mut fc, mut fd) = (mean_frac(c)?, mean_frac(d)?);
+    while b - a > 1e-6 {
+        if fc >= fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - g * (b - a);
+            fc = mean_frac(c)?;
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + g * (b - a);
+            fd = mean_frac(d)?;
+        }
+    }
+    let (factor, score) = if fc.max(fd) >= scores[best] {
+        if fc >= fd { (c, fc) } else { (d, fd) }
+    } else {
+        (grid[best], scores[best])
+    };
+    Ok(Alignment {
+        factor,
+        mean_frac: score,
+        mean_frac_unscaled: mean_frac(1.0)?,
+    })
 }
 
 /// Modal superposition of the modes up to `request.modes_up_to` times the highest line, with the
@@ -947,6 +1053,12 @@ fn modal_route(
         modes: (modes.values.len(), top_hz),
         residual: residual.is_some(),
         backward_error: None,
+        synthesis: Some(Synthesis {
+            values: modes.values.clone(),
+            vectors: modes.vectors.clone(),
+            residual,
+            options,
+        }),
     })
 }
 
@@ -1003,6 +1115,7 @@ fn direct_route(
         modes: (0, 0.0),
         residual: false,
         backward_error: Some(worst),
+        synthesis: None,
     })
 }
 
@@ -1057,6 +1170,17 @@ impl std::fmt::Display for FrfCorrelation {
                 l.iter().map(|x| x.csac).sum::<f64>() / n,
                 worst.map_or("-".into(), |w| format!("{:.4} ({:.2})", w.csac, w.hz)),
                 l.iter().map(|x| x.csf).sum::<f64>() / n
+            );
+        }
+        if let Some(a) = &self.alignment {
+            let _ = writeln!(
+                s,
+                "\nThe model's FRFs align best with the test's at {:.4} times the test's frequencies (mean FRAC {:.4}, unscaled {:.4}): its resonances are {:.1} % {}",
+                a.factor,
+                a.mean_frac,
+                a.mean_frac_unscaled,
+                100.0 * (a.factor - 1.0).abs(),
+                if a.factor >= 1.0 { "high" } else { "low" }
             );
         }
         if let Some(u) = &self.update {
