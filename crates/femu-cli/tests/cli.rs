@@ -1808,8 +1808,8 @@ fn frf_update_finds_the_softer_half() {
 /// (0.99 elsewhere).
 /// With the default threshold (0.8) those lines are left out of its FRAC and the line's CSAC and
 /// the FRAC is above 0.999, as for the clean functions; with `--min-coherence 0` the corrupted
-/// lines count and it falls below 0.9. A coherence above 1 or a threshold outside [0, 1] is
-/// refused.
+/// lines count and it falls below 0.9. A coherence above 1, a threshold outside [0, 1], lines
+/// out of order (naming the function and the line) and a NaN value (the file's line) are refused.
 #[test]
 fn frf_lines_of_low_coherence_are_left_out() {
     use femu_io::uff::Ordinate;
@@ -1927,6 +1927,31 @@ fn frf_lines_of_low_coherence_are_left_out() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         !out.status.success() && stderr.contains("between 0 and 1"),
+        "{stderr}"
+    );
+    // lines out of order, and a value that is not a number
+    let mut unsorted = uff.clone();
+    for f in &mut unsorted.functions {
+        let mut x = f.abscissa_values();
+        x.swap(3, 4);
+        f.abscissa = femu_io::uff::Abscissa::Uneven(x);
+    }
+    femu_io::uff::write_uff(dir.join("unsorted.uff"), &unsorted).unwrap();
+    let out = run("unsorted.uff", &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("line 5") && stderr.contains("increasing"),
+        "{stderr}"
+    );
+    let mut nan = uff.clone();
+    if let Ordinate::Complex(v) = &mut nan.functions[2].ordinate {
+        v[7].1 = f64::NAN;
+    }
+    femu_io::uff::write_uff(dir.join("nan.uff"), &nan).unwrap();
+    let out = run("nan.uff", &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("nan.uff:") && stderr.contains("not a finite"),
         "{stderr}"
     );
     let out = run("coherent.uff", &["--min-coherence", "2"]);

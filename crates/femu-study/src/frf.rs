@@ -354,6 +354,17 @@ pub fn frf_correlation(
         ));
     };
     let lines = first.abscissa_values();
+    if let Some(l) = (0..lines.len()).find(|&l| {
+        !(lines[l].is_finite() && lines[l] >= 0.0) || (l > 0 && lines[l] <= lines[l - 1])
+    }) {
+        return Err(in_file(format!(
+            "FRF {}: line {} is {} Hz after {} Hz: the lines must be finite, at or above 0 Hz and strictly increasing",
+            first.numbers[0],
+            l + 1,
+            lines[l],
+            if l > 0 { lines[l - 1] } else { f64::NAN }
+        )));
+    }
     let kind = kind_of(first).map_err(in_file)?;
     let mut outputs: Vec<Sensor> = Vec::new();
     let mut inputs: Vec<Sensor> = Vec::new();
@@ -390,6 +401,7 @@ pub fn frf_correlation(
                 .collect(),
             Ordinate::Real(v) => v.iter().map(|re| c64::new(*re * so * si, 0.0)).collect(),
         };
+
         pairs.push((f, oi, ii, values));
     }
     let measured_functions: Vec<&UffFunction> = pairs.iter().map(|p| *p.0).collect();
