@@ -1687,8 +1687,10 @@ ENDDATA
 /// root half is 20 % softer (loss factor 0.02), at ten z and two y sensors under a force at the
 /// tip, written as dataset 58; the nominal deck updated over its two halves from a loss factor of
 /// 0.01 finds the root half (-0.2 to 1e-4), the tip half unchanged (1e-4), the loss factor 0.02
-/// (1e-5), and the held-out lines' receptance error falls below 1e-4 of what it was. Bad input:
-/// an unknown set (named), a response on a clamped DOF, damping ratios with the update.
+/// (1e-5), and the held-out lines' receptance error falls below 1e-4 of what it was; fitting
+/// Rayleigh damping instead (`--rayleigh 1,1e-7`, which cannot equal a loss factor at every line)
+/// still finds the root half within 0.01. Bad input: an unknown set (named), a response on a
+/// clamped DOF, damping ratios with the update, one Rayleigh coefficient.
 #[test]
 fn frf_update_finds_the_softer_half() {
     let nx = 10;
@@ -1770,13 +1772,44 @@ fn frf_update_finds_the_softer_half() {
         (theta[0] + 0.2).abs() < 1e-4 && theta[1].abs() < 1e-4,
         "{theta:?}"
     );
-    let eta = u["result"]["loss_factor"].as_f64().unwrap();
+    let eta = u["result"]["damping"]["loss_factor"].as_f64().unwrap();
     assert!((eta - 0.02).abs() < 1e-5, "{eta}");
     let held = u["held_out_error"].as_array().unwrap();
     let (before, after) = (held[0].as_f64().unwrap(), held[1].as_f64().unwrap());
     assert!(after < 1e-4 * before, "{before} -> {after}");
     // the ranking names the softer half first
     assert_eq!(u["ranking"][0]["name"], "ROOT_HALF", "{u}");
+    // Rayleigh damping fitted instead (it cannot be the measured loss factor at every line):
+    // reported as such, the softer half still found
+    let rayleigh = dir.join("rayleigh.json");
+    let out = frf(&[
+        "--update",
+        "ROOT_HALF,TIP_HALF",
+        "--update-all",
+        "--rayleigh",
+        "1,1e-7",
+        "--json",
+        rayleigh.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = &json_of(&rayleigh)["update"]["result"];
+    assert!(
+        r["damping"]["rayleigh"]["alpha"].as_f64().unwrap() >= 0.0,
+        "{r}"
+    );
+    let root = r["theta"][0].as_f64().unwrap();
+    assert!((root + 0.2).abs() < 0.01, "{r}");
+    // Rayleigh damping takes two coefficients
+    let out = frf(&["--rayleigh", "1"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("two coefficients"),
+        "{stderr}"
+    );
     // bad input
     let out = frf(&["--update", "ROOT_HALF,NOPE"]);
     let stderr = String::from_utf8_lossy(&out.stderr);

@@ -815,7 +815,8 @@ fn correlate<'py>(
 /// responses, directly"): the model's own dampers act, with a loss factor or Rayleigh damping.
 /// `update`, candidate element sets, updates the model from the FRFs (docs/MATH.md, "Updating
 /// from frequency responses"): the sets ranked by the FRF residue on the lowest `tuned_lines`
-/// lines (default two-thirds), the selected ones (`update_all`: every one) and the loss factor
+/// lines (default two-thirds), the selected ones (`update_all`: every one) and the damping (the
+/// loss factor, or `rayleigh`'s two coefficients)
 /// fitted (SB-EBE, then the output error; `sb_ebe_only` stops after SB-EBE) on at most
 /// `update_lines` lines per band, and checked on the held-out lines (the dict's `update`).
 /// Where the file carries coherence (function type 6), lines below `min_coherence` (default 0.8)

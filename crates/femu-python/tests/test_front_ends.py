@@ -227,7 +227,7 @@ def test_the_frf_update_is_one_pipeline(case):
     assert u["result"]["names"] == [f"k:{s}" for s in SETS]
     want = [0.0, -0.2, 0.0, 0.0]
     assert np.allclose(u["result"]["theta"], want, atol=1e-4), u["result"]
-    assert abs(u["result"]["loss_factor"] - LOSS) < 1e-5
+    assert abs(u["result"]["damping"]["loss_factor"] - LOSS) < 1e-5
     before, after = u["held_out_error"]
     assert after < 1e-3 * before
     with pytest.raises(femu.FemuError, match="NOPE"):

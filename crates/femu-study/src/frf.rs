@@ -44,7 +44,6 @@ pub struct FrfRequest {
             long,
             value_name = "ALPHA,BETA",
             value_delimiter = ',',
-            num_args = 2,
             conflicts_with_all = ["damping_ratio", "loss_factor"]
         )
     )]
@@ -73,12 +72,13 @@ pub struct FrfRequest {
     )]
     pub modes_up_to: f64,
     /// Update the model from the FRFs: candidate element sets (comma-separated), ranked by the
-    /// FRF residue (4) on the tuned lines; the selected sets' stiffness factors and the loss
-    /// factor are fitted (SB-EBE on FRFs, then the output error), and the model is checked on the
-    /// held-out lines. Starts from `--loss-factor` (default 0.02).
+    /// FRF residue (4) on the tuned lines; the selected sets' stiffness factors and the damping
+    /// (a loss factor, or Rayleigh's two coefficients) are fitted (SB-EBE on FRFs, then the
+    /// output error), and the model is checked on the held-out lines. Starts from
+    /// `--loss-factor` or `--rayleigh` (default: a loss factor of 0.02).
     #[cfg_attr(
         feature = "clap",
-        arg(long, value_name = "SETS", value_delimiter = ',', conflicts_with_all = ["damping_ratio", "rayleigh", "damping_from"])
+        arg(long, value_name = "SETS", value_delimiter = ',', conflicts_with_all = ["damping_ratio", "damping_from"])
     )]
     pub update: Vec<String>,
     /// With `--update`: the lowest N lines are tuned and the others held out for the check
@@ -616,14 +616,13 @@ fn update_from_frfs(
     kind: ResponseKind,
     notes: &mut Vec<String>,
 ) -> Result<FrfUpdateStudy, StudyError> {
-    use femu_update::{FrfMethod, FrfTest, FrfUpdateOptions, SelectionRule, UpdateModel};
-    if request.damping_ratio.is_some()
-        || request.rayleigh.is_some()
-        || request.damping_from.is_some()
-    {
+    use femu_update::{
+        FrfDamping, FrfMethod, FrfTest, FrfUpdateOptions, SelectionRule, UpdateModel,
+    };
+    if request.damping_ratio.is_some() || request.damping_from.is_some() {
         return Err(StudyError::invalid(
             "update",
-            "updating from FRFs fits a structural loss factor: give --loss-factor (its start), not damping ratios or Rayleigh coefficients",
+            "updating from FRFs fits a loss factor or Rayleigh coefficients: give --loss-factor or --rayleigh (their start), not modal damping ratios",
         ));
     }
     if dampers.any() {
@@ -743,12 +742,15 @@ fn update_from_frfs(
             t.omegas.len(),
         )
     };
-    let eta = request.loss_factor.unwrap_or(0.02);
-    if request.loss_factor.is_none() {
-        notes.push(
-            "updating: the loss factor starts at 0.02 (--loss-factor gives another start)".into(),
-        );
-    }
+    let damping = match request.damping()? {
+        Damping::Rayleigh { alpha, beta } => FrfDamping::Rayleigh { alpha, beta },
+        Damping::LossFactor(eta) => FrfDamping::LossFactor(eta),
+        _ => {
+            notes.push("updating: the loss factor starts at 0.02 (--loss-factor or --rayleigh gives another start)".into());
+            FrfDamping::LossFactor(0.02)
+        }
+    };
+    damping.check()?;
     let sets = crate::updating::resolve_sets(model, &request.update)?;
     let set_refs: Vec<&str> = sets.iter().map(String::as_str).collect();
     let build = |names: &[&str]| -> Result<UpdateModel<'_>, StudyError> {
@@ -767,7 +769,7 @@ fn update_from_frfs(
     };
     let candidates = build(&set_refs)?;
     let localisation =
-        femu_update::frf_localise(&candidates, &tuned, eta, &SelectionRule::default())?;
+        femu_update::frf_localise(&candidates, &tuned, &damping, &SelectionRule::default())?;
     let updated: Vec<&str> = if request.update_all {
         set_refs.clone()
     } else {
@@ -775,13 +777,13 @@ fn update_from_frfs(
     };
     let mut up = build(&updated)?;
     let rms = |v: &[f64]| (v.iter().map(|e| e * e).sum::<f64>() / v.len().max(1) as f64).sqrt();
-    let tuned_before = rms(&femu_update::frf_errors(&up, &tuned, eta)?);
+    let tuned_before = rms(&femu_update::frf_errors(&up, &tuned, &damping)?);
     let held_before = match &held {
-        Some(h) => Some(rms(&femu_update::frf_errors(&up, h, eta)?)),
+        Some(h) => Some(rms(&femu_update::frf_errors(&up, h, &damping)?)),
         None => None,
     };
     let options = FrfUpdateOptions {
-        loss_factor: eta,
+        damping,
         method: if request.sb_ebe_only {
             FrfMethod::SbEbe
         } else {
@@ -790,11 +792,11 @@ fn update_from_frfs(
         ..Default::default()
     };
     let result = femu_update::frf_update(&mut up, &tuned, &options)?;
-    let tuned_after = rms(&femu_update::frf_errors(&up, &tuned, result.loss_factor)?);
+    let tuned_after = rms(&femu_update::frf_errors(&up, &tuned, &result.damping)?);
     let held_out_error = match (&held, held_before) {
         (Some(h), Some(before)) => Some((
             before,
-            rms(&femu_update::frf_errors(&up, h, result.loss_factor)?),
+            rms(&femu_update::frf_errors(&up, h, &result.damping)?),
         )),
         _ => None,
     };

@@ -3,15 +3,17 @@
 //! "Updating from frequency responses").
 //!
 //! At each line `w` the test measured the receptance `H_a` (measured DOFs `a`) under a unit force
-//! at each reference DOF. The model's dynamic stiffness `A(w) = K(p) (1 + i eta) - w^2 M(q)`
+//! at each reference DOF. The model's dynamic stiffness `A(w) = K(p) (1 + i eta) - w^2 M(q)` (or,
+//! with Rayleigh damping, `K(p) (1 + i w beta) - w^2 M(q) + i w alpha M(q)`)
 //! expands each column on the omitted DOFs by its own equilibrium
 //! ([`femu_correlate::expansion::ForcedExpander`]) and leaves the residue
 //! `R_a = A_aa u_a + A_ao u_o - f_a` on the measured DOFs. The objective is
 //! `J = sum_lines sum_refs ||R_a||_W^2` with `W = diag(M)^-1` on the measured DOFs (the residual
 //! force's metric of the modal localisation). Its exact derivative with respect to a parameter
 //! `theta_k` (the re-expansion included) is `P (dA/dtheta_k u)`, with
-//! `dA/dtheta_k = (1 + i eta) dK/dtheta_k - w^2 dM/dtheta_k` formed element by element and
-//! `dA/deta = i K(p)`: no eigenvector and no mode enters.
+//! `dA/dtheta_k = c_K dK/dtheta_k + c_M dM/dtheta_k` formed element by element, `dA/deta = i K(p)`
+//! for a loss factor, `dA/dalpha = i w M(q)` and `dA/dbeta = i w K(p)` for Rayleigh damping: no
+//! eigenvector and no mode enters.
 //!
 //! - [`frf_localise`]: each group's explained fraction of `J` (the fraction its own factor removes,
 //!   bounded), the residual force on its DOFs and the strain energy of the displacement residual
@@ -138,6 +140,126 @@ impl FrfTest {
     }
 }
 
+/// The model's damping in updating from FRFs: the values are a start when they are fitted.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrfDamping {
+    /// A structural loss factor: `K (1 + i eta)`.
+    LossFactor(f64),
+    /// Rayleigh damping `C = alpha M + beta K` (s^-1 and s).
+    Rayleigh {
+        /// The mass coefficient, s^-1.
+        alpha: f64,
+        /// The stiffness coefficient, s.
+        beta: f64,
+    },
+}
+
+impl FrfDamping {
+    /// The dynamic stiffness's coefficients at `omega` rad/s.
+    pub fn stiffness(&self, omega: f64) -> DynamicStiffness {
+        match *self {
+            FrfDamping::LossFactor(eta) => DynamicStiffness::loss_factor(omega, eta),
+            FrfDamping::Rayleigh { alpha, beta } => DynamicStiffness::rayleigh(omega, alpha, beta),
+        }
+    }
+
+    /// The values, in the order of the fit's damping parameters.
+    fn values(&self) -> Vec<f64> {
+        match *self {
+            FrfDamping::LossFactor(eta) => vec![eta],
+            FrfDamping::Rayleigh { alpha, beta } => vec![alpha, beta],
+        }
+    }
+
+    /// The same form with `v` (as [`FrfDamping::values`]).
+    fn with_values(&self, v: &[f64]) -> Self {
+        match self {
+            FrfDamping::LossFactor(_) => FrfDamping::LossFactor(v[0]),
+            FrfDamping::Rayleigh { .. } => FrfDamping::Rayleigh {
+                alpha: v[0],
+                beta: v[1],
+            },
+        }
+    }
+
+    /// The bounds of the values: a loss factor in `[0, 1]`, Rayleigh coefficients at least 0.
+    fn bounds(&self) -> Vec<(f64, f64)> {
+        match self {
+            FrfDamping::LossFactor(_) => vec![(0.0, 1.0)],
+            FrfDamping::Rayleigh { .. } => vec![(0.0, f64::INFINITY); 2],
+        }
+    }
+
+    /// Checks the values.
+    ///
+    /// # Errors
+    /// [`UpdateError::Invalid`]: a loss factor outside `[0, 1]`, a negative or non-finite
+    /// Rayleigh coefficient.
+    pub fn check(&self) -> Result<(), UpdateError> {
+        let ok = self
+            .values()
+            .iter()
+            .zip(self.bounds())
+            .all(|(v, (lo, hi))| v.is_finite() && *v >= lo && *v <= hi);
+        if ok {
+            Ok(())
+        } else {
+            Err(UpdateError::Invalid {
+                what: "damping",
+                reason: match self {
+                    FrfDamping::LossFactor(eta) => {
+                        format!("a loss factor of {eta}: a structural loss factor is in [0, 1]")
+                    }
+                    FrfDamping::Rayleigh { alpha, beta } => format!(
+                        "Rayleigh coefficients {alpha}, {beta}: both must be finite and at least 0"
+                    ),
+                },
+            })
+        }
+    }
+
+    /// `dA/dd u` for each damping value `d` at `omega`: `i K u` for a loss factor, `i w M u` and
+    /// `i w K u` for Rayleigh's `alpha` and `beta`.
+    fn columns(
+        &self,
+        up: &UpdateModel<'_>,
+        omega: f64,
+        u: &[c64],
+    ) -> Result<Vec<Vec<c64>>, UpdateError> {
+        let sys = up.matrices();
+        let n = u.len();
+        let re: Vec<f64> = u.iter().map(|v| v.re).collect();
+        let im: Vec<f64> = u.iter().map(|v| v.im).collect();
+        // i s A u for a real matrix A and a real factor s
+        let times = |a: &femu_sparse::SparseMatrix, s: f64| -> Result<Vec<c64>, UpdateError> {
+            let (mut ar, mut ai) = (vec![0.0; n], vec![0.0; n]);
+            femu_sparse::csc::mul_vec(a, &re, &mut ar)?;
+            femu_sparse::csc::mul_vec(a, &im, &mut ai)?;
+            Ok(ar
+                .iter()
+                .zip(&ai)
+                .map(|(r, i)| c64::new(-s * i, s * r))
+                .collect())
+        };
+        Ok(match self {
+            FrfDamping::LossFactor(_) => vec![times(&sys.k, 1.0)?],
+            FrfDamping::Rayleigh { .. } => vec![times(&sys.m, omega)?, times(&sys.k, omega)?],
+        })
+    }
+}
+
+impl std::fmt::Display for FrfDamping {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FrfDamping::LossFactor(eta) => write!(f, "loss factor {eta:.5}"),
+            FrfDamping::Rayleigh { alpha, beta } => {
+                write!(f, "Rayleigh alpha {alpha:.5e} s^-1, beta {beta:.5e} s")
+            }
+        }
+    }
+}
+
 /// What the FRF fit minimises.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -161,8 +283,8 @@ pub enum FrfMethod {
 enum Columns {
     /// None: the objective alone.
     None,
-    /// One per parameter of the model (and the loss factor when it is fitted).
-    Parameters { loss_factor: bool },
+    /// One per parameter of the model (and the damping's values when they are fitted).
+    Parameters { damping: bool },
     /// One per group (the localisation's).
     Groups,
 }
@@ -180,14 +302,16 @@ struct Evaluation {
     backward_error: f64,
 }
 
-/// `dA/dtheta u` for each column family at one line: `(1 + i eta) K' u - w^2 M' u`, with `K' x`
+/// `dA/dtheta u` for each column family at one line: `c_K K' u + c_M M' u`, with `K' x`
 /// and `M' x` from the model's element-by-element columns at `lambda = 0` and `lambda = 1`.
 fn derivative_columns(
     up: &UpdateModel<'_>,
     which: Columns,
-    a: DynamicStiffness,
+    damping: &FrfDamping,
+    omega: f64,
     u: &[c64],
 ) -> Result<Vec<Vec<c64>>, UpdateError> {
+    let a = damping.stiffness(omega);
     let n = u.len();
     let re: Vec<f64> = u.iter().map(|v| v.re).collect();
     let im: Vec<f64> = u.iter().map(|v| v.im).collect();
@@ -213,30 +337,24 @@ fn derivative_columns(
         }
         out.push(v);
     }
-    if let Columns::Parameters { loss_factor: true } = which {
-        // dA/deta u = i K(p) u
-        let k = &up.matrices().k;
-        let mut kr = vec![0.0; n];
-        let mut ki = vec![0.0; n];
-        femu_sparse::csc::mul_vec(k, &re, &mut kr)?;
-        femu_sparse::csc::mul_vec(k, &im, &mut ki)?;
-        out.push(kr.iter().zip(&ki).map(|(r, i)| c64::new(-i, *r)).collect());
+    if let Columns::Parameters { damping: true } = which {
+        out.extend(damping.columns(up, omega, u)?);
     }
     Ok(out)
 }
 
 /// The objective (and, with `which`, its normal equations) at the model's current parameters and
-/// the loss factor `eta`.
+/// the damping `damping`.
 fn evaluate(
     up: &UpdateModel<'_>,
     test: &FrfTest,
-    eta: f64,
+    damping: &FrfDamping,
     which: Columns,
     method: FrfMethod,
 ) -> Result<Evaluation, UpdateError> {
     match method {
-        FrfMethod::SbEbe => evaluate_residue(up, test, eta, which),
-        FrfMethod::OutputError => evaluate_output(up, test, eta, which),
+        FrfMethod::SbEbe => evaluate_residue(up, test, damping, which),
+        FrfMethod::OutputError => evaluate_output(up, test, damping, which),
     }
 }
 
@@ -320,7 +438,7 @@ fn output_weights(test: &FrfTest) -> Vec<Mat<f64>> {
 fn evaluate_output(
     up: &UpdateModel<'_>,
     test: &FrfTest,
-    eta: f64,
+    damping: &FrfDamping,
     which: Columns,
 ) -> Result<Evaluation, UpdateError> {
     let sys = up.matrices();
@@ -333,7 +451,7 @@ fn evaluate_output(
         .into_par_iter()
         .map(|l| {
             let omega = test.omegas[l];
-            let a = DynamicStiffness::loss_factor(omega, eta);
+            let a = damping.stiffness(omega);
             let mut factor = combination
                 .factor(&[a.k, a.m])
                 .map_err(|e| at_line(e.into(), l, omega))?;
@@ -355,7 +473,7 @@ fn evaluate_output(
             if which != Columns::None {
                 for j in 0..r.ncols() {
                     let uj: Vec<c64> = u.col(j).iter().copied().collect();
-                    let v = derivative_columns(up, which, a, &uj)?;
+                    let v = derivative_columns(up, which, damping, omega, &uj)?;
                     let mut z = Mat::from_fn(n, v.len(), |i, c| v[c][i]);
                     backward_error = backward_error.max(
                         factor
@@ -385,7 +503,7 @@ fn evaluate_output(
 fn evaluate_residue(
     up: &UpdateModel<'_>,
     test: &FrfTest,
-    eta: f64,
+    damping: &FrfDamping,
     which: Columns,
 ) -> Result<Evaluation, UpdateError> {
     let sys = up.matrices();
@@ -398,7 +516,7 @@ fn evaluate_residue(
     let per_line: Vec<Result<Evaluation, UpdateError>> = (0..test.omegas.len())
         .into_par_iter()
         .map(|l| {
-            let a = DynamicStiffness::loss_factor(test.omegas[l], eta);
+            let a = damping.stiffness(test.omegas[l]);
             let mut line = forced.line(a).map_err(|e| at_line(e, l, test.omegas[l]))?;
             let e = line
                 .expand(test.receptance[l].as_ref(), f.as_ref())
@@ -414,7 +532,7 @@ fn evaluate_residue(
             if which != Columns::None {
                 for j in 0..r.ncols() {
                     let u: Vec<c64> = e.u.col(j).iter().copied().collect();
-                    let v = derivative_columns(up, which, a, &u)?;
+                    let v = derivative_columns(up, which, damping, test.omegas[l], &u)?;
                     let vm = Mat::from_fn(n, v.len(), |i, c| v[c][i]);
                     let b = line.project(vm.as_ref())?;
                     let rj: Vec<c64> = r.col(j).iter().copied().collect();
@@ -445,7 +563,7 @@ fn at_line(e: femu_correlate::CorrelateError, l: usize, omega: f64) -> UpdateErr
 }
 
 /// Localisation from measured FRFs: every group's indicators from the residues (4) of the
-/// responses expanded at each line with the loss factor `eta`, ranked and selected by `rule`
+/// responses expanded at each line with the damping `damping`, ranked and selected by `rule`
 /// (its `test_error` does not apply: the measured values are imposed). The explained fraction
 /// (the default indicator) is the fraction of `J` the group's own factor removes within its
 /// bounds; [`Localisation::joint_fit`] fits several together from the same normal equations.
@@ -456,12 +574,12 @@ fn at_line(e: femu_correlate::CorrelateError, l: usize, omega: f64) -> UpdateErr
 pub fn frf_localise(
     up: &UpdateModel<'_>,
     test: &FrfTest,
-    eta: f64,
+    damping: &FrfDamping,
     rule: &SelectionRule,
 ) -> Result<Localisation, UpdateError> {
     crate::localise::check_rule(rule)?;
-    check_eta(eta)?;
-    let e = evaluate_residue(up, test, eta, Columns::Groups)?;
+    damping.check()?;
+    let e = evaluate_residue(up, test, damping, Columns::Groups)?;
     let sys = up.matrices();
     let n = sys.dofs.free_count();
     let w_inv = femu_correlate::expansion::residual_metric(&sys.m)?;
@@ -510,24 +628,13 @@ pub fn frf_localise(
     Ok(loc)
 }
 
-fn check_eta(eta: f64) -> Result<(), UpdateError> {
-    if eta.is_finite() && (0.0..=1.0).contains(&eta) {
-        Ok(())
-    } else {
-        Err(UpdateError::Invalid {
-            what: "loss factor",
-            reason: format!("{eta}: a structural loss factor is in [0, 1]"),
-        })
-    }
-}
-
 /// The settings of [`frf_update`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FrfUpdateOptions {
-    /// The model's structural loss factor (the starting value when it is fitted; default 0.02).
-    pub loss_factor: f64,
-    /// Fit the loss factor with the parameters (default true).
-    pub fit_loss_factor: bool,
+    /// The model's damping (the start when it is fitted; default a loss factor of 0.02).
+    pub damping: FrfDamping,
+    /// Fit the damping's values with the parameters (default true).
+    pub fit_damping: bool,
     /// At most this many Gauss-Newton steps (default 30).
     pub max_iterations: usize,
     /// Stop when a step lowers the objective by less than this fraction (default 1e-8).
@@ -539,8 +646,8 @@ pub struct FrfUpdateOptions {
 impl Default for FrfUpdateOptions {
     fn default() -> Self {
         Self {
-            loss_factor: 0.02,
-            fit_loss_factor: true,
+            damping: FrfDamping::LossFactor(0.02),
+            fit_damping: true,
             max_iterations: 30,
             tolerance: 1e-8,
             method: FrfMethod::OutputError,
@@ -557,8 +664,8 @@ pub struct FrfIteration {
     pub objective: f64,
     /// The parameters before the step.
     pub theta: Vec<f64>,
-    /// The loss factor before the step.
-    pub loss_factor: f64,
+    /// The damping before the step.
+    pub damping: FrfDamping,
 }
 
 /// What [`frf_update`] found.
@@ -568,8 +675,8 @@ pub struct FrfUpdate {
     pub names: Vec<String>,
     /// The updated parameters.
     pub theta: Vec<f64>,
-    /// The updated (or given) loss factor.
-    pub loss_factor: f64,
+    /// The updated (or given) damping.
+    pub damping: FrfDamping,
     /// The objective minimised last.
     pub method: FrfMethod,
     /// That objective at the start and at the end.
@@ -603,12 +710,13 @@ impl std::fmt::Display for FrfUpdate {
         for (n, t) in self.names.iter().zip(&self.theta) {
             writeln!(f, "  {n:<16} {t:+.4}")?;
         }
-        write!(f, "  loss factor      {:.5}", self.loss_factor)
+        write!(f, "  damping: {}", self.damping)
     }
 }
 
 /// Updating from FRF data: Gauss-Newton over the model's parameters (stiffness, mass or
-/// thickness of its groups, as built) and, when asked, the structural loss factor, each step the
+/// thickness of its groups, as built) and, when asked, the damping (a loss factor or Rayleigh's
+/// two coefficients), each step the
 /// least-squares solution of the linearised objective (the re-expansion included for SB-EBE)
 /// clamped to the bounds, shortened by halves until the objective decreases. With
 /// [`FrfMethod::OutputError`] (the default) SB-EBE runs first and the output error continues
@@ -616,30 +724,31 @@ impl std::fmt::Display for FrfUpdate {
 /// under noise. The model is left at the updated parameters.
 ///
 /// # Errors
-/// The test's sizes and values, a loss factor outside `[0, 1]`, a singular line.
+/// The test's sizes and values, damping out of its bounds ([`FrfDamping::check`]), a singular
+/// line.
 pub fn frf_update(
     up: &mut UpdateModel<'_>,
     test: &FrfTest,
     options: &FrfUpdateOptions,
 ) -> Result<FrfUpdate, UpdateError> {
-    check_eta(options.loss_factor)?;
+    options.damping.check()?;
     test.check(up.matrices().dofs.free_count())?;
     let stages: &[FrfMethod] = match options.method {
         FrfMethod::SbEbe => &[FrfMethod::SbEbe],
         FrfMethod::OutputError => &[FrfMethod::SbEbe, FrfMethod::OutputError],
     };
-    let start = evaluate(up, test, options.loss_factor, Columns::None, options.method)?.objective;
-    let mut eta = options.loss_factor;
+    let start = evaluate(up, test, &options.damping, Columns::None, options.method)?.objective;
+    let mut damping = options.damping;
     let mut history = Vec::new();
     let mut end = (start, 0.0, true);
     for &method in stages {
-        end = gauss_newton(up, test, options, method, &mut eta, &mut history)?;
+        end = gauss_newton(up, test, options, method, &mut damping, &mut history)?;
     }
     let (objective, backward_error, converged) = end;
     Ok(FrfUpdate {
         names: up.parameters().iter().map(|p| p.name.clone()).collect(),
         theta: up.theta(),
-        loss_factor: eta,
+        damping,
         method: options.method,
         objective: (start, objective),
         history,
@@ -648,46 +757,58 @@ pub fn frf_update(
     })
 }
 
-/// Gauss-Newton steps of `method` from the model's parameters and `eta`; returns the final
+/// Gauss-Newton steps of `method` from the model's parameters and `damping`; returns the final
 /// objective, the largest backward error at the end and whether the tolerance stopped it.
 fn gauss_newton(
     up: &mut UpdateModel<'_>,
     test: &FrfTest,
     options: &FrfUpdateOptions,
     method: FrfMethod,
-    eta: &mut f64,
+    damping: &mut FrfDamping,
     history: &mut Vec<FrfIteration>,
 ) -> Result<(f64, f64, bool), UpdateError> {
-    let fit_eta = options.fit_loss_factor;
-    let which = Columns::Parameters {
-        loss_factor: fit_eta,
-    };
-    let bounds: Vec<(f64, f64)> = up
-        .parameters()
-        .iter()
-        .map(|p| (p.lower, p.upper))
-        .chain(fit_eta.then_some((0.0, 1.0)))
-        .collect();
+    let fit = options.fit_damping;
+    let which = Columns::Parameters { damping: fit };
+    let mut bounds: Vec<(f64, f64)> = up.parameters().iter().map(|p| (p.lower, p.upper)).collect();
+    if fit {
+        bounds.extend(damping.bounds());
+    }
     let mut theta = up.theta();
-    let mut e = evaluate(up, test, *eta, which, method)?;
+    let mut e = evaluate(up, test, damping, which, method)?;
     for _ in 0..options.max_iterations {
         history.push(FrfIteration {
             method,
             objective: e.objective,
             theta: theta.clone(),
-            loss_factor: *eta,
+            damping: *damping,
         });
         if e.objective == 0.0 {
             return Ok((0.0, e.backward_error, true));
         }
+        // the step of the Jacobi-scaled normal equations: the parameters' columns differ in
+        // scale by orders of magnitude (a stiffness factor, a loss factor, Rayleigh's alpha in
+        // s^-1 and beta in s)
         let p = e.num.len();
-        let g = Mat::from_fn(p, p, |a, b| e.gram[a][b]);
+        let d: Vec<f64> = (0..p)
+            .map(|a| {
+                let g = e.gram[a][a];
+                if g > 0.0 { 1.0 / g.sqrt() } else { 0.0 }
+            })
+            .collect();
+        let g = Mat::from_fn(p, p, |a, b| d[a] * e.gram[a][b] * d[b]);
         let (inverse, _) = crate::lsq::symmetric_pseudo_inverse(g.as_ref())?;
         let step: Vec<f64> = (0..p)
-            .map(|a| -(0..p).map(|b| inverse[(a, b)] * e.num[b]).sum::<f64>())
+            .map(|a| {
+                -d[a]
+                    * (0..p)
+                        .map(|b| inverse[(a, b)] * d[b] * e.num[b])
+                        .sum::<f64>()
+            })
             .collect();
         let mut current: Vec<f64> = theta.clone();
-        current.extend(fit_eta.then_some(*eta));
+        if fit {
+            current.extend(damping.values());
+        }
         let mut accepted = None;
         let mut s = 1.0;
         for _ in 0..8 {
@@ -697,9 +818,9 @@ fn gauss_newton(
                 .zip(&bounds)
                 .map(|((c, d), (lo, hi))| (c + s * d).clamp(*lo, *hi))
                 .collect();
-            let (t, et) = split(&trial, theta.len(), *eta);
+            let (t, et) = split(&trial, theta.len(), damping);
             up.set_theta(&t)?;
-            let trial_objective = evaluate(up, test, et, Columns::None, method)?.objective;
+            let trial_objective = evaluate(up, test, &et, Columns::None, method)?.objective;
             if trial_objective < e.objective {
                 accepted = Some((t, et, trial_objective));
                 break;
@@ -712,8 +833,8 @@ fn gauss_newton(
         };
         let decrease = (e.objective - objective) / e.objective;
         theta = t;
-        *eta = et;
-        e = evaluate(up, test, *eta, which, method)?;
+        *damping = et;
+        e = evaluate(up, test, damping, which, method)?;
         if decrease < options.tolerance {
             return Ok((e.objective, e.backward_error, true));
         }
@@ -721,20 +842,29 @@ fn gauss_newton(
     Ok((e.objective, e.backward_error, false))
 }
 
-/// The parameters and the loss factor of a stacked vector.
-fn split(v: &[f64], params: usize, eta: f64) -> (Vec<f64>, f64) {
-    (v[..params].to_vec(), v.get(params).copied().unwrap_or(eta))
+/// The parameters and the damping of a stacked vector.
+fn split(v: &[f64], params: usize, damping: &FrfDamping) -> (Vec<f64>, FrfDamping) {
+    let d = if v.len() > params {
+        damping.with_values(&v[params..])
+    } else {
+        *damping
+    };
+    (v[..params].to_vec(), d)
 }
 
 /// The model's receptance at the test's DOFs against the measured one, per line:
-/// `||H_model - H_test||_F / ||H_test||_F`, the model solved directly (`K (1 + i eta) - w^2 M`,
-/// one complex factorization per line). The truth check of an FRF update on lines it did not
+/// `||H_model - H_test||_F / ||H_test||_F`, the model solved directly with the damping (one
+/// complex factorization per line). The truth check of an FRF update on lines it did not
 /// use.
 ///
 /// # Errors
 /// The test's sizes and values, a loss factor outside `[0, 1]`, a singular line.
-pub fn frf_errors(up: &UpdateModel<'_>, test: &FrfTest, eta: f64) -> Result<Vec<f64>, UpdateError> {
-    check_eta(eta)?;
+pub fn frf_errors(
+    up: &UpdateModel<'_>,
+    test: &FrfTest,
+    damping: &FrfDamping,
+) -> Result<Vec<f64>, UpdateError> {
+    damping.check()?;
     let sys = up.matrices();
     let n = sys.dofs.free_count();
     test.check(n)?;
@@ -743,7 +873,7 @@ pub fn frf_errors(up: &UpdateModel<'_>, test: &FrfTest, eta: f64) -> Result<Vec<
     (0..test.omegas.len())
         .into_par_iter()
         .map(|l| {
-            let a = DynamicStiffness::loss_factor(test.omegas[l], eta);
+            let a = damping.stiffness(test.omegas[l]);
             let mut factor = combination.factor(&[a.k, a.m])?;
             let mut u = f.clone();
             factor.solve_in_place(u.as_mut())?;

@@ -62,8 +62,8 @@ pub mod truth;
 pub use derivatives::{EigenpairDerivatives, eigenpair_derivatives};
 pub use error::UpdateError;
 pub use frf::{
-    FrfIteration, FrfMethod, FrfTest, FrfUpdate, FrfUpdateOptions, frf_errors, frf_localise,
-    frf_update,
+    FrfDamping, FrfIteration, FrfMethod, FrfTest, FrfUpdate, FrfUpdateOptions, frf_errors,
+    frf_localise, frf_update,
 };
 pub use localise::{Indicator, Localisation, SelectionRule, localise, localise_expanded};
 pub use lsq::{MassGuard, UpdateOptions};

@@ -124,8 +124,8 @@ pub fn measure_along(
     (TestModes::new(f, None, y).unwrap(), sensors)
 }
 
-/// Measured receptances: `real` with region stiffness factors `theta` and the structural loss
-/// factor `eta`, solved directly at each of `hz` (one sparse complex factorization per line), a
+/// Measured receptances: `real` with region stiffness factors `theta` and the damping
+/// `damping`, solved directly at each of `hz` (one sparse complex factorization per line), a
 /// unit force along z at the model's sensor node `reference` (an index into
 /// [`sensor_nodes`]), read at the model's sensor nodes in y and z, each value with complex
 /// noise of relative size `noise` (uniform, unit variance per part). Returns the response sensors
@@ -134,7 +134,7 @@ pub fn measure_along(
 pub fn measure_frf(
     real: &Model,
     theta: &[f64],
-    eta: f64,
+    damping: &femu_update::FrfDamping,
     model: &Model,
     reference: usize,
     hz: &[f64],
@@ -176,9 +176,8 @@ pub fn measure_frf(
         .iter()
         .map(|f| {
             let w = 2.0 * std::f64::consts::PI * f;
-            let mut factor = combination
-                .factor(&[c64::new(1.0, eta), c64::new(-w * w, 0.0)])
-                .unwrap();
+            let a = damping.stiffness(w);
+            let mut factor = combination.factor(&[a.k, a.m]).unwrap();
             let mut u = Mat::<c64>::zeros(sys.k.rows(), 1);
             u[(force_dof, 0)] = c64::new(1.0, 0.0);
             factor.solve_in_place(u.as_mut()).unwrap();
