@@ -446,13 +446,7 @@ pub fn frf_correlation(
     };
     let mut rows = Vec::with_capacity(pairs.len());
     for ((f, oi, ii, values), keep) in pairs.iter().zip(&coherent) {
-        let (test_curve, model_curve): (Vec<c64>, Vec<c64>) = values
-            .iter()
-            .zip(&frf.h)
-            .zip(keep)
-            .filter(|(_, k)| **k)
-            .map(|((v, h), _)| (*v, h[(*oi, *ii)]))
-            .unzip();
+        let (test_curve, model_curve) = coherent_curves(values, &frf, keep, *oi, *ii);
         if test_curve.is_empty() {
             return Err(in_file(format!(
                 "FRF {}: every line's coherence is below {} (--min-coherence)",
@@ -811,6 +805,24 @@ fn update_from_frfs(
     })
 }
 
+/// The measured values of one function and the model's (output `oi`, input `ii`) at the lines
+/// `keep` marks.
+fn coherent_curves(
+    values: &[c64],
+    frf: &Frf,
+    keep: &[bool],
+    oi: usize,
+    ii: usize,
+) -> (Vec<c64>, Vec<c64>) {
+    values
+        .iter()
+        .zip(&frf.h)
+        .zip(keep)
+        .filter(|(_, k)| **k)
+        .map(|((v, h), _)| (*v, h[(oi, ii)]))
+        .unzip()
+}
+
 /// [`FrfRequest::min_coherence`]'s default.
 const DEFAULT_MIN_COHERENCE: f64 = 0.8;
 
@@ -934,13 +946,7 @@ fn align(
         )?;
         let mut sum = 0.0;
         for ((oi, ii, values), keep) in pairs.iter().zip(coherent) {
-            let (t, m): (Vec<c64>, Vec<c64>) = values
-                .iter()
-                .zip(&frf.h)
-                .zip(keep)
-                .filter(|(_, k)| **k)
-                .map(|((v, h), _)| (*v, h[(*oi, *ii)]))
-                .unzip();
+            let (t, m) = coherent_curves(values, &frf, keep, *oi, *ii);
             sum += frac(&t, &m).unwrap_or(0.0);
         }
         Ok(sum / pairs.len().max(1) as f64)

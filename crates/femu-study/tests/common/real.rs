@@ -55,6 +55,17 @@ fn node_at(mesh: &Mesh, x: [f64; 3]) -> u64 {
     mesh.node_id(i)
 }
 
+/// `real` over its regions with the stiffness factors `theta`.
+fn with_factors<'a>(real: &'a Model, theta: &[f64]) -> UpdateModel<'a> {
+    let names = regions();
+    let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+    let mut up =
+        UpdateModel::from_element_sets(real, &sets, MassKind::Consistent, Corrections::Stiffness)
+            .unwrap();
+    up.set_theta(theta).unwrap();
+    up
+}
+
 /// A test: the first `count` elastic modes of `real` with region stiffness factors `theta`,
 /// read at `model`'s sensor nodes in y and z, noise `shape_noise` times each mode's largest
 /// reading (uniform, unit variance) and `frequency_noise` relative on the frequencies.
@@ -88,12 +99,7 @@ pub fn measure_along(
     seed: u64,
     directions: &[[f64; 3]],
 ) -> (TestModes, Vec<Sensor>) {
-    let names = regions();
-    let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-    let mut up =
-        UpdateModel::from_element_sets(real, &sets, MassKind::Consistent, Corrections::Stiffness)
-            .unwrap();
-    up.set_theta(theta).unwrap();
+    let mut up = with_factors(real, theta);
     let modes = model_modes(&mut up, 6 + count, &Default::default()).unwrap();
     let nodes = sensor_nodes(model);
     let mut real_sensors = Vec::new();
@@ -142,12 +148,7 @@ pub fn measure_frf(
     seed: u64,
 ) -> (Vec<Sensor>, Sensor, Vec<Mat<faer::c64>>) {
     use faer::c64;
-    let names = regions();
-    let sets: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-    let mut up =
-        UpdateModel::from_element_sets(real, &sets, MassKind::Consistent, Corrections::Stiffness)
-            .unwrap();
-    up.set_theta(theta).unwrap();
+    let up = with_factors(real, theta);
     let sys = up.matrices();
     let nodes = sensor_nodes(model);
     let real_dof = |id: u64, axis: usize| {
