@@ -26,9 +26,14 @@ pub struct ModelArgs {
     /// Mesh-only models: density in kg/m^3.
     #[arg(long, allow_negative_numbers = true)]
     pub density: Option<f64>,
-    /// Mesh-only models: a node set (Gmsh physical group) to clamp; repeat for several.
+    /// Mesh-only models: a node set (Gmsh physical group) to clamp (rotations too where shells
+    /// give them); repeat for several.
     #[arg(long)]
     pub fix: Vec<String>,
+    /// Gmsh meshes: a physical group of surfaces (3-node triangles, 4-node quadrangles) made
+    /// shells of the given thickness in m, as GROUP=THICKNESS; repeat for several.
+    #[arg(long, value_name = "GROUP=THICKNESS")]
+    pub shell: Vec<String>,
     /// `.inp` decks: unknown keywords are warnings instead of errors (unknown parameters of known
     /// keywords stay errors).
     #[arg(long)]
@@ -142,9 +147,23 @@ impl ModelArgs {
                 )));
             }
         };
+        let shells = self
+            .shell
+            .iter()
+            .map(|s| {
+                let (group, t) = s
+                    .rsplit_once('=')
+                    .ok_or_else(|| CliError::Usage(format!("--shell {s}: give GROUP=THICKNESS")))?;
+                let t: f64 = t.trim().parse().map_err(|_| {
+                    CliError::Usage(format!("--shell {s}: the thickness '{t}' is not a number"))
+                })?;
+                Ok((group.trim().to_string(), t))
+            })
+            .collect::<Result<Vec<_>, CliError>>()?;
         Ok(ModelOptions {
             material,
             fix: self.fix.clone(),
+            shells,
             lumped,
             lenient: self.lenient,
             bricks: self.bricks,

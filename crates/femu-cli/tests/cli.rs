@@ -1995,3 +1995,181 @@ fn frf_lines_of_low_coherence_are_left_out() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Shells from a Gmsh mesh: NAFEMS FV16 (a 10 m square plate, 0.05 m thick, E = 200 GPa,
+/// nu = 0.3, rho = 8000, one edge clamped) as 16 x 16 quadrangles in a physical surface "plate"
+/// with the clamped edge a physical curve "edge", made shells by `--shell plate=0.05`: the six
+/// frequencies equal those of the same plate as a Nastran deck of CQUAD4 (PSHELL with MID3,
+/// coupled mass) to 1e-9, and NAFEMS' 0.421, 1.029, 2.582, 3.306, 3.753, 6.555 Hz to 1 %; the
+/// same mesh cut into triangles to 1 % too (32 x 32 x 2). Refused: no `--shell` (the surface
+/// groups named), a group that is not a surface group, a thickness of 0, a quadratic surface.
+#[test]
+fn gmsh_surfaces_as_shells() {
+    let dir = std::env::temp_dir().join(format!("femu-cli-gmsh-shells-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let node = |n: usize, i: usize, j: usize| 1 + i + (n + 1) * j;
+    let msh = |n: usize, triangles: bool, quadratic_one: bool| {
+        let mut s = String::from(
+            "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n1 2 \"edge\"\n2 1 \"plate\"\n$EndPhysicalNames\n",
+        );
+        s.push_str(&format!("$Nodes\n{}\n", (n + 1) * (n + 1)));
+        for j in 0..=n {
+            for i in 0..=n {
+                s.push_str(&format!(
+                    "{} {:e} {:e} 0\n",
+                    node(n, i, j),
+                    10.0 * i as f64 / n as f64,
+                    10.0 * j as f64 / n as f64
+                ));
+            }
+        }
+        let mut elements = Vec::new();
+        for j in 0..n {
+            elements.push(format!("1 2 2 2 {} {}", node(n, 0, j), node(n, 0, j + 1)));
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let (a, b, c, d) = (
+                    node(n, i, j),
+                    node(n, i + 1, j),
+                    node(n, i + 1, j + 1),
+                    node(n, i, j + 1),
+                );
+                if triangles {
+                    elements.push(format!("2 2 1 1 {a} {b} {c}"));
+                    elements.push(format!("2 2 1 1 {a} {c} {d}"));
+                } else if quadratic_one && i == 0 && j == 0 {
+                    // a 9-node quadrangle's type with its corners repeated: refused by type
+                    elements.push(format!("10 2 1 1 {a} {b} {c} {d} {a} {b} {c} {d} {a}"));
+                } else {
+                    elements.push(format!("3 2 1 1 {a} {b} {c} {d}"));
+                }
+            }
+        }
+        s.push_str(&format!("$EndNodes\n$Elements\n{}\n", elements.len()));
+        for (k, e) in elements.iter().enumerate() {
+            s.push_str(&format!("{} {e}\n", k + 1));
+        }
+        s.push_str("$EndElements\n");
+        s
+    };
+    std::fs::write(dir.join("quads.msh"), msh(16, false, false)).unwrap();
+    std::fs::write(dir.join("triangles.msh"), msh(32, true, false)).unwrap();
+    std::fs::write(dir.join("quadratic.msh"), msh(16, false, true)).unwrap();
+    // the same plate as a Nastran deck (its element ids the .msh's: edges come first there)
+    let n = 16;
+    let mut bdf = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
+    for j in 0..=n {
+        for i in 0..=n {
+            bdf.push_str(&format!(
+                "GRID,{},,{},{},0.\n",
+                node(n, i, j),
+                10.0 * i as f64 / n as f64,
+                10.0 * j as f64 / n as f64
+            ));
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            bdf.push_str(&format!(
+                "CQUAD4,{},7,{},{},{},{}\n",
+                n + 1 + i + n * j,
+                node(n, i, j),
+                node(n, i + 1, j),
+                node(n, i + 1, j + 1),
+                node(n, i, j + 1)
+            ));
+        }
+    }
+    bdf.push_str("PSHELL,7,3,0.05,3,,3\nMAT1,3,2.+11,,0.3,8000.\n");
+    for j in 0..=n {
+        bdf.push_str(&format!("SPC1,1,123456,{}\n", node(n, 0, j)));
+    }
+    bdf.push_str("ENDDATA\n");
+    std::fs::write(dir.join("fv16.bdf"), bdf).unwrap();
+    let material = ["--young", "2e11", "--poisson", "0.3", "--density", "8000"];
+    let modes = |file: &str, extra: &[&str], json: &str| {
+        let out = femu()
+            .args(["modes", dir.join(file).to_str().unwrap(), "--count", "6"])
+            .args(extra)
+            .args(["--json", dir.join(json).to_str().unwrap(), "--quiet"])
+            .output()
+            .unwrap();
+        (out, dir.join(json))
+    };
+    let freqs = |json: &std::path::Path| -> Vec<f64> {
+        json_of(json)["frequencies_hz"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f.as_f64().unwrap())
+            .collect()
+    };
+    let shell = [&material[..], &["--shell", "plate=0.05", "--fix", "edge"]].concat();
+    let (out, json) = modes("quads.msh", &shell, "quads.json");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let from_msh = freqs(&json);
+    let (out, json) = modes("fv16.bdf", &[], "bdf.json");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let from_bdf = freqs(&json);
+    let (out, json) = modes("triangles.msh", &shell, "triangles.json");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let triangles = freqs(&json);
+    let nafems = [0.421, 1.029, 2.582, 3.306, 3.753, 6.555];
+    for k in 0..6 {
+        assert!(
+            (from_msh[k] / from_bdf[k] - 1.0).abs() < 1e-9,
+            "mode {}: {from_msh:?} {from_bdf:?}",
+            k + 1
+        );
+        assert!(
+            (from_msh[k] / nafems[k] - 1.0).abs() < 0.01,
+            "mode {}: {from_msh:?}",
+            k + 1
+        );
+        assert!(
+            (triangles[k] / nafems[k] - 1.0).abs() < 0.01,
+            "mode {}: {triangles:?}",
+            k + 1
+        );
+    }
+    // bad input
+    let refused = |file: &str, extra: &[&str], what: &[&str]| {
+        let (out, _) = modes(file, extra, "bad.json");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{extra:?}");
+        for w in what {
+            assert!(stderr.contains(w), "{extra:?}: {stderr}");
+        }
+    };
+    refused("quads.msh", &material, &["--shell", "plate"]);
+    refused(
+        "quads.msh",
+        &[&material[..], &["--shell", "edge=0.05"]].concat(),
+        &["no physical group of surfaces edge", "plate"],
+    );
+    refused(
+        "quads.msh",
+        &[&material[..], &["--shell", "plate=0"]].concat(),
+        &["positive"],
+    );
+    refused(
+        "quads.msh",
+        &[&material[..], &["--shell", "plate"]].concat(),
+        &["GROUP=THICKNESS"],
+    );
+    refused("quadratic.msh", &shell, &["type 10", "line"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -19,8 +19,24 @@ pub struct GmshMesh {
     /// The mesh (element sets and node sets from physical groups, named by their physical name
     /// or `"physical<tag>"`).
     pub mesh: Mesh,
+    /// The surface elements (dimension 2) of each physical group, by its name: what a shell
+    /// section turns into shells (the mesh has them as node sets only).
+    pub surfaces: BTreeMap<String, Vec<Surface>>,
     /// Warnings (skipped sections, element types without a femu equivalent).
     pub warnings: Vec<Warning>,
+}
+
+/// A surface element of a physical group.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Surface {
+    /// Its element tag.
+    pub tag: u64,
+    /// Its Gmsh element type (2: 3-node triangle, 3: 4-node quadrangle, 9, 16, 10: quadratic).
+    pub gmsh_type: i64,
+    /// Its node tags, in Gmsh's order.
+    pub nodes: Vec<u64>,
+    /// The line of the file it was read from.
+    pub line: usize,
 }
 
 /// An element as read: Gmsh type, tag, node tags, (entity dimension, physical tags), line.
@@ -457,6 +473,7 @@ fn build(
     };
     let mut element_sets: BTreeMap<String, Vec<u64>> = BTreeMap::new();
     let mut node_sets: BTreeMap<String, Vec<u64>> = BTreeMap::new();
+    let mut surfaces: BTreeMap<String, Vec<Surface>> = BTreeMap::new();
     let mut skipped: BTreeMap<i64, usize> = BTreeMap::new();
     let mut first_skip_line = BTreeMap::new();
     for (ty, tag, g, (dim, phys), ln) in elements {
@@ -484,6 +501,17 @@ fn build(
                 }
                 for p in phys {
                     node_sets.entry(set_name(*dim, *p)).or_default().extend(g);
+                    if *dim == 2 {
+                        surfaces
+                            .entry(set_name(*dim, *p))
+                            .or_default()
+                            .push(Surface {
+                                tag: *tag,
+                                gmsh_type: *ty,
+                                nodes: g.clone(),
+                                line: *ln,
+                            });
+                    }
                 }
             }
         }
@@ -513,16 +541,20 @@ fn build(
                 source,
             })?;
     }
-    if mesh.element_count() == 0 {
+    if mesh.element_count() == 0 && surfaces.is_empty() {
         return Err(IoError::Content {
             path: path.to_path_buf(),
             reason: format!(
-                "no volume elements in the mesh ({} nodes): femu needs tetrahedra, hexahedra or prisms ($Elements of dimension 3)",
+                "no volume elements in the mesh ({} nodes): femu needs tetrahedra, hexahedra or prisms ($Elements of dimension 3), or surfaces in a physical group to make shells of",
                 mesh.node_count()
             ),
         });
     }
-    Ok(GmshMesh { mesh, warnings })
+    Ok(GmshMesh {
+        mesh,
+        surfaces,
+        warnings,
+    })
 }
 
 /// Binary 4.1: the same sections as ASCII with their numbers as raw bytes.

@@ -31,8 +31,12 @@ pub struct ModelOptions {
     /// The material of a mesh-only model (required for `.msh`/`.unv`, not used for an `.inp`
     /// deck, which has its own).
     pub material: Option<MaterialOptions>,
-    /// Node sets (Gmsh physical groups, UFF groups) to clamp in a mesh-only model.
+    /// Node sets (Gmsh physical groups, UFF groups) to clamp in a mesh-only model (their
+    /// rotations too where shells give them rotations).
     pub fix: Vec<String>,
+    /// Shell sections of a Gmsh mesh: each named physical group of surfaces (3-node triangles,
+    /// 4-node quadrangles) becomes shells of this thickness (m) in the model's material.
+    pub shells: Vec<(String, f64)>,
     /// Lumped (row-sum/HRZ) instead of consistent mass.
     pub lumped: bool,
     /// Unknown keywords in an `.inp` deck are warnings instead of errors
@@ -57,6 +61,108 @@ impl ModelOptions {
             MassKind::Consistent
         }
     }
+}
+
+/// The shells of `sections` (physical group, thickness) on a Gmsh mesh's `surfaces`, in the
+/// material `mat` (MITC4 quadrangles and MITC3 triangles, a solid section: `12I/T^3 = 1`,
+/// `TS/T = 5/6`), each group an element set of that name; a mesh without volume elements needs
+/// them.
+///
+/// # Errors
+/// A group that is not a physical group of surfaces (the groups it has named), a thickness that
+/// is not positive, a quadratic surface element (named with its line), a bad shell (its id).
+fn add_shells(
+    model: &mut Model,
+    surfaces: &std::collections::BTreeMap<String, Vec<femu_io::gmsh::Surface>>,
+    sections: &[(String, f64)],
+    mat: &MaterialOptions,
+    path: &Path,
+) -> Result<(), StudyError> {
+    use femu_fem::structural::{StructuralElement, StructuralKind};
+    let groups = || {
+        if surfaces.is_empty() {
+            "none".to_string()
+        } else {
+            surfaces.keys().cloned().collect::<Vec<_>>().join(", ")
+        }
+    };
+    if sections.is_empty() && model.mesh().element_count() == 0 {
+        return Err(StudyError::in_file(
+            path,
+            "shells",
+            format!(
+                "no volume elements: give the surface groups a shell thickness (--shell GROUP=THICKNESS, or [shells] in a study file; the physical groups of surfaces: {})",
+                groups()
+            ),
+        ));
+    }
+    for (group, t) in sections {
+        if !(t.is_finite() && *t > 0.0) {
+            return Err(StudyError::invalid(
+                "shell thickness",
+                format!("{group} = {t}: a shell's thickness is a positive length (m)"),
+            ));
+        }
+        let Some(faces) = surfaces.get(group) else {
+            return Err(StudyError::in_file(
+                path,
+                "shells",
+                format!(
+                    "no physical group of surfaces {group} (the mesh's: {})",
+                    groups()
+                ),
+            ));
+        };
+        let mut ids = Vec::with_capacity(faces.len());
+        for f in faces {
+            if !matches!(f.gmsh_type, 2 | 3) {
+                return Err(StudyError::in_file(
+                    path,
+                    "shells",
+                    format!(
+                        "line {}: element {} of {group} is of Gmsh type {}: femu's shells are 3-node triangles (2) and 4-node quadrangles (3)",
+                        f.line, f.tag, f.gmsh_type
+                    ),
+                ));
+            }
+            let nodes = f
+                .nodes
+                .iter()
+                .map(|n| {
+                    model.mesh().node_index(*n).ok_or_else(|| {
+                        StudyError::in_file(
+                            path,
+                            "shells",
+                            format!("line {}: element {} has no node {n}", f.line, f.tag),
+                        )
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            let shell = femu_fem::shell::Shell {
+                e: mat.young,
+                nu: mat.poisson,
+                rho: mat.density,
+                t: *t,
+                bending: 1.0,
+                shear: Some(5.0 / 6.0),
+                nsm: 0.0,
+                material: None,
+                offset: 0.0,
+            };
+            model
+                .add_structural(StructuralElement {
+                    id: f.tag,
+                    nodes,
+                    kind: StructuralKind::Shell(shell),
+                })
+                .map_err(|e| StudyError::within(path, e))?;
+            ids.push(f.tag);
+        }
+        model
+            .add_structural_set(group.clone(), &ids)
+            .map_err(|e| StudyError::within(path, e))?;
+    }
+    Ok(())
 }
 
 /// Where loading a model spent its time, s (what `femu modes` prints and writes under `load`).
@@ -156,16 +262,23 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
                 "a mesh file has no material: give Young's modulus, Poisson's ratio and the density (--young, --poisson, --density, or [material] in a study file)",
             ));
         };
-        let mesh = if format == Format::Universal {
+        let (mesh, surfaces) = if format == Format::Universal {
             let u = femu_io::uff::read_uff(path)?;
             let (mesh, w) = u.to_mesh(path)?;
             warnings.extend(u.warnings.iter().map(|w| w.to_string()));
             warnings.extend(w.iter().map(|w| w.to_string()));
-            mesh
+            if !options.shells.is_empty() {
+                return Err(StudyError::in_file(
+                    path,
+                    "shells",
+                    "shell sections apply to a Gmsh mesh's physical groups of surfaces: a universal file's mesh has solids only",
+                ));
+            }
+            (mesh, Default::default())
         } else {
             let g = femu_io::gmsh::read_msh(path)?;
             warnings.extend(g.warnings.iter().map(|w| w.to_string()));
-            g.mesh
+            (g.mesh, g.surfaces)
         };
         if options.lenient {
             warnings.push(format!(
@@ -177,10 +290,24 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         let material = Material::isotropic("command line", mat.young, mat.poisson, mat.density)?;
         model.set_material(None, material)?;
         set_bricks(&mut model, options.bricks, path, &mut warnings)?;
+        add_shells(&mut model, &surfaces, &options.shells, &mat, path)?;
         for set in &options.fix {
             model
                 .fix_set(set, &[0, 1, 2])
                 .map_err(|e| StudyError::within(path, e))?;
+            let with_rotations: Vec<u64> = model
+                .mesh()
+                .node_set(set)
+                .map_err(|e| StudyError::within(path, e))?
+                .iter()
+                .filter(|n| model.has_rotations(**n))
+                .map(|n| model.mesh().node_id(*n))
+                .collect();
+            for id in with_rotations {
+                model
+                    .fix_node_dofs(id, &[3, 4, 5])
+                    .map_err(|e| StudyError::within(path, e))?;
+            }
         }
         (model, None)
     } else if format == Format::Nastran {

@@ -3,7 +3,8 @@
 //! the model is read and assembled once and its modes are solved once for every step.
 //!
 //! ```toml
-//! model = "plate.inp"            # or a .msh/.unv with [material] and fix
+//! model = "plate.inp"            # or a .msh/.unv with [material] and fix (and [shells]:
+//!                                # a .msh's surface groups with their thickness)
 //! test = "test.unv"              # .unv, .csv or .json
 //! lenient = false               # true: unknown .inp keywords are warnings
 //! [pairing]
@@ -53,6 +54,10 @@ pub struct StudyFile {
     /// Node sets to clamp in a mesh-only model.
     #[serde(default)]
     pub fix: Vec<String>,
+    /// `[shells]`: a Gmsh mesh's physical groups of surfaces made shells, by name, with their
+    /// thickness (m).
+    #[serde(default)]
+    pub shells: std::collections::BTreeMap<String, f64>,
     /// Lumped mass.
     #[serde(default)]
     pub lumped: bool,
@@ -308,6 +313,7 @@ pub fn run_study_file(
     let options = ModelOptions {
         material: s.material,
         fix: s.fix.clone(),
+        shells: s.shells.iter().map(|(g, t)| (g.clone(), *t)).collect(),
         lumped: s.lumped,
         lenient: s.lenient,
         bricks: s.bricks,

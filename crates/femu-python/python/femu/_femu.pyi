@@ -1,7 +1,7 @@
 """Type stubs of femu's native module (checked by mypy in CI)."""
 
 from os import PathLike
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -114,6 +114,7 @@ def read_model(
     fix: Optional[Sequence[str]] = None,
     bricks: str = "full",
     nodes: Optional[_Path] = None,
+    shells: Optional[Mapping[str, float]] = None,
 ) -> Model: ...
 def read_test(
     path: _Path, model: Union[Model, Results], *, test_units: Optional[float] = None
