@@ -622,11 +622,17 @@ fn run_a_study_file() {
         "expansion.json",
         "expanded.vtu",
         "figure1/study.svg",
+        "report.md",
     ] {
         assert!(out.join(f).exists(), "{f}");
     }
     let v = json_of(out.join("correlation.json"));
     assert_eq!(v["pairing"]["pairs"].as_array().unwrap().len(), 1);
+    // one report of every step
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for section in ["# correlation", "# estimators", "# expansion (static)"] {
+        assert!(report.contains(section), "{section}\n{report}");
+    }
     std::fs::write(
         dir.join("bad.toml"),
         "model = \"model.inp\"\ntest = \"test.csv\"\nmodell = 1\n",

@@ -223,6 +223,9 @@ def test_the_frf_update_is_one_pipeline(case):
     py = femu.frf(model, case / "frf.uff", loss_factor=0.01, update=SETS, update_all=True)
     assert_same(py, read(case / "frf_update.json"))
     assert_same(read(case / "study_frf" / "frf.json"), py)
+    report = (case / "study_frf" / "report.md").read_text()
+    assert "# correlation" in report and "# frequency responses" in report
+    assert "Updating from FRFs" in report
     u = py["update"]
     assert u["result"]["names"] == [f"k:{s}" for s in SETS]
     want = [0.0, -0.2, 0.0, 0.0]

@@ -38,6 +38,7 @@ use femu_correlate::{ModeSet, PairingOptions};
 use femu_sparse::eigen::EigenOptions;
 use femu_sparse::slepc::{Engine, SlepcOptions};
 use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// A study file.
@@ -444,7 +445,7 @@ pub fn run_study_file(
         }
         None => None,
     };
-    Ok(StudyRun {
+    let mut run = StudyRun {
         correlation: estimate.correlation.clone(),
         estimate: Some(estimate),
         expansion,
@@ -454,7 +455,50 @@ pub fn run_study_file(
         model_assemblies: model.asm.assemblies(),
         warnings: model.warnings,
         files,
-    })
+    };
+    let p = out.join("report.md");
+    let text = run.report();
+    write_text(&p, &text, &mut run.files)?;
+    Ok(run)
+}
+
+impl StudyRun {
+    /// Every step's result in one text (Markdown): the modal correlation, the estimators, the
+    /// expansion, the updating and the measured FRFs against the model's, as `femu run` prints
+    /// them and writes them to `report.md`.
+    pub fn report(&self) -> String {
+        let mut s = format!("# correlation\n\n{}", self.correlation);
+        if let Some(estimate) = &self.estimate {
+            let _ = write!(
+                s,
+                "\n# estimators ({} expansion)\n\n{}\n{}\n",
+                estimate.expansion,
+                estimate.table2(),
+                crate::estimate::table2_legend()
+            );
+        }
+        if let Some(e) = &self.expansion {
+            let _ = writeln!(
+                s,
+                "\n# expansion ({})\n\nrho_M (s^-2) per test mode: {:?}",
+                e.method,
+                e.norms
+                    .iter()
+                    .map(|n| format!("{:.4e}", n.rho_m))
+                    .collect::<Vec<_>>()
+            );
+            if let Some(st) = &e.study {
+                let _ = writeln!(s, "sensor-removal study: {} points", st.points.len());
+            }
+        }
+        if let Some(u) = &self.update {
+            let _ = writeln!(s, "\n# updating\n\n{u}");
+        }
+        if let Some(f) = &self.frf {
+            let _ = writeln!(s, "\n# frequency responses\n\n{f}");
+        }
+        s
+    }
 }
 
 /// The mapping table of a test on its own wireframe (`mapping.txt`, `mapping.json`).

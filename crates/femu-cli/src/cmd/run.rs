@@ -59,31 +59,7 @@ pub fn run(a: &RunArgs, quiet: bool) -> Result<(), CliError> {
     if quiet {
         return Ok(());
     }
-    println!("# correlation\n\n{}", r.correlation);
-    if let Some(estimate) = &r.estimate {
-        println!(
-            "# estimators ({} expansion)\n\n{}\n{}\n",
-            estimate.expansion,
-            estimate.table2(),
-            femu::study::estimate::table2_legend()
-        );
-    }
-    if let Some(e) = &r.expansion {
-        println!(
-            "\n# expansion ({})\n\nrho_M (s^-2) per test mode: {:?}",
-            e.method,
-            e.norms
-                .iter()
-                .map(|n| format!("{:.4e}", n.rho_m))
-                .collect::<Vec<_>>()
-        );
-        if let Some(st) = &e.study {
-            println!("sensor-removal study: {} points", st.points.len());
-        }
-    }
-    if let Some(u) = &r.update {
-        println!("\n# updating\n\n{u}");
-    }
+    println!("{}", r.report());
     println!("results written to {}:", a.out.display());
     for f in &r.files {
         println!("  {}", f.display());
