@@ -345,3 +345,24 @@ def test_gmsh_shells_are_one_definition(tmp_path):
     assert abs(py[0] / 0.421 - 1) < 0.02
     with pytest.raises(femu.FemuError, match="plate"):
         femu.read_model(msh, fix=["edge"], shells={"edge": 0.05}, **material)
+    # a study file's [shells]: the model's own modes as the test pair with it exactly
+    modes = model.modes(4)
+    rows = {(int(n), int(c)): f for f, (n, c) in enumerate(model.dofs)}
+    free_edge = [node(n, j) for j in range(0, n + 1, 2)]
+    csv = ["mode,frequency_hz,node,direction,value"]
+    for k in range(4):
+        for nd in free_edge:
+            csv.append(f"{k + 1},{float(modes.frequencies_hz[k])!r},{nd},z,"
+                       f"{float(modes.vectors[rows[(nd, 2)], k])!r}")
+    (tmp_path / "test.csv").write_text("\n".join(csv) + "\n")
+    (tmp_path / "study.toml").write_text(
+        'model = "plate.msh"\ntest = "test.csv"\nfix = ["edge"]\n'
+        '[material]\nyoung = 2e11\npoisson = 0.3\ndensity = 8000.0\n'
+        '[shells]\nplate = 0.05\n'
+    )
+    done = subprocess.run([str(FEMU), "run", str(tmp_path / "study.toml"), "--out",
+                           str(tmp_path / "study"), "--quiet"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    pairs = read(tmp_path / "study" / "correlation.json")["pairing"]["pairs"]
+    assert len(pairs) == 4
+    assert all(p["mac"] > 1 - 1e-9 for p in pairs)
