@@ -545,7 +545,7 @@ fn build(
         return Err(IoError::Content {
             path: path.to_path_buf(),
             reason: format!(
-                "no volume elements in the mesh ({} nodes): femu needs tetrahedra, hexahedra or prisms ($Elements of dimension 3), or surfaces in a physical group to make shells of",
+                "no volume elements in the mesh ({} nodes): femu needs tetrahedra, hexahedra or prisms ($Elements of dimension 3), or a physical group of surfaces to make shells of (--shell GROUP=THICKNESS)",
                 mesh.node_count()
             ),
         });
