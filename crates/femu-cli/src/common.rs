@@ -34,6 +34,11 @@ pub struct ModelArgs {
     /// shells of the given thickness in m, as GROUP=THICKNESS; repeat for several.
     #[arg(long, value_name = "GROUP=THICKNESS")]
     pub shell: Vec<String>,
+    /// Gmsh meshes: a physical group of 2-node lines made Timoshenko beams of a section, as
+    /// GROUP=rect:A,B (circ:R, pipe:R,T; Abaqus' *BEAM SECTION shapes), with @X,Y,Z for the
+    /// section's 1-axis direction n1 (default 0,0,-1); repeat for several.
+    #[arg(long, value_name = "GROUP=SECTION")]
+    pub beam: Vec<String>,
     /// `.inp` decks: unknown keywords are warnings instead of errors (unknown parameters of known
     /// keywords stay errors).
     #[arg(long)]
@@ -160,10 +165,21 @@ impl ModelArgs {
                 Ok((group.trim().to_string(), t))
             })
             .collect::<Result<Vec<_>, CliError>>()?;
+        let beams = self
+            .beam
+            .iter()
+            .map(|s| {
+                let (group, section) = s.split_once('=').ok_or_else(|| {
+                    CliError::Usage(format!("--beam {s}: give GROUP=SECTION (rect:A,B)"))
+                })?;
+                Ok((group.trim().to_string(), section.trim().to_string()))
+            })
+            .collect::<Result<Vec<_>, CliError>>()?;
         Ok(ModelOptions {
             material,
             fix: self.fix.clone(),
             shells,
+            beams,
             lumped,
             lenient: self.lenient,
             bricks: self.bricks,

@@ -2179,3 +2179,145 @@ fn gmsh_surfaces_as_shells() {
     refused("quadratic.msh", &shell, &["type 10", "line"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Beams from a Gmsh mesh: a 1 m steel cantilever along x as 20 two-node lines in a physical
+/// curve "frame", clamped at a physical point "root", made beams by `--beam frame=rect:0.02,0.04`
+/// (Abaqus' RECT: 0.02 along the section's 1-axis, n1 = (0, 0, -1) by default): the four lowest
+/// frequencies equal those of the same beam read as an Abaqus deck of B31 with `*BEAM SECTION,
+/// SECTION=RECT` to 1e-9, and the first is Euler-Bernoulli's `1.8751^2 / (2 pi) sqrt(E I / (rho
+/// A L^4))` with the smaller `I = 0.04 0.02^3 / 12` to 0.1 % (a slender beam: L/h = 50). Refused:
+/// a shape femu does not read, a wrong count of dimensions, no `=`, a group of points, and a beam
+/// along z with the default n1 (its id named); with `@1,0,0` the vertical beam has the
+/// horizontal one's frequencies to 1e-9.
+#[test]
+fn gmsh_lines_as_beams() {
+    let dir = std::env::temp_dir().join(format!("femu-cli-gmsh-beams-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let n = 20;
+    let msh = |axis: usize| {
+        let mut s = String::from(
+            "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n0 1 \"root\"\n1 2 \"frame\"\n$EndPhysicalNames\n",
+        );
+        s.push_str(&format!("$Nodes\n{}\n", n + 1));
+        for i in 0..=n {
+            let mut x = [0.0; 3];
+            x[axis] = i as f64 / n as f64;
+            s.push_str(&format!("{} {:e} {:e} {:e}\n", i + 1, x[0], x[1], x[2]));
+        }
+        s.push_str(&format!("$EndNodes\n$Elements\n{}\n1 15 2 1 1 1\n", n + 1));
+        for i in 0..n {
+            s.push_str(&format!("{} 1 2 2 2 {} {}\n", i + 2, i + 1, i + 2));
+        }
+        s.push_str("$EndElements\n");
+        s
+    };
+    std::fs::write(dir.join("beam.msh"), msh(0)).unwrap();
+    std::fs::write(dir.join("vertical.msh"), msh(2)).unwrap();
+    let mut inp = String::from("*NODE\n");
+    for i in 0..=n {
+        inp.push_str(&format!("{}, {:e}, 0., 0.\n", i + 1, i as f64 / n as f64));
+    }
+    inp.push_str("*ELEMENT, TYPE=B31, ELSET=FRAME\n");
+    for i in 0..n {
+        inp.push_str(&format!("{}, {}, {}\n", i + 2, i + 1, i + 2));
+    }
+    inp.push_str(
+        "*MATERIAL, NAME=STEEL\n*ELASTIC\n2.1e11, 0.3\n*DENSITY\n7850.\n\
+         *BEAM SECTION, ELSET=FRAME, MATERIAL=STEEL, SECTION=RECT\n0.02, 0.04\n0., 0., -1.\n\
+         *BOUNDARY\n1, 1, 6\n",
+    );
+    std::fs::write(dir.join("beam.inp"), inp).unwrap();
+    let material = ["--young", "2.1e11", "--poisson", "0.3", "--density", "7850"];
+    let modes = |file: &str, extra: &[&str]| {
+        let json = dir.join(format!("{file}.json"));
+        let out = femu()
+            .args(["modes", dir.join(file).to_str().unwrap(), "--count", "4"])
+            .args(extra)
+            .args(["--json", json.to_str().unwrap(), "--quiet"])
+            .output()
+            .unwrap();
+        (out, json)
+    };
+    let freqs = |json: &std::path::Path| -> Vec<f64> {
+        json_of(json)["frequencies_hz"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f.as_f64().unwrap())
+            .collect()
+    };
+    let beam = [
+        &material[..],
+        &["--beam", "frame=rect:0.02,0.04", "--fix", "root"],
+    ]
+    .concat();
+    let (out, json) = modes("beam.msh", &beam);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let from_msh = freqs(&json);
+    let (out, json) = modes("beam.inp", &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let from_inp = freqs(&json);
+    for k in 0..4 {
+        assert!(
+            (from_msh[k] / from_inp[k] - 1.0).abs() < 1e-9,
+            "{from_msh:?} {from_inp:?}"
+        );
+    }
+    let (e, rho, a, i) = (2.1e11, 7850.0, 0.02 * 0.04, 0.04 * 0.02f64.powi(3) / 12.0);
+    let f1 = 1.8751f64.powi(2) / (2.0 * std::f64::consts::PI) * (e * i / (rho * a)).sqrt();
+    assert!(
+        (from_msh[0] / f1 - 1.0).abs() < 1e-3,
+        "{} {f1}",
+        from_msh[0]
+    );
+    let refused = |file: &str, section: &str, what: &str| {
+        let args = [&material[..], &["--beam", section, "--fix", "root"]].concat();
+        let (out, _) = modes(file, &args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && stderr.contains(what),
+            "{section}: {stderr}"
+        );
+    };
+    refused("beam.msh", "frame=ibeam:0.1,0.2", "RECT, CIRC and PIPE");
+    refused("beam.msh", "frame=rect:0.02", "needs 2 positive");
+    refused("beam.msh", "frame", "GROUP=SECTION");
+    refused(
+        "beam.msh",
+        "root=rect:0.02,0.04",
+        "no physical group of lines root",
+    );
+    refused(
+        "vertical.msh",
+        "frame=rect:0.02,0.04",
+        "element 2: its orientation vector",
+    );
+    // with n1 given across the axis, the vertical beam is the horizontal one turned
+    let args = [
+        &material[..],
+        &["--beam", "frame=rect:0.02,0.04@1,0,0", "--fix", "root"],
+    ]
+    .concat();
+    let (out, json) = modes("vertical.msh", &args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let vertical = freqs(&json);
+    for k in 0..4 {
+        assert!(
+            (vertical[k] / from_inp[k] - 1.0).abs() < 1e-9,
+            "{vertical:?}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -21,17 +21,21 @@ pub struct GmshMesh {
     pub mesh: Mesh,
     /// The surface elements (dimension 2) of each physical group, by its name: what a shell
     /// section turns into shells (the mesh has them as node sets only).
-    pub surfaces: BTreeMap<String, Vec<Surface>>,
+    pub surfaces: BTreeMap<String, Vec<GroupElement>>,
+    /// The line elements (dimension 1) of each physical group: what a beam section turns into
+    /// beams.
+    pub curves: BTreeMap<String, Vec<GroupElement>>,
     /// Warnings (skipped sections, element types without a femu equivalent).
     pub warnings: Vec<Warning>,
 }
 
-/// A surface element of a physical group.
+/// A surface or line element of a physical group.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Surface {
+pub struct GroupElement {
     /// Its element tag.
     pub tag: u64,
-    /// Its Gmsh element type (2: 3-node triangle, 3: 4-node quadrangle, 9, 16, 10: quadratic).
+    /// Its Gmsh element type (1: 2-node line, 8: 3-node line; 2: 3-node triangle, 3: 4-node
+    /// quadrangle, 9, 16, 10: quadratic).
     pub gmsh_type: i64,
     /// Its node tags, in Gmsh's order.
     pub nodes: Vec<u64>,
@@ -473,7 +477,8 @@ fn build(
     };
     let mut element_sets: BTreeMap<String, Vec<u64>> = BTreeMap::new();
     let mut node_sets: BTreeMap<String, Vec<u64>> = BTreeMap::new();
-    let mut surfaces: BTreeMap<String, Vec<Surface>> = BTreeMap::new();
+    let mut surfaces: BTreeMap<String, Vec<GroupElement>> = BTreeMap::new();
+    let mut curves: BTreeMap<String, Vec<GroupElement>> = BTreeMap::new();
     let mut skipped: BTreeMap<i64, usize> = BTreeMap::new();
     let mut first_skip_line = BTreeMap::new();
     for (ty, tag, g, (dim, phys), ln) in elements {
@@ -501,11 +506,16 @@ fn build(
                 }
                 for p in phys {
                     node_sets.entry(set_name(*dim, *p)).or_default().extend(g);
-                    if *dim == 2 {
-                        surfaces
+                    let lower = match dim {
+                        2 => Some(&mut surfaces),
+                        1 => Some(&mut curves),
+                        _ => None,
+                    };
+                    if let Some(lower) = lower {
+                        lower
                             .entry(set_name(*dim, *p))
                             .or_default()
-                            .push(Surface {
+                            .push(GroupElement {
                                 tag: *tag,
                                 gmsh_type: *ty,
                                 nodes: g.clone(),
@@ -541,11 +551,11 @@ fn build(
                 source,
             })?;
     }
-    if mesh.element_count() == 0 && surfaces.is_empty() {
+    if mesh.element_count() == 0 && surfaces.is_empty() && curves.is_empty() {
         return Err(IoError::Content {
             path: path.to_path_buf(),
             reason: format!(
-                "no volume elements in the mesh ({} nodes): femu needs tetrahedra, hexahedra or prisms ($Elements of dimension 3), or a physical group of surfaces to make shells of (--shell GROUP=THICKNESS)",
+                "no volume elements in the mesh ({} nodes): femu needs tetrahedra, hexahedra or prisms ($Elements of dimension 3), or physical groups of surfaces or lines to make shells or beams of (--shell, --beam)",
                 mesh.node_count()
             ),
         });
@@ -553,6 +563,7 @@ fn build(
     Ok(GmshMesh {
         mesh,
         surfaces,
+        curves,
         warnings,
     })
 }

@@ -120,14 +120,16 @@ struct Model {
 /// Reads a model: an Abaqus/CalculiX deck (`.inp`), Nastran bulk data (`.bdf`, `.dat`, `.nas`),
 /// a Gmsh mesh (`.msh`) or universal file solids (`.unv`, `.uff`). A mesh-only file needs the
 /// material (`young` Pa, `poisson`, `density` kg/m^3) and may clamp node sets (`fix`); a Gmsh
-/// mesh's physical groups of surfaces become shells with `shells={"group": thickness}`; its 8-node
+/// mesh's physical groups of surfaces become shells with `shells={"group": thickness}`, its groups
+/// of lines beams with `beams={"group": "rect:A,B"}` (`circ:R`, `pipe:R,T`, `@X,Y,Z` for `n1`);
+/// its 8-node
 /// bricks are fully integrated unless `bricks="incompatible_modes"` (a deck states its own).
 /// Another solver's matrices (CalculiX `job.sti`, Abaqus `job_STIF1.mtx` with `job_MASS1.mtx`,
 /// Nastran DMIG `job.pch`, MatrixMarket `X_K.mtx` with `X_M.mtx` and `X_dofs.csv`) are a model
 /// too, with their nodes' coordinates from `nodes` (a deck or a
 /// `node,x,y,z` table; by default `job.inp` or `X_nodes.csv` beside them).
 #[pyfunction]
-#[pyo3(signature = (path, *, lumped=false, lenient=false, young=None, poisson=None, density=None, fix=None, bricks="full", nodes=None, shells=None))]
+#[pyo3(signature = (path, *, lumped=false, lenient=false, young=None, poisson=None, density=None, fix=None, bricks="full", nodes=None, shells=None, beams=None))]
 #[allow(clippy::too_many_arguments)]
 fn read_model(
     py: Python<'_>,
@@ -141,6 +143,7 @@ fn read_model(
     bricks: &str,
     nodes: Option<PathBuf>,
     shells: Option<std::collections::BTreeMap<String, f64>>,
+    beams: Option<std::collections::BTreeMap<String, String>>,
 ) -> PyResult<Model> {
     let bricks = match bricks {
         "full" => femu_fem::element::Formulation::Full,
@@ -168,6 +171,7 @@ fn read_model(
         material,
         fix: fix.unwrap_or_default(),
         shells: shells.map(|m| m.into_iter().collect()).unwrap_or_default(),
+        beams: beams.map(|m| m.into_iter().collect()).unwrap_or_default(),
         lumped,
         lenient,
         bricks,

@@ -366,3 +366,33 @@ def test_gmsh_shells_are_one_definition(tmp_path):
     pairs = read(tmp_path / "study" / "correlation.json")["pairing"]["pairs"]
     assert len(pairs) == 4
     assert all(p["mac"] > 1 - 1e-9 for p in pairs)
+
+
+def test_gmsh_beams_are_one_definition(tmp_path):
+    """A Gmsh cantilever of 2-node lines (physical curve "frame", clamped physical point "root")
+    made beams by `beams={"frame": "rect:0.02,0.04"}` in Python and `--beam` on the command line:
+    the same frequencies, the first Euler-Bernoulli's to 0.1 %."""
+    n = 20
+    lines = ["$MeshFormat", "2.2 0 8", "$EndMeshFormat", "$PhysicalNames", "2", '0 1 "root"',
+             '1 2 "frame"', "$EndPhysicalNames", "$Nodes", str(n + 1)]
+    lines += [f"{i + 1} {i / n!r} 0 0" for i in range(n + 1)]
+    lines += ["$EndNodes", "$Elements", str(n + 1), "1 15 2 1 1 1"]
+    lines += [f"{i + 2} 1 2 2 2 {i + 1} {i + 2}" for i in range(n)]
+    lines += ["$EndElements"]
+    msh = tmp_path / "beam.msh"
+    msh.write_text("\n".join(lines) + "\n")
+    model = femu.read_model(msh, young=2.1e11, poisson=0.3, density=7850.0, fix=["root"],
+                            beams={"frame": "rect:0.02,0.04"})
+    py = np.asarray(model.modes(4).frequencies_hz)
+    done = subprocess.run([str(FEMU), "modes", str(msh), "--young", "2.1e11", "--poisson", "0.3",
+                           "--density", "7850", "--fix", "root", "--beam",
+                           "frame=rect:0.02,0.04", "--count", "4", "--json",
+                           str(tmp_path / "m.json"), "--quiet"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert np.allclose(py, read(tmp_path / "m.json")["frequencies_hz"], rtol=1e-12, atol=0.0)
+    e, rho, a, i = 2.1e11, 7850.0, 0.02 * 0.04, 0.04 * 0.02 ** 3 / 12
+    f1 = 1.8751 ** 2 / (2 * np.pi) * np.sqrt(e * i / (rho * a))
+    assert abs(py[0] / f1 - 1) < 1e-3
+    with pytest.raises(femu.FemuError, match="RECT, CIRC and PIPE"):
+        femu.read_model(msh, young=2.1e11, poisson=0.3, density=7850.0, fix=["root"],
+                        beams={"frame": "ibeam:0.1,0.2"})

@@ -37,6 +37,11 @@ pub struct ModelOptions {
     /// Shell sections of a Gmsh mesh: each named physical group of surfaces (3-node triangles,
     /// 4-node quadrangles) becomes shells of this thickness (m) in the model's material.
     pub shells: Vec<(String, f64)>,
+    /// Beam sections of a Gmsh mesh: each named physical group of 2-node lines becomes
+    /// Timoshenko beams of this section in the model's material, written as Abaqus' `*BEAM
+    /// SECTION` shapes: `rect:A,B`, `circ:R` or `pipe:R,T`, with `@X,Y,Z` for the direction of
+    /// the section's 1-axis (`n1`; default `0,0,-1`, Abaqus' default).
+    pub beams: Vec<(String, String)>,
     /// Lumped (row-sum/HRZ) instead of consistent mass.
     pub lumped: bool,
     /// Unknown keywords in an `.inp` deck are warnings instead of errors
@@ -63,105 +68,199 @@ impl ModelOptions {
     }
 }
 
-/// The shells of `sections` (physical group, thickness) on a Gmsh mesh's `surfaces`, in the
-/// material `mat` (MITC4 quadrangles and MITC3 triangles, a solid section: `12I/T^3 = 1`,
-/// `TS/T = 5/6`), each group an element set of that name; a mesh without volume elements needs
-/// them.
+/// Physical groups of a Gmsh mesh made structural elements in the material `mat`: the shells of
+/// `options.shells` (group, thickness) on its surfaces (MITC4 quadrangles and MITC3 triangles,
+/// a solid section: `12I/T^3 = 1`, `TS/T = 5/6`) and the beams of `options.beams` (group,
+/// section) on its lines; each group an element set of its name. A mesh without volume elements
+/// needs one or the other.
 ///
 /// # Errors
-/// A group that is not a physical group of surfaces (the groups it has named), a thickness that
-/// is not positive, a quadratic surface element (named with its line), a bad shell (its id).
-fn add_shells(
+/// A group that is not a physical group of surfaces or lines (the groups it has named), a
+/// thickness that is not positive, a section that is not read, an element type femu does not
+/// build (named with its line), a bad element (its id).
+fn add_sections(
     model: &mut Model,
-    surfaces: &std::collections::BTreeMap<String, Vec<femu_io::gmsh::Surface>>,
-    sections: &[(String, f64)],
+    (surfaces, curves): (&Groups, &Groups),
+    options: &ModelOptions,
     mat: &MaterialOptions,
     path: &Path,
 ) -> Result<(), StudyError> {
-    use femu_fem::structural::{StructuralElement, StructuralKind};
-    let groups = || {
-        if surfaces.is_empty() {
+    use femu_fem::structural::{Beam, BeamSection, StructuralKind};
+    let names = |g: &Groups| {
+        if g.is_empty() {
             "none".to_string()
         } else {
-            surfaces.keys().cloned().collect::<Vec<_>>().join(", ")
+            g.keys().cloned().collect::<Vec<_>>().join(", ")
         }
     };
-    if sections.is_empty() && model.mesh().element_count() == 0 {
+    if options.shells.is_empty() && options.beams.is_empty() && model.mesh().element_count() == 0 {
         return Err(StudyError::in_file(
             path,
-            "shells",
+            "sections",
             format!(
-                "no volume elements: give the surface groups a shell thickness (--shell GROUP=THICKNESS, or [shells] in a study file; the physical groups of surfaces: {})",
-                groups()
+                "no volume elements: give the surface groups a shell thickness (--shell GROUP=THICKNESS, [shells] in a study file) or the line groups a beam section (--beam GROUP=rect:A,B, [beams]); the physical groups of surfaces: {}; of lines: {}",
+                names(surfaces),
+                names(curves)
             ),
         ));
     }
-    for (group, t) in sections {
+    for (group, t) in &options.shells {
         if !(t.is_finite() && *t > 0.0) {
             return Err(StudyError::invalid(
                 "shell thickness",
                 format!("{group} = {t}: a shell's thickness is a positive length (m)"),
             ));
         }
-        let Some(faces) = surfaces.get(group) else {
+        let shell = femu_fem::shell::Shell {
+            e: mat.young,
+            nu: mat.poisson,
+            rho: mat.density,
+            t: *t,
+            bending: 1.0,
+            shear: Some(5.0 / 6.0),
+            nsm: 0.0,
+            material: None,
+            offset: 0.0,
+        };
+        add_group(
+            model,
+            surfaces,
+            (group, "surfaces", &[2, 3]),
+            path,
+            StructuralKind::Shell(shell),
+        )?;
+    }
+    for (group, spec) in &options.beams {
+        let (shape, dims, n1) = beam_spec(spec)
+            .map_err(|r| StudyError::invalid("beam section", format!("{group} = {spec}: {r}")))?;
+        let (area, i1, i2, j, shear) = femu_io::inp::section_shape(&shape, &dims)
+            .map_err(|r| StudyError::invalid("beam section", format!("{group} = {spec}: {r}")))?;
+        let beam = Beam {
+            e: mat.young,
+            g: mat.young / (2.0 * (1.0 + mat.poisson)),
+            rho: mat.density,
+            section: BeamSection {
+                area,
+                i1,
+                i2,
+                j,
+                shear: Some(shear),
+                nsm: 0.0,
+            },
+            orientation: n1,
+            offsets: [[0.0; 3]; 2],
+            lumped_torsion: false,
+        };
+        add_group(
+            model,
+            curves,
+            (group, "lines", &[1]),
+            path,
+            StructuralKind::Beam(beam),
+        )?;
+    }
+    Ok(())
+}
+
+/// A Gmsh mesh's physical groups of surfaces or lines, by name.
+type Groups = std::collections::BTreeMap<String, Vec<femu_io::gmsh::GroupElement>>;
+
+/// `SHAPE:D1,D2[@X,Y,Z]` as (the shape in capitals, its dimensions, `n1`).
+fn beam_spec(spec: &str) -> Result<(String, Vec<f64>, [f64; 3]), String> {
+    let (section, n1) = match spec.split_once('@') {
+        Some((s, v)) => (s, Some(v)),
+        None => (spec, None),
+    };
+    let (shape, dims) = section
+        .split_once(':')
+        .ok_or("give SHAPE:DIMENSIONS (rect:A,B, circ:R or pipe:R,T)")?;
+    let numbers = |s: &str| -> Result<Vec<f64>, String> {
+        s.split(',')
+            .map(|v| {
+                v.trim()
+                    .parse::<f64>()
+                    .map_err(|_| format!("'{}' is not a number", v.trim()))
+            })
+            .collect()
+    };
+    let n1 = match n1 {
+        Some(v) => {
+            let v = numbers(v)?;
+            let [x, y, z] = v[..] else {
+                return Err(format!("n1 needs three components, got {}", v.len()));
+            };
+            [x, y, z]
+        }
+        None => [0.0, 0.0, -1.0],
+    };
+    Ok((shape.trim().to_uppercase(), numbers(dims)?, n1))
+}
+
+/// The elements of the physical group `group` of `groups` (of `what`, Gmsh types `types`) added
+/// as structural elements of the kind `kind`, and an element set of the group's name.
+fn add_group(
+    model: &mut Model,
+    groups: &Groups,
+    (group, what, types): (&str, &str, &[i64]),
+    path: &Path,
+    kind: femu_fem::structural::StructuralKind,
+) -> Result<(), StudyError> {
+    use femu_fem::structural::StructuralElement;
+    let Some(elements) = groups.get(group) else {
+        return Err(StudyError::in_file(
+            path,
+            "sections",
+            format!(
+                "no physical group of {what} {group} (the mesh's: {})",
+                if groups.is_empty() {
+                    "none".to_string()
+                } else {
+                    groups.keys().cloned().collect::<Vec<_>>().join(", ")
+                }
+            ),
+        ));
+    };
+    let mut ids = Vec::with_capacity(elements.len());
+    for f in elements {
+        if !types.contains(&f.gmsh_type) {
             return Err(StudyError::in_file(
                 path,
-                "shells",
+                "sections",
                 format!(
-                    "no physical group of surfaces {group} (the mesh's: {})",
-                    groups()
+                    "line {}: element {} of {group} is of Gmsh type {}: femu builds {what} of type{} {:?} (3-node triangles 2, 4-node quadrangles 3, 2-node lines 1)",
+                    f.line,
+                    f.tag,
+                    f.gmsh_type,
+                    if types.len() == 1 { "" } else { "s" },
+                    types
                 ),
             ));
-        };
-        let mut ids = Vec::with_capacity(faces.len());
-        for f in faces {
-            if !matches!(f.gmsh_type, 2 | 3) {
-                return Err(StudyError::in_file(
-                    path,
-                    "shells",
-                    format!(
-                        "line {}: element {} of {group} is of Gmsh type {}: femu's shells are 3-node triangles (2) and 4-node quadrangles (3)",
-                        f.line, f.tag, f.gmsh_type
-                    ),
-                ));
-            }
-            let nodes = f
-                .nodes
-                .iter()
-                .map(|n| {
-                    model.mesh().node_index(*n).ok_or_else(|| {
-                        StudyError::in_file(
-                            path,
-                            "shells",
-                            format!("line {}: element {} has no node {n}", f.line, f.tag),
-                        )
-                    })
-                })
-                .collect::<Result<Vec<_>, _>>()?;
-            let shell = femu_fem::shell::Shell {
-                e: mat.young,
-                nu: mat.poisson,
-                rho: mat.density,
-                t: *t,
-                bending: 1.0,
-                shear: Some(5.0 / 6.0),
-                nsm: 0.0,
-                material: None,
-                offset: 0.0,
-            };
-            model
-                .add_structural(StructuralElement {
-                    id: f.tag,
-                    nodes,
-                    kind: StructuralKind::Shell(shell),
-                })
-                .map_err(|e| StudyError::within(path, e))?;
-            ids.push(f.tag);
         }
+        let nodes = f
+            .nodes
+            .iter()
+            .map(|n| {
+                model.mesh().node_index(*n).ok_or_else(|| {
+                    StudyError::in_file(
+                        path,
+                        "sections",
+                        format!("line {}: element {} has no node {n}", f.line, f.tag),
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
         model
-            .add_structural_set(group.clone(), &ids)
+            .add_structural(StructuralElement {
+                id: f.tag,
+                nodes,
+                kind,
+            })
             .map_err(|e| StudyError::within(path, e))?;
+        ids.push(f.tag);
     }
+    model
+        .add_structural_set(group.to_string(), &ids)
+        .map_err(|e| StudyError::within(path, e))?;
     Ok(())
 }
 
@@ -262,23 +361,23 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
                 "a mesh file has no material: give Young's modulus, Poisson's ratio and the density (--young, --poisson, --density, or [material] in a study file)",
             ));
         };
-        let (mesh, surfaces) = if format == Format::Universal {
+        let (mesh, surfaces, curves) = if format == Format::Universal {
             let u = femu_io::uff::read_uff(path)?;
             let (mesh, w) = u.to_mesh(path)?;
             warnings.extend(u.warnings.iter().map(|w| w.to_string()));
             warnings.extend(w.iter().map(|w| w.to_string()));
-            if !options.shells.is_empty() {
+            if !options.shells.is_empty() || !options.beams.is_empty() {
                 return Err(StudyError::in_file(
                     path,
-                    "shells",
-                    "shell sections apply to a Gmsh mesh's physical groups of surfaces: a universal file's mesh has solids only",
+                    "sections",
+                    "shell and beam sections apply to a Gmsh mesh's physical groups of surfaces and lines: a universal file's mesh has solids only",
                 ));
             }
-            (mesh, Default::default())
+            (mesh, Default::default(), Default::default())
         } else {
             let g = femu_io::gmsh::read_msh(path)?;
             warnings.extend(g.warnings.iter().map(|w| w.to_string()));
-            (g.mesh, g.surfaces)
+            (g.mesh, g.surfaces, g.curves)
         };
         if options.lenient {
             warnings.push(format!(
@@ -290,7 +389,7 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         let material = Material::isotropic("command line", mat.young, mat.poisson, mat.density)?;
         model.set_material(None, material)?;
         set_bricks(&mut model, options.bricks, path, &mut warnings)?;
-        add_shells(&mut model, &surfaces, &options.shells, &mat, path)?;
+        add_sections(&mut model, (&surfaces, &curves), options, &mat, path)?;
         for set in &options.fix {
             model
                 .fix_set(set, &[0, 1, 2])

@@ -4,7 +4,8 @@
 //!
 //! ```toml
 //! model = "plate.inp"            # or a .msh/.unv with [material] and fix (and [shells]:
-//!                                # a .msh's surface groups with their thickness)
+//!                                # a .msh's surface groups with their thickness, [beams]: its
+//!                                # line groups with their section, "rect:0.02,0.04")
 //! test = "test.unv"              # .unv, .csv or .json
 //! lenient = false               # true: unknown .inp keywords are warnings
 //! [pairing]
@@ -59,6 +60,10 @@ pub struct StudyFile {
     /// thickness (m).
     #[serde(default)]
     pub shells: std::collections::BTreeMap<String, f64>,
+    /// `[beams]`: a Gmsh mesh's physical groups of lines made beams, by name, with their section
+    /// (`"rect:A,B"`, `"circ:R"`, `"pipe:R,T"`, `@X,Y,Z` for `n1`).
+    #[serde(default)]
+    pub beams: std::collections::BTreeMap<String, String>,
     /// Lumped mass.
     #[serde(default)]
     pub lumped: bool,
@@ -315,6 +320,11 @@ pub fn run_study_file(
         material: s.material,
         fix: s.fix.clone(),
         shells: s.shells.iter().map(|(g, t)| (g.clone(), *t)).collect(),
+        beams: s
+            .beams
+            .iter()
+            .map(|(g, b)| (g.clone(), b.clone()))
+            .collect(),
         lumped: s.lumped,
         lenient: s.lenient,
         bricks: s.bricks,

@@ -45,6 +45,7 @@ use std::path::{Path, PathBuf};
 mod model;
 mod parse;
 mod structural;
+pub use structural::section_shape;
 mod write;
 
 use parse::*;

@@ -143,6 +143,62 @@ fn moduli(m: &Material) -> Result<(f64, f64, f64), String> {
     }
 }
 
+/// The section properties `(A, femu I1, femu I2, J, shear factors)` of an Abaqus `*BEAM
+/// SECTION` shape: `RECT` (`a` along the 1-direction, `b` along the 2-direction; J by the
+/// thin-rectangle series, shear factors 5/6), `CIRC` (`r`; 0.9), `PIPE` (`r`, wall `t`; 1/2).
+///
+/// # Errors
+/// Another shape, too few or non-positive dimensions, a pipe wall not thinner than its radius.
+pub fn section_shape(shape: &str, dims: &[f64]) -> Result<(f64, f64, f64, f64, [f64; 2]), String> {
+    let need = |n: usize| -> Result<(), String> {
+        if dims.len() != n || dims.iter().any(|d| !(d.is_finite() && *d > 0.0)) {
+            Err(format!(
+                "{shape} needs {n} positive dimension{}, got {dims:?}",
+                if n == 1 { "" } else { "s" }
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    match shape {
+        "RECT" => {
+            need(2)?;
+            // a along the 1-axis (femu's y), b along the 2-axis
+            let (a, b) = (dims[0], dims[1]);
+            let (long, short) = if a > b { (a, b) } else { (b, a) };
+            let j = long
+                * short.powi(3)
+                * (1.0 / 3.0 - 0.21 * short / long * (1.0 - short.powi(4) / (12.0 * long.powi(4))));
+            Ok((
+                a * b,
+                b * a.powi(3) / 12.0,
+                a * b.powi(3) / 12.0,
+                j,
+                [5.0 / 6.0; 2],
+            ))
+        }
+        "CIRC" => {
+            need(1)?;
+            let r = dims[0];
+            let i = PI * r.powi(4) / 4.0;
+            Ok((PI * r * r, i, i, 2.0 * i, [0.9; 2]))
+        }
+        "PIPE" => {
+            need(2)?;
+            let (r, t) = (dims[0], dims[1]);
+            if t >= r {
+                return Err(format!("PIPE wall {t} is not thinner than its radius {r}"));
+            }
+            let ri = r - t;
+            let i = PI * (r.powi(4) - ri.powi(4)) / 4.0;
+            Ok((PI * (r * r - ri * ri), i, i, 2.0 * i, [0.5; 2]))
+        }
+        other => Err(format!(
+            "section shape {other}: femu reads RECT, CIRC and PIPE"
+        )),
+    }
+}
+
 /// A section's `(A, femu I1, femu I2, J, shear factors)` and its material `(E, G, rho)`.
 type SectionValues = ((f64, f64, f64, f64, [f64; 2]), (f64, f64, f64));
 
@@ -189,47 +245,11 @@ fn section_values(
         moduli(m).map_err(|r| at_err(l, r))
     };
     let values = match (c.general, c.section.as_str()) {
-        (false, "RECT") => {
-            need(2)?;
-            // a along the 1-axis (femu's y), b along the 2-axis
-            let (a, b) = (dims[0], dims[1]);
-            let (long, short) = if a > b { (a, b) } else { (b, a) };
-            let j = long
-                * short.powi(3)
-                * (1.0 / 3.0 - 0.21 * short / long * (1.0 - short.powi(4) / (12.0 * long.powi(4))));
+        (false, shape @ ("RECT" | "CIRC" | "PIPE")) => {
+            let n = if shape == "CIRC" { 1 } else { 2 };
+            need(n)?;
             (
-                (
-                    a * b,
-                    b * a.powi(3) / 12.0,
-                    a * b.powi(3) / 12.0,
-                    j,
-                    [5.0 / 6.0; 2],
-                ),
-                material(&c.material)?,
-            )
-        }
-        (false, "CIRC") => {
-            need(1)?;
-            let r = dims[0];
-            let i = PI * r.powi(4) / 4.0;
-            (
-                (PI * r * r, i, i, 2.0 * i, [0.9; 2]),
-                material(&c.material)?,
-            )
-        }
-        (false, "PIPE") => {
-            need(2)?;
-            let (r, t) = (dims[0], dims[1]);
-            if t >= r {
-                return Err(at_err(
-                    l,
-                    format!("PIPE wall {t} is not thinner than its radius {r}"),
-                ));
-            }
-            let ri = r - t;
-            let i = PI * (r.powi(4) - ri.powi(4)) / 4.0;
-            (
-                (PI * (r * r - ri * ri), i, i, 2.0 * i, [0.5; 2]),
+                section_shape(shape, &dims[..n]).map_err(|r| at_err(l, r))?,
                 material(&c.material)?,
             )
         }

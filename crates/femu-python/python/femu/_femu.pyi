@@ -115,6 +115,7 @@ def read_model(
     bricks: str = "full",
     nodes: Optional[_Path] = None,
     shells: Optional[Mapping[str, float]] = None,
+    beams: Optional[Mapping[str, str]] = None,
 ) -> Model: ...
 def read_test(
     path: _Path, model: Union[Model, Results], *, test_units: Optional[float] = None
