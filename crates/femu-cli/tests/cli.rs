@@ -1257,6 +1257,30 @@ fn direct_frfs(
     values
 }
 
+/// Receptances of the deck `measured` by [`direct_frfs`] with a loss factor of 0.02 at `outputs`
+/// (node, direction 1-3) for a unit force along z at `tip`, on `count` lines from `min` by `step`
+/// Hz.
+fn measured_receptances(
+    measured: &std::path::Path,
+    outputs: &[(u64, i64)],
+    tip: u64,
+    (min, step, count): (f64, f64, usize),
+) -> Vec<Vec<(f64, f64)>> {
+    let (model, sys, k, m) = dense_deck(measured);
+    let free = |node: u64, c: usize| {
+        sys.dofs
+            .free_index(model.mesh().node_index(node).unwrap(), c)
+            .unwrap()
+    };
+    let out_free: Vec<usize> = outputs
+        .iter()
+        .map(|(node, d)| free(*node, (*d - 1) as usize))
+        .collect();
+    direct_frfs(&k, &m, &out_free, free(tip, 2), min, step, count, |_| {
+        faer::Mat::from_fn(k.nrows(), k.ncols(), |i, j| 0.02 * k[(i, j)])
+    })
+}
+
 /// Writes receptances (`values[o]` at `outputs[o]`, force at `tip` in z) as dataset 58.
 fn write_frf_uff(
     path: &std::path::Path,
@@ -1712,24 +1736,12 @@ fn frf_update_finds_the_softer_half() {
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("bar.inp"), &nominal).unwrap();
     std::fs::write(dir.join("softer.inp"), &softer).unwrap();
-    let (model, sys, k, m) = dense_deck(&dir.join("softer.inp"));
-    let free = |node: u64, c: usize| {
-        sys.dofs
-            .free_index(model.mesh().node_index(node).unwrap(), c)
-            .unwrap()
-    };
     let tip = beam.id(nx, 0, 1) as u64;
     let mut outputs: Vec<(u64, i64)> = (1..=nx).map(|i| (beam.id(i, 0, 1) as u64, 3)).collect();
     outputs.push((beam.id(nx, 1, 0) as u64, 2));
     outputs.push((beam.id(nx / 2, 1, 1) as u64, 2));
-    let out_free: Vec<usize> = outputs
-        .iter()
-        .map(|(node, d)| free(*node, (*d - 1) as usize))
-        .collect();
     let (min, step, count) = (5.0, 2.5, 360usize);
-    let values = direct_frfs(&k, &m, &out_free, free(tip, 2), min, step, count, |_| {
-        faer::Mat::from_fn(k.nrows(), k.ncols(), |i, j| 0.02 * k[(i, j)])
-    });
+    let values = measured_receptances(&dir.join("softer.inp"), &outputs, tip, (min, step, count));
     write_frf_uff(&dir.join("frf.uff"), &outputs, tip, min, step, &values);
     let frf = |extra: &[&str]| {
         femu()
@@ -1857,26 +1869,14 @@ fn frf_lines_of_low_coherence_are_left_out() {
     let dir = std::env::temp_dir().join(format!("femu-cli-coherence-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("bar.inp"), beam.deck("C3D8", 2.1e11)).unwrap();
-    let (model, sys, k, m) = dense_deck(&dir.join("bar.inp"));
-    let free = |node: u64, c: usize| {
-        sys.dofs
-            .free_index(model.mesh().node_index(node).unwrap(), c)
-            .unwrap()
-    };
     let tip = beam.id(nx, 0, 1) as u64;
     let outputs = [
         (tip, 3i64),
         (beam.id(nx / 2, 0, 1) as u64, 3),
         (beam.id(nx / 2, 1, 1) as u64, 3),
     ];
-    let out_free: Vec<usize> = outputs
-        .iter()
-        .map(|(node, d)| free(*node, (*d - 1) as usize))
-        .collect();
     let (min, step, count) = (5.0, 2.5, 200usize);
-    let mut values = direct_frfs(&k, &m, &out_free, free(tip, 2), min, step, count, |_| {
-        faer::Mat::from_fn(k.nrows(), k.ncols(), |i, j| 0.02 * k[(i, j)])
-    });
+    let mut values = measured_receptances(&dir.join("bar.inp"), &outputs, tip, (min, step, count));
     // the band around the first resonance: its 40 lines of largest response
     let mut order: Vec<usize> = (0..count).collect();
     order.sort_by(|a, b| {
