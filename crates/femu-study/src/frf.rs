@@ -769,6 +769,12 @@ fn update_from_frfs(
     } else {
         localisation.selected.iter().map(|&g| set_refs[g]).collect()
     };
+    if updated.is_empty() {
+        return Err(StudyError::invalid(
+            "update",
+            "the FRF residue selects no candidate set (none removes a share of it: the model already reproduces the tuned lines, or the sets cannot change it); --update-all fits every candidate",
+        ));
+    }
     let mut up = build(&updated)?;
     let rms = |v: &[f64]| (v.iter().map(|e| e * e).sum::<f64>() / v.len().max(1) as f64).sqrt();
     let tuned_before = rms(&femu_update::frf_errors(&up, &tuned, &damping)?);
