@@ -1634,7 +1634,9 @@ fn frf_correlation_against_a_direct_solve() {
 /// grounded CBUSH with PBUSH stiffnesses, viscous `B` and structural `GE`. Along z the receptance
 /// is the single-DOF oscillator's `1 / (K3 (1 + i GE) - w^2 m + i w B3)`, written here by hand as
 /// the "measurement": the direct route reproduces it to 1e-9 of the peak (FRAC 1). Modal
-/// superposition, which leaves the deck's dampers out, says so and misses the peak's height.
+/// superposition, which leaves the deck's dampers out, says so and misses the peak's height. The
+/// same damping in a second CBUSH of its own (PBUSH with `B` alone: a pure damper, which Nastran
+/// reads) gives the same receptance to 1e-9.
 #[test]
 fn frf_direct_with_the_decks_own_dampers() {
     use femu_io::uff::Ordinate;
@@ -1710,6 +1712,31 @@ ENDDATA
         .success();
     let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
     assert!(stderr.contains("--direct includes them"), "{stderr}");
+    // the damping in a bushing of its own (a pure damper: PBUSH B alone, which Nastran reads)
+    // beside the stiff one: the same receptance
+    let split = deck.replace(
+        ",B,1.,2.,30.,4.,5.,6.\n,GE,0.04\n",
+        ",GE,0.04\nCBUSH,17,18,1,2,,,,0\nPBUSH,18,B,1.,2.,30.,4.,5.,6.\n",
+    );
+    assert_ne!(split, deck);
+    std::fs::write(dir.join("damper.bdf"), split).unwrap();
+    femu()
+        .args(["frf", dir.join("damper.bdf").to_str().unwrap()])
+        .arg(dir.join("frf.uff"))
+        .args(["--direct", "--quiet", "--uff"])
+        .arg(dir.join("damper.uff"))
+        .assert()
+        .success();
+    let back = femu_io::uff::read_uff(dir.join("damper.uff")).unwrap();
+    let Ordinate::Complex(v) = &back.functions[0].ordinate else {
+        panic!("complex FRF expected")
+    };
+    let err = v
+        .iter()
+        .zip(&h)
+        .map(|((a, b), (c, d))| (a - c).hypot(b - d))
+        .fold(0.0, f64::max);
+    assert!(err < 1e-9 * peak, "{err:e} against {peak:e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -440,10 +440,11 @@ impl StructuralElement {
                         ),
                     });
                 }
-                if b.k.iter().all(|v| *v == 0.0) {
+                // a damper alone (B without K) is a valid bushing: it acts in frequency responses
+                if b.k.iter().chain(&b.b).all(|v| *v == 0.0) {
                     return Err(FemError::InvalidStructural {
                         element: id,
-                        reason: "it has no stiffness (K1 to K6 all zero or blank)".into(),
+                        reason: "it has neither stiffness nor damping (K1 to K6 and B1 to B6 all zero or blank)".into(),
                     });
                 }
             }
@@ -487,10 +488,10 @@ impl StructuralElement {
         }
     }
 
-    /// A bushing reaches its nodes' rotations when it has a rotational stiffness or acts at a
-    /// point joined to them by rigid arms.
+    /// A bushing reaches its nodes' rotations when it has a rotational stiffness or damping, or
+    /// acts at a point joined to them by rigid arms.
     fn bushing_needs_rotations(&self, b: &Bushing) -> bool {
-        b.k[3..].iter().any(|v| *v != 0.0) || b.point.is_some()
+        b.k[3..].iter().chain(&b.b[3..]).any(|v| *v != 0.0) || b.point.is_some()
     }
 
     /// Checks the element's values ([`StructuralElement::validate`]) and geometry at node

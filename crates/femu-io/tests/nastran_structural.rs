@@ -272,9 +272,9 @@ MAT1,1,2.1+11,,0.3,7850.
             "I12",
         ),
         (
-            "CBUSH,1,2,1,2,,,,0\nPBUSH,2,B,1.,1.\n",
+            "CBUSH,1,2,1,2,,,,0\nPBUSH,2,GE,0.01\n",
             "bad.bdf:5",
-            "no stiffness",
+            "neither stiffness nor damping",
         ),
         ("CBUSH,1,2,1,1\nPBUSH,2,K,1.e4\n", "bad.bdf:5", "need a CID"),
         ("CELAS2,1,1.e4,1,7\n", "bad.bdf:5", "component 7"),

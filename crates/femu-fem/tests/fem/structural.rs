@@ -453,7 +453,8 @@ fn rod_axial_and_torsion_frequencies_converge() {
 }
 
 /// Bad values and geometry are refused with the element's id: a zero area, an orientation
-/// vector along the axis, a bushing without stiffness, coincident beam ends, a duplicate id.
+/// vector along the axis, a bushing without stiffness or damping, coincident beam ends, a duplicate
+/// id.
 #[test]
 fn bad_structural_elements_are_refused_by_id() {
     let mut mesh = Mesh::new();
@@ -494,14 +495,14 @@ fn bad_structural_elements_are_refused_by_id() {
         vec![0, 2],
         StructuralKind::Bushing(Bushing {
             k: [0.0; 6],
-            b: [1.0; 6],
-            ge: 0.0,
+            b: [0.0; 6],
+            ge: 0.02,
             axes: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             point: None,
         }),
     )
     .unwrap_err();
-    assert!(e.contains("no stiffness"), "{e}");
+    assert!(e.contains("neither stiffness nor damping"), "{e}");
     try_add(
         &mut model,
         9,
