@@ -1746,8 +1746,9 @@ ENDDATA
 /// 0.01 finds the root half (-0.2 to 1e-4), the tip half unchanged (1e-4), the loss factor 0.02
 /// (1e-5), and the held-out lines' receptance error falls below 1e-4 of what it was; fitting
 /// Rayleigh damping instead (`--rayleigh 1,1e-7`, which cannot equal a loss factor at every line)
-/// still finds the root half within 0.01. Bad input: an unknown set (named), a response on a
-/// clamped DOF, damping ratios with the update, one Rayleigh coefficient.
+/// still finds the root half within 0.01; the same measurement written as accelerance gives the
+/// same update to 1e-6. Bad input: an unknown set (named), a response on a clamped DOF, damping
+/// ratios with the update, one Rayleigh coefficient.
 #[test]
 fn frf_update_finds_the_softer_half() {
     let nx = 10;
@@ -1824,6 +1825,46 @@ fn frf_update_finds_the_softer_half() {
     assert!(after < 1e-4 * before, "{before} -> {after}");
     // the ranking names the softer half first
     assert_eq!(u["ranking"][0]["name"], "ROOT_HALF", "{u}");
+    // the same measurement as accelerance (-w^2 times each value, ordinate type 12): the same
+    // update
+    let mut acc = femu_io::uff::read_uff(dir.join("frf.uff")).unwrap();
+    for f in &mut acc.functions {
+        let x = f.abscissa_values();
+        if let femu_io::uff::Ordinate::Complex(v) = &mut f.ordinate {
+            for (value, hz) in v.iter_mut().zip(&x) {
+                let w2 = (2.0 * std::f64::consts::PI * hz).powi(2);
+                *value = (-w2 * value.0, -w2 * value.1);
+            }
+        }
+        f.axes[1].data_type = 12;
+    }
+    femu_io::uff::write_uff(dir.join("accelerance.uff"), &acc).unwrap();
+    let acc_json = dir.join("accelerance.json");
+    let out = femu()
+        .args(["frf", dir.join("bar.inp").to_str().unwrap()])
+        .arg(dir.join("accelerance.uff"))
+        .args([
+            "--update",
+            "ROOT_HALF,TIP_HALF",
+            "--update-all",
+            "--loss-factor",
+            "0.01",
+        ])
+        .arg("--json")
+        .arg(&acc_json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let a = json_of(&acc_json);
+    assert_eq!(a["kind"], "accelerance");
+    for (k, t) in theta.iter().enumerate() {
+        let ta = a["update"]["result"]["theta"][k].as_f64().unwrap();
+        assert!((ta - t).abs() < 1e-6, "{ta} {t}");
+    }
     // Rayleigh damping fitted instead (it cannot be the measured loss factor at every line):
     // reported as such, the softer half still found
     let rayleigh = dir.join("rayleigh.json");
