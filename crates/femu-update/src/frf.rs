@@ -820,21 +820,23 @@ fn gauss_newton(
                 .collect();
             let (t, et) = split(&trial, theta.len(), damping);
             up.set_theta(&t)?;
-            let trial_objective = evaluate(up, test, &et, Columns::None, method)?.objective;
-            if trial_objective < e.objective {
-                accepted = Some((t, et, trial_objective));
+            // the trial with its normal equations: accepted (the usual case, at the full step),
+            // it is the next step's evaluation, and its lines are factored once
+            let at_trial = evaluate(up, test, &et, which, method)?;
+            if at_trial.objective < e.objective {
+                accepted = Some((t, et, at_trial));
                 break;
             }
             s *= 0.5;
         }
-        let Some((t, et, objective)) = accepted else {
+        let Some((t, et, at_trial)) = accepted else {
             up.set_theta(&theta)?;
             return Ok((e.objective, e.backward_error, true));
         };
-        let decrease = (e.objective - objective) / e.objective;
+        let decrease = (e.objective - at_trial.objective) / e.objective;
         theta = t;
         *damping = et;
-        e = evaluate(up, test, damping, which, method)?;
+        e = at_trial;
         if decrease < options.tolerance {
             return Ok((e.objective, e.backward_error, true));
         }
