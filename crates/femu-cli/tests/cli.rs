@@ -2161,6 +2161,18 @@ fn gmsh_surfaces_as_shells() {
     }
     bdf.push_str("ENDDATA\n");
     std::fs::write(dir.join("fv16.bdf"), bdf).unwrap();
+    // femu info names the groups a section can make shells or beams of
+    let info = femu()
+        .args(["info", dir.join("quads.msh").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let info = String::from_utf8_lossy(&info.stdout);
+    for line in [
+        "surface group plate: 256 4-node quadrangles (type 3) (its nodes a set; shells with --shell plate=THICKNESS)",
+        "line group edge: 16 2-node lines (type 1) (its nodes a set; beams with --beam edge=rect:A,B)",
+    ] {
+        assert!(info.contains(line), "{info}");
+    }
     let material = ["--young", "2e11", "--poisson", "0.3", "--density", "8000"];
     let modes = |file: &str, extra: &[&str], json: &str| {
         let out = femu()

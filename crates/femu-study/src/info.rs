@@ -367,10 +367,62 @@ fn describe_gmsh(
     let g = femu_io::gmsh::read_msh(path)?;
     let _ = writeln!(s, "format: Gmsh mesh");
     mesh_lines(s, &g.mesh);
+    // the groups a section makes shells or beams of, with their element types
+    let kinds = |elements: &[femu_io::gmsh::GroupElement]| {
+        let mut count: std::collections::BTreeMap<i64, usize> = Default::default();
+        for e in elements {
+            *count.entry(e.gmsh_type).or_default() += 1;
+        }
+        count
+            .iter()
+            .map(|(t, n)| {
+                let name = match t {
+                    1 => "2-node line",
+                    2 => "3-node triangle",
+                    3 => "4-node quadrangle",
+                    _ => "quadratic element femu does not build",
+                };
+                format!("{n} {name}{} (type {t})", if *n == 1 { "" } else { "s" })
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    // on a mesh of volumes these groups are usually faces and edges to clamp or load: the hint
+    // at sections is for a mesh without volumes
+    let volumes = g.mesh.element_count() > 0;
+    for (name, elements) in &g.surfaces {
+        let _ = writeln!(
+            s,
+            "surface group {name}: {} (its nodes a set{})",
+            kinds(elements),
+            if volumes {
+                String::new()
+            } else {
+                format!("; shells with --shell {name}=THICKNESS")
+            }
+        );
+    }
+    for (name, elements) in &g.curves {
+        let _ = writeln!(
+            s,
+            "line group {name}: {} (its nodes a set{})",
+            kinds(elements),
+            if volumes {
+                String::new()
+            } else {
+                format!("; beams with --beam {name}=rect:A,B")
+            }
+        );
+    }
     warnings.extend(g.warnings.iter().map(ToString::to_string));
     let _ = writeln!(
         s,
-        "femu would: use it as a model once given a material (--young, --poisson, --density) and, if clamped, the sets to fix (--fix)"
+        "femu would: use it as a model once given a material (--young, --poisson, --density){} and, if clamped, the sets to fix (--fix)",
+        if volumes {
+            ""
+        } else {
+            ", its surface and line groups' sections (it has no volume elements)"
+        }
     );
     Ok(())
 }
