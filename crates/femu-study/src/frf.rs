@@ -340,6 +340,21 @@ pub fn frf_correlation(
     request: &FrfRequest,
     eigen: &EigenOptions,
 ) -> Result<FrfCorrelation, StudyError> {
+    frf_correlation_with(model, path, request, eigen, |_| {})
+}
+
+/// [`frf_correlation`], with `progress` told of each step of a long run (a line each: the update's
+/// steps with their objective).
+///
+/// # Errors
+/// As [`frf_correlation`].
+pub fn frf_correlation_with(
+    model: &LoadedModel,
+    path: &Path,
+    request: &FrfRequest,
+    eigen: &EigenOptions,
+    mut progress: impl FnMut(&str),
+) -> Result<FrfCorrelation, StudyError> {
     let in_file = |reason: String| StudyError::in_file(path, "FRF", reason);
     let uff = femu_io::uff::read_uff(path)?;
     let mut notes: Vec<String> = uff.warnings.iter().map(ToString::to_string).collect();
@@ -489,6 +504,7 @@ pub fn frf_correlation(
         Some(
             update_from_frfs(
                 model,
+                &mut progress,
                 request,
                 &dampers,
                 &outputs,
@@ -600,6 +616,7 @@ fn pick(lines: &[usize], count: usize) -> Vec<usize> {
 #[allow(clippy::too_many_arguments)]
 fn update_from_frfs(
     model: &LoadedModel,
+    progress: &mut dyn FnMut(&str),
     request: &FrfRequest,
     dampers: &femu_fem::assembly::Dampers,
     outputs: &SensorLayout,
@@ -791,7 +808,18 @@ fn update_from_frfs(
         },
         ..Default::default()
     };
-    let result = femu_update::frf_update(&mut up, &tuned, &options)?;
+    let mut steps = 0;
+    let result = femu_update::frf_update_logged(&mut up, &tuned, &options, |step| {
+        steps += 1;
+        progress(&format!(
+            "updating from the FRFs ({}): step {steps}, objective {:.4e}",
+            match step.method {
+                FrfMethod::SbEbe => "SB-EBE",
+                FrfMethod::OutputError => "output error",
+            },
+            step.objective
+        ))
+    })?;
     let tuned_after = rms(&femu_update::frf_errors(&up, &tuned, &result.damping)?);
     let held_out_error = match (&held, held_before) {
         (Some(h), Some(before)) => Some((

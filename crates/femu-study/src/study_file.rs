@@ -441,7 +441,14 @@ pub fn run_study_file(
                     damping_from: r.damping_from.as_ref().map(|t| base.join(t)),
                     ..r.clone()
                 };
-                crate::frf::frf_correlation(&model, &base.join(file), &r, &eigen).map_err(named)?
+                crate::frf::frf_correlation_with(
+                    &model,
+                    &base.join(file),
+                    &r,
+                    &eigen,
+                    &mut progress,
+                )
+                .map_err(named)?
             };
             let p = out.join("frf.json");
             write_json(&p, &c)?;

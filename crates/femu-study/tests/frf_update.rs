@@ -97,7 +97,12 @@ fn sb_ebe_on_the_models_own_frfs_reaches_the_truth() {
         method: FrfMethod::SbEbe,
         ..Default::default()
     };
-    let result = frf_update(&mut up, &test, &options).unwrap();
+    // every step is told to the log before it is taken
+    let mut told = Vec::new();
+    let result =
+        femu_update::frf_update_logged(&mut up, &test, &options, |step| told.push(step.clone()))
+            .unwrap();
+    assert_eq!(told, result.history);
     for (t, want) in result.theta.iter().zip(truth()) {
         assert!((t - want).abs() < 1e-6, "{result}");
     }

@@ -731,6 +731,19 @@ pub fn frf_update(
     test: &FrfTest,
     options: &FrfUpdateOptions,
 ) -> Result<FrfUpdate, UpdateError> {
+    frf_update_logged(up, test, options, |_| {})
+}
+
+/// [`frf_update`], with `log` told of every step before it is taken (progress on long runs).
+///
+/// # Errors
+/// As [`frf_update`].
+pub fn frf_update_logged(
+    up: &mut UpdateModel<'_>,
+    test: &FrfTest,
+    options: &FrfUpdateOptions,
+    mut log: impl FnMut(&FrfIteration),
+) -> Result<FrfUpdate, UpdateError> {
     options.damping.check()?;
     test.check(up.matrices().dofs.free_count())?;
     let stages: &[FrfMethod] = match options.method {
@@ -742,7 +755,15 @@ pub fn frf_update(
     let mut history = Vec::new();
     let mut end = (start, 0.0, true);
     for &method in stages {
-        end = gauss_newton(up, test, options, method, &mut damping, &mut history)?;
+        end = gauss_newton(
+            up,
+            test,
+            options,
+            method,
+            &mut damping,
+            &mut history,
+            &mut log,
+        )?;
     }
     let (objective, backward_error, converged) = end;
     Ok(FrfUpdate {
@@ -766,6 +787,7 @@ fn gauss_newton(
     method: FrfMethod,
     damping: &mut FrfDamping,
     history: &mut Vec<FrfIteration>,
+    log: &mut dyn FnMut(&FrfIteration),
 ) -> Result<(f64, f64, bool), UpdateError> {
     let fit = options.fit_damping;
     let which = Columns::Parameters { damping: fit };
@@ -776,12 +798,14 @@ fn gauss_newton(
     let mut theta = up.theta();
     let mut e = evaluate(up, test, damping, which, method)?;
     for _ in 0..options.max_iterations {
-        history.push(FrfIteration {
+        let step = FrfIteration {
             method,
             objective: e.objective,
             theta: theta.clone(),
             damping: *damping,
-        });
+        };
+        log(&step);
+        history.push(step);
         if e.objective == 0.0 {
             return Ok((0.0, e.backward_error, true));
         }

@@ -63,7 +63,7 @@ pub use derivatives::{EigenpairDerivatives, eigenpair_derivatives};
 pub use error::UpdateError;
 pub use frf::{
     FrfDamping, FrfIteration, FrfMethod, FrfTest, FrfUpdate, FrfUpdateOptions, frf_errors,
-    frf_localise, frf_update,
+    frf_localise, frf_update, frf_update_logged,
 };
 pub use localise::{Indicator, Localisation, SelectionRule, localise, localise_expanded};
 pub use lsq::{MassGuard, UpdateOptions};

@@ -3,7 +3,7 @@
 use crate::common::{EngineArgs, ModelArgs, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
-use femu::study::frf::{FrfRequest, frf_correlation};
+use femu::study::frf::{FrfRequest, frf_correlation_with};
 use std::path::PathBuf;
 
 /// Correlate measured FRFs (universal file dataset 58) with the model's: FRAC per function, CSAC
@@ -55,7 +55,9 @@ pub fn run(a: &FrfArgs, quiet: bool) -> Result<(), CliError> {
     let eigen = a.engine.eigen()?;
     let loaded = load_model(&a.model, &a.model_args, a.lumped, quiet, &pb)?;
     pb.set_message("solving for the model's modes and FRFs");
-    let result = frf_correlation(&loaded, &a.test, &a.request, &eigen)?;
+    let result = frf_correlation_with(&loaded, &a.test, &a.request, &eigen, |line| {
+        pb.set_message(line.to_string())
+    })?;
     pb.finish_and_clear();
     crate::common::warn(quiet, &result.notes);
     if !quiet {
