@@ -455,10 +455,6 @@ pub fn frf_correlation_with(
         synthesis,
     } = solved;
     let triples: Vec<(usize, usize, &[c64])> = pairs.iter().map(|p| (p.1, p.2, &p.3[..])).collect();
-    let alignment = match &synthesis {
-        Some(syn) => Some(align(syn, &outputs, &inputs, &lines, &triples, &coherent)?),
-        None => None,
-    };
     let mut rows = Vec::with_capacity(pairs.len());
     for ((f, oi, ii, values), keep) in pairs.iter().zip(&coherent) {
         let (test_curve, model_curve) = coherent_curves(values, &frf, keep, *oi, *ii);
@@ -478,6 +474,14 @@ pub fn frf_correlation_with(
             input: *ii,
         });
     }
+    // the unscaled mean FRAC is the rows' (the same model curves on the same coherent lines)
+    let unscaled = rows.iter().map(|r| r.frac).sum::<f64>() / rows.len().max(1) as f64;
+    let alignment = match &synthesis {
+        Some(syn) => Some(align(
+            syn, &outputs, &inputs, &lines, &triples, &coherent, unscaled,
+        )?),
+        None => None,
+    };
     let mut line_rows = Vec::new();
     for ii in 0..inputs.len() {
         let of_ref: Vec<usize> = (0..pairs.len()).filter(|&k| pairs[k].2 == ii).collect();
@@ -649,23 +653,14 @@ fn update_from_frfs(
         ));
     }
     // the measured DOFs: every sensor along a free axis
-    let dofs_of = |layout: &SensorLayout, what: &str| -> Result<Vec<usize>, StudyError> {
-        (0..layout.len())
-            .map(|s| match layout.row(s) {
-                [(d, w)] if (*w - 1.0).abs() < 1e-15 => Ok(*d),
-                [] => Err(StudyError::invalid(
-                    "update",
-                    format!("{what} {} is on a DOF the model holds (a constraint or a clamp): it has no response to fit", s + 1),
-                )),
-                _ => Err(StudyError::invalid(
-                    "update",
-                    format!("{what} {} is not along a free DOF", s + 1),
-                )),
-            })
-            .collect()
+    // every sensor of a dataset 58 is along an axis, and a layout refuses one on a held DOF
+    let axis_dofs = |layout: &SensorLayout, what: &str| {
+        layout.measured_dofs().ok_or_else(|| {
+            StudyError::invalid("update", format!("a {what} is not along a free DOF"))
+        })
     };
-    let measured = dofs_of(outputs, "response")?;
-    let references = dofs_of(inputs, "reference")?;
+    let measured = axis_dofs(outputs, "response")?;
+    let references = axis_dofs(inputs, "reference")?;
     // the receptance matrix of every line: every response under every reference
     let mut seen = vec![vec![false; references.len()]; measured.len()];
     for (oi, ii, _) in pairs {
@@ -958,7 +953,7 @@ pub struct Alignment {
 
 /// The scaling `kappa` in `[0.8, 1.25]` that maximises the mean FRAC of the model's FRFs at
 /// `kappa f` against the test's at `f` (coherent lines only): a geometric grid of 91 points, then
-/// golden-section search between the best point's neighbours.
+/// golden-section search between the best point's neighbours; `unscaled` is the mean FRAC at 1.
 fn align(
     synthesis: &Synthesis,
     outputs: &SensorLayout,
@@ -966,6 +961,7 @@ fn align(
     lines: &[f64],
     pairs: &[(usize, usize, &[c64])],
     coherent: &[Vec<bool>],
+    unscaled: f64,
 ) -> Result<Alignment, StudyError> {
     let mean_frac = |kappa: f64| -> Result<f64, StudyError> {
         let shifted: Vec<f64> = lines.iter().map(|f| kappa * f).collect();
@@ -1023,7 +1019,7 @@ fn align(
     Ok(Alignment {
         factor,
         mean_frac: score,
-        mean_frac_unscaled: mean_frac(1.0)?,
+        mean_frac_unscaled: unscaled,
     })
 }
 
