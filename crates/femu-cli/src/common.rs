@@ -48,7 +48,7 @@ pub struct ModelArgs {
     #[arg(long, value_enum, default_value = "full")]
     pub bricks: femu::fem::element::Formulation,
     /// Models given as another solver's matrices (CalculiX `job.sti`, Abaqus `job_STIF1.mtx`,
-    /// Nastran DMIG `job.pch`, MatrixMarket `X_K.mtx`): the nodes' coordinates, a deck's `*NODE`
+    /// Nastran DMIG `job.pch` or OUTPUT4 `job.op4`, MatrixMarket `X_K.mtx`): the nodes' coordinates, a deck's `*NODE`
     /// lines (`.inp`) or GRIDs (`.bdf`, `.dat`, `.nas`) or a table (`.csv`: node,x,y,z); by
     /// default the deck or `X_nodes.csv` beside the matrices.
     #[arg(long, value_name = "FILE")]

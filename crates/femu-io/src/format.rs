@@ -21,7 +21,8 @@ pub enum Format {
     /// CSV test modes (`mode, frequency_hz, node, direction, value`).
     Csv,
     /// Another solver's `K` and `M` with the node and component of each row: CalculiX's
-    /// `job.sti` (with `job.mas`, `job.dof`) or MatrixMarket `X_K.mtx` (with `X_M.mtx`,
+    /// `job.sti` (with `job.mas`, `job.dof`), Abaqus's `job_STIF1.mtx`, Nastran's DMIG punch
+    /// `job.pch` or OUTPUT4 `job.op4`, or MatrixMarket `X_K.mtx` (with `X_M.mtx`,
     /// `X_dofs.csv`); [`crate::matrices`].
     Matrices,
     /// Another solver's modes: CalculiX's `.frd` ([`crate::frd`]) or Nastran's `.f06` or `.op2`
@@ -85,7 +86,7 @@ pub const FORMATS: &[FormatInfo] = &[
     },
     FormatInfo {
         format: Format::Matrices,
-        extensions: &["sti", "mtx", "pch"],
+        extensions: &["sti", "mtx", "pch", "op4"],
         model: true,
         deck: true,
         test: false,
@@ -182,13 +183,13 @@ mod tests {
         assert!(Format::Inp.info().deck && !Format::Gmsh.info().deck);
         assert_eq!(
             described(true),
-            "Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh), universal files (.unv, .uff), stiffness and mass matrices with their DOF table (.sti, .mtx, .pch) and another solver's modes (.frd, .f06, .op2)"
+            "Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh), universal files (.unv, .uff), stiffness and mass matrices with their DOF table (.sti, .mtx, .pch, .op4) and another solver's modes (.frd, .f06, .op2)"
         );
         assert_eq!(
             described(false),
             "universal files (.unv, .uff), JSON (.json) and CSV (.csv, .txt)"
         );
-        assert_eq!(all_extensions().len(), 16);
+        assert_eq!(all_extensions().len(), 17);
         assert_eq!(
             Format::from_path(Path::new("job.sti")),
             Some(Format::Matrices)

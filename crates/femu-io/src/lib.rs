@@ -20,6 +20,7 @@ pub mod json;
 pub mod matrices;
 pub mod nastran;
 pub mod op2;
+pub mod op4;
 mod spelling;
 pub mod test_data;
 pub mod uff;

@@ -22,6 +22,14 @@
 //!   and with M), each entry labelled by grid and component ([`crate::nastran::read_dmig`]). The
 //!   grids come from the deck beside it (`job.bdf`, `.dat` or `.nas`); components in a turned
 //!   displacement frame (CD) are refused, as femu's rows are in the basic frame.
+//! - **Nastran** `OUTPUT4` files (`job.op4`, text or binary, [`crate::op4`]) holding a stiffness
+//!   and a mass (`KAA`/`MAA`, `KFF`/`MFF`, `KLL`/`MLL`, `KGG`/`MGG`, or one matrix named `K...`
+//!   and one `M...`). OP4 rows carry no labels: a DOF table `job_dofs.csv` beside it labels any
+//!   set; without one, the deck beside it labels the g-set (`KGG`, `MGG`: each grid's six
+//!   components, grids by id, [`crate::nastran::read_gset`]), less the components the deck
+//!   constrains (`PS`, the selected SPC set) and those with neither stiffness nor mass (Nastran's
+//!   AUTOSPC fixes them); a deck with multipoint constraints or rigid elements, which a g-set
+//!   matrix does not hold, or scalar points is refused.
 //!
 //! The node coordinates come from a separate table ([`read_node_table`]): the deck's `*NODE` lines
 //! (`job.inp`), or `X_nodes.csv` (`node,x,y,z`).
@@ -51,6 +59,9 @@ pub enum MatrixSource {
     Abaqus,
     /// Nastran's DMIG punch file (`KAAX`, `MAAX`).
     NastranDmig,
+    /// Nastran's OUTPUT4 file (`.op4`, text or binary) of a stiffness and a mass, its rows the
+    /// g-set of the deck beside it or a DOF table.
+    NastranOp4,
 }
 
 impl MatrixSource {
@@ -61,6 +72,7 @@ impl MatrixSource {
             MatrixSource::MatrixMarket => "MatrixMarket matrices with a DOF table",
             MatrixSource::Abaqus => "Abaqus's generated matrices (*MATRIX OUTPUT)",
             MatrixSource::NastranDmig => "Nastran's DMIG matrices (KAAX, MAAX)",
+            MatrixSource::NastranOp4 => "Nastran's OUTPUT4 matrices (.op4)",
         }
     }
 }
@@ -89,6 +101,16 @@ pub fn matrix_files(path: &Path) -> Option<(MatrixSource, [PathBuf; 3])> {
     if lower.ends_with(".pch") {
         let p = path.to_path_buf();
         return Some((MatrixSource::NastranDmig, [p.clone(), p.clone(), p]));
+    }
+    if let Some(stem) = lower.strip_suffix(".op4").map(|s| &name[..s.len()]) {
+        let p = path.to_path_buf();
+        let table = path.with_file_name(format!("{stem}_dofs.csv"));
+        let rows = if table.exists() {
+            table
+        } else {
+            nastran_deck_beside(path)
+        };
+        return Some((MatrixSource::NastranOp4, [p.clone(), p, rows]));
     }
     if let Some((job, step)) = abaqus_name(&lower) {
         let stem = &name[..job.len()];
@@ -130,11 +152,7 @@ pub fn default_node_table(path: &Path) -> Option<PathBuf> {
             let name = files[2].file_name()?.to_str()?;
             files[2].with_file_name(format!("{}_nodes.csv", name.strip_suffix("_dofs.csv")?))
         }
-        MatrixSource::NastranDmig => ["bdf", "dat", "nas", "BDF", "DAT", "NAS"]
-            .iter()
-            .map(|e| files[0].with_extension(e))
-            .find(|p| p.exists())
-            .unwrap_or_else(|| files[0].with_extension("bdf")),
+        MatrixSource::NastranDmig | MatrixSource::NastranOp4 => nastran_deck_beside(&files[0]),
         MatrixSource::Abaqus => {
             let name = files[0].file_name()?.to_str()?;
             let lower = name.to_ascii_lowercase();
@@ -142,6 +160,16 @@ pub fn default_node_table(path: &Path) -> Option<PathBuf> {
             files[0].with_file_name(format!("{}.inp", &name[..job]))
         }
     })
+}
+
+/// The Nastran deck beside `path`: `job.bdf`, `.dat` or `.nas` (any case), `job.bdf` when none
+/// is there.
+fn nastran_deck_beside(path: &Path) -> PathBuf {
+    ["bdf", "dat", "nas", "BDF", "DAT", "NAS"]
+        .iter()
+        .map(|e| path.with_extension(e))
+        .find(|p| p.exists())
+        .unwrap_or_else(|| path.with_extension("bdf"))
 }
 
 /// `(job, step)` of an Abaqus matrix file name `job_STIF<step>.mtx` or `job_MASS<step>.mtx`
@@ -164,7 +192,7 @@ pub fn read_matrices(path: &Path) -> Result<ExternalMatrices, IoError> {
     let Some((source, files)) = matrix_files(path) else {
         return Err(IoError::Content {
             path: path.to_path_buf(),
-            reason: "femu reads matrices as CalculiX's job.sti (with job.mas and job.dof beside it), Abaqus's job_STIF1.mtx (with job_MASS1.mtx beside it) or MatrixMarket X_K.mtx (with X_M.mtx and X_dofs.csv beside it)".into(),
+            reason: "femu reads matrices as CalculiX's job.sti (with job.mas and job.dof beside it), Abaqus's job_STIF1.mtx (with job_MASS1.mtx beside it), Nastran's DMIG punch job.pch or OUTPUT4 job.op4 (with the deck job.bdf or the table job_dofs.csv beside it) or MatrixMarket X_K.mtx (with X_M.mtx and X_dofs.csv beside it)".into(),
         });
     };
     let (k, m, dofs) = match source {
@@ -205,6 +233,7 @@ pub fn read_matrices(path: &Path) -> Result<ExternalMatrices, IoError> {
         }
         MatrixSource::Abaqus => read_abaqus_pair(&files[0], &files[1])?,
         MatrixSource::NastranDmig => read_dmig_pair(&files[0])?,
+        MatrixSource::NastranOp4 => read_op4_pair(&files[0], &files[2])?,
     };
     Ok(ExternalMatrices {
         k,
@@ -763,6 +792,168 @@ fn read_dmig_pair(path: &Path) -> Result<(SparseMatrix, SparseMatrix, Vec<DofLab
     };
     let (k, m) = (pick("KAAX", 'K')?, pick("MAAX", 'M')?);
     labelled_pair((path, &labelled(k)), (path, &labelled(m)), false)
+}
+
+/// The names an OP4's stiffness and mass are looked for by, in order: the a-set's (after every
+/// constraint and reduction), the f-set's, the l-set's, the g-set's.
+const OP4_PAIRS: &[(&str, &str)] = &[
+    ("KAA", "MAA"),
+    ("KFF", "MFF"),
+    ("KLL", "MLL"),
+    ("KGG", "MGG"),
+];
+
+/// An OP4 file's stiffness and mass ([`OP4_PAIRS`], or the one matrix whose name starts with K
+/// and the one with M), labelled by `rows`: a DOF table (`job_dofs.csv`, any set), or the deck
+/// beside them, whose g-set ([`crate::nastran::read_gset`]) labels `KGG` and `MGG`, less the
+/// components the deck constrains and those with neither stiffness nor mass (Nastran's AUTOSPC
+/// would fix them: the rotations of grids only solids touch).
+fn read_op4_pair(
+    path: &Path,
+    rows: &Path,
+) -> Result<(SparseMatrix, SparseMatrix, Vec<DofLabel>), IoError> {
+    let all = crate::op4::read_op4(path)?;
+    let content = |reason: String| IoError::Content {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let names: Vec<&str> = all.iter().map(|m| m.name.as_str()).collect();
+    let find = |n: &str| all.iter().find(|m| m.name.eq_ignore_ascii_case(n));
+    let (k, m) = match OP4_PAIRS
+        .iter()
+        .find_map(|(k, m)| Some((find(k)?, find(m)?)))
+    {
+        Some(pair) => pair,
+        None => {
+            let one = |first: char| {
+                let mut like = all
+                    .iter()
+                    .filter(|m| m.name.to_ascii_uppercase().starts_with(first));
+                match (like.next(), like.next()) {
+                    (Some(m), None) => Some(m),
+                    _ => None,
+                }
+            };
+            match (one('K'), one('M')) {
+                (Some(k), Some(m)) => (k, m),
+                _ => {
+                    return Err(content(format!(
+                        "no stiffness and mass pair (KAA and MAA, KFF and MFF, KLL and MLL, KGG and MGG, or one matrix named K... and one M...): the file has {names:?}"
+                    )));
+                }
+            }
+        }
+    };
+    for a in [k, m] {
+        if a.is_complex() {
+            return Err(content(format!(
+                "matrix {} ({}) is complex: a stiffness or mass is real",
+                a.name,
+                a.kind_name()
+            )));
+        }
+        if a.rows != a.cols || a.rows != k.rows {
+            return Err(content(format!(
+                "{} is {} x {} and {} is {} x {}: a stiffness and a mass are square, of one size",
+                k.name, k.rows, k.cols, m.name, m.rows, m.cols
+            )));
+        }
+    }
+    let n = k.rows;
+    let csc = |a: &crate::op4::Op4Matrix| {
+        SparseMatrix::new_csc(
+            (n, n),
+            a.col_start.clone(),
+            a.row_index.clone(),
+            a.re.clone(),
+        )
+    };
+    let is_table = rows
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    if is_table {
+        let dofs = read_dof_csv(rows)?;
+        if dofs.len() != n {
+            return Err(content(format!(
+                "{} and {} have {n} rows, the DOF table {} has {}",
+                k.name,
+                m.name,
+                rows.display(),
+                dofs.len()
+            )));
+        }
+        let (ka, ma) = (csc(k), csc(m));
+        symmetric(path, &ka, &dofs)?;
+        symmetric(path, &ma, &dofs)?;
+        return Ok((ka, ma, dofs));
+    }
+    if !rows.exists() {
+        return Err(content(format!(
+            "no DOF table {} and no deck {} beside the matrices: OP4 rows carry no labels; give the deck whose g-set KGG and MGG are on, or a table row,node,component",
+            path.with_file_name(format!(
+                "{}_dofs.csv",
+                path.file_stem().and_then(|s| s.to_str()).unwrap_or("job")
+            ))
+            .display(),
+            rows.display()
+        )));
+    }
+    let gset = crate::nastran::read_gset(rows)?;
+    if n != 6 * gset.grids.len() {
+        return Err(content(format!(
+            "{} and {} have {n} rows; the g-set of the deck {} has {} ({} grids x 6): a matrix of another set (KAA, KFF: after constraints or reductions) needs its DOF table {}",
+            k.name,
+            m.name,
+            rows.display(),
+            6 * gset.grids.len(),
+            gset.grids.len(),
+            path.with_file_name(format!(
+                "{}_dofs.csv",
+                path.file_stem().and_then(|s| s.to_str()).unwrap_or("job")
+            ))
+            .display()
+        )));
+    }
+    let all_dofs: Vec<DofLabel> = gset
+        .grids
+        .iter()
+        .flat_map(|&node| (0..6).map(move |component| DofLabel { node, component }))
+        .collect();
+    let (kg, mg) = (csc(k), csc(m));
+    symmetric(path, &kg, &all_dofs)?;
+    symmetric(path, &mg, &all_dofs)?;
+    // kept: not constrained, and with stiffness or mass
+    let mut touched = vec![false; n];
+    for a in [&kg, &mg] {
+        for (r, c, v) in femu_sparse::csc::entries(a) {
+            if v != 0.0 {
+                touched[r] = true;
+                touched[c] = true;
+            }
+        }
+    }
+    let mut new_index = vec![usize::MAX; n];
+    let mut dofs = Vec::new();
+    for (i, d) in all_dofs.iter().enumerate() {
+        if touched[i] && !gset.constrained.contains(&(d.node, d.component)) {
+            new_index[i] = dofs.len();
+            dofs.push(*d);
+        }
+    }
+    if dofs.is_empty() {
+        return Err(content("no unconstrained DOF in the matrices".into()));
+    }
+    let keep = |a: &SparseMatrix| {
+        femu_sparse::csc::from_entry_iter(
+            dofs.len(),
+            dofs.len(),
+            femu_sparse::csc::entries(a).filter_map(|(r, c, v)| {
+                let (i, j) = (new_index[r], new_index[c]);
+                (i != usize::MAX && j != usize::MAX).then_some((i, j, v))
+            }),
+        )
+    };
+    Ok((keep(&kg), keep(&mg), dofs))
 }
 
 /// The stiffness and mass of labelled entries: the rows are the labels either uses, sorted by

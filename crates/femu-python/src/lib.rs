@@ -125,7 +125,7 @@ struct Model {
 /// its 8-node
 /// bricks are fully integrated unless `bricks="incompatible_modes"` (a deck states its own).
 /// Another solver's matrices (CalculiX `job.sti`, Abaqus `job_STIF1.mtx` with `job_MASS1.mtx`,
-/// Nastran DMIG `job.pch`, MatrixMarket `X_K.mtx` with `X_M.mtx` and `X_dofs.csv`) are a model
+/// Nastran DMIG `job.pch` or OUTPUT4 `job.op4`, MatrixMarket `X_K.mtx` with `X_M.mtx` and `X_dofs.csv`) are a model
 /// too, with their nodes' coordinates from `nodes` (a deck or a
 /// `node,x,y,z` table; by default `job.inp` or `X_nodes.csv` beside them).
 #[pyfunction]

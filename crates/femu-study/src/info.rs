@@ -191,8 +191,50 @@ fn describe_matrices(
     s: &mut String,
     warnings: &mut Vec<String>,
 ) -> Result<(), StudyError> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("op4"))
+    {
+        // an OUTPUT4 file may hold any matrices: each, then what femu would make of them (a
+        // file of other matrices is a valid file femu has no model in)
+        let _ = writeln!(
+            s,
+            "format: {}",
+            femu_io::matrices::MatrixSource::NastranOp4.name()
+        );
+        for m in femu_io::op4::read_op4(path)? {
+            let _ = writeln!(
+                s,
+                "matrix {}: {} x {}, {}, {}, {} stored values ({})",
+                m.name,
+                m.rows,
+                m.cols,
+                m.form_name(),
+                m.kind_name(),
+                m.re.len(),
+                m.at
+            );
+        }
+        match femu_io::matrices::read_matrices(path) {
+            Ok(ext) => return describe_matrix_set(ext, path, s, warnings),
+            Err(e) => {
+                let _ = writeln!(s, "femu would: not use it as a model ({e})");
+                return Ok(());
+            }
+        }
+    }
     let ext = femu_io::matrices::read_matrices(path)?;
     let _ = writeln!(s, "format: {}", ext.source.name());
+    describe_matrix_set(ext, path, s, warnings)
+}
+
+/// What [`describe`] says of a matrix set read: its rows and what femu would do with it.
+fn describe_matrix_set(
+    ext: femu_io::matrices::ExternalMatrices,
+    path: &Path,
+    s: &mut String,
+    warnings: &mut Vec<String>,
+) -> Result<(), StudyError> {
     let (k_nnz, m_nnz) = (ext.k.nnz(), ext.m.nnz());
     let names: Vec<String> = ext.files.iter().map(|f| f.display().to_string()).collect();
     let _ = writeln!(s, "files: {}", names.join(", "));

@@ -348,7 +348,7 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         return Err(StudyError::in_file(
             path,
             "model",
-            "the file holds another solver's modes, not its stiffness and mass: femu correlate compares them with a test; estimate, expand, frf and update need K and M (CalculiX writes them with *FREQUENCY, SOLVER=MATRIXSTORAGE: give femu the job.sti; Abaqus with *MATRIX OUTPUT: job_STIF1.mtx; Nastran's DMIG punch: job.pch; any solver's as MatrixMarket with a DOF table: X_K.mtx)",
+            "the file holds another solver's modes, not its stiffness and mass: femu correlate compares them with a test; estimate, expand, frf and update need K and M (CalculiX writes them with *FREQUENCY, SOLVER=MATRIXSTORAGE: give femu the job.sti; Abaqus with *MATRIX OUTPUT: job_STIF1.mtx; Nastran's DMIG punch: job.pch, or OUTPUT4: job.op4; any solver's as MatrixMarket with a DOF table: X_K.mtx)",
         ));
     }
     let mut mass = options.mass();

@@ -865,6 +865,265 @@ fn abaqus_generated_matrices_are_the_model() {
 /// deck's to 1e-5 with the Sturm proof (2e-6 measured: the punch's ten digits moved by the thin
 /// plate's `lambda_max / lambda_1`). A complex matrix, a scalar point, and grids in a turned displacement frame are
 /// refused with file and line or grid.
+/// The clamped CQUAD4 plate of [`nastran_dmig_punch_is_the_model`]'s kind, with a grid no
+/// element touches (999): its deck and femu's stiffness, mass and DOF labels (node, 0-based
+/// component) of its free DOFs, from the deck without grid 999.
+fn clamped_plate(d: &Path) -> (String, femu_study::load::LoadedModel, Vec<(u64, usize)>) {
+    let n = 3;
+    let mut deck = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
+    let g = |i: usize, j: usize| 1 + i + (n + 1) * j;
+    for j in 0..=n {
+        for i in 0..=n {
+            deck.push_str(&format!(
+                "GRID,{},,{},{},0.\n",
+                g(i, j),
+                0.1 * i as f64,
+                0.08 * j as f64
+            ));
+        }
+        deck.push_str(&format!("SPC1,1,123456,{}\n", g(0, j)));
+    }
+    for j in 0..n {
+        for i in 0..n {
+            deck.push_str(&format!(
+                "CQUAD4,{},1,{},{},{},{}\n",
+                1 + i + n * j,
+                g(i, j),
+                g(i + 1, j),
+                g(i + 1, j + 1),
+                g(i, j + 1)
+            ));
+        }
+    }
+    deck.push_str("PSHELL,1,1,0.004,1,,1\nMAT1,1,7.+10,,0.33,2700.\nENDDATA\n");
+    std::fs::write(d.join("own.bdf"), &deck).unwrap();
+    let loaded = load_model(&d.join("own.bdf"), &ModelOptions::default()).unwrap();
+    let mesh = loaded.model.mesh();
+    let labels = (0..loaded.sys.dofs.free_count())
+        .map(|f| {
+            let (p, c) = loaded.sys.dofs.free_dof(f);
+            let (node, rotation) = loaded.sys.dofs.point_node(p);
+            (mesh.node_id(node), c + if rotation { 3 } else { 0 })
+        })
+        .collect();
+    let deck = deck.replace("ENDDATA", "GRID,999,,5.,5.,5.\nENDDATA");
+    (deck, loaded, labels)
+}
+
+#[test]
+fn nastran_op4_matrices_are_the_model() {
+    use femu_testkit::op4::{Op4Layout, Op4Out, columns_of, op4_binary, op4_text};
+    let d = dir("op4");
+    let (deck, own, labels) = clamped_plate(&d);
+    let want = own
+        .sys
+        .modes(Which::Lowest(6), &EigenOptions::default())
+        .unwrap()
+        .values;
+    // the g-set: 17 grids x 6 in the order of their ids; the clamped grids' rows hold stiffness
+    // and mass that couple them to the free ones (Nastran's KGG before SPCs), which the reader
+    // must drop; grid 999's rows are null (Nastran's AUTOSPC fixes them)
+    let mut grids: Vec<u64> = labels.iter().map(|l| l.0).collect();
+    grids.extend([1, 5, 9, 13, 999]);
+    grids.sort_unstable();
+    grids.dedup();
+    let row = |node: u64, c: usize| 6 * grids.iter().position(|&g| g == node).unwrap() + c;
+    let ng = 6 * grids.len();
+    let gset = |a: &femu_sparse::SparseMatrix, clamp: f64| {
+        let mut e: Vec<(usize, usize, f64)> = femu_sparse::csc::entries(a)
+            .map(|(i, j, v)| {
+                (
+                    row(labels[i].0, labels[i].1),
+                    row(labels[j].0, labels[j].1),
+                    v,
+                )
+            })
+            .collect();
+        for g in [1u64, 5, 9, 13] {
+            for c in 0..6 {
+                let r = row(g, c);
+                e.push((r, r, clamp));
+                let f = row(g + 1, c); // the free grid beside
+                e.push((r, f, -0.3 * clamp));
+                e.push((f, r, -0.3 * clamp));
+            }
+        }
+        columns_of(ng, e.into_iter())
+    };
+    let scale_k = own.sys.k.data().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let scale_m = own.sys.m.data().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let kgg = Op4Out {
+        name: "KGG",
+        rows: ng,
+        form: 6,
+        columns: gset(&own.sys.k, scale_k),
+    };
+    let mgg = Op4Out {
+        name: "MGG",
+        rows: ng,
+        form: 6,
+        columns: gset(&own.sys.m, scale_m),
+    };
+    let pair = [kgg, mgg];
+    std::fs::write(
+        d.join("bin.op4"),
+        op4_binary(&pair, Op4Layout::Sparse, false),
+    )
+    .unwrap();
+    std::fs::write(d.join("bin.bdf"), &deck).unwrap();
+    std::fs::write(d.join("text.op4"), op4_text(&pair, Op4Layout::BigMat)).unwrap();
+    std::fs::write(d.join("text.bdf"), &deck).unwrap();
+    for file in ["bin.op4", "text.op4"] {
+        // the free rows' entries to the bit (binary doubles; text of 17 digits), the clamped and
+        // null rows gone
+        let ext = femu_io::matrices::read_matrices(&d.join(file)).unwrap();
+        let at: std::collections::HashMap<(u64, usize), usize> = ext
+            .dofs
+            .iter()
+            .enumerate()
+            .map(|(r, l)| ((l.node, l.component), r))
+            .collect();
+        assert_eq!(ext.dofs.len(), labels.len(), "{file}");
+        for (ours, theirs) in [(&own.sys.k, &ext.k), (&own.sys.m, &ext.m)] {
+            assert_eq!(ours.nnz(), theirs.nnz(), "{file}");
+            for (i, j, v) in femu_sparse::csc::entries(ours) {
+                assert_eq!(
+                    theirs.get(at[&labels[i]], at[&labels[j]]),
+                    Some(&v),
+                    "{file}"
+                );
+            }
+        }
+        // the eigenvalues to the solver's convergence (the rows are in another order)
+        let (got, _) = lowest(&d.join(file), 6);
+        for (a, b) in got.iter().zip(&want) {
+            assert!((a / b - 1.0).abs() < 1e-10, "{file}: {got:?} vs {want:?}");
+        }
+    }
+    // femu info lists the file's matrices, then the model it makes
+    let info = femu_study::info::describe(&d.join("bin.op4")).unwrap();
+    assert!(
+        info.contains(&format!(
+            "matrix KGG: {ng} x {ng}, symmetric, RD (real, double precision)"
+        )) && info.contains("(byte 0)")
+            && info.contains(&format!(
+                "use it as a model with {} free DOFs",
+                labels.len()
+            )),
+        "{info}"
+    );
+    let info = femu_study::info::describe(
+        &PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../fixtures/nastran/pynastran/op4/mat_t_s2.op4"),
+    )
+    .unwrap();
+    assert!(
+        info.contains("matrix STRINGS: 30 x 20, rectangular, RS (real, single precision), 240 stored values (line 162)")
+            && info.contains("not use it as a model"),
+        "{info}"
+    );
+    // the a-set with its DOF table: the free rows as they are
+    let aset = |name, a: &femu_sparse::SparseMatrix| Op4Out {
+        name,
+        rows: labels.len(),
+        form: 6,
+        columns: columns_of(labels.len(), femu_sparse::csc::entries(a)),
+    };
+    std::fs::write(
+        d.join("aset.op4"),
+        op4_binary(
+            &[aset("KAA", &own.sys.k), aset("MAA", &own.sys.m)],
+            Op4Layout::Dense,
+            true,
+        ),
+    )
+    .unwrap();
+    let mut table = String::from("row,node,component\n");
+    for (r, (node, c)) in labels.iter().enumerate() {
+        table.push_str(&format!("{},{node},{}\n", r + 1, c + 1));
+    }
+    std::fs::write(d.join("aset_dofs.csv"), &table).unwrap();
+    std::fs::write(d.join("aset.bdf"), &deck).unwrap();
+    let (got, _) = lowest(&d.join("aset.op4"), 6);
+    for (a, b) in got.iter().zip(&want) {
+        assert!((a / b - 1.0).abs() < 1e-10, "aset: {got:?} vs {want:?}");
+    }
+    // refusals: an a-set without its table, a rigid element or a scalar point in the deck, a
+    // complex matrix, no pair of names
+    let bad = |name: &str, op4: &[u8], bdf: &str| {
+        let _ = std::fs::remove_file(d.join(format!("{name}_dofs.csv")));
+        std::fs::write(d.join(format!("{name}.op4")), op4).unwrap();
+        std::fs::write(d.join(format!("{name}.bdf")), bdf).unwrap();
+        load_model(&d.join(format!("{name}.op4")), &ModelOptions::default())
+            .map(|_| ())
+            .unwrap_err()
+            .to_string()
+    };
+    let aset_bytes = std::fs::read(d.join("aset.op4")).unwrap();
+    let e = bad("notable", &aset_bytes, &deck);
+    assert!(
+        e.contains("the g-set of the deck") && e.contains("notable_dofs.csv"),
+        "{e}"
+    );
+    let gbytes = std::fs::read(d.join("bin.op4")).unwrap();
+    let e = bad(
+        "rbe",
+        &gbytes,
+        &deck.replace("ENDDATA", "RBE2,50,999,123456,16\nENDDATA"),
+    );
+    assert!(
+        e.contains("rbe.bdf") && e.contains("RBE2: a multipoint constraint"),
+        "{e}"
+    );
+    let e = bad(
+        "spoint",
+        &gbytes,
+        &deck.replace("ENDDATA", "SPOINT,5000\nENDDATA"),
+    );
+    assert!(e.contains("scalar points"), "{e}");
+    let e = bad(
+        "names",
+        &op4_binary(
+            &[aset("A", &own.sys.k), aset("B", &own.sys.m)],
+            Op4Layout::Sparse,
+            true,
+        ),
+        &deck,
+    );
+    assert!(
+        e.contains("no stiffness and mass pair") && e.contains("[\"A\", \"B\"]"),
+        "{e}"
+    );
+    let complex = std::fs::read(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../fixtures/nastran/pynastran/op4/mat_b_s1.op4"),
+    )
+    .unwrap();
+    let e = bad("complex", &complex, &deck);
+    assert!(e.contains("no stiffness and mass pair"), "{e}");
+    // the same file with its complex matrices named as a stiffness and a mass
+    let renamed = String::from_utf8_lossy(&complex)
+        .contains("RND1CD")
+        .then(|| {
+            let mut b = complex.clone();
+            for (from, to) in [
+                (&b"RND1CD  "[..], &b"KAA     "[..]),
+                (b"RND1CS  ", b"MAA     "),
+            ] {
+                let at = b.windows(8).position(|w| w == from).unwrap();
+                b[at..at + 8].copy_from_slice(to);
+            }
+            b
+        })
+        .unwrap();
+    let e = bad("complex", &renamed, &deck);
+    assert!(
+        e.contains("matrix KAA (CD (complex, double precision)) is complex"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 #[test]
 fn nastran_dmig_punch_is_the_model() {
     let n = 4;

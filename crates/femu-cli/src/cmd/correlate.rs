@@ -18,7 +18,7 @@ use std::path::PathBuf;
 #[command(verbatim_doc_comment)]
 pub struct CorrelateArgs {
     /// The model (`.inp`, Nastran `.bdf`/`.dat`/`.nas`, `.msh`/`.unv` with --young, --poisson,
-    /// --density, --fix, another solver's K and M: `job.sti`, `job_STIF1.mtx`, `job.pch`, `X_K.mtx`), or another solver's
+    /// --density, --fix, another solver's K and M: `job.sti`, `job_STIF1.mtx`, `job.pch`, `job.op4`, `X_K.mtx`), or another solver's
     /// modes (CalculiX `.frd`), which are then the model's modes.
     pub model: PathBuf,
     /// The test modes (`.unv`/`.uff`, `.json` or `.csv`: mode,frequency_hz,node,direction,value).

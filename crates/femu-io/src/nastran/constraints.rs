@@ -51,15 +51,15 @@ pub(super) fn fix_components(
 }
 
 /// The permanent single-point constraints of the grids (QRG GRID field 8, `PS`: "permanent
-/// single-point constraints", in the grid's displacement frame; blank takes GRDSET's).
+/// single-point constraints", in the grid's displacement frame; blank takes GRDSET's):
+/// `fix(card, grid, components)` for each grid that has them.
 ///
 /// # Errors
 /// A malformed component list, partial components in a turned frame.
 pub(super) fn apply_permanent(
     grids: &[&Card],
     geometry: &Geometry<'_>,
-    model: &mut Model,
-    turned: &HashMap<u64, i64>,
+    fix: &mut impl FnMut(&Card, u64, &[usize]) -> Result<(), IoError>,
 ) -> Result<usize, IoError> {
     let mut count = 0;
     for g in grids {
@@ -70,26 +70,27 @@ pub(super) fn apply_permanent(
         }
         let comps = super::links::components(source, 6, "PS")?;
         let id = g.id(0, "ID")?;
-        fix_components(model, turned, g, id, &comps)?;
+        fix(g, id, &comps)?;
         count += 1;
     }
     Ok(count)
 }
 
 /// Applies the SPC set the case control selects (`selected`), or the deck's only set when it has
-/// no case control.
+/// no case control: `fix(card, grid, components)` for each grid it constrains (components
+/// 0-based).
 ///
 /// # Errors
-/// A selected set nothing defines, several sets and no selection, malformed cards.
+/// A selected set nothing defines, several sets and no selection, malformed cards, and `fix`'s.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn apply_spc(
     spcs: &[&Card],
     selected: Option<&Selected>,
     has_case_control: bool,
-    model: &mut Model,
-    turned: &HashMap<u64, i64>,
     geometry: &Geometry<'_>,
     path: &Path,
     warnings: &mut Vec<Warning>,
+    fix: &mut impl FnMut(&Card, u64, &[usize]) -> Result<(), IoError>,
 ) -> Result<(), IoError> {
     // constraints: the case control's SPC set, or the only one a bulk-only file has
     let mut sets: BTreeMap<i64, Vec<&Card>> = BTreeMap::new();
@@ -171,8 +172,6 @@ pub(super) fn apply_spc(
                     }
                     Ok(out)
                 };
-                let mut fix =
-                    |c: &Card, g: u64, comps: &[usize]| fix_components(model, turned, c, g, comps);
                 match c.name.as_str() {
                     "SPC" => {
                         for k in 0..2 {

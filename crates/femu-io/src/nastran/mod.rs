@@ -783,16 +783,18 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
         );
     }
     let dependents = links::read_links(&sorted.links, &mut model, &turned, &mut warnings)?;
-    let permanent = constraints::apply_permanent(&sorted.grids, &geometry, &mut model, &turned)?;
+    let mut fix = |c: &Card, g: u64, comps: &[usize]| {
+        constraints::fix_components(&mut model, &turned, c, g, comps)
+    };
+    let permanent = constraints::apply_permanent(&sorted.grids, &geometry, &mut fix)?;
     constraints::apply_spc(
         &sorted.spcs,
         deck.case_control.spc.as_ref(),
         deck.has_case_control,
-        &mut model,
-        &turned,
         &geometry,
         path,
         &mut warnings,
+        &mut fix,
     )?;
     if let Some((n, g)) = named_cd {
         warn(
@@ -832,5 +834,108 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
         permanent_constraints: permanent,
         spc_set: deck.case_control.spc.as_ref().map(|s| s.id),
         warnings,
+    })
+}
+
+/// The g-set of a deck, the rows of the matrices Nastran assembles before any constraint (`KGG`,
+/// `MGG`): each GRID's six components in the order of the grids' ids (Nastran's internal
+/// sequence when nothing resequences it), with the components the deck constrains.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GSet {
+    /// The grids, ids increasing: rows `6 i .. 6 i + 6` are grid `grids[i]`'s T1-T3, R1-R3.
+    pub grids: Vec<u64>,
+    /// The components (0-based) the deck fixes: the grids' permanent constraints (`PS`) and the
+    /// SPC set the case control selects (or the only one of a deck without case control).
+    pub constrained: std::collections::BTreeSet<(u64, usize)>,
+}
+
+/// Cards whose constraints a g-set matrix does not hold (Nastran applies them after `KGG`).
+const MULTIPOINT: &[&str] = &[
+    "MPC", "MPCADD", "RBE1", "RBE2", "RBE3", "RBAR", "RBAR1", "RROD", "RTRPLT", "RTRPLT1",
+    "RSPLINE", "RSSCON", "RJOINT",
+];
+
+/// Reads the g-set of the deck at `path` ([`GSet`]): its grids and single-point constraints,
+/// whatever its elements.
+///
+/// # Errors
+/// The file system's; [`IoError::Parse`] naming the card's line for a malformed GRID, SPC, SPC1
+/// or SPCADD, a grid in a turned displacement frame (`CD`, whose g-set components are not the
+/// basic ones), a scalar point (`SPOINT`: a g-set row that is not a grid's) and a multipoint
+/// constraint or rigid element (its constraint is not in a g-set matrix: the model would lose
+/// it); a selected SPC set nothing defines.
+pub fn read_gset(path: impl AsRef<Path>) -> Result<GSet, IoError> {
+    let path = path.as_ref();
+    let mut lines = Vec::new();
+    cards::load(path, 0, &mut lines)?;
+    let deck = cards::deck(&lines)?;
+    if let Some(c) = deck.cards.iter().find(|c| c.name == "SPOINT") {
+        return Err(c.err(
+            "defines scalar points: femu's rows are grids' components, so a g-set matrix with scalar points cannot be labelled (give its DOF table, or a matrix without them)".into(),
+        ));
+    }
+    if let Some(c) = deck
+        .cards
+        .iter()
+        .find(|c| MULTIPOINT.contains(&c.name.as_str()))
+    {
+        return Err(c.err(format!(
+            "{}: a multipoint constraint, which Nastran applies after assembling the g-set matrices: KGG and MGG do not hold it and the model would lose it (export the matrices after it, KAA and MAA or KFF and MFF, with their DOF table)",
+            c.name
+        )));
+    }
+    let grids: Vec<&Card> = deck.cards.iter().filter(|c| c.name == "GRID").collect();
+    if grids.is_empty() {
+        return Err(IoError::Content {
+            path: path.to_path_buf(),
+            reason: "the deck defines no GRID".into(),
+        });
+    }
+    let cords: Vec<&Card> = deck
+        .cards
+        .iter()
+        .filter(|c| c.name.starts_with("CORD1") || c.name.starts_with("CORD2"))
+        .collect();
+    let grdset = deck.cards.iter().find(|c| c.name == "GRDSET");
+    let geometry = Geometry::new(&cords, &grids, grdset)?;
+    for g in &grids {
+        let cd = geometry.grid_int(g, 5, "CD")?.unwrap_or(0);
+        if cd != 0 {
+            return Err(g.err(format!(
+                "has its displacements in frame CD = {cd}: its g-set rows are in that frame, and femu's rows are in the basic one (give the grids CD = 0)"
+            )));
+        }
+    }
+    let mut ids: Vec<u64> = geometry.grid_of.keys().copied().collect();
+    ids.sort_unstable();
+    let mut constrained = std::collections::BTreeSet::new();
+    let mut fix = |c: &Card, g: u64, comps: &[usize]| -> Result<(), IoError> {
+        if !geometry.grid_of.contains_key(&g) {
+            return Err(c.err(format!(
+                "constrains GRID {g}, which the deck does not define"
+            )));
+        }
+        constrained.extend(comps.iter().map(|&k| (g, k)));
+        Ok(())
+    };
+    constraints::apply_permanent(&grids, &geometry, &mut fix)?;
+    let spcs: Vec<&Card> = deck
+        .cards
+        .iter()
+        .filter(|c| matches!(c.name.as_str(), "SPC" | "SPC1" | "SPCADD"))
+        .collect();
+    let mut warnings = Vec::new();
+    constraints::apply_spc(
+        &spcs,
+        deck.case_control.spc.as_ref(),
+        deck.has_case_control,
+        &geometry,
+        path,
+        &mut warnings,
+        &mut fix,
+    )?;
+    Ok(GSet {
+        grids: ids,
+        constrained,
     })
 }
