@@ -26,7 +26,7 @@
 //! file's twice (docs/SCALING.md, "Reading another solver's matrices").
 
 use crate::IoError;
-use std::io::{BufRead, BufReader, Read};
+use std::io::{BufRead, Read};
 use std::path::Path;
 
 /// One matrix of an OP4 file, in compressed sparse columns (rows sorted within each column).
@@ -202,6 +202,19 @@ impl Builder {
         })
     }
 
+    /// Reserves room for `values` values (virtual memory, touched as they arrive, in huge pages
+    /// where the system gives them: [`huge_pages`]).
+    fn reserve(&mut self, values: usize) {
+        self.m.row_index.reserve(values);
+        self.m.re.reserve(values);
+        huge_pages(&self.m.row_index);
+        huge_pages(&self.m.re);
+        if let Some(im) = self.m.im.as_mut() {
+            im.reserve(values);
+            huge_pages(im);
+        }
+    }
+
     /// Starts column `icol` (1-based; the columns between are null); a column given again
     /// continues (its rows must follow).
     fn start_column(&mut self, icol: i64) -> Result<(), String> {
@@ -226,10 +239,14 @@ impl Builder {
         Ok(())
     }
 
-    /// Stores `numbers` (values, two numbers each when complex) from row `irow` (1-based) on.
-    fn put(&mut self, irow: i64, numbers: &[f64]) -> Result<(), String> {
-        let per = self.layout.numbers_per_value();
-        let count = numbers.len() / per;
+    /// Stores `count` values from row `irow` (1-based) on, taken from `numbers` (two numbers a
+    /// value when complex), straight into the columns.
+    fn put(
+        &mut self,
+        irow: i64,
+        count: usize,
+        mut numbers: impl Iterator<Item = f64>,
+    ) -> Result<(), String> {
         let name = &self.m.name;
         if irow < 1 || irow as usize + count - 1 > self.m.rows {
             return Err(format!(
@@ -248,20 +265,28 @@ impl Builder {
                 self.m.row_index.last().map_or(0, |r| r + 1)
             ));
         }
-        for (k, v) in numbers.chunks_exact(per).enumerate() {
-            if !v.iter().all(|x| x.is_finite()) {
-                return Err(format!(
-                    "matrix {name}: the value at row {}, column {} is not a finite number",
-                    first + k + 1,
-                    self.column
-                ));
-            }
-            self.m.row_index.push(first + k);
-            self.m.re.push(v[0]);
-            if let Some(im) = self.m.im.as_mut() {
-                im.push(v[1]);
+        let from = self.m.re.len();
+        match self.m.im.as_mut() {
+            None => self.m.re.extend(numbers.by_ref().take(count)),
+            Some(im) => {
+                for _ in 0..count {
+                    self.m.re.push(numbers.next().unwrap_or(f64::NAN));
+                    im.push(numbers.next().unwrap_or(f64::NAN));
+                }
             }
         }
+        let bad = self.m.re[from..]
+            .iter()
+            .chain(self.m.im.as_ref().map_or(&[][..], |im| &im[from..]))
+            .position(|v| !v.is_finite());
+        if let Some(k) = bad.or((self.m.re.len() != from + count).then_some(0)) {
+            return Err(format!(
+                "matrix {name}: the value at row {}, column {} is not a finite number",
+                first + k % count.max(1) + 1,
+                self.column
+            ));
+        }
+        self.m.row_index.extend(first..first + count);
         Ok(())
     }
 
@@ -279,6 +304,11 @@ impl Builder {
         }
         col_start.push(nnz);
         self.m.col_start = col_start;
+        self.m.row_index.shrink_to_fit();
+        self.m.re.shrink_to_fit();
+        if let Some(im) = self.m.im.as_mut() {
+            im.shrink_to_fit();
+        }
         self.m
     }
 }
@@ -293,7 +323,87 @@ impl Builder {
 pub fn read_op4(path: impl AsRef<Path>) -> Result<Vec<Op4Matrix>, IoError> {
     let path = path.as_ref();
     let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
-    parse_op4(BufReader::with_capacity(1 << 20, file), path)
+    let len = file.metadata().map_or(0, |m| m.len());
+    parse(ReadAhead::new(file), path, len)
+}
+
+/// A file read ahead on another thread in chunks of 4 MiB (two in flight, recycled), so that
+/// the system's copy of the bytes overlaps their parsing (docs/SCALING.md, "Reading another
+/// solver's matrices").
+struct ReadAhead {
+    full: std::sync::mpsc::Receiver<std::io::Result<Vec<u8>>>,
+    empty: std::sync::mpsc::SyncSender<Vec<u8>>,
+    chunk: Vec<u8>,
+    pos: usize,
+    done: bool,
+}
+
+impl ReadAhead {
+    const CHUNK: usize = 4 << 20;
+
+    fn new(mut file: std::fs::File) -> Self {
+        let (full_tx, full) = std::sync::mpsc::sync_channel::<std::io::Result<Vec<u8>>>(2);
+        let (empty, empty_rx) = std::sync::mpsc::sync_channel::<Vec<u8>>(4);
+        std::thread::spawn(move || {
+            loop {
+                let mut buf = empty_rx
+                    .try_recv()
+                    .unwrap_or_else(|_| Vec::with_capacity(Self::CHUNK));
+                buf.resize(Self::CHUNK, 0);
+                match read_full(&mut file, &mut buf) {
+                    Ok(0) => return,
+                    Ok(n) => {
+                        buf.truncate(n);
+                        if full_tx.send(Ok(buf)).is_err() {
+                            return; // the reader stopped (an error in the file)
+                        }
+                    }
+                    Err(e) => {
+                        let _ = full_tx.send(Err(e));
+                        return;
+                    }
+                }
+            }
+        });
+        ReadAhead {
+            full,
+            empty,
+            chunk: Vec::new(),
+            pos: 0,
+            done: false,
+        }
+    }
+}
+
+impl Read for ReadAhead {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        let avail = self.fill_buf()?;
+        let n = avail.len().min(out.len());
+        out[..n].copy_from_slice(&avail[..n]);
+        self.consume(n);
+        Ok(n)
+    }
+}
+
+impl BufRead for ReadAhead {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        while self.pos == self.chunk.len() && !self.done {
+            match self.full.recv() {
+                Ok(Ok(next)) => {
+                    let used = std::mem::replace(&mut self.chunk, next);
+                    let _ = self.empty.try_send(used);
+                    self.pos = 0;
+                }
+                Ok(Err(e)) => return Err(e),
+                Err(_) => self.done = true,
+            }
+        }
+        Ok(&self.chunk[self.pos..])
+    }
+
+    fn consume(&mut self, n: usize) {
+        self.pos += n;
+    }
 }
 
 /// Reads the matrices of an OP4 stream (`path` names it in messages): [`read_op4`] on any
@@ -301,16 +411,24 @@ pub fn read_op4(path: impl AsRef<Path>) -> Result<Vec<Op4Matrix>, IoError> {
 ///
 /// # Errors
 /// As [`read_op4`].
-pub fn parse_op4(mut reader: impl BufRead, path: &Path) -> Result<Vec<Op4Matrix>, IoError> {
+pub fn parse_op4(reader: impl BufRead, path: &Path) -> Result<Vec<Op4Matrix>, IoError> {
+    parse(reader, path, 0)
+}
+
+/// [`parse_op4`] of a stream of `len` bytes (0: unknown): the columns of each matrix are
+/// reserved for as many values as the rest of the stream could hold, virtual memory that is
+/// touched only as values arrive (and returned when the matrix is complete), so that they are
+/// not copied as they grow.
+fn parse(mut reader: impl BufRead, path: &Path, len: u64) -> Result<Vec<Op4Matrix>, IoError> {
     let head = reader.fill_buf().map_err(|e| IoError::io(path, e))?;
     let binary = head.len() >= 4 && {
         let w: [u8; 4] = head[..4].try_into().expect("4 bytes");
         [24, 48].contains(&i32::from_le_bytes(w)) || [24, 48].contains(&i32::from_be_bytes(w))
     };
     if binary {
-        read_binary(reader, path)
+        read_binary(reader, path, len)
     } else {
-        read_text(reader, path)
+        read_text(reader, path, len)
     }
 }
 
@@ -442,7 +560,7 @@ impl<R: BufRead> Lines<R> {
     }
 }
 
-fn read_text(reader: impl BufRead, path: &Path) -> Result<Vec<Op4Matrix>, IoError> {
+fn read_text(reader: impl BufRead, path: &Path, len: u64) -> Result<Vec<Op4Matrix>, IoError> {
     let mut lines = Lines {
         reader,
         buf: String::new(),
@@ -488,6 +606,8 @@ fn read_text(reader: impl BufRead, path: &Path) -> Result<Vec<Op4Matrix>, IoErro
             .to_string();
         let mut b = Builder::new(ints[0], ints[1], ints[2], ints[3], name, Place::Line(at))
             .map_err(|r| text_error(path, at, r))?;
+        // a printed number takes at least 8 characters
+        b.reserve((len / 8) as usize);
         let per_number_words = b.layout.words_per_number();
         loop {
             let last = lines.line;
@@ -540,7 +660,8 @@ fn read_text(reader: impl BufRead, path: &Path) -> Result<Vec<Op4Matrix>, IoErro
                         ),
                     ));
                 }
-                b.put(irow, &numbers)
+                let count = numbers.len() / b.layout.numbers_per_value();
+                b.put(irow, count, numbers.iter().copied())
                     .map_err(|r| text_error(path, here, r))?;
                 continue;
             }
@@ -597,7 +718,9 @@ fn read_text(reader: impl BufRead, path: &Path) -> Result<Vec<Op4Matrix>, IoErro
                     &b.m.name,
                     &mut numbers,
                 )?;
-                b.put(row, &numbers).map_err(|r| text_error(path, sl, r))?;
+                let count = numbers.len() / b.layout.numbers_per_value();
+                b.put(row, count, numbers.iter().copied())
+                    .map_err(|r| text_error(path, sl, r))?;
             }
         }
         out.push(b.finish());
@@ -703,30 +826,19 @@ fn binary_error(path: &Path, at: u64, reason: String) -> IoError {
     }
 }
 
-/// The numbers of `bytes` (4- or 8-byte floats of the file's byte order), appended to `out`.
-fn binary_numbers(bytes: &[u8], double: bool, little: bool, out: &mut Vec<f64>) {
-    if double {
-        out.extend(bytes.chunks_exact(8).map(|c| {
-            let b: [u8; 8] = c.try_into().expect("8 bytes");
-            if little {
-                f64::from_le_bytes(b)
-            } else {
-                f64::from_be_bytes(b)
-            }
-        }));
-    } else {
-        out.extend(bytes.chunks_exact(4).map(|c| {
-            let b: [u8; 4] = c.try_into().expect("4 bytes");
-            f64::from(if little {
-                f32::from_le_bytes(b)
-            } else {
-                f32::from_be_bytes(b)
-            })
-        }));
-    }
+/// The numbers of `bytes`: 4- or 8-byte floats of the file's byte order.
+fn binary_numbers(bytes: &[u8], double: bool, little: bool) -> impl Iterator<Item = f64> + '_ {
+    bytes
+        .chunks_exact(if double { 8 } else { 4 })
+        .map(move |c| match (double, little) {
+            (true, true) => f64::from_le_bytes(c.try_into().expect("8 bytes")),
+            (true, false) => f64::from_be_bytes(c.try_into().expect("8 bytes")),
+            (false, true) => f64::from(f32::from_le_bytes(c.try_into().expect("4 bytes"))),
+            (false, false) => f64::from(f32::from_be_bytes(c.try_into().expect("4 bytes"))),
+        })
 }
 
-fn read_binary(mut reader: impl BufRead, path: &Path) -> Result<Vec<Op4Matrix>, IoError> {
+fn read_binary(mut reader: impl BufRead, path: &Path, len: u64) -> Result<Vec<Op4Matrix>, IoError> {
     let head = reader.fill_buf().map_err(|e| IoError::io(path, e))?;
     let w: [u8; 4] = head[..4].try_into().expect("4 bytes");
     let little = [24, 48].contains(&i32::from_le_bytes(w));
@@ -749,7 +861,6 @@ fn read_binary(mut reader: impl BufRead, path: &Path) -> Result<Vec<Op4Matrix>, 
         buf: Vec::new(),
     };
     let mut out = Vec::new();
-    let mut numbers: Vec<f64> = Vec::new();
     while let Some(at) = recs.next(path)? {
         if recs.buf.len() != 24 {
             return Err(binary_error(
@@ -773,6 +884,8 @@ fn read_binary(mut reader: impl BufRead, path: &Path) -> Result<Vec<Op4Matrix>, 
             Place::Byte(at),
         )
         .map_err(|r| binary_error(path, at, r))?;
+        let value_bytes = 4 * b.layout.words_per_number() * b.layout.numbers_per_value();
+        b.reserve((len.saturating_sub(recs.offset) / value_bytes as u64) as usize);
         let layout = b.layout;
         loop {
             let Some(rat) = recs.next(path)? else {
@@ -826,9 +939,8 @@ fn read_binary(mut reader: impl BufRead, path: &Path) -> Result<Vec<Op4Matrix>, 
                         ),
                     ));
                 }
-                numbers.clear();
-                binary_numbers(&recs.buf[12..], layout.double, little, &mut numbers);
-                b.put(irow, &numbers)
+                let numbers = binary_numbers(&recs.buf[12..], layout.double, little);
+                b.put(irow, data_words / value_words, numbers)
                     .map_err(|r| binary_error(path, rat, r))?;
                 continue;
             }
@@ -866,14 +978,12 @@ fn read_binary(mut reader: impl BufRead, path: &Path) -> Result<Vec<Op4Matrix>, 
                     ));
                 }
                 let from = 4 * (k + header_words);
-                numbers.clear();
-                binary_numbers(
+                let numbers = binary_numbers(
                     &recs.buf[from..from + 4 * words as usize],
                     layout.double,
                     little,
-                    &mut numbers,
                 );
-                b.put(row, &numbers)
+                b.put(row, words as usize / value_words, numbers)
                     .map_err(|r| binary_error(path, rat, r))?;
                 k += header_words + words as usize;
             }
@@ -888,3 +998,34 @@ fn read_binary(mut reader: impl BufRead, path: &Path) -> Result<Vec<Op4Matrix>, 
     }
     Ok(out)
 }
+
+/// Asks the system to back `v`'s reserved memory with transparent huge pages (Linux's
+/// `madvise(MADV_HUGEPAGE)` on the 2 MiB-aligned part of a reservation of 4 MiB or more; a
+/// system set to `madvise` gives them only so asked). Filling a gigabyte of fresh 4 KiB pages
+/// costs a fault every 4 KiB, which on these machines took longer than reading the file
+/// (docs/SCALING.md, "Reading another solver's matrices"). Only advice: the memory, its
+/// contents and what is resident (pages are still made as they are touched) are unchanged, and
+/// a refusal is ignored.
+#[cfg(target_os = "linux")]
+#[allow(unsafe_code)]
+fn huge_pages<T>(v: &Vec<T>) {
+    const HUGE: usize = 2 << 20;
+    let bytes = v.capacity() * std::mem::size_of::<T>();
+    if bytes < 2 * HUGE {
+        return;
+    }
+    let p = v.as_ptr() as usize;
+    let start = p.div_ceil(HUGE) * HUGE;
+    let end = (p + bytes) / HUGE * HUGE;
+    if end > start {
+        // SAFETY: [start, end) lies within `v`'s own allocation (its capacity), and
+        // MADV_HUGEPAGE changes only how the kernel backs those pages, not their contents or
+        // their validity.
+        unsafe {
+            libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE);
+        }
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn huge_pages<T>(_: &Vec<T>) {}

@@ -1,0 +1,160 @@
+//! Reading another solver's binary matrices against reading their bytes (docs/SCALING.md,
+//! "Reading another solver's matrices"): a stiffness-like pair on `FEMU_BENCH_OP4_DOF` rows
+//! (default 1,000,000: three DOFs a node on a cube of nodes, each row coupled to the 27 nodes
+//! around its own, 81 entries an interior row, as a hex8 model's `K` and `M` are) written as a
+//! binary OUTPUT4 file (`KGG`, `MGG`, sparse `BIGMAT` columns, double precision, by
+//! `femu_testkit::op4`), then, in a fresh process so that its peak memory is the reader's alone:
+//! the file's bytes read into memory from a warm cache, `femu::io::op4::read_op4` (medians of
+//! `FEMU_BENCH_REPS`, default 3), the ratio, and the process's peak resident memory against the
+//! matrices it holds (`16 bytes` an entry and `8` a column pointer).
+//!
+//! Run: `cargo bench --bench external_read` (`FEMU_BENCH_OP4_KEEP=FILE` keeps the file).
+
+use femu_testkit::op4::{Op4Layout, Op4Out, op4_binary};
+use std::time::Instant;
+
+fn median(mut t: Vec<f64>) -> f64 {
+    t.sort_by(f64::total_cmp);
+    t[t.len() / 2]
+}
+
+/// The process's peak resident memory, bytes (`VmHWM`).
+fn peak_rss() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+        })
+        .map_or(0, |kb| kb * 1024)
+}
+
+/// The columns of the pair on a cube of `n^3` nodes, 3 DOFs each.
+fn columns(n: usize, mass: bool) -> Vec<Vec<(usize, f64)>> {
+    let node = |i: usize, j: usize, k: usize| i + n * (j + n * k);
+    let mut cols = Vec::with_capacity(3 * n * n * n);
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                for a in 0..3 {
+                    let c = 3 * node(i, j, k) + a;
+                    let mut col = Vec::with_capacity(81);
+                    for kk in k.saturating_sub(1)..(k + 2).min(n) {
+                        for jj in j.saturating_sub(1)..(j + 2).min(n) {
+                            for ii in i.saturating_sub(1)..(i + 2).min(n) {
+                                for b in 0..3 {
+                                    let r = 3 * node(ii, jj, kk) + b;
+                                    // symmetric values: a function of the unordered pair
+                                    let (lo, hi) = (r.min(c), r.max(c));
+                                    let v = if r == c {
+                                        if mass { 2.0 } else { 26.0 }
+                                    } else {
+                                        -(((lo * 31 + hi * 17) % 97) as f64 + 1.0) / 97.0
+                                            * if mass { -0.01 } else { 1.0 }
+                                    };
+                                    col.push((r, v));
+                                }
+                            }
+                        }
+                    }
+                    col.sort_by_key(|e| e.0);
+                    cols.push(col);
+                }
+            }
+        }
+    }
+    cols
+}
+
+fn main() {
+    let reps: usize = std::env::var("FEMU_BENCH_REPS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(3);
+    if let Ok(path) = std::env::var("FEMU_BENCH_OP4_READ") {
+        // the fresh process: the bytes, then the reader
+        let path = std::path::PathBuf::from(path);
+        let _ = std::fs::read(&path).unwrap(); // warm the cache
+        let bytes: Vec<f64> = (0..reps)
+            .map(|_| {
+                let t = Instant::now();
+                let b = std::fs::read(&path).unwrap();
+                std::hint::black_box(&b);
+                t.elapsed().as_secs_f64()
+            })
+            .collect();
+        let before = peak_rss();
+        let mut held = 0u64;
+        let reads: Vec<f64> = (0..reps)
+            .map(|_| {
+                let t = Instant::now();
+                let m = femu::io::op4::read_op4(&path).unwrap();
+                let dt = t.elapsed().as_secs_f64();
+                held = m
+                    .iter()
+                    .map(|a| 16 * a.re.len() as u64 + 8 * a.col_start.len() as u64)
+                    .sum();
+                dt
+            })
+            .collect();
+        let (b, r) = (median(bytes), median(reads));
+        println!(
+            "bytes read {b:.3} s, read_op4 {r:.3} s ({:.2}x); held {:.0} MB, peak resident {:.0} MB before the reader and {:.0} MB after ({:.2}x what it holds)",
+            r / b,
+            held as f64 / 1e6,
+            before as f64 / 1e6,
+            peak_rss() as f64 / 1e6,
+            peak_rss() as f64 / held as f64
+        );
+        return;
+    }
+    let dof: usize = std::env::var("FEMU_BENCH_OP4_DOF")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1_000_000);
+    let n = ((dof as f64 / 3.0).cbrt().round() as usize).max(2);
+    let rows = 3 * n * n * n;
+    let dir = std::env::temp_dir().join(format!("femu_bench_op4_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // FEMU_BENCH_OP4_KEEP=FILE: the file is written there and kept (to profile the reader alone)
+    let kept = std::env::var("FEMU_BENCH_OP4_KEEP").ok();
+    let path = kept
+        .as_ref()
+        .map_or_else(|| dir.join("job.op4"), std::path::PathBuf::from);
+    {
+        let t = Instant::now();
+        let k = Op4Out {
+            name: "KGG",
+            rows,
+            form: 6,
+            columns: columns(n, false),
+        };
+        let mut bytes = op4_binary(std::slice::from_ref(&k), Op4Layout::BigMat, true);
+        drop(k);
+        let m = Op4Out {
+            name: "MGG",
+            rows,
+            form: 6,
+            columns: columns(n, true),
+        };
+        bytes.extend(op4_binary(
+            std::slice::from_ref(&m),
+            Op4Layout::BigMat,
+            true,
+        ));
+        drop(m);
+        std::fs::write(&path, &bytes).unwrap();
+        println!(
+            "{rows} rows ({n}^3 nodes), {:.0} MB written in {:.1} s",
+            bytes.len() as f64 / 1e6,
+            t.elapsed().as_secs_f64()
+        );
+    }
+    let status = std::process::Command::new(std::env::current_exe().unwrap())
+        .env("FEMU_BENCH_OP4_READ", &path)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let _ = std::fs::remove_dir_all(&dir);
+}
