@@ -1,12 +1,14 @@
-//! Reading another solver's binary matrices against reading their bytes (docs/SCALING.md,
-//! "Reading another solver's matrices"): a stiffness-like pair on `FEMU_BENCH_OP4_DOF` rows
+//! Reading another solver's binary matrices and modes against reading their bytes
+//! (docs/SCALING.md, "Reading another solver's matrices"): a stiffness-like pair on `FEMU_BENCH_OP4_DOF` rows
 //! (default 1,000,000: three DOFs a node on a cube of nodes, each row coupled to the 27 nodes
 //! around its own, 81 entries an interior row, as a hex8 model's `K` and `M` are) written as a
 //! binary OUTPUT4 file (`KGG`, `MGG`, sparse `BIGMAT` columns, double precision, by
 //! `femu_testkit::op4`), then, in a fresh process so that its peak memory is the reader's alone:
 //! the file's bytes read into memory from a warm cache, `femu::io::op4::read_op4` (medians of
 //! `FEMU_BENCH_REPS`, default 3), the ratio, and the process's peak resident memory against the
-//! matrices it holds (`16 bytes` an entry and `8` a column pointer).
+//! matrices it holds (`16 bytes` an entry and `8` a column pointer). Then the same for an OP2 of
+//! 50 real modes on a sixth of the rows' count of grids (six components each, `femu_testkit::op2`)
+//! read by `femu_io::op2::read_op2`, against the modes it holds.
 //!
 //! Run: `cargo bench --bench external_read` (`FEMU_BENCH_OP4_KEEP=FILE` keeps the file).
 
@@ -16,6 +18,15 @@ use std::time::Instant;
 fn median(mut t: Vec<f64>) -> f64 {
     t.sort_by(f64::total_cmp);
     t[t.len() / 2]
+}
+
+/// Writes `bytes` and waits until they are on disk: the reads timed next are not slowed by the
+/// system writing them back.
+fn write_synced(path: &std::path::Path, bytes: &[u8]) {
+    use std::io::Write;
+    let mut f = std::fs::File::create(path).unwrap();
+    f.write_all(bytes).unwrap();
+    f.sync_all().unwrap();
 }
 
 /// The process's peak resident memory, bytes (`VmHWM`).
@@ -72,6 +83,44 @@ fn main() {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(3);
+    if let Ok(path) = std::env::var("FEMU_BENCH_OP2_READ") {
+        // the fresh process: the bytes, then the reader
+        let path = std::path::PathBuf::from(path);
+        let _ = std::fs::read(&path).unwrap();
+        let bytes: Vec<f64> = (0..reps)
+            .map(|_| {
+                let t = Instant::now();
+                let b = std::fs::read(&path).unwrap();
+                std::hint::black_box(&b);
+                t.elapsed().as_secs_f64()
+            })
+            .collect();
+        let before = peak_rss();
+        let mut held = 0u64;
+        let reads: Vec<f64> = (0..reps)
+            .map(|_| {
+                let t = Instant::now();
+                let f = femu::io::op2::read_op2(&path).unwrap();
+                let dt = t.elapsed().as_secs_f64();
+                held = f
+                    .modes
+                    .iter()
+                    .map(|m| std::mem::size_of_val(m.points.as_slice()) as u64)
+                    .sum();
+                dt
+            })
+            .collect();
+        let (b, r) = (median(bytes), median(reads));
+        println!(
+            "OP2: bytes read {b:.3} s, read_op2 {r:.3} s ({:.2}x); held {:.0} MB, peak resident {:.0} MB before the reader and {:.0} MB after ({:.2}x what it holds)",
+            r / b,
+            held as f64 / 1e6,
+            before as f64 / 1e6,
+            peak_rss() as f64 / 1e6,
+            peak_rss() as f64 / held as f64
+        );
+        return;
+    }
     if let Ok(path) = std::env::var("FEMU_BENCH_OP4_READ") {
         // the fresh process: the bytes, then the reader
         let path = std::path::PathBuf::from(path);
@@ -144,7 +193,7 @@ fn main() {
             true,
         ));
         drop(m);
-        std::fs::write(&path, &bytes).unwrap();
+        write_synced(&path, &bytes);
         println!(
             "{rows} rows ({n}^3 nodes), {:.0} MB written in {:.1} s",
             bytes.len() as f64 / 1e6,
@@ -153,6 +202,34 @@ fn main() {
     }
     let status = std::process::Command::new(std::env::current_exe().unwrap())
         .env("FEMU_BENCH_OP4_READ", &path)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    // an OP2 of 50 modes on a third of the rows' grids (six components each)
+    let op2 = dir.join("modes.op2");
+    {
+        let grids: Vec<u64> = (1..=(rows as u64).div_ceil(6)).collect();
+        let modes: Vec<(f32, Vec<[f32; 6]>)> = (0..50)
+            .map(|j| {
+                let shape = grids
+                    .iter()
+                    .map(|&g| {
+                        std::array::from_fn(|c| ((g as f32) * 0.001 + c as f32 + j as f32).sin())
+                    })
+                    .collect();
+                (1e3 * (j + 1) as f32, shape)
+            })
+            .collect();
+        let bytes = femu_testkit::op2::op2_modes(&grids, &modes, true);
+        write_synced(&op2, &bytes);
+        println!(
+            "OP2: {} grids x 50 modes, {:.0} MB",
+            grids.len(),
+            bytes.len() as f64 / 1e6
+        );
+    }
+    let status = std::process::Command::new(std::env::current_exe().unwrap())
+        .env("FEMU_BENCH_OP2_READ", &op2)
         .status()
         .unwrap();
     assert!(status.success());

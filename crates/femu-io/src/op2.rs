@@ -14,7 +14,9 @@
 
 use crate::IoError;
 use crate::f06::{F06, F06Mode};
-use std::path::Path;
+use std::collections::VecDeque;
+use std::io::Read;
+use std::path::{Path, PathBuf};
 
 fn content(path: &Path, reason: String) -> IoError {
     IoError::Content {
@@ -23,74 +25,179 @@ fn content(path: &Path, reason: String) -> IoError {
     }
 }
 
-/// A Fortran record: its byte offset and its bytes.
-type Record<'a> = (usize, &'a [u8]);
+/// The file's Fortran records, read as they are needed: a window from the first record the
+/// parser may still look at, so that memory holds the records of one mode at a time and not the
+/// file.
+struct Records<R> {
+    reader: R,
+    path: PathBuf,
+    little: bool,
+    /// The byte offset of the next record to read.
+    pos: usize,
+    /// The index of the window's first record.
+    base: usize,
+    window: VecDeque<(usize, Vec<u8>)>,
+    eof: bool,
+}
 
-/// The Fortran records of `bytes`, and whether the file is little-endian.
-fn records<'a>(bytes: &'a [u8], path: &Path) -> Result<(Vec<Record<'a>>, bool), IoError> {
-    let first = bytes
-        .get(..4)
-        .ok_or_else(|| content(path, "shorter than one record".into()))?;
-    let little = match (
-        i32::from_le_bytes(first.try_into().expect("4 bytes")),
-        i32::from_be_bytes(first.try_into().expect("4 bytes")),
-    ) {
-        (4, _) => true,
-        (_, 4) => false,
-        (8, _) | (_, 8) => {
-            return Err(content(
-                path,
-                "8-byte words (a double-precision OP2): femu reads OP2 files of 4-byte words, Nastran's default".into(),
-            ));
+impl<R: Read> Records<R> {
+    /// Reads the first record's length to tell the byte order.
+    fn new(mut reader: R, path: &Path) -> Result<Self, IoError> {
+        let mut first = [0u8; 4];
+        if crate::stream::read_full(&mut reader, &mut first).map_err(|e| IoError::io(path, e))? < 4
+        {
+            return Err(content(path, "shorter than one record".into()));
         }
-        _ => {
-            return Err(content(
-                path,
-                "not an OP2 file: the first record does not hold one 4-byte word".into(),
-            ));
-        }
-    };
-    let word = |b: &[u8]| {
-        let b: [u8; 4] = b.try_into().expect("4 bytes");
-        if little {
+        let little = match (i32::from_le_bytes(first), i32::from_be_bytes(first)) {
+            (4, _) => true,
+            (_, 4) => false,
+            (8, _) | (_, 8) => {
+                return Err(content(
+                    path,
+                    "8-byte words (a double-precision OP2): femu reads OP2 files of 4-byte words, Nastran's default".into(),
+                ));
+            }
+            _ => {
+                return Err(content(
+                    path,
+                    "not an OP2 file: the first record does not hold one 4-byte word".into(),
+                ));
+            }
+        };
+        let mut r = Records {
+            reader,
+            path: path.to_path_buf(),
+            little,
+            pos: 0,
+            base: 0,
+            window: VecDeque::new(),
+            eof: false,
+        };
+        r.read_record(Some(first))?;
+        Ok(r)
+    }
+
+    fn word(&self, b: [u8; 4]) -> i32 {
+        if self.little {
             i32::from_le_bytes(b)
         } else {
             i32::from_be_bytes(b)
         }
-    };
-    let mut out = Vec::new();
-    let mut pos = 0;
-    while pos < bytes.len() {
+    }
+
+    /// Reads one record into the window (`length`: its length's bytes, already read).
+    fn read_record(&mut self, length: Option<[u8; 4]>) -> Result<(), IoError> {
+        let pos = self.pos;
+        let path = self.path.clone();
         let truncated = || {
             content(
-                path,
+                &path,
                 format!("truncated: the record at byte {pos} runs past the end of the file"),
             )
         };
-        let n = word(bytes.get(pos..pos + 4).ok_or_else(truncated)?);
+        let io = |e| IoError::io(&path, e);
+        let head = match length {
+            Some(h) => h,
+            None => {
+                let mut h = [0u8; 4];
+                match crate::stream::read_full(&mut self.reader, &mut h).map_err(io)? {
+                    0 => {
+                        self.eof = true;
+                        return Ok(());
+                    }
+                    4 => h,
+                    _ => return Err(truncated()),
+                }
+            }
+        };
+        let n = self.word(head);
         let n = usize::try_from(n).map_err(|_| {
             content(
-                path,
+                &path,
                 format!("the record at byte {pos} has a negative length {n}"),
             )
         })?;
-        let data = bytes.get(pos + 4..pos + 4 + n).ok_or_else(truncated)?;
-        let end = word(bytes.get(pos + 4 + n..pos + 8 + n).ok_or_else(truncated)?);
+        // read as the bytes come: a damaged length allocates no more than the file holds
+        let mut data = Vec::new();
+        let got = (&mut self.reader)
+            .take(n as u64)
+            .read_to_end(&mut data)
+            .map_err(io)?;
+        let mut tail = [0u8; 4];
+        if got < n || crate::stream::read_full(&mut self.reader, &mut tail).map_err(io)? < 4 {
+            return Err(truncated());
+        }
+        let end = self.word(tail);
         if end as usize != n {
             return Err(content(
-                path,
+                &path,
                 format!(
                     "the record at byte {pos} says {n} bytes at its start and {end} at its end"
                 ),
             ));
         }
-        out.push((pos, data));
-        pos += 8 + n;
+        self.window.push_back((pos, data));
+        self.pos += 8 + n;
+        Ok(())
     }
-    Ok((out, little))
+
+    /// Record `k` (its offset and bytes), `None` past the end of the file.
+    fn get(&mut self, k: usize) -> Result<Option<&(usize, Vec<u8>)>, IoError> {
+        while !self.eof && self.base + self.window.len() <= k {
+            self.read_record(None)?;
+        }
+        Ok(self.window.get(k - self.base))
+    }
+
+    /// Record `k` as one integer, if it is one word.
+    fn int(&mut self, k: usize) -> Result<Option<i32>, IoError> {
+        let little = self.little;
+        Ok(self.get(k)?.and_then(|r| {
+            let b: [u8; 4] = r.1.as_slice().try_into().ok()?;
+            Some(if little {
+                i32::from_le_bytes(b)
+            } else {
+                i32::from_be_bytes(b)
+            })
+        }))
+    }
+
+    /// Record `k`'s bytes, taken out of the window.
+    fn take(&mut self, k: usize) -> Result<Vec<u8>, IoError> {
+        self.get(k)?;
+        Ok(self
+            .window
+            .get_mut(k - self.base)
+            .map(|r| std::mem::take(&mut r.1))
+            .unwrap_or_default())
+    }
+
+    /// Record `k`'s byte offset, or the end of the file.
+    fn at(&mut self, k: usize) -> Result<usize, IoError> {
+        let end = self.pos;
+        Ok(self.get(k)?.map_or(end, |r| r.0))
+    }
+
+    /// Forgets the records before `k`.
+    fn release(&mut self, k: usize) {
+        while self.base < k && !self.window.is_empty() {
+            self.window.pop_front();
+            self.base += 1;
+        }
+    }
+
+    /// Whether a table starts at record `k`: `2`, its name, `-1`, `7`.
+    fn table_at(&mut self, k: usize) -> Result<bool, IoError> {
+        Ok(self.int(k)? == Some(2)
+            && self.get(k + 1)?.is_some_and(|r| r.1.len() == 8)
+            && self.int(k + 2)? == Some(-1)
+            && self.int(k + 3)? == Some(7))
+    }
 }
 
-/// Reads the real modes of an OP2 file's `OUGV1` table.
+/// Reads the real modes of an OP2 file's `OUGV1` table. The file is streamed (read ahead on a
+/// second thread), one mode's records in memory at a time (docs/SCALING.md, "Reading another
+/// solver's matrices").
 ///
 /// # Errors
 /// [`IoError::Io`] if unreadable; [`IoError::Content`] naming the byte offset for a truncated or
@@ -99,8 +206,8 @@ fn records<'a>(bytes: &'a [u8], path: &Path) -> Result<(Vec<Record<'a>>, bool), 
 /// eigenvectors.
 pub fn read_op2(path: impl AsRef<Path>) -> Result<F06, IoError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
-    parse_op2(&bytes, path)
+    let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
+    parse(crate::stream::ReadAhead::new(file), path)
 }
 
 /// Parses OP2 bytes (`path` names them in messages).
@@ -108,20 +215,12 @@ pub fn read_op2(path: impl AsRef<Path>) -> Result<F06, IoError> {
 /// # Errors
 /// As [`read_op2`].
 pub fn parse_op2(bytes: &[u8], path: &Path) -> Result<F06, IoError> {
-    let (recs, little) = records(bytes, path)?;
-    let int = |r: &[u8]| -> Option<i32> {
-        let b: [u8; 4] = r.try_into().ok()?;
-        Some(if little {
-            i32::from_le_bytes(b)
-        } else {
-            i32::from_be_bytes(b)
-        })
-    };
-    let words = |r: &[u8]| -> Vec<[u8; 4]> {
-        r.chunks_exact(4)
-            .map(|c| c.try_into().expect("4 bytes"))
-            .collect()
-    };
+    parse(bytes, path)
+}
+
+fn parse(reader: impl Read, path: &Path) -> Result<F06, IoError> {
+    let mut recs = Records::new(reader, path)?;
+    let little = recs.little;
     let to_i = |w: [u8; 4]| {
         if little {
             i32::from_le_bytes(w)
@@ -129,72 +228,75 @@ pub fn parse_op2(bytes: &[u8], path: &Path) -> Result<F06, IoError> {
             i32::from_be_bytes(w)
         }
     };
-    let to_f = |w: [u8; 4]| {
-        f64::from(if little {
-            f32::from_le_bytes(w)
-        } else {
-            f32::from_be_bytes(w)
-        })
-    };
-    let at = |k: usize| recs.get(k).map_or(bytes.len(), |r| r.0);
     let mut modes: Vec<F06Mode> = Vec::new();
     let mut subcase: Option<i32> = None;
     let mut k = 0;
     // the header (date, tape code, label) ends at the first table: `2`, its name, `-1`, `7`
-    let table_at = |k: usize| {
-        recs.get(k).and_then(|r| int(r.1)) == Some(2)
-            && recs.get(k + 1).is_some_and(|r| r.1.len() == 8)
-            && recs.get(k + 2).and_then(|r| int(r.1)) == Some(-1)
-            && recs.get(k + 3).and_then(|r| int(r.1)) == Some(7)
-    };
-    while k < recs.len() && !table_at(k) {
+    while recs.get(k)?.is_some() && !recs.table_at(k)? {
         k += 1;
     }
-    while k + 1 < recs.len() {
-        if int(recs[k].1) != Some(2) || recs[k + 1].1.len() != 8 {
+    while recs.get(k + 1)?.is_some() {
+        recs.release(k);
+        let first = recs.int(k)?;
+        if first != Some(2) || recs.get(k + 1)?.is_none_or(|r| r.1.len() != 8) {
             // the file's last records (a table count of 0) end it
-            if int(recs[k].1) == Some(0) {
+            if first == Some(0) {
                 k += 1;
                 continue;
             }
             return Err(content(
                 path,
-                format!("byte {}: a table's name was expected here", at(k)),
+                format!("byte {}: a table's name was expected here", recs.at(k)?),
             ));
         }
-        let name = String::from_utf8_lossy(recs[k + 1].1).trim().to_string();
+        let name = recs
+            .get(k + 1)?
+            .map(|r| String::from_utf8_lossy(&r.1).trim().to_string())
+            .unwrap_or_default();
         // -1, 7, trailer, -2, 1, 0, n, header
         let layout = [Some(-1), Some(7), None, Some(-2), Some(1), Some(0)];
         for (j, want) in layout.iter().enumerate() {
-            let r = recs
-                .get(k + 2 + j)
-                .ok_or_else(|| content(path, format!("table {name} ends inside its header")))?;
+            if recs.get(k + 2 + j)?.is_none() {
+                return Err(content(
+                    path,
+                    format!("table {name} ends inside its header"),
+                ));
+            }
             if let Some(w) = want
-                && int(r.1) != Some(*w)
+                && recs.int(k + 2 + j)? != Some(*w)
             {
                 return Err(content(
                     path,
                     format!(
                         "byte {}: table {name}'s header has no marker {w} where the format puts it",
-                        r.0
+                        recs.at(k + 2 + j)?
                     ),
                 ));
             }
         }
         k += 2 + layout.len() + 2; // past the header's length and the header
-        let mut data: Vec<&[u8]> = Vec::new();
+        let modes_table = name == "OUGV1" || name == "BOUGV1";
+        let mut ident: Option<Vec<u8>> = None;
         loop {
             // -m, 1, 0, n (0 ends the table), data
-            let marker = |j: usize| recs.get(k + j).and_then(|r| int(r.1));
-            match (marker(0), marker(1), marker(2), marker(3)) {
+            let marker = (
+                recs.int(k)?,
+                recs.int(k + 1)?,
+                recs.int(k + 2)?,
+                recs.int(k + 3)?,
+            );
+            match marker {
                 (Some(m), Some(1), Some(0), Some(0)) if m < 0 => {
                     k += 4;
                     break;
                 }
                 (Some(m), Some(1), Some(0), Some(n)) if m < 0 && n > 0 => {
-                    let r = recs.get(k + 4).ok_or_else(|| {
-                        content(path, format!("table {name} ends before its data record"))
-                    })?;
+                    let Some(r) = recs.get(k + 4)? else {
+                        return Err(content(
+                            path,
+                            format!("table {name} ends before its data record"),
+                        ));
+                    };
                     if r.1.len() != 4 * n as usize {
                         return Err(content(
                             path,
@@ -206,100 +308,42 @@ pub fn parse_op2(bytes: &[u8], path: &Path) -> Result<F06, IoError> {
                             ),
                         ));
                     }
-                    data.push(r.1);
+                    if modes_table {
+                        let data = recs.take(k + 4)?;
+                        match ident.take() {
+                            None => ident = Some(data),
+                            Some(id) => {
+                                mode_records(
+                                    &id,
+                                    &data,
+                                    &name,
+                                    to_i,
+                                    &mut subcase,
+                                    &mut modes,
+                                    path,
+                                )?;
+                            }
+                        }
+                    }
                     k += 5;
+                    recs.release(k);
                 }
                 _ => {
                     return Err(content(
                         path,
                         format!(
                             "byte {}: table {name} has no record marker where the format puts one",
-                            at(k)
+                            recs.at(k)?
                         ),
                     ));
                 }
             }
         }
-        if name != "OUGV1" && name != "BOUGV1" {
-            continue;
-        }
-        for pair in data.chunks(2) {
-            let [ident, points] = pair else {
-                return Err(content(
-                    path,
-                    format!("table {name} ends with an identification record without its data"),
-                ));
-            };
-            let w = words(ident);
-            if w.len() < 10 {
-                return Err(content(
-                    path,
-                    format!(
-                        "table {name}: an identification record of {} words, not 146",
-                        w.len()
-                    ),
-                ));
-            }
-            let (approach, table, case, number) =
-                (to_i(w[0]) / 10, to_i(w[1]), to_i(w[3]), to_i(w[4]));
-            let (format, width) = (to_i(w[8]), to_i(w[9]));
-            if approach != 2 || table != 7 {
-                // displacements of another analysis: not modes
-                continue;
-            }
-            if format != 1 || width != 8 {
-                return Err(content(
-                    path,
-                    format!(
-                        "table {name}, mode {number}: format {format} with {width} words a point; femu reads real SORT1 eigenvectors (format 1, 8 words)"
-                    ),
-                ));
-            }
-            match subcase {
-                Some(s) if s != case => {
-                    return Err(content(
-                        path,
-                        format!(
-                            "table {name}: eigenvectors of subcase {case} after those of subcase {s}: femu reads the modes of one subcase"
-                        ),
-                    ));
-                }
-                _ => subcase = Some(case),
-            }
-            let eigenvalue = to_f(w[5]);
-            let mut pts = Vec::new();
-            for p in words(points).chunks(8) {
-                if p.len() != 8 {
-                    return Err(content(
-                        path,
-                        format!("table {name}, mode {number}: a point of fewer than 8 words"),
-                    ));
-                }
-                let id = to_i(p[0]) / 10;
-                match to_i(p[1]) {
-                    1 => {}
-                    t => {
-                        return Err(content(
-                            path,
-                            format!(
-                                "table {name}, mode {number}: point {id} of type {t} (a scalar or extra point); femu places modes on grid points only"
-                            ),
-                        ));
-                    }
-                }
-                let v: [f64; 6] = std::array::from_fn(|c| to_f(p[2 + c]));
-                pts.push((u64::try_from(id).unwrap_or(0), v));
-            }
-            let number = usize::try_from(number).unwrap_or(0);
-            match modes.iter_mut().find(|m| m.number == number) {
-                Some(m) => m.points.extend(pts),
-                None => modes.push(F06Mode {
-                    number,
-                    eigenvalue,
-                    points: pts,
-                    line: 0,
-                }),
-            }
+        if ident.is_some() {
+            return Err(content(
+                path,
+                format!("table {name} ends with an identification record without its data"),
+            ));
         }
     }
     if modes.is_empty() {
@@ -313,6 +357,94 @@ pub fn parse_op2(bytes: &[u8], path: &Path) -> Result<F06, IoError> {
         modes,
         without_vectors: 0,
     })
+}
+
+/// One mode of an `OUGV1` table: its identification record (146 words) and its points.
+fn mode_records(
+    ident: &[u8],
+    points: &[u8],
+    name: &str,
+    to_i: impl Fn([u8; 4]) -> i32,
+    subcase: &mut Option<i32>,
+    modes: &mut Vec<F06Mode>,
+    path: &Path,
+) -> Result<(), IoError> {
+    let word_at =
+        |p: &[u8], k: usize| -> [u8; 4] { p[4 * k..4 * k + 4].try_into().expect("4 bytes") };
+    let to_f = |w: [u8; 4]| f64::from(f32::from_bits(to_i(w) as u32));
+    if ident.len() < 40 {
+        return Err(content(
+            path,
+            format!(
+                "table {name}: an identification record of {} words, not 146",
+                ident.len() / 4
+            ),
+        ));
+    }
+    let w = |k: usize| to_i(word_at(ident, k));
+    let (approach, table, case, number) = (w(0) / 10, w(1), w(3), w(4));
+    let (format, width) = (w(8), w(9));
+    if approach != 2 || table != 7 {
+        // displacements of another analysis: not modes
+        return Ok(());
+    }
+    if format != 1 || width != 8 {
+        return Err(content(
+            path,
+            format!(
+                "table {name}, mode {number}: format {format} with {width} words a point; femu reads real SORT1 eigenvectors (format 1, 8 words)"
+            ),
+        ));
+    }
+    match *subcase {
+        Some(s) if s != case => {
+            return Err(content(
+                path,
+                format!(
+                    "table {name}: eigenvectors of subcase {case} after those of subcase {s}: femu reads the modes of one subcase"
+                ),
+            ));
+        }
+        _ => *subcase = Some(case),
+    }
+    let eigenvalue = to_f(word_at(ident, 5));
+    if !points.len().is_multiple_of(32) {
+        return Err(content(
+            path,
+            format!("table {name}, mode {number}: a point of fewer than 8 words"),
+        ));
+    }
+    // decoded straight from the record, into room reserved for its points (in huge pages where
+    // the system gives them: `crate::memory`)
+    let mut pts = Vec::with_capacity(points.len() / 32);
+    crate::memory::huge_pages(&pts);
+    for p in points.chunks_exact(32) {
+        let id = to_i(word_at(p, 0)) / 10;
+        match to_i(word_at(p, 1)) {
+            1 => {}
+            t => {
+                return Err(content(
+                    path,
+                    format!(
+                        "table {name}, mode {number}: point {id} of type {t} (a scalar or extra point); femu places modes on grid points only"
+                    ),
+                ));
+            }
+        }
+        let v: [f64; 6] = std::array::from_fn(|c| to_f(word_at(p, 2 + c)));
+        pts.push((u64::try_from(id).unwrap_or(0), v));
+    }
+    let number = usize::try_from(number).unwrap_or(0);
+    match modes.iter_mut().find(|m| m.number == number) {
+        Some(m) => m.points.extend(pts),
+        None => modes.push(F06Mode {
+            number,
+            eigenvalue,
+            points: pts,
+            line: 0,
+        }),
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -203,15 +203,15 @@ impl Builder {
     }
 
     /// Reserves room for `values` values (virtual memory, touched as they arrive, in huge pages
-    /// where the system gives them: [`huge_pages`]).
+    /// where the system gives them: [`crate::memory::huge_pages`]).
     fn reserve(&mut self, values: usize) {
         self.m.row_index.reserve(values);
         self.m.re.reserve(values);
-        huge_pages(&self.m.row_index);
-        huge_pages(&self.m.re);
+        crate::memory::huge_pages(&self.m.row_index);
+        crate::memory::huge_pages(&self.m.re);
         if let Some(im) = self.m.im.as_mut() {
             im.reserve(values);
-            huge_pages(im);
+            crate::memory::huge_pages(im);
         }
     }
 
@@ -324,86 +324,7 @@ pub fn read_op4(path: impl AsRef<Path>) -> Result<Vec<Op4Matrix>, IoError> {
     let path = path.as_ref();
     let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
     let len = file.metadata().map_or(0, |m| m.len());
-    parse(ReadAhead::new(file), path, len)
-}
-
-/// A file read ahead on another thread in chunks of 4 MiB (two in flight, recycled), so that
-/// the system's copy of the bytes overlaps their parsing (docs/SCALING.md, "Reading another
-/// solver's matrices").
-struct ReadAhead {
-    full: std::sync::mpsc::Receiver<std::io::Result<Vec<u8>>>,
-    empty: std::sync::mpsc::SyncSender<Vec<u8>>,
-    chunk: Vec<u8>,
-    pos: usize,
-    done: bool,
-}
-
-impl ReadAhead {
-    const CHUNK: usize = 4 << 20;
-
-    fn new(mut file: std::fs::File) -> Self {
-        let (full_tx, full) = std::sync::mpsc::sync_channel::<std::io::Result<Vec<u8>>>(2);
-        let (empty, empty_rx) = std::sync::mpsc::sync_channel::<Vec<u8>>(4);
-        std::thread::spawn(move || {
-            loop {
-                let mut buf = empty_rx
-                    .try_recv()
-                    .unwrap_or_else(|_| Vec::with_capacity(Self::CHUNK));
-                buf.resize(Self::CHUNK, 0);
-                match read_full(&mut file, &mut buf) {
-                    Ok(0) => return,
-                    Ok(n) => {
-                        buf.truncate(n);
-                        if full_tx.send(Ok(buf)).is_err() {
-                            return; // the reader stopped (an error in the file)
-                        }
-                    }
-                    Err(e) => {
-                        let _ = full_tx.send(Err(e));
-                        return;
-                    }
-                }
-            }
-        });
-        ReadAhead {
-            full,
-            empty,
-            chunk: Vec::new(),
-            pos: 0,
-            done: false,
-        }
-    }
-}
-
-impl Read for ReadAhead {
-    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
-        let avail = self.fill_buf()?;
-        let n = avail.len().min(out.len());
-        out[..n].copy_from_slice(&avail[..n]);
-        self.consume(n);
-        Ok(n)
-    }
-}
-
-impl BufRead for ReadAhead {
-    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
-        while self.pos == self.chunk.len() && !self.done {
-            match self.full.recv() {
-                Ok(Ok(next)) => {
-                    let used = std::mem::replace(&mut self.chunk, next);
-                    let _ = self.empty.try_send(used);
-                    self.pos = 0;
-                }
-                Ok(Err(e)) => return Err(e),
-                Err(_) => self.done = true,
-            }
-        }
-        Ok(&self.chunk[self.pos..])
-    }
-
-    fn consume(&mut self, n: usize) {
-        self.pos += n;
-    }
+    parse(crate::stream::ReadAhead::new(file), path, len)
 }
 
 /// Reads the matrices of an OP4 stream (`path` names it in messages): [`read_op4`] on any
@@ -740,7 +661,9 @@ impl<R: Read> Records<R> {
     fn next(&mut self, path: &Path) -> Result<Option<u64>, IoError> {
         let at = self.offset;
         let mut marker = [0u8; 4];
-        match read_full(&mut self.reader, &mut marker).map_err(|e| IoError::io(path, e))? {
+        match crate::stream::read_full(&mut self.reader, &mut marker)
+            .map_err(|e| IoError::io(path, e))?
+        {
             0 => return Ok(None),
             4 => {}
             _ => {
@@ -773,7 +696,8 @@ impl<R: Read> Records<R> {
             .read_to_end(&mut self.buf)
             .map_err(|e| IoError::io(path, e))?;
         let mut end = [0u8; 4];
-        let got_end = read_full(&mut self.reader, &mut end).map_err(|e| IoError::io(path, e))?;
+        let got_end = crate::stream::read_full(&mut self.reader, &mut end)
+            .map_err(|e| IoError::io(path, e))?;
         if got < n as usize || got_end < 4 {
             return Err(binary_error(
                 path,
@@ -803,20 +727,6 @@ impl<R: Read> Records<R> {
             i32::from_be_bytes(b)
         })
     }
-}
-
-/// Reads until `buf` is full or the file ends; the bytes read.
-fn read_full(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
-    let mut got = 0;
-    while got < buf.len() {
-        match r.read(&mut buf[got..]) {
-            Ok(0) => break,
-            Ok(n) => got += n,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Ok(got)
 }
 
 fn binary_error(path: &Path, at: u64, reason: String) -> IoError {
@@ -998,34 +908,3 @@ fn read_binary(mut reader: impl BufRead, path: &Path, len: u64) -> Result<Vec<Op
     }
     Ok(out)
 }
-
-/// Asks the system to back `v`'s reserved memory with transparent huge pages (Linux's
-/// `madvise(MADV_HUGEPAGE)` on the 2 MiB-aligned part of a reservation of 4 MiB or more; a
-/// system set to `madvise` gives them only so asked). Filling a gigabyte of fresh 4 KiB pages
-/// costs a fault every 4 KiB, which on these machines took longer than reading the file
-/// (docs/SCALING.md, "Reading another solver's matrices"). Only advice: the memory, its
-/// contents and what is resident (pages are still made as they are touched) are unchanged, and
-/// a refusal is ignored.
-#[cfg(target_os = "linux")]
-#[allow(unsafe_code)]
-fn huge_pages<T>(v: &Vec<T>) {
-    const HUGE: usize = 2 << 20;
-    let bytes = v.capacity() * std::mem::size_of::<T>();
-    if bytes < 2 * HUGE {
-        return;
-    }
-    let p = v.as_ptr() as usize;
-    let start = p.div_ceil(HUGE) * HUGE;
-    let end = (p + bytes) / HUGE * HUGE;
-    if end > start {
-        // SAFETY: [start, end) lies within `v`'s own allocation (its capacity), and
-        // MADV_HUGEPAGE changes only how the kernel backs those pages, not their contents or
-        // their validity.
-        unsafe {
-            libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE);
-        }
-    }
-}
-
-#[cfg(not(target_os = "linux"))]
-fn huge_pages<T>(_: &Vec<T>) {}

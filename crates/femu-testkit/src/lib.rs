@@ -3,6 +3,7 @@
 //! several crates test on, and the 3D Laplacian with its analytic spectrum.
 
 pub mod ccx;
+pub mod op2;
 pub mod op4;
 
 use femu_fem::prelude::*;
