@@ -435,3 +435,72 @@ def test_a_gmsh_stiffened_panel_updates_its_thickness(tmp_path):
     assert r["result"]["names"] == ["t:plate", "k:stiffener"]
     assert np.allclose(r["result"]["theta"], [0.1, 0.0], atol=1e-6), r["result"]["theta"]
     assert r["truth_check"]["judgement"]["verdict"] == "agrees"
+
+
+def write_op4_text(path, matrices):
+    """Nastran's OUTPUT4 text format, written here from its description (a third writer, beside
+    femu's test kit and Nastran's own files): `4I8,A8` headers and `1P,3E23.16` values, each
+    column's strings of consecutive rows behind one-word headers IROW + 65536 (L + 1)."""
+    lines = []
+    for name, n, columns in matrices:
+        lines.append(f"{n:8d}{n:8d}{6:8d}{2:8d}{name:<8s}1P,3E23.16")
+        for j, col in enumerate(columns):
+            if not col:
+                continue
+            strings = []
+            for r, v in sorted(col):
+                if strings and strings[-1][0] + len(strings[-1][1]) == r:
+                    strings[-1][1].append(v)
+                else:
+                    strings.append((r, [v]))
+            nw = sum(1 + 2 * len(vals) for _, vals in strings)
+            lines.append(f"{j + 1:8d}{0:8d}{nw:8d}")
+            for first, vals in strings:
+                lines.append(f"{first + 1 + 65536 * (2 * len(vals) + 1):12d}")
+                for k in range(0, len(vals), 3):
+                    lines.append("".join(f"{v:23.16E}" for v in vals[k:k + 3]))
+        lines.append(f"{n + 1:8d}{1:8d}{1:8d}")
+        lines.append(f"{1.0:23.16E}")
+    path.write_text("\n".join(lines) + "\n")
+
+
+def mtx_columns(path):
+    """The columns of a symmetric MatrixMarket coordinate file (one triangle), both triangles."""
+    rows = [l for l in path.read_text().splitlines() if l and not l.startswith("%")]
+    n = int(rows[0].split()[0])
+    cols = [[] for _ in range(n)]
+    for l in rows[1:]:
+        i, j, v = l.split()
+        i, j, v = int(i) - 1, int(j) - 1, float(v)
+        cols[j].append((i, v))
+        if i != j:
+            cols[i].append((j, v))
+    return n, cols
+
+
+def test_nastran_op4_matrices_are_a_model_everywhere(case):
+    """The bar's K and M as Nastran's OUTPUT4 text (KAA, MAA) with their DOF table are a model
+    for the command line and Python: the same estimate as from the MatrixMarket files they were
+    written from (the values' 17 digits are the doubles'), and `femu info` lists the matrices."""
+    run = lambda *args: subprocess.run([str(FEMU), *map(str, args), "--quiet"], cwd=case,
+                                       capture_output=True, text=True)
+    done = run("matrices", "bar.inp", "--out", "bar")
+    assert done.returncode == 0, done.stderr
+    n, k = mtx_columns(case / "bar_K.mtx")
+    _, m = mtx_columns(case / "bar_M.mtx")
+    write_op4_text(case / "op4bar.op4", [("KAA", n, k), ("MAA", n, m)])
+    (case / "op4bar_dofs.csv").write_text((case / "bar_dofs.csv").read_text())
+    info = subprocess.run([str(FEMU), "info", "op4bar.op4"], cwd=case, capture_output=True,
+                          text=True)
+    assert info.returncode == 0, info.stderr
+    assert f"matrix KAA: {n} x {n}, symmetric" in info.stdout, info.stdout
+    done = run("estimate", "op4bar.op4", "test.csv", "--count", 16, "--nodes", "bar_nodes.csv",
+               "--json", "estimate_op4.json")
+    assert done.returncode == 0, done.stderr
+    done = run("estimate", "bar_K.mtx", "test.csv", "--count", 16, "--json", "estimate_mtx.json")
+    assert done.returncode == 0, done.stderr
+    model = femu.read_model(case / "op4bar.op4", nodes=case / "bar_nodes.csv")
+    py = femu.estimate(model, femu.read_test(case / "test.csv", model), count=16)
+    assert_same(py["assessments"], read(case / "estimate_op4.json"))
+    for a, b in zip(py["assessments"], read(case / "estimate_mtx.json")):
+        assert np.allclose(a["frequency_interval_hz"], b["frequency_interval_hz"], rtol=1e-12)
