@@ -728,3 +728,221 @@ fn offset_layers_as_a_nastran_deck() {
         }
     }
 }
+
+/// Laminates (PCOMP, PCOMPG) as classical lamination theory makes them: a simply supported
+/// square plate of a cross-ply `[0/90]s` of MAT8 plies without transverse shear flexibility
+/// (blank G1Z, G2Z) converging on 16 and 32 elements a side to Navier's series for a specially orthotropic plate, its bending
+/// stiffnesses computed by hand here (`D11 = 2/3 (Q11 ((t/2)^3 - (t/4)^3) + Q22 (t/4)^3)`, ...);
+/// the same laminate as all four plies, as `LAM = SYM`, as a PCOMPG and as the PSHELL with MAT2
+/// membrane `A/T` and bending `12 D/T^3` written by hand give the same `K` and `M` to 1e-13 of
+/// their largest entries; an
+/// angle-ply `[45/-45]s` of plies of two densities, whose `D16`, `D26` are not zero, against its
+/// PSHELL + MAT2 equivalent from the rotated stiffnesses' closed forms (`Qbar11 = Q11 c^4 + 2
+/// (Q12 + 2 Q66) s^2 c^2 + Q22 s^4`, ...) and the mean density.
+#[test]
+fn laminates_as_classical_lamination_theory_makes_them() {
+    let (a, t): (f64, f64) = (1.0, 0.008);
+    let assembled = |property: &str, n: usize| {
+        let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
+        let g = |i: usize, j: usize| 1 + i + (n + 1) * j;
+        for j in 0..=n {
+            for i in 0..=n {
+                s.push_str(&format!(
+                    "GRID,{},,{:.10},{:.10},0.\n",
+                    g(i, j),
+                    a * i as f64 / n as f64,
+                    a * j as f64 / n as f64
+                ));
+                let comps = match (i == 0 || i == n, j == 0 || j == n) {
+                    (true, true) => "12345",
+                    (true, false) => "1234",
+                    (false, true) => "1235",
+                    _ => "",
+                };
+                if !comps.is_empty() {
+                    s.push_str(&format!("SPC1,1,{comps},{}\n", g(i, j)));
+                }
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                s.push_str(&format!(
+                    "CQUAD4,{},1,{},{},{},{}\n",
+                    1 + i + n * j,
+                    g(i, j),
+                    g(i + 1, j),
+                    g(i + 1, j + 1),
+                    g(i, j + 1)
+                ));
+            }
+        }
+        s.push_str(property);
+        s.push_str("ENDDATA\n");
+        let d = parse_bdf(&s, "laminate.bdf", &BdfOptions::default()).unwrap();
+        d.model.assemble(d.mass).unwrap()
+    };
+    let mesh = |property: &str, n: usize| -> Vec<f64> {
+        assembled(property, n)
+            .modes(Which::Lowest(3), &EigenOptions::default())
+            .unwrap()
+            .values
+    };
+    let plate = |property: &str| mesh(property, 16);
+    // two sections the same: K and M entry by entry, to round-off of the largest entry
+    let same = |x: &str, y: &str| {
+        let (p, q) = (assembled(x, 4), assembled(y, 4));
+        for (a, b) in [(&p.k, &q.k), (&p.m, &q.m)] {
+            let scale = a.data().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert_eq!(a.nnz(), b.nnz());
+            for (i, j, v) in femu_sparse::csc::entries(a) {
+                let w = b.get(i, j).copied().unwrap_or(0.0);
+                assert!(
+                    (v - w).abs() <= 1e-13 * scale,
+                    "({i}, {j}): {v} vs {w}\n{x}\n{y}"
+                );
+            }
+        }
+    };
+    let (e1, e2, nu12, g12, rho) = (140e9, 10e9, 0.3, 5e9, 1600.0);
+    let mat8 = format!("MAT8,8,{e1:e},{e2:e},{nu12},{g12:e},,,{rho}\n");
+    let den = 1.0 - nu12 * nu12 * e2 / e1;
+    let (q11, q12, q22, q66) = (e1 / den, nu12 * e2 / den, e2 / den, g12);
+    let h = t / 4.0;
+    // [0/90/90/0]: the 0-degree plies from |z| = t/4 to t/2, the 90-degree ones inside
+    let outer = 2.0 / 3.0 * ((t / 2.0).powi(3) - h.powi(3));
+    let inner = 2.0 / 3.0 * h.powi(3);
+    let (d11, d22) = (q11 * outer + q22 * inner, q22 * outer + q11 * inner);
+    let (d12, d66) = (q12 * t.powi(3) / 12.0, q66 * t.powi(3) / 12.0);
+    let mut navier: Vec<f64> = (1..5)
+        .flat_map(|m| (1..5).map(move |k| (m as f64 / a, k as f64 / a)))
+        .map(|(p, r)| {
+            PI.powi(4)
+                * (d11 * p.powi(4) + 2.0 * (d12 + 2.0 * d66) * p * p * r * r + d22 * r.powi(4))
+                / (rho * t)
+        })
+        .collect();
+    navier.sort_by(f64::total_cmp);
+    let laminate = format!("PCOMP,1\n,8,{h},0.,,8,{h},90.\n,8,{h},90.,,8,{h},0.\n{mat8}");
+    let all = plate(&laminate);
+    // MITC4 converges from above at O(h^2) (16 and 32 elements a side: 0.93 % and 0.22 %, 3.0 %
+    // and 0.73 % measured), and Richardson's extrapolation of the two meets Navier to 5e-4
+    let fine = mesh(&laminate, 32);
+    for k in 0..2 {
+        let (coarse_err, fine_err) = (all[k] / navier[k] - 1.0, fine[k] / navier[k] - 1.0);
+        let extrapolated = (4.0 * fine[k] - all[k]) / 3.0;
+        assert!(
+            fine_err > 0.0
+                && fine_err < [3e-3, 1e-2][k]
+                && coarse_err > 3.5 * fine_err
+                && (extrapolated / navier[k] - 1.0).abs() < 1e-3,
+            "{all:?}, {fine:?} against Navier's {navier:?}"
+        );
+    }
+    // blank MID and T take the ply before's; SYM mirrors; PCOMPG lists one ply a line
+    let sym = format!("PCOMP,1,,,,,,,SYM\n,8,{h},0.,,,,90.\n{mat8}");
+    let global = format!("PCOMPG,1\n,1,8,{h},0.\n,2,8,{h},90.\n,3,8,{h},90.\n,4,8,{h},0.\n{mat8}");
+    let equivalent = format!(
+        "PSHELL,1,2,{t},3\nMAT2,2,{:.16e},{:.16e},0.,{:.16e},0.,{:.16e},{rho}\nMAT2,3,{:.16e},{:.16e},0.,{:.16e},0.,{:.16e},{rho}\n",
+        (q11 + q22) / 2.0,
+        q12,
+        (q11 + q22) / 2.0,
+        q66,
+        12.0 * d11 / t.powi(3),
+        12.0 * d12 / t.powi(3),
+        12.0 * d22 / t.powi(3),
+        12.0 * d66 / t.powi(3)
+    );
+    for other in [&sym, &global, &equivalent] {
+        same(&laminate, other);
+    }
+    // [45/-45/-45/45] of plies of densities 1600 and 2000 (outer, inner)
+    let (c, s) = (0.5f64.sqrt(), 0.5f64.sqrt());
+    let qbar = |sign: f64| {
+        let (c, s) = (c, sign * s);
+        let q11b = q11 * c.powi(4) + 2.0 * (q12 + 2.0 * q66) * s * s * c * c + q22 * s.powi(4);
+        let q12b = (q11 + q22 - 4.0 * q66) * s * s * c * c + q12 * (s.powi(4) + c.powi(4));
+        let q22b = q11 * s.powi(4) + 2.0 * (q12 + 2.0 * q66) * s * s * c * c + q22 * c.powi(4);
+        let q16b =
+            (q11 - q12 - 2.0 * q66) * s * c.powi(3) + (q12 - q22 + 2.0 * q66) * s.powi(3) * c;
+        let q26b =
+            (q11 - q12 - 2.0 * q66) * s.powi(3) * c + (q12 - q22 + 2.0 * q66) * s * c.powi(3);
+        let q66b =
+            (q11 + q22 - 2.0 * q12 - 2.0 * q66) * s * s * c * c + q66 * (s.powi(4) + c.powi(4));
+        [q11b, q12b, q16b, q22b, q26b, q66b]
+    };
+    let (p45, m45) = (qbar(1.0), qbar(-1.0));
+    let membrane: Vec<f64> = (0..6).map(|k| (p45[k] + m45[k]) / 2.0).collect();
+    let bending: Vec<f64> = (0..6)
+        .map(|k| 12.0 / t.powi(3) * (p45[k] * outer + m45[k] * inner))
+        .collect();
+    let mean_rho = (rho + 2000.0) / 2.0;
+    let angle = format!(
+        "PCOMP,1,,,,,,,SYM\n,8,{h},45.,,9,{h},-45.\n{mat8}MAT8,9,{e1:e},{e2:e},{nu12},{g12:e},,,2000.\n"
+    );
+    let f = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:.16e}"))
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let angle_equivalent = format!(
+        "PSHELL,1,2,{t},3\nMAT2,2,{},{mean_rho}\nMAT2,3,{},{mean_rho}\n",
+        f(&membrane),
+        f(&bending)
+    );
+    assert!(
+        bending[2].abs() > 0.05 * bending[0],
+        "D16 is not small: {bending:?}"
+    );
+    same(&angle, &angle_equivalent);
+    // refused: unsymmetric, membrane-only, plies of different shear, a ply of no thickness
+    let refused = |property: &str| -> String {
+        let s = format!(
+            "BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,1.,1.,0.\nGRID,4,,0.,1.,0.\nCQUAD4,1,1,1,2,3,4\n{property}{mat8}MAT8,9,{e1:e},{e2:e},{nu12},{g12:e},5.+9,3.+9,{rho}\nENDDATA\n"
+        );
+        parse_bdf(&s, "bad.bdf", &BdfOptions::default())
+            .map(|_| ())
+            .unwrap_err()
+            .to_string()
+    };
+    let e = refused(&format!("PCOMP,1\n,8,{h},0.,,8,{h},90.\n"));
+    assert!(
+        e.contains("bad.bdf:7") && e.contains("not symmetric about its mid-plane"),
+        "{e}"
+    );
+    let e = refused(&format!("PCOMP,1,,,,,,,MEM\n,8,{h},0.\n"));
+    assert!(e.contains("LAM = MEM"), "{e}");
+    let e = refused(&format!("PCOMP,1,,,,,,,SYM\n,9,{h},0.,,9,{h},90.\n"));
+    assert!(e.contains("transverse shear moduli differ"), "{e}");
+    let e = refused("PCOMP,1\n,8,0.,0.\n");
+    assert!(e.contains("ply 1 has thickness 0"), "{e}");
+}
+
+/// pyNastran's `pcomp_cquad4.bdf` (BSD; MSC Nastran ran it, its OP2 is in pyNastran's models):
+/// fields separated by tabs, which move to the next field of 8 columns, and a PCOMP of four
+/// plies of one MAT1, 0.1 thick each. An isotropic laminate is the homogeneous plate (`A = Q T`,
+/// `D = Q T^3 / 12`): its `K` and `M` equal those of the deck with `PSHELL,1,1,0.4,1,,1` in place
+/// of the PCOMP, entry by entry to 1e-13 of the largest.
+#[test]
+fn a_tabbed_deck_s_isotropic_laminate_is_the_homogeneous_plate() {
+    let path = fixture("pcomp_cquad4.bdf");
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.contains("PCOMP\t1") && text.contains("\t1\t0.1"));
+    let laminate = read_bdf(&path, &BdfOptions::default()).unwrap();
+    let start = text.find("PCOMP\t1").unwrap();
+    let end = text.find("$MATERIALS").unwrap();
+    let homogeneous = format!("{}PSHELL,1,1,0.4,1,,1\n{}", &text[..start], &text[end..]);
+    let plate = parse_bdf(&homogeneous, &path, &BdfOptions::default()).unwrap();
+    let (p, q) = (
+        laminate.model.assemble(MassKind::Consistent).unwrap(),
+        plate.model.assemble(MassKind::Consistent).unwrap(),
+    );
+    assert_eq!(p.k.rows(), 6 * 36 - 36);
+    for (a, b) in [(&p.k, &q.k), (&p.m, &q.m)] {
+        let scale = a.data().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (i, j, v) in femu_sparse::csc::entries(a) {
+            let w = b.get(i, j).copied().unwrap_or(0.0);
+            assert!((v - w).abs() <= 1e-13 * scale, "({i}, {j}): {v} vs {w}");
+        }
+    }
+}

@@ -2,7 +2,8 @@
 //! small field (10 fields of 8 characters), large field (`NAME*`: 16-character data fields, four a
 //! line, continued by a line starting with `*`) and free field (commas; a free-field line holds
 //! the name, eight data fields and the continuation label, four data fields when large), `$`
-//! comments, `INCLUDE`. A continuation line starts with `+`, `*` or a blank field 1; when its
+//! comments, `INCLUDE`; a tab in a fixed-field line moves to the next field of 8 columns (the
+//! tab stops Nastran reads such decks with). A continuation line starts with `+`, `*` or a blank field 1; when its
 //! field 1 carries a label (`+A001`), it continues the card whose field 10 holds that label,
 //! wherever that card is, as Nastran pairs them; a bare `+`, `*` or blank continues the card above.
 
@@ -184,7 +185,19 @@ pub(super) fn split(l: &str) -> Vec<Physical> {
         }
         return out;
     }
-    let chars: Vec<char> = l.chars().collect();
+    // a tab moves to the next field of 8 columns (the tab stops Nastran, and pyNastran's
+    // `expandtabs`, read small-field lines with)
+    let mut chars: Vec<char> = Vec::with_capacity(l.len());
+    for ch in l.chars() {
+        if ch == '\t' {
+            chars.push(' ');
+            while !chars.len().is_multiple_of(8) {
+                chars.push(' ');
+            }
+        } else {
+            chars.push(ch);
+        }
+    }
     let cut = |a: usize, b: usize| -> String {
         chars
             .get(a.min(chars.len())..b.min(chars.len()))

@@ -115,7 +115,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("CTRIA6", "shells"),
     ("CQUADR", "shells"),
     ("CTRIAR", "shells"),
-    ("PCOMP", "shells"),
     ("CONM1", "general mass matrices"),
     ("CELAS3", "scalar springs on scalar points"),
     ("CELAS4", "scalar springs on scalar points"),

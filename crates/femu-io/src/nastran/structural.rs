@@ -36,7 +36,7 @@ pub(super) const ELEMENTS: &[&str] = &[
 ];
 /// The structural property card names.
 pub(super) const PROPERTIES: &[&str] = &[
-    "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PELAS", "PBUSH", "PSHELL",
+    "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PELAS", "PBUSH", "PSHELL", "PCOMP", "PCOMPG",
 ];
 
 impl<'a> StructuralCards<'a> {
@@ -732,16 +732,29 @@ pub(super) fn add_structural(
             }
             "CQUAD4" | "CTRIA3" => {
                 let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
-                let p = prop(pid, &["PSHELL"])?;
+                let p = prop(pid, &["PSHELL", "PCOMP", "PCOMPG"])?;
                 let corners = if c.name == "CQUAD4" { 4 } else { 3 };
                 let nodes = (2..2 + corners)
                     .map(|i| node(model, c.id(i, "G")?, c, "a corner"))
                     .collect::<Result<Vec<_>, _>>()?;
                 // THETA/MCID and ZOFFS follow the corners: fields 8 and 9 of a CQUAD4, 7 and 8
                 // of a CTRIA3
-                let mut shell = pshell(p, pid, ctx)?;
-                if let Some(z) = zoffs(c, corners + 3, shell.t)? {
-                    shell.offset = z;
+                let (mut shell, laminate) = if p.name == "PSHELL" {
+                    (pshell(p, pid, ctx)?, None)
+                } else {
+                    let (s, shift) = pcomp(p, pid, ctx)?;
+                    (s, Some(shift))
+                };
+                let element_offset = zoffs(c, corners + 3, shell.t)?;
+                match laminate {
+                    // a laminate's mid-plane is `Z0 + T/2` from its reference plane, which the
+                    // element's ZOFFS moves from the grids
+                    Some(shift) => shell.offset = shift + element_offset.unwrap_or(0.0),
+                    None => {
+                        if let Some(z) = element_offset {
+                            shell.offset = z;
+                        }
+                    }
                 }
                 if let Some(m) = &mut shell.material {
                     let x: Vec<[f64; 3]> =
@@ -882,6 +895,184 @@ fn pshell(
         }),
         offset,
     })
+}
+
+/// A PCOMP or PCOMPG (QRG PCOMP: `PID Z0 NSM SB FT TREF GE LAM`, then four fields a ply `MIDi
+/// Ti THETAi SOUTi`; PCOMPG: one line a ply, `GPLYIDi MIDi Ti THETAi SOUTi`) as the shell section
+/// of classical lamination theory (docs/MATH.md, "Laminates"): each ply's plane-stress material
+/// `Q` (MAT1, MAT2 or MAT8, [`plane_material`]) turned by its THETA from the element's material
+/// axis, `Qbar = T^T Q T`, stacked from the bottom surface (`z = -T/2` from the laminate's
+/// mid-plane, `T` the plies' total): `A = sum Qbar t`, `B = sum Qbar (z_k^2 - z_(k-1)^2) / 2`,
+/// `D = sum Qbar (z_k^3 - z_(k-1)^3) / 3`, the section's membrane material `A / T` and bending
+/// material `12 D / T^3`, its mass per area `sum rho t + NSM`. `LAM = SYM` lists the plies of
+/// one half, mirrored about the mid-plane. Returns the section and the mid-plane's offset from
+/// the reference plane, `Z0 + T/2` (blank Z0: `-T/2`, no offset).
+///
+/// Refused, naming the property: `LAM` = MEM, BEND, SMEAR or SMCORE; a laminate whose `B` is not
+/// zero (unsymmetric: its membrane-bending coupling is not modelled, as PSHELL's MID4 is not);
+/// plies whose transverse shear moduli, turned to the material axes, differ (the laminate's
+/// shear stiffness then depends on the stacking in a way femu does not compute: give the plies
+/// blank MAT8 G1Z and G2Z, no shear flexibility, or an equivalent PSHELL with MID3), or where
+/// some plies have them and some do not; a ply of no thickness or of another material card.
+fn pcomp(
+    p: &Card,
+    pid: u64,
+    ctx: &mut Context<'_, '_>,
+) -> Result<(femu_fem::shell::Shell, f64), IoError> {
+    let lam = p.field(7).to_ascii_uppercase();
+    if !lam.is_empty() && lam != "SYM" {
+        return Err(p.err(format!(
+            "{pid}: LAM = {lam}: femu reads laminates of all plies (blank) or of one half mirrored (SYM); a membrane-only or bending-only laminate, or a smeared one, is not built"
+        )));
+    }
+    // (MID, T, THETA, line-less card field) of each listed ply, blanks taken from the ply before
+    let (first, stride) = if p.name == "PCOMPG" { (9, 8) } else { (8, 4) };
+    let mut plies: Vec<(u64, f64, f64)> = Vec::new();
+    let mut i = first;
+    while i < p.fields.len() {
+        let blank = (0..3).all(|k| p.field(i + k).is_empty());
+        if blank {
+            i += stride;
+            continue;
+        }
+        let mid = match p.int(i, "MID")? {
+            Some(m) if m > 0 => m as u64,
+            Some(m) => return Err(p.err(format!("{pid}: ply material {m} is not an id"))),
+            None => plies
+                .last()
+                .map(|q| q.0)
+                .ok_or_else(|| p.err(format!("{pid}: the first ply needs its material")))?,
+        };
+        let t = match p.real(i + 1, "T")? {
+            Some(t) => t,
+            None => plies
+                .last()
+                .map(|q| q.1)
+                .ok_or_else(|| p.err(format!("{pid}: the first ply needs its thickness")))?,
+        };
+        if !(t > 0.0) {
+            return Err(p.err(format!(
+                "{pid}: ply {} has thickness {t}; a ply needs a positive one",
+                plies.len() + 1
+            )));
+        }
+        let theta = p.real(i + 2, "THETA")?.unwrap_or(0.0);
+        plies.push((mid, t, theta));
+        i += stride;
+    }
+    if plies.is_empty() {
+        return Err(p.err(format!("{pid}: no ply")));
+    }
+    if lam == "SYM" {
+        let mirrored: Vec<_> = plies.iter().rev().copied().collect();
+        plies.extend(mirrored);
+    }
+    let total: f64 = plies.iter().map(|q| q.1).sum();
+    let mut a = [[0.0; 3]; 3];
+    let mut b = [[0.0; 3]; 3];
+    let mut d = [[0.0; 3]; 3];
+    let mut mass = 0.0;
+    let mut shears: Vec<Option<[[f64; 2]; 2]>> = Vec::new();
+    let mut z0 = -total / 2.0;
+    for &(mid, t, theta) in &plies {
+        let m = ctx.materials.get(&mid).copied().ok_or_else(|| {
+            p.err(format!(
+                "{pid} refers to material {mid}, which the deck does not define"
+            ))
+        })?;
+        let q = plane_material(m, pid, p)?;
+        let (sn, cs) = theta.to_radians().sin_cos();
+        // strains (eps_x, eps_y, gamma_xy) in the material axes to the ply's (1, 2)
+        let tr = [
+            [cs * cs, sn * sn, cs * sn],
+            [sn * sn, cs * cs, -cs * sn],
+            [-2.0 * cs * sn, 2.0 * cs * sn, cs * cs - sn * sn],
+        ];
+        let z1 = z0 + t;
+        for r in 0..3 {
+            for c in 0..3 {
+                let mut qb = 0.0;
+                for k in 0..3 {
+                    for l in 0..3 {
+                        qb += tr[k][r] * q[k][l] * tr[l][c];
+                    }
+                }
+                a[r][c] += qb * t;
+                b[r][c] += qb * (z1 * z1 - z0 * z0) / 2.0;
+                d[r][c] += qb * (z1.powi(3) - z0.powi(3)) / 3.0;
+            }
+        }
+        mass += shell_density(m, pid, p)? * t;
+        // transverse shear (gamma_1z, gamma_2z) of the ply to the material axes
+        shears.push(shear_material(m, pid, p)?.map(|g| {
+            let rot = [[cs, sn], [-sn, cs]];
+            let mut gb = [[0.0; 2]; 2];
+            for r in 0..2 {
+                for c in 0..2 {
+                    for k in 0..2 {
+                        for l in 0..2 {
+                            gb[r][c] += rot[k][r] * g[k][l] * rot[l][c];
+                        }
+                    }
+                }
+            }
+            gb
+        }));
+        z0 = z1;
+    }
+    let a_max = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let b_max = b.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    if b_max > 1e-9 * a_max * total {
+        return Err(p.err(format!(
+            "{pid}: the laminate is not symmetric about its mid-plane (its membrane-bending coupling B reaches {:.2e} of A T): femu's shells do not model that coupling, as they do not model PSHELL's MID4",
+            b_max / (a_max * total)
+        )));
+    }
+    let shear = match shears.as_slice() {
+        [first, rest @ ..] => {
+            let same = |x: &[[f64; 2]; 2], y: &[[f64; 2]; 2]| {
+                let scale = x.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+                x.iter()
+                    .flatten()
+                    .zip(y.iter().flatten())
+                    .all(|(u, v)| (u - v).abs() <= 1e-9 * scale)
+            };
+            match first {
+                None if rest.iter().all(Option::is_none) => None,
+                Some(g) if rest.iter().all(|r| r.as_ref().is_some_and(|h| same(g, h))) => Some(*g),
+                _ => {
+                    return Err(p.err(format!(
+                        "{pid}: its plies' transverse shear moduli differ (turned to the material axes, or given for some plies and not others): the laminate's shear stiffness then depends on the stacking, which femu does not compute (give the plies' MAT8 blank G1Z and G2Z for no shear flexibility, or an equivalent PSHELL with MID3)"
+                    )));
+                }
+            }
+        }
+        [] => None,
+    };
+    let scale = |m: &[[f64; 3]; 3], f: f64| m.map(|r| r.map(|v| v * f));
+    let z0_field = p.real(1, "Z0")?;
+    let shift = z0_field.map_or(0.0, |z| z + total / 2.0);
+    let nsm = p.real(2, "NSM")?.unwrap_or(0.0) * ctx.wtmass;
+    Ok((
+        femu_fem::shell::Shell {
+            e: 0.0,
+            nu: 0.0,
+            rho: mass / total * ctx.wtmass,
+            t: total,
+            bending: 1.0,
+            // PSHELL's default TS/T on the plies' one transverse shear material
+            shear: shear.map(|_| 0.833_333),
+            nsm,
+            material: Some(femu_fem::shell::ShellMaterial {
+                membrane: scale(&a, 1.0 / total),
+                bending: scale(&d, 12.0 / total.powi(3)),
+                shear: shear.unwrap_or([[0.0; 2]; 2]),
+                axis: [1.0, 0.0, 0.0],
+            }),
+            offset: 0.0,
+        },
+        shift,
+    ))
 }
 
 /// A ZOFFS field (QRG CQUAD4, PSHELL): the reference plane's offset from the grids along the
