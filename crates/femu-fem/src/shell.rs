@@ -57,6 +57,162 @@ pub struct ShellMaterial {
     pub axis: [f64; 3],
 }
 
+/// One ply of a laminate ([`laminate`]): its plane-stress material `q` (Pa, on `(eps_1, eps_2,
+/// gamma_12)` in the ply's axes), its transverse shear material (Pa, on `(gamma_1z, gamma_2z)`;
+/// `None`: no shear flexibility), its density, thickness and angle (degrees) from the section's
+/// material axis about the normal.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ply {
+    /// Plane-stress material in the ply's axes.
+    pub q: [[f64; 3]; 3],
+    /// Transverse shear material in the ply's axes, or none (rigid in shear).
+    pub shear: Option<[[f64; 2]; 2]>,
+    /// Density (kg/m^3).
+    pub rho: f64,
+    /// Thickness (m).
+    pub t: f64,
+    /// Angle of the ply's first axis from the section's material axis (degrees).
+    pub theta: f64,
+}
+
+/// Why a stack of plies is not a section femu builds ([`laminate`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum LaminateError {
+    /// No ply, or a ply without a positive thickness (its index).
+    Ply(usize),
+    /// The laminate is not symmetric about its mid-plane: its membrane-bending coupling `B`
+    /// reaches this fraction of `A T`.
+    Unsymmetric(f64),
+    /// The plies' transverse shear materials, turned to the material axes, differ (or some plies
+    /// have one and some not).
+    Shear,
+}
+
+impl std::fmt::Display for LaminateError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LaminateError::Ply(k) => write!(f, "ply {} has no positive thickness", k + 1),
+            LaminateError::Unsymmetric(r) => write!(
+                f,
+                "the laminate is not symmetric about its mid-plane (its membrane-bending coupling B reaches {r:.2e} of A T): femu's shells do not model that coupling (Nastran's PSHELL MID4)"
+            ),
+            LaminateError::Shear => write!(
+                f,
+                "its plies' transverse shear moduli differ (turned to the material axes, or given for some plies and not others): the laminate's shear stiffness then depends on the stacking, which femu does not compute (give the plies no transverse shear flexibility, Nastran's blank MAT8 G1Z and G2Z, or an equivalent homogeneous section)"
+            ),
+        }
+    }
+}
+
+/// The shell section of a laminate by classical lamination theory (docs/MATH.md, "Laminates"):
+/// each ply's `Qbar = T^T Q T` turned by its angle (`T` the strain rotation of [`ShellMaterial`]'s
+/// element turn), stacked from the bottom surface (`z_0 = -T/2` from the mid-plane, `T` the plies'
+/// total), `A = sum Qbar t`, `B = sum Qbar (z_k^2 - z_(k-1)^2) / 2`, `D = sum Qbar (z_k^3 -
+/// z_(k-1)^3) / 3`: the anisotropic section of thickness `T` with membrane material `A / T`,
+/// bending material `12 D / T^3`, the plies' one transverse shear material with the homogeneous
+/// section's factor 5/6 (or none), density `sum rho t / T`; no non-structural mass and no offset
+/// (the caller's). The material axis is the basic x axis until the element sets it.
+///
+/// # Errors
+/// [`LaminateError`]: no ply or one of no thickness; `B` above `1e-9 A T` (unsymmetric); plies of
+/// different transverse shear.
+pub fn laminate(plies: &[Ply]) -> Result<Shell, LaminateError> {
+    if plies.is_empty() {
+        return Err(LaminateError::Ply(0));
+    }
+    if let Some(k) = plies.iter().position(|p| !(p.t > 0.0 && p.t.is_finite())) {
+        return Err(LaminateError::Ply(k));
+    }
+    let total: f64 = plies.iter().map(|q| q.t).sum();
+    let mut a = [[0.0; 3]; 3];
+    let mut b = [[0.0; 3]; 3];
+    let mut d = [[0.0; 3]; 3];
+    let mut mass = 0.0;
+    let mut shears: Vec<Option<[[f64; 2]; 2]>> = Vec::with_capacity(plies.len());
+    let mut z0 = -total / 2.0;
+    for ply in plies {
+        let (sn, cs) = ply.theta.to_radians().sin_cos();
+        // strains (eps_x, eps_y, gamma_xy) in the material axes to the ply's (1, 2)
+        let tr = [
+            [cs * cs, sn * sn, cs * sn],
+            [sn * sn, cs * cs, -cs * sn],
+            [-2.0 * cs * sn, 2.0 * cs * sn, cs * cs - sn * sn],
+        ];
+        let z1 = z0 + ply.t;
+        for r in 0..3 {
+            for c in 0..3 {
+                let mut qb = 0.0;
+                for k in 0..3 {
+                    for l in 0..3 {
+                        qb += tr[k][r] * ply.q[k][l] * tr[l][c];
+                    }
+                }
+                a[r][c] += qb * ply.t;
+                b[r][c] += qb * (z1 * z1 - z0 * z0) / 2.0;
+                d[r][c] += qb * (z1.powi(3) - z0.powi(3)) / 3.0;
+            }
+        }
+        mass += ply.rho * ply.t;
+        // (gamma_1z, gamma_2z) of the ply from the material axes' (gamma_xz, gamma_yz)
+        let rot = [[cs, sn], [-sn, cs]];
+        shears.push(ply.shear.map(|g| {
+            let mut gb = [[0.0; 2]; 2];
+            for r in 0..2 {
+                for c in 0..2 {
+                    for k in 0..2 {
+                        for l in 0..2 {
+                            gb[r][c] += rot[k][r] * g[k][l] * rot[l][c];
+                        }
+                    }
+                }
+            }
+            gb
+        }));
+        z0 = z1;
+    }
+    let largest = |m: &[[f64; 3]; 3]| m.iter().flatten().fold(0.0f64, |x, v| x.max(v.abs()));
+    let coupling = largest(&b) / (largest(&a) * total);
+    if coupling > 1e-9 {
+        return Err(LaminateError::Unsymmetric(coupling));
+    }
+    let same = |x: &[[f64; 2]; 2], y: &[[f64; 2]; 2]| {
+        let scale = x.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        x.iter()
+            .flatten()
+            .zip(y.iter().flatten())
+            .all(|(u, v)| (u - v).abs() <= 1e-9 * scale)
+    };
+    let shear = match shears[0] {
+        None if shears.iter().all(Option::is_none) => None,
+        Some(g)
+            if shears
+                .iter()
+                .all(|s| s.as_ref().is_some_and(|h| same(&g, h))) =>
+        {
+            Some(g)
+        }
+        _ => return Err(LaminateError::Shear),
+    };
+    let scale = |m: &[[f64; 3]; 3], f: f64| m.map(|r| r.map(|v| v * f));
+    Ok(Shell {
+        e: 0.0,
+        nu: 0.0,
+        rho: mass / total,
+        t: total,
+        bending: 1.0,
+        // the homogeneous section's factor on the plies' one transverse shear material
+        shear: shear.map(|_| 5.0 / 6.0),
+        nsm: 0.0,
+        material: Some(ShellMaterial {
+            membrane: scale(&a, 1.0 / total),
+            bending: scale(&d, 12.0 / total.powi(3)),
+            shear: shear.unwrap_or([[0.0; 2]; 2]),
+            axis: [1.0, 0.0, 0.0],
+        }),
+        offset: 0.0,
+    })
+}
+
 /// The section's membrane, bending and transverse shear matrices in the element's axes `e` (rows
 /// `e1`, `e2`, `n`) with the parts scaled by `sc`, and the shear modulus of the drilling
 /// stiffness.

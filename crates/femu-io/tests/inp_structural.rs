@@ -372,3 +372,142 @@ fn shell_section_offsets_make_one_plate_of_two() {
         "{same_side:?} against {want:?}"
     );
 }
+
+/// `*SHELL SECTION, COMPOSITE` of `*ELASTIC, TYPE=LAMINA` layers as Abaqus defines them (one data
+/// line a layer: thickness, section points, material, angle; `SYMMETRIC` the lower half): NAFEMS
+/// FV16's cantilevered plate as a `[45/-45]s` of two laminae (densities 1600 and 2000, `G13 =
+/// G23`) has the frequencies of the same plate as a Nastran deck with the PCOMP of MAT8 plies
+/// (both readers make the section by `femu_fem::shell::laminate`; the material axis Abaqus's
+/// default, global x projected, is the CQUAD4's edge G1-G2 here) to 1e-9, all four layers listed
+/// or the lower two with `SYMMETRIC`; the default axis of a shell whose normal is global x is
+/// global z (the plate turned into the y-z plane, a 0-degree ply, is the flat plate's 90-degree
+/// one, to 1e-9); an `ORIENTATION=`, a layer's named orientation, an
+/// unsymmetric stack and a LAMINA short of its six constants are refused with their line.
+#[test]
+fn composite_shell_sections_are_the_nastran_laminate() {
+    let n = 8;
+    let base = fv16(n);
+    let head = &base[..base.find("*MATERIAL").unwrap()];
+    let tail = &base[base.find("*BOUNDARY").unwrap()..];
+    let laminae = "*MATERIAL, NAME=CFRP\n*ELASTIC, TYPE=LAMINA\n1.4e11, 1.e10, 0.3, 5.e9, 4.e9, 4.e9\n*DENSITY\n1600.\n\
+                   *MATERIAL, NAME=HEAVY\n*ELASTIC, TYPE=LAMINA\n1.4e11, 1.e10, 0.3, 5.e9, 4.e9, 4.e9\n*DENSITY\n2000.\n";
+    let abaqus = |section: &str| format!("{head}{laminae}{section}{tail}");
+    let all = abaqus(
+        "*SHELL SECTION, ELSET=PLATE, COMPOSITE\n0.0125, 3, CFRP, 45.\n0.0125, 3, HEAVY, -45.\n0.0125, 3, HEAVY, -45.\n0.0125, 3, CFRP, 45.\n",
+    );
+    let sym = abaqus(
+        "*SHELL SECTION, ELSET=PLATE, COMPOSITE, SYMMETRIC\n0.0125, 3, CFRP, 45.\n0.0125, 3, HEAVY, -45.\n",
+    );
+    let mut bdf = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
+    let g = |i: usize, j: usize| 1 + i + (n + 1) * j;
+    for j in 0..=n {
+        for i in 0..=n {
+            bdf.push_str(&format!(
+                "GRID,{},,{},{},0.\n",
+                g(i, j),
+                10.0 * i as f64 / n as f64,
+                10.0 * j as f64 / n as f64
+            ));
+        }
+        bdf.push_str(&format!("SPC1,1,123456,{}\n", g(0, j)));
+    }
+    for j in 0..n {
+        for i in 0..n {
+            bdf.push_str(&format!(
+                "CQUAD4,{},1,{},{},{},{}\n",
+                1 + i + n * j,
+                g(i, j),
+                g(i + 1, j),
+                g(i + 1, j + 1),
+                g(i, j + 1)
+            ));
+        }
+    }
+    bdf.push_str(
+        "PCOMP,1,,,,,,,SYM\n,8,0.0125,45.,,9,0.0125,-45.\nMAT8,8,1.4+11,1.+10,0.3,5.+9,4.+9,4.+9,1600.\nMAT8,9,1.4+11,1.+10,0.3,5.+9,4.+9,4.+9,2000.\nENDDATA\n",
+    );
+    let nastran = femu_io::nastran::parse_bdf(&bdf, "plate.bdf", &Default::default()).unwrap();
+    let want = nastran
+        .model
+        .assemble(MassKind::Consistent)
+        .unwrap()
+        .modes(Which::Lowest(4), &EigenOptions::default())
+        .unwrap()
+        .values;
+    for deck in [&all, &sym] {
+        let (got, _, _) = lowest(deck, 4);
+        for (a, b) in got.iter().zip(&want) {
+            assert!((a / b - 1.0).abs() < 1e-9, "{got:?} vs {want:?}");
+        }
+    }
+    // the default local axes: the plate turned into the y-z plane (x to y, y to z: its normal
+    // along x) takes global z, the image of the flat plate's y, so a 0-degree ply there is the
+    // flat plate's 90-degree ply
+    let single = |angle: &str| {
+        abaqus(&format!(
+            "*SHELL SECTION, ELSET=PLATE, COMPOSITE\n0.05, 3, CFRP, {angle}\n"
+        ))
+    };
+    let flat = single("90.");
+    let nodes_end = flat.find("*ELEMENT").unwrap();
+    let turned: String = flat[..nodes_end]
+        .lines()
+        .map(|l| {
+            let f: Vec<&str> = l.split(", ").collect();
+            if f.len() == 4 {
+                format!("{}, 0., {}, {}\n", f[0], f[1], f[2])
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect::<String>()
+        + &single("0.")[nodes_end..];
+    let (a, _, _) = lowest(&flat, 4);
+    let (b, _, _) = lowest(&turned, 4);
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x / y - 1.0).abs() < 1e-9, "{a:?} vs {b:?}");
+    }
+    let (c, _, _) = lowest(&single("0."), 4);
+    assert!(
+        (c[0] / a[0] - 1.0).abs() > 0.1,
+        "the ply's angle matters: {c:?} {a:?}"
+    );
+    let refused = |section: &str, extra: &str| -> String {
+        parse_inp(
+            &abaqus(section).replace(
+                "*MATERIAL, NAME=CFRP",
+                &format!("{extra}*MATERIAL, NAME=CFRP"),
+            ),
+            "bad.inp",
+        )
+        .and_then(|d| d.to_model().map(|_| ()))
+        .unwrap_err()
+        .to_string()
+    };
+    let e = refused(
+        "*SHELL SECTION, ELSET=PLATE, COMPOSITE, ORIENTATION=ORI\n0.01, 3, CFRP, 0.\n",
+        "",
+    );
+    assert!(
+        e.contains("bad.inp:") && e.contains("ORIENTATION=ORI"),
+        "{e}"
+    );
+    let e = refused(
+        "*SHELL SECTION, ELSET=PLATE, COMPOSITE\n0.01, 3, CFRP, ORI\n",
+        "",
+    );
+    assert!(e.contains("layer 1 takes orientation \"ORI\""), "{e}");
+    let e = refused(
+        "*SHELL SECTION, ELSET=PLATE, COMPOSITE\n0.01, 3, CFRP, 0.\n0.01, 3, CFRP, 90.\n",
+        "",
+    );
+    assert!(e.contains("not symmetric about its mid-plane"), "{e}");
+    let e = refused(
+        "*SHELL SECTION, ELSET=PLATE, COMPOSITE\n0.01, 3, THIN, 0.\n",
+        "*MATERIAL, NAME=THIN\n*ELASTIC, TYPE=LAMINA\n1.e11, 1.e10, 0.3\n*DENSITY\n1.\n",
+    );
+    assert!(
+        e.contains("needs E1, E2, NU12, G12, G13, G23, got 3 values"),
+        "{e}"
+    );
+}

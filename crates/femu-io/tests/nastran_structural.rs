@@ -921,8 +921,8 @@ fn laminates_as_classical_lamination_theory_makes_them() {
 /// pyNastran's `pcomp_cquad4.bdf` (BSD; MSC Nastran ran it, its OP2 is in pyNastran's models):
 /// fields separated by tabs, which move to the next field of 8 columns, and a PCOMP of four
 /// plies of one MAT1, 0.1 thick each. An isotropic laminate is the homogeneous plate (`A = Q T`,
-/// `D = Q T^3 / 12`): its `K` and `M` equal those of the deck with `PSHELL,1,1,0.4,1,,1` in place
-/// of the PCOMP, entry by entry to 1e-13 of the largest.
+/// `D = Q T^3 / 12`): its `K` and `M` equal those of the deck with a PSHELL 0.4 thick in place
+/// (TS/T 5/6) of the PCOMP, entry by entry to 1e-13 of the largest.
 #[test]
 fn a_tabbed_deck_s_isotropic_laminate_is_the_homogeneous_plate() {
     let path = fixture("pcomp_cquad4.bdf");
@@ -931,7 +931,11 @@ fn a_tabbed_deck_s_isotropic_laminate_is_the_homogeneous_plate() {
     let laminate = read_bdf(&path, &BdfOptions::default()).unwrap();
     let start = text.find("PCOMP\t1").unwrap();
     let end = text.find("$MATERIALS").unwrap();
-    let homogeneous = format!("{}PSHELL,1,1,0.4,1,,1\n{}", &text[..start], &text[end..]);
+    let homogeneous = format!(
+        "{}PSHELL,1,1,0.4,1,,1,0.8333333333333334\n{}",
+        &text[..start],
+        &text[end..]
+    );
     let plate = parse_bdf(&homogeneous, &path, &BdfOptions::default()).unwrap();
     let (p, q) = (
         laminate.model.assemble(MassKind::Consistent).unwrap(),

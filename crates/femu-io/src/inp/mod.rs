@@ -98,7 +98,16 @@ const READ: &[(&str, &[&str])] = &[
     ("SPRING", &["ELSET"]),
     (
         "SHELL SECTION",
-        &["ELSET", "MATERIAL", "SECTION INTEGRATION", "OFFSET"],
+        &[
+            "ELSET",
+            "MATERIAL",
+            "SECTION INTEGRATION",
+            "OFFSET",
+            "COMPOSITE",
+            "SYMMETRIC",
+            "ORIENTATION",
+            "LAYUP",
+        ],
     ),
     ("EQUATION", &[]),
     ("KINEMATIC COUPLING", &["REF NODE"]),
@@ -410,6 +419,9 @@ pub struct InpDeck {
     pub mesh: Mesh,
     /// Materials by upper-case name.
     pub materials: BTreeMap<String, Material>,
+    /// Plane-stress ply materials (`*ELASTIC, TYPE=LAMINA`) by upper-case name: for composite
+    /// shell sections only.
+    pub(crate) laminae: BTreeMap<String, structural::Lamina>,
     /// Solid sections in file order.
     pub sections: Vec<Section>,
     /// Boundary conditions in file order.
@@ -576,6 +588,9 @@ fn element_kind(name: &str) -> Option<(ElementKind, Formulation, bool)> {
 struct PendingMaterial {
     name: String,
     young: Option<(f64, f64)>,
+    /// `*ELASTIC, TYPE=LAMINA` was given: the data line is `E1 E2 NU12 G12 G13 G23`.
+    lamina_type: bool,
+    lamina: Option<[f64; 6]>,
     density: Option<f64>,
     line: usize,
     path: PathBuf,

@@ -76,7 +76,7 @@ impl InpDeck {
                     source,
                 })?;
         }
-        structural::add_structural(&self.structural, &self.materials, &mut model)?;
+        structural::add_structural(&self.structural, &self.materials, &self.laminae, &mut model)?;
         self.apply_links(&mut model)?;
         for b in &self.boundaries {
             let all: Vec<usize> = (b.first - 1..b.last).collect();

@@ -113,6 +113,7 @@ struct DeckBuilder {
     mass_block: Option<String>,
     mass_cards: Vec<MassCard>,
     materials: BTreeMap<String, Material>,
+    laminae: BTreeMap<String, structural::Lamina>,
     pending: Option<PendingMaterial>,
     sections: Vec<Section>,
     boundaries: Vec<Boundary>,
@@ -179,6 +180,39 @@ impl DeckBuilder {
         let Some(p) = self.pending.take() else {
             return Ok(());
         };
+        if p.lamina_type {
+            let at = Location {
+                path: p.path.clone(),
+                line: p.line,
+            };
+            let [e1, e2, nu12, g12, g13, g23] = p.lamina.ok_or_else(|| {
+                structural::at_err(
+                    &at,
+                    format!("material {} has no *ELASTIC data line", p.name),
+                )
+            })?;
+            let density = p.density.ok_or_else(|| {
+                structural::at_err(
+                    &at,
+                    format!(
+                        "material {} has no *DENSITY (a frequency analysis needs it)",
+                        p.name
+                    ),
+                )
+            })?;
+            let lamina = structural::Lamina {
+                e1,
+                e2,
+                nu12,
+                g12,
+                g13,
+                g23,
+                density,
+            };
+            lamina.check(&at, &p.name)?;
+            self.laminae.insert(p.name, lamina);
+            return Ok(());
+        }
         let (e, nu) = p.young.ok_or_else(|| IoError::Parse {
             path: p.path.clone(),
             line: p.line,
@@ -275,9 +309,20 @@ impl DeckBuilder {
                 let elset = params
                     .get("ELSET")
                     .ok_or_else(|| err(l, "*SHELL SECTION without ELSET=".into()))?;
-                let material = params
-                    .get("MATERIAL")
-                    .ok_or_else(|| err(l, "*SHELL SECTION without MATERIAL=".into()))?;
+                let composite = params.contains_key("COMPOSITE");
+                let material = match params.get("MATERIAL") {
+                    Some(m) => m.clone(),
+                    None if composite => String::new(),
+                    None => return Err(err(l, "*SHELL SECTION without MATERIAL=".into())),
+                };
+                if let Some(o) = params.get("ORIENTATION") {
+                    return Err(err(
+                        l,
+                        format!(
+                            "*SHELL SECTION, ORIENTATION={o}: femu takes a shell's default local axes (the global x axis projected onto it, or z where x is within 0.1 degree of its normal) and does not read *ORIENTATION; give the plies' angles from those axes"
+                        ),
+                    ));
+                }
                 // OFFSET: the nodes' surface from the midsurface, a fraction of the thickness
                 // along the normal (SPOS the top surface, SNEG the bottom one)
                 let offset = match params.get("OFFSET").map(|o| o.to_ascii_uppercase()) {
@@ -302,6 +347,8 @@ impl DeckBuilder {
                         elset: elset.to_ascii_uppercase(),
                         material: material.to_ascii_uppercase(),
                         offset,
+                        composite,
+                        symmetric: params.contains_key("SYMMETRIC"),
                         lines: Vec::new(),
                         line: at(l),
                     });
@@ -542,13 +589,25 @@ impl DeckBuilder {
         if self.pending.is_none() {
             return Err(err(l, format!("*{name} outside a *MATERIAL")));
         }
+        if name == "ELASTIC"
+            && params
+                .get("TYPE")
+                .is_some_and(|ty| ty.eq_ignore_ascii_case("LAMINA"))
+        {
+            if let Some(p) = self.pending.as_mut() {
+                p.lamina_type = true;
+            }
+            return Ok(());
+        }
         let unsupported = params
             .get("TYPE")
             .filter(|ty| !ty.eq_ignore_ascii_case("ISOTROPIC") && !ty.eq_ignore_ascii_case("ISO"));
         if let (true, Some(ty)) = (name == "ELASTIC", unsupported) {
             return Err(err(
                 l,
-                format!("*ELASTIC, TYPE={ty} is not supported yet (isotropic only)"),
+                format!(
+                    "*ELASTIC, TYPE={ty} is not supported yet (isotropic, and LAMINA for composite shell sections)"
+                ),
             ));
         }
         Ok(())
@@ -816,6 +875,33 @@ impl DeckBuilder {
         warnings: &mut Vec<Warning>,
     ) -> Result<(), IoError> {
         let p = self.pending.as_mut().expect("checked at the keyword");
+        if p.lamina_type {
+            if f.len() < 6 {
+                return Err(err(
+                    l,
+                    format!(
+                        "*ELASTIC, TYPE=LAMINA needs E1, E2, NU12, G12, G13, G23, got {} values",
+                        f.len()
+                    ),
+                ));
+            }
+            let mut v = [0.0; 6];
+            for (k, name) in ["E1", "E2", "NU12", "G12", "G13", "G23"].iter().enumerate() {
+                v[k] = parse_f64(f[k])
+                    .ok_or_else(|| err(l, format!("{name} = {:?} is not a number", f[k])))?;
+            }
+            if f.len() > 6 {
+                warn(
+                    warnings,
+                    l,
+                    "temperature-dependent elasticity: the first line is used".into(),
+                );
+            }
+            if p.lamina.is_none() {
+                p.lamina = Some(v);
+            }
+            return Ok(());
+        }
         if f.len() < 2 {
             return Err(err(l, "*ELASTIC needs E and nu".into()));
         }
@@ -1101,6 +1187,7 @@ impl DeckBuilder {
         Ok(InpDeck {
             mesh,
             materials: self.materials,
+            laminae: self.laminae,
             sections: self.sections,
             boundaries: self.boundaries,
             point_masses,

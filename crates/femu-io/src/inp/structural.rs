@@ -105,6 +105,10 @@ pub(super) struct ShellSectionCard {
     pub(super) material: String,
     /// `OFFSET`: the nodes' surface from the midsurface, a fraction of the thickness.
     pub(super) offset: f64,
+    /// `COMPOSITE`: one data line a ply (thickness, section points, material, angle).
+    pub(super) composite: bool,
+    /// `SYMMETRIC`: the plies given are the lower half, mirrored.
+    pub(super) symmetric: bool,
     pub(super) lines: Vec<Vec<String>>,
     pub(super) line: Location,
 }
@@ -120,7 +124,7 @@ pub(super) struct StructuralRecords {
     pub(super) sets: BTreeMap<String, Vec<u64>>,
 }
 
-fn at_err(l: &Location, reason: String) -> IoError {
+pub(super) fn at_err(l: &Location, reason: String) -> IoError {
     IoError::Parse {
         path: l.path.clone(),
         line: l.line,
@@ -347,6 +351,7 @@ fn n1(c: &BeamSectionCard) -> Result<[f64; 3], IoError> {
 pub(super) fn add_structural(
     records: &StructuralRecords,
     materials: &BTreeMap<String, Material>,
+    laminae: &BTreeMap<String, Lamina>,
     model: &mut Model,
 ) -> Result<(), IoError> {
     // the section (or spring card) of each element, by its set
@@ -453,7 +458,8 @@ pub(super) fn add_structural(
                         ),
                     )
                 })?;
-                shell(&records.shell_sections[k], materials)?
+                let x: Vec<[f64; 3]> = nodes.iter().map(|n| model.mesh().coords()[*n]).collect();
+                shell(&records.shell_sections[k], materials, laminae, &x)?
             }
             _ => {
                 let k = *spring_of.get(id).ok_or_else(|| {
@@ -502,8 +508,13 @@ pub(super) fn add_structural(
 fn shell(
     c: &ShellSectionCard,
     materials: &BTreeMap<String, Material>,
+    laminae: &BTreeMap<String, Lamina>,
+    x: &[[f64; 3]],
 ) -> Result<StructuralKind, IoError> {
     let l = &c.line;
+    if c.composite {
+        return composite_shell(c, materials, laminae, x);
+    }
     let t = c
         .lines
         .first()
@@ -546,6 +557,163 @@ fn shell(
         // the nodes OFFSET t above the midsurface: the midsurface is -OFFSET t from them
         offset: -c.offset * t,
     }))
+}
+
+/// A ply material of `*ELASTIC, TYPE=LAMINA` (Abaqus's plane-stress orthotropic material of a
+/// shell's layer: `E1 E2 NU12 G12 G13 G23`) and its `*DENSITY`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lamina {
+    /// Modulus along the ply's first axis (Pa).
+    pub e1: f64,
+    /// Modulus along its second axis (Pa).
+    pub e2: f64,
+    /// Poisson's ratio `nu12`.
+    pub nu12: f64,
+    /// In-plane shear modulus (Pa).
+    pub g12: f64,
+    /// Transverse shear modulus in the 1-3 plane (Pa).
+    pub g13: f64,
+    /// Transverse shear modulus in the 2-3 plane (Pa).
+    pub g23: f64,
+    /// Density (kg/m^3).
+    pub density: f64,
+}
+
+impl Lamina {
+    /// Refuses moduli that are not positive and a `nu12` that makes no material (`1 - nu12 nu21
+    /// <= 0`).
+    pub(super) fn check(&self, at: &Location, name: &str) -> Result<(), IoError> {
+        let moduli = [self.e1, self.e2, self.g12, self.g13, self.g23];
+        if !moduli.iter().all(|v| v.is_finite() && *v > 0.0) || !self.density.is_finite() {
+            return Err(at_err(
+                at,
+                format!(
+                    "material {name}: a LAMINA's E1, E2, G12, G13 and G23 must be positive, got {moduli:?}"
+                ),
+            ));
+        }
+        if !(1.0 - self.nu12 * self.nu12 * self.e2 / self.e1 > 0.0) {
+            return Err(at_err(
+                at,
+                format!(
+                    "material {name}: NU12 = {} with E1 = {:e} and E2 = {:e} is not a material",
+                    self.nu12, self.e1, self.e2
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The ply of `t` at `theta` degrees: its plane-stress `Q` and transverse shear `(G13, G23)`.
+    fn ply(&self, t: f64, theta: f64) -> femu_fem::shell::Ply {
+        let den = 1.0 - self.nu12 * self.nu12 * self.e2 / self.e1;
+        let q12 = self.nu12 * self.e2 / den;
+        femu_fem::shell::Ply {
+            q: [
+                [self.e1 / den, q12, 0.0],
+                [q12, self.e2 / den, 0.0],
+                [0.0, 0.0, self.g12],
+            ],
+            shear: Some([[self.g13, 0.0], [0.0, self.g23]]),
+            rho: self.density,
+            t,
+            theta,
+        }
+    }
+}
+
+/// A shell of a `*SHELL SECTION, COMPOSITE`: one data line a layer, `thickness, section points,
+/// material, orientation angle (degrees)`, from the bottom (`SYMMETRIC`: the lower half, mirrored
+/// about the midsurface), each material a LAMINA ([`Lamina`]) or an isotropic `*ELASTIC`; the
+/// section of classical lamination theory ([`femu_fem::shell::laminate`], docs/MATH.md,
+/// "Laminates"), whose material axis is a shell's default local 1-direction: the global x axis
+/// projected onto the shell, or the global z axis where x is within 0.1 degree of its normal.
+/// A layer's orientation given by name (an `*ORIENTATION`) is refused.
+fn composite_shell(
+    c: &ShellSectionCard,
+    materials: &BTreeMap<String, Material>,
+    laminae: &BTreeMap<String, Lamina>,
+    x: &[[f64; 3]],
+) -> Result<StructuralKind, IoError> {
+    let l = &c.line;
+    let mut plies = Vec::with_capacity(c.lines.len());
+    for (k, row) in c.lines.iter().enumerate() {
+        let field = |i: usize| row.get(i).map(String::as_str).unwrap_or("").trim();
+        let t = number(l, "a layer's thickness", field(0))?;
+        let name = field(2).to_ascii_uppercase();
+        let theta = match field(3) {
+            "" => 0.0,
+            s => s.parse::<f64>().map_err(|_| {
+                at_err(
+                    l,
+                    format!(
+                        "*SHELL SECTION, COMPOSITE: layer {} takes orientation {s:?}, an *ORIENTATION femu does not read; give its angle in degrees from the shell's default local axes",
+                        k + 1
+                    ),
+                )
+            })?,
+        };
+        let ply = if let Some(lam) = laminae.get(&name) {
+            lam.ply(t, theta)
+        } else if let Some(m) = materials.get(&name) {
+            let Elasticity::Isotropic { e, nu } = m.elasticity else {
+                return Err(at_err(
+                    l,
+                    format!(
+                        "layer {} names material {name}, whose *ELASTIC is neither isotropic nor a LAMINA",
+                        k + 1
+                    ),
+                ));
+            };
+            let d = e / (1.0 - nu * nu);
+            let g = e / (2.0 * (1.0 + nu));
+            femu_fem::shell::Ply {
+                q: [[d, d * nu, 0.0], [d * nu, d, 0.0], [0.0, 0.0, g]],
+                shear: Some([[g, 0.0], [0.0, g]]),
+                rho: m.density,
+                t,
+                theta,
+            }
+        } else {
+            return Err(at_err(
+                l,
+                format!(
+                    "*SHELL SECTION, COMPOSITE: layer {} names material {name:?}, which no *MATERIAL defines",
+                    k + 1
+                ),
+            ));
+        };
+        plies.push(ply);
+    }
+    if c.symmetric {
+        let mirrored: Vec<_> = plies.iter().rev().copied().collect();
+        plies.extend(mirrored);
+    }
+    let mut s = femu_fem::shell::laminate(&plies)
+        .map_err(|e| at_err(l, format!("*SHELL SECTION, COMPOSITE: {e}")))?;
+    // the default local 1-direction: global x, or z where x is within 0.1 degree of the normal
+    let normal = {
+        let (a, b) = (
+            [x[1][0] - x[0][0], x[1][1] - x[0][1], x[1][2] - x[0][2]],
+            [x[2][0] - x[0][0], x[2][1] - x[0][1], x[2][2] - x[0][2]],
+        );
+        let n = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        [n[0] / len, n[1] / len, n[2] / len]
+    };
+    if let Some(m) = s.material.as_mut() {
+        m.axis = if normal[0].abs() > 0.1f64.to_radians().cos() {
+            [0.0, 0.0, 1.0]
+        } else {
+            [1.0, 0.0, 0.0]
+        };
+    }
+    s.offset = -c.offset * s.t;
+    Ok(StructuralKind::Shell(s))
 }
 
 /// A spring element from its `*SPRING`: SPRING1 (a DOF to ground) and SPRING2 (two DOFs) take the

@@ -899,21 +899,16 @@ fn pshell(
 
 /// A PCOMP or PCOMPG (QRG PCOMP: `PID Z0 NSM SB FT TREF GE LAM`, then four fields a ply `MIDi
 /// Ti THETAi SOUTi`; PCOMPG: one line a ply, `GPLYIDi MIDi Ti THETAi SOUTi`) as the shell section
-/// of classical lamination theory (docs/MATH.md, "Laminates"): each ply's plane-stress material
-/// `Q` (MAT1, MAT2 or MAT8, [`plane_material`]) turned by its THETA from the element's material
-/// axis, `Qbar = T^T Q T`, stacked from the bottom surface (`z = -T/2` from the laminate's
-/// mid-plane, `T` the plies' total): `A = sum Qbar t`, `B = sum Qbar (z_k^2 - z_(k-1)^2) / 2`,
-/// `D = sum Qbar (z_k^3 - z_(k-1)^3) / 3`, the section's membrane material `A / T` and bending
-/// material `12 D / T^3`, its mass per area `sum rho t + NSM`. `LAM = SYM` lists the plies of
-/// one half, mirrored about the mid-plane. Returns the section and the mid-plane's offset from
-/// the reference plane, `Z0 + T/2` (blank Z0: `-T/2`, no offset).
+/// of classical lamination theory ([`femu_fem::shell::laminate`], docs/MATH.md, "Laminates"):
+/// each ply's plane-stress material (MAT1, MAT2 or MAT8, [`plane_material`]) and transverse
+/// shear ([`shear_material`]) turned by its THETA from the element's material axis, stacked from
+/// the bottom surface; the mass per area `sum rho t + NSM`. `LAM = SYM` lists the plies of one
+/// half, mirrored about the mid-plane. Returns the section and the mid-plane's offset from the
+/// reference plane, `Z0 + T/2` (blank Z0: `-T/2`, no offset).
 ///
-/// Refused, naming the property: `LAM` = MEM, BEND, SMEAR or SMCORE; a laminate whose `B` is not
-/// zero (unsymmetric: its membrane-bending coupling is not modelled, as PSHELL's MID4 is not);
-/// plies whose transverse shear moduli, turned to the material axes, differ (the laminate's
-/// shear stiffness then depends on the stacking in a way femu does not compute: give the plies
-/// blank MAT8 G1Z and G2Z, no shear flexibility, or an equivalent PSHELL with MID3), or where
-/// some plies have them and some do not; a ply of no thickness or of another material card.
+/// Refused, naming the property: `LAM` = MEM, BEND, SMEAR or SMCORE; what
+/// [`femu_fem::shell::laminate`] refuses (an unsymmetric laminate, plies of different transverse
+/// shear); a ply of no thickness or of another material card.
 fn pcomp(
     p: &Card,
     pid: u64,
@@ -968,111 +963,25 @@ fn pcomp(
         plies.extend(mirrored);
     }
     let total: f64 = plies.iter().map(|q| q.1).sum();
-    let mut a = [[0.0; 3]; 3];
-    let mut b = [[0.0; 3]; 3];
-    let mut d = [[0.0; 3]; 3];
-    let mut mass = 0.0;
-    let mut shears: Vec<Option<[[f64; 2]; 2]>> = Vec::new();
-    let mut z0 = -total / 2.0;
+    let mut layers = Vec::with_capacity(plies.len());
     for &(mid, t, theta) in &plies {
         let m = ctx.materials.get(&mid).copied().ok_or_else(|| {
             p.err(format!(
                 "{pid} refers to material {mid}, which the deck does not define"
             ))
         })?;
-        let q = plane_material(m, pid, p)?;
-        let (sn, cs) = theta.to_radians().sin_cos();
-        // strains (eps_x, eps_y, gamma_xy) in the material axes to the ply's (1, 2)
-        let tr = [
-            [cs * cs, sn * sn, cs * sn],
-            [sn * sn, cs * cs, -cs * sn],
-            [-2.0 * cs * sn, 2.0 * cs * sn, cs * cs - sn * sn],
-        ];
-        let z1 = z0 + t;
-        for r in 0..3 {
-            for c in 0..3 {
-                let mut qb = 0.0;
-                for k in 0..3 {
-                    for l in 0..3 {
-                        qb += tr[k][r] * q[k][l] * tr[l][c];
-                    }
-                }
-                a[r][c] += qb * t;
-                b[r][c] += qb * (z1 * z1 - z0 * z0) / 2.0;
-                d[r][c] += qb * (z1.powi(3) - z0.powi(3)) / 3.0;
-            }
-        }
-        mass += shell_density(m, pid, p)? * t;
-        // transverse shear (gamma_1z, gamma_2z) of the ply to the material axes
-        shears.push(shear_material(m, pid, p)?.map(|g| {
-            let rot = [[cs, sn], [-sn, cs]];
-            let mut gb = [[0.0; 2]; 2];
-            for r in 0..2 {
-                for c in 0..2 {
-                    for k in 0..2 {
-                        for l in 0..2 {
-                            gb[r][c] += rot[k][r] * g[k][l] * rot[l][c];
-                        }
-                    }
-                }
-            }
-            gb
-        }));
-        z0 = z1;
+        layers.push(femu_fem::shell::Ply {
+            q: plane_material(m, pid, p)?,
+            shear: shear_material(m, pid, p)?,
+            rho: shell_density(m, pid, p)? * ctx.wtmass,
+            t,
+            theta,
+        });
     }
-    let a_max = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    let b_max = b.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    if b_max > 1e-9 * a_max * total {
-        return Err(p.err(format!(
-            "{pid}: the laminate is not symmetric about its mid-plane (its membrane-bending coupling B reaches {:.2e} of A T): femu's shells do not model that coupling, as they do not model PSHELL's MID4",
-            b_max / (a_max * total)
-        )));
-    }
-    let shear = match shears.as_slice() {
-        [first, rest @ ..] => {
-            let same = |x: &[[f64; 2]; 2], y: &[[f64; 2]; 2]| {
-                let scale = x.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-                x.iter()
-                    .flatten()
-                    .zip(y.iter().flatten())
-                    .all(|(u, v)| (u - v).abs() <= 1e-9 * scale)
-            };
-            match first {
-                None if rest.iter().all(Option::is_none) => None,
-                Some(g) if rest.iter().all(|r| r.as_ref().is_some_and(|h| same(g, h))) => Some(*g),
-                _ => {
-                    return Err(p.err(format!(
-                        "{pid}: its plies' transverse shear moduli differ (turned to the material axes, or given for some plies and not others): the laminate's shear stiffness then depends on the stacking, which femu does not compute (give the plies' MAT8 blank G1Z and G2Z for no shear flexibility, or an equivalent PSHELL with MID3)"
-                    )));
-                }
-            }
-        }
-        [] => None,
-    };
-    let scale = |m: &[[f64; 3]; 3], f: f64| m.map(|r| r.map(|v| v * f));
-    let z0_field = p.real(1, "Z0")?;
-    let shift = z0_field.map_or(0.0, |z| z + total / 2.0);
-    let nsm = p.real(2, "NSM")?.unwrap_or(0.0) * ctx.wtmass;
-    Ok((
-        femu_fem::shell::Shell {
-            e: 0.0,
-            nu: 0.0,
-            rho: mass / total * ctx.wtmass,
-            t: total,
-            bending: 1.0,
-            // PSHELL's default TS/T on the plies' one transverse shear material
-            shear: shear.map(|_| 0.833_333),
-            nsm,
-            material: Some(femu_fem::shell::ShellMaterial {
-                membrane: scale(&a, 1.0 / total),
-                bending: scale(&d, 12.0 / total.powi(3)),
-                shear: shear.unwrap_or([[0.0; 2]; 2]),
-                axis: [1.0, 0.0, 0.0],
-            }),
-            offset: 0.0,
-        },
-        shift,
-    ))
+    let mut shell = femu_fem::shell::laminate(&layers).map_err(|e| p.err(format!("{pid}: {e}")))?;
+    shell.nsm = p.real(2, "NSM")?.unwrap_or(0.0) * ctx.wtmass;
+    let shift = p.real(1, "Z0")?.map_or(0.0, |z| z + total / 2.0);
+    Ok((shell, shift))
 }
 
 /// A ZOFFS field (QRG CQUAD4, PSHELL): the reference plane's offset from the grids along the
