@@ -78,84 +78,62 @@ fn columns(n: usize, mass: bool) -> Vec<Vec<(usize, f64)>> {
     cols
 }
 
+/// Times reading `path`'s bytes from a warm cache against `read` (which returns the bytes it
+/// holds), medians of `reps`, and prints the ratio and the peak resident memory.
+fn measure(label: &str, path: &str, reps: usize, read: impl Fn(&std::path::Path) -> u64) {
+    let path = std::path::PathBuf::from(path);
+    let _ = std::fs::read(&path).unwrap(); // warm the cache
+    let bytes: Vec<f64> = (0..reps)
+        .map(|_| {
+            let t = Instant::now();
+            let b = std::fs::read(&path).unwrap();
+            std::hint::black_box(&b);
+            t.elapsed().as_secs_f64()
+        })
+        .collect();
+    let before = peak_rss();
+    let mut held = 0u64;
+    let reads: Vec<f64> = (0..reps)
+        .map(|_| {
+            let t = Instant::now();
+            held = read(&path);
+            t.elapsed().as_secs_f64()
+        })
+        .collect();
+    let (b, r) = (median(bytes), median(reads));
+    println!(
+        "{label}: bytes read {b:.3} s, reader {r:.3} s ({:.2}x); held {:.0} MB, peak resident {:.0} MB before the reader and {:.0} MB after ({:.2}x what it holds)",
+        r / b,
+        held as f64 / 1e6,
+        before as f64 / 1e6,
+        peak_rss() as f64 / 1e6,
+        peak_rss() as f64 / held as f64
+    );
+}
+
 fn main() {
     let reps: usize = std::env::var("FEMU_BENCH_REPS")
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(3);
+    // the fresh process: the bytes, then the reader
     if let Ok(path) = std::env::var("FEMU_BENCH_OP2_READ") {
-        // the fresh process: the bytes, then the reader
-        let path = std::path::PathBuf::from(path);
-        let _ = std::fs::read(&path).unwrap();
-        let bytes: Vec<f64> = (0..reps)
-            .map(|_| {
-                let t = Instant::now();
-                let b = std::fs::read(&path).unwrap();
-                std::hint::black_box(&b);
-                t.elapsed().as_secs_f64()
-            })
-            .collect();
-        let before = peak_rss();
-        let mut held = 0u64;
-        let reads: Vec<f64> = (0..reps)
-            .map(|_| {
-                let t = Instant::now();
-                let f = femu::io::op2::read_op2(&path).unwrap();
-                let dt = t.elapsed().as_secs_f64();
-                held = f
-                    .modes
-                    .iter()
-                    .map(|m| std::mem::size_of_val(m.points.as_slice()) as u64)
-                    .sum();
-                dt
-            })
-            .collect();
-        let (b, r) = (median(bytes), median(reads));
-        println!(
-            "OP2: bytes read {b:.3} s, read_op2 {r:.3} s ({:.2}x); held {:.0} MB, peak resident {:.0} MB before the reader and {:.0} MB after ({:.2}x what it holds)",
-            r / b,
-            held as f64 / 1e6,
-            before as f64 / 1e6,
-            peak_rss() as f64 / 1e6,
-            peak_rss() as f64 / held as f64
-        );
+        measure("OP2: read_op2", &path, reps, |p| {
+            let f = femu::io::op2::read_op2(p).unwrap();
+            f.modes
+                .iter()
+                .map(|m| std::mem::size_of_val(m.points.as_slice()) as u64)
+                .sum()
+        });
         return;
     }
     if let Ok(path) = std::env::var("FEMU_BENCH_OP4_READ") {
-        // the fresh process: the bytes, then the reader
-        let path = std::path::PathBuf::from(path);
-        let _ = std::fs::read(&path).unwrap(); // warm the cache
-        let bytes: Vec<f64> = (0..reps)
-            .map(|_| {
-                let t = Instant::now();
-                let b = std::fs::read(&path).unwrap();
-                std::hint::black_box(&b);
-                t.elapsed().as_secs_f64()
-            })
-            .collect();
-        let before = peak_rss();
-        let mut held = 0u64;
-        let reads: Vec<f64> = (0..reps)
-            .map(|_| {
-                let t = Instant::now();
-                let m = femu::io::op4::read_op4(&path).unwrap();
-                let dt = t.elapsed().as_secs_f64();
-                held = m
-                    .iter()
-                    .map(|a| 16 * a.re.len() as u64 + 8 * a.col_start.len() as u64)
-                    .sum();
-                dt
-            })
-            .collect();
-        let (b, r) = (median(bytes), median(reads));
-        println!(
-            "bytes read {b:.3} s, read_op4 {r:.3} s ({:.2}x); held {:.0} MB, peak resident {:.0} MB before the reader and {:.0} MB after ({:.2}x what it holds)",
-            r / b,
-            held as f64 / 1e6,
-            before as f64 / 1e6,
-            peak_rss() as f64 / 1e6,
-            peak_rss() as f64 / held as f64
-        );
+        measure("read_op4", &path, reps, |p| {
+            let m = femu::io::op4::read_op4(p).unwrap();
+            m.iter()
+                .map(|a| 16 * a.re.len() as u64 + 8 * a.col_start.len() as u64)
+                .sum()
+        });
         return;
     }
     let dof: usize = std::env::var("FEMU_BENCH_OP4_DOF")

@@ -451,83 +451,22 @@ fn mode_records(
 mod tests {
     use super::*;
 
-    /// Records written by hand, both byte orders: the header, a table to skip, and OUGV1 with one
-    /// mode of two grids.
+    /// Records written from the layout (`femu_testkit::op2`), both byte orders: the header, an
+    /// empty table to skip, and OUGV1 with one mode of two grids.
     #[test]
     fn tables_by_hand() {
         for little in [true, false] {
-            let mut b = Vec::new();
-            let word = |v: i32| {
-                if little {
-                    v.to_le_bytes()
-                } else {
-                    v.to_be_bytes()
-                }
-            };
-            let float = |v: f32| {
-                if little {
-                    v.to_le_bytes()
-                } else {
-                    v.to_be_bytes()
-                }
-            };
-            let mut record = |data: &[u8]| {
-                b.extend(word(data.len() as i32));
-                b.extend_from_slice(data);
-                b.extend(word(data.len() as i32));
-            };
-            let int = |v: i32| word(v).to_vec();
-            record(&int(3));
-            record(&[0; 12]);
-            record(&int(7));
-            record(b"NASTRAN FORT TAPE ID CODE - ");
-            record(&int(2));
-            record(b"XXXXXXXX");
-            record(&int(-1));
-            record(&int(0));
-            for name in [b"GEOM1   ", b"OUGV1   "] {
-                record(&int(2));
-                record(name);
-                record(&int(-1));
-                record(&int(7));
-                record(&[0; 28]);
-                record(&int(-2));
-                record(&int(1));
-                record(&int(0));
-                record(&int(2));
-                record(name);
-                let mut ident = Vec::new();
-                for v in [23, 7, 0, 1, 1] {
-                    ident.extend(word(v));
-                }
-                ident.extend(float(1.5e5));
-                ident.extend(word(0));
-                ident.extend(word(0));
-                ident.extend(word(1));
-                ident.extend(word(8));
-                ident.resize(584, 0);
-                let mut points = Vec::new();
-                for (id, t1) in [(7, 0.25f32), (9, -1.0)] {
-                    points.extend(word(10 * id + 3));
-                    points.extend(word(1));
-                    points.extend(float(t1));
-                    for _ in 0..5 {
-                        points.extend(float(0.5));
-                    }
-                }
-                for (m, rec) in [(-3, &ident), (-4, &points)] {
-                    record(&int(m));
-                    record(&int(1));
-                    record(&int(0));
-                    record(&int((rec.len() / 4) as i32));
-                    record(rec);
-                }
-                record(&int(-5));
-                record(&int(1));
-                record(&int(0));
-                record(&int(0));
-            }
-            record(&int(0));
+            let b = femu_testkit::op2::op2_modes(
+                &[7, 9],
+                &[(
+                    1.5e5,
+                    vec![
+                        [0.25, 0.5, 0.5, 0.5, 0.5, 0.5],
+                        [-1.0, 0.5, 0.5, 0.5, 0.5, 0.5],
+                    ],
+                )],
+                little,
+            );
             let f = parse_op2(&b, Path::new("a.op2")).unwrap();
             assert_eq!(f.modes.len(), 1);
             assert_eq!(f.modes[0].eigenvalue, 1.5e5);

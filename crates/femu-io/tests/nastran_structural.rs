@@ -552,6 +552,48 @@ ENDDATA
     }
 }
 
+/// A flat `a x b` plate of `n x n` CQUAD4 (the elements' trailing fields `orientation`, the
+/// property and materials `property`), simply supported on its four edges (`w` and the
+/// rotation along each edge fixed, in-plane motion held at the edges), coupled mass, SPC set 1.
+fn simply_supported((a, b, n): (f64, f64, usize), orientation: &str, property: &str) -> String {
+    let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
+    let g = |i: usize, j: usize| 1 + i + (n + 1) * j;
+    for j in 0..=n {
+        for i in 0..=n {
+            s.push_str(&format!(
+                "GRID,{},,{:.10},{:.10},0.\n",
+                g(i, j),
+                a * i as f64 / n as f64,
+                b * j as f64 / n as f64
+            ));
+            let comps = match (i == 0 || i == n, j == 0 || j == n) {
+                (true, true) => "12345",
+                (true, false) => "1234",
+                (false, true) => "1235",
+                _ => "",
+            };
+            if !comps.is_empty() {
+                s.push_str(&format!("SPC1,1,{comps},{}\n", g(i, j)));
+            }
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            s.push_str(&format!(
+                "CQUAD4,{},1,{},{},{},{},{orientation}\n",
+                1 + i + n * j,
+                g(i, j),
+                g(i + 1, j),
+                g(i + 1, j + 1),
+                g(i, j + 1)
+            ));
+        }
+    }
+    s.push_str(property);
+    s.push_str("ENDDATA\n");
+    s
+}
+
 /// A simply supported orthotropic plate as Nastran decks: CQUAD4 on a PSHELL whose MID1, MID2 and
 /// MID3 are one MAT8 (E1 = 140 GPa, E2 = 10 GPa, NU12 = 0.3, G12 = G1Z = G2Z = 5 GPa). With
 /// THETA blank (the ply along G1-G2, x) the first two frequencies are within 0.5 % and 1.5 % of
@@ -563,42 +605,11 @@ ENDDATA
 fn orthotropic_shells_as_nastran_decks() {
     let (a, b, n, t): (f64, f64, usize, f64) = (1.0, 0.8, 24, 0.004);
     let deck = |orientation: &str, materials: &str| -> Vec<f64> {
-        let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
-        let g = |i: usize, j: usize| 1 + i + (n + 1) * j;
-        for j in 0..=n {
-            for i in 0..=n {
-                s.push_str(&format!(
-                    "GRID,{},,{:.10},{:.10},0.\n",
-                    g(i, j),
-                    a * i as f64 / n as f64,
-                    b * j as f64 / n as f64
-                ));
-                let comps = match (i == 0 || i == n, j == 0 || j == n) {
-                    (true, true) => "12345",
-                    (true, false) => "1234",
-                    (false, true) => "1235",
-                    _ => "",
-                };
-                if !comps.is_empty() {
-                    s.push_str(&format!("SPC1,1,{comps},{}\n", g(i, j)));
-                }
-            }
-        }
-        for j in 0..n {
-            for i in 0..n {
-                s.push_str(&format!(
-                    "CQUAD4,{},1,{},{},{},{},{orientation}\n",
-                    1 + i + n * j,
-                    g(i, j),
-                    g(i + 1, j),
-                    g(i + 1, j + 1),
-                    g(i, j + 1)
-                ));
-            }
-        }
-        s.push_str(&format!(
-            "{materials}CORD2R,5,,0.,0.,0.,0.,0.,1.,+C\n+C,0.,1.,0.\nENDDATA\n"
-        ));
+        let s = simply_supported(
+            (a, b, n),
+            orientation,
+            &format!("{materials}CORD2R,5,,0.,0.,0.,0.,0.,1.,+C\n+C,0.,1.,0.\n"),
+        );
         let d = parse_bdf(&s, "ply.bdf", &BdfOptions::default()).unwrap();
         let sys = d.model.assemble(d.mass).unwrap();
         sys.modes(Which::Lowest(2), &EigenOptions::default())
@@ -743,41 +754,7 @@ fn offset_layers_as_a_nastran_deck() {
 fn laminates_as_classical_lamination_theory_makes_them() {
     let (a, t): (f64, f64) = (1.0, 0.008);
     let assembled = |property: &str, n: usize| {
-        let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
-        let g = |i: usize, j: usize| 1 + i + (n + 1) * j;
-        for j in 0..=n {
-            for i in 0..=n {
-                s.push_str(&format!(
-                    "GRID,{},,{:.10},{:.10},0.\n",
-                    g(i, j),
-                    a * i as f64 / n as f64,
-                    a * j as f64 / n as f64
-                ));
-                let comps = match (i == 0 || i == n, j == 0 || j == n) {
-                    (true, true) => "12345",
-                    (true, false) => "1234",
-                    (false, true) => "1235",
-                    _ => "",
-                };
-                if !comps.is_empty() {
-                    s.push_str(&format!("SPC1,1,{comps},{}\n", g(i, j)));
-                }
-            }
-        }
-        for j in 0..n {
-            for i in 0..n {
-                s.push_str(&format!(
-                    "CQUAD4,{},1,{},{},{},{}\n",
-                    1 + i + n * j,
-                    g(i, j),
-                    g(i + 1, j),
-                    g(i + 1, j + 1),
-                    g(i, j + 1)
-                ));
-            }
-        }
-        s.push_str(property);
-        s.push_str("ENDDATA\n");
+        let s = simply_supported((a, a, n), "", property);
         let d = parse_bdf(&s, "laminate.bdf", &BdfOptions::default()).unwrap();
         d.model.assemble(d.mass).unwrap()
     };

@@ -865,11 +865,9 @@ fn abaqus_generated_matrices_are_the_model() {
 /// deck's to 1e-5 with the Sturm proof (2e-6 measured: the punch's ten digits moved by the thin
 /// plate's `lambda_max / lambda_1`). A complex matrix, a scalar point, and grids in a turned displacement frame are
 /// refused with file and line or grid.
-/// The clamped CQUAD4 plate of [`nastran_dmig_punch_is_the_model`]'s kind, with a grid no
-/// element touches (999): its deck and femu's stiffness, mass and DOF labels (node, 0-based
-/// component) of its free DOFs, from the deck without grid 999.
-fn clamped_plate(d: &Path) -> (String, femu_study::load::LoadedModel, Vec<(u64, usize)>) {
-    let n = 3;
+/// A plate of `n x n` CQUAD4 (0.1 x 0.08 each, 4 mm aluminium, coupled mass) clamped along its
+/// first column of grids by SPC1 123456, as a Nastran deck.
+fn clamped_plate_deck(n: usize) -> String {
     let mut deck = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
     let g = |i: usize, j: usize| 1 + i + (n + 1) * j;
     for j in 0..=n {
@@ -896,6 +894,14 @@ fn clamped_plate(d: &Path) -> (String, femu_study::load::LoadedModel, Vec<(u64, 
         }
     }
     deck.push_str("PSHELL,1,1,0.004,1,,1\nMAT1,1,7.+10,,0.33,2700.\nENDDATA\n");
+    deck
+}
+
+/// The clamped plate of [`clamped_plate_deck`] (3 x 3) with a grid no element touches (999): its
+/// deck and femu's stiffness, mass and DOF labels (node, 0-based component) of its free DOFs,
+/// from the deck without grid 999.
+fn clamped_plate(d: &Path) -> (String, femu_study::load::LoadedModel, Vec<(u64, usize)>) {
+    let deck = clamped_plate_deck(3);
     std::fs::write(d.join("own.bdf"), &deck).unwrap();
     let loaded = load_model(&d.join("own.bdf"), &ModelOptions::default()).unwrap();
     let mesh = loaded.model.mesh();
@@ -1126,33 +1132,7 @@ fn nastran_op4_matrices_are_the_model() {
 
 #[test]
 fn nastran_dmig_punch_is_the_model() {
-    let n = 4;
-    let mut deck = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
-    let g = |i: usize, j: usize| 1 + i + (n + 1) * j;
-    for j in 0..=n {
-        for i in 0..=n {
-            deck.push_str(&format!(
-                "GRID,{},,{},{},0.\n",
-                g(i, j),
-                0.1 * i as f64,
-                0.08 * j as f64
-            ));
-        }
-        deck.push_str(&format!("SPC1,1,123456,{}\n", g(0, j)));
-    }
-    for j in 0..n {
-        for i in 0..n {
-            deck.push_str(&format!(
-                "CQUAD4,{},1,{},{},{},{}\n",
-                1 + i + n * j,
-                g(i, j),
-                g(i + 1, j),
-                g(i + 1, j + 1),
-                g(i, j + 1)
-            ));
-        }
-    }
-    deck.push_str("PSHELL,1,1,0.004,1,,1\nMAT1,1,7.+10,,0.33,2700.\nENDDATA\n");
+    let deck = clamped_plate_deck(4);
     let d = dir("dmig");
     std::fs::write(d.join("job.bdf"), &deck).unwrap();
     let (own, loaded) = lowest(&d.join("job.bdf"), 6);
