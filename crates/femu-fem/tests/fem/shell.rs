@@ -964,3 +964,87 @@ fn a_thickness_group_of_solids_is_refused_without_a_panic() {
         "{e}"
     );
 }
+
+/// `femu_fem::shell::laminate` by hand: a `[0/90/90/0]` cross-ply's membrane `A/T` (the two
+/// orientations' mean: `(Q11 + Q22)/2` on both diagonals) and bending `12 D/T^3` (the outer
+/// plies' share `1 - (1/2)^3 = 7/8` of `Q11`, the inner ones' `1/8`), its density and shear; one
+/// isotropic ply is the isotropic section (the element's `K` and `M` to 1e-12 of their largest
+/// entries); refusals: no ply, a ply of no thickness, an unsymmetric `[0/90]`, plies of different
+/// transverse shear.
+#[test]
+fn laminates_by_hand() {
+    use femu_fem::shell::{LaminateError, Ply, laminate};
+    let (q11, q12, q22, q66) = (140.0, 3.0, 10.0, 5.0);
+    let q = [[q11, q12, 0.0], [q12, q22, 0.0], [0.0, 0.0, q66]];
+    let ply = |theta: f64, rho: f64| Ply {
+        q,
+        shear: None,
+        rho,
+        t: 0.25,
+        theta,
+    };
+    let s = laminate(&[ply(0.0, 1.0), ply(90.0, 3.0), ply(90.0, 3.0), ply(0.0, 1.0)]).unwrap();
+    let m = s.material.unwrap();
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
+    assert!(close(s.t, 1.0) && close(s.rho, 2.0) && s.shear.is_none());
+    let mean = (q11 + q22) / 2.0;
+    let want_a = [[mean, q12, 0.0], [q12, mean, 0.0], [0.0, 0.0, q66]];
+    let want_d = [
+        [q11 * 7.0 / 8.0 + q22 / 8.0, q12, 0.0],
+        [q12, q22 * 7.0 / 8.0 + q11 / 8.0, 0.0],
+        [0.0, 0.0, q66],
+    ];
+    for r in 0..3 {
+        for c in 0..3 {
+            assert!(close(m.membrane[r][c], want_a[r][c]), "{:?}", m.membrane);
+            assert!(close(m.bending[r][c], want_d[r][c]), "{:?}", m.bending);
+        }
+    }
+    // one isotropic ply is the isotropic section
+    let (e, nu, g) = (2.0e11, 0.3, 2.0e11 / 2.6);
+    let d = e / (1.0 - nu * nu);
+    let iso = laminate(&[Ply {
+        q: [[d, d * nu, 0.0], [d * nu, d, 0.0], [0.0, 0.0, g]],
+        shear: Some([[g, 0.0], [0.0, g]]),
+        rho: 7850.0,
+        t: 0.01,
+        theta: 30.0,
+    }])
+    .unwrap();
+    let homogeneous = Shell {
+        e,
+        nu,
+        rho: 7850.0,
+        t: 0.01,
+        bending: 1.0,
+        shear: Some(5.0 / 6.0),
+        nsm: 0.0,
+        material: None,
+        offset: 0.0,
+    };
+    let x = [[0.0, 0.0, 0.0], [1.0, 0.1, 0.0], [0.9, 1.2, 0.0], [-0.1, 0.8, 0.0]];
+    let (ka, ma) = femu_fem::shell::matrices(&iso, &x, MassKind::Consistent).unwrap();
+    let (kb, mb) = femu_fem::shell::matrices(&homogeneous, &x, MassKind::Consistent).unwrap();
+    for (a, b) in [(&ka, &kb), (&ma, &mb)] {
+        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (u, v) in a.iter().zip(b.iter()) {
+            assert!((u - v).abs() <= 1e-12 * scale, "{u} vs {v}");
+        }
+    }
+    assert_eq!(laminate(&[]), Err(LaminateError::Ply(0)));
+    let mut thin = ply(0.0, 1.0);
+    thin.t = 0.0;
+    assert_eq!(laminate(&[ply(0.0, 1.0), thin]), Err(LaminateError::Ply(1)));
+    assert!(matches!(
+        laminate(&[ply(0.0, 1.0), ply(90.0, 1.0)]),
+        Err(LaminateError::Unsymmetric(r)) if r > 0.1
+    ));
+    let sheared = |theta: f64| Ply {
+        shear: Some([[5.0, 0.0], [0.0, 3.0]]),
+        ..ply(theta, 1.0)
+    };
+    assert_eq!(
+        laminate(&[sheared(0.0), sheared(90.0), sheared(90.0), sheared(0.0)]),
+        Err(LaminateError::Shear)
+    );
+}
