@@ -10,7 +10,8 @@
 //! 50 real modes on a sixth of the rows' count of grids (six components each, `femu_testkit::op2`)
 //! read by `femu_io::op2::read_op2`, against the modes it holds.
 //!
-//! Run: `cargo bench --bench external_read` (`FEMU_BENCH_OP4_KEEP=FILE` keeps the file).
+//! Run: `cargo bench --bench external_read` (`FEMU_BENCH_OP4_KEEP=FILE` keeps the file;
+//! `FEMU_BENCH_OP4_TEXT=1` times the pair as OUTPUT4 text too).
 
 use femu_testkit::op4::{Op4Layout, Op4Out, op4_binary};
 use std::time::Instant;
@@ -183,6 +184,33 @@ fn main() {
         .status()
         .unwrap();
     assert!(status.success());
+    // FEMU_BENCH_OP4_TEXT=1: the same pair as OUTPUT4 text (1P,3E23.16), read the same way
+    if std::env::var("FEMU_BENCH_OP4_TEXT").is_ok() {
+        let text = dir.join("job_text.op4");
+        let pair = [
+            Op4Out {
+                name: "KGG",
+                rows,
+                form: 6,
+                columns: columns(n, false),
+            },
+            Op4Out {
+                name: "MGG",
+                rows,
+                form: 6,
+                columns: columns(n, true),
+            },
+        ];
+        let s = femu_testkit::op4::op4_text(&pair, Op4Layout::BigMat);
+        write_synced(&text, s.as_bytes());
+        println!("text: {:.0} MB", s.len() as f64 / 1e6);
+        drop(s);
+        let status = std::process::Command::new(std::env::current_exe().unwrap())
+            .env("FEMU_BENCH_OP4_READ", &text)
+            .status()
+            .unwrap();
+        assert!(status.success());
+    }
     // an OP2 of 50 modes on a third of the rows' grids (six components each)
     let op2 = dir.join("modes.op2");
     {

@@ -1022,7 +1022,12 @@ fn laminates_by_hand() {
         material: None,
         offset: 0.0,
     };
-    let x = [[0.0, 0.0, 0.0], [1.0, 0.1, 0.0], [0.9, 1.2, 0.0], [-0.1, 0.8, 0.0]];
+    let x = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.1, 0.0],
+        [0.9, 1.2, 0.0],
+        [-0.1, 0.8, 0.0],
+    ];
     let (ka, ma) = femu_fem::shell::matrices(&iso, &x, MassKind::Consistent).unwrap();
     let (kb, mb) = femu_fem::shell::matrices(&homogeneous, &x, MassKind::Consistent).unwrap();
     for (a, b) in [(&ka, &kb), (&ma, &mb)] {
