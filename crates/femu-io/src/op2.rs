@@ -77,67 +77,23 @@ impl<R: Read> Records<R> {
         Ok(r)
     }
 
-    fn word(&self, b: [u8; 4]) -> i32 {
-        if self.little {
-            i32::from_le_bytes(b)
-        } else {
-            i32::from_be_bytes(b)
-        }
-    }
-
     /// Reads one record into the window (`length`: its length's bytes, already read).
     fn read_record(&mut self, length: Option<[u8; 4]>) -> Result<(), IoError> {
-        let pos = self.pos;
-        let path = self.path.clone();
-        let truncated = || {
-            content(
-                &path,
-                format!("truncated: the record at byte {pos} runs past the end of the file"),
-            )
-        };
-        let io = |e| IoError::io(&path, e);
-        let head = match length {
-            Some(h) => h,
-            None => {
-                let mut h = [0u8; 4];
-                match crate::stream::read_full(&mut self.reader, &mut h).map_err(io)? {
-                    0 => {
-                        self.eof = true;
-                        return Ok(());
-                    }
-                    4 => h,
-                    _ => return Err(truncated()),
-                }
-            }
-        };
-        let n = self.word(head);
-        let n = usize::try_from(n).map_err(|_| {
-            content(
-                &path,
-                format!("the record at byte {pos} has a negative length {n}"),
-            )
-        })?;
-        // read as the bytes come: a damaged length allocates no more than the file holds
         let mut data = Vec::new();
-        let got = (&mut self.reader)
-            .take(n as u64)
-            .read_to_end(&mut data)
-            .map_err(io)?;
-        let mut tail = [0u8; 4];
-        if got < n || crate::stream::read_full(&mut self.reader, &mut tail).map_err(io)? < 4 {
-            return Err(truncated());
+        let at = self.pos;
+        if !crate::stream::fortran_record(
+            &mut self.reader,
+            self.little,
+            at as u64,
+            length,
+            &mut data,
+            &self.path,
+        )? {
+            self.eof = true;
+            return Ok(());
         }
-        let end = self.word(tail);
-        if end as usize != n {
-            return Err(content(
-                &path,
-                format!(
-                    "the record at byte {pos} says {n} bytes at its start and {end} at its end"
-                ),
-            ));
-        }
-        self.window.push_back((pos, data));
-        self.pos += 8 + n;
+        self.pos += 8 + data.len();
+        self.window.push_back((at, data));
         Ok(())
     }
 

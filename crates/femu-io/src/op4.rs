@@ -657,65 +657,21 @@ struct Records<R> {
 }
 
 impl<R: Read> Records<R> {
-    /// The next record's bytes and its offset, `None` at the end of the file.
+    /// The next record's bytes (in `buf`) and its offset, `None` at the end of the file.
     fn next(&mut self, path: &Path) -> Result<Option<u64>, IoError> {
         let at = self.offset;
-        let mut marker = [0u8; 4];
-        match crate::stream::read_full(&mut self.reader, &mut marker)
-            .map_err(|e| IoError::io(path, e))?
-        {
-            0 => return Ok(None),
-            4 => {}
-            _ => {
-                return Err(binary_error(
-                    path,
-                    at,
-                    "the file ends inside a record's length".into(),
-                ));
-            }
+        let more = crate::stream::fortran_record(
+            &mut self.reader,
+            self.little,
+            at,
+            None,
+            &mut self.buf,
+            path,
+        )?;
+        if !more {
+            return Ok(None);
         }
-        let word = |b: [u8; 4]| {
-            if self.little {
-                i32::from_le_bytes(b)
-            } else {
-                i32::from_be_bytes(b)
-            }
-        };
-        let n = word(marker);
-        if n < 0 {
-            return Err(binary_error(
-                path,
-                at,
-                format!("a record of negative length {n}"),
-            ));
-        }
-        // read as the bytes come (a damaged length allocates no more than the file holds)
-        self.buf.clear();
-        let got = (&mut self.reader)
-            .take(n as u64)
-            .read_to_end(&mut self.buf)
-            .map_err(|e| IoError::io(path, e))?;
-        let mut end = [0u8; 4];
-        let got_end = crate::stream::read_full(&mut self.reader, &mut end)
-            .map_err(|e| IoError::io(path, e))?;
-        if got < n as usize || got_end < 4 {
-            return Err(binary_error(
-                path,
-                at,
-                format!("truncated: the record of {n} bytes runs past the end of the file"),
-            ));
-        }
-        if word(end) != n {
-            return Err(binary_error(
-                path,
-                at,
-                format!(
-                    "the record's lengths differ ({n} before, {} after): not a Fortran record",
-                    word(end)
-                ),
-            ));
-        }
-        self.offset += 8 + n as u64;
+        self.offset += 8 + self.buf.len() as u64;
         Ok(Some(at))
     }
 

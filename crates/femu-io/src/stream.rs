@@ -95,3 +95,65 @@ pub(crate) fn read_full(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<us
     }
     Ok(got)
 }
+
+/// Reads one Fortran unformatted record (`length, bytes, length`, 4-byte lengths in the file's
+/// byte order) starting at byte `at` into `buf` (cleared first): `Ok(false)` at the end of the
+/// stream. `length`: the record's first four bytes when the caller has read them already. The
+/// bytes are read as they come, so that a damaged length allocates no more than the stream holds.
+///
+/// # Errors
+/// The stream's; [`IoError::Content`] naming byte `at` for a record cut by the end of the stream,
+/// a negative length, or lengths that differ at its two ends.
+pub(crate) fn fortran_record(
+    reader: &mut impl Read,
+    little: bool,
+    at: u64,
+    length: Option<[u8; 4]>,
+    buf: &mut Vec<u8>,
+    path: &std::path::Path,
+) -> Result<bool, crate::IoError> {
+    let content = |reason: String| crate::IoError::Content {
+        path: path.to_path_buf(),
+        reason: format!("byte {at}: {reason}"),
+    };
+    let io = |e| crate::IoError::io(path, e);
+    let word = |b: [u8; 4]| {
+        if little {
+            i32::from_le_bytes(b)
+        } else {
+            i32::from_be_bytes(b)
+        }
+    };
+    let head = match length {
+        Some(h) => h,
+        None => {
+            let mut h = [0u8; 4];
+            match read_full(reader, &mut h).map_err(io)? {
+                0 => return Ok(false),
+                4 => h,
+                _ => {
+                    return Err(content(
+                        "truncated: the file ends inside a record's length".into(),
+                    ));
+                }
+            }
+        }
+    };
+    let n = word(head);
+    let n = usize::try_from(n).map_err(|_| content(format!("a record of negative length {n}")))?;
+    buf.clear();
+    let got = reader.take(n as u64).read_to_end(buf).map_err(io)?;
+    let mut tail = [0u8; 4];
+    if got < n || read_full(reader, &mut tail).map_err(io)? < 4 {
+        return Err(content(format!(
+            "truncated: the record of {n} bytes runs past the end of the file"
+        )));
+    }
+    let end = word(tail);
+    if end as usize != n {
+        return Err(content(format!(
+            "the record says {n} bytes at its start and {end} at its end: not a Fortran record"
+        )));
+    }
+    Ok(true)
+}
