@@ -378,44 +378,59 @@ fn fortran_numbers(line: &str, out: &mut Vec<f64>) -> Option<()> {
             i += 1;
             continue;
         }
-        token.clear();
+        let start = i;
         if b[i] == b'+' || b[i] == b'-' {
-            token.push(b[i] as char);
             i += 1;
         }
         let mantissa = i;
+        let mut point = false;
         while i < b.len() && (b[i].is_ascii_digit() || b[i] == b'.') {
-            token.push(b[i] as char);
+            point |= b[i] == b'.';
             i += 1;
         }
         if i == mantissa {
             return None;
         }
+        let mantissa_end = i;
         let letter = i < b.len() && matches!(b[i], b'E' | b'e' | b'D' | b'd');
+        let e_letter = letter && matches!(b[i], b'E' | b'e');
         let bare = !letter
             && i + 1 < b.len()
             && matches!(b[i], b'+' | b'-')
             && b[i + 1].is_ascii_digit()
-            && token.contains('.');
+            && point;
         if letter || bare {
-            token.push('E');
             if letter {
                 i += 1;
             }
             if i < b.len() && matches!(b[i], b'+' | b'-') {
-                token.push(b[i] as char);
                 i += 1;
             }
             let exponent = i;
             while i < b.len() && b[i].is_ascii_digit() {
-                token.push(b[i] as char);
                 i += 1;
             }
             if i == exponent {
                 return None;
             }
         }
-        out.push(token.parse().ok()?);
+        // Rust reads `1.5E+03` as it stands; a `D` exponent or a bare one (`1.5+003`) is
+        // rewritten with an `E` first
+        let value = if !letter && !bare || e_letter {
+            line[start..i].parse().ok()?
+        } else {
+            token.clear();
+            token.push_str(&line[start..mantissa_end]);
+            token.push('E');
+            let exp_from = if letter {
+                mantissa_end + 1
+            } else {
+                mantissa_end
+            };
+            token.push_str(&line[exp_from..i]);
+            token.parse().ok()?
+        };
+        out.push(value);
     }
     Some(())
 }
@@ -863,4 +878,37 @@ fn read_binary(mut reader: impl BufRead, path: &Path, len: u64) -> Result<Vec<Op
         });
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fortran_numbers;
+
+    /// Fortran `E` fields as printers write them: touching, signed, a `D` exponent, an exponent
+    /// of three digits without its letter, a lower-case `e`, a bare mantissa; and what is not a
+    /// number.
+    #[test]
+    fn fortran_fields() {
+        let mut out = Vec::new();
+        fortran_numbers(
+            " 2.708955224E+05-2.708955224E+05 1.0D-03-.5e+01 1.0-100 3. +7.25",
+            &mut out,
+        )
+        .unwrap();
+        assert_eq!(
+            out,
+            vec![
+                2.708955224e5,
+                -2.708955224e5,
+                1.0e-3,
+                -5.0,
+                1.0e-100,
+                3.0,
+                7.25
+            ]
+        );
+        for bad in ["1.0E", "abc", "1.0E+0x", "--1.0"] {
+            assert_eq!(fortran_numbers(bad, &mut out), None, "{bad}");
+        }
+    }
 }
