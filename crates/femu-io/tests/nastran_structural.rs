@@ -993,3 +993,44 @@ fn a_simcenter_laminate_stretches_as_nastran_solved_it() {
         );
     }
 }
+
+/// A laminate's thickness as an updating parameter (`t:PID1`): every ply scaled together keeps
+/// `A/T` and `12 D/T^3`, so `K(p) = (1 + p) K_1 + (1 + p)^3 K_3` and the mass alike (its NSM
+/// unscaled) equal the deck whose plies are `1 + p` times as thick, entry by entry to 1e-13 of the
+/// largest, for a `[45/-45]s` of two densities with a non-structural mass.
+#[test]
+fn a_laminate_s_thickness_parameter_is_the_thicker_laminate() {
+    use femu_fem::assembly::Assembler;
+    use femu_fem::groups::ParameterGroups;
+    let laminate = |h: f64| {
+        simply_supported(
+            (0.5, 0.4, 5),
+            "",
+            &format!(
+                "PCOMP,1,,0.5,,,,,SYM\n,8,{h},45.,,9,{h},-45.\nMAT8,8,1.4+11,1.+10,0.3,5.+9,,,1600.\nMAT8,9,1.4+11,1.+10,0.3,5.+9,,,2000.\n"
+            ),
+        )
+    };
+    let (h, p) = (0.002, 0.2);
+    let nominal = parse_bdf(&laminate(h), "a.bdf", &BdfOptions::default()).unwrap();
+    let thicker = parse_bdf(&laminate(h * (1.0 + p)), "b.bdf", &BdfOptions::default()).unwrap();
+    for mass in [MassKind::Consistent, MassKind::Lumped] {
+        let asm = Assembler::new(&nominal.model).unwrap();
+        let base = asm.assemble(&nominal.model, mass).unwrap();
+        let groups = ParameterGroups::from_element_sets(&nominal.model, &["t:PID1"], mass).unwrap();
+        let got = groups
+            .parameterized(&nominal.model, &asm, &base, &[p], &[0.0])
+            .unwrap();
+        let direct = asm.assemble(&thicker.model, mass).unwrap();
+        for (a, b) in [(&got.k, &direct.k), (&got.m, &direct.m)] {
+            let scale = b.data().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (i, j, v) in femu_sparse::csc::entries(b) {
+                let w = a.get(i, j).copied().unwrap_or(0.0);
+                assert!(
+                    (v - w).abs() <= 1e-13 * scale,
+                    "{mass:?} ({i}, {j}): {w} vs {v}"
+                );
+            }
+        }
+    }
+}
