@@ -256,6 +256,15 @@ fn stdout_of_success(args: &[&str]) -> String {
 }
 
 /// A JSON file a command wrote.
+/// Asserts that a command succeeded, showing its standard error when it did not.
+fn succeeded(out: &std::process::Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn json_of(path: impl AsRef<std::path::Path>) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
@@ -694,11 +703,7 @@ fn matrices_export_round_trips() {
             .args(["modes", model.to_str().unwrap(), "--count", "4"])
             .output()
             .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        succeeded(&out);
         String::from_utf8(out.stdout).unwrap()
     };
     let (from_files, from_deck) = (lines(&dir.join("m_K.mtx")), lines(&deck));
@@ -1790,11 +1795,7 @@ fn frf_update_finds_the_softer_half() {
         json.to_str().unwrap(),
     ]);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     assert!(
         stdout.contains("Updating from FRFs") && stdout.contains("better"),
         "{stdout}"
@@ -1854,11 +1855,7 @@ fn frf_update_finds_the_softer_half() {
         .arg(&acc_json)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let a = json_of(&acc_json);
     assert_eq!(a["kind"], "accelerance");
     for (k, t) in theta.iter().enumerate() {
@@ -1877,11 +1874,7 @@ fn frf_update_finds_the_softer_half() {
         "--json",
         rayleigh.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let r = &json_of(&rayleigh)["update"]["result"];
     assert!(
         r["damping"]["rayleigh"]["alpha"].as_f64().unwrap() >= 0.0,
@@ -2005,11 +1998,7 @@ fn frf_lines_of_low_coherence_are_left_out() {
             "coherent.uff",
             &[extra, &["--json", dir.join(json).to_str().unwrap()]].concat(),
         );
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        succeeded(&out);
         let v = json_of(dir.join(json));
         v["functions"]
             .as_array()
@@ -2193,25 +2182,13 @@ fn gmsh_surfaces_as_shells() {
     };
     let shell = [&material[..], &["--shell", "plate=0.05", "--fix", "edge"]].concat();
     let (out, json) = modes("quads.msh", &shell, "quads.json");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let from_msh = freqs(&json);
     let (out, json) = modes("fv16.bdf", &[], "bdf.json");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let from_bdf = freqs(&json);
     let (out, json) = modes("triangles.msh", &shell, "triangles.json");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let triangles = freqs(&json);
     let nafems = [0.421, 1.029, 2.582, 3.306, 3.753, 6.555];
     for k in 0..6 {
@@ -2332,18 +2309,10 @@ fn gmsh_lines_as_beams() {
     ]
     .concat();
     let (out, json) = modes("beam.msh", &beam);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let from_msh = freqs(&json);
     let (out, json) = modes("beam.inp", &[]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let from_inp = freqs(&json);
     for k in 0..4 {
         assert!(
@@ -2387,11 +2356,7 @@ fn gmsh_lines_as_beams() {
     ]
     .concat();
     let (out, json) = modes("vertical.msh", &args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let vertical = freqs(&json);
     for k in 0..4 {
         assert!(

@@ -817,33 +817,28 @@ fn read_op4_pair(
         path: path.to_path_buf(),
         reason,
     };
-    let names: Vec<&str> = all.iter().map(|m| m.name.as_str()).collect();
-    let find = |n: &str| all.iter().find(|m| m.name.eq_ignore_ascii_case(n));
-    let (k, m) = match OP4_PAIRS
-        .iter()
-        .find_map(|(k, m)| Some((find(k)?, find(m)?)))
-    {
-        Some(pair) => pair,
-        None => {
-            let one = |first: char| {
-                let mut like = all
-                    .iter()
-                    .filter(|m| m.name.to_ascii_uppercase().starts_with(first));
-                match (like.next(), like.next()) {
-                    (Some(m), None) => Some(m),
-                    _ => None,
-                }
-            };
-            match (one('K'), one('M')) {
-                (Some(k), Some(m)) => (k, m),
-                _ => {
-                    return Err(content(format!(
-                        "no stiffness and mass pair (KAA and MAA, KFF and MFF, KLL and MLL, KGG and MGG, or one matrix named K... and one M...): the file has {names:?}"
-                    )));
-                }
-            }
+    let find = |n: &str| all.iter().position(|m| m.name.eq_ignore_ascii_case(n));
+    let one = |first: char| {
+        let mut like = all
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.name.to_ascii_uppercase().starts_with(first));
+        match (like.next(), like.next()) {
+            (Some((i, _)), None) => Some(i),
+            _ => None,
         }
     };
+    let Some((ik, im)) = OP4_PAIRS
+        .iter()
+        .find_map(|(k, m)| Some((find(k)?, find(m)?)))
+        .or_else(|| Some((one('K')?, one('M')?)))
+    else {
+        let names: Vec<&str> = all.iter().map(|m| m.name.as_str()).collect();
+        return Err(content(format!(
+            "no stiffness and mass pair (KAA and MAA, KFF and MFF, KLL and MLL, KGG and MGG, or one matrix named K... and one M...): the file has {names:?}"
+        )));
+    };
+    let (k, m) = (&all[ik], &all[im]);
     for a in [k, m] {
         if a.is_complex() {
             return Err(content(format!(
@@ -859,15 +854,19 @@ fn read_op4_pair(
             )));
         }
     }
-    let n = k.rows;
-    let csc = |a: &crate::op4::Op4Matrix| {
-        SparseMatrix::new_csc(
-            (n, n),
-            a.col_start.clone(),
-            a.row_index.clone(),
-            a.re.clone(),
-        )
-    };
+    let (n, names) = (k.rows, format!("{} and {}", k.name, m.name));
+    // the two matrices moved out of the file's list into compressed columns, not copied
+    let mut slots: Vec<Option<crate::op4::Op4Matrix>> = all.into_iter().map(Some).collect();
+    let csc =
+        |a: crate::op4::Op4Matrix| SparseMatrix::new_csc((n, n), a.col_start, a.row_index, a.re);
+    let (kc, mc) = (
+        csc(slots[ik].take().expect("chosen once")),
+        csc(slots[im].take().expect("K and M are two matrices")),
+    );
+    let table = path.with_file_name(format!(
+        "{}_dofs.csv",
+        path.file_stem().and_then(|s| s.to_str()).unwrap_or("job")
+    ));
     let is_table = rows
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
@@ -875,43 +874,30 @@ fn read_op4_pair(
         let dofs = read_dof_csv(rows)?;
         if dofs.len() != n {
             return Err(content(format!(
-                "{} and {} have {n} rows, the DOF table {} has {}",
-                k.name,
-                m.name,
+                "{names} have {n} rows, the DOF table {} has {}",
                 rows.display(),
                 dofs.len()
             )));
         }
-        let (ka, ma) = (csc(k), csc(m));
-        symmetric(path, &ka, &dofs)?;
-        symmetric(path, &ma, &dofs)?;
-        return Ok((ka, ma, dofs));
+        symmetric(path, &kc, &dofs)?;
+        symmetric(path, &mc, &dofs)?;
+        return Ok((kc, mc, dofs));
     }
     if !rows.exists() {
         return Err(content(format!(
             "no DOF table {} and no deck {} beside the matrices: OP4 rows carry no labels; give the deck whose g-set KGG and MGG are on, or a table row,node,component",
-            path.with_file_name(format!(
-                "{}_dofs.csv",
-                path.file_stem().and_then(|s| s.to_str()).unwrap_or("job")
-            ))
-            .display(),
+            table.display(),
             rows.display()
         )));
     }
     let gset = crate::nastran::read_gset(rows)?;
     if n != 6 * gset.grids.len() {
         return Err(content(format!(
-            "{} and {} have {n} rows; the g-set of the deck {} has {} ({} grids x 6): a matrix of another set (KAA, KFF: after constraints or reductions) needs its DOF table {}",
-            k.name,
-            m.name,
+            "{names} have {n} rows; the g-set of the deck {} has {} ({} grids x 6): a matrix of another set (KAA, KFF: after constraints or reductions) needs its DOF table {}",
             rows.display(),
             6 * gset.grids.len(),
             gset.grids.len(),
-            path.with_file_name(format!(
-                "{}_dofs.csv",
-                path.file_stem().and_then(|s| s.to_str()).unwrap_or("job")
-            ))
-            .display()
+            table.display()
         )));
     }
     let all_dofs: Vec<DofLabel> = gset
@@ -919,12 +905,11 @@ fn read_op4_pair(
         .iter()
         .flat_map(|&node| (0..6).map(move |component| DofLabel { node, component }))
         .collect();
-    let (kg, mg) = (csc(k), csc(m));
-    symmetric(path, &kg, &all_dofs)?;
-    symmetric(path, &mg, &all_dofs)?;
+    symmetric(path, &kc, &all_dofs)?;
+    symmetric(path, &mc, &all_dofs)?;
     // kept: not constrained, and with stiffness or mass
     let mut touched = vec![false; n];
-    for a in [&kg, &mg] {
+    for a in [&kc, &mc] {
         for (r, c, v) in femu_sparse::csc::entries(a) {
             if v != 0.0 {
                 touched[r] = true;
@@ -943,6 +928,9 @@ fn read_op4_pair(
     if dofs.is_empty() {
         return Err(content("no unconstrained DOF in the matrices".into()));
     }
+    if dofs.len() == n {
+        return Ok((kc, mc, dofs));
+    }
     let keep = |a: &SparseMatrix| {
         femu_sparse::csc::from_entry_iter(
             dofs.len(),
@@ -953,7 +941,7 @@ fn read_op4_pair(
             }),
         )
     };
-    Ok((keep(&kg), keep(&mg), dofs))
+    Ok((keep(&kc), keep(&mc), dofs))
 }
 
 /// The stiffness and mass of labelled entries: the rows are the labels either uses, sorted by
