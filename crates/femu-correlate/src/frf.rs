@@ -300,6 +300,124 @@ pub fn residual_flexibility_analysed(
     Ok(r)
 }
 
+/// [`residual_flexibility`] solved with a factorization of `K - sigma M` that the eigensolver
+/// kept ([`femu_sparse::eigen::EigenOptions::keep_factor`]) instead of a factorization of `K`:
+/// no factorization at all, and defined for a model with rigid-body motions, whose rigid-body
+/// modes are among the kept ones (docs/MATH.md, "Residual flexibility from the eigensolver's
+/// factor").
+///
+/// The loads are first cleared of the kept modes, `f' = (I - M Phi Phi^T) f`, so that what is
+/// solved lies in the span of the modes left out, where `K` is definite; there
+/// `x = sum_left phi_r phi_r^T f / lambda_r` is reached by refining `x <- x + (K - sigma M)^-1
+/// (f' - K x)` (each step multiplies a mode's error by `-sigma / (lambda_r - sigma)`: `1e-10` at
+/// the lowest-mode solve's tiny shift, a step or two), and `R = C x`. With rigid-body modes kept
+/// this is the flexibility of the elastic modes left out under loads balanced by the rigid-body
+/// inertia (inertia relief), the free structure's residual flexibility.
+///
+/// # Errors
+/// A factor of another size, kept modes that are not every mode below the factor's shift
+/// (its inertia counts others), refinement that stops converging above round-off (a null vector
+/// of `K` the kept modes do not hold, such as a rigid-body mode left out, or a shift too close to
+/// the modes left out), sizes. Loads the kept modes hold entirely give `R = 0`.
+#[allow(clippy::too_many_arguments)]
+pub fn residual_flexibility_factored(
+    k: &SparseMatrix,
+    m: &SparseMatrix,
+    factor: &femu_sparse::eigen::KeptFactor,
+    values: &[f64],
+    shapes: MatRef<'_, f64>,
+    outputs: &SensorLayout,
+    inputs: &SensorLayout,
+) -> Result<Mat<f64>, CorrelateError> {
+    use femu_sparse::cholesky::Factorization;
+    use femu_sparse::csc::sym_mul_mat;
+    let n = k.rows();
+    let invalid = |reason: String| CorrelateError::Invalid {
+        what: "residual flexibility",
+        reason,
+    };
+    if factor.ldlt.dim() != n || m.rows() != n || shapes.nrows() != n {
+        return Err(invalid(format!(
+            "K has {n} DOFs, M {}, the kept factor {}, the modes {}",
+            m.rows(),
+            factor.ldlt.dim(),
+            shapes.nrows()
+        )));
+    }
+    if values.len() != shapes.ncols() {
+        return Err(invalid(format!(
+            "{} eigenvalues for {} mode shapes",
+            values.len(),
+            shapes.ncols()
+        )));
+    }
+    let below = values.iter().filter(|l| **l < factor.sigma).count();
+    if factor.ldlt.inertia().negative != below {
+        return Err(invalid(format!(
+            "the factor at the shift {:e} s^-2 has {} eigenvalues below it, the kept modes {below}: the modes are not every mode below the shift",
+            factor.sigma,
+            factor.ldlt.inertia().negative
+        )));
+    }
+    // x <- x - Phi Phi^T M x: clears a block of its components along the kept modes
+    let clear = |x: &mut Mat<f64>| -> Result<(), CorrelateError> {
+        let mx = sym_mul_mat(m, x.as_ref())?;
+        let c = shapes.transpose() * &mx;
+        *x -= shapes * &c;
+        Ok(())
+    };
+    // f' = (I - M Phi Phi^T) f for the inputs' rows f
+    let mut f = Mat::<f64>::zeros(n, inputs.len());
+    for j in 0..inputs.len() {
+        for (d, w) in inputs.row(j) {
+            f[(*d, j)] += w;
+        }
+    }
+    let c = shapes.transpose() * &f;
+    let cleared = &f - sym_mul_mat(m, (shapes * &c).as_ref())?;
+    let norm = |a: MatRef<'_, f64>| a.norm_max();
+    if norm(cleared.as_ref()) <= 1e-12 * norm(f.as_ref()) {
+        // the kept modes hold the loads to round-off: the modes left out carry nothing
+        return Ok(Mat::zeros(outputs.len(), inputs.len()));
+    }
+    let f = cleared;
+    let mut x = f.clone();
+    factor.ldlt.solve_in_place(x.as_mut());
+    clear(&mut x)?;
+    // Refined until a step is below 1e-14 of the solution, or until the steps stop shrinking at
+    // round-off (below 1e-10 of it: K's conditioning sets that floor); a step that stops
+    // shrinking above it is a null vector of K the kept modes do not hold, or a shift too close
+    // to the modes left out.
+    let mut previous = f64::INFINITY;
+    let mut converged = false;
+    for _ in 0..60 {
+        let mut dx = &f - sym_mul_mat(k, x.as_ref())?;
+        factor.ldlt.solve_in_place(dx.as_mut());
+        clear(&mut dx)?;
+        x += &dx;
+        let step = norm(dx.as_ref());
+        let floor = norm(x.as_ref());
+        if !step.is_finite() {
+            break;
+        }
+        if step <= 1e-14 * floor || (step > 0.5 * previous && step <= 1e-10 * floor) {
+            converged = true;
+            break;
+        }
+        if step > 0.5 * previous {
+            break;
+        }
+        previous = step;
+    }
+    if !converged {
+        return Err(invalid(format!(
+            "refinement with the factor at {:e} s^-2 did not converge: K has a null vector the kept modes do not hold (a rigid-body mode left out), or the shift is too close to the modes left out",
+            factor.sigma
+        )));
+    }
+    outputs.measure_all(x.as_ref())
+}
+
 /// The matrices of the direct route: `K` and `M` (free DOFs), and the model's own dampers when it
 /// has them: discrete viscous dampers `C_d` (bushings' `B`) and element structural damping
 /// `K_4 = sum_e GE_e K_e` (springs' and bushings' `GE`), Nastran's `B` and `K4`.

@@ -500,6 +500,7 @@ impl SlepcRun {
                 total_seconds: self.seconds.iter().sum(),
                 ..Default::default()
             },
+            factor: None,
         })
     }
 }

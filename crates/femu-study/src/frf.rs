@@ -9,7 +9,7 @@ use crate::load::LoadedModel;
 use faer::c64;
 use femu_correlate::frf::{
     Damping, DirectSystem, Frf, FrfOptions, ResponseKind, csac, csf, direct_frf, frac, modal_frf,
-    residual_flexibility_analysed,
+    residual_flexibility_analysed, residual_flexibility_factored,
 };
 use femu_correlate::{Sensor, SensorLayout};
 use femu_io::uff::{Ordinate, UffDof, UffFunction};
@@ -328,8 +328,9 @@ fn kind_of(f: &UffFunction) -> Result<ResponseKind, String> {
 /// The measured FRFs of the universal file `path` against the model's: the test's response and
 /// reference DOFs are the model's node ids (translations), its lines the FRFs' abscissa (Hz, the
 /// same for every function), their values in the model's units (SI: m, N, s). Model modes up to
-/// `request.modes_up_to` times the highest line are superposed with the request's damping; the
-/// residual flexibility of those above is added when the model has no rigid-body motion.
+/// `request.modes_up_to` times the highest line are superposed with the request's damping, with
+/// the residual flexibility of those above (for a model with rigid-body motions, that of its
+/// elastic modes under loads balanced by the rigid-body inertia).
 ///
 /// # Errors
 /// A file without FRFs, FRFs of different lines or kinds, rotations, nodes the model does not
@@ -1024,7 +1025,8 @@ fn align(
 }
 
 /// Modal superposition of the modes up to `request.modes_up_to` times the highest line, with the
-/// residual flexibility of those above when the model has no rigid-body motion.
+/// residual flexibility of those above (for a model with rigid-body motions, of its elastic modes
+/// under loads balanced by the rigid-body inertia).
 #[allow(clippy::too_many_arguments)]
 fn modal_route(
     model: &LoadedModel,
@@ -1049,29 +1051,51 @@ fn modal_route(
         ));
     }
     let hi = w_top * w_top;
-    let modes = model.sys.modes(Which::Band { lo: -1e-6 * hi, hi }, eigen)?;
+    // the band's lower-end factor kept: the residual flexibility solves with it, no factorization
+    // of K of its own (docs/MATH.md, "Residual flexibility from the eigensolver's factor")
+    let keep = EigenOptions {
+        keep_factor: true,
+        ..eigen.clone()
+    };
+    let mut modes = model.sys.modes(Which::Band { lo: -1e-6 * hi, hi }, &keep)?;
     let top_hz = modes
         .values
         .last()
         .map_or(0.0, |l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI));
-    let residual = if modes.values.first().is_some_and(|l| *l <= 0.0)
-        || modes.values.first().is_some_and(|l| {
-            // rigid-body eigenvalues are round-off far below the first elastic one
-            *l < 1e-8 * hi
-        }) {
-        notes.push(
-            "no residual flexibility: the model has rigid-body motions (it would need inertia relief); modes above the band are left out".into(),
-        );
-        None
-    } else {
-        Some(residual_flexibility_analysed(
+    // rigid-body eigenvalues are round-off far below the first elastic one
+    let rigid = modes.values.iter().filter(|l| **l < 1e-8 * hi).count();
+    let residual = match modes.factor.take() {
+        Some(factor) => {
+            if rigid > 0 {
+                notes.push(format!(
+                    "residual flexibility of the elastic modes above the band, the loads balanced by the inertia of the {rigid} rigid-body modes (inertia relief)"
+                ));
+            }
+            Some(residual_flexibility_factored(
+                &model.sys.k,
+                &model.sys.m,
+                &factor,
+                &modes.values,
+                modes.vectors.as_ref(),
+                outputs,
+                inputs,
+            )?)
+        }
+        // (an engine that keeps no factor)
+        None if rigid > 0 => {
+            notes.push(
+                "no residual flexibility: the model has rigid-body motions and the engine kept no factor to balance them with; modes above the band are left out".into(),
+            );
+            None
+        }
+        None => Some(residual_flexibility_analysed(
             &model.sys.k,
             model.sys.analysis(),
             &modes.values,
             modes.vectors.as_ref(),
             outputs,
             inputs,
-        )?)
+        )?),
     };
     let damping = match &request.damping_from {
         Some(test) => test_damping(model, test, request, &modes, notes)?,

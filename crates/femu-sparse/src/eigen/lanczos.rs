@@ -934,6 +934,7 @@ impl<'p, 'a> Lanczos<'p, 'a> {
             shift: sigma,
             sturm,
             stats,
+            factor: None,
         }
     }
 }

@@ -217,6 +217,20 @@ pub struct Modes {
     pub sturm: SturmCheck,
     /// Work and time.
     pub stats: EigenStats,
+    /// The factorization kept when [`EigenOptions::keep_factor`] asked for it and the solve had
+    /// one below every returned eigenvalue; `None` otherwise.
+    pub factor: Option<KeptFactor>,
+}
+
+/// A factorization of `K - sigma M` kept from a solve ([`EigenOptions::keep_factor`]), with
+/// `sigma` below every eigenvalue the solve returned and no eigenvalue between `sigma` and the
+/// lowest of them (`inertia().negative` of them below `sigma`, none for a semi-definite `K`).
+#[derive(Debug, Clone)]
+pub struct KeptFactor {
+    /// The shift `sigma` (s^-2).
+    pub sigma: f64,
+    /// `LDL^T` of `K - sigma M`, shared by the clones of the modes.
+    pub ldlt: std::sync::Arc<crate::cholesky::Ldlt>,
 }
 
 impl Modes {

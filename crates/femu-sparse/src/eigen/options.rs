@@ -55,6 +55,15 @@ pub struct EigenOptions {
     /// their span are verified and locked before the iteration starts, so the Lanczos run never
     /// has to converge them at the tiny shift. `None` (the default): the run finds them itself.
     pub null_space_hint: Option<NullSpaceHint>,
+    /// Keep a factorization of `K - sigma M` at a shift below every returned eigenvalue in
+    /// [`Modes::factor`](super::Modes::factor) ([`KeptFactor`](super::KeptFactor)): for [`Which::Lowest`], the iteration's own (kept
+    /// through the Sturm count, whose inertia pass then runs beside it); for a [`Which::Band`]
+    /// whose lower end is below zero, the Sturm count's at that end, made after the iteration
+    /// instead of before it, so that no two factors are alive at once. No factorization is
+    /// added. The frequency responses' residual flexibility solves with it instead of factoring
+    /// `K` (docs/MATH.md, "Residual flexibility from the eigensolver's factor"). `false` (the
+    /// default): every factor is released.
+    pub keep_factor: bool,
 }
 
 /// Candidate null vectors of `K` for [`EigenOptions::null_space_hint`]: the columns of an
@@ -103,6 +112,7 @@ impl Default for EigenOptions {
             engine: crate::slepc::Engine::Femu,
             lowest_shift_hint: None,
             null_space_hint: None,
+            keep_factor: false,
         }
     }
 }

@@ -566,7 +566,14 @@ impl<'a> Pencil<'a> {
             // the rigid-body zeros) instead of a shift on the zeros
             return self.solve(Which::Lowest(count), params);
         }
-        let (mut sigma, band) = self.first_shift(which, hint, stats)?;
+        // a band reaching below zero with its lower end's factor to keep: that end is counted
+        // after the iteration (no eigenvalue below it is assumed until then, and the check
+        // corrects the count), so that its factor is never alive beside the iteration's
+        let defer_lower = params.keep_factor
+            && matches!(which, Which::Band { lo, .. } if lo - self.tie_tolerance(lo) < 0.0);
+        let (mut sigma, mut band) = self.first_shift(which, hint, defer_lower, stats)?;
+        let mut lower_pending = defer_lower;
+        let mut kept: Option<Ldlt> = None;
         let mut want = band.map_or(requested, |b| b.2);
         // the nearest modes are chosen by their distance to the shift the user gave
         let target = sigma;
@@ -671,6 +678,7 @@ impl<'a> Pencil<'a> {
             }
         }
         if want == 0 {
+            // (a deferred lower count: none below the upper end, so none below the lower)
             return Ok(no_modes(self.dim(), requested, sigma, band, stats));
         }
         let mut lanczos = Lanczos::new(self, op, sigma, params, &known);
@@ -708,13 +716,35 @@ impl<'a> Pencil<'a> {
                 }
                 r => r?,
             }
-            let (sel, check) =
+            if let (true, Some((lo, hi, upper_count))) = (lower_pending, band) {
+                // the deferred count at the band's lower end, its factor kept
+                lanczos.op = None;
+                let t = Instant::now();
+                let low = self.factor_shifted(lo)?;
+                stats.factor_seconds += t.elapsed().as_secs_f64();
+                stats.factorizations += 1;
+                band = Some((lo, hi, upper_count - low.inertia().negative));
+                kept = Some(low);
+                lower_pending = false;
+            }
+            let (sel, check, op) =
                 self.checked_selection(&mut lanczos, band, which, requested, target, stats)?;
+            if op.is_some() {
+                kept = op;
+            }
             if check.verified() {
                 let mut modes = lanczos.finish(sel, sigma, check, requested, stats.clone());
                 modes.stats.total_seconds =
                     self.check_seconds + self.symbolic_seconds + started.elapsed().as_secs_f64();
+                modes.factor = kept.map(|ldlt| super::KeptFactor {
+                    sigma: band.map_or(sigma, |b| b.0),
+                    ldlt: std::sync::Arc::new(ldlt),
+                });
                 return Ok(modes);
+            }
+            if matches!(which, Which::Lowest(_)) {
+                // the iteration goes on at its shift: its factor back, if kept
+                lanczos.op = kept.take();
             }
             attempts += 1;
             if check.count < check.returned || attempts > 8 || lanczos.values.len() >= n {
@@ -737,6 +767,7 @@ impl<'a> Pencil<'a> {
         &self,
         which: Which,
         hint: Option<f64>,
+        defer_lower: bool,
         stats: &mut EigenStats,
     ) -> Result<(f64, Option<Band>), SparseError> {
         Ok(match which {
@@ -759,9 +790,15 @@ impl<'a> Pencil<'a> {
                 }
                 let (lo, hi) = (lo - self.tie_tolerance(lo), hi + self.tie_tolerance(hi));
                 let t = Instant::now();
-                let (nl, nh) = (self.count_below(lo)?, self.count_below(hi)?);
+                let nl = if defer_lower {
+                    0
+                } else {
+                    stats.factorizations += 1;
+                    self.count_below(lo)?
+                };
+                let nh = self.count_below(hi)?;
                 stats.factor_seconds += t.elapsed().as_secs_f64();
-                stats.factorizations += 2;
+                stats.factorizations += 1;
                 (0.5 * (lo + hi), Some((lo, hi, nh - nl)))
             }
         })
@@ -770,7 +807,9 @@ impl<'a> Pencil<'a> {
     /// The pairs of a finished run that answer the request, and the Sturm count that proves none
     /// was skipped: for a band, the values inside it against the count made at the start; else
     /// the `requested` nearest `target` (nearest) or lowest above the shift, counted now (the
-    /// iteration's factor is released first, so that one factor is alive at a time).
+    /// iteration's factor is released first, so that one factor is alive at a time, unless
+    /// [`EigenOptions::keep_factor`] asks for it: it is then returned, and the count's inertia
+    /// pass runs beside it).
     fn checked_selection(
         &self,
         lanczos: &mut Lanczos<'_, '_>,
@@ -779,7 +818,7 @@ impl<'a> Pencil<'a> {
         requested: usize,
         target: f64,
         stats: &mut EigenStats,
-    ) -> Result<(Vec<usize>, SturmCheck), SparseError> {
+    ) -> Result<(Vec<usize>, SturmCheck, Option<Ldlt>), SparseError> {
         let sigma = lanczos.sigma;
         Ok(match band {
             Some((lo, hi, count)) => {
@@ -793,14 +832,18 @@ impl<'a> Pencil<'a> {
                     count,
                     returned,
                 };
-                (sel, check)
+                (sel, check, None)
             }
             None => {
                 let nearest = matches!(which, Which::Nearest { .. });
                 let centre = if nearest { target } else { sigma };
                 let (sel, lower, upper) = self.select(&lanczos.values, requested, centre, nearest);
-                // one factor alive at a time: release the iteration's before the check's
-                lanczos.op = None;
+                // one factor alive at a time: release the iteration's before the check's, or
+                // hand it back when it is to be kept (a lowest-mode shift, below the spectrum)
+                let op = lanczos
+                    .op
+                    .take()
+                    .filter(|_| lanczos.params.keep_factor && !nearest);
                 let t = Instant::now();
                 let count = self.count_below(upper)?
                     - lower.map(|l| self.count_below(l)).transpose()?.unwrap_or(0);
@@ -813,7 +856,7 @@ impl<'a> Pencil<'a> {
                     count,
                     returned,
                 };
-                (sel, check)
+                (sel, check, op)
             }
         })
     }
@@ -1019,5 +1062,6 @@ fn no_modes(
             returned: 0,
         },
         stats: stats.clone(),
+        factor: None,
     }
 }
