@@ -648,3 +648,79 @@ fn massless_dofs_with_requests_near_the_finite_count() {
         "{e}"
     );
 }
+
+/// [`EigenOptions::keep_factor`]: a band reaching below zero counts its lower end after the
+/// iteration and keeps that factor; a lowest-mode solve keeps its own. On the free cube (zero
+/// triples at the bottom) and on the same pencil shifted by `-c M` (`K - c M`: eigenvalues below
+/// the band's lower end, which the deferred count must subtract) every result passes the cluster
+/// checks against the dense spectrum, equals the solve without the option, and the kept factor's
+/// inertia is the dense count below its shift.
+#[test]
+fn a_kept_factor_changes_no_result() {
+    let mut case = Case::new(4, 3, true, 3);
+    let keep = EigenOptions {
+        keep_factor: true,
+        ..EigenOptions::default()
+    };
+    let first_elastic = case.dense.iter().copied().find(|v| *v > case.tie).unwrap();
+    for shift in [0.0, 1.5 * first_elastic] {
+        if shift > 0.0 {
+            // K - c M on K's pattern (M's pattern is K's here), and its spectrum moved by -c
+            let (k, m) = (to_dense(&case.k), to_dense(&case.m));
+            let shifted: Vec<Vec<f64>> = (0..k.nrows())
+                .map(|i| {
+                    (0..k.ncols())
+                        .map(|j| k[(i, j)] - shift * m[(i, j)])
+                        .collect()
+                })
+                .collect();
+            let mm: Vec<Vec<f64>> = (0..m.nrows())
+                .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
+                .collect();
+            case.k = sparse(&shifted, &mm);
+            case.dense = generalized_symmetric_eigenvalues(
+                to_dense(&case.k).as_ref(),
+                to_dense(&case.m).as_ref(),
+            )
+            .unwrap();
+        }
+        let top = 4.0 * first_elastic;
+        for which in [
+            Which::Band {
+                lo: -1e-6 * top,
+                hi: top,
+            },
+            Which::Lowest(7),
+        ] {
+            if shift > 0.0 && matches!(which, Which::Lowest(_)) {
+                // an indefinite K has no lowest-mode shift below its spectrum: refused either way
+                continue;
+            }
+            let plain = case.check(which);
+            let kept = case.check_with(which, &keep);
+            assert_eq!(
+                kept.values.len(),
+                plain.values.len(),
+                "{which:?}, shift {shift}"
+            );
+            for (a, b) in kept.values.iter().zip(&plain.values) {
+                assert!(
+                    (a - b).abs() <= case.tie,
+                    "{which:?}, shift {shift}: {a} {b}"
+                );
+            }
+            assert!(plain.factor.is_none());
+            let f = kept.factor.as_ref().expect("kept");
+            assert!(kept.values.iter().all(|v| *v > f.sigma), "{which:?}");
+            assert_eq!(
+                f.ldlt.inertia().negative,
+                case.count(None, f.sigma),
+                "{which:?}, shift {shift}: inertia at {}",
+                f.sigma
+            );
+            if shift > 0.0 {
+                assert!(f.ldlt.inertia().negative > 0, "eigenvalues below the band");
+            }
+        }
+    }
+}
