@@ -70,6 +70,39 @@ pub fn mac(xa: &[f64], phia: &[f64]) -> Result<f64, CorrelateError> {
     Ok(xp * xp / (xx * pp))
 }
 
+/// The MAC of two complex vectors `a = a_re + i a_im` and `b = b_re + i b_im`:
+/// `|a^H b|^2 / ((a^H a)(b^H b))` (docs/MATH.md, "Complex modes"). It is 1 for `b` any complex
+/// multiple of `a`, and equals [`mac`] when both are real. A real model shape is `b_im = 0`.
+///
+/// # Errors
+/// Mismatched lengths or a zero vector.
+pub fn complex_mac(
+    a_re: &[f64],
+    a_im: &[f64],
+    b_re: &[f64],
+    b_im: &[f64],
+) -> Result<f64, CorrelateError> {
+    same_len(
+        "a's imaginary part against its real part",
+        a_re.len(),
+        a_im.len(),
+    )?;
+    same_len("b against a", a_re.len(), b_re.len())?;
+    same_len(
+        "b's imaginary part against its real part",
+        b_re.len(),
+        b_im.len(),
+    )?;
+    let aa = dot(a_re, a_re) + dot(a_im, a_im);
+    let bb = dot(b_re, b_re) + dot(b_im, b_im);
+    nonzero("test vector", 0, aa)?;
+    nonzero("model vector", 0, bb)?;
+    // a^H b = sum (a_re - i a_im)(b_re + i b_im)
+    let re = dot(a_re, b_re) + dot(a_im, b_im);
+    let im = dot(a_re, b_im) - dot(a_im, b_re);
+    Ok((re * re + im * im) / (aa * bb))
+}
+
 fn mac_from_products(
     xx: &[f64],
     pp: &[f64],

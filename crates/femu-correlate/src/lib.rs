@@ -86,7 +86,7 @@ pub use test_data::TestData;
 
 /// The types most programs need.
 pub mod prelude {
-    pub use crate::correlation::{mac, mac_m, mac_m_matrix, mac_matrix, msd, msd_m};
+    pub use crate::correlation::{complex_mac, mac, mac_m, mac_m_matrix, mac_matrix, msd, msd_m};
     pub use crate::{
         Bound, BoundKind, CorrelateError, ElementBounds, Estimator, Form, MassSolver, ModeSet,
         ModelSpectrum, PairedModel, Pairing, PairingOptions, Sensor, SensorLayout, StiffnessSolver,

@@ -148,8 +148,12 @@ pub struct TestModes {
     pub frequencies_hz: Vec<f64>,
     /// Modal damping ratios (fraction of critical), when identified.
     pub damping_ratios: Option<Vec<f64>>,
-    /// Shapes at the sensors (`s x m`), real.
+    /// Shapes at the sensors (`s x m`), real: for complex identified modes, each turned by the
+    /// phase of its largest component and its real part taken (docs/MATH.md, "Complex modes").
     pub shapes: Mat<f64>,
+    /// For complex identified modes, the imaginary parts of the same turned shapes (`s x m`):
+    /// the mode is `shapes + i imaginary` (a real mode's column is zero). `None` for real data.
+    pub imaginary: Option<Mat<f64>>,
 }
 
 impl TestModes {
@@ -204,7 +208,41 @@ impl TestModes {
             frequencies_hz,
             damping_ratios,
             shapes,
+            imaginary: None,
         })
+    }
+
+    /// These modes with the imaginary parts of complex identified shapes
+    /// ([`TestModes::imaginary`]): correlation then reports the complex MAC of each pair beside
+    /// the MAC of the real shapes.
+    ///
+    /// # Errors
+    /// A matrix of another size than the shapes, a value that is not finite.
+    pub fn with_imaginary(mut self, imaginary: Mat<f64>) -> Result<Self, CorrelateError> {
+        if imaginary.nrows() != self.shapes.nrows() || imaginary.ncols() != self.shapes.ncols() {
+            return Err(CorrelateError::DimensionMismatch {
+                what: "imaginary parts against the test shapes (values)",
+                expected: self.shapes.nrows() * self.shapes.ncols(),
+                got: imaginary.nrows() * imaginary.ncols(),
+            });
+        }
+        for j in 0..imaginary.ncols() {
+            for i in 0..imaginary.nrows() {
+                if !imaginary[(i, j)].is_finite() {
+                    return Err(CorrelateError::Invalid {
+                        what: "test mode shape",
+                        reason: format!(
+                            "mode {}'s imaginary part at sensor {} is {}",
+                            j + 1,
+                            i + 1,
+                            imaginary[(i, j)]
+                        ),
+                    });
+                }
+            }
+        }
+        self.imaginary = Some(imaginary);
+        Ok(self)
     }
 
     /// Test modes of frequencies alone (no shapes: zero sensors).

@@ -71,6 +71,10 @@ pub struct Pair {
     pub frequency_error: f64,
     /// `|lambda_id - lambda_j|`, s^-2 (Table 2).
     pub eigenvalue_gap: f64,
+    /// For a complex test mode, the complex MAC of its complex shape with the model's
+    /// ([`crate::correlation::complex_mac`]); `None` for real test data.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub complex_mac: Option<f64>,
 }
 
 impl Pair {
@@ -84,6 +88,7 @@ impl Pair {
             f_model,
             frequency_error: frequency_error(f_test, f_model),
             eigenvalue_gap: eigenvalue_gap_hz(f_test, f_model),
+            complex_mac: None,
         }
     }
 }

@@ -106,6 +106,17 @@ pub fn correlate(
             )
         })
         .collect::<Result<Vec<_>, _>>()?;
+    if let Some(im) = &test.imaginary {
+        let zeros = vec![0.0; layout.len()];
+        for p in &mut pairing.pairs {
+            p.complex_mac = Some(crate::correlation::complex_mac(
+                &col(test.shapes.as_ref(), p.test),
+                &col(im.as_ref(), p.test),
+                &col(phia.as_ref(), p.model),
+                &zeros,
+            )?);
+        }
+    }
     let pairs = pairing.index_pairs();
     let comac = if pairs.is_empty() {
         Vec::new()
@@ -127,16 +138,28 @@ pub fn correlate(
 impl fmt::Display for CorrelationReport {
     /// The paired modes as a Markdown table (the paper's Table 1 with MAC and MSD).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // complex test modes: their complex MAC in a column of its own
+        let complex = self.pairing.pairs.iter().any(|p| p.complex_mac.is_some());
+        let (head, rule, blank) = if complex {
+            (" complex MAC |", "---|", " - |")
+        } else {
+            ("", "", "")
+        };
         writeln!(
             f,
-            "| test | f test (Hz) | model | f model (Hz) | error (%) | gap (s^-2) | MAC | MSD |"
+            "| test | f test (Hz) | model | f model (Hz) | error (%) | gap (s^-2) | MAC | MSD |{head}"
         )?;
-        writeln!(f, "|---|---|---|---|---|---|---|---|")?;
+        writeln!(f, "|---|---|---|---|---|---|---|---|{rule}")?;
         for (k, p) in self.pairing.pairs.iter().enumerate() {
             let or_dash = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
+            let extra = if complex {
+                format!(" {} |", or_dash(p.complex_mac))
+            } else {
+                String::new()
+            };
             writeln!(
                 f,
-                "| {} | {:.1} | {} | {:.1} | {:+.2} | {:.4e} | {} | {} |",
+                "| {} | {:.1} | {} | {:.1} | {:+.2} | {:.4e} | {} | {} |{extra}",
                 p.test + 1,
                 p.f_test,
                 p.model + 1,
@@ -150,7 +173,7 @@ impl fmt::Display for CorrelationReport {
         for t in &self.pairing.unpaired_test {
             writeln!(
                 f,
-                "| {} | {:.1} | - | - | - | - | < {:.2} | - |",
+                "| {} | {:.1} | - | - | - | - | < {:.2} | - |{blank}",
                 t + 1,
                 self.f_test[*t],
                 self.pairing.mac_threshold
@@ -176,6 +199,14 @@ impl fmt::Display for CorrelationReport {
                  on the sensor readings; pairs by optimal assignment at MAC >= {}{window}.",
                 self.pairing.mac_threshold,
             )?;
+            if complex {
+                writeln!(
+                    f,
+                    "The test's modes are complex: MAC and MSD use each shape turned by the phase \
+                     of its largest component, real part; complex MAC = |psi^H phi|^2 / \
+                     ((psi^H psi)(phi^T phi)) uses the whole complex shape psi."
+                )?;
+            }
         }
         for w in &self.pairing.warnings {
             writeln!(f, "warning: {w}")?;

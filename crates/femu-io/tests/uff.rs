@@ -30,6 +30,7 @@ fn sample() -> Universal {
             values: vec![(1, [0.0, 1.25e-3, -0.987654321]), (7, [0.0, -2.5e-12, 0.5])],
             complex: false,
             complexity: None,
+            imaginary: None,
         }],
         ..Default::default()
     }

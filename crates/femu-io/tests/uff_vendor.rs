@@ -163,6 +163,7 @@ fn displacement_and_definition_systems_of_dataset_18() {
             ],
             complex: false,
             complexity: None,
+            imaginary: None,
         }],
         ..Default::default()
     };
@@ -394,6 +395,7 @@ fn cylindrical_and_spherical_systems_of_2420() {
             values: vec![(9, [0.3, -0.2, 0.7]), (10, [0.1, 0.2, 0.4])],
             complex: false,
             complexity: None,
+            imaginary: None,
         }],
         ..Default::default()
     };

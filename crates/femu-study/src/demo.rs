@@ -257,6 +257,7 @@ fn write_test_uff(
                 .collect(),
             complex: false,
             complexity: None,
+            imaginary: None,
         });
     }
     femu_io::uff::write_uff(path, &uff)?;

@@ -69,6 +69,7 @@ fn test_file(name: &str, label: impl Fn(u64) -> u64, offset: f64) -> PathBuf {
                 .collect(),
             complex: false,
             complexity: None,
+            imaginary: None,
         }],
         ..Default::default()
     };
@@ -364,6 +365,7 @@ fn a_turned_millimetre_wireframe_between_nodes_maps_onto_the_model() {
                 values: values(j),
                 complex: false,
                 complexity: None,
+                imaginary: None,
             })
             .collect(),
         ..Default::default()

@@ -478,3 +478,25 @@ fn repeated_modes_are_turned_towards_the_test() {
         );
     }
 }
+
+/// The complex MAC by hand: `a = (1, i)` against the real `b = (1, 1)`: `a^H b = 1 - i`, so
+/// `|a^H b|^2 = 2` over `(a^H a)(b^H b) = 4`: 0.5 (the MAC of `a`'s real part is also 0.5, of its
+/// imaginary part 0.5: neither alone tells). A complex multiple of `a` gives 1; real vectors give
+/// the real MAC; a zero vector and mismatched lengths are errors.
+#[test]
+fn complex_mac_by_hand() {
+    let v = complex_mac(&[1.0, 0.0], &[0.0, 1.0], &[1.0, 1.0], &[0.0, 0.0]).unwrap();
+    assert!((v - 0.5).abs() < 1e-15, "{v}");
+    // a = (1 + 2i, -0.5i, 3), b = (0.6 - 0.8i) a
+    let (ar, ai) = ([1.0, 0.0, 3.0], [2.0, -0.5, 0.0]);
+    let (cr, ci) = (0.6, -0.8);
+    let br: Vec<f64> = (0..3).map(|k| cr * ar[k] - ci * ai[k]).collect();
+    let bi: Vec<f64> = (0..3).map(|k| cr * ai[k] + ci * ar[k]).collect();
+    assert!((complex_mac(&ar, &ai, &br, &bi).unwrap() - 1.0).abs() < 1e-15);
+    // (1, 2, 0) and (2, 1, 1): (2 + 2)^2 / (5 * 6) = 16 / 30
+    let real = complex_mac(&[1.0, 2.0, 0.0], &[0.0; 3], &[2.0, 1.0, 1.0], &[0.0; 3]).unwrap();
+    assert!((real - 16.0 / 30.0).abs() < 1e-15);
+    assert!((real - mac(&[1.0, 2.0, 0.0], &[2.0, 1.0, 1.0]).unwrap()).abs() < 1e-15);
+    assert!(complex_mac(&[0.0; 2], &[0.0; 2], &[1.0, 1.0], &[0.0; 2]).is_err());
+    assert!(complex_mac(&[1.0; 2], &[0.0; 3], &[1.0, 1.0], &[0.0; 2]).is_err());
+}

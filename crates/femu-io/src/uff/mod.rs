@@ -65,6 +65,9 @@ pub struct UffMode {
     pub complex: bool,
     /// How complex the stored mode is (MPC, MPD over its translations), for complex data.
     pub complexity: Option<femu_correlate::Complexity>,
+    /// For complex data, the imaginary parts of the turned translations, node by node in the
+    /// order of `values` (the mode is `values + i imaginary`); `None` for real data.
+    pub imaginary: Option<Vec<[f64; 3]>>,
 }
 
 /// The supported content of a universal file.

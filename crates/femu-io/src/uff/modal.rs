@@ -129,7 +129,8 @@ pub(super) fn parse_55(
     let k = 7 + rec8_lines;
     let raw = node_values(path, &body[k..], width)?;
     let complexity = complexity_of(&raw, complex);
-    values.extend(translations(raw, complex));
+    let (real, imaginary) = translations(raw, complex);
+    values.extend(real);
     out.modes.push(UffMode {
         number,
         frequency_hz,
@@ -138,6 +139,7 @@ pub(super) fn parse_55(
         values,
         complex,
         complexity,
+        imaginary,
     });
     Ok(())
 }
@@ -202,13 +204,19 @@ fn complexity_of(raw: &[(u64, Vec<f64>)], complex: bool) -> Option<femu_correlat
 }
 
 /// The translations of each node; complex values rotated by the phase of the mode's largest
-/// component and their real part taken (a real mode stored as complex comes back exactly).
-fn translations(raw: Vec<(u64, Vec<f64>)>, complex: bool) -> Vec<(u64, [f64; 3])> {
+/// component and their real part taken (a real mode stored as complex comes back exactly), and
+/// for complex data the imaginary parts of the same turned values, node by node.
+#[allow(clippy::type_complexity)]
+fn translations(
+    raw: Vec<(u64, Vec<f64>)>,
+    complex: bool,
+) -> (Vec<(u64, [f64; 3])>, Option<Vec<[f64; 3]>>) {
     if !complex {
-        return raw
+        let real = raw
             .into_iter()
             .map(|(n, v)| (n, [v[0], v[1], v[2]]))
             .collect();
+        return (real, None);
     }
     let (mut best, mut phase) = (0.0, 0.0);
     for (_, v) in &raw {
@@ -220,13 +228,20 @@ fn translations(raw: Vec<(u64, Vec<f64>)>, complex: bool) -> Vec<(u64, [f64; 3])
             }
         }
     }
+    // (re + i im) e^(-i phase)
     let (cs, sn) = (phase.cos(), phase.sin());
-    raw.into_iter()
+    let imaginary = raw
+        .iter()
+        .map(|(_, v)| std::array::from_fn(|c| v[2 * c + 1] * cs - v[2 * c] * sn))
+        .collect();
+    let real = raw
+        .into_iter()
         .map(|(n, v)| {
             let r = |c: usize| v[2 * c] * cs + v[2 * c + 1] * sn;
             (n, [r(0), r(1), r(2)])
         })
-        .collect()
+        .collect();
+    (real, Some(imaginary))
 }
 
 /// Dataset 2414 (analysis results): the normal and complex modes another FE code computed, at
@@ -340,14 +355,16 @@ pub(super) fn parse_2414(
     };
     let raw = node_values(path, &body[13..], width)?;
     let complexity = complexity_of(&raw, complex);
+    let (values, imaginary) = translations(raw, complex);
     out.modes.push(UffMode {
         number,
         frequency_hz,
         damping,
         modal_mass,
-        values: translations(raw, complex),
+        values,
         complex,
         complexity,
+        imaginary,
     });
     out.modes_from_2414 += 1;
     Ok(())

@@ -249,12 +249,25 @@ impl Universal {
             w[0] * v[0] + w[1] * v[1] + w[2] * v[2]
         });
         let damping = self.modes.iter().map(|m| m.damping).collect();
-        let modes = TestModes::new(
+        let mut modes = TestModes::new(
             self.modes.iter().map(|m| m.frequency_hz).collect(),
             Some(damping),
             shapes,
         )
         .map_err(|e| bad(e.to_string()))?;
+        // complex modes keep their imaginary parts (a real mode among them: zero)
+        if self.modes.iter().any(|m| m.imaginary.is_some()) {
+            let imaginary = Mat::from_fn(rows.len(), self.modes.len(), |r, j| {
+                let (k, w) = rows[r];
+                self.modes[j].imaginary.as_ref().map_or(0.0, |im| {
+                    let v = im[k];
+                    w[0] * v[0] + w[1] * v[1] + w[2] * v[2]
+                })
+            });
+            modes = modes
+                .with_imaginary(imaginary)
+                .map_err(|e| bad(e.to_string()))?;
+        }
         // coordinates of the nodes that carry sensors, in the file's units
         let coordinates = sensors
             .iter()
