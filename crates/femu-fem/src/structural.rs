@@ -62,6 +62,13 @@ pub struct Beam {
     /// end's rotation about the axis (Nastran's CBEAM does, its CBAR does not); the lumped mass
     /// never carries bending rotary inertia.
     pub lumped_torsion: bool,
+    /// The DOFs released at each end (`[end][c]`, `c` the element frame's x, y, z translations
+    /// then rotations): the end no longer passes that force or moment to its node (Nastran's
+    /// pin flags PA and PB; docs/MATH.md, "Beams"). The released DOFs are condensed out of the
+    /// element's stiffness; a released DOF must carry no mass (a rotation under the lumped mass,
+    /// torsion only without `lumped_torsion`), and the releases must leave the element no
+    /// mechanism of its own.
+    pub releases: [[bool; 6]; 2],
 }
 
 /// A rod: axial stiffness `E A` and, when `J > 0`, torsion `G J`; no bending.
@@ -651,7 +658,8 @@ impl StructuralElement {
                     add(coords[self.nodes[1]], b.offsets[1]),
                 ];
                 let (l, axes) = line_axes(ends[0], ends[1], b.orientation).map_err(bad)?;
-                let (kl, ml) = beam_local(b, l, mass);
+                let (mut kl, ml) = beam_local(b, l, mass);
+                release(&mut kl, &ml, &b.releases).map_err(bad)?;
                 let mut t = vec![0.0; 144];
                 for end in 0..2 {
                     let e = offset_map(b.offsets[end]);
@@ -802,6 +810,53 @@ impl StructuralElement {
 /// A beam's local stiffness and mass (12 x 12 on `(u, v, w, theta_x, theta_y, theta_z)` of each
 /// end, local axes): axial, torsion and the two bending planes. Plane 1 (x-y) bends with `I1`
 /// and `theta_z = dv/dx`; plane 2 (x-z) with `I2` and `theta_y = -dw/dx`.
+/// Condenses the released DOFs (`releases[end][c]`, local index `6 end + c`) out of the local
+/// stiffness `k` (12 x 12): `K <- K - K_:r K_r: / K_rr` for each in turn, which leaves the
+/// released rows and columns zero (static condensation: the released end DOF follows the rest
+/// without force). Refused: a released DOF with mass in `m` (its inertia would be lost), and one
+/// the element has no stiffness left on (a mechanism within the element, such as torsion released
+/// at both ends).
+fn release(k: &mut [f64], m: &[f64], releases: &[[bool; 6]; 2]) -> Result<(), String> {
+    const NAMES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
+    let top = (0..12).map(|i| k[i * 12 + i].abs()).fold(0.0, f64::max);
+    for end in 0..2 {
+        for c in 0..6 {
+            if !releases[end][c] {
+                continue;
+            }
+            let r = 6 * end + c;
+            let what = format!(
+                "its released DOF {} ({}) at end {}",
+                c + 1,
+                NAMES[c],
+                ["A", "B"][end]
+            );
+            if (0..12).any(|j| m[r * 12 + j] != 0.0) {
+                return Err(format!(
+                    "{what} carries mass in this mass matrix, which a release would lose: femu releases DOFs without mass (rotations under the lumped mass)"
+                ));
+            }
+            let pivot = k[r * 12 + r];
+            if !(pivot > 1e-12 * top) {
+                return Err(format!(
+                    "{what} leaves the element a mechanism (no stiffness left on it: a DOF released at both ends, or one the section does not resist)"
+                ));
+            }
+            let col: Vec<f64> = (0..12).map(|i| k[i * 12 + r]).collect();
+            for i in 0..12 {
+                for j in 0..12 {
+                    k[i * 12 + j] -= col[i] * col[j] / pivot;
+                }
+            }
+            for i in 0..12 {
+                k[i * 12 + r] = 0.0;
+                k[r * 12 + i] = 0.0;
+            }
+        }
+    }
+    Ok(())
+}
+
 fn beam_local(b: &Beam, l: f64, mass: MassKind) -> (Vec<f64>, Vec<f64>) {
     let s = &b.section;
     let mut k = vec![0.0; 144];

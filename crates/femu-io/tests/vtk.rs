@@ -212,6 +212,7 @@ fn structural_elements_are_lines_with_their_sections() {
             orientation: [0.0, 0.0, 1.0],
             offsets: [[0.0; 3]; 2],
             lumped_torsion: false,
+            releases: [[false; 6]; 2],
         }),
     };
     let spring = StructuralElement {

@@ -44,6 +44,7 @@ fn beam(section: BeamSection, orientation: [f64; 3]) -> StructuralKind {
         orientation,
         offsets: [[0.0; 3]; 2],
         lumped_torsion: false,
+        releases: [[false; 6]; 2],
     })
 }
 
@@ -223,6 +224,7 @@ fn a_free_beam_has_six_rigid_body_modes() {
             orientation: [0.3, -1.0, 0.2],
             offsets: [[0.0, 0.01, 0.02], [0.01, -0.02, 0.0]],
             lumped_torsion: false,
+            releases: [[false; 6]; 2],
         }),
     };
     let coords = [[0.1, 0.2, 0.3], [0.5, 0.6, 0.1]];
@@ -564,6 +566,7 @@ fn nafems_fv2_pin_ended_double_cross() {
             orientation: [0.0, 0.0, 1.0],
             offsets: [[0.0; 3]; 2],
             lumped_torsion: false,
+            releases: [[false; 6]; 2],
         });
         for arm in 0..8 {
             for k in 0..per_arm {

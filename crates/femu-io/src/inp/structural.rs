@@ -446,6 +446,7 @@ pub(super) fn add_structural(
                     orientation: n1(c)?,
                     offsets: [[0.0; 3]; 2],
                     lumped_torsion: false,
+                    releases: [[false; 6]; 2],
                 })
             }
             StructuralType::S4 | StructuralType::S3 => {

@@ -4,7 +4,7 @@
 //! material axes), with `BAROR` and
 //! `BEAMOR` defaults, read as the Quick Reference Guide defines them
 //! (cited by card) into femu's structural elements ([`femu_fem::structural`]). What femu cannot
-//! represent is refused with card and line: pin flags, tapered beams, warping, shear-centre and
+//! represent is refused with card and line: pin flags on translations, tapered beams, warping, shear-centre and
 //! mass offsets, products of inertia, offsets in the element frame, scalar points.
 
 use super::cards::Card;
@@ -595,13 +595,35 @@ pub(super) fn add_structural(
                 let (ga, gb) = (c.id(2, "GA")?, c.id(3, "GB")?);
                 let (na, nb) = (node(model, ga, c, "GA")?, node(model, gb, c, "GB")?);
                 let (v, offt) = orientation(ctx, model, c, defaults, ga)?;
-                // PA, PB: pin flags (released DOFs)
-                for (i, what) in [(8, "PA"), (9, "PB")] {
-                    if !c.field(i).is_empty() && c.field(i) != "0" {
-                        return Err(c.err(format!(
-                            "{eid}: {what} = {} releases DOFs at an end (pin flags), which femu does not model",
-                            c.field(i)
-                        )));
+                // PA, PB: pin flags, the components (element frame) released at each end
+                let mut releases = [[false; 6]; 2];
+                for (end, (i, what)) in [(8, "PA"), (9, "PB")].into_iter().enumerate() {
+                    let flags = c.field(i);
+                    if flags.is_empty() || flags == "0" {
+                        continue;
+                    }
+                    for ch in flags.chars() {
+                        let k = match ch.to_digit(10) {
+                            Some(k @ 1..=6) => k as usize - 1,
+                            _ => {
+                                return Err(c.err(format!(
+                                    "{eid}: {what} = {flags}: pin flags are components 1 to 6"
+                                )));
+                            }
+                        };
+                        if releases[end][k] {
+                            return Err(c.err(format!(
+                                "{eid}: {what} = {flags} gives component {} twice",
+                                k + 1
+                            )));
+                        }
+                        if k < 3 {
+                            return Err(c.err(format!(
+                                "{eid}: {what} = {flags} releases translation {} at an end, which carries the bar's mass: femu releases rotations (4-6) only",
+                                k + 1
+                            )));
+                        }
+                        releases[end][k] = true;
                     }
                 }
                 if c.name == "CBEAM" && (!c.field(16).is_empty() || !c.field(17).is_empty()) {
@@ -640,6 +662,7 @@ pub(super) fn add_structural(
                     // Nastran's lumped CBEAM mass carries the polar inertia, its CBAR's does not
                     // (the grid point weight of pyNastran's beam_modes run: docs/VERIFICATION.md)
                     lumped_torsion: c.name == "CBEAM",
+                    releases,
                 });
                 (kind, vec![na, nb], pid)
             }
