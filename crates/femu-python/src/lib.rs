@@ -537,9 +537,11 @@ fn read_test(
 #[pymethods]
 impl Test {
     /// Test modes from numpy: sensor `i` reads node `nodes[i]` along `directions[i]` (any
-    /// direction, normalised), `shapes[i, j]` is mode `j` at sensor `i`.
+    /// direction, normalised), `shapes[i, j]` is mode `j` at sensor `i`; for complex identified
+    /// modes `shapes_imaginary` their imaginary parts (the real parts in `shapes`, the modes
+    /// `shapes + i shapes_imaginary`), which give each pair its complex MAC in correlation.
     #[staticmethod]
-    #[pyo3(signature = (model, nodes, directions, frequencies_hz, shapes, *, damping=None))]
+    #[pyo3(signature = (model, nodes, directions, frequencies_hz, shapes, *, damping=None, shapes_imaginary=None))]
     fn from_arrays(
         model: &Model,
         nodes: Vec<u64>,
@@ -547,6 +549,7 @@ impl Test {
         frequencies_hz: Vec<f64>,
         shapes: PyReadonlyArray2<'_, f64>,
         damping: Option<Vec<f64>>,
+        shapes_imaginary: Option<PyReadonlyArray2<'_, f64>>,
     ) -> PyResult<Test> {
         let d = directions.as_array();
         if d.ncols() != 3 || d.nrows() != nodes.len() {
@@ -563,7 +566,10 @@ impl Test {
                 femu_correlate::sensors::Sensor::new(*n, [d[(i, 0)], d[(i, 1)], d[(i, 2)]])
             })
             .collect();
-        let modes = TestModes::new(frequencies_hz, damping, py_to_mat(&shapes)).map_err(err)?;
+        let mut modes = TestModes::new(frequencies_hz, damping, py_to_mat(&shapes)).map_err(err)?;
+        if let Some(im) = &shapes_imaginary {
+            modes = modes.with_imaginary(py_to_mat(im)).map_err(err)?;
+        }
         let layout = femu_correlate::SensorLayout::new(
             model.loaded.model.mesh(),
             &model.loaded.sys.dofs,
@@ -607,6 +613,18 @@ impl Test {
     #[getter]
     fn shapes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         mat_to_py(py, &self.loaded.data.modes.shapes)
+    }
+
+    /// For complex identified modes, the imaginary parts of the shapes (sensors x modes; the
+    /// modes are `shapes + i shapes_imaginary`); `None` for real data.
+    #[getter]
+    fn shapes_imaginary<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
+        self.loaded
+            .data
+            .modes
+            .imaginary
+            .as_ref()
+            .map(|m| mat_to_py(py, m))
     }
 
     /// Sensor `i`: its node id.

@@ -243,6 +243,41 @@ def test_correlate_against_numpy(plate):
     assert json.loads(json.dumps(report)) == report
 
 
+def test_complex_test_modes_have_a_complex_mac(plate):
+    """Complex test modes built from the plate's own modes, psi = phi_a + 0.4 i phi_b at the
+    test's sensors: each pair's complex MAC is numpy's |psi^H phi|^2 / ((psi^H psi)(phi^T phi))."""
+    model, test, _ = plate
+    # the free plate's elastic modes (the first six are rigid-body)
+    modes = model.modes(14)
+    y = test.C @ modes.vectors
+    re, im = y[:, [6, 8, 10]], 0.4 * y[:, [7, 9, 11]]
+    directions = test.directions
+    complex_test = femu.Test.from_arrays(
+        model,
+        test.nodes,
+        directions,
+        list(modes.frequencies_hz[[6, 8, 10]]),
+        re,
+        shapes_imaginary=im,
+    )
+    assert complex_test.shapes_imaginary is not None
+    np.testing.assert_allclose(complex_test.shapes_imaginary, im)
+    assert test.shapes_imaginary is None
+    report = femu.correlate(model, complex_test, count=14)
+    pairs = report["pairing"]["pairs"]
+    assert [p["model"] for p in pairs] == [6, 8, 10]
+    for p in pairs:
+        psi = re[:, p["test"]] + 1j * im[:, p["test"]]
+        phi = y[:, p["model"]]
+        expected = abs(np.vdot(psi, phi)) ** 2 / (np.vdot(psi, psi).real * (phi @ phi))
+        assert p["complex_mac"] == pytest.approx(expected, rel=1e-10)
+    assert "complex_mac" not in femu.correlate(model, test)["pairing"]["pairs"][0]
+    with pytest.raises(femu.FemuError, match="imaginary"):
+        femu.Test.from_arrays(
+            model, test.nodes, directions, [1.0], re[:, :1], shapes_imaginary=im[:1, :1]
+        )
+
+
 def test_removal_study_points(plate):
     model, test, _ = plate
     study = femu.removal_study(model, test)
