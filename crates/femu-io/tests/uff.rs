@@ -255,3 +255,42 @@ fn complex_mode_indicators() {
     let real = parse_uff(&uff_string(&sample()), Path::new("r.unv")).unwrap();
     assert!(real.modes.iter().all(|m| m.complexity.is_none()));
 }
+
+/// A complex mode keeps its imaginary parts, turned with the real ones by the phase of the largest
+/// component (node 3's y, `2 e^(i 90 deg)`: turned to 2), and is written back complex: node 5's y
+/// `e^(i 120 deg)` becomes `e^(i 30 deg)` (`0.866 + 0.5 i`), and a second reading gives the same
+/// values, frequency, damping and indicators to the written digits (six).
+#[test]
+fn complex_modes_keep_and_write_their_imaginary_parts() {
+    let (c, s) = (120f64.to_radians().cos(), 120f64.to_radians().sin());
+    let text = format!(
+        "    -1\n    55\nid1\nid2\nid3\nid4\nid5\n         1         3         2         8         5         3\n         2         6         1         4\n -3.5D+00  6.28318D+03  0.0D+00  0.0D+00  0.0D+00  0.0D+00\n         3\n  0.0D+00  0.0D+00  0.0D+00  2.0D+00  0.0D+00  0.0D+00\n         5\n  0.0D+00  0.0D+00  {c:.15E}  {s:.15E}  0.0D+00  0.0D+00\n    -1\n"
+    );
+    let u = parse_uff(&text, Path::new("c.unv")).unwrap();
+    let m = &u.modes[0];
+    let im = m.imaginary.as_ref().expect("imaginary parts kept");
+    assert!((m.values[0].1[1] - 2.0).abs() < 1e-12 && im[0][1].abs() < 1e-12);
+    let (c30, s30) = (30f64.to_radians().cos(), 0.5);
+    assert!((m.values[1].1[1] - c30).abs() < 1e-12, "{:?}", m.values);
+    assert!((im[1][1] - s30).abs() < 1e-12, "{im:?}");
+    let again = parse_uff(&uff_string(&u), Path::new("again.unv")).unwrap();
+    let b = &again.modes[0];
+    assert!(b.complex);
+    let close = |x: f64, y: f64| (x - y).abs() <= 1e-5 * y.abs().max(1.0);
+    assert!(close(b.frequency_hz, m.frequency_hz) && close(b.damping, m.damping));
+    let bi = b.imaginary.as_ref().unwrap();
+    for k in 0..2 {
+        for c in 0..3 {
+            assert!(close(b.values[k].1[c], m.values[k].1[c]) && close(bi[k][c], im[k][c]));
+        }
+    }
+    let (ka, kb) = (m.complexity.unwrap(), b.complexity.unwrap());
+    assert!(close(ka.mpc, kb.mpc) && close(ka.mpd_degrees, kb.mpd_degrees));
+    // a real file stays real
+    let real = parse_uff(&uff_string(&sample()), Path::new("r.unv")).unwrap();
+    assert!(
+        real.modes
+            .iter()
+            .all(|m| !m.complex && m.imaginary.is_none())
+    );
+}

@@ -60,7 +60,7 @@ pub fn uff_bytes(u: &Universal) -> Vec<u8> {
     out
 }
 
-/// Writes units, nodes, elements, real normal modes, functions and trace lines as datasets 164,
+/// Writes units, nodes, elements, normal modes (complex ones with their imaginary parts), functions and trace lines as datasets 164,
 /// 2411 or 15, 2412, 55, 58 and 82, all as text (functions read from 58b included: use
 /// [`uff_bytes`] to keep them binary).
 pub fn uff_string(u: &Universal) -> String {
@@ -231,19 +231,56 @@ pub(super) fn head_text(u: &Universal) -> String {
         ] {
             let _ = writeln!(s, "{line}");
         }
-        let _ = writeln!(s, " {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}", 1, 2, 2, 8, 2, 3);
-        let _ = writeln!(s, " {:>9} {:>9} {:>9} {:>9}", 2, 4, 1, m.number);
-        let _ = writeln!(
-            s,
-            "{}{}{}{}",
-            e13(m.frequency_hz),
-            e13(m.modal_mass),
-            e13(m.damping),
-            e13(0.0)
-        );
-        for (n, v) in &m.values {
-            let _ = writeln!(s, "{n:>10}");
-            let _ = writeln!(s, "{}{}{}", e13(v[0]), e13(v[1]), e13(v[2]));
+        match &m.imaginary {
+            // a complex mode (analysis type 3, single precision complex data): its eigenvalue
+            // `lambda = -zeta w + i w sqrt(1 - zeta^2)`, which the reader turns back into the
+            // frequency `|lambda| / 2 pi` and the damping `-Re lambda / |lambda|`, and its turned
+            // values with their imaginary parts
+            Some(im) => {
+                let _ = writeln!(s, " {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}", 1, 3, 2, 8, 5, 3);
+                let _ = writeln!(s, " {:>9} {:>9} {:>9} {:>9}", 2, 6, 1, m.number);
+                let w = 2.0 * std::f64::consts::PI * m.frequency_hz;
+                let (re, imag) = (-m.damping * w, w * (1.0 - m.damping * m.damping).sqrt());
+                let _ = writeln!(
+                    s,
+                    "{}{}{}{}{}{}",
+                    e13(re),
+                    e13(imag),
+                    e13(0.0),
+                    e13(0.0),
+                    e13(0.0),
+                    e13(0.0)
+                );
+                for ((n, v), i) in m.values.iter().zip(im) {
+                    let _ = writeln!(s, "{n:>10}");
+                    let _ = writeln!(
+                        s,
+                        "{}{}{}{}{}{}",
+                        e13(v[0]),
+                        e13(i[0]),
+                        e13(v[1]),
+                        e13(i[1]),
+                        e13(v[2]),
+                        e13(i[2])
+                    );
+                }
+            }
+            None => {
+                let _ = writeln!(s, " {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}", 1, 2, 2, 8, 2, 3);
+                let _ = writeln!(s, " {:>9} {:>9} {:>9} {:>9}", 2, 4, 1, m.number);
+                let _ = writeln!(
+                    s,
+                    "{}{}{}{}",
+                    e13(m.frequency_hz),
+                    e13(m.modal_mass),
+                    e13(m.damping),
+                    e13(0.0)
+                );
+                for (n, v) in &m.values {
+                    let _ = writeln!(s, "{n:>10}");
+                    let _ = writeln!(s, "{}{}{}", e13(v[0]), e13(v[1]), e13(v[2]));
+                }
+            }
         }
         s.push_str("    -1\n");
     }
