@@ -716,16 +716,19 @@ impl<'a> Pencil<'a> {
                 }
                 r => r?,
             }
-            if let (true, Some((lo, hi, upper_count))) = (lower_pending, band) {
-                // the deferred count at the band's lower end, its factor kept
+            if let (true, None, Some((lo, hi, count))) = (defer_lower, &kept, band) {
+                // the band's lower end factored after the iteration's factor is released: its
+                // count (the first time) and its factor, kept
                 lanczos.op = None;
                 let t = Instant::now();
                 let low = self.factor_shifted(lo)?;
                 stats.factor_seconds += t.elapsed().as_secs_f64();
                 stats.factorizations += 1;
-                band = Some((lo, hi, upper_count - low.inertia().negative));
+                if lower_pending {
+                    band = Some((lo, hi, count - low.inertia().negative));
+                    lower_pending = false;
+                }
                 kept = Some(low);
-                lower_pending = false;
             }
             let (sel, check, op) =
                 self.checked_selection(&mut lanczos, band, which, requested, target, stats)?;
@@ -745,6 +748,10 @@ impl<'a> Pencil<'a> {
             if matches!(which, Which::Lowest(_)) {
                 // the iteration goes on at its shift: its factor back, if kept
                 lanczos.op = kept.take();
+            } else {
+                // a band's lower factor is released while the iteration factors again (one
+                // factor alive at a time), and made again after it
+                kept = None;
             }
             attempts += 1;
             if check.count < check.returned || attempts > 8 || lanczos.values.len() >= n {
