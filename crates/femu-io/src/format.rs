@@ -118,10 +118,33 @@ pub const FORMATS: &[FormatInfo] = &[
     },
 ];
 
+/// Whether the file at `path` opens as CalculiX's printed output (its first 4 KiB); a file that
+/// cannot be read is not (its reader then says why).
+fn calculix_output(path: &Path) -> bool {
+    use std::io::Read;
+    let mut head = vec![0u8; 4096];
+    let Ok(mut f) = std::fs::File::open(path) else {
+        return false;
+    };
+    let mut n = 0;
+    while n < head.len() {
+        match f.read(&mut head[n..]) {
+            Ok(0) | Err(_) => break,
+            Ok(k) => n += k,
+        }
+    }
+    crate::ccx_dat::looks_like_calculix(&String::from_utf8_lossy(&head[..n]))
+}
+
 impl Format {
-    /// The format of `path` by its extension (any case), if femu reads it.
+    /// The format of `path` by its extension (any case), if femu reads it. A `.dat` is Nastran
+    /// bulk data unless its first kilobytes are CalculiX's printed output
+    /// ([`crate::ccx_dat::looks_like_calculix`]): then another solver's modes.
     pub fn from_path(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        if ext == "dat" && calculix_output(path) {
+            return Some(Format::Results);
+        }
         FORMATS
             .iter()
             .find(|f| f.extensions.contains(&ext.as_str()))

@@ -9,6 +9,7 @@
 //! spelling ([`inp::InpOptions::lenient`] turns unknown keywords, never unknown parameters, into
 //! warnings); the warnings collected before an error travel with it ([`IoError::warnings`]).
 
+pub mod ccx_dat;
 pub mod csv;
 mod error;
 pub mod f06;

@@ -207,6 +207,23 @@ fn frd_reader_never_panics() {
     });
 }
 
+/// CalculiX's printed-output reader on mutated `.dat` files (the eigenvalue table and four modes'
+/// displacements CalculiX printed for `fixtures/calculix/cantilever_modes.inp`).
+#[test]
+fn calculix_dat_reader_never_panics() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/calculix/cantilever_modes.dat");
+    let bytes = std::fs::read(&path).unwrap();
+    let read =
+        femu_io::ccx_dat::parse_calculix_dat(&String::from_utf8_lossy(&bytes), &path).unwrap();
+    assert_eq!(read.modes.len(), 4);
+    let config = config();
+    proptest!(config, |(edits in prop::collection::vec(edit(), 1..6))| {
+        let mutated = apply(&bytes, &edits);
+        let _ = femu_io::ccx_dat::parse_calculix_dat(&String::from_utf8_lossy(&mutated), &path);
+    });
+}
+
 /// Nastran's `.f06` reader on mutated pages of a real run's printed modes (the eigenvalue table
 /// and the eigenvector blocks of `fixtures/nastran/pynastran/mode_solid_shell_bar.f06`, lines
 /// 280-460, about 16 KiB).

@@ -34,8 +34,9 @@ pub struct ResultModes {
     pub warnings: Vec<String>,
 }
 
-/// Reads another solver's modes: CalculiX's `.frd` ([`femu_io::frd::read_frd`], its own nodes),
-/// or Nastran's `.f06` or `.op2` ([`femu_io::f06::read_f06`], [`femu_io::op2::read_op2`]) with
+/// Reads another solver's modes: CalculiX's `.frd` ([`femu_io::frd::read_frd`], its own nodes)
+/// or printed `.dat` ([`femu_io::ccx_dat::read_calculix_dat`], with the nodes of the `.inp` beside
+/// it or `nodes`), or Nastran's `.f06` or `.op2` ([`femu_io::f06::read_f06`], [`femu_io::op2::read_op2`]) with
 /// the grids of its deck
 /// ([`femu_io::nastran::read_grids`]: `nodes`, or the `.bdf`, `.dat` or `.nas` of the same name
 /// beside it), each grid's printed translations turned from its displacement frame (CD) into the
@@ -47,8 +48,13 @@ pub struct ResultModes {
 /// modes whose frequencies do not ascend (named).
 pub fn load_result_modes(path: &Path, nodes: Option<&Path>) -> Result<ResultModes, StudyError> {
     let nastran = nastran_results(path);
+    let dat = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("dat"));
     let (points, modes, mut warnings) = if nastran {
         nastran_modes(path, nodes)?
+    } else if dat {
+        calculix_dat_modes(path, nodes)?
     } else {
         let frd = femu_io::frd::read_frd(path)?;
         let warnings: Vec<String> = frd
@@ -75,7 +81,7 @@ pub fn load_result_modes(path: &Path, nodes: Option<&Path>) -> Result<ResultMode
             .collect();
         (frd.nodes, modes, warnings)
     };
-    if nodes.is_some() && !nastran {
+    if nodes.is_some() && !nastran && !dat {
         warnings.push(format!(
             "{}: the .frd holds its nodes: the given node file is not used",
             path.display()
@@ -141,6 +147,84 @@ pub fn nastran_deck_beside(path: &Path) -> Option<PathBuf> {
         .iter()
         .map(|e| path.with_extension(e))
         .find(|p| p.exists())
+}
+
+/// Nodes, modes `(eigenvalue, line, translations per node)` and warnings of CalculiX's printed
+/// modes (`job.dat`, [`femu_io::ccx_dat`]) with the nodes of the run's deck (`nodes`, or the
+/// `.inp` of the same name beside it): the nodes the modes print, in their order, and the
+/// eigenvalues as the table prints them (seven digits).
+#[allow(clippy::type_complexity)]
+fn calculix_dat_modes(
+    path: &Path,
+    nodes: Option<&Path>,
+) -> Result<
+    (
+        Vec<(u64, [f64; 3])>,
+        Vec<(f64, usize, Vec<[f64; 3]>)>,
+        Vec<String>,
+    ),
+    StudyError,
+> {
+    let dat = femu_io::ccx_dat::read_calculix_dat(path)?;
+    let deck = match nodes {
+        Some(p) => p.to_path_buf(),
+        None => {
+            let beside = path.with_extension("inp");
+            if !beside.exists() {
+                return Err(StudyError::in_file(
+                    path,
+                    "nodes",
+                    "the modes need their nodes' positions: no .inp of the same name beside the .dat; name the run's deck with --nodes (nodes = \"...\" in a study file)",
+                ));
+            }
+            beside
+        }
+    };
+    let mesh = femu_io::inp::read_inp(&deck)?.mesh;
+    let first = dat
+        .modes
+        .first()
+        .ok_or_else(|| StudyError::in_file(path, "modes", "the eigenvalue table lists no mode"))?;
+    let mut points = Vec::with_capacity(first.shape.len());
+    for (id, _) in &first.shape {
+        let i = mesh.node_index(*id).ok_or_else(|| {
+            StudyError::in_file(
+                path,
+                "modes",
+                format!(
+                    "node {id} of mode {} is not a node of {}",
+                    first.number,
+                    deck.display()
+                ),
+            )
+        })?;
+        points.push((*id, mesh.coords()[i]));
+    }
+    let modes = dat
+        .modes
+        .iter()
+        .map(|m| (m.eigenvalue, m.line, m.shape.iter().map(|s| s.1).collect()))
+        .collect();
+    let mut warnings: Vec<String> = dat
+        .skipped
+        .iter()
+        .map(|(name, count)| {
+            format!(
+                "{}: {count} result block{} \"{name}\" skipped (femu reads the displacements of a frequency step)",
+                path.display(),
+                if *count == 1 { "" } else { "s" }
+            )
+        })
+        .collect();
+    if mesh.node_count() > points.len() {
+        warnings.push(format!(
+            "{}: {} of the deck's {} nodes are not printed in the modes: a test cannot be placed on them",
+            path.display(),
+            mesh.node_count() - points.len(),
+            mesh.node_count()
+        ));
+    }
+    Ok((points, modes, warnings))
 }
 
 /// Nodes, modes `(eigenvalue, line, translations per node in the basic frame)` and warnings of

@@ -1551,3 +1551,114 @@ fn updating_a_plate_of_another_fe_recovers_a_known_change() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// CalculiX's printed modes (`*NODE PRINT` with `U` in the `*FREQUENCY` step: its `.dat`, seven
+/// digits per value) as the model side, with the nodes of the deck beside it: the same run's
+/// `.frd` (another file, another reader) gives the same frequencies to 1e-6 and shapes with MAC
+/// above 1 - 1e-9, and femu's own modes of the deck, as the test, pair one to one with MAC above
+/// 1 - 1e-9 and frequencies within 1e-6. A Nastran deck named `.dat` is still bulk data; a study
+/// file of the `.dat` correlates the same.
+#[test]
+fn calculix_printed_modes_are_the_model_side() {
+    if !femu_testkit::ccx::available() {
+        return;
+    }
+    let spec = BoxSpec::new([0.4, 0.1, 0.05], [8, 2, 2], BoxCells::Hex, false);
+    let mut model = Model::new(box_mesh(&spec).unwrap()).unwrap();
+    model.set_material(None, Material::steel()).unwrap();
+    model.fix_set("xmin", &[0, 1, 2]).unwrap();
+    let d = dir("dat");
+    let text = inp_string(
+        &model,
+        Some(&FrequencyStep {
+            count: 6,
+            shift_cycles2: None,
+        }),
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("job.inp"),
+        text.replace(
+            "*END STEP",
+            "*NODE PRINT, NSET=NALL\nU\n*NODE FILE\nU\n*END STEP",
+        ),
+    )
+    .unwrap();
+    femu_testkit::ccx::run(&d, "job");
+    assert_eq!(
+        femu_io::Format::from_path(&d.join("job.dat")),
+        Some(femu_io::Format::Results)
+    );
+    let dat = femu_study::external::load_result_modes(&d.join("job.dat"), None).unwrap();
+    let frd = femu_study::external::load_result_modes(&d.join("job.frd"), None).unwrap();
+    assert_eq!(dat.modes.len(), 6);
+    let (fd, ff) = (dat.modes.frequencies_hz(), frd.modes.frequencies_hz());
+    let ids = |r: &femu_study::external::ResultModes| -> Vec<u64> {
+        let m = r.model.mesh();
+        (0..m.node_count()).map(|i| m.node_id(i)).collect()
+    };
+    let (dat_ids, frd_ids) = (ids(&dat), ids(&frd));
+    for j in 0..6 {
+        assert!((fd[j] / ff[j] - 1.0).abs() < 1e-6, "{fd:?} {ff:?}");
+        // the .frd's shape at the .dat's nodes
+        let a: Vec<f64> = (0..3 * dat_ids.len())
+            .map(|r| dat.modes.shapes[(r, j)])
+            .collect();
+        let b: Vec<f64> = dat_ids
+            .iter()
+            .flat_map(|id| {
+                let k = frd_ids.iter().position(|x| x == id).unwrap();
+                (0..3).map(move |c| (k, c))
+            })
+            .map(|(k, c)| frd.modes.shapes[(3 * k + c, j)])
+            .collect();
+        let mac = femu_correlate::correlation::mac(&a, &b).unwrap();
+        // measured: 1 - 1e-12 and closer
+        assert!(mac > 1.0 - 1e-9, "mode {}: {mac}", j + 1);
+    }
+    // femu's own modes of the deck as the test, at the free end in y and z
+    let (values, loaded) = lowest(&d.join("job.inp"), 6);
+    let modes = loaded
+        .sys
+        .modes(Which::Lowest(6), &EigenOptions::default())
+        .unwrap();
+    let mesh = loaded.model.mesh();
+    let mut csv = String::from("mode,frequency_hz,node,direction,value\n");
+    for j in 0..6 {
+        let f = values[j].sqrt() / (2.0 * std::f64::consts::PI);
+        for &n in mesh.node_set("XMAX").unwrap() {
+            for (c, name) in [(1, "y"), (2, "z")] {
+                let r = loaded.sys.dofs.free_index(n, c).unwrap();
+                csv.push_str(&format!(
+                    "{},{f:.12},{},{name},{:.15e}\n",
+                    j + 1,
+                    mesh.node_id(n),
+                    modes.vectors[(r, j)]
+                ));
+            }
+        }
+    }
+    std::fs::write(d.join("test.csv"), csv).unwrap();
+    let report = correlate_on(&dat, &d.join("test.csv"));
+    assert_eq!(report.pairing.pairs.len(), 6);
+    for p in &report.pairing.pairs {
+        assert_eq!(p.test, p.model);
+        assert!(p.mac.unwrap() > 1.0 - 1e-9, "{p:?}");
+        assert!(p.frequency_error.abs() < 1e-6, "{p:?}");
+    }
+    std::fs::write(
+        d.join("study.toml"),
+        "model = \"job.dat\"\ntest = \"test.csv\"\n",
+    )
+    .unwrap();
+    let run = femu_study::study_file::run_study_file(&d.join("study.toml"), &d.join("out"), |_| {})
+        .unwrap();
+    assert_eq!(run.correlation, report);
+    // a Nastran deck named .dat stays bulk data
+    std::fs::write(d.join("deck.dat"), "SOL 103\nCEND\nBEGIN BULK\nENDDATA\n").unwrap();
+    assert_eq!(
+        femu_io::Format::from_path(&d.join("deck.dat")),
+        Some(femu_io::Format::Nastran)
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
