@@ -1613,7 +1613,7 @@ fn calculix_printed_modes_are_the_model_side() {
             .map(|(k, c)| frd.modes.shapes[(3 * k + c, j)])
             .collect();
         let mac = femu_correlate::correlation::mac(&a, &b).unwrap();
-        // measured: 1 - 1e-12 and closer
+        // measured: frequencies within 2.1e-7 (the .dat's seven digits), MAC 1 - 1.3e-12 at worst
         assert!(mac > 1.0 - 1e-9, "mode {}: {mac}", j + 1);
     }
     // femu's own modes of the deck as the test, at the free end in y and z
