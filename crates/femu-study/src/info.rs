@@ -324,6 +324,9 @@ fn describe_results(
                 "Nastran printed output (.f06): real eigenvectors, the grids from the run's deck"
             }
             Some("op2") => "Nastran OP2: real eigenvectors (OUGV1), the grids from the run's deck",
+            Some("dat") => {
+                "CalculiX printed output (.dat): the displacements *NODE PRINT gives each mode, the nodes from the run's deck"
+            }
             _ => "CalculiX results (.frd)",
         }
     );
