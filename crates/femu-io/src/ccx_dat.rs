@@ -10,7 +10,8 @@
 //! with `displacements (vx,vy,vz) for set NAME and time ...` and listing a node id and three
 //! values per line (`E13.6`: seven significant digits, one more than the `.frd`'s).
 //!
-//! Other blocks (stresses, forces, participation factors, effective masses) are skipped; a second
+//! Other blocks (stresses, forces, participation factors, effective masses, the displacements of
+//! a step before the frequency step) are skipped and counted; a second
 //! eigenvalue table (another frequency step), a complex eigenvalue, a mode without displacements
 //! and a node printed twice are refused with their line. A `.dat` is also a Nastran deck's
 //! extension: [`looks_like_calculix`] tells them apart by CalculiX's headers.
@@ -180,15 +181,8 @@ pub fn parse_calculix_dat(text: &str, path: &Path) -> Result<CalculixDat, IoErro
             i += 1;
             continue;
         }
-        if t.starts_with("displacements (vx,vy,vz) for set") {
-            let Some((n, at)) = current else {
-                return Err(perr(
-                    path,
-                    ln,
-                    "displacements before any mode header: femu reads the modes of a frequency step"
-                        .into(),
-                ));
-            };
+        if let (true, Some((n, at))) = (t.starts_with("displacements (vx,vy,vz) for set"), current)
+        {
             let mut shape = Vec::new();
             i += 1;
             while i < lines.len() {
@@ -226,8 +220,9 @@ pub fn parse_calculix_dat(text: &str, path: &Path) -> Result<CalculixDat, IoErro
             }
             continue;
         }
-        // another result block's title (stresses, forces, ...) inside a mode: skipped
-        if current.is_some() && t.contains(" for set ") && t.contains(" and time ") {
+        // another result block's title (stresses, forces, ...), or displacements of another
+        // step (a static one before the frequency step): skipped
+        if t.contains(" for set ") && t.contains(" and time ") {
             let name = t.split(" for set ").next().unwrap_or(t).to_string();
             match skipped.iter_mut().find(|s| s.0 == name) {
                 Some(s) => s.1 += 1,
@@ -331,6 +326,11 @@ mod tests {
                 "{e}"
             );
         };
+        // a static step's displacements before the frequency step: skipped, counted
+        let stat = " displacements (vx,vy,vz) for set NALL and time  0.1000000E+01\n\n         1  1.0E+00  0.0E+00  0.0E+00\n";
+        let d = parse_calculix_dat(&format!("{stat}{HEAD}{MODE1}"), p).unwrap();
+        assert_eq!(d.modes.len(), 1);
+        assert_eq!(d.skipped, vec![("displacements (vx,vy,vz)".to_string(), 1)]);
         bad(HEAD.to_string(), "print them with *NODE PRINT", 1);
         bad(MODE1.to_string(), "no eigenvalue table", 1);
         bad(
