@@ -149,22 +149,19 @@ pub fn nastran_deck_beside(path: &Path) -> Option<PathBuf> {
         .find(|p| p.exists())
 }
 
+/// What a results reader gives [`load_result_modes`]: the nodes `(id, position)`, the modes
+/// `(eigenvalue, line, translations per node)` and warnings.
+type ReadModes = (
+    Vec<(u64, [f64; 3])>,
+    Vec<(f64, usize, Vec<[f64; 3]>)>,
+    Vec<String>,
+);
+
 /// Nodes, modes `(eigenvalue, line, translations per node)` and warnings of CalculiX's printed
 /// modes (`job.dat`, [`femu_io::ccx_dat`]) with the nodes of the run's deck (`nodes`, or the
 /// `.inp` of the same name beside it): the nodes the modes print, in their order, and the
 /// eigenvalues as the table prints them (seven digits).
-#[allow(clippy::type_complexity)]
-fn calculix_dat_modes(
-    path: &Path,
-    nodes: Option<&Path>,
-) -> Result<
-    (
-        Vec<(u64, [f64; 3])>,
-        Vec<(f64, usize, Vec<[f64; 3]>)>,
-        Vec<String>,
-    ),
-    StudyError,
-> {
+fn calculix_dat_modes(path: &Path, nodes: Option<&Path>) -> Result<ReadModes, StudyError> {
     let dat = femu_io::ccx_dat::read_calculix_dat(path)?;
     let deck = match nodes {
         Some(p) => p.to_path_buf(),
@@ -229,18 +226,7 @@ fn calculix_dat_modes(
 
 /// Nodes, modes `(eigenvalue, line, translations per node in the basic frame)` and warnings of
 /// Nastran's results with the grids of the run's deck.
-#[allow(clippy::type_complexity)]
-fn nastran_modes(
-    path: &Path,
-    nodes: Option<&Path>,
-) -> Result<
-    (
-        Vec<(u64, [f64; 3])>,
-        Vec<(f64, usize, Vec<[f64; 3]>)>,
-        Vec<String>,
-    ),
-    StudyError,
-> {
+fn nastran_modes(path: &Path, nodes: Option<&Path>) -> Result<ReadModes, StudyError> {
     let f06 = read_nastran_modes(path)?;
     let deck = match nodes {
         Some(p) => p.to_path_buf(),

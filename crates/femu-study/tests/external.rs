@@ -367,22 +367,13 @@ fn calculix_shell_matrices_are_refused() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// CalculiX's modes as the model side: a hex8 cantilever solved by CalculiX (`*NODE FILE, U`
-/// in its `*FREQUENCY` step: a `.frd` of 6 significant digits per value, 10 per frequency) and a
-/// "test" of femu's own modes of the same deck at the tip's nodes in y and z. The two codes'
-/// modes pair one to one with MAC above 1 - 1e-10 (1 - 4.6e-12 measured) and frequencies within
-/// 1e-9 (1.3e-10 measured: the `.frd`'s 10 digits); a study file of the `.frd` gives the same
-/// correlation; asked for K and M, the `.frd` is refused with what to give instead.
-#[test]
-fn calculix_modes_are_the_model_side() {
-    if !femu_testkit::ccx::available() {
-        return;
-    }
+/// A steel hex8 cantilever (8 x 2 x 2 bricks, clamped at `x = 0`) written as `job.inp` in `d`
+/// with a six-mode `*FREQUENCY` step asking for `outputs`, and solved by CalculiX there.
+fn solved_cantilever(d: &Path, outputs: &str) {
     let spec = BoxSpec::new([0.4, 0.1, 0.05], [8, 2, 2], BoxCells::Hex, false);
     let mut model = Model::new(box_mesh(&spec).unwrap()).unwrap();
     model.set_material(None, Material::steel()).unwrap();
     model.fix_set("xmin", &[0, 1, 2]).unwrap();
-    let d = dir("frd");
     let text = inp_string(
         &model,
         Some(&FrequencyStep {
@@ -394,10 +385,15 @@ fn calculix_modes_are_the_model_side() {
     assert!(text.contains("*END STEP"));
     std::fs::write(
         d.join("job.inp"),
-        text.replace("*END STEP", "*NODE FILE\nU\n*END STEP"),
+        text.replace("*END STEP", &format!("{outputs}*END STEP")),
     )
     .unwrap();
-    femu_testkit::ccx::run(&d, "job");
+    femu_testkit::ccx::run(d, "job");
+}
+
+/// `test.csv` in `d`: femu's own six lowest modes of `job.inp` at its free end (`XMAX`) in y and
+/// z, the "test" another solver's modes of the same deck are correlated with.
+fn femu_test_at_the_tip(d: &Path) {
     let (values, loaded) = lowest(&d.join("job.inp"), 6);
     let modes = loaded
         .sys
@@ -420,6 +416,22 @@ fn calculix_modes_are_the_model_side() {
         }
     }
     std::fs::write(d.join("test.csv"), csv).unwrap();
+}
+
+/// CalculiX's modes as the model side: a hex8 cantilever solved by CalculiX (`*NODE FILE, U`
+/// in its `*FREQUENCY` step: a `.frd` of 6 significant digits per value, 10 per frequency) and a
+/// "test" of femu's own modes of the same deck at the tip's nodes in y and z. The two codes'
+/// modes pair one to one with MAC above 1 - 1e-10 (1 - 4.6e-12 measured) and frequencies within
+/// 1e-9 (1.3e-10 measured: the `.frd`'s 10 digits); a study file of the `.frd` gives the same
+/// correlation; asked for K and M, the `.frd` is refused with what to give instead.
+#[test]
+fn calculix_modes_are_the_model_side() {
+    if !femu_testkit::ccx::available() {
+        return;
+    }
+    let d = dir("frd");
+    solved_cantilever(&d, "*NODE FILE\nU\n");
+    femu_test_at_the_tip(&d);
     let results = femu_study::external::load_result_modes(&d.join("job.frd"), None).unwrap();
     assert_eq!(results.modes.len(), 6);
     let report = correlate_on(&results, &d.join("test.csv"));
@@ -1563,28 +1575,8 @@ fn calculix_printed_modes_are_the_model_side() {
     if !femu_testkit::ccx::available() {
         return;
     }
-    let spec = BoxSpec::new([0.4, 0.1, 0.05], [8, 2, 2], BoxCells::Hex, false);
-    let mut model = Model::new(box_mesh(&spec).unwrap()).unwrap();
-    model.set_material(None, Material::steel()).unwrap();
-    model.fix_set("xmin", &[0, 1, 2]).unwrap();
     let d = dir("dat");
-    let text = inp_string(
-        &model,
-        Some(&FrequencyStep {
-            count: 6,
-            shift_cycles2: None,
-        }),
-    )
-    .unwrap();
-    std::fs::write(
-        d.join("job.inp"),
-        text.replace(
-            "*END STEP",
-            "*NODE PRINT, NSET=NALL\nU\n*NODE FILE\nU\n*END STEP",
-        ),
-    )
-    .unwrap();
-    femu_testkit::ccx::run(&d, "job");
+    solved_cantilever(&d, "*NODE PRINT, NSET=NALL\nU\n*NODE FILE\nU\n");
     assert_eq!(
         femu_io::Format::from_path(&d.join("job.dat")),
         Some(femu_io::Format::Results)
@@ -1617,28 +1609,7 @@ fn calculix_printed_modes_are_the_model_side() {
         assert!(mac > 1.0 - 1e-9, "mode {}: {mac}", j + 1);
     }
     // femu's own modes of the deck as the test, at the free end in y and z
-    let (values, loaded) = lowest(&d.join("job.inp"), 6);
-    let modes = loaded
-        .sys
-        .modes(Which::Lowest(6), &EigenOptions::default())
-        .unwrap();
-    let mesh = loaded.model.mesh();
-    let mut csv = String::from("mode,frequency_hz,node,direction,value\n");
-    for j in 0..6 {
-        let f = values[j].sqrt() / (2.0 * std::f64::consts::PI);
-        for &n in mesh.node_set("XMAX").unwrap() {
-            for (c, name) in [(1, "y"), (2, "z")] {
-                let r = loaded.sys.dofs.free_index(n, c).unwrap();
-                csv.push_str(&format!(
-                    "{},{f:.12},{},{name},{:.15e}\n",
-                    j + 1,
-                    mesh.node_id(n),
-                    modes.vectors[(r, j)]
-                ));
-            }
-        }
-    }
-    std::fs::write(d.join("test.csv"), csv).unwrap();
+    femu_test_at_the_tip(&d);
     let report = correlate_on(&dat, &d.join("test.csv"));
     assert_eq!(report.pairing.pairs.len(), 6);
     for p in &report.pairing.pairs {
