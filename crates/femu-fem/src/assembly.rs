@@ -621,7 +621,8 @@ impl Assembler {
 
     /// The model's own damping, on the stiffness pattern: the viscous damping `C_d` of its
     /// bushings (`B1..B6`, formed as their stiffness with `B` for `K`) and the structural damping
-    /// `K_4 = sum_e GE_e K_e` of its springs and bushings (Nastran's `B` and `K4` matrices of a
+    /// `K_4 = sum_e GE_e K_e` of its springs and bushings and of the elements with a `GE` of their
+    /// material ([`Model::set_element_damping`]) (Nastran's `B` and `K4` matrices of a
     /// direct frequency response; docs/MATH.md, "Frequency responses, directly"). Each is `None`
     /// when no element has it.
     ///
@@ -644,7 +645,10 @@ impl Assembler {
                         d
                     }),
                 ),
-                _ => (0.0, None),
+                _ => (
+                    model.element_damping().get(&s.id).copied().unwrap_or(0.0),
+                    None,
+                ),
             };
             if ge != 0.0 {
                 let sm = s.matrices(coords, MassKind::Lumped)?;
@@ -658,6 +662,16 @@ impl Assembler {
                 let v = c.get_or_insert_with(|| vec![0.0; self.nnz()]);
                 self.scatter(&pts, |at, l, w| v[at] += w * sm.k[l]);
             }
+        }
+        // the solids with a GE of their material
+        let mesh = model.mesh();
+        for (&id, &ge) in model.element_damping() {
+            let Some(e) = mesh.element_index(id) else {
+                continue;
+            };
+            let (ke, _) = element_matrices(model, e, MassKind::Lumped)?;
+            let v = k4.get_or_insert_with(|| vec![0.0; self.nnz()]);
+            self.scatter(mesh.element(e).nodes, |at, l, w| v[at] += ge * w * ke[l]);
         }
         Ok(Dampers {
             viscous: c.map(|v| self.without_zeros(&v)),
@@ -928,7 +942,8 @@ impl Assembler {
 pub struct Dampers {
     /// Viscous damping `C_d` (N s/m) of the bushings' `B`.
     pub viscous: Option<SparseMatrix>,
-    /// Structural damping `K_4 = sum_e GE_e K_e` (N/m) of the springs and bushings.
+    /// Structural damping `K_4 = sum_e GE_e K_e` (N/m) of the springs and bushings and of the
+    /// elements with a `GE` ([`Model::set_element_damping`]).
     pub structural: Option<SparseMatrix>,
 }
 

@@ -33,6 +33,9 @@ pub struct Model {
     structural_lookup: std::collections::HashMap<u64, usize>,
     /// Named sets of point and rigid masses (a Nastran CONM2, an Abaqus `*MASS` element set).
     mass_sets: BTreeMap<String, Vec<MassRef>>,
+    /// The structural damping coefficient `GE` of solids, beams, rods and shells by element id
+    /// (from their material); absent: none.
+    element_damping: BTreeMap<u64, f64>,
 }
 
 /// A concentrated mass of a model: [`Model::point_masses`] or [`Model::rigid_masses`] by index.
@@ -101,7 +104,54 @@ impl Model {
             structural_sets: BTreeMap::new(),
             structural_lookup: std::collections::HashMap::new(),
             mass_sets: BTreeMap::new(),
+            element_damping: BTreeMap::new(),
         })
+    }
+
+    /// Gives the solid, beam, rod or shell `id` the structural damping coefficient `ge`: it adds
+    /// `i ge K_e` to the dynamic stiffness of a direct frequency response (`K_4 = sum_e GE_e K_e`,
+    /// Nastran's `GE` of the element's material, Abaqus' `*DAMPING, STRUCTURAL` of it; docs/MATH.md,
+    /// "Frequency responses, directly"). It changes neither `K` nor `M`. A spring or a bushing
+    /// carries its own `GE` ([`crate::structural::Spring::ge`]); `ge = 0` removes the element's.
+    ///
+    /// # Errors
+    /// [`FemError::UnknownElement`] for an id of no element; [`FemError::InvalidStructural`] for
+    /// a spring or a bushing, or a `ge` that is negative or not finite.
+    pub fn set_element_damping(&mut self, id: u64, ge: f64) -> Result<(), FemError> {
+        if let Some(s) = self.structural_index(id) {
+            use crate::structural::StructuralKind;
+            if matches!(
+                self.structural[s].kind,
+                StructuralKind::Spring(_) | StructuralKind::Bushing(_)
+            ) {
+                return Err(FemError::InvalidStructural {
+                    element: id,
+                    reason: "a spring or a bushing has its own GE".into(),
+                });
+            }
+        } else if self.mesh.element_index(id).is_none() {
+            return Err(FemError::UnknownElement { element: id });
+        }
+        if !(ge.is_finite() && ge >= 0.0) {
+            return Err(FemError::InvalidStructural {
+                element: id,
+                reason: format!(
+                    "a structural damping coefficient GE of {ge}: it must be finite and at least 0"
+                ),
+            });
+        }
+        if ge == 0.0 {
+            self.element_damping.remove(&id);
+        } else {
+            self.element_damping.insert(id, ge);
+        }
+        Ok(())
+    }
+
+    /// The structural damping coefficients `GE` of solids, beams, rods and shells, by element id
+    /// ([`Model::set_element_damping`]); elements without one are absent.
+    pub fn element_damping(&self) -> &BTreeMap<u64, f64> {
+        &self.element_damping
     }
 
     /// Adds a beam, rod, spring, bushing or shell; its nodes get rotations where it acts on them

@@ -511,3 +511,91 @@ fn composite_shell_sections_are_the_nastran_laminate() {
         "{e}"
     );
 }
+
+/// `*DAMPING, STRUCTURAL=` in a `*MATERIAL` gives the solids and shells of its sections that
+/// structural damping coefficient (`GE`); `ALPHA` and `BETA` are not read, with a warning on their
+/// line; `STRUCTURAL=` outside a material, a negative value and a composite section whose plies'
+/// materials differ in it are refused with the line.
+#[test]
+fn material_structural_damping_reaches_solids_and_shells() {
+    let base = "\
+*NODE
+1, 0., 0., 0.
+2, 1., 0., 0.
+3, 1., 1., 0.
+4, 0., 1., 0.
+5, 0., 0., 1.
+6, 1., 0., 1.
+7, 1., 1., 1.
+8, 0., 1., 1.
+9, 2., 0., 0.
+10, 2., 1., 0.
+*ELEMENT, TYPE=C3D8, ELSET=BLOCK
+1, 1, 2, 3, 4, 5, 6, 7, 8
+*ELEMENT, TYPE=S4, ELSET=SKIN
+2, 2, 9, 10, 3
+*MATERIAL, NAME=STEEL
+*ELASTIC
+2.1e11, 0.3
+*DENSITY
+7850.
+";
+    let read = |rest: &str| femu_io::inp::parse_inp(&format!("{base}{rest}"), "d.inp");
+    let deck = read(
+        "*DAMPING, STRUCTURAL=0.03, ALPHA=2.\n*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n\
+         *SHELL SECTION, ELSET=SKIN, MATERIAL=STEEL\n0.01\n",
+    )
+    .unwrap();
+    let w: Vec<String> = deck.warnings.iter().map(|w| w.to_string()).collect();
+    assert!(
+        w.iter()
+            .any(|w| w.contains("d.inp:21") && w.contains("ALPHA")),
+        "{w:?}"
+    );
+    let model = deck.to_model().unwrap();
+    assert_eq!(
+        model.element_damping().iter().collect::<Vec<_>>(),
+        vec![(&1, &0.03), (&2, &0.03)]
+    );
+    let asm = femu_fem::assembly::Assembler::new(&model).unwrap();
+    let k4 = asm.dampers(&model).unwrap().structural.unwrap();
+    let sys = model
+        .assemble(femu_fem::assembly::MassKind::Lumped)
+        .unwrap();
+    // every entry of K_4 is 0.03 of K's (both elements damped alike)
+    let (a, b) = (
+        femu_sparse::csc::to_dense(&k4),
+        femu_sparse::csc::to_dense(&sys.k),
+    );
+    let scale = b.norm_max();
+    let worst = (0..b.nrows())
+        .flat_map(|i| (0..b.ncols()).map(move |j| (i, j)))
+        .map(|(i, j)| (a[(i, j)] - 0.03 * b[(i, j)]).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-14 * scale, "{worst:e}");
+
+    for (rest, line, says) in [
+        ("*DAMPING, STRUCTURAL=-0.1\n", 21, "at least 0"),
+        (
+            "*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n*DAMPING, STRUCTURAL=0.1\n",
+            22,
+            "outside a *MATERIAL",
+        ),
+        (
+            "*DAMPING, STRUCTURAL=0.02\n*MATERIAL, NAME=SOFT\n*ELASTIC\n1e9, 0.3\n*DENSITY\n1000.\n\
+             *SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n\
+             *SHELL SECTION, ELSET=SKIN, COMPOSITE\n0.005, 3, STEEL, 0.\n0.005, 3, SOFT, 90.\n",
+            28,
+            "different structural damping",
+        ),
+    ] {
+        let e = read(rest)
+            .and_then(|d| d.to_model().map(|_| ()))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!("d.inp:{line}")) && e.contains(says),
+            "{e}"
+        );
+    }
+}

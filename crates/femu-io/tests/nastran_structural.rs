@@ -1120,3 +1120,111 @@ fn pin_flags_make_a_pinned_beam() {
         assert!(e.contains("pin.bdf:10") && e.contains(what), "{pa}: {e}");
     }
 }
+
+/// The structural damping of the materials (QRG MAT1 GE, field 9) reaches every kind of element
+/// made of them: a simply supported CQUAD4 plate whose PSHELL's MAT1 has `GE = 0.04` gives
+/// `K_4 = 0.04 K` entry by entry (the identity of one damped material), and a CHEXA of a damped
+/// PSOLID beside an undamped one damps the first alone. A PCOMP's own `GE` (field 8) is its
+/// elements'; a PSHELL whose membrane and bending materials disagree, and a negative `GE`, are
+/// refused with the card and line.
+#[test]
+fn material_damping_is_the_elements_structural_damping() {
+    let damped = |property: &str| {
+        let deck = simply_supported((0.6, 0.4, 4), "", property);
+        let bdf = parse_bdf(&deck, "plate.bdf", &BdfOptions::default()).unwrap();
+        let asm = femu_fem::assembly::Assembler::new(&bdf.model).unwrap();
+        let sys = bdf.model.assemble(MassKind::Consistent).unwrap();
+        let k4 = asm.dampers(&bdf.model).unwrap().structural;
+        (sys, k4)
+    };
+    let (sys, k4) = damped("PSHELL,1,1,0.005,1,,1\nMAT1,1,2.1+11,,0.3,7850.,,,0.04\n");
+    let k4 = k4.expect("the MAT1's GE");
+    let scale = sys.k.data().iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let k4_dense = femu_sparse::csc::to_dense(&k4);
+    let k_dense = femu_sparse::csc::to_dense(&sys.k);
+    let worst = (0..k_dense.nrows())
+        .flat_map(|i| (0..k_dense.ncols()).map(move |j| (i, j)))
+        .map(|(i, j)| (k4_dense[(i, j)] - 0.04 * k_dense[(i, j)]).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-14 * scale, "K4 - 0.04 K: {worst:e} of {scale:e}");
+    // a PCOMP's GE, not its plies'
+    let (sys, k4) = damped(
+        "PCOMP,1,,,,,,0.02\n,1,0.0025,0.,YES,1,0.0025,90.,YES\nMAT1,1,2.1+11,,0.3,7850.,,,0.07\n",
+    );
+    let ratio = femu_sparse::csc::to_dense(&k4.expect("the PCOMP's GE"))[(7, 7)]
+        / femu_sparse::csc::to_dense(&sys.k)[(7, 7)];
+    assert!((ratio - 0.02).abs() < 1e-14, "{ratio}");
+    // no GE: no damping
+    let (_, k4) = damped("PSHELL,1,1,0.005,1,,1\nMAT1,1,2.1+11,,0.3,7850.\n");
+    assert!(k4.is_none());
+
+    // two CHEXA, one of a damped PSOLID: K_4 is its element's stiffness times GE
+    let deck = "\
+BEGIN BULK
+GRID,1,,0.,0.,0.
+GRID,2,,1.,0.,0.
+GRID,3,,1.,1.,0.
+GRID,4,,0.,1.,0.
+GRID,5,,0.,0.,1.
+GRID,6,,1.,0.,1.
+GRID,7,,1.,1.,1.
+GRID,8,,0.,1.,1.
+GRID,9,,2.,0.,0.
+GRID,10,,2.,1.,0.
+GRID,11,,2.,0.,1.
+GRID,12,,2.,1.,1.
+CHEXA,1,1,1,2,3,4,5,6,+A
++A,7,8
+CHEXA,2,2,2,9,10,3,6,11,+B
++B,12,7
+PSOLID,1,1
+PSOLID,2,2
+MAT1,1,2.1+11,,0.3,7850.,,,0.05
+MAT1,2,2.1+11,,0.3,7850.
+ENDDATA
+";
+    let bdf = parse_bdf(deck, "two.bdf", &BdfOptions::default()).unwrap();
+    assert_eq!(
+        bdf.model.element_damping().iter().collect::<Vec<_>>(),
+        vec![(&1, &0.05)]
+    );
+    let asm = femu_fem::assembly::Assembler::new(&bdf.model).unwrap();
+    let k4 = asm.dampers(&bdf.model).unwrap().structural.unwrap();
+    let sys = bdf.model.assemble(MassKind::Consistent).unwrap();
+    let node = |g: u64, c: usize| {
+        sys.dofs
+            .free_index(bdf.model.mesh().node_index(g).unwrap(), c)
+            .unwrap()
+    };
+    let (k4d, kd) = (
+        femu_sparse::csc::to_dense(&k4),
+        femu_sparse::csc::to_dense(&sys.k),
+    );
+    // grid 1 belongs to element 1 alone, grid 9 to element 2 alone
+    let (a, b) = (node(1, 0), node(9, 0));
+    assert!((k4d[(a, a)] / kd[(a, a)] - 0.05).abs() < 1e-14);
+    assert_eq!(k4d[(b, b)], 0.0);
+
+    for (property, at, says) in [
+        (
+            "PSHELL,1,1,0.005,2,,1\nMAT1,1,2.1+11,,0.3,7850.,,,0.04\nMAT1,2,2.1+11,,0.3,7850.,,,0.03\n",
+            "PSHELL",
+            "different structural damping",
+        ),
+        (
+            "PSHELL,1,1,0.005,1,,1\nMAT1,1,2.1+11,,0.3,7850.,,,-0.04\n",
+            "MAT1,1",
+            "at least 0",
+        ),
+    ] {
+        let deck = simply_supported((0.6, 0.4, 4), "", property);
+        let line = 1 + deck.lines().position(|l| l.starts_with(at)).unwrap();
+        let e = parse_bdf(&deck, "bad.bdf", &BdfOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!("bad.bdf:{line}:")) && e.contains(says),
+            "{e}"
+        );
+    }
+}

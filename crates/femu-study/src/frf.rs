@@ -50,7 +50,7 @@ pub struct FrfRequest {
     pub rayleigh: Option<Vec<f64>>,
     /// Solve the dynamic stiffness `K (1 + i eta) + i K4 + i w C - w^2 M` at every line (one
     /// sparse complex factorization each) instead of superposing modes: the model's own dampers
-    /// (bushings' B, springs' and bushings' GE) then act, and no mode is left out. Takes a loss
+    /// (bushings' B, the GE of springs, bushings and damped materials) then act, and no mode is left out. Takes a loss
     /// factor or Rayleigh damping (modal ratios have no matrix); default: a loss factor of 0.02
     /// (1 % viscous at resonance) on a model without dampers, none on one with them.
     #[cfg_attr(feature = "clap", arg(long, conflicts_with_all = ["damping_ratio", "damping_from"]))]
@@ -441,7 +441,7 @@ pub fn frf_correlation_with(
         )?
     } else {
         if dampers.any() {
-            notes.push("the model's own dampers (bushings' B, springs' and bushings' GE) are left out by modal superposition: --direct includes them".into());
+            notes.push("the model's own dampers (bushings' B, the GE of springs, bushings and damped materials) are left out by modal superposition: --direct includes them".into());
         }
         modal_route(
             model, request, eigen, &outputs, &inputs, &lines, kind, &mut notes,
@@ -644,7 +644,7 @@ fn update_from_frfs(
     if dampers.any() {
         return Err(StudyError::invalid(
             "update",
-            "the model has its own dampers (bushings' B, springs' and bushings' GE), which updating from FRFs does not model: remove them or correlate only",
+            "the model has its own dampers (bushings' B, the GE of springs, bushings and damped materials), which updating from FRFs does not model: remove them or correlate only",
         ));
     }
     if model.matrices.is_some() {

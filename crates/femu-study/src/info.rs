@@ -58,6 +58,30 @@ fn structural_lines(s: &mut String, model: &femu_fem::model::Model) {
     }
 }
 
+/// The elements with a structural damping coefficient of their material (Nastran's `GE`, Abaqus'
+/// `*DAMPING, STRUCTURAL`), when there are any: what a direct frequency response adds as
+/// `i sum_e GE_e K_e`.
+fn damping_line(s: &mut String, model: &femu_fem::model::Model) {
+    let d = model.element_damping();
+    if d.is_empty() {
+        return;
+    }
+    let (lo, hi) = d
+        .values()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
+    let _ = writeln!(
+        s,
+        "structural damping of the materials: {} elements, GE {}{} (femu frf --direct adds it)",
+        d.len(),
+        lo,
+        if hi > lo {
+            format!(" to {hi}")
+        } else {
+            String::new()
+        }
+    );
+}
+
 /// The mass sets (a Nastran CONM2 each, an Abaqus `*MASS` element set), when there are any: the
 /// names that update concentrated masses.
 fn mass_set_lines(s: &mut String, model: &femu_fem::model::Model) {
@@ -151,9 +175,13 @@ fn describe_inp(path: &Path, s: &mut String, warnings: &mut Vec<String>) -> Resu
             }
             _ => "anisotropic".to_string(),
         };
+        let damping = match deck.material_damping.get(name) {
+            Some(ge) => format!(", structural damping {ge}"),
+            None => String::new(),
+        };
         let _ = writeln!(
             s,
-            "material {name}: {elastic}, density {} kg/m^3",
+            "material {name}: {elastic}, density {} kg/m^3{damping}",
             m.density
         );
     }
@@ -356,6 +384,7 @@ fn describe_nastran(
     let model = &deck.model;
     mesh_lines(s, model.mesh());
     structural_lines(s, model);
+    damping_line(s, model);
     mass_set_lines(s, model);
     formulation_line(s, model);
     let _ = writeln!(

@@ -70,6 +70,7 @@ const READ: &[(&str, &[&str])] = &[
     ("MATERIAL", &["NAME"]),
     ("ELASTIC", &["TYPE", "DEPENDENCIES", "MODULI"]),
     ("DENSITY", &["DEPENDENCIES"]),
+    ("DAMPING", &["STRUCTURAL", "ALPHA", "BETA", "COMPOSITE"]),
     (
         "SOLID SECTION",
         &[
@@ -161,7 +162,6 @@ const NO_EFFECT: &[&str] = &[
     "CONTACT OUTPUT",
     "CONTACT PRINT",
     "CONDUCTIVITY",
-    "DAMPING",
     "DASHPOT",
     "DLOAD",
     "DSLOAD",
@@ -419,6 +419,9 @@ pub struct InpDeck {
     pub mesh: Mesh,
     /// Materials by upper-case name.
     pub materials: BTreeMap<String, Material>,
+    /// The structural damping coefficient of each material with `*DAMPING, STRUCTURAL=` (by
+    /// upper-case name): the `GE` of the elements of its sections.
+    pub material_damping: BTreeMap<String, f64>,
     /// Plane-stress ply materials (`*ELASTIC, TYPE=LAMINA`) by upper-case name: for composite
     /// shell sections only.
     pub(crate) laminae: BTreeMap<String, structural::Lamina>,
@@ -592,6 +595,8 @@ struct PendingMaterial {
     lamina_type: bool,
     lamina: Option<[f64; 6]>,
     density: Option<f64>,
+    /// `*DAMPING, STRUCTURAL=`: the material's structural damping coefficient.
+    structural: Option<f64>,
     line: usize,
     path: PathBuf,
 }

@@ -75,8 +75,26 @@ impl InpDeck {
                     line: s.line.line,
                     source,
                 })?;
+            if let Some(&ge) = self.material_damping.get(&s.material) {
+                for &e in &self.mesh.element_sets()[&s.elset] {
+                    let id = self.mesh.element(e).id;
+                    model
+                        .set_element_damping(id, ge)
+                        .map_err(|source| IoError::Model {
+                            path: s.line.path.clone(),
+                            line: s.line.line,
+                            source,
+                        })?;
+                }
+            }
         }
-        structural::add_structural(&self.structural, &self.materials, &self.laminae, &mut model)?;
+        structural::add_structural(
+            &self.structural,
+            &self.materials,
+            &self.material_damping,
+            &self.laminae,
+            &mut model,
+        )?;
         self.apply_links(&mut model)?;
         for b in &self.boundaries {
             let all: Vec<usize> = (b.first - 1..b.last).collect();

@@ -113,6 +113,7 @@ struct DeckBuilder {
     mass_block: Option<String>,
     mass_cards: Vec<MassCard>,
     materials: BTreeMap<String, Material>,
+    material_damping: BTreeMap<String, f64>,
     laminae: BTreeMap<String, structural::Lamina>,
     pending: Option<PendingMaterial>,
     sections: Vec<Section>,
@@ -180,6 +181,9 @@ impl DeckBuilder {
         let Some(p) = self.pending.take() else {
             return Ok(());
         };
+        if let Some(ge) = p.structural {
+            self.material_damping.insert(p.name.clone(), ge);
+        }
         if p.lamina_type {
             let at = Location {
                 path: p.path.clone(),
@@ -245,7 +249,8 @@ impl DeckBuilder {
         li: usize,
         warnings: &mut Vec<Warning>,
     ) -> Result<(), IoError> {
-        let material_keyword = matches!(name.as_str(), "ELASTIC" | "DENSITY");
+        let material_keyword = matches!(name.as_str(), "ELASTIC" | "DENSITY")
+            || (name == "DAMPING" && self.pending.is_some());
         if !material_keyword && name != "MATERIAL" {
             self.finish_material()?;
         }
@@ -270,6 +275,7 @@ impl DeckBuilder {
             "NSET" | "ELSET" => self.set_keyword(&name, &params, l, li),
             "MATERIAL" => self.material_keyword(&params, l),
             "ELASTIC" | "DENSITY" => self.material_option_keyword(&name, &params, l),
+            "DAMPING" => self.damping_keyword(&params, l, warnings),
             "SOLID SECTION" => self.section_keyword(&params, l),
             "BEAM SECTION" | "BEAM GENERAL SECTION" => {
                 let elset = params
@@ -577,6 +583,58 @@ impl DeckBuilder {
             path: l.path.clone(),
             ..Default::default()
         });
+        Ok(())
+    }
+
+    /// `*DAMPING`: in a `*MATERIAL`, `STRUCTURAL=s` is the structural damping coefficient of its
+    /// elements (Abaqus' material damping, CalculiX's too: `i s K_e` in a frequency response);
+    /// `ALPHA` and `BETA` (Abaqus' Rayleigh damping of the material, CalculiX's of the model when
+    /// given outside a material) are not read, with a warning that says where they would act.
+    fn damping_keyword(
+        &mut self,
+        params: &HashMap<String, String>,
+        l: &Line,
+        warnings: &mut Vec<Warning>,
+    ) -> Result<(), IoError> {
+        if let Some(v) = params.get("STRUCTURAL") {
+            let Some(p) = self.pending.as_mut() else {
+                return Err(err(
+                    l,
+                    "*DAMPING, STRUCTURAL= outside a *MATERIAL: structural damping is a material's"
+                        .into(),
+                ));
+            };
+            let ge = parse_f64(v)
+                .filter(|g| g.is_finite() && *g >= 0.0)
+                .ok_or_else(|| {
+                    err(
+                        l,
+                        format!(
+                            "STRUCTURAL={v:?}: a structural damping coefficient is a number of at least 0"
+                        ),
+                    )
+                })?;
+            p.structural = Some(ge);
+        }
+        let rayleigh: Vec<&str> = ["ALPHA", "BETA", "COMPOSITE"]
+            .into_iter()
+            .filter(|k| params.contains_key(*k))
+            .collect();
+        if !rayleigh.is_empty() {
+            warn(
+                warnings,
+                l,
+                format!(
+                    "*DAMPING {} not read: {}; femu frf takes Rayleigh damping for the whole model from --rayleigh",
+                    rayleigh.join(", "),
+                    if self.pending.is_some() {
+                        "Rayleigh damping of a material"
+                    } else {
+                        "Rayleigh damping of modal dynamics"
+                    }
+                ),
+            );
+        }
         Ok(())
     }
 
@@ -1187,6 +1245,7 @@ impl DeckBuilder {
         Ok(InpDeck {
             mesh,
             materials: self.materials,
+            material_damping: self.material_damping,
             laminae: self.laminae,
             sections: self.sections,
             boundaries: self.boundaries,

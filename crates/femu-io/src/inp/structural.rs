@@ -351,6 +351,7 @@ fn n1(c: &BeamSectionCard) -> Result<[f64; 3], IoError> {
 pub(super) fn add_structural(
     records: &StructuralRecords,
     materials: &BTreeMap<String, Material>,
+    material_damping: &BTreeMap<String, f64>,
     laminae: &BTreeMap<String, Lamina>,
     model: &mut Model,
 ) -> Result<(), IoError> {
@@ -413,6 +414,8 @@ pub(super) fn add_structural(
                 })
             })
             .collect::<Result<Vec<_>, _>>()?;
+        // the structural damping of the element's material
+        let mut ge = 0.0;
         let kind = match ty {
             StructuralType::B31 | StructuralType::B33 => {
                 let k = *section_of.get(id).ok_or_else(|| {
@@ -425,6 +428,9 @@ pub(super) fn add_structural(
                     )
                 })?;
                 let c = &records.sections[k];
+                if let Some(m) = &c.material {
+                    ge = material_damping.get(m).copied().unwrap_or(0.0);
+                }
                 let ((area, i1, i2, j, kf), (e, g, rho)) = match values.entry(k) {
                     std::collections::hash_map::Entry::Occupied(v) => *v.get(),
                     std::collections::hash_map::Entry::Vacant(v) => {
@@ -460,6 +466,7 @@ pub(super) fn add_structural(
                     )
                 })?;
                 let x: Vec<[f64; 3]> = nodes.iter().map(|n| model.mesh().coords()[*n]).collect();
+                ge = shell_damping(&records.shell_sections[k], material_damping)?;
                 shell(&records.shell_sections[k], materials, laminae, &x)?
             }
             _ => {
@@ -481,6 +488,10 @@ pub(super) fn add_structural(
                 nodes,
                 kind,
             })
+            .and_then(|_| match ge {
+                0.0 => Ok(()),
+                _ => model.set_element_damping(*id, ge),
+            })
             .map_err(|source| IoError::Model {
                 path: l.path.clone(),
                 line: l.line,
@@ -500,6 +511,40 @@ pub(super) fn add_structural(
             })?;
     }
     Ok(())
+}
+
+/// The structural damping coefficient of a `*SHELL SECTION`'s material; for a composite section,
+/// its plies' (one value: femu damps an element by one coefficient, so plies of materials with
+/// different ones are refused with the section's line).
+fn shell_damping(
+    c: &ShellSectionCard,
+    material_damping: &BTreeMap<String, f64>,
+) -> Result<f64, IoError> {
+    let ge = |m: &str| {
+        material_damping
+            .get(&m.to_ascii_uppercase())
+            .copied()
+            .unwrap_or(0.0)
+    };
+    if !c.composite {
+        return Ok(ge(&c.material));
+    }
+    let plies: Vec<(String, f64)> = c
+        .lines
+        .iter()
+        .filter_map(|f| f.get(2))
+        .map(|m| (m.to_ascii_uppercase(), ge(m)))
+        .collect();
+    match plies.iter().find(|(_, g)| *g != plies[0].1) {
+        Some((m, g)) => Err(at_err(
+            &c.line,
+            format!(
+                "the plies' materials have different structural damping ({} {}, {m} {g}): femu damps a shell by one coefficient",
+                plies[0].0, plies[0].1
+            ),
+        )),
+        None => Ok(plies.first().map_or(0.0, |p| p.1)),
+    }
 }
 
 /// A shell of a `*SHELL SECTION`: its material's `E`, `nu`, density and the thickness on its

@@ -122,6 +122,27 @@ pub(super) fn rotate_voigt(d: &[[f64; 6]; 6], a: &[[f64; 3]; 3]) -> [[f64; 6]; 6
     })
 }
 
+/// The structural element damping coefficient `GE` of a material card (QRG: MAT1 field 9, MAT2
+/// field 14, MAT8 field 18, MAT9 field 32; blank is 0): `i GE K_e` in the dynamic stiffness of a
+/// direct frequency response of the elements made of it.
+pub(super) fn material_ge(m: &Card) -> Result<f64, IoError> {
+    let at = match m.name.as_str() {
+        "MAT1" => 7,
+        "MAT2" => 12,
+        "MAT8" => 16,
+        "MAT9" => 30,
+        _ => return Ok(0.0),
+    };
+    let ge = m.real(at, "GE")?.unwrap_or(0.0);
+    if !(ge.is_finite() && ge >= 0.0) {
+        return Err(m.err(format!(
+            "{}: GE = {ge}: a structural damping coefficient is at least 0",
+            m.field(0)
+        )));
+    }
+    Ok(ge)
+}
+
 /// The material of MAT1 or MAT9 `m` for the PSOLID `psolid`, its density times `wtmass`.
 pub(super) fn material(
     m: &Card,

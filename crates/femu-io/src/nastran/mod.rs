@@ -604,6 +604,12 @@ fn model_with_materials(
         model
             .set_material(Some(&format!("PID{pid}")), material)
             .map_err(pc.located())?;
+        let ge = materials::material_ge(m)?;
+        if ge != 0.0 {
+            for &eid in eids {
+                model.set_element_damping(eid, ge).map_err(m.located())?;
+            }
+        }
         formulation(pc, eids, element_pid, &mut model, warnings)?;
     }
     Ok(model)

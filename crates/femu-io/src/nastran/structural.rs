@@ -540,6 +540,55 @@ fn orientation(
     Ok((v, offt))
 }
 
+/// The structural damping coefficient `GE` of the materials in fields `at` of `card` (blank or
+/// unknown ids are skipped: the element's own reading refuses them): one value, or an error when
+/// they differ (femu damps an element by one coefficient).
+fn mid_ge(ctx: &Context<'_, '_>, card: &Card, at: &[usize]) -> Result<f64, IoError> {
+    let mut found: Option<(u64, f64)> = None;
+    for &i in at {
+        let Some(mid) = card.int(i, "MID")?.filter(|m| *m > 0) else {
+            continue;
+        };
+        let Some(m) = ctx.materials.get(&(mid as u64)) else {
+            continue;
+        };
+        let ge = super::materials::material_ge(m)?;
+        match found {
+            Some((other, g)) if g != ge => {
+                return Err(card.err(format!(
+                    "{}: its materials {other} and {mid} have different structural damping (GE {g} and {ge}): femu damps an element by one coefficient",
+                    card.field(0)
+                )));
+            }
+            _ => found = Some((mid as u64, ge)),
+        }
+    }
+    Ok(found.map_or(0.0, |f| f.1))
+}
+
+/// The structural damping coefficient `GE` of the elements of property `p`: its material's `GE`
+/// (PBAR, PBARL, PBEAM, PBEAML, PROD: MID; PSHELL: MID1, MID2 and MID3, which must agree), a
+/// PCOMP's or PCOMPG's own `GE` field (QRG PCOMP: the element's damping, whatever its plies'
+/// materials say).
+fn property_ge(ctx: &Context<'_, '_>, p: &Card) -> Result<f64, IoError> {
+    match p.name.as_str() {
+        "PSHELL" => mid_ge(ctx, p, &[1, 3, 5]),
+        "PCOMP" | "PCOMPG" => {
+            let ge = p.real(6, "GE")?.unwrap_or(0.0);
+            if ge.is_finite() && ge >= 0.0 {
+                Ok(ge)
+            } else {
+                Err(p.err(format!(
+                    "{}: GE = {ge}: a structural damping coefficient is at least 0",
+                    p.field(0)
+                )))
+            }
+        }
+        "PBAR" | "PBARL" | "PBEAM" | "PBEAML" | "PROD" => mid_ge(ctx, p, &[1]),
+        _ => Ok(0.0),
+    }
+}
+
 /// Reads the structural elements into `model` (each property's into the structural set
 /// `PID<n>`); returns how many.
 ///
@@ -808,11 +857,23 @@ pub(super) fn add_structural(
             }
             _ => unreachable!("sorted as structural"),
         };
+        let ge = match c.name.as_str() {
+            "CONROD" => mid_ge(ctx, c, &[3])?,
+            "CELAS1" | "CELAS2" | "CBUSH" => 0.0,
+            _ => match cards.properties.get(&pid) {
+                Some(p) => property_ge(ctx, p)?,
+                None => 0.0,
+            },
+        };
         model
             .add_structural(StructuralElement {
                 id: eid,
                 nodes,
                 kind,
+            })
+            .and_then(|_| match ge {
+                0.0 => Ok(()),
+                _ => model.set_element_damping(eid, ge),
             })
             .map_err(c.located())?;
         sets.entry(pid).or_default().push(eid);
