@@ -1797,6 +1797,88 @@ ENDDATA
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Nastran's `PARAM,G` is the model's structural loss factor (`K (1 + i G)`, QRG PARAM G) when
+/// `femu frf` is given no damping: a CELAS2 spring to ground under a CONM2 with `G = 0.05`
+/// measured as the single-DOF receptance `1 / (k (1 + i G) - w^2 m)` written by hand is
+/// reproduced to 1e-9 of its peak by the direct route and by modal superposition (its one mode
+/// holds the whole response), and both say the damping is the deck's; `--loss-factor` given
+/// overrides it, and the peak then moves away from the measured one.
+#[test]
+fn frf_takes_the_decks_param_g() {
+    use femu_io::uff::Ordinate;
+    let dir = std::env::temp_dir().join(format!("femu-cli-frf-g-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let deck = "\
+SOL 103
+CEND
+SPC = 1
+BEGIN BULK
+PARAM,G,0.05
+GRID,2,,0.,0.,0.
+CELAS2,7,3.+4,2,3
+CONM2,9,2,,10.
+SPC1,1,12,2
+ENDDATA
+";
+    std::fs::write(dir.join("spring.bdf"), deck).unwrap();
+    let (k, g, m) = (3e4, 0.05, 10.0);
+    let (min, step, count) = (1.0, 0.25, 80usize); // the resonance at 8.72 Hz
+    let h: Vec<(f64, f64)> = (0..count)
+        .map(|l| {
+            let w = 2.0 * std::f64::consts::PI * (min + step * l as f64);
+            let (re, im) = (k - w * w * m, k * g);
+            let d = re * re + im * im;
+            (re / d, -im / d)
+        })
+        .collect();
+    write_frf_uff(
+        &dir.join("frf.uff"),
+        &[(2, 3)],
+        2,
+        min,
+        step,
+        std::slice::from_ref(&h),
+    );
+    let peak = h.iter().map(|(a, b)| a.hypot(*b)).fold(0.0, f64::max);
+    let run = |extra: &[&str], name: &str| {
+        femu()
+            .args(["frf", dir.join("spring.bdf").to_str().unwrap()])
+            .arg(dir.join("frf.uff"))
+            .args(["--quiet", "--uff"])
+            .arg(dir.join(format!("{name}.uff")))
+            .arg("--json")
+            .arg(dir.join(format!("{name}.json")))
+            .args(extra)
+            .assert()
+            .success();
+        let back = femu_io::uff::read_uff(dir.join(format!("{name}.uff"))).unwrap();
+        let Ordinate::Complex(v) = &back.functions[0].ordinate else {
+            panic!("complex FRF expected")
+        };
+        let err = v
+            .iter()
+            .zip(&h)
+            .map(|((a, b), (c, d))| (a - c).hypot(b - d))
+            .fold(0.0, f64::max);
+        (
+            err / peak,
+            json_of(dir.join(format!("{name}.json")))["notes"].to_string(),
+        )
+    };
+    for (extra, name) in [(&["--direct"][..], "direct"), (&[][..], "modal")] {
+        let (err, notes) = run(extra, name);
+        assert!(err < 1e-9, "{name}: {err:e} of the peak");
+        assert!(
+            notes.contains("the deck's own (a loss factor of 0.05"),
+            "{notes}"
+        );
+    }
+    let (err, notes) = run(&["--direct", "--loss-factor", "0.02"], "given");
+    assert!(err > 0.5, "{err:e}");
+    assert!(!notes.contains("the deck's own"), "{notes}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `femu frf --update`: receptances "measured" by a dense direct solve on the cantilever whose
 /// root half is 20 % softer (loss factor 0.02), at ten z and two y sensors under a force at the
 /// tip, written as dataset 58; the nominal deck updated over its two halves from a loss factor of

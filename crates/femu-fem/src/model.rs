@@ -36,6 +36,25 @@ pub struct Model {
     /// The structural damping coefficient `GE` of solids, beams, rods and shells by element id
     /// (from their material); absent: none.
     element_damping: BTreeMap<u64, f64>,
+    /// The damping the deck gives the whole model (Nastran's `PARAM,G`, CalculiX's `*DAMPING,
+    /// ALPHA=, BETA=`).
+    uniform_damping: Option<UniformDamping>,
+}
+
+/// The damping a deck gives the whole model, which a frequency response uses when its request
+/// names none: Nastran's `PARAM,G` (a structural loss factor, `K (1 + i G)`), CalculiX's
+/// `*DAMPING, ALPHA=, BETA=` (Rayleigh damping `C = alpha M + beta K`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum UniformDamping {
+    /// A structural loss factor `eta`: `K (1 + i eta)`.
+    LossFactor(f64),
+    /// Rayleigh damping `C = alpha M + beta K` (s^-1 and s).
+    Rayleigh {
+        /// The mass coefficient, s^-1.
+        alpha: f64,
+        /// The stiffness coefficient, s.
+        beta: f64,
+    },
 }
 
 /// A concentrated mass of a model: [`Model::point_masses`] or [`Model::rigid_masses`] by index.
@@ -105,7 +124,33 @@ impl Model {
             structural_lookup: std::collections::HashMap::new(),
             mass_sets: BTreeMap::new(),
             element_damping: BTreeMap::new(),
+            uniform_damping: None,
         })
+    }
+
+    /// Gives the whole model the damping its deck states ([`UniformDamping`]); `None` removes it.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidMaterial`] (named `damping`) for a value that is negative or not finite.
+    pub fn set_uniform_damping(&mut self, d: Option<UniformDamping>) -> Result<(), FemError> {
+        let values = match d {
+            Some(UniformDamping::LossFactor(g)) => vec![g],
+            Some(UniformDamping::Rayleigh { alpha, beta }) => vec![alpha, beta],
+            None => Vec::new(),
+        };
+        if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+            return Err(FemError::InvalidMaterial {
+                name: "damping".into(),
+                reason: format!("{v}: a damping coefficient is finite and at least 0"),
+            });
+        }
+        self.uniform_damping = d;
+        Ok(())
+    }
+
+    /// The damping the deck gives the whole model, if any ([`Model::set_uniform_damping`]).
+    pub fn uniform_damping(&self) -> Option<UniformDamping> {
+        self.uniform_damping
     }
 
     /// Gives the solid, beam, rod or shell `id` the structural damping coefficient `ge`: it adds

@@ -513,9 +513,11 @@ fn composite_shell_sections_are_the_nastran_laminate() {
 }
 
 /// `*DAMPING, STRUCTURAL=` in a `*MATERIAL` gives the solids and shells of its sections that
-/// structural damping coefficient (`GE`); `ALPHA` and `BETA` are not read, with a warning on their
-/// line; `STRUCTURAL=` outside a material, a negative value and a composite section whose plies'
-/// materials differ in it are refused with the line.
+/// structural damping coefficient (`GE`); `ALPHA` and `BETA` (Rayleigh damping of an Abaqus
+/// material in direct procedures, of a CalculiX `*DYNAMIC` step, which its steady-state dynamics
+/// ignores) are not read, with a warning on their line; `STRUCTURAL=` outside a material, a
+/// negative value and a composite section whose plies' materials differ in it are refused with
+/// the line.
 #[test]
 fn material_structural_damping_reaches_solids_and_shells() {
     let base = "\

@@ -1125,8 +1125,8 @@ fn pin_flags_make_a_pinned_beam() {
 /// made of them: a simply supported CQUAD4 plate whose PSHELL's MAT1 has `GE = 0.04` gives
 /// `K_4 = 0.04 K` entry by entry (the identity of one damped material), and a CHEXA of a damped
 /// PSOLID beside an undamped one damps the first alone. A PCOMP's own `GE` (field 8) is its
-/// elements'; a PSHELL whose membrane and bending materials disagree, and a negative `GE`, are
-/// refused with the card and line.
+/// elements'; `PARAM,G` is the whole model's loss factor. A PSHELL whose membrane and bending
+/// materials disagree, a negative `GE` and a negative `G` are refused with the card and line.
 #[test]
 fn material_damping_is_the_elements_structural_damping() {
     let damped = |property: &str| {
@@ -1157,6 +1157,18 @@ fn material_damping_is_the_elements_structural_damping() {
     // no GE: no damping
     let (_, k4) = damped("PSHELL,1,1,0.005,1,,1\nMAT1,1,2.1+11,,0.3,7850.\n");
     assert!(k4.is_none());
+    // PARAM,G: the whole model's loss factor (QRG PARAM G), not an element's
+    let deck = simply_supported(
+        (0.6, 0.4, 4),
+        "",
+        "PARAM,G,0.03\nPSHELL,1,1,0.005,1,,1\nMAT1,1,2.1+11,,0.3,7850.\n",
+    );
+    let bdf = parse_bdf(&deck, "g.bdf", &BdfOptions::default()).unwrap();
+    assert_eq!(
+        bdf.model.uniform_damping(),
+        Some(femu_fem::model::UniformDamping::LossFactor(0.03))
+    );
+    assert!(bdf.model.element_damping().is_empty());
 
     // two CHEXA, one of a damped PSOLID: K_4 is its element's stiffness times GE
     let deck = "\
@@ -1214,6 +1226,11 @@ ENDDATA
         (
             "PSHELL,1,1,0.005,1,,1\nMAT1,1,2.1+11,,0.3,7850.,,,-0.04\n",
             "MAT1,1",
+            "at least 0",
+        ),
+        (
+            "PARAM,G,-0.01\nPSHELL,1,1,0.005,1,,1\nMAT1,1,2.1+11,,0.3,7850.\n",
+            "PARAM,G",
             "at least 0",
         ),
     ] {

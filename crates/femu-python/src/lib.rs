@@ -833,7 +833,8 @@ fn correlate<'py>(
 /// Measured FRFs (a universal file with dataset 58, function type 4, at the model's node ids)
 /// against the model's at the same DOFs and lines, by modal superposition of the modes up to
 /// `modes_up_to` times the highest line with the residual flexibility of those above: FRAC per
-/// function, CSAC and CSF per line, as a dict. Damping: `damping_ratio` (viscous, default 0.01),
+/// function, CSAC and CSF per line, as a dict. Damping: `damping_ratio` (viscous, default 0.01
+/// unless the deck states its own: a Nastran `PARAM,G` is its loss factor),
 /// `loss_factor` or `rayleigh=(alpha, beta)`; `damping_from`, a test of identified modes with
 /// damping ratios, gives each paired model mode its test's ratio (the others `damping_ratio`).
 /// `direct=True` solves the dynamic stiffness at each line instead (docs/MATH.md, "Frequency

@@ -59,7 +59,9 @@ pub struct Combination {
     slots: Vec<Vec<usize>>,
     /// Each matrix's stored values, in its CSC order.
     values: Vec<Vec<f64>>,
-    tree: Tree,
+    /// The supernodal analysis; `None` for a matrix whose factor has no entry below its diagonal
+    /// (a diagonal matrix: faer makes no supernodal analysis of it), which the pivoted `LU` factors.
+    tree: Option<Tree>,
     /// faer's `LU` analysis, made when a line first needs it.
     lu: OnceLock<Result<SymbolicLu<usize>, String>>,
 }
@@ -197,7 +199,7 @@ impl Combination {
 
     /// Complex values of the factor `L` (with `D`) of one line's `LDL^T`.
     pub fn factor_len(&self) -> usize {
-        self.tree.factor_len()
+        self.tree.as_ref().map_or(self.n, Tree::factor_len)
     }
 
     /// `sum_j coefficients[j] A_j` on the union pattern.
@@ -241,7 +243,11 @@ impl Combination {
             });
         }
         let values = self.combine(coefficients);
-        let kind = match self.tree.ldlt(&self.col_ptr, &self.row_idx, &values) {
+        let fronts = self
+            .tree
+            .as_ref()
+            .and_then(|t| t.ldlt(&self.col_ptr, &self.row_idx, &values));
+        let kind = match fronts {
             Some(fronts) => Kind::Ldlt(fronts),
             None => Kind::Lu(Box::new(self.lu_of(&values)?)),
         };
@@ -276,7 +282,9 @@ impl Combination {
 }
 
 impl Tree {
-    fn new(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Result<Self, SparseError> {
+    /// The analysis of the pattern; `None` when faer makes no supernodal one (a factor with no
+    /// entry below the diagonal).
+    fn new(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Result<Option<Self>, SparseError> {
         let fail = |e: String| SparseError::Factorization {
             reason: format!("symbolic analysis of the dynamic stiffness: {e}"),
         };
@@ -303,7 +311,7 @@ impl Tree {
             None => ((0..n).collect(), (0..n).collect()),
         };
         let SymbolicCholeskyRaw::Supernodal(s) = symbolic.raw() else {
-            return Err(fail("faer did not make a supernodal analysis".into()));
+            return Ok(None);
         };
         let ns = s.n_supernodes();
         let (begin, end) = (s.supernode_begin(), s.supernode_end());
@@ -328,7 +336,7 @@ impl Tree {
             top: Vec::new(),
         };
         tree.partition();
-        Ok(tree)
+        Ok(Some(tree))
     }
 
     fn supernodes(
@@ -671,7 +679,12 @@ impl Factored<'_> {
     /// `X <- A^-1 X` for `r` columns stored row by row.
     fn solve_rows(&self, x: &mut [c64], r: usize) {
         match &self.kind {
-            Kind::Ldlt(fronts) => self.owner.tree.solve(fronts, x, r),
+            Kind::Ldlt(fronts) => self
+                .owner
+                .tree
+                .as_ref()
+                .expect("fronts are made from the tree")
+                .solve(fronts, x, r),
             Kind::Lu(lu) => {
                 let n = self.owner.n;
                 let mut m = Mat::<c64>::from_fn(n, r, |i, t| x[i * r + t]);
@@ -806,6 +819,29 @@ mod tests {
             assert!((b[(i, 0)] - want[i]).norm() < 1e-15, "{:?}", b[(i, 0)]);
         }
         assert!(berr < 1e-15);
+    }
+
+    /// Uncoupled DOFs (a diagonal dynamic stiffness: springs to ground under point masses, one
+    /// DOF alone), for which faer makes no supernodal analysis: solved, `x_i = b_i / a_ii` by
+    /// hand, at 1 and at 3 DOFs.
+    #[test]
+    fn a_diagonal_combination_is_solved() {
+        for n in [1usize, 3] {
+            let k: Vec<(usize, usize, f64)> =
+                (0..n).map(|i| (i, i, 3e4 * (i + 1) as f64)).collect();
+            let m: Vec<(usize, usize, f64)> = (0..n).map(|i| (i, i, 10.0)).collect();
+            let (k, m) = (from_entries(n, n, &k), from_entries(n, n, &m));
+            let comb = Combination::new(&[&k, &m], &["K", "M"]).unwrap();
+            let (ck, cm) = (c64::new(1.0, 0.05), c64::new(-2500.0, 0.0));
+            let mut f = comb.factor(&[ck, cm]).unwrap();
+            let mut b = Mat::<c64>::from_fn(n, 1, |i, _| c64::new(1.0 + i as f64, -0.5));
+            f.solve_in_place(b.as_mut()).unwrap();
+            for i in 0..n {
+                let a = ck * 3e4 * (i + 1) as f64 + cm * 10.0;
+                let want = c64::new(1.0 + i as f64, -0.5) / a;
+                assert!((b[(i, 0)] - want).norm() < 1e-15 * want.norm(), "{n}: {i}");
+            }
+        }
     }
 
     /// A zero pivot (a singular real combination) is an error, not a NaN answer.

@@ -28,7 +28,8 @@ pub struct FrfRequest {
     /// file); `femu frf` and Python take it as an argument.
     #[cfg_attr(feature = "clap", arg(skip))]
     pub file: Option<std::path::PathBuf>,
-    /// Viscous damping ratio of every model mode (default 0.01 when no loss factor is given).
+    /// Viscous damping ratio of every model mode (default 0.01 when no damping is given and the
+    /// deck states none: a Nastran deck's `PARAM,G` is its loss factor).
     #[cfg_attr(feature = "clap", arg(long, value_name = "ZETA"))]
     pub damping_ratio: Option<f64>,
     /// A structural loss factor instead of viscous damping (`K (1 + i eta)`).
@@ -50,9 +51,10 @@ pub struct FrfRequest {
     pub rayleigh: Option<Vec<f64>>,
     /// Solve the dynamic stiffness `K (1 + i eta) + i K4 + i w C - w^2 M` at every line (one
     /// sparse complex factorization each) instead of superposing modes: the model's own dampers
-    /// (bushings' B, the GE of springs, bushings and damped materials) then act, and no mode is left out. Takes a loss
-    /// factor or Rayleigh damping (modal ratios have no matrix); default: a loss factor of 0.02
-    /// (1 % viscous at resonance) on a model without dampers, none on one with them.
+    /// (bushings' B, the GE of springs, bushings and damped materials) then act, and no mode is
+    /// left out. Takes a loss factor or Rayleigh damping (modal ratios have no matrix); default:
+    /// the deck's `PARAM,G` as a loss factor, else a loss factor of 0.02 (1 % viscous at
+    /// resonance) on a model without dampers, none on one with them.
     #[cfg_attr(feature = "clap", arg(long, conflicts_with_all = ["damping_ratio", "damping_from"]))]
     pub direct: bool,
     /// The test's identified modes with their damping ratios (CSV with a `damping` column,
@@ -165,6 +167,36 @@ impl FrfRequest {
             None => Ok(Damping::Ratio(self.damping_ratio.unwrap_or(0.01))),
         }
     }
+}
+
+/// The damping the deck gives the whole model (Nastran's `PARAM,G`, CalculiX's `*DAMPING, ALPHA=,
+/// BETA=`: [`femu_fem::model::UniformDamping`]) when the request names none, with a note that
+/// says so.
+fn deck_damping(
+    request: &FrfRequest,
+    model: &femu_fem::model::Model,
+    notes: &mut Vec<String>,
+) -> Option<Damping> {
+    let named = request.damping_ratio.is_some()
+        || request.loss_factor.is_some()
+        || request.rayleigh.is_some()
+        || request.damping_from.is_some();
+    if named {
+        return None;
+    }
+    let (damping, what) = match model.uniform_damping()? {
+        femu_fem::model::UniformDamping::LossFactor(g) => {
+            (Damping::LossFactor(g), format!("a loss factor of {g}"))
+        }
+        femu_fem::model::UniformDamping::Rayleigh { alpha, beta } => (
+            Damping::Rayleigh { alpha, beta },
+            format!("Rayleigh alpha {alpha:e} s^-1, beta {beta:e} s"),
+        ),
+    };
+    notes.push(format!(
+        "damping: the deck's own ({what}: Nastran's PARAM,G or the deck's *DAMPING, ALPHA=, BETA=); --damping-ratio, --loss-factor or --rayleigh give another"
+    ));
+    Some(damping)
 }
 
 /// The test's identified damping on the model modes it pairs with (MAC pairing with the
@@ -749,7 +781,11 @@ fn update_from_frfs(
             t.omegas.len(),
         )
     };
-    let damping = match request.damping()? {
+    let start = match deck_damping(request, &model.model, notes) {
+        Some(d) => d,
+        None => request.damping()?,
+    };
+    let damping = match start {
         Damping::Rayleigh { alpha, beta } => FrfDamping::Rayleigh { alpha, beta },
         Damping::LossFactor(eta) => FrfDamping::LossFactor(eta),
         _ => {
@@ -1097,15 +1133,18 @@ fn modal_route(
             inputs,
         )?),
     };
-    let damping = match &request.damping_from {
-        Some(test) => test_damping(model, test, request, &modes, notes)?,
-        None => request.damping()?,
-    };
-    if request.damping_ratio.is_none()
+    let from_deck = deck_damping(request, &model.model, notes);
+    let by_default = from_deck.is_none()
+        && request.damping_ratio.is_none()
         && request.loss_factor.is_none()
         && request.rayleigh.is_none()
-        && request.damping_from.is_none()
-    {
+        && request.damping_from.is_none();
+    let damping = match (&request.damping_from, from_deck) {
+        (Some(test), _) => test_damping(model, test, request, &modes, notes)?,
+        (None, Some(d)) => d,
+        (None, None) => request.damping()?,
+    };
+    if by_default {
         notes.push("damping: 1 % viscous on every mode (the default; --damping-ratio, --loss-factor or --rayleigh give another)".into());
     }
     let options = FrfOptions {
@@ -1157,6 +1196,8 @@ fn direct_route(
     }
     let damping = if request.loss_factor.is_some() || request.rayleigh.is_some() {
         request.damping()?
+    } else if let Some(d) = deck_damping(request, &model.model, notes) {
+        d
     } else if dampers.any() {
         notes.push(
             "damping: the model's own dampers alone (--loss-factor or --rayleigh add more)".into(),

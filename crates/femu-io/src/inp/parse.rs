@@ -616,7 +616,14 @@ impl DeckBuilder {
                 })?;
             p.structural = Some(ge);
         }
-        let rayleigh: Vec<&str> = ["ALPHA", "BETA", "COMPOSITE"]
+        if params.contains_key("COMPOSITE") {
+            warn(
+                warnings,
+                l,
+                "*DAMPING, COMPOSITE= not read: the modal damping of composite modal dynamics; femu frf takes a loss factor, Rayleigh or modal damping ratios from its options".into(),
+            );
+        }
+        let rayleigh: Vec<&str> = ["ALPHA", "BETA"]
             .into_iter()
             .filter(|k| params.contains_key(*k))
             .collect();
@@ -625,12 +632,12 @@ impl DeckBuilder {
                 warnings,
                 l,
                 format!(
-                    "*DAMPING {} not read: {}; femu frf takes Rayleigh damping for the whole model from --rayleigh",
+                    "*DAMPING {} not read: Rayleigh damping of {} (CalculiX's steady-state dynamics does not use it either); femu frf takes Rayleigh damping from --rayleigh",
                     rayleigh.join(", "),
                     if self.pending.is_some() {
-                        "Rayleigh damping of a material"
+                        "a material (Abaqus' direct procedures)"
                     } else {
-                        "Rayleigh damping of modal dynamics"
+                        "a dynamic step (CalculiX's *DYNAMIC)"
                     }
                 ),
             );

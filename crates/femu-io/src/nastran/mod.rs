@@ -16,6 +16,10 @@
 //!   default ([`BdfDeck::mass`]); `PARAM,WTMASS` scales every mass. Other PARAMs do not change a
 //!   solid model's `K` or `M` (`K6ROT` acts on shells only; output and solution controls) and are
 //!   named as skipped.
+//! - **Damping** of frequency responses: each material's `GE` (MAT1, MAT2, MAT8, MAT9; a PCOMP's
+//!   own) damps its elements (`Model::set_element_damping`), springs and bushings carry theirs,
+//!   and `PARAM,G` is the whole model's loss factor (`Model::uniform_damping`), which `femu frf`
+//!   uses when told no other.
 //! - **Constraints** (`constraints.rs`): the selected SPC set (`SPC`, `SPC1`, `SPCADD`) and the
 //!   permanent constraints of GRID field 8 (`PS`), with `GRDSET`'s CP, CD and PS for grids that
 //!   leave them blank. Components 4-6 act on grids with rotations (those of beams, springs and
@@ -259,6 +263,8 @@ struct Sorted<'a> {
     methods: BTreeMap<i64, &'a Card>,
     wtmass: f64,
     coupmass: Option<(i64, &'a Card)>,
+    /// `PARAM,G`: the uniform structural damping coefficient.
+    g: Option<(f64, &'a Card)>,
 }
 
 fn warn(warnings: &mut Vec<Warning>, c: &Card, message: String) {
@@ -276,8 +282,8 @@ const PARAM_NO_EFFECT: &[&str] = &[
     "PATVER", "PRGPST", "OUGCORD", "EST", "NOFISR", "SRCOMPS", "OMACHPR", "USETPRT", "K6ROT",
     "RESVEC", "PEDGEP", "LGDISP", "NASPRT", "PRTGPL", "PRTEQXIN", "PRTGPDT", "PRTCSTM", "PRTBGPDT",
     "PRTGPTT", "PRTMGG", "PRTPG", "DBALL", "DBDICT", "CHECKOUT", "SEMAP", "OLDSEQ", "TINY",
-    "ALPHA1", "ALPHA2", "G", "W3", "W4", "OIBULK", "POSTEXT", "UNITSYS", "LFREQ", "HFREQ",
-    "LMODES", "NOELOF", "NOELOP", "NOGPF", "SRTOUT", "PRTRESLT",
+    "ALPHA1", "ALPHA2", "W3", "W4", "OIBULK", "POSTEXT", "UNITSYS", "LFREQ", "HFREQ", "LMODES",
+    "NOELOF", "NOELOP", "NOGPF", "SRTOUT", "PRTRESLT",
 ];
 
 /// Cards that act only in other solutions than a linear modal one: contact (nonlinear or contact
@@ -473,6 +479,15 @@ fn param<'a>(
                 .real(1, "WTMASS")?
                 .filter(|v| *v > 0.0)
                 .ok_or_else(|| c.err("WTMASS needs a positive value".into()))?;
+        }
+        "G" => {
+            let g = c
+                .real(1, "G")?
+                .filter(|v| v.is_finite() && *v >= 0.0)
+                .ok_or_else(|| {
+                    c.err("G needs a value of at least 0 (the uniform structural damping coefficient)".into())
+                })?;
+            s.g = Some((g, c));
         }
         "COUPMASS" => {
             let v = c.field(1).to_ascii_uppercase();
@@ -825,6 +840,12 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
         reason: source.to_string(),
     })?;
     let eigrl = selected_method(&sorted, deck.case_control.method.as_ref())?;
+    // QRG PARAM,G: the uniform structural damping of a frequency response, `K (1 + i G)`
+    if let Some((g, c)) = sorted.g {
+        model
+            .set_uniform_damping(Some(femu_fem::model::UniformDamping::LossFactor(g)))
+            .map_err(c.located())?;
+    }
     // QRG PARAM,COUPMASS: -1 (the default) lumped, > 0 coupled
     let (mass, coupmass) = match sorted.coupmass {
         Some((v, c)) if v > 0 => (MassKind::Consistent, Some((v, c.line))),
