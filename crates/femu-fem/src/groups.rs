@@ -661,6 +661,106 @@ impl ParameterGroups {
         self.product(asm, g, true, at, x, y)
     }
 
+    /// `y += K_g(at) x`: group `g`'s own stiffness at `p_g = at`, `(1 + at) K_g x` for a group
+    /// that scales its elements, `((1 + at) K_1 + (1 + at)^3 K_3) x` for a thickness group, nothing
+    /// for a mass group (the stiffness a per-group loss factor damps, docs/MATH.md, "Updating from
+    /// frequency responses").
+    ///
+    /// # Errors
+    /// [`FemError::LengthMismatch`] or [`FemError::InvalidGroup`].
+    pub fn stiffness_now_product(
+        &self,
+        asm: &Assembler,
+        g: usize,
+        at: f64,
+        x: &[f64],
+        y: &mut [f64],
+    ) -> Result<(), FemError> {
+        match self.check_group(g)?.law {
+            GroupLaw::Mass => Ok(()),
+            GroupLaw::Scale => {
+                let mut z = vec![0.0; y.len()];
+                self.product(asm, g, false, at, x, &mut z)?;
+                for (a, b) in y.iter_mut().zip(&z) {
+                    *a += (1.0 + at) * b;
+                }
+                Ok(())
+            }
+            GroupLaw::Thickness => {
+                let (n, dm) = (asm.dofs().free_count(), asm.dofs());
+                if x.len() != n || y.len() != n {
+                    return Err(FemError::LengthMismatch {
+                        what: "x and y in K_g x",
+                        expected: n,
+                        got: x.len().min(y.len()),
+                    });
+                }
+                let (c1, c3) = (1.0 + at, (1.0 + at).powi(3));
+                let mut xe = Vec::with_capacity(60);
+                for (nodes, t) in self.thickness_items(&self.groups[g]) {
+                    element_product(dm, nodes, &t.k1, c1, x, y, &mut xe);
+                    element_product(dm, nodes, &t.k3, c3, x, y, &mut xe);
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// `values += c K_g(at)` on the stiffness pattern of `asm` (the values of `K` as the assembly
+    /// stores them): group `g`'s own stiffness at `p_g = at`, as
+    /// [`ParameterGroups::stiffness_now_product`] applies it.
+    ///
+    /// # Errors
+    /// [`FemError::LengthMismatch`] for `values` of another length than the pattern's,
+    /// [`FemError::InvalidGroup`].
+    pub fn add_stiffness_now(
+        &self,
+        asm: &Assembler,
+        g: usize,
+        at: f64,
+        c: f64,
+        values: &mut [f64],
+    ) -> Result<(), FemError> {
+        let group = self.check_group(g)?;
+        if let Some(mg) = &self.matrices {
+            if mg.k_at[g].iter().any(|&i| i >= values.len()) {
+                return Err(FemError::LengthMismatch {
+                    what: "stiffness values against the group's matrix",
+                    expected: values.len(),
+                    got: mg.k_at[g].iter().max().map_or(0, |m| m + 1),
+                });
+            }
+            for (i, v) in mg.k_at[g].iter().zip(mg.k[g].data()) {
+                values[*i] += c * (1.0 + at) * v;
+            }
+            return Ok(());
+        }
+        if values.len() != asm.nnz() {
+            return Err(FemError::LengthMismatch {
+                what: "stiffness values",
+                expected: asm.nnz(),
+                got: values.len(),
+            });
+        }
+        match group.law {
+            GroupLaw::Mass => {}
+            GroupLaw::Scale => {
+                for (nodes, ke, _) in self.items(group) {
+                    asm.scatter(nodes, |i, l, w| values[i] += c * (1.0 + at) * w * ke[l]);
+                }
+            }
+            GroupLaw::Thickness => {
+                let (c1, c3) = (c * (1.0 + at), c * (1.0 + at).powi(3));
+                for (nodes, t) in self.thickness_items(group) {
+                    asm.scatter(nodes, |i, l, w| {
+                        values[i] += w * (c1 * t.k1[l] + c3 * t.k3[l])
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// The law of group `g`'s parameter.
     ///
     /// # Errors

@@ -843,13 +843,14 @@ fn correlate<'py>(
 /// from frequency responses"): the sets ranked by the FRF residue on the lowest `tuned_lines`
 /// lines (default two-thirds), the selected ones (`update_all`: every one) and the damping (the
 /// loss factor, or `rayleigh`'s two coefficients)
-/// fitted (SB-EBE, then the output error; `sb_ebe_only` stops after SB-EBE) on at most
+/// fitted (SB-EBE, then the output error; `sb_ebe_only` stops after SB-EBE;
+/// `loss_factor_per_set=True`: a loss factor for each updated set and one for the rest) on at most
 /// `update_lines` lines per band, and checked on the held-out lines (the dict's `update`).
 /// Where the file carries coherence (function type 6), lines below `min_coherence` (default 0.8)
 /// are left out.
 /// Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (model, path, *, damping_ratio=None, loss_factor=None, rayleigh=None, direct=false, damping_from=None, modes_up_to=2.0, update=None, tuned_lines=None, update_lines=24, update_all=false, sb_ebe_only=false, min_coherence=None))]
+#[pyo3(signature = (model, path, *, damping_ratio=None, loss_factor=None, rayleigh=None, direct=false, damping_from=None, modes_up_to=2.0, update=None, tuned_lines=None, update_lines=24, update_all=false, sb_ebe_only=false, min_coherence=None, loss_factor_per_set=false))]
 #[allow(clippy::too_many_arguments)]
 fn frf<'py>(
     py: Python<'py>,
@@ -867,6 +868,7 @@ fn frf<'py>(
     update_all: bool,
     sb_ebe_only: bool,
     min_coherence: Option<f64>,
+    loss_factor_per_set: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let request = femu_study::frf::FrfRequest {
         file: None,
@@ -882,6 +884,7 @@ fn frf<'py>(
         update_all,
         sb_ebe_only,
         min_coherence,
+        loss_factor_per_set,
     };
     let result = py
         .detach(|| {

@@ -207,7 +207,8 @@ def test_the_frf_update_is_one_pipeline(case):
     """Updating from the FRFs (numpy's direct solve of the bar whose G1 has 0.8 of the modulus,
     loss factor 0.02) over the four slabs from a loss factor of 0.01: the command line, a study
     file's `[frf]` and Python give the same JSON; G1 is found (-0.2 to 1e-4), the others stay at
-    0, the loss factor is 0.02, and the held-out lines' error falls."""
+    0, the loss factor is 0.02, and the held-out lines' error falls; a loss factor per slab finds
+    0.02 in each, the same from Python and the command line."""
     run = lambda *args: subprocess.run([str(FEMU), *map(str, args), "--quiet"], cwd=case,
                                        capture_output=True, text=True)
     done = run("frf", "bar.inp", "frf.uff", "--loss-factor", 0.01, "--update", ",".join(SETS),
@@ -235,6 +236,15 @@ def test_the_frf_update_is_one_pipeline(case):
     assert after < 1e-3 * before
     with pytest.raises(femu.FemuError, match="NOPE"):
         femu.frf(model, case / "frf.uff", update=["G1", "NOPE"])
+    # a loss factor per slab (the bar's is one: each finds it), from Python as from the CLI
+    per = femu.frf(model, case / "frf.uff", loss_factor=0.01, update=SETS, update_all=True,
+                   loss_factor_per_set=True)
+    done = run("frf", "bar.inp", "frf.uff", "--loss-factor", 0.01, "--update", ",".join(SETS),
+               "--update-all", "--loss-factor-per-set", "--json", "frf_per_set.json")
+    assert done.returncode == 0, done.stderr
+    assert_same(per, read(case / "frf_per_set.json"))
+    groups = per["update"]["result"]["damping"]["group_loss_factors"]["groups"]
+    assert np.allclose(groups, [LOSS] * len(SETS), atol=1e-5), groups
 
 
 def test_another_solvers_matrices_are_a_model_everywhere(case):

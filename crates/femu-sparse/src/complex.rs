@@ -187,6 +187,11 @@ impl Combination {
         })
     }
 
+    /// How many matrices it combines (one coefficient each in [`Combination::factor`]).
+    pub fn matrices(&self) -> usize {
+        self.values.len()
+    }
+
     /// The dimension.
     pub fn dim(&self) -> usize {
         self.n

@@ -106,6 +106,15 @@ pub struct FrfRequest {
     /// error that follows it by default, it is biased by measurement noise).
     #[cfg_attr(feature = "clap", arg(long, requires = "update"))]
     pub sb_ebe_only: bool,
+    /// With `--update`: fit a structural loss factor for each updated set and one for the rest
+    /// of the model (each starting at `--loss-factor`, or the deck's, or 0.02), instead of one
+    /// for the whole model: damping that differs from region to region, as a joint, a damped
+    /// layer or another material gives it (docs/MATH.md, "Updating from frequency responses").
+    #[cfg_attr(
+        feature = "clap",
+        arg(long, requires = "update", conflicts_with = "rayleigh")
+    )]
+    pub loss_factor_per_set: bool,
 }
 
 fn default_update_lines() -> usize {
@@ -128,6 +137,7 @@ impl Default for FrfRequest {
             update_all: false,
             sb_ebe_only: false,
             min_coherence: None,
+            loss_factor_per_set: false,
         }
     }
 }
@@ -825,6 +835,26 @@ fn update_from_frfs(
         ));
     }
     let mut up = build(&updated)?;
+    let damping = match (request.loss_factor_per_set, damping) {
+        (false, d) => d,
+        (true, FrfDamping::LossFactor(eta)) => {
+            notes.push(format!(
+                "updating: a loss factor for each of {} and one for the rest of the model, each starting at {eta}",
+                updated.join(", ")
+            ));
+            FrfDamping::GroupLossFactors {
+                rest: eta,
+                groups: vec![eta; updated.len()],
+            }
+        }
+        (true, _) => {
+            return Err(StudyError::invalid(
+                "loss factor per set",
+                "per-set loss factors start from a loss factor (--loss-factor, or the deck's PARAM,G), not Rayleigh coefficients",
+            ));
+        }
+    };
+    damping.check_for(&up)?;
     let rms = |v: &[f64]| (v.iter().map(|e| e * e).sum::<f64>() / v.len().max(1) as f64).sqrt();
     let tuned_before = rms(&femu_update::frf_errors(&up, &tuned, &damping)?);
     let held_before = match &held {

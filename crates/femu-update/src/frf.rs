@@ -141,7 +141,7 @@ impl FrfTest {
 }
 
 /// The model's damping in updating from FRFs: the values are a start when they are fitted.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FrfDamping {
     /// A structural loss factor: `K (1 + i eta)`.
@@ -153,22 +153,56 @@ pub enum FrfDamping {
         /// The stiffness coefficient, s.
         beta: f64,
     },
+    /// A structural loss factor per parameter group and one for the rest of the model:
+    /// `A = K_rest (1 + i rest) + sum_g K_g(p) (1 + i eta_g) - w^2 M`, `K_g(p)` each group's own
+    /// stiffness at its current parameter and `K_rest = K(p) - sum_g K_g(p)` (docs/MATH.md,
+    /// "Updating from frequency responses"). The groups must not share an element; a mass
+    /// group has no stiffness, and its value acts on nothing.
+    GroupLossFactors {
+        /// The loss factor of the elements in no group.
+        rest: f64,
+        /// One loss factor per group, in the model's group order.
+        groups: Vec<f64>,
+    },
 }
 
 impl FrfDamping {
     /// The dynamic stiffness's coefficients at `omega` rad/s.
+    /// (per-group loss factors: `K + i D - w^2 M`, `D` from [`FrfDamping::matrix`]).
     pub fn stiffness(&self, omega: f64) -> DynamicStiffness {
         match *self {
             FrfDamping::LossFactor(eta) => DynamicStiffness::loss_factor(omega, eta),
             FrfDamping::Rayleigh { alpha, beta } => DynamicStiffness::rayleigh(omega, alpha, beta),
+            FrfDamping::GroupLossFactors { .. } => DynamicStiffness::structural(omega),
+        }
+    }
+
+    /// The structural damping matrix of per-group loss factors on `K`'s pattern,
+    /// `D = rest K(p) + sum_g (eta_g - rest) K_g(p)`; `None` for the other forms.
+    ///
+    /// # Errors
+    /// A number of loss factors other than the model's groups.
+    pub fn matrix(
+        &self,
+        up: &UpdateModel<'_>,
+    ) -> Result<Option<femu_sparse::SparseMatrix>, UpdateError> {
+        match self {
+            FrfDamping::GroupLossFactors { rest, groups } => {
+                let c: Vec<f64> = groups.iter().map(|g| g - rest).collect();
+                Ok(Some(up.group_stiffness_matrix(*rest, &c)?))
+            }
+            _ => Ok(None),
         }
     }
 
     /// The values, in the order of the fit's damping parameters.
     fn values(&self) -> Vec<f64> {
-        match *self {
-            FrfDamping::LossFactor(eta) => vec![eta],
-            FrfDamping::Rayleigh { alpha, beta } => vec![alpha, beta],
+        match self {
+            FrfDamping::LossFactor(eta) => vec![*eta],
+            FrfDamping::Rayleigh { alpha, beta } => vec![*alpha, *beta],
+            FrfDamping::GroupLossFactors { rest, groups } => std::iter::once(*rest)
+                .chain(groups.iter().copied())
+                .collect(),
         }
     }
 
@@ -180,6 +214,10 @@ impl FrfDamping {
                 alpha: v[0],
                 beta: v[1],
             },
+            FrfDamping::GroupLossFactors { .. } => FrfDamping::GroupLossFactors {
+                rest: v[0],
+                groups: v[1..].to_vec(),
+            },
         }
     }
 
@@ -188,7 +226,54 @@ impl FrfDamping {
         match self {
             FrfDamping::LossFactor(_) => vec![(0.0, 1.0)],
             FrfDamping::Rayleigh { .. } => vec![(0.0, f64::INFINITY); 2],
+            FrfDamping::GroupLossFactors { groups, .. } => vec![(0.0, 1.0); 1 + groups.len()],
         }
+    }
+
+    /// Checks the values ([`FrfDamping::check`]) and, for per-group loss factors, that they are
+    /// one per group of `up` and that no two groups share an element or a structural element.
+    ///
+    /// # Errors
+    /// [`UpdateError::Invalid`] naming the value or the two groups.
+    pub fn check_for(&self, up: &UpdateModel<'_>) -> Result<(), UpdateError> {
+        self.check()?;
+        let FrfDamping::GroupLossFactors { groups, .. } = self else {
+            return Ok(());
+        };
+        let all = up.groups();
+        if groups.len() != all.len() {
+            return Err(UpdateError::Invalid {
+                what: "damping",
+                reason: format!(
+                    "{} per-group loss factors for {} groups",
+                    groups.len(),
+                    all.len()
+                ),
+            });
+        }
+        let mut owner: std::collections::HashMap<(bool, usize), usize> =
+            std::collections::HashMap::new();
+        for (g, group) in all.iter().enumerate() {
+            let items = group
+                .elements
+                .iter()
+                .map(|e| (false, *e))
+                .chain(group.structural.iter().map(|e| (true, *e)));
+            for item in items {
+                if let Some(h) = owner.insert(item, g)
+                    && h != g
+                {
+                    return Err(UpdateError::Invalid {
+                        what: "damping",
+                        reason: format!(
+                            "groups {} and {} share an element: a loss factor per group needs groups apart",
+                            all[h].name, group.name
+                        ),
+                    });
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Checks the values.
@@ -213,6 +298,9 @@ impl FrfDamping {
                     }
                     FrfDamping::Rayleigh { alpha, beta } => format!(
                         "Rayleigh coefficients {alpha}, {beta}: both must be finite and at least 0"
+                    ),
+                    FrfDamping::GroupLossFactors { rest, groups } => format!(
+                        "loss factors {rest} (the rest) and {groups:?} (the groups): each is in [0, 1]"
                     ),
                 },
             })
@@ -245,6 +333,26 @@ impl FrfDamping {
         Ok(match self {
             FrfDamping::LossFactor(_) => vec![times(&sys.k, 1.0)?],
             FrfDamping::Rayleigh { .. } => vec![times(&sys.m, omega)?, times(&sys.k, omega)?],
+            FrfDamping::GroupLossFactors { .. } => {
+                // i K_g(p) u per group, and i (K(p) - sum_g K_g(p)) u for the rest
+                let mut rest = times(&sys.k, 1.0)?;
+                let (cr, ci) = (
+                    up.group_stiffness_columns(&re)?,
+                    up.group_stiffness_columns(&im)?,
+                );
+                let mut out = vec![Vec::new()];
+                for (r, i) in cr.iter().zip(&ci) {
+                    let mut v = vec![c64::new(0.0, 0.0); n];
+                    for (idx, &d) in r.dofs.iter().enumerate() {
+                        let kv = c64::new(-i.values[idx], r.values[idx]);
+                        v[d] = kv;
+                        rest[d] -= kv;
+                    }
+                    out.push(v);
+                }
+                out[0] = rest;
+                out
+            }
         })
     }
 }
@@ -255,6 +363,13 @@ impl std::fmt::Display for FrfDamping {
             FrfDamping::LossFactor(eta) => write!(f, "loss factor {eta:.5}"),
             FrfDamping::Rayleigh { alpha, beta } => {
                 write!(f, "Rayleigh alpha {alpha:.5e} s^-1, beta {beta:.5e} s")
+            }
+            FrfDamping::GroupLossFactors { rest, groups } => {
+                write!(f, "loss factors per group")?;
+                for (g, eta) in groups.iter().enumerate() {
+                    write!(f, " {}: {eta:.5}", g + 1)?;
+                }
+                write!(f, ", the rest {rest:.5}")
             }
         }
     }
@@ -323,8 +438,19 @@ fn derivative_columns(
     };
     let (k_re, k_im) = (cols(&re, 0.0)?, cols(&im, 0.0)?);
     let (l_re, l_im) = (cols(&re, 1.0)?, cols(&im, 1.0)?);
+    // per-group loss factors damp each group's stiffness change by its own factor:
+    // dA/dp_g = (1 + i eta_g) K_g'
+    let group_of = |c: usize| match which {
+        Columns::Groups => c,
+        _ => up.parameters()[c].group,
+    };
+    let k_coefficient = |c: usize| match damping {
+        FrfDamping::GroupLossFactors { groups, .. } => c64::new(1.0, groups[group_of(c)]),
+        _ => a.k,
+    };
     let mut out = Vec::with_capacity(k_re.len() + 1);
     for c in 0..k_re.len() {
+        let ck = k_coefficient(c);
         let mut v = vec![c64::new(0.0, 0.0); n];
         // K' u and M' u = (col(0) - col(1)) u, real and imaginary parts on the group's DOFs
         for (idx, &d) in k_re[c].dofs.iter().enumerate() {
@@ -333,7 +459,7 @@ fn derivative_columns(
                 k_re[c].values[idx] - l_re[c].values[idx],
                 k_im[c].values[idx] - l_im[c].values[idx],
             );
-            v[d] = a.k * ku + a.m * mu;
+            v[d] = ck * ku + a.m * mu;
         }
         out.push(v);
     }
@@ -445,16 +571,16 @@ fn evaluate_output(
     let n = sys.dofs.free_count();
     test.check(n)?;
     let weights = output_weights(test);
-    let combination = Combination::new(&[&sys.k, &sys.m], &["K", "M"])?;
+    let d = damping.matrix(up)?;
+    let combination = combination_of(&sys.k, &sys.m, d.as_ref())?;
     let f = test.forces(n);
     let per_line: Vec<Result<Evaluation, UpdateError>> = (0..test.omegas.len())
         .into_par_iter()
         .map(|l| {
             let omega = test.omegas[l];
             let a = damping.stiffness(omega);
-            let mut factor = combination
-                .factor(&[a.k, a.m])
-                .map_err(|e| at_line(e.into(), l, omega))?;
+            let mut factor =
+                factor_line(&combination, a).map_err(|e| at_line(e.into(), l, omega))?;
             let mut u = f.clone();
             let mut backward_error = factor
                 .solve_in_place(u.as_mut())
@@ -511,7 +637,11 @@ fn evaluate_residue(
     test.check(n)?;
     let w_inv = femu_correlate::expansion::residual_metric(&sys.m)?;
     let w: Vec<f64> = test.measured.iter().map(|&d| 1.0 / w_inv[d]).collect();
-    let forced = ForcedExpander::new(&sys.k, &sys.m, &test.measured)?;
+    let d = damping.matrix(up)?;
+    let forced = match &d {
+        Some(d) => ForcedExpander::with_damping_matrix(&sys.k, &sys.m, d, &test.measured)?,
+        None => ForcedExpander::new(&sys.k, &sys.m, &test.measured)?,
+    };
     let f = test.forces(n);
     let per_line: Vec<Result<Evaluation, UpdateError>> = (0..test.omegas.len())
         .into_par_iter()
@@ -551,6 +681,31 @@ fn evaluate_residue(
     total(per_line)
 }
 
+/// `K` and `M` (and the structural damping matrix `D` of per-group loss factors) analysed once for
+/// the lines' complex factorizations.
+fn combination_of(
+    k: &femu_sparse::SparseMatrix,
+    m: &femu_sparse::SparseMatrix,
+    d: Option<&femu_sparse::SparseMatrix>,
+) -> Result<Combination, UpdateError> {
+    Ok(match d {
+        Some(d) => Combination::new(&[k, m, d], &["K", "M", "D"])?,
+        None => Combination::new(&[k, m], &["K", "M"])?,
+    })
+}
+
+/// One line's dynamic stiffness factored on [`combination_of`]'s analysis.
+fn factor_line(
+    combination: &Combination,
+    a: DynamicStiffness,
+) -> Result<femu_sparse::complex::Factored<'_>, femu_sparse::SparseError> {
+    if combination.matrices() == 3 {
+        combination.factor(&[a.k, a.m, a.d])
+    } else {
+        combination.factor(&[a.k, a.m])
+    }
+}
+
 fn at_line(e: femu_correlate::CorrelateError, l: usize, omega: f64) -> UpdateError {
     UpdateError::Invalid {
         what: "FRF residue",
@@ -578,7 +733,7 @@ pub fn frf_localise(
     rule: &SelectionRule,
 ) -> Result<Localisation, UpdateError> {
     crate::localise::check_rule(rule)?;
-    damping.check()?;
+    damping.check_for(up)?;
     let e = evaluate_residue(up, test, damping, Columns::Groups)?;
     let sys = up.matrices();
     let n = sys.dofs.free_count();
@@ -673,6 +828,8 @@ pub struct FrfIteration {
 pub struct FrfUpdate {
     /// Parameter names (the model's).
     pub names: Vec<String>,
+    /// The model's group names (those of per-group loss factors, in their order).
+    pub groups: Vec<String>,
     /// The updated parameters.
     pub theta: Vec<f64>,
     /// The updated (or given) damping.
@@ -710,7 +867,15 @@ impl std::fmt::Display for FrfUpdate {
         for (n, t) in self.names.iter().zip(&self.theta) {
             writeln!(f, "  {n:<16} {t:+.4}")?;
         }
-        write!(f, "  damping: {}", self.damping)
+        match &self.damping {
+            FrfDamping::GroupLossFactors { rest, groups } => {
+                for (n, eta) in self.groups.iter().zip(groups) {
+                    writeln!(f, "  loss factor of {n}: {eta:.5}")?;
+                }
+                write!(f, "  loss factor of the rest: {rest:.5}")
+            }
+            other => write!(f, "  damping: {other}"),
+        }
     }
 }
 
@@ -744,14 +909,14 @@ pub fn frf_update_logged(
     options: &FrfUpdateOptions,
     mut log: impl FnMut(&FrfIteration),
 ) -> Result<FrfUpdate, UpdateError> {
-    options.damping.check()?;
+    options.damping.check_for(up)?;
     test.check(up.matrices().dofs.free_count())?;
     let stages: &[FrfMethod] = match options.method {
         FrfMethod::SbEbe => &[FrfMethod::SbEbe],
         FrfMethod::OutputError => &[FrfMethod::SbEbe, FrfMethod::OutputError],
     };
     let start = evaluate(up, test, &options.damping, Columns::None, options.method)?.objective;
-    let mut damping = options.damping;
+    let mut damping = options.damping.clone();
     let mut history = Vec::new();
     let mut end = (start, 0.0, true);
     for &method in stages {
@@ -768,6 +933,7 @@ pub fn frf_update_logged(
     let (objective, backward_error, converged) = end;
     Ok(FrfUpdate {
         names: up.parameters().iter().map(|p| p.name.clone()).collect(),
+        groups: up.groups().iter().map(|g| g.name.clone()).collect(),
         theta: up.theta(),
         damping,
         method: options.method,
@@ -802,7 +968,7 @@ fn gauss_newton(
             method,
             objective: e.objective,
             theta: theta.clone(),
-            damping: *damping,
+            damping: damping.clone(),
         };
         log(&step);
         history.push(step);
@@ -873,7 +1039,7 @@ fn split(v: &[f64], params: usize, damping: &FrfDamping) -> (Vec<f64>, FrfDampin
     let d = if v.len() > params {
         damping.with_values(&v[params..])
     } else {
-        *damping
+        damping.clone()
     };
     (v[..params].to_vec(), d)
 }
@@ -890,17 +1056,18 @@ pub fn frf_errors(
     test: &FrfTest,
     damping: &FrfDamping,
 ) -> Result<Vec<f64>, UpdateError> {
-    damping.check()?;
+    damping.check_for(up)?;
     let sys = up.matrices();
     let n = sys.dofs.free_count();
     test.check(n)?;
-    let combination = Combination::new(&[&sys.k, &sys.m], &["K", "M"])?;
+    let d = damping.matrix(up)?;
+    let combination = combination_of(&sys.k, &sys.m, d.as_ref())?;
     let f = test.forces(n);
     (0..test.omegas.len())
         .into_par_iter()
         .map(|l| {
             let a = damping.stiffness(test.omegas[l]);
-            let mut factor = combination.factor(&[a.k, a.m])?;
+            let mut factor = factor_line(&combination, a)?;
             let mut u = f.clone();
             factor.solve_in_place(u.as_mut())?;
             let h = &test.receptance[l];

@@ -293,6 +293,67 @@ impl<'m> UpdateModel<'m> {
         &self.group_dofs[g]
     }
 
+    /// `sum_g c_g K_g(p)` on `K`'s pattern: each group's own stiffness at its current parameter
+    /// ([`femu_fem::groups::ParameterGroups::stiffness_now_product`]) weighted by `c_g` (a
+    /// structural damping matrix of per-group loss factors), `c_K K(p)` added.
+    ///
+    /// # Errors
+    /// A wrong number of coefficients.
+    pub fn group_stiffness_matrix(
+        &self,
+        c_k: f64,
+        coefficients: &[f64],
+    ) -> Result<femu_sparse::SparseMatrix, UpdateError> {
+        if coefficients.len() != self.groups.len() {
+            return Err(UpdateError::Invalid {
+                what: "group coefficients",
+                reason: format!(
+                    "{} values for {} groups",
+                    coefficients.len(),
+                    self.groups.len()
+                ),
+            });
+        }
+        let k = &self.current.k;
+        let mut values: Vec<f64> = k.data().iter().map(|v| c_k * v).collect();
+        for (g, &c) in coefficients.iter().enumerate() {
+            if c != 0.0 {
+                self.groups
+                    .add_stiffness_now(&self.asm, g, self.p[g], c, &mut values)?;
+            }
+        }
+        Ok(femu_sparse::SparseMatrix::new_csc(
+            (k.rows(), k.cols()),
+            k.indptr().raw_storage().to_vec(),
+            k.indices().to_vec(),
+            values,
+        ))
+    }
+
+    /// Each group's own stiffness at its current parameter times `x`, `K_g(p) x`, on the group's
+    /// DOFs.
+    ///
+    /// # Errors
+    /// A wrong length of `x`.
+    pub fn group_stiffness_columns(&self, x: &[f64]) -> Result<Vec<SparseColumn>, UpdateError> {
+        let mut y = vec![0.0; self.base.dofs.free_count()];
+        (0..self.groups.len())
+            .map(|g| {
+                self.groups
+                    .stiffness_now_product(&self.asm, g, self.p[g], x, &mut y)?;
+                let dofs = &self.group_dofs[g];
+                let values = dofs
+                    .iter()
+                    .map(|&d| std::mem::replace(&mut y[d], 0.0))
+                    .collect();
+                Ok(SparseColumn {
+                    dofs: dofs.clone(),
+                    values,
+                })
+            })
+            .collect()
+    }
+
     /// The parameters (in the order of [`UpdateModel::theta`]).
     pub fn parameters(&self) -> &[Parameter] {
         &self.params

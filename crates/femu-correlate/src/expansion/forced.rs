@@ -4,7 +4,8 @@
 //!
 //! At a line `w` the model's dynamic stiffness is `A = c_K K + c_M M` (undamped
 //! `c_K = 1, c_M = -w^2`; a structural loss factor makes `c_K = 1 + i eta`; Rayleigh damping
-//! `alpha M + beta K` adds `i w beta` to `c_K` and `i w alpha` to `c_M`). The response `u_a` the
+//! `alpha M + beta K` adds `i w beta` to `c_K` and `i w alpha` to `c_M`), plus `c_D D` for a
+//! structural damping matrix `D` on `K`'s pattern (per-group loss factors, `c_D = i`). The response `u_a` the
 //! test measured under the force `f` is expanded by
 //! `u_o = A_oo^-1 (f_o - A_oa u_a)` (the forced counterpart of dynamic expansion), so that the
 //! residue `R_F = A u - f` (the paper's (4)) vanishes on `o` and is `R_a = A_aa u_a + A_ao u_o - f_a`
@@ -21,13 +22,16 @@ use femu_sparse::complex::{Combination, Factored};
 use femu_sparse::csc::sym_mul_mat;
 use femu_sparse::{SparseError, SparseMatrix};
 
-/// The dynamic stiffness `A = k K + m M` at one line (complex coefficients).
+/// The dynamic stiffness `A = k K + m M + d D` at one line (complex coefficients; `D` the
+/// structural damping matrix a [`ForcedExpander::with_damping_matrix`] holds, `d = 0` without).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DynamicStiffness {
     /// Coefficient of `K`.
     pub k: c64,
     /// Coefficient of `M`.
     pub m: c64,
+    /// Coefficient of the structural damping matrix `D`.
+    pub d: c64,
 }
 
 impl DynamicStiffness {
@@ -36,6 +40,7 @@ impl DynamicStiffness {
         Self {
             k: c64::new(1.0, eta),
             m: c64::new(-omega * omega, 0.0),
+            d: c64::new(0.0, 0.0),
         }
     }
 
@@ -44,34 +49,48 @@ impl DynamicStiffness {
         Self {
             k: c64::new(1.0, omega * beta),
             m: c64::new(-omega * omega, omega * alpha),
+            d: c64::new(0.0, 0.0),
+        }
+    }
+
+    /// `K + i D - w^2 M`: the structural damping of the matrix `D` (`sum_g eta_g K_g`, per-group
+    /// loss factors) at `omega` rad/s.
+    pub fn structural(omega: f64) -> Self {
+        Self {
+            k: c64::new(1.0, 0.0),
+            m: c64::new(-omega * omega, 0.0),
+            d: c64::new(0.0, 1.0),
         }
     }
 
     fn check(&self) -> Result<(), CorrelateError> {
-        if [self.k.re, self.k.im, self.m.re, self.m.im]
-            .iter()
-            .all(|v| v.is_finite())
+        if [
+            self.k.re, self.k.im, self.m.re, self.m.im, self.d.re, self.d.im,
+        ]
+        .iter()
+        .all(|v| v.is_finite())
         {
             Ok(())
         } else {
             Err(CorrelateError::Invalid {
                 what: "dynamic stiffness",
                 reason: format!(
-                    "coefficients {} (of K) and {} (of M) must be finite",
-                    self.k, self.m
+                    "coefficients {} (of K), {} (of M) and {} (of D) must be finite",
+                    self.k, self.m, self.d
                 ),
             })
         }
     }
 }
 
-/// `A x = c_K K x + c_M M x` for complex `x` (full-length columns).
+/// `A x = c_K K x + c_M M x (+ c_D D x)` for complex `x` (full-length columns).
 ///
 /// # Errors
 /// `x` of another length than `K`.
 pub fn dynamic_product(
     k: &SparseMatrix,
     m: &SparseMatrix,
+    d: Option<&SparseMatrix>,
     a: DynamicStiffness,
     x: MatRef<'_, c64>,
 ) -> Result<Mat<c64>, CorrelateError> {
@@ -88,10 +107,18 @@ pub fn dynamic_product(
         sym_mul_mat(k, parts.as_ref())?,
         sym_mul_mat(m, parts.as_ref())?,
     );
+    let dx = match d {
+        Some(d) if a.d != c64::new(0.0, 0.0) => Some(sym_mul_mat(d, parts.as_ref())?),
+        _ => None,
+    };
     Ok(Mat::from_fn(x.nrows(), r, |i, j| {
         let kx = c64::new(kx[(i, j)], kx[(i, j + r)]);
         let mx = c64::new(mx[(i, j)], mx[(i, j + r)]);
-        a.k * kx + a.m * mx
+        let mut v = a.k * kx + a.m * mx;
+        if let Some(dx) = &dx {
+            v += a.d * c64::new(dx[(i, j)], dx[(i, j + r)]);
+        }
+        v
     }))
 }
 
@@ -101,6 +128,8 @@ pub fn dynamic_product(
 pub struct ForcedExpander<'a> {
     expander: Expander<'a>,
     combination: Combination,
+    /// The structural damping matrix `D` on `K`'s pattern, when given.
+    damping: Option<&'a SparseMatrix>,
 }
 
 impl std::fmt::Debug for ForcedExpander<'_> {
@@ -136,6 +165,53 @@ impl<'a> ForcedExpander<'a> {
         Ok(Self {
             expander,
             combination,
+            damping: None,
+        })
+    }
+
+    /// As [`ForcedExpander::new`], with a structural damping matrix `D` (real symmetric, on `K`'s
+    /// pattern exactly: the values of `K`'s stored entries) that each line's
+    /// [`DynamicStiffness::d`] multiplies.
+    ///
+    /// # Errors
+    /// As [`ForcedExpander::new`]; `D` of another pattern than `K`'s.
+    pub fn with_damping_matrix(
+        k: &'a SparseMatrix,
+        m: &'a SparseMatrix,
+        d: &'a SparseMatrix,
+        measured: &[usize],
+    ) -> Result<Self, CorrelateError> {
+        if d.rows() != k.rows()
+            || d.nnz() != k.nnz()
+            || d.indptr().raw_storage() != k.indptr().raw_storage()
+            || d.indices() != k.indices()
+        {
+            return Err(CorrelateError::Invalid {
+                what: "structural damping matrix",
+                reason: format!(
+                    "it has {} entries where K has {} (it must be stored on K's pattern)",
+                    d.nnz(),
+                    k.nnz()
+                ),
+            });
+        }
+        let expander = Expander::with_measured_dofs(k, m, measured)?;
+        let (k_oo, m_values) = expander.oo();
+        let on_pattern = |values: Vec<f64>| {
+            SparseMatrix::new_csc(
+                (k_oo.rows(), k_oo.cols()),
+                k_oo.indptr().raw_storage().to_vec(),
+                k_oo.indices().to_vec(),
+                values,
+            )
+        };
+        let m_oo = on_pattern(m_values.clone());
+        let d_oo = on_pattern(expander.oo_values(d.data()));
+        let combination = Combination::new(&[k_oo, &m_oo, &d_oo], &["K_oo", "M_oo", "D_oo"])?;
+        Ok(Self {
+            expander,
+            combination,
+            damping: Some(d),
         })
     }
 
@@ -151,10 +227,20 @@ impl<'a> ForcedExpander<'a> {
     /// line at an eigenvalue of the structure with its measured DOFs held).
     pub fn line(&self, a: DynamicStiffness) -> Result<ForcedLine<'_>, CorrelateError> {
         a.check()?;
-        let factor = self
-            .combination
-            .factor(&[a.k, a.m])
-            .map_err(|e| singular(e, a))?;
+        if self.damping.is_none() && a.d != c64::new(0.0, 0.0) {
+            return Err(CorrelateError::Invalid {
+                what: "forced expansion",
+                reason: format!(
+                    "a coefficient {} of a structural damping matrix, and no such matrix (ForcedExpander::with_damping_matrix)",
+                    a.d
+                ),
+            });
+        }
+        let factor = match self.damping {
+            Some(_) => self.combination.factor(&[a.k, a.m, a.d]),
+            None => self.combination.factor(&[a.k, a.m]),
+        }
+        .map_err(|e| singular(e, a))?;
         Ok(ForcedLine {
             owner: self,
             a,
@@ -252,7 +338,7 @@ impl ForcedLine<'_> {
                 u[(d, j)] = ua[(i, j)];
             }
         }
-        let au = dynamic_product(k, m, self.a, u.as_ref())?;
+        let au = dynamic_product(k, m, owner.damping, self.a, u.as_ref())?;
         let rhs = Mat::from_fn(part.omitted.len(), r, |i, j| {
             let d = part.omitted[i];
             f[(d, j)] - au[(d, j)]
@@ -263,7 +349,7 @@ impl ForcedLine<'_> {
                 u[(d, j)] = uo[(i, j)];
             }
         }
-        let au = dynamic_product(k, m, self.a, u.as_ref())?;
+        let au = dynamic_product(k, m, owner.damping, self.a, u.as_ref())?;
         let residual = Mat::from_fn(part.measured.len(), r, |i, j| {
             let d = part.measured[i];
             au[(d, j)] - f[(d, j)]
@@ -290,7 +376,7 @@ impl ForcedLine<'_> {
                 full[(d, j)] = z[(i, j)];
             }
         }
-        let az = dynamic_product(k, m, self.a, full.as_ref())?;
+        let az = dynamic_product(k, m, owner.damping, self.a, full.as_ref())?;
         Ok(Mat::from_fn(part.measured.len(), r, |i, j| {
             let d = part.measured[i];
             v[(d, j)] - az[(d, j)]

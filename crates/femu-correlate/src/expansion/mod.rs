@@ -288,6 +288,23 @@ impl<'a> Expander<'a> {
         })
     }
 
+    /// A matrix's values on `K`'s pattern (`on_k`, one per stored entry of `K`) restricted to the
+    /// omitted DOFs, in the order of `K_oo`'s entries.
+    fn oo_values(&self, on_k: &[f64]) -> Vec<f64> {
+        let (k, part) = (self.k, &self.part);
+        let kp = k.indptr();
+        let kp = kp.raw_storage();
+        let mut v = Vec::with_capacity(self.oo().0.nnz());
+        for &c in &part.omitted {
+            for p in kp[c]..kp[c + 1] {
+                if part.omitted_pos[k.indices()[p]] != usize::MAX {
+                    v.push(on_k[p]);
+                }
+            }
+        }
+        v
+    }
+
     /// The symbolic analysis of `K_oo`, computed on first use.
     fn symbolic_oo(&self) -> Result<&SymbolicFactor, CorrelateError> {
         if let Some(s) = self.symbolic.get() {

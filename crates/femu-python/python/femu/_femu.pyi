@@ -161,6 +161,7 @@ def frf(
     update_all: bool = False,
     sb_ebe_only: bool = False,
     min_coherence: Optional[float] = None,
+    loss_factor_per_set: bool = False,
 ) -> Dict[str, Any]: ...
 def removal_study(model: Model, test: Test, *, expansion: str = "dynamic") -> Dict[str, Any]: ...
 def update(

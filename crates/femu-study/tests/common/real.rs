@@ -147,9 +147,91 @@ pub fn measure_frf(
     noise: f64,
     seed: u64,
 ) -> (Vec<Sensor>, Sensor, Vec<Mat<faer::c64>>) {
-    use faer::c64;
     let up = with_factors(real, theta);
     let sys = up.matrices();
+    let (sensors, dofs, force_dof) = frf_dofs(real, sys, model, reference);
+    let combination =
+        femu_sparse::complex::Combination::new(&[&sys.k, &sys.m], &["K", "M"]).unwrap();
+    let mut rng = femu_testkit::Rng(seed);
+    let h = hz
+        .iter()
+        .map(|f| {
+            let w = 2.0 * std::f64::consts::PI * f;
+            let a = damping.stiffness(w);
+            let factor = combination.factor(&[a.k, a.m]).unwrap();
+            read_noisy(factor, sys.k.rows(), force_dof, &dofs, noise, &mut rng)
+        })
+        .collect();
+    (sensors, Sensor::axis(sensor_nodes(model)[reference], 2), h)
+}
+
+/// Measured receptances of `real` as it is built, its materials and their structural damping
+/// included: `(K + i K_4 - w^2 M) u = f` solved at each of `hz` with `K_4 = sum_e GE_e K_e` of
+/// its elements (`Assembler::dampers`), read as [`measure_frf`] reads them.
+pub fn measure_frf_damped(
+    real: &Model,
+    model: &Model,
+    reference: usize,
+    hz: &[f64],
+    noise: f64,
+    seed: u64,
+) -> (Vec<Sensor>, Sensor, Vec<Mat<faer::c64>>) {
+    use faer::c64;
+    let asm = femu_fem::assembly::Assembler::new(real).unwrap();
+    let sys = asm.assemble(real, MassKind::Consistent).unwrap();
+    let k4 = asm.dampers(real).unwrap().structural.unwrap();
+    let (sensors, dofs, force_dof) = frf_dofs(real, &sys, model, reference);
+    let combination =
+        femu_sparse::complex::Combination::new(&[&sys.k, &sys.m, &k4], &["K", "M", "K4"]).unwrap();
+    let mut rng = femu_testkit::Rng(seed);
+    let h = hz
+        .iter()
+        .map(|f| {
+            let w = 2.0 * std::f64::consts::PI * f;
+            let factor = combination
+                .factor(&[
+                    c64::new(1.0, 0.0),
+                    c64::new(-w * w, 0.0),
+                    c64::new(0.0, 1.0),
+                ])
+                .unwrap();
+            read_noisy(factor, sys.k.rows(), force_dof, &dofs, noise, &mut rng)
+        })
+        .collect();
+    (sensors, Sensor::axis(sensor_nodes(model)[reference], 2), h)
+}
+
+/// The response under a unit force at `force_dof`, read at `dofs` with complex noise of relative
+/// size `noise`.
+fn read_noisy(
+    mut factor: femu_sparse::complex::Factored<'_>,
+    n: usize,
+    force_dof: usize,
+    dofs: &[usize],
+    noise: f64,
+    rng: &mut femu_testkit::Rng,
+) -> Mat<faer::c64> {
+    use faer::c64;
+    let mut u = Mat::<c64>::zeros(n, 1);
+    u[(force_dof, 0)] = c64::new(1.0, 0.0);
+    factor.solve_in_place(u.as_mut()).unwrap();
+    Mat::from_fn(dofs.len(), 1, |i, _| {
+        let e = c64::new(
+            noise * 3f64.sqrt() * rng.sym(),
+            noise * 3f64.sqrt() * rng.sym(),
+        );
+        u[(dofs[i], 0)] * (c64::new(1.0, 0.0) + e)
+    })
+}
+
+/// The model's sensors (its sensor nodes in y and z), the real structure's DOFs at the same
+/// points, and the real DOF of the force (z at sensor node `reference`).
+fn frf_dofs(
+    real: &Model,
+    sys: &SystemMatrices,
+    model: &Model,
+    reference: usize,
+) -> (Vec<Sensor>, Vec<usize>, usize) {
     let nodes = sensor_nodes(model);
     let real_dof = |id: u64, axis: usize| {
         let x = model.mesh().coords()[model.mesh().node_index(id).unwrap()];
@@ -170,26 +252,5 @@ pub fn measure_frf(
         }
     }
     let force_dof = real_dof(nodes[reference], 2);
-    let combination =
-        femu_sparse::complex::Combination::new(&[&sys.k, &sys.m], &["K", "M"]).unwrap();
-    let mut rng = femu_testkit::Rng(seed);
-    let h = hz
-        .iter()
-        .map(|f| {
-            let w = 2.0 * std::f64::consts::PI * f;
-            let a = damping.stiffness(w);
-            let mut factor = combination.factor(&[a.k, a.m]).unwrap();
-            let mut u = Mat::<c64>::zeros(sys.k.rows(), 1);
-            u[(force_dof, 0)] = c64::new(1.0, 0.0);
-            factor.solve_in_place(u.as_mut()).unwrap();
-            Mat::from_fn(dofs.len(), 1, |i, _| {
-                let e = c64::new(
-                    noise * 3f64.sqrt() * rng.sym(),
-                    noise * 3f64.sqrt() * rng.sym(),
-                );
-                u[(dofs[i], 0)] * (c64::new(1.0, 0.0) + e)
-            })
-        })
-        .collect();
-    (sensors, Sensor::axis(nodes[reference], 2), h)
+    (sensors, dofs, force_dof)
 }
