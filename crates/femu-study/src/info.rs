@@ -62,6 +62,18 @@ fn structural_lines(s: &mut String, model: &femu_fem::model::Model) {
 /// `*DAMPING, STRUCTURAL`), when there are any: what a direct frequency response adds as
 /// `i sum_e GE_e K_e`.
 fn damping_line(s: &mut String, model: &femu_fem::model::Model) {
+    if let Some(u) = model.uniform_damping() {
+        let _ = writeln!(
+            s,
+            "damping of the whole model: {} (femu frf uses it when given no damping)",
+            match u {
+                femu_fem::model::UniformDamping::LossFactor(g) =>
+                    format!("a loss factor of {g} (PARAM,G)"),
+                femu_fem::model::UniformDamping::Rayleigh { alpha, beta } =>
+                    format!("Rayleigh alpha {alpha:e} s^-1, beta {beta:e} s"),
+            }
+        );
+    }
     let d = model.element_damping();
     if d.is_empty() {
         return;
