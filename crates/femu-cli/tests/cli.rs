@@ -1690,8 +1690,8 @@ fn frf_of_a_free_structure_with_inertia_relief() {
 /// `femu frf --direct` on a Nastran deck whose damping is its own: a CONM2 of 10 kg on a
 /// grounded CBUSH with PBUSH stiffnesses, viscous `B` and structural `GE`. Along z the receptance
 /// is the single-DOF oscillator's `1 / (K3 (1 + i GE) - w^2 m + i w B3)`, written here by hand as
-/// the "measurement": the direct route reproduces it to 1e-9 of the peak (FRAC 1). Modal
-/// superposition, which leaves the deck's dampers out, says so and misses the peak's height. The
+/// the "measurement": the direct route reproduces it to 1e-9 of the peak (FRAC 1); so does modal
+/// superposition, which projects the deck's dampers on the six modes and says so. The
 /// same damping in a second CBUSH of its own (PBUSH with `B` alone: a pure damper, which Nastran
 /// reads) gives the same receptance to 1e-9.
 #[test]
@@ -1758,17 +1758,28 @@ ENDDATA
     assert!(direct["functions"][0]["frac"].as_f64().unwrap() > 1.0 - 1e-12);
     let notes = direct["notes"].to_string();
     assert!(notes.contains("own dampers alone"), "{notes}");
-    // modal superposition leaves the dampers out (and says so): 1 % viscous is lighter than the
-    // deck's B (2.7 %) and GE (0.04), so its peak stands higher than the measured one
+    // modal superposition projects the dampers on the modes (all six of the bushing's are in the
+    // band) and solves the modal equations together: with no damping of its own added, the same
+    // receptance
     let out = femu()
         .args(["frf", dir.join("bush.bdf").to_str().unwrap()])
         .arg(dir.join("frf.uff"))
-        .arg("--json")
-        .arg(dir.join("modal.json"))
+        .args(["--damping-ratio", "0", "--uff"])
+        .arg(dir.join("modal.uff"))
         .assert()
         .success();
     let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
-    assert!(stderr.contains("--direct includes them"), "{stderr}");
+    assert!(stderr.contains("projected on the 6 modes"), "{stderr}");
+    let back = femu_io::uff::read_uff(dir.join("modal.uff")).unwrap();
+    let Ordinate::Complex(v) = &back.functions[0].ordinate else {
+        panic!("complex FRF expected")
+    };
+    let err = v
+        .iter()
+        .zip(&h)
+        .map(|((a, b), (c, d))| (a - c).hypot(b - d))
+        .fold(0.0, f64::max);
+    assert!(err < 1e-9 * peak, "modal: {err:e} against {peak:e}");
     // the damping in a bushing of its own (a pure damper: PBUSH B alone, which Nastran reads)
     // beside the stiff one: the same receptance
     let split = deck.replace(

@@ -154,7 +154,77 @@ pub fn modal_frf(
     lines_hz: &[f64],
     options: &FrfOptions,
 ) -> Result<Frf, CorrelateError> {
+    modal_frf_coupled(
+        values, shapes, residual, outputs, inputs, lines_hz, options, None,
+    )
+}
+
+/// A model's own dampers projected on its kept modes: `Phi^T K_4 Phi` (structural, entering as
+/// `i Phi^T K_4 Phi`) and `Phi^T C_d Phi` (viscous, `i w Phi^T C_d Phi`), full `modes x modes`
+/// matrices, which the modes do not diagonalise (docs/MATH.md, "Frequency responses, directly").
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModalDampers {
+    /// `Phi^T K_4 Phi`.
+    pub structural: Option<Mat<f64>>,
+    /// `Phi^T C_d Phi`.
+    pub viscous: Option<Mat<f64>>,
+}
+
+impl ModalDampers {
+    /// The projections of `structural` (`K_4`) and `viscous` (`C_d`) on the mass-normalised
+    /// `shapes` (free DOFs x modes).
+    ///
+    /// # Errors
+    /// Sizes that do not match.
+    pub fn project(
+        structural: Option<&SparseMatrix>,
+        viscous: Option<&SparseMatrix>,
+        shapes: MatRef<'_, f64>,
+    ) -> Result<Self, CorrelateError> {
+        let project = |a: Option<&SparseMatrix>| -> Result<Option<Mat<f64>>, CorrelateError> {
+            let Some(a) = a else { return Ok(None) };
+            let ap = femu_sparse::csc::sym_mul_mat(a, shapes)?;
+            Ok(Some(shapes.transpose() * &ap))
+        };
+        Ok(Self {
+            structural: project(structural)?,
+            viscous: project(viscous)?,
+        })
+    }
+}
+
+/// [`modal_frf`] with the model's own dampers projected on the kept modes (`dampers`): at each line
+/// the modal equations `(diag(lambda_r - w^2 + i d_r) + i Phi^T K_4 Phi + i w Phi^T C_d Phi) q =
+/// Phi^T B^T` are solved together (a dense complex `LU` of `modes x modes`), as CalculiX's
+/// steady-state dynamics does with a material's structural damping; `d_r` is the damping of
+/// `options`. The residual flexibility of the modes left out is undamped by the dampers.
+///
+/// # Errors
+/// As [`modal_frf`]; projections of another size than the modes; a singular modal system.
+#[allow(clippy::too_many_arguments)]
+pub fn modal_frf_coupled(
+    values: &[f64],
+    shapes: MatRef<'_, f64>,
+    residual: Option<MatRef<'_, f64>>,
+    outputs: &SensorLayout,
+    inputs: &SensorLayout,
+    lines_hz: &[f64],
+    options: &FrfOptions,
+    dampers: Option<&ModalDampers>,
+) -> Result<Frf, CorrelateError> {
     let (damping, kind) = (&options.damping, options.kind);
+    let dampers = dampers.filter(|d| d.structural.is_some() || d.viscous.is_some());
+    if let Some(d) = dampers {
+        for p in d.structural.iter().chain(&d.viscous) {
+            if p.nrows() != values.len() || p.ncols() != values.len() {
+                return Err(CorrelateError::DimensionMismatch {
+                    what: "projected dampers (modes x modes)",
+                    expected: values.len(),
+                    got: p.nrows(),
+                });
+            }
+        }
+    }
     if values.len() != shapes.ncols() {
         return Err(CorrelateError::DimensionMismatch {
             what: "eigenvalues against mode shapes",
@@ -184,7 +254,16 @@ pub fn modal_frf(
     for (line, f) in lines_hz.iter().enumerate() {
         let w = 2.0 * std::f64::consts::PI * f;
         let mut hl = Mat::<c64>::zeros(outputs.len(), inputs.len());
-        for (r, lambda) in values.iter().enumerate() {
+        if let Some(d) = dampers {
+            coupled_line(values, damping, d, w, (&co, &bi), &mut hl).map_err(|reason| {
+                CorrelateError::Invalid {
+                    what: "frequency line",
+                    reason: format!("line {} ({f} Hz): {reason}", line + 1),
+                }
+            })?;
+        }
+        // (with dampers the modes are solved together above)
+        for (r, lambda) in values.iter().enumerate().filter(|_| dampers.is_none()) {
             let den = c64::new(lambda - w * w, damping.term(r, *lambda, w));
             if den.re == 0.0 && den.im == 0.0 {
                 return Err(CorrelateError::Invalid {
@@ -230,6 +309,52 @@ pub fn modal_frf(
         kind,
         h,
     })
+}
+
+/// One line of [`modal_frf_coupled`]: `hl += C Phi Z^-1 (B Phi)^T` with the coupled modal
+/// dynamic stiffness `Z`.
+fn coupled_line(
+    values: &[f64],
+    damping: &Damping,
+    d: &ModalDampers,
+    w: f64,
+    (co, bi): (&Mat<f64>, &Mat<f64>),
+    hl: &mut Mat<c64>,
+) -> Result<(), String> {
+    use faer::linalg::solvers::Solve;
+    let m = values.len();
+    let z = Mat::<c64>::from_fn(m, m, |i, j| {
+        let mut v = c64::new(0.0, 0.0);
+        if i == j {
+            v += c64::new(values[i] - w * w, damping.term(i, values[i], w));
+        }
+        if let Some(s) = &d.structural {
+            v += c64::new(0.0, s[(i, j)]);
+        }
+        if let Some(c) = &d.viscous {
+            v += c64::new(0.0, w * c[(i, j)]);
+        }
+        v
+    });
+    let rhs = Mat::<c64>::from_fn(m, bi.nrows(), |r, j| c64::new(bi[(j, r)], 0.0));
+    let q = z.as_ref().partial_piv_lu().solve(&rhs);
+    if q.col_iter()
+        .any(|c| c.iter().any(|v| !(v.re.is_finite() && v.im.is_finite())))
+    {
+        return Err(
+            "the damped modal equations are singular (an undamped mode at the line)".into(),
+        );
+    }
+    for i in 0..co.nrows() {
+        for j in 0..bi.nrows() {
+            let mut v = c64::new(0.0, 0.0);
+            for r in 0..m {
+                v += q[(r, j)] * co[(i, r)];
+            }
+            hl[(i, j)] += v;
+        }
+    }
+    Ok(())
 }
 
 /// The residual flexibility of the modes left out: `C K^-1 B^T - sum_r (C phi_r)(B phi_r)^T /

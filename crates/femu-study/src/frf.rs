@@ -8,8 +8,8 @@ use crate::StudyError;
 use crate::load::LoadedModel;
 use faer::c64;
 use femu_correlate::frf::{
-    Damping, DirectSystem, Frf, FrfOptions, ResponseKind, csac, csf, direct_frf, frac, modal_frf,
-    residual_flexibility_analysed, residual_flexibility_factored,
+    Damping, DirectSystem, Frf, FrfOptions, ModalDampers, ResponseKind, csac, csf, direct_frf,
+    frac, modal_frf_coupled, residual_flexibility_analysed, residual_flexibility_factored,
 };
 use femu_correlate::{Sensor, SensorLayout};
 use femu_io::uff::{Ordinate, UffDof, UffFunction};
@@ -51,8 +51,8 @@ pub struct FrfRequest {
     pub rayleigh: Option<Vec<f64>>,
     /// Solve the dynamic stiffness `K (1 + i eta) + i K4 + i w C - w^2 M` at every line (one
     /// sparse complex factorization each) instead of superposing modes: the model's own dampers
-    /// (bushings' B, the GE of springs, bushings and damped materials) then act, and no mode is
-    /// left out. Takes a loss factor or Rayleigh damping (modal ratios have no matrix); default:
+    /// (bushings' B, the GE of springs, bushings and damped materials) act whole (modal
+    /// superposition projects them on its modes), and no mode is left out. Takes a loss factor or Rayleigh damping (modal ratios have no matrix); default:
     /// the deck's `PARAM,G` as a loss factor, else a loss factor of 0.02 (1 % viscous at
     /// resonance) on a model without dampers, none on one with them.
     #[cfg_attr(feature = "clap", arg(long, conflicts_with_all = ["damping_ratio", "damping_from"]))]
@@ -482,11 +482,8 @@ pub fn frf_correlation_with(
             model, request, &dampers, &outputs, &inputs, &lines, kind, &mut notes,
         )?
     } else {
-        if dampers.any() {
-            notes.push("the model's own dampers (bushings' B, the GE of springs, bushings and damped materials) are left out by modal superposition: --direct includes them".into());
-        }
         modal_route(
-            model, request, eigen, &outputs, &inputs, &lines, kind, &mut notes,
+            model, request, eigen, &dampers, &outputs, &inputs, &lines, kind, &mut notes,
         )?
     };
     let Solved {
@@ -1004,6 +1001,8 @@ struct Synthesis {
     vectors: faer::Mat<f64>,
     residual: Option<faer::Mat<f64>>,
     options: FrfOptions,
+    /// The model's own dampers projected on the modes.
+    dampers: Option<ModalDampers>,
 }
 
 /// The frequency scaling that best aligns the model's FRFs with the test's.
@@ -1032,7 +1031,7 @@ fn align(
 ) -> Result<Alignment, StudyError> {
     let mean_frac = |kappa: f64| -> Result<f64, StudyError> {
         let shifted: Vec<f64> = lines.iter().map(|f| kappa * f).collect();
-        let frf = modal_frf(
+        let frf = modal_frf_coupled(
             &synthesis.values,
             synthesis.vectors.as_ref(),
             synthesis.residual.as_ref().map(|r| r.as_ref()),
@@ -1040,6 +1039,7 @@ fn align(
             inputs,
             &shifted,
             &synthesis.options,
+            synthesis.dampers.as_ref(),
         )?;
         let mut sum = 0.0;
         for ((oi, ii, values), keep) in pairs.iter().zip(coherent) {
@@ -1098,6 +1098,7 @@ fn modal_route(
     model: &LoadedModel,
     request: &FrfRequest,
     eigen: &EigenOptions,
+    dampers: &femu_fem::assembly::Dampers,
     outputs: &SensorLayout,
     inputs: &SensorLayout,
     lines: &[f64],
@@ -1181,7 +1182,22 @@ fn modal_route(
         damping: damping.clone(),
         kind,
     };
-    let frf = modal_frf(
+    // the model's own dampers, which the modes do not diagonalise: projected on them and the
+    // modal equations solved together at each line
+    let projected = if dampers.any() {
+        notes.push(format!(
+            "the model's own dampers (bushings' B, the GE of springs, bushings and damped materials) projected on the {} modes and the modal equations solved together at each line (--direct solves the whole model)",
+            modes.values.len()
+        ));
+        Some(ModalDampers::project(
+            dampers.structural.as_ref(),
+            dampers.viscous.as_ref(),
+            modes.vectors.as_ref(),
+        )?)
+    } else {
+        None
+    };
+    let frf = modal_frf_coupled(
         &modes.values,
         modes.vectors.as_ref(),
         residual.as_ref().map(|r| r.as_ref()),
@@ -1189,6 +1205,7 @@ fn modal_route(
         inputs,
         lines,
         &options,
+        projected.as_ref(),
     )?;
     Ok(Solved {
         frf,
@@ -1201,6 +1218,7 @@ fn modal_route(
             vectors: modes.vectors.clone(),
             residual,
             options,
+            dampers: projected,
         }),
     })
 }

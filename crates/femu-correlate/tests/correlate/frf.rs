@@ -430,6 +430,84 @@ fn the_direct_route_is_the_dense_solve_with_dampers() {
     }
 }
 
+/// Modal superposition with the model's dampers projected on every mode and the modal equations
+/// solved together (`modal_frf_coupled`) is the dense complex solve of the whole damped system:
+/// the dashpot and the grounded spring's structural damping of the test above, with Rayleigh
+/// damping, a loss factor or none of the request's, at lines below, on, between and far above the
+/// modes (1e-9 relative).
+#[test]
+fn every_mode_with_projected_dampers_is_the_dense_solve() {
+    use femu_correlate::frf::{ModalDampers, modal_frf_coupled};
+    let model = bar([4, 1, 1], true);
+    let sys = model.assemble(MassKind::Consistent).unwrap();
+    let (outputs, inputs) = layouts(&model, &sys);
+    let n = sys.k.rows();
+    let (a, b) = (outputs.row(0)[0].0, outputs.row(2)[0].0);
+    let kmax = dense(&sys.k)[(a, a)];
+    let cd = dashpot(n, a, b, 2e-4 * kmax);
+    let mut k4 = Mat::<f64>::zeros(n, n);
+    k4[(b, b)] = 0.05 * kmax;
+    let (cd_s, k4_s) = (sparse(&cd), sparse(&k4));
+    let e = full_eigen(&sys);
+    let f1 = e.values[0].sqrt() / (2.0 * std::f64::consts::PI);
+    let lines = [0.0, 0.3 * f1, f1, 2.7 * f1, 40.0 * f1];
+    let projected = ModalDampers::project(Some(&k4_s), Some(&cd_s), e.vectors.as_ref()).unwrap();
+    for (damping, coefficients) in [
+        (
+            Damping::Rayleigh {
+                alpha: 3.0,
+                beta: 2e-6,
+            },
+            (0.0, 3.0, 2e-6),
+        ),
+        (Damping::LossFactor(0.02), (0.02, 0.0, 0.0)),
+        (Damping::Ratio(0.0), (0.0, 0.0, 0.0)),
+    ] {
+        let options = FrfOptions {
+            damping: damping.clone(),
+            kind: ResponseKind::Receptance,
+        };
+        let got = modal_frf_coupled(
+            &e.values,
+            e.vectors.as_ref(),
+            None,
+            &outputs,
+            &inputs,
+            &lines,
+            &options,
+            Some(&projected),
+        )
+        .unwrap();
+        for (l, f) in lines.iter().enumerate() {
+            let w = 2.0 * std::f64::consts::PI * f;
+            let want = direct_with(&sys, Some((&cd, &k4)), &outputs, &inputs, w, coefficients);
+            let err = max_rel(&got.h[l], &want);
+            assert!(err < 1e-9, "{damping:?} line {l}: {err:e}");
+        }
+    }
+    // projections of another size are refused
+    let wrong = ModalDampers {
+        structural: Some(Mat::zeros(2, 2)),
+        viscous: None,
+    };
+    assert!(
+        modal_frf_coupled(
+            &e.values,
+            e.vectors.as_ref(),
+            None,
+            &outputs,
+            &inputs,
+            &lines,
+            &FrfOptions {
+                damping: Damping::Ratio(0.0),
+                kind: ResponseKind::Receptance,
+            },
+            Some(&wrong),
+        )
+        .is_err()
+    );
+}
+
 /// Without the model's dampers the direct route is modal superposition over every mode (the
 /// identity of docs/MATH.md, "Frequency responses"), to 1e-9; accelerance is `-w^2` times the
 /// receptance.
