@@ -1890,6 +1890,40 @@ ENDDATA
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A 10-element C3D8 cantilever (`bar.inp`, element sets ROOT_HALF and TIP_HALF) and the same
+/// with its root half 20 % softer (`softer.inp`, material SOFT), in a new folder named by `tag`;
+/// `damping` (a `*DAMPING` line or nothing) is added to both halves' materials of the softer one,
+/// 0.05 in the root half's when given. Returns the folder, the beam, its twelve response sensors
+/// (ten z, two y) and the tip node (the force).
+fn softer_halves(
+    tag: &str,
+    damping: &str,
+) -> (std::path::PathBuf, Cantilever, Vec<(u64, i64)>, u64) {
+    let nx = 10;
+    let beam = Cantilever::new(nx, [0.4, 0.04, 0.02]);
+    let sets = "*ELSET, ELSET=ROOT_HALF\n2, 3, 4, 5, 6\n*ELSET, ELSET=TIP_HALF\n7, 8, 9, 10, 11\n";
+    let nominal = format!("{}{sets}", beam.deck("C3D8", 2.1e11));
+    let soft_damping = if damping.is_empty() {
+        ""
+    } else {
+        "*DAMPING, STRUCTURAL=0.05\n"
+    };
+    let softer = nominal.replace(
+        "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n",
+        &format!("{damping}*MATERIAL, NAME=SOFT\n*ELASTIC\n1.68e11, 0.3\n*DENSITY\n7850.\n{soft_damping}*SOLID SECTION, ELSET=ROOT_HALF, MATERIAL=SOFT\n*SOLID SECTION, ELSET=TIP_HALF, MATERIAL=STEEL\n"),
+    );
+    assert_ne!(softer, nominal);
+    let dir = std::env::temp_dir().join(format!("femu-cli-frf-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("bar.inp"), &nominal).unwrap();
+    std::fs::write(dir.join("softer.inp"), &softer).unwrap();
+    let tip = beam.id(nx, 0, 1) as u64;
+    let mut outputs: Vec<(u64, i64)> = (1..=nx).map(|i| (beam.id(i, 0, 1) as u64, 3)).collect();
+    outputs.push((beam.id(nx, 1, 0) as u64, 2));
+    outputs.push((beam.id(nx / 2, 1, 1) as u64, 2));
+    (dir, beam, outputs, tip)
+}
+
 /// `femu frf --update`: receptances "measured" by a dense direct solve on the cantilever whose
 /// root half is 20 % softer (loss factor 0.02), at ten z and two y sensors under a force at the
 /// tip, written as dataset 58; the nominal deck updated over its two halves from a loss factor of
@@ -1901,23 +1935,7 @@ ENDDATA
 /// ratios with the update, one Rayleigh coefficient.
 #[test]
 fn frf_update_finds_the_softer_half() {
-    let nx = 10;
-    let beam = Cantilever::new(nx, [0.4, 0.04, 0.02]);
-    let sets = "*ELSET, ELSET=ROOT_HALF\n2, 3, 4, 5, 6\n*ELSET, ELSET=TIP_HALF\n7, 8, 9, 10, 11\n";
-    let nominal = format!("{}{sets}", beam.deck("C3D8", 2.1e11));
-    let softer = nominal.replace(
-        "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n",
-        "*MATERIAL, NAME=SOFT\n*ELASTIC\n1.68e11, 0.3\n*DENSITY\n7850.\n*SOLID SECTION, ELSET=ROOT_HALF, MATERIAL=SOFT\n*SOLID SECTION, ELSET=TIP_HALF, MATERIAL=STEEL\n",
-    );
-    assert_ne!(softer, nominal);
-    let dir = std::env::temp_dir().join(format!("femu-cli-frf-update-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("bar.inp"), &nominal).unwrap();
-    std::fs::write(dir.join("softer.inp"), &softer).unwrap();
-    let tip = beam.id(nx, 0, 1) as u64;
-    let mut outputs: Vec<(u64, i64)> = (1..=nx).map(|i| (beam.id(i, 0, 1) as u64, 3)).collect();
-    outputs.push((beam.id(nx, 1, 0) as u64, 2));
-    outputs.push((beam.id(nx / 2, 1, 1) as u64, 2));
+    let (dir, beam, outputs, tip) = softer_halves("update", "");
     let (min, step, count) = (5.0, 2.5, 360usize);
     let values = measured_receptances(&dir.join("softer.inp"), &outputs, tip, (min, step, count));
     write_frf_uff(&dir.join("frf.uff"), &outputs, tip, min, step, &values);
@@ -2069,23 +2087,7 @@ fn frf_update_finds_the_softer_half() {
 /// Rayleigh coefficients with the flag are refused.
 #[test]
 fn frf_update_fits_a_loss_factor_per_set() {
-    let nx = 10;
-    let beam = Cantilever::new(nx, [0.4, 0.04, 0.02]);
-    let sets = "*ELSET, ELSET=ROOT_HALF\n2, 3, 4, 5, 6\n*ELSET, ELSET=TIP_HALF\n7, 8, 9, 10, 11\n";
-    let nominal = format!("{}{sets}", beam.deck("C3D8", 2.1e11));
-    let softer = nominal.replace(
-        "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n",
-        "*DAMPING, STRUCTURAL=0.01\n*MATERIAL, NAME=SOFT\n*ELASTIC\n1.68e11, 0.3\n*DENSITY\n7850.\n*DAMPING, STRUCTURAL=0.05\n*SOLID SECTION, ELSET=ROOT_HALF, MATERIAL=SOFT\n*SOLID SECTION, ELSET=TIP_HALF, MATERIAL=STEEL\n",
-    );
-    assert_ne!(softer, nominal);
-    let dir = std::env::temp_dir().join(format!("femu-cli-frf-per-set-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("bar.inp"), &nominal).unwrap();
-    std::fs::write(dir.join("softer.inp"), &softer).unwrap();
-    let tip = beam.id(nx, 0, 1) as u64;
-    let mut outputs: Vec<(u64, i64)> = (1..=nx).map(|i| (beam.id(i, 0, 1) as u64, 3)).collect();
-    outputs.push((beam.id(nx, 1, 0) as u64, 2));
-    outputs.push((beam.id(nx / 2, 1, 1) as u64, 2));
+    let (dir, _, outputs, tip) = softer_halves("per-set", "*DAMPING, STRUCTURAL=0.01\n");
     let (min, step, count) = (5.0, 2.5, 360usize);
     let (model, sys, k, m) = dense_deck(&dir.join("softer.inp"));
     let asm = femu_fem::assembly::Assembler::new(&model).unwrap();

@@ -371,13 +371,20 @@ fn dashpot(n: usize, a: usize, b: usize, c: f64) -> Mat<f64> {
     d
 }
 
-/// The direct route (a sparse complex `LU` per line) against the dense complex solve of the same
-/// dynamic stiffness, with damping the modes do not diagonalise: a dashpot between the tip and
-/// the middle of the bar and structural damping of a spring to ground, on top of Rayleigh
-/// damping or a loss factor, at lines below, on, between and far above the modes (1e-10
-/// relative; each line's backward error below 1e-14).
-#[test]
-fn the_direct_route_is_the_dense_solve_with_dampers() {
+/// The clamped bar with damping the modes do not diagonalise: a dashpot `C_d` between the tip and
+/// the middle and structural damping `K_4` of a spring to ground at the middle (dense), lines below,
+/// on, between and far above the modes, and every mode.
+struct DampedBar {
+    sys: SystemMatrices,
+    outputs: SensorLayout,
+    inputs: SensorLayout,
+    cd: Mat<f64>,
+    k4: Mat<f64>,
+    lines: [f64; 5],
+    eigen: femu_sparse::dense::GeneralizedEigen,
+}
+
+fn damped_bar() -> DampedBar {
     let model = bar([4, 1, 1], true);
     let sys = model.assemble(MassKind::Consistent).unwrap();
     let (outputs, inputs) = layouts(&model, &sys);
@@ -385,16 +392,25 @@ fn the_direct_route_is_the_dense_solve_with_dampers() {
     let (a, b) = (outputs.row(0)[0].0, outputs.row(2)[0].0);
     let kmax = dense(&sys.k)[(a, a)];
     let cd = dashpot(n, a, b, 2e-4 * kmax);
-    let k4 = dashpot(n, b, b, 0.0) + {
-        let mut g = Mat::<f64>::zeros(n, n);
-        g[(b, b)] = 0.05 * kmax;
-        g
-    };
-    let (cd_s, k4_s) = (sparse(&cd), sparse(&k4));
-    let e = full_eigen(&sys);
-    let f1 = e.values[0].sqrt() / (2.0 * std::f64::consts::PI);
-    let lines = [0.0, 0.3 * f1, f1, 2.7 * f1, 40.0 * f1];
-    for (damping, coefficients) in [
+    let mut k4 = Mat::<f64>::zeros(n, n);
+    k4[(b, b)] = 0.05 * kmax;
+    let eigen = full_eigen(&sys);
+    let f1 = eigen.values[0].sqrt() / (2.0 * std::f64::consts::PI);
+    DampedBar {
+        sys,
+        outputs,
+        inputs,
+        cd,
+        k4,
+        lines: [0.0, 0.3 * f1, f1, 2.7 * f1, 40.0 * f1],
+        eigen,
+    }
+}
+
+/// The request's damping with the `(eta, alpha, beta)` of [`direct_with`]: Rayleigh damping, a
+/// loss factor, none.
+fn damping_cases() -> [(Damping, (f64, f64, f64)); 3] {
+    [
         (
             Damping::Rayleigh {
                 alpha: 3.0,
@@ -404,7 +420,27 @@ fn the_direct_route_is_the_dense_solve_with_dampers() {
         ),
         (Damping::LossFactor(0.02), (0.02, 0.0, 0.0)),
         (Damping::Ratio(0.0), (0.0, 0.0, 0.0)),
-    ] {
+    ]
+}
+
+/// The direct route (a sparse complex `LU` per line) against the dense complex solve of the same
+/// dynamic stiffness, with damping the modes do not diagonalise: a dashpot between the tip and
+/// the middle of the bar and structural damping of a spring to ground, on top of Rayleigh
+/// damping or a loss factor, at lines below, on, between and far above the modes (1e-10
+/// relative; each line's backward error below 1e-14).
+#[test]
+fn the_direct_route_is_the_dense_solve_with_dampers() {
+    let DampedBar {
+        sys,
+        outputs,
+        inputs,
+        cd,
+        k4,
+        lines,
+        ..
+    } = damped_bar();
+    let (cd_s, k4_s) = (sparse(&cd), sparse(&k4));
+    for (damping, coefficients) in damping_cases() {
         let options = FrfOptions {
             damping: damping.clone(),
             kind: ResponseKind::Receptance,
@@ -438,31 +474,18 @@ fn the_direct_route_is_the_dense_solve_with_dampers() {
 #[test]
 fn every_mode_with_projected_dampers_is_the_dense_solve() {
     use femu_correlate::frf::{ModalDampers, modal_frf_coupled};
-    let model = bar([4, 1, 1], true);
-    let sys = model.assemble(MassKind::Consistent).unwrap();
-    let (outputs, inputs) = layouts(&model, &sys);
-    let n = sys.k.rows();
-    let (a, b) = (outputs.row(0)[0].0, outputs.row(2)[0].0);
-    let kmax = dense(&sys.k)[(a, a)];
-    let cd = dashpot(n, a, b, 2e-4 * kmax);
-    let mut k4 = Mat::<f64>::zeros(n, n);
-    k4[(b, b)] = 0.05 * kmax;
+    let DampedBar {
+        sys,
+        outputs,
+        inputs,
+        cd,
+        k4,
+        lines,
+        eigen: e,
+    } = damped_bar();
     let (cd_s, k4_s) = (sparse(&cd), sparse(&k4));
-    let e = full_eigen(&sys);
-    let f1 = e.values[0].sqrt() / (2.0 * std::f64::consts::PI);
-    let lines = [0.0, 0.3 * f1, f1, 2.7 * f1, 40.0 * f1];
     let projected = ModalDampers::project(Some(&k4_s), Some(&cd_s), e.vectors.as_ref()).unwrap();
-    for (damping, coefficients) in [
-        (
-            Damping::Rayleigh {
-                alpha: 3.0,
-                beta: 2e-6,
-            },
-            (0.0, 3.0, 2e-6),
-        ),
-        (Damping::LossFactor(0.02), (0.02, 0.0, 0.0)),
-        (Damping::Ratio(0.0), (0.0, 0.0, 0.0)),
-    ] {
+    for (damping, coefficients) in damping_cases() {
         let options = FrfOptions {
             damping: damping.clone(),
             kind: ResponseKind::Receptance,
