@@ -1780,6 +1780,18 @@ ENDDATA
         .map(|((a, b), (c, d))| (a - c).hypot(b - d))
         .fold(0.0, f64::max);
     assert!(err < 1e-9 * peak, "modal: {err:e} against {peak:e}");
+    // updating from FRFs does not parameterise a bushing's own damping: refused, naming it
+    let out = femu()
+        .args(["frf", dir.join("bush.bdf").to_str().unwrap()])
+        .arg(dir.join("frf.uff"))
+        .args(["--update", "PID8"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("element 7 is a spring or bushing"),
+        "{stderr}"
+    );
     // the damping in a bushing of its own (a pure damper: PBUSH B alone, which Nastran reads)
     // beside the stiff one: the same receptance
     let split = deck.replace(
@@ -2084,7 +2096,9 @@ fn frf_update_finds_the_softer_half() {
 /// from a loss factor of 0.02 for each finds the root half (-0.2 to 1e-4), the tip half unchanged
 /// (1e-4) and each half's loss factor (1e-5), and the held-out lines' error falls below 1e-4 of
 /// what it was. With one loss factor for the whole beam the fit cannot reproduce the lines.
-/// Rayleigh coefficients with the flag are refused.
+/// Rayleigh coefficients with the flag are refused. The nominal deck with its material damped
+/// (`*DAMPING, STRUCTURAL=0.02`), updated with no damping option, fits a loss factor per set from
+/// the deck's values to the same result; `--loss-factor` beside the deck's damping is refused.
 #[test]
 fn frf_update_fits_a_loss_factor_per_set() {
     let (dir, _, outputs, tip) = softer_halves("per-set", "*DAMPING, STRUCTURAL=0.01\n");
@@ -2156,6 +2170,44 @@ fn frf_update_fits_a_loss_factor_per_set() {
         &dir.join("bad.json"),
     );
     assert!(!out.status.success());
+    // the engineer's deck damps its material (0.02): updated with no damping option, a loss
+    // factor per set started from the deck's, the same result
+    let damped = std::fs::read_to_string(dir.join("bar.inp"))
+        .unwrap()
+        .replace(
+            "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n",
+            "*DAMPING, STRUCTURAL=0.02\n*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n",
+        );
+    std::fs::write(dir.join("damped.inp"), damped).unwrap();
+    let from_deck = |extra: &[&str]| {
+        femu()
+            .args(["frf", dir.join("damped.inp").to_str().unwrap()])
+            .arg(dir.join("frf.uff"))
+            .args(["--update", "ROOT_HALF,TIP_HALF", "--update-all"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let deck_json = dir.join("deck.json");
+    let out = from_deck(&["--json", deck_json.to_str().unwrap()]);
+    succeeded(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("started from the deck's"), "{stderr}");
+    let r = &json_of(&deck_json)["update"]["result"];
+    let per = &r["damping"]["group_loss_factors"]["groups"];
+    assert!(
+        (r["theta"][0].as_f64().unwrap() + 0.2).abs() < 1e-4
+            && (per[0].as_f64().unwrap() - 0.05).abs() < 1e-5
+            && (per[1].as_f64().unwrap() - 0.01).abs() < 1e-5,
+        "{r}"
+    );
+    // a loss factor for the whole model would replace the deck's damping: refused
+    let out = from_deck(&["--loss-factor", "0.02"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("materials damp their elements"),
+        "{stderr}"
+    );
     eprintln!("held-out error: per set {before:.3e} -> {after:.3e}, one loss factor {one:.3e}");
     let _ = std::fs::remove_dir_all(&dir);
 }

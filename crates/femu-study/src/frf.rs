@@ -110,6 +110,7 @@ pub struct FrfRequest {
     /// of the model (each starting at `--loss-factor`, or the deck's, or 0.02), instead of one
     /// for the whole model: damping that differs from region to region, as a joint, a damped
     /// layer or another material gives it (docs/MATH.md, "Updating from frequency responses").
+    /// A deck whose materials damp their elements is always updated so, from the deck's values.
     #[cfg_attr(
         feature = "clap",
         arg(long, requires = "update", conflicts_with = "rayleigh")
@@ -207,6 +208,90 @@ fn deck_damping(
         "damping: the deck's own ({what}: Nastran's PARAM,G or the deck's *DAMPING, ALPHA=, BETA=); --damping-ratio, --loss-factor or --rayleigh give another"
     ));
     Some(damping)
+}
+
+/// The structural damping the deck gives its elements (`Model::element_damping`) as a loss factor
+/// per group of `up` and one for the rest, each plus the whole model's loss factor of `base` (the
+/// deck's `PARAM,G`; a base that is not a loss factor is refused): the elements of a group must
+/// share one `GE`, and so must those of no group (springs and bushings apart).
+///
+/// # Errors
+/// A group, or the rest, whose elements' `GE` differ (named); Rayleigh damping beside it.
+fn deck_group_loss_factors(
+    up: &femu_update::UpdateModel<'_>,
+    base: &femu_update::FrfDamping,
+) -> Result<femu_update::FrfDamping, StudyError> {
+    use femu_fem::structural::StructuralKind;
+    use femu_update::FrfDamping;
+    let base = match base {
+        FrfDamping::LossFactor(g) => *g,
+        FrfDamping::GroupLossFactors { rest, .. } => *rest,
+        FrfDamping::Rayleigh { .. } => {
+            return Err(StudyError::invalid(
+                "update",
+                "the deck's materials damp their elements and the deck gives Rayleigh damping too: updating fits loss factors, not both",
+            ));
+        }
+    };
+    let model = up.model();
+    let (mesh, structural) = (model.mesh(), model.structural());
+    let ge = |id: u64| model.element_damping().get(&id).copied().unwrap_or(0.0);
+    let one = |name: &str, ids: &mut dyn Iterator<Item = u64>| -> Result<f64, StudyError> {
+        let mut value: Option<(u64, f64)> = None;
+        for id in ids {
+            let g = ge(id);
+            match value {
+                Some((first, v)) if v != g => {
+                    return Err(StudyError::invalid(
+                        "update",
+                        format!(
+                            "{name}: elements {first} and {id} are damped differently (GE {v} and {g}); a loss factor per set needs one GE per set: update sets that follow the materials"
+                        ),
+                    ));
+                }
+                None => value = Some((id, g)),
+                _ => {}
+            }
+        }
+        Ok(base + value.map_or(0.0, |v| v.1))
+    };
+    let mut in_group = (
+        vec![false; mesh.element_count()],
+        vec![false; structural.len()],
+    );
+    let mut groups = Vec::with_capacity(up.groups().len());
+    for g in up.groups() {
+        for &e in &g.elements {
+            in_group.0[e] = true;
+        }
+        for &e in &g.structural {
+            in_group.1[e] = true;
+        }
+        let mut ids = g
+            .elements
+            .iter()
+            .map(|&e| mesh.element(e).id)
+            .chain(g.structural.iter().map(|&e| structural[e].id));
+        groups.push(one(&format!("set {}", g.name), &mut ids)?);
+    }
+    let mut rest_ids = (0..mesh.element_count())
+        .filter(|e| !in_group.0[*e])
+        .map(|e| mesh.element(e).id)
+        .chain(
+            structural
+                .iter()
+                .enumerate()
+                .filter(|(i, s)| {
+                    !in_group.1[*i]
+                        && !matches!(
+                            s.kind,
+                            StructuralKind::Spring(_) | StructuralKind::Bushing(_)
+                        )
+                })
+                .map(|(_, s)| s.id),
+        );
+    let rest = one("the elements in no updated set", &mut rest_ids)?;
+    Ok(FrfDamping::GroupLossFactors { rest, groups })
 }
 
 /// The test's identified damping on the model modes it pairs with (MAC pairing with the
@@ -680,10 +765,31 @@ fn update_from_frfs(
             "updating from FRFs fits a loss factor or Rayleigh coefficients: give --loss-factor or --rayleigh (their start), not modal damping ratios",
         ));
     }
-    if dampers.any() {
+    let _ = dampers;
+    {
+        use femu_fem::structural::StructuralKind;
+        let own = model.model.structural().iter().find(|e| match &e.kind {
+            StructuralKind::Spring(sp) => sp.ge != 0.0,
+            StructuralKind::Bushing(b) => b.ge != 0.0 || b.b.iter().any(|v| *v != 0.0),
+            _ => false,
+        });
+        if let Some(e) = own {
+            return Err(StudyError::invalid(
+                "update",
+                format!(
+                    "element {} is a spring or bushing with its own damping (GE or B), which updating from FRFs does not model: remove it or correlate only",
+                    e.id
+                ),
+            ));
+        }
+    }
+    // a deck whose materials damp their elements (GE, *DAMPING STRUCTURAL) is updated with a loss
+    // factor per set, started from the deck's
+    let materials_damp = !model.model.element_damping().is_empty();
+    if materials_damp && (request.loss_factor.is_some() || request.rayleigh.is_some()) {
         return Err(StudyError::invalid(
             "update",
-            "the model has its own dampers (bushings' B, the GE of springs, bushings and damped materials), which updating from FRFs does not model: remove them or correlate only",
+            "the deck's materials damp their elements (GE, *DAMPING, STRUCTURAL): updating fits a loss factor per set started from the deck's values, so --loss-factor and --rayleigh do not apply (remove the materials' damping to fit one for the whole model)",
         ));
     }
     if model.matrices.is_some() {
@@ -792,9 +898,18 @@ fn update_from_frfs(
         Some(d) => d,
         None => request.damping()?,
     };
+    // with the materials' damping, the whole model's is the deck's PARAM,G alone (none: 0)
+    let deck_base = match model.model.uniform_damping() {
+        Some(femu_fem::model::UniformDamping::LossFactor(g)) => FrfDamping::LossFactor(g),
+        Some(femu_fem::model::UniformDamping::Rayleigh { alpha, beta }) => {
+            FrfDamping::Rayleigh { alpha, beta }
+        }
+        None => FrfDamping::LossFactor(0.0),
+    };
     let damping = match start {
         Damping::Rayleigh { alpha, beta } => FrfDamping::Rayleigh { alpha, beta },
         Damping::LossFactor(eta) => FrfDamping::LossFactor(eta),
+        _ if materials_damp => deck_base.clone(),
         _ => {
             notes.push("updating: the loss factor starts at 0.02 (--loss-factor or --rayleigh gives another start)".into());
             FrfDamping::LossFactor(0.02)
@@ -818,6 +933,11 @@ fn update_from_frfs(
         )?)
     };
     let candidates = build(&set_refs)?;
+    let damping = if materials_damp {
+        deck_group_loss_factors(&candidates, &deck_base)?
+    } else {
+        damping
+    };
     let localisation =
         femu_update::frf_localise(&candidates, &tuned, &damping, &SelectionRule::default())?;
     let updated: Vec<&str> = if request.update_all {
@@ -833,6 +953,14 @@ fn update_from_frfs(
     }
     let mut up = build(&updated)?;
     let damping = match (request.loss_factor_per_set, damping) {
+        (_, FrfDamping::GroupLossFactors { .. }) => {
+            let d = deck_group_loss_factors(&up, &deck_base)?;
+            notes.push(format!(
+                "updating: the deck's materials damp their elements: a loss factor for each of {} and one for the rest, started from the deck's ({d})",
+                updated.join(", ")
+            ));
+            d
+        }
         (false, d) => d,
         (true, FrfDamping::LossFactor(eta)) => {
             notes.push(format!(
