@@ -308,15 +308,20 @@ def test_ctrl_c_stops_a_long_call(tmp_path):
     import threading
 
     started = threading.Event()
+    sent = threading.Event()
     steps = []
 
     def progress(step):
         steps.append(step)
         started.set()
+        # the first step waits until the signal is sent, so that it lands while the call runs
+        # whatever the machine's load (a quick demo can otherwise finish first)
+        sent.wait(10)
 
     def interrupt():
         started.wait()
         os.kill(os.getpid(), signal.SIGINT)
+        sent.set()
 
     t = threading.Thread(target=interrupt)
     t.start()
