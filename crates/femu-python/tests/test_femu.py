@@ -323,11 +323,17 @@ def test_ctrl_c_stops_a_long_call(tmp_path):
         os.kill(os.getpid(), signal.SIGINT)
         sent.set()
 
+    # Python's own handler, whatever the process inherited: a shell that starts a job in the
+    # background without job control ignores SIGINT for it, and Python then installs none
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     t = threading.Thread(target=interrupt)
     t.start()
-    with pytest.raises(KeyboardInterrupt):
-        femu.run_demo(tmp_path / "d", quick=True, progress=progress)
-    t.join()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            femu.run_demo(tmp_path / "d", quick=True, progress=progress)
+    finally:
+        t.join()
+        signal.signal(signal.SIGINT, previous)
     # stopped at a step boundary, long before the study's end
     assert 1 <= len(steps) < 6
 
