@@ -26,6 +26,10 @@ pub struct ModelArgs {
     /// Mesh-only models: density in kg/m^3.
     #[arg(long, allow_negative_numbers = true)]
     pub density: Option<f64>,
+    /// Mesh-only models: the material's structural damping coefficient GE (every element damped
+    /// by `i GE K_e` in `femu frf`, as a Nastran MAT1's GE).
+    #[arg(long, value_name = "GE", allow_negative_numbers = true)]
+    pub structural_damping: Option<f64>,
     /// Mesh-only models: a node set (Gmsh physical group) to clamp (rotations too where shells
     /// give them); repeat for several.
     #[arg(long)]
@@ -117,14 +121,24 @@ impl ModelArgs {
         // a deck has its own materials and constraints (the format table says which)
         let deck = femu::io::Format::from_path(path).is_some_and(|f| f.info().deck);
         let material = match (self.young, self.poisson, self.density) {
+            (None, None, None) if self.structural_damping.is_some() && !deck => {
+                return Err(CliError::Usage(
+                    "--structural-damping is the mesh material's: give --young, --poisson and --density with it".into(),
+                ));
+            }
             (None, None, None) => None,
             // a deck has its own materials
             (y, p, d) if deck => {
-                let given: Vec<&str> = [("--young", y), ("--poisson", p), ("--density", d)]
-                    .iter()
-                    .filter(|(_, v)| v.is_some())
-                    .map(|(n, _)| *n)
-                    .collect();
+                let given: Vec<&str> = [
+                    ("--young", y),
+                    ("--poisson", p),
+                    ("--density", d),
+                    ("--structural-damping", self.structural_damping),
+                ]
+                .iter()
+                .filter(|(_, v)| v.is_some())
+                .map(|(n, _)| *n)
+                .collect();
                 warn(
                     quiet,
                     &[format!(
@@ -139,6 +153,7 @@ impl ModelArgs {
                 young,
                 poisson,
                 density,
+                structural_damping: self.structural_damping.unwrap_or(0.0),
             }),
             (y, p, d) => {
                 let missing: Vec<&str> = [("--young", y), ("--poisson", p), ("--density", d)]

@@ -476,7 +476,8 @@ fn steel_modes(
 }
 
 /// `femu modes` on a Gmsh mesh with the material and clamp from the command line: the JSON
-/// frequencies equal a dense solution of the same model built through the library.
+/// frequencies equal a dense solution of the same model built through the library; the mesh
+/// material's `--structural-damping` damps every element, and needs the material.
 #[test]
 fn modes_of_a_gmsh_mesh() {
     let msh =
@@ -512,6 +513,44 @@ fn modes_of_a_gmsh_mesh() {
         .failure();
     let stderr = String::from_utf8(out.get_output().stderr.clone()).unwrap();
     assert!(stderr.contains("--young"), "{stderr}");
+    // the mesh material's structural damping reaches every element (the command line's options
+    // are the library's), and needs the material
+    steel_modes(
+        &msh,
+        &["--fix", "bottom", "--structural-damping", "0.03"],
+        &json,
+    );
+    let loaded = femu::study::load::load_model(
+        &msh,
+        &femu::study::load::ModelOptions {
+            material: Some(femu::study::load::MaterialOptions {
+                young: 2.1e11,
+                poisson: 0.3,
+                density: 7850.0,
+                structural_damping: 0.03,
+            }),
+            fix: vec!["bottom".into()],
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let damped = loaded.model.element_damping();
+    assert_eq!(damped.len(), model.mesh().element_count());
+    assert!(damped.values().all(|g| *g == 0.03));
+    let out = femu()
+        .args([
+            "modes",
+            msh.to_str().unwrap(),
+            "--structural-damping",
+            "0.03",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("--young, --poisson and --density"),
+        "{stderr}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

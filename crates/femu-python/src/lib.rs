@@ -119,7 +119,8 @@ struct Model {
 
 /// Reads a model: an Abaqus/CalculiX deck (`.inp`), Nastran bulk data (`.bdf`, `.dat`, `.nas`),
 /// a Gmsh mesh (`.msh`) or universal file solids (`.unv`, `.uff`). A mesh-only file needs the
-/// material (`young` Pa, `poisson`, `density` kg/m^3) and may clamp node sets (`fix`); a Gmsh
+/// material (`young` Pa, `poisson`, `density` kg/m^3, and `structural_damping`, its `GE` for
+/// `femu.frf`) and may clamp node sets (`fix`); a Gmsh
 /// mesh's physical groups of surfaces become shells with `shells={"group": thickness}`, its groups
 /// of lines beams with `beams={"group": "rect:A,B"}` (`circ:R`, `pipe:R,T`, `@X,Y,Z` for `n1`);
 /// its 8-node
@@ -129,7 +130,7 @@ struct Model {
 /// too, with their nodes' coordinates from `nodes` (a deck or a
 /// `node,x,y,z` table; by default `job.inp` or `X_nodes.csv` beside them).
 #[pyfunction]
-#[pyo3(signature = (path, *, lumped=false, lenient=false, young=None, poisson=None, density=None, fix=None, bricks="full", nodes=None, shells=None, beams=None))]
+#[pyo3(signature = (path, *, lumped=false, lenient=false, young=None, poisson=None, density=None, fix=None, bricks="full", nodes=None, shells=None, beams=None, structural_damping=None))]
 #[allow(clippy::too_many_arguments)]
 fn read_model(
     py: Python<'_>,
@@ -144,6 +145,7 @@ fn read_model(
     nodes: Option<PathBuf>,
     shells: Option<std::collections::BTreeMap<String, f64>>,
     beams: Option<std::collections::BTreeMap<String, String>>,
+    structural_damping: Option<f64>,
 ) -> PyResult<Model> {
     let bricks = match bricks {
         "full" => femu_fem::element::Formulation::Full,
@@ -159,6 +161,7 @@ fn read_model(
             young,
             poisson,
             density,
+            structural_damping: structural_damping.unwrap_or(0.0),
         }),
         (None, None, None) => None,
         _ => {

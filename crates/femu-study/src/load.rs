@@ -23,6 +23,11 @@ pub struct MaterialOptions {
     pub poisson: f64,
     /// Density, kg/m^3.
     pub density: f64,
+    /// The structural damping coefficient `GE` of every element (solids, shells, beams): `i GE
+    /// K_e` in a frequency response, as a Nastran MAT1's `GE` or an Abaqus `*DAMPING,
+    /// STRUCTURAL` (docs/MATH.md, "Frequency responses, directly"); 0, the default: none.
+    #[serde(default)]
+    pub structural_damping: f64,
 }
 
 /// How to turn a model file into a model.
@@ -391,6 +396,17 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
         model.set_material(None, material)?;
         set_bricks(&mut model, options.bricks, path, &mut warnings)?;
         add_sections(&mut model, (&surfaces, &curves), options, &mat, path)?;
+        if mat.structural_damping != 0.0 {
+            let ids: Vec<u64> = (0..model.mesh().element_count())
+                .map(|e| model.mesh().element(e).id)
+                .chain(model.structural().iter().map(|s| s.id))
+                .collect();
+            for id in ids {
+                model
+                    .set_element_damping(id, mat.structural_damping)
+                    .map_err(|e| StudyError::within(path, e))?;
+            }
+        }
         for set in &options.fix {
             model
                 .fix_set(set, &[0, 1, 2])

@@ -119,6 +119,7 @@ def read_model(
     nodes: Optional[_Path] = None,
     shells: Optional[Mapping[str, float]] = None,
     beams: Optional[Mapping[str, str]] = None,
+    structural_damping: Optional[float] = None,
 ) -> Model: ...
 def read_test(
     path: _Path, model: Union[Model, Results], *, test_units: Optional[float] = None
