@@ -1325,6 +1325,12 @@ fn measured_receptances(
     })
 }
 
+/// [`deviation`] of the first function of the universal file `path` written by femu.
+fn file_deviation(path: &std::path::Path, measured: &[(f64, f64)]) -> (f64, f64) {
+    let back = femu_io::uff::read_uff(path).unwrap();
+    deviation(&back.functions[0].ordinate, measured)
+}
+
 /// A complex FRF written by femu against the `measured` one at the same lines: the measured peak
 /// magnitude and the largest distance between the two in the complex plane.
 fn deviation(model: &femu_io::uff::Ordinate, measured: &[(f64, f64)]) -> (f64, f64) {
@@ -1735,7 +1741,6 @@ fn frf_of_a_free_structure_with_inertia_relief() {
 /// reads) gives the same receptance to 1e-9.
 #[test]
 fn frf_direct_with_the_decks_own_dampers() {
-    use femu_io::uff::Ordinate;
     let dir = std::env::temp_dir().join(format!("femu-cli-frf-bush-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let deck = "\
@@ -1782,16 +1787,7 @@ ENDDATA
         .arg(dir.join("direct.json"))
         .assert()
         .success();
-    let back = femu_io::uff::read_uff(dir.join("model.uff")).unwrap();
-    let Ordinate::Complex(v) = &back.functions[0].ordinate else {
-        panic!("complex FRF expected")
-    };
-    let peak = h.iter().map(|(a, b)| a.hypot(*b)).fold(0.0, f64::max);
-    let err = v
-        .iter()
-        .zip(&h)
-        .map(|((a, b), (c, d))| (a - c).hypot(b - d))
-        .fold(0.0, f64::max);
+    let (peak, err) = file_deviation(&dir.join("model.uff"), &h);
     assert!(err < 1e-9 * peak, "{err:e} against {peak:e}");
     let direct = json_of(dir.join("direct.json"));
     assert!(direct["functions"][0]["frac"].as_f64().unwrap() > 1.0 - 1e-12);
@@ -1809,15 +1805,7 @@ ENDDATA
         .success();
     let stderr = String::from_utf8_lossy(&out.get_output().stderr).to_string();
     assert!(stderr.contains("projected on the 6 modes"), "{stderr}");
-    let back = femu_io::uff::read_uff(dir.join("modal.uff")).unwrap();
-    let Ordinate::Complex(v) = &back.functions[0].ordinate else {
-        panic!("complex FRF expected")
-    };
-    let err = v
-        .iter()
-        .zip(&h)
-        .map(|((a, b), (c, d))| (a - c).hypot(b - d))
-        .fold(0.0, f64::max);
+    let (_, err) = file_deviation(&dir.join("modal.uff"), &h);
     assert!(err < 1e-9 * peak, "modal: {err:e} against {peak:e}");
     // updating from FRFs does not parameterise a bushing's own damping: refused, naming it
     let out = femu()
@@ -1846,15 +1834,7 @@ ENDDATA
         .arg(dir.join("damper.uff"))
         .assert()
         .success();
-    let back = femu_io::uff::read_uff(dir.join("damper.uff")).unwrap();
-    let Ordinate::Complex(v) = &back.functions[0].ordinate else {
-        panic!("complex FRF expected")
-    };
-    let err = v
-        .iter()
-        .zip(&h)
-        .map(|((a, b), (c, d))| (a - c).hypot(b - d))
-        .fold(0.0, f64::max);
+    let (_, err) = file_deviation(&dir.join("damper.uff"), &h);
     assert!(err < 1e-9 * peak, "{err:e} against {peak:e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -1867,7 +1847,6 @@ ENDDATA
 /// overrides it, and the peak then moves away from the measured one.
 #[test]
 fn frf_takes_the_decks_param_g() {
-    use femu_io::uff::Ordinate;
     let dir = std::env::temp_dir().join(format!("femu-cli-frf-g-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let deck = "\
@@ -1901,7 +1880,6 @@ ENDDATA
         step,
         std::slice::from_ref(&h),
     );
-    let peak = h.iter().map(|(a, b)| a.hypot(*b)).fold(0.0, f64::max);
     let run = |extra: &[&str], name: &str| {
         femu()
             .args(["frf", dir.join("spring.bdf").to_str().unwrap()])
@@ -1913,15 +1891,7 @@ ENDDATA
             .args(extra)
             .assert()
             .success();
-        let back = femu_io::uff::read_uff(dir.join(format!("{name}.uff"))).unwrap();
-        let Ordinate::Complex(v) = &back.functions[0].ordinate else {
-            panic!("complex FRF expected")
-        };
-        let err = v
-            .iter()
-            .zip(&h)
-            .map(|((a, b), (c, d))| (a - c).hypot(b - d))
-            .fold(0.0, f64::max);
+        let (peak, err) = file_deviation(&dir.join(format!("{name}.uff")), &h);
         (
             err / peak,
             json_of(dir.join(format!("{name}.json")))["notes"].to_string(),

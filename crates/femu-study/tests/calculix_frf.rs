@@ -66,6 +66,17 @@ fn ccx_displacements(dat: &str) -> Vec<(f64, u64, [c64; 3])> {
         .collect()
 }
 
+/// CalculiX run on `deck` (as `bar.inp` in a folder of its own named by `tag`): its `bar.dat`.
+fn calculix_dat(deck: &str, tag: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("femu-ccx-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("bar.inp"), deck).unwrap();
+    femu_testkit::ccx::run(&dir, "bar");
+    let dat = std::fs::read_to_string(dir.join("bar.dat")).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    dat
+}
+
 /// Every receptance CalculiX prints (2 nodes x 3 components, 36 lines from 10 to 5000 Hz with 4
 /// modes inside, their eigenfrequencies among the lines) equals femu's to 1e-5 of its function's
 /// peak (measured: 6.0e-6, CalculiX's 7 printed digits and the eigenvalues' 1e-6 agreement
@@ -93,13 +104,7 @@ fn modal_frfs_agree_with_calculix_steady_state_dynamics() {
          *STEP\n*STEADY STATE DYNAMICS\n10., 5000., 8, 1.\n*MODAL DAMPING\n1, 8, 0.02\n\
          *CLOAD\n{tip}, 3, 1.\n*NODE PRINT, NSET=OUT\nU\n*END STEP\n"
     ));
-    let dir = std::env::temp_dir().join(format!("femu-ccx-ssd-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("bar.inp"), &deck).unwrap();
-    femu_testkit::ccx::run(&dir, "bar");
-    let dat = std::fs::read_to_string(dir.join("bar.dat")).unwrap();
-    let _ = std::fs::remove_dir_all(&dir);
-    let ccx = ccx_displacements(&dat);
+    let ccx = ccx_displacements(&calculix_dat(&deck, "ssd"));
     let mut lines: Vec<f64> = ccx.iter().map(|r| r.0).collect();
     lines.dedup();
     // femu: its 8 lowest modes, the same ratio, no residual flexibility
@@ -238,13 +243,7 @@ fn material_structural_damping_agrees_with_calculix() {
          *STEP\n*STEADY STATE DYNAMICS\n10., 9000., 6, 1.\n*CLOAD\n{tip}, 3, 1.\n\
          *NODE PRINT, NSET=OUT\nU\n*END STEP\n"
     ));
-    let dir = std::env::temp_dir().join(format!("femu-ccx-damping-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("bar.inp"), &deck).unwrap();
-    femu_testkit::ccx::run(&dir, "bar");
-    let dat = std::fs::read_to_string(dir.join("bar.dat")).unwrap();
-    let _ = std::fs::remove_dir_all(&dir);
-    let ccx = ccx_displacements(&dat);
+    let ccx = ccx_displacements(&calculix_dat(&deck, "damping"));
     let mut lines: Vec<f64> = ccx.iter().map(|r| r.0).collect();
     lines.dedup();
 
