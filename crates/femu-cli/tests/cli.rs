@@ -1911,6 +1911,86 @@ ENDDATA
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Nastran's `SDAMPING` selecting a `TABDMP1` (CRIT, 0.03 at every frequency) is the modes'
+/// damping when `femu frf` is given none: the CELAS2 under a CONM2 measured as
+/// `1 / (k - w^2 m + i 2 zeta w_n w m)` written by hand is reproduced to 1e-9 of its peak by modal
+/// superposition, which says the damping is the deck's table; the direct route says the table
+/// does not act there; `PARAM,G` beside the table is refused (Nastran adds the two, femu takes
+/// one).
+#[test]
+fn frf_takes_the_decks_modal_damping_table() {
+    let dir = std::env::temp_dir().join(format!("femu-cli-frf-sdamping-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let deck = "\
+SOL 111
+CEND
+SPC = 1
+SDAMPING = 4
+BEGIN BULK
+GRID,2,,0.,0.,0.
+CELAS2,7,3.+4,2,3
+CONM2,9,2,,10.
+SPC1,1,12,2
+TABDMP1,4,CRIT
+,0.,0.03,100.,0.03,ENDT
+ENDDATA
+";
+    std::fs::write(dir.join("spring.bdf"), deck).unwrap();
+    let (k, zeta, m): (f64, f64, f64) = (3e4, 0.03, 10.0);
+    let wn = (k / m).sqrt();
+    let (min, step, count) = (1.0, 0.25, 80usize);
+    let h: Vec<(f64, f64)> = (0..count)
+        .map(|l| {
+            let w = 2.0 * std::f64::consts::PI * (min + step * l as f64);
+            let (re, im) = (k - w * w * m, 2.0 * zeta * wn * w * m);
+            let d = re * re + im * im;
+            (re / d, -im / d)
+        })
+        .collect();
+    write_frf_uff(
+        &dir.join("frf.uff"),
+        &[(2, 3)],
+        2,
+        min,
+        step,
+        std::slice::from_ref(&h),
+    );
+    let run = |deck: &str, extra: &[&str]| {
+        femu()
+            .args(["frf", dir.join(deck).to_str().unwrap()])
+            .arg(dir.join("frf.uff"))
+            .args(["--uff"])
+            .arg(dir.join("model.uff"))
+            .arg("--json")
+            .arg(dir.join("frf.json"))
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let out = run("spring.bdf", &[]);
+    succeeded(&out);
+    let (peak, err) = file_deviation(&dir.join("model.uff"), &h);
+    assert!(err < 1e-9 * peak, "{err:e} against {peak:e}");
+    let notes = json_of(dir.join("frf.json"))["notes"].to_string();
+    assert!(notes.contains("modal damping table"), "{notes}");
+    let out = run("spring.bdf", &["--direct"]);
+    succeeded(&out);
+    let notes = json_of(dir.join("frf.json"))["notes"].to_string();
+    assert!(notes.contains("not in the direct route"), "{notes}");
+    std::fs::write(
+        dir.join("both.bdf"),
+        deck.replace("BEGIN BULK\n", "BEGIN BULK\nPARAM,G,0.02\n"),
+    )
+    .unwrap();
+    let out = run("both.bdf", &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("both PARAM,G and a modal damping table"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A 10-element C3D8 cantilever (`bar.inp`, element sets ROOT_HALF and TIP_HALF) and the same
 /// with its root half 20 % softer (`softer.inp`, material SOFT), in a new folder named by `tag`;
 /// `damping` (a `*DAMPING` line or nothing) is added to both halves' materials of the softer one,

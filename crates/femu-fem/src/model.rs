@@ -39,6 +39,74 @@ pub struct Model {
     /// The damping the deck gives the whole model (Nastran's `PARAM,G`, CalculiX's `*DAMPING,
     /// ALPHA=, BETA=`).
     uniform_damping: Option<UniformDamping>,
+    /// The modes' damping as a function of their frequency (Nastran's `TABDMP1`).
+    modal_damping: Option<ModalDampingTable>,
+}
+
+/// How a modal damping table states each mode's damping (Nastran `TABDMP1`'s `TYPE`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModalDampingUnits {
+    /// The structural damping coefficient `g`: Nastran's default (`KDAMP = 1`) applies it as
+    /// viscous damping of ratio `g / 2` at the mode's frequency.
+    G,
+    /// The ratio to critical damping `zeta`.
+    Crit,
+    /// The amplification factor `Q = 1 / (2 zeta)`.
+    Q,
+}
+
+/// The modes' damping as a tabular function of their natural frequency (Nastran `TABDMP1`
+/// selected by the case control's `SDAMPING`): linear between the points, linearly extrapolated
+/// from the two end points outside them (QRG TABDMP1, remarks); at a discontinuity (two points at
+/// one frequency) the mean of its two values.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModalDampingTable {
+    /// The units of the values.
+    pub units: ModalDampingUnits,
+    /// `(frequency in Hz, value)`, frequencies ascending.
+    pub points: Vec<(f64, f64)>,
+}
+
+impl ModalDampingTable {
+    /// The viscous damping ratio of a mode of `hz`: the table's value there, as a ratio (`g / 2`,
+    /// `zeta`, or `1 / (2 Q)`).
+    pub fn ratio_at(&self, hz: f64) -> f64 {
+        let p = &self.points;
+        let value = match p.len() {
+            0 => 0.0,
+            1 => p[0].1,
+            n => {
+                // the segment that holds hz (the end segments extrapolate)
+                let i = p[..n - 1]
+                    .iter()
+                    .rposition(|(f, _)| *f <= hz)
+                    .unwrap_or(0)
+                    .min(n - 2);
+                let exact: Vec<f64> = p.iter().filter(|(f, _)| *f == hz).map(|v| v.1).collect();
+                if exact.len() > 1 {
+                    exact.iter().sum::<f64>() / exact.len() as f64
+                } else {
+                    let ((f0, g0), (f1, g1)) = (p[i], p[i + 1]);
+                    if f1 == f0 {
+                        (g0 + g1) / 2.0
+                    } else {
+                        g0 + (g1 - g0) * (hz - f0) / (f1 - f0)
+                    }
+                }
+            }
+        };
+        match self.units {
+            ModalDampingUnits::G => value / 2.0,
+            ModalDampingUnits::Crit => value,
+            ModalDampingUnits::Q => {
+                if value > 0.0 {
+                    1.0 / (2.0 * value)
+                } else {
+                    f64::INFINITY
+                }
+            }
+        }
+    }
 }
 
 /// The damping a deck gives the whole model, which a frequency response uses when its request
@@ -125,7 +193,48 @@ impl Model {
             mass_sets: BTreeMap::new(),
             element_damping: BTreeMap::new(),
             uniform_damping: None,
+            modal_damping: None,
         })
+    }
+
+    /// Gives the model's modes a damping table ([`ModalDampingTable`]); `None` removes it.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidMaterial`] (named `modal damping`) for no point, a frequency that is
+    /// negative or not finite, frequencies out of order, a value that is not finite or that gives
+    /// a negative ratio.
+    pub fn set_modal_damping(&mut self, table: Option<ModalDampingTable>) -> Result<(), FemError> {
+        if let Some(t) = &table {
+            let bad = |reason: String| FemError::InvalidMaterial {
+                name: "modal damping".into(),
+                reason,
+            };
+            if t.points.is_empty() {
+                return Err(bad("a table needs at least one point".into()));
+            }
+            if let Some((f, g)) = t
+                .points
+                .iter()
+                .find(|(f, g)| !(f.is_finite() && *f >= 0.0 && g.is_finite()))
+            {
+                return Err(bad(format!(
+                    "the point ({f}, {g}): frequencies are finite and at least 0, values finite"
+                )));
+            }
+            if t.points.windows(2).any(|w| w[1].0 < w[0].0) {
+                return Err(bad("the frequencies must ascend".into()));
+            }
+            if let Some((f, g)) = t.points.iter().find(|(_, g)| *g < 0.0) {
+                return Err(bad(format!("the value {g} at {f} Hz is negative")));
+            }
+        }
+        self.modal_damping = table;
+        Ok(())
+    }
+
+    /// The modes' damping table, if any ([`Model::set_modal_damping`]).
+    pub fn modal_damping(&self) -> Option<&ModalDampingTable> {
+        self.modal_damping.as_ref()
     }
 
     /// Gives the whole model the damping its deck states ([`UniformDamping`]); `None` removes it.

@@ -1245,3 +1245,82 @@ ENDDATA
         );
     }
 }
+
+/// The case control's `SDAMPING` selects a `TABDMP1` (QRG: pairs `f g` to `ENDT`, `SKIP` drops a
+/// pair, ascending or descending): the model's modal damping table, whose ratio at a frequency is
+/// worked by hand here: linear between points, linearly extrapolated past the ends, the mean at a
+/// discontinuity, `g / 2` for TYPE G, `1 / (2 Q)` for Q. Refused with card and line: an SDAMPING
+/// that selects no table, a TYPE that is not G, CRIT or Q, frequencies that go up and down,
+/// `PARAM,KDAMP,-1` with a G table (complex modal stiffness, not built).
+#[test]
+fn sdamping_selects_a_modal_damping_table() {
+    use femu_fem::model::ModalDampingUnits;
+    let deck = |table: &str, sdamping: &str| {
+        format!(
+            "SOL 111\nCEND\n{sdamping}BEGIN BULK\nGRID,2,,0.,0.,0.\nCELAS2,7,3.+4,2,3\nCONM2,9,2,,10.\nSPC1,1,12,2\n{table}ENDDATA\n"
+        )
+    };
+    let read = |table: &str, sdamping: &str| {
+        parse_bdf(&deck(table, sdamping), "d.bdf", &BdfOptions::default())
+    };
+    // CRIT, descending, a SKIP pair and a discontinuity at 20 Hz
+    let d = read(
+        "TABDMP1,5,CRIT\n,40.,0.05,SKIP,1.,20.,0.04,20.,0.02\n,10.,0.01,ENDT\n",
+        "SDAMPING = 5\n",
+    )
+    .unwrap();
+    let t = d.model.modal_damping().expect("the selected table");
+    assert_eq!(t.units, ModalDampingUnits::Crit);
+    assert_eq!(
+        t.points,
+        vec![(10.0, 0.01), (20.0, 0.02), (20.0, 0.04), (40.0, 0.05)]
+    );
+    let near = |a: f64, b: f64| (a - b).abs() < 1e-15;
+    assert!(near(t.ratio_at(15.0), 0.015)); // halfway from 0.01 to 0.02
+    assert!(near(t.ratio_at(20.0), 0.03)); // the discontinuity's mean
+    assert!(near(t.ratio_at(30.0), 0.045)); // halfway from 0.04 to 0.05
+    assert!(near(t.ratio_at(50.0), 0.055)); // extrapolated from the last two points
+    assert!(near(t.ratio_at(5.0), 0.005)); // and from the first two
+    // G: half the value; Q: 1 / (2 Q)
+    let g = read("TABDMP1,6\n,0.,0.04,100.,0.04,ENDT\n", "SDAMPING = 6\n").unwrap();
+    assert!(near(g.model.modal_damping().unwrap().ratio_at(50.0), 0.02));
+    let q = read("TABDMP1,6,Q\n,0.,25.,100.,25.,ENDT\n", "SDAMPING = 6\n").unwrap();
+    assert!(near(q.model.modal_damping().unwrap().ratio_at(50.0), 0.02));
+    // a table the case control does not select is not the model's
+    let unselected = read("TABDMP1,6\n,0.,0.04,100.,0.04,ENDT\n", "").unwrap();
+    assert!(unselected.model.modal_damping().is_none());
+    for (table, sdamping, at, says) in [
+        (
+            "TABDMP1,6\n,0.,0.04,ENDT\n",
+            "SDAMPING = 7\n",
+            "SDAMPING",
+            "selects no TABDMP1",
+        ),
+        (
+            "TABDMP1,6,LOG\n,0.,0.04,ENDT\n",
+            "SDAMPING = 6\n",
+            "TABDMP1",
+            "is not G, CRIT or Q",
+        ),
+        (
+            "TABDMP1,6\n,0.,0.04,20.,0.02,10.,0.03,ENDT\n",
+            "SDAMPING = 6\n",
+            "TABDMP1",
+            "go up and down",
+        ),
+        (
+            "PARAM,KDAMP,-1\nTABDMP1,6\n,0.,0.04,ENDT\n",
+            "SDAMPING = 6\n",
+            "PARAM,KDAMP",
+            "complex stiffness",
+        ),
+    ] {
+        let text = deck(table, sdamping);
+        let line = 1 + text.lines().position(|l| l.starts_with(at)).unwrap();
+        let e = read(table, sdamping).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("d.bdf:{line}:")) && e.contains(says),
+            "{e}"
+        );
+    }
+}

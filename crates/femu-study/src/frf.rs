@@ -898,6 +898,9 @@ fn update_from_frfs(
         Some(d) => d,
         None => request.damping()?,
     };
+    if model.model.modal_damping().is_some() {
+        notes.push("updating: the deck's modal damping table (SDAMPING) is not used: updating from FRFs fits loss factors or Rayleigh damping".into());
+    }
     // with the materials' damping, the whole model's is the deck's PARAM,G alone (none: 0)
     let deck_base = match model.model.uniform_damping() {
         Some(femu_fem::model::UniformDamping::LossFactor(g)) => FrfDamping::LossFactor(g),
@@ -1292,7 +1295,34 @@ fn modal_route(
             inputs,
         )?),
     };
-    let from_deck = deck_damping(request, &model.model, notes);
+    let mut from_deck = deck_damping(request, &model.model, notes);
+    // the deck's modal damping table (Nastran's SDAMPING and TABDMP1): each mode's ratio at its
+    // frequency
+    if let (Some(table), true) = (
+        model.model.modal_damping(),
+        request.damping_ratio.is_none()
+            && request.loss_factor.is_none()
+            && request.rayleigh.is_none()
+            && request.damping_from.is_none(),
+    ) {
+        if from_deck.is_some() {
+            return Err(StudyError::invalid(
+                "damping",
+                "the deck gives both PARAM,G and a modal damping table (SDAMPING): Nastran adds them, femu takes one; give --loss-factor or --damping-ratio",
+            ));
+        }
+        let ratios: Vec<f64> = modes
+            .frequencies_hz()
+            .iter()
+            .map(|f| table.ratio_at(*f))
+            .collect();
+        notes.push(format!(
+            "damping: the deck's modal damping table (SDAMPING), each mode's ratio at its frequency ({:.4} to {:.4})",
+            ratios.iter().copied().fold(f64::INFINITY, f64::min),
+            ratios.iter().copied().fold(0.0, f64::max)
+        ));
+        from_deck = Some(Damping::Ratios(ratios));
+    }
     let by_default = from_deck.is_none()
         && request.damping_ratio.is_none()
         && request.loss_factor.is_none()
@@ -1369,6 +1399,9 @@ fn direct_route(
             "damping",
             "modal damping ratios have no damping matrix: the direct route takes a loss factor or Rayleigh coefficients (and the model's own dampers)",
         ));
+    }
+    if model.model.modal_damping().is_some() {
+        notes.push("the deck's modal damping table (SDAMPING) acts in modal superposition, not in the direct route (as in Nastran's direct frequency response)".into());
     }
     let damping = if request.loss_factor.is_some() || request.rayleigh.is_some() {
         request.damping()?

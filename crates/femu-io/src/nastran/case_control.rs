@@ -28,6 +28,8 @@ pub(super) struct CaseControl {
     pub(super) spc: Option<Selected>,
     /// `METHOD = n` (the `EIGRL` or `EIGR` of the modes), the same in every subcase.
     pub(super) method: Option<Selected>,
+    /// `SDAMPING = n` (the `TABDMP1` of the modes' damping), the same in every subcase.
+    pub(super) sdamping: Option<Selected>,
     /// The subcases' ids (empty: none).
     pub(super) subcases: Vec<i64>,
 }
@@ -38,6 +40,7 @@ struct Scope {
     id: Option<i64>,
     spc: Option<Selected>,
     method: Option<Selected>,
+    sdamping: Option<Selected>,
 }
 
 /// The command word of a case control line (upper case, before `(`, `=` or a blank) and the value
@@ -127,6 +130,12 @@ impl CaseControl {
                 });
             } else if word == "SPC" {
                 scope.spc = Some(selected("SPC")?);
+            } else if is(&word, "SDAMPING") {
+                // SDAMPING(STRUCTURE) = n and SDAMPING(FLUID) = n: the structure's
+                let fluid = option_of(raw).is_some_and(|o| o == "FLUID");
+                if !fluid {
+                    scope.sdamping = Some(selected("SDAMPING")?);
+                }
             } else if is(&word, "METHOD") {
                 // METHOD(STRUCTURE) = n and METHOD(FLUID) = n: the structure's
                 let fluid = option_of(raw).is_some_and(|o| o == "FLUID");
@@ -147,6 +156,7 @@ impl CaseControl {
                 (|s: &Scope| s.spc.clone()) as fn(&Scope) -> Option<Selected>,
             ),
             ("METHOD", |s: &Scope| s.method.clone()),
+            ("SDAMPING", |s: &Scope| s.sdamping.clone()),
         ] {
             let chosen: Vec<(Option<i64>, Option<Selected>)> = if subcases.is_empty() {
                 vec![(None, pick(&global))]
@@ -185,7 +195,8 @@ impl CaseControl {
             }
             match what {
                 "SPC" => out.spc = first.1,
-                _ => out.method = first.1,
+                "METHOD" => out.method = first.1,
+                _ => out.sdamping = first.1,
             }
         }
         Ok(out)

@@ -19,7 +19,8 @@
 //! - **Damping** of frequency responses: each material's `GE` (MAT1, MAT2, MAT8, MAT9; a PCOMP's
 //!   own) damps its elements (`Model::set_element_damping`), springs and bushings carry theirs,
 //!   and `PARAM,G` is the whole model's loss factor (`Model::uniform_damping`), which `femu frf`
-//!   uses when told no other.
+//!   uses when told no other; the case control's `SDAMPING` selects a `TABDMP1`, the modes'
+//!   damping as a function of their frequency (`Model::modal_damping`).
 //! - **Constraints** (`constraints.rs`): the selected SPC set (`SPC`, `SPC1`, `SPCADD`) and the
 //!   permanent constraints of GRID field 8 (`PS`), with `GRDSET`'s CP, CD and PS for grids that
 //!   leave them blank. Components 4-6 act on grids with rotations (those of beams, springs and
@@ -107,10 +108,10 @@ pub struct BdfDeck {
 /// Cards that cannot change `K` or `M`: read past with a warning.
 const NO_EFFECT: &[&str] = &[
     "PARAM", "FORCE", "MOMENT", "LOAD", "DLOAD", "RLOAD1", "RLOAD2", "TLOAD1", "TLOAD2", "TABLED1",
-    "TABLED2", "TABLED3", "TABLED4", "TABDMP1", "FREQ", "FREQ1", "FREQ2", "GRAV", "TEMP", "TEMPD",
-    "PLOAD", "PLOAD2", "PLOAD4", "EIGR", "EIGRL", "SPOINT", "DAREA", "NSM", "SET1", "DESVAR",
-    "DRESP1", "DCONSTR", "MONPNT1", "ASET", "ASET1", "OMIT", "OMIT1", "SUPORT", "SUPORT1",
-    "MDLPRM", "LSEQ", "RLOAD1", "RLOAD2", "USET", "USET1",
+    "TABLED2", "TABLED3", "TABLED4", "FREQ", "FREQ1", "FREQ2", "GRAV", "TEMP", "TEMPD", "PLOAD",
+    "PLOAD2", "PLOAD4", "EIGR", "EIGRL", "SPOINT", "DAREA", "NSM", "SET1", "DESVAR", "DRESP1",
+    "DCONSTR", "MONPNT1", "ASET", "ASET1", "OMIT", "OMIT1", "SUPORT", "SUPORT1", "MDLPRM", "LSEQ",
+    "RLOAD1", "RLOAD2", "USET", "USET1",
 ];
 
 /// Cards that change `K` or `M` and that femu cannot model yet, with what they are.
@@ -265,6 +266,10 @@ struct Sorted<'a> {
     coupmass: Option<(i64, &'a Card)>,
     /// `PARAM,G`: the uniform structural damping coefficient.
     g: Option<(f64, &'a Card)>,
+    /// `PARAM,KDAMP`, when given.
+    kdamp: Option<(i64, &'a Card)>,
+    /// `TABDMP1` cards by table id.
+    tabdmp: BTreeMap<i64, &'a Card>,
 }
 
 fn warn(warnings: &mut Vec<Warning>, c: &Card, message: String) {
@@ -380,6 +385,15 @@ fn sort<'a>(
             "SPC" | "SPC1" | "SPCADD" => s.spcs.push(c),
             "CONM2" => s.conm2.push(c),
             "RBE2" | "RBE3" => s.links.push(c),
+            "TABDMP1" => {
+                let tid = c.id(0, "TID")? as i64;
+                if let Some(first) = s.tabdmp.insert(tid, c) {
+                    return Err(c.err(format!(
+                        "{tid} is defined twice (first at line {})",
+                        first.line
+                    )));
+                }
+            }
             "EIGRL" | "EIGR" => {
                 let sid = c.id(0, "SID")? as i64;
                 if s.methods.insert(sid, c).is_some() {
@@ -479,6 +493,12 @@ fn param<'a>(
                 .real(1, "WTMASS")?
                 .filter(|v| *v > 0.0)
                 .ok_or_else(|| c.err("WTMASS needs a positive value".into()))?;
+        }
+        "KDAMP" => {
+            let v = c
+                .int(1, "KDAMP")?
+                .ok_or_else(|| c.err("KDAMP needs a value (1 or -1)".into()))?;
+            s.kdamp = Some((v, c));
         }
         "G" => {
             let g = c
@@ -706,6 +726,83 @@ fn formulation(
 
 /// The `EIGRL` (or `EIGR`) the case control's `METHOD` selects, or the deck's only one when no
 /// method is selected: `(V1, V2, ND)` with the frequencies in Hz.
+/// The `TABDMP1` the case control's `SDAMPING` selects (QRG TABDMP1: `TID TYPE`, then pairs
+/// `f g` to `ENDT`, `SKIP` in either field dropping a pair; TYPE `G` (default), `CRIT` or `Q`).
+/// Nastran applies a `G` table as viscous damping unless `PARAM,KDAMP` is -1 (complex stiffness
+/// per mode), which femu does not build: refused.
+fn modal_damping_table(
+    sorted: &Sorted<'_>,
+    sel: &case_control::Selected,
+) -> Result<femu_fem::model::ModalDampingTable, IoError> {
+    use femu_fem::model::{ModalDampingTable, ModalDampingUnits};
+    let c = *sorted.tabdmp.get(&sel.id).ok_or_else(|| IoError::Parse {
+        path: sel.path.clone(),
+        line: sel.line,
+        reason: format!(
+            "SDAMPING = {} selects no TABDMP1 (the deck defines {:?})",
+            sel.id,
+            sorted.tabdmp.keys().collect::<Vec<_>>()
+        ),
+    })?;
+    let units = match c.field(1).to_ascii_uppercase().as_str() {
+        "" | "G" => ModalDampingUnits::G,
+        "CRIT" => ModalDampingUnits::Crit,
+        "Q" => ModalDampingUnits::Q,
+        other => {
+            return Err(c.err(format!("{}: TYPE {other} is not G, CRIT or Q", c.field(0))));
+        }
+    };
+    if units == ModalDampingUnits::G
+        && let Some((k, p)) = sorted.kdamp
+        && k < 0
+    {
+        return Err(p.err(format!(
+            "KDAMP = {k} applies TABDMP1 {}'s G as complex stiffness of each mode, which femu does not build (its viscous form, KDAMP = 1, is Nastran's default)",
+            c.field(0)
+        )));
+    }
+    // the pairs start on the first continuation (field 10 of the card, data field 8)
+    let mut points = Vec::new();
+    let mut i = 8;
+    loop {
+        let (f, g) = (c.field(i), c.field(i + 1));
+        let (fu, gu) = (f.to_ascii_uppercase(), g.to_ascii_uppercase());
+        let rest_blank = c.fields.iter().skip(i).all(|x| x.trim().is_empty());
+        if fu == "ENDT" || gu == "ENDT" || rest_blank {
+            break;
+        }
+        if fu == "SKIP" || gu == "SKIP" {
+            i += 2;
+            continue;
+        }
+        let value = |t: &str, at: usize, what: &str| {
+            cards::real(t).ok_or_else(|| {
+                c.err(format!(
+                    "{}: field {} ({what}) {t:?} is not a number",
+                    c.field(0),
+                    at + 2
+                ))
+            })
+        };
+        points.push((value(f, i, "f")?, value(g, i + 1, "g")?));
+        i += 2;
+    }
+    if points.is_empty() {
+        return Err(c.err(format!("{}: no (f, g) point before ENDT", c.field(0))));
+    }
+    // QRG: ascending or descending, not both
+    if points.windows(2).all(|w| w[1].0 <= w[0].0) {
+        points.reverse();
+    }
+    if points.windows(2).any(|w| w[1].0 < w[0].0) {
+        return Err(c.err(format!(
+            "{}: the frequencies go up and down (they ascend or descend, not both)",
+            c.field(0)
+        )));
+    }
+    Ok(ModalDampingTable { units, points })
+}
+
 fn selected_method(
     sorted: &Sorted<'_>,
     method: Option<&case_control::Selected>,
@@ -845,6 +942,17 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
         model
             .set_uniform_damping(Some(femu_fem::model::UniformDamping::LossFactor(g)))
             .map_err(c.located())?;
+    }
+    // QRG SDAMPING and TABDMP1: the modes' damping as a function of their frequency
+    if let Some(sel) = deck.case_control.sdamping.as_ref() {
+        let table = modal_damping_table(&sorted, sel)?;
+        model
+            .set_modal_damping(Some(table))
+            .map_err(|source| IoError::Model {
+                path: sel.path.clone(),
+                line: sel.line,
+                source,
+            })?;
     }
     // QRG PARAM,COUPMASS: -1 (the default) lumped, > 0 coupled
     let (mass, coupmass) = match sorted.coupmass {
