@@ -1325,6 +1325,21 @@ fn measured_receptances(
     })
 }
 
+/// The receptance `1 / A(w)` of a single DOF whose dynamic stiffness is `A(w) = re + i im`
+/// (`dynamic(w)`, w in rad/s) at the lines `min + step l` Hz, as `(re, im)` pairs.
+fn oscillator(
+    (min, step, count): (f64, f64, usize),
+    dynamic: impl Fn(f64) -> (f64, f64),
+) -> Vec<(f64, f64)> {
+    (0..count)
+        .map(|l| {
+            let (re, im) = dynamic(2.0 * std::f64::consts::PI * (min + step * l as f64));
+            let d = re * re + im * im;
+            (re / d, -im / d)
+        })
+        .collect()
+}
+
 /// [`deviation`] of the first function of the universal file `path` written by femu.
 fn file_deviation(path: &std::path::Path, measured: &[(f64, f64)]) -> (f64, f64) {
     let back = femu_io::uff::read_uff(path).unwrap();
@@ -1762,14 +1777,7 @@ ENDDATA
     std::fs::write(dir.join("bush.bdf"), deck).unwrap();
     let (k3, b3, ge, m) = (3e4, 30.0, 0.04, 10.0);
     let (min, step, count) = (1.0, 0.25, 80usize); // 1 to 20.75 Hz, the resonance at 8.72 Hz
-    let h: Vec<(f64, f64)> = (0..count)
-        .map(|l| {
-            let w = 2.0 * std::f64::consts::PI * (min + step * l as f64);
-            let (re, im) = (k3 - w * w * m, k3 * ge + w * b3);
-            let d = re * re + im * im;
-            (re / d, -im / d)
-        })
-        .collect();
+    let h = oscillator((min, step, count), |w| (k3 - w * w * m, k3 * ge + w * b3));
     write_frf_uff(
         &dir.join("frf.uff"),
         &[(2, 3)],
@@ -1864,14 +1872,7 @@ ENDDATA
     std::fs::write(dir.join("spring.bdf"), deck).unwrap();
     let (k, g, m) = (3e4, 0.05, 10.0);
     let (min, step, count) = (1.0, 0.25, 80usize); // the resonance at 8.72 Hz
-    let h: Vec<(f64, f64)> = (0..count)
-        .map(|l| {
-            let w = 2.0 * std::f64::consts::PI * (min + step * l as f64);
-            let (re, im) = (k - w * w * m, k * g);
-            let d = re * re + im * im;
-            (re / d, -im / d)
-        })
-        .collect();
+    let h = oscillator((min, step, count), |w| (k - w * w * m, k * g));
     write_frf_uff(
         &dir.join("frf.uff"),
         &[(2, 3)],
@@ -1939,14 +1940,9 @@ ENDDATA
     let (k, zeta, m): (f64, f64, f64) = (3e4, 0.03, 10.0);
     let wn = (k / m).sqrt();
     let (min, step, count) = (1.0, 0.25, 80usize);
-    let h: Vec<(f64, f64)> = (0..count)
-        .map(|l| {
-            let w = 2.0 * std::f64::consts::PI * (min + step * l as f64);
-            let (re, im) = (k - w * w * m, 2.0 * zeta * wn * w * m);
-            let d = re * re + im * im;
-            (re / d, -im / d)
-        })
-        .collect();
+    let h = oscillator((min, step, count), |w| {
+        (k - w * w * m, 2.0 * zeta * wn * w * m)
+    });
     write_frf_uff(
         &dir.join("frf.uff"),
         &[(2, 3)],
