@@ -41,6 +41,8 @@ pub struct Model {
     uniform_damping: Option<UniformDamping>,
     /// The modes' damping as a function of their frequency (Nastran's `TABDMP1`).
     modal_damping: Option<ModalDampingTable>,
+    /// The modes' damping ratios by mode number (Abaqus' and CalculiX's `*MODAL DAMPING`).
+    mode_ratios: Vec<(usize, usize, f64)>,
 }
 
 /// How a modal damping table states each mode's damping (Nastran `TABDMP1`'s `TYPE`).
@@ -194,7 +196,46 @@ impl Model {
             element_damping: BTreeMap::new(),
             uniform_damping: None,
             modal_damping: None,
+            mode_ratios: Vec::new(),
         })
+    }
+
+    /// Gives modes `first..=last` (numbered from 1, lowest first) the viscous damping ratio
+    /// `ratio` (Abaqus' and CalculiX's `*MODAL DAMPING`: a mode in no range is undamped); an
+    /// empty list removes them.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidMaterial`] (named `modal damping`) for a range that starts at 0 or ends
+    /// before it starts, or a ratio that is negative or not finite.
+    pub fn set_mode_ratios(&mut self, ranges: Vec<(usize, usize, f64)>) -> Result<(), FemError> {
+        if let Some((a, b, z)) = ranges
+            .iter()
+            .find(|(a, b, z)| *a == 0 || b < a || !(z.is_finite() && *z >= 0.0))
+        {
+            return Err(FemError::InvalidMaterial {
+                name: "modal damping".into(),
+                reason: format!(
+                    "modes {a} to {b} with ratio {z}: modes are numbered from 1, the last not before the first, the ratio finite and at least 0"
+                ),
+            });
+        }
+        self.mode_ratios = ranges;
+        Ok(())
+    }
+
+    /// The damping ratio of mode `mode` (from 1) by [`Model::set_mode_ratios`]'s ranges (the last
+    /// range that holds it), `None` without ranges.
+    pub fn mode_ratio(&self, mode: usize) -> Option<f64> {
+        if self.mode_ratios.is_empty() {
+            return None;
+        }
+        Some(
+            self.mode_ratios
+                .iter()
+                .rev()
+                .find(|(a, b, _)| (*a..=*b).contains(&mode))
+                .map_or(0.0, |r| r.2),
+        )
     }
 
     /// Gives the model's modes a damping table ([`ModalDampingTable`]); `None` removes it.

@@ -576,7 +576,41 @@ fn material_structural_damping_reaches_solids_and_shells() {
         .fold(0.0, f64::max);
     assert!(worst < 1e-14 * scale, "{worst:e}");
 
+    // *MODAL DAMPING: ranges of modes with a ratio (a mode in none undamped), or Rayleigh's
+    let modal = read(
+        "*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n*SHELL SECTION, ELSET=SKIN, MATERIAL=STEEL\n0.01\n\
+         *MODAL DAMPING\n1, 3, 0.02\n5, , 0.04\n",
+    )
+    .unwrap()
+    .to_model()
+    .unwrap();
+    let ratios: Vec<Option<f64>> = (1..=6).map(|r| modal.mode_ratio(r)).collect();
+    assert_eq!(
+        ratios,
+        [0.02, 0.02, 0.02, 0.0, 0.04, 0.0].map(Some).to_vec()
+    );
+    let rayleigh = read(
+        "*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n*SHELL SECTION, ELSET=SKIN, MATERIAL=STEEL\n0.01\n\
+         *MODAL DAMPING, RAYLEIGH\n, , 2., 1e-6\n",
+    )
+    .unwrap()
+    .to_model()
+    .unwrap();
+    assert_eq!(
+        rayleigh.uniform_damping(),
+        Some(femu_fem::model::UniformDamping::Rayleigh {
+            alpha: 2.0,
+            beta: 1e-6
+        })
+    );
     for (rest, line, says) in [
+        ("*MODAL DAMPING\n3, 1, 0.02\n", 22, "end before they start"),
+        ("*MODAL DAMPING\n1, 3, -0.02\n", 22, "at least 0"),
+        (
+            "*MODAL DAMPING, DEFINITION=FREQUENCY RANGE\n1., 100., 0.02\n",
+            22,
+            "by mode numbers",
+        ),
         ("*DAMPING, STRUCTURAL=-0.1\n", 21, "at least 0"),
         (
             "*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n*DAMPING, STRUCTURAL=0.1\n",

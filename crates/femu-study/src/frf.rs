@@ -205,7 +205,7 @@ fn deck_damping(
         ),
     };
     notes.push(format!(
-        "damping: the deck's own ({what}: Nastran's PARAM,G or the deck's *DAMPING, ALPHA=, BETA=); --damping-ratio, --loss-factor or --rayleigh give another"
+        "damping: the deck's own ({what}: Nastran's PARAM,G, or *MODAL DAMPING, RAYLEIGH); --damping-ratio, --loss-factor or --rayleigh give another"
     ));
     Some(damping)
 }
@@ -1323,6 +1323,29 @@ fn modal_route(
         ));
         from_deck = Some(Damping::Ratios(ratios));
     }
+    // the deck's modal damping by mode number (Abaqus' and CalculiX's *MODAL DAMPING)
+    if let (Some(_), true) = (
+        model.model.mode_ratio(1),
+        request.damping_ratio.is_none()
+            && request.loss_factor.is_none()
+            && request.rayleigh.is_none()
+            && request.damping_from.is_none(),
+    ) {
+        if from_deck.is_some() {
+            return Err(StudyError::invalid(
+                "damping",
+                "the deck gives modal damping ratios (*MODAL DAMPING) and another damping of the whole model: femu takes one; give --damping-ratio, --loss-factor or --rayleigh",
+            ));
+        }
+        let ratios: Vec<f64> = (1..=modes.values.len())
+            .map(|r| model.model.mode_ratio(r).unwrap_or(0.0))
+            .collect();
+        notes.push(format!(
+            "damping: the deck's modal damping (*MODAL DAMPING) on modes 1 to {}, those it names with their ratio and the others undamped",
+            ratios.len()
+        ));
+        from_deck = Some(Damping::Ratios(ratios));
+    }
     let by_default = from_deck.is_none()
         && request.damping_ratio.is_none()
         && request.loss_factor.is_none()
@@ -1400,8 +1423,8 @@ fn direct_route(
             "modal damping ratios have no damping matrix: the direct route takes a loss factor or Rayleigh coefficients (and the model's own dampers)",
         ));
     }
-    if model.model.modal_damping().is_some() {
-        notes.push("the deck's modal damping table (SDAMPING) acts in modal superposition, not in the direct route (as in Nastran's direct frequency response)".into());
+    if model.model.modal_damping().is_some() || model.model.mode_ratio(1).is_some() {
+        notes.push("the deck's modal damping (SDAMPING, *MODAL DAMPING) acts in modal superposition, not in the direct route (as in Nastran's direct frequency response)".into());
     }
     let damping = if request.loss_factor.is_some() || request.rayleigh.is_some() {
         request.damping()?

@@ -3,7 +3,8 @@
 //! with 2 % modal damping (`*MODAL DAMPING`) for a unit force at the tip in z, the displacements
 //! at two nodes printed (7 digits, real and imaginary parts) at CalculiX's own lines (its points
 //! between the band's ends and the eigenfrequencies, the eigenfrequencies included). femu
-//! superposes its own 8 modes with the same ratio and no residual flexibility (CalculiX adds
+//! superposes its own 8 modes with the ratios it reads from the same deck's `*MODAL DAMPING` and no
+//! residual flexibility (CalculiX adds
 //! none). `.ci/run` installs CalculiX and sets `FEMU_REQUIRE_CCX=1`.
 
 use faer::c64;
@@ -105,6 +106,14 @@ fn modal_frfs_agree_with_calculix_steady_state_dynamics() {
          *CLOAD\n{tip}, 3, 1.\n*NODE PRINT, NSET=OUT\nU\n*END STEP\n"
     ));
     let ccx = ccx_displacements(&calculix_dat(&deck, "ssd"));
+    // femu reads the same deck's *MODAL DAMPING: modes 1 to 8 at 2 %
+    let read = femu_io::inp::parse_inp(&deck, "bar.inp")
+        .unwrap()
+        .to_model()
+        .unwrap();
+    let ratios: Vec<f64> = (1..=8).map(|r| read.mode_ratio(r).unwrap()).collect();
+    assert_eq!(ratios, vec![0.02; 8]);
+    assert_eq!(read.mode_ratio(9), Some(0.0));
     let mut lines: Vec<f64> = ccx.iter().map(|r| r.0).collect();
     lines.dedup();
     // femu: its 8 lowest modes, the same ratio, no residual flexibility
@@ -136,7 +145,7 @@ fn modal_frfs_agree_with_calculix_steady_state_dynamics() {
         &inputs,
         &lines,
         &FrfOptions {
-            damping: Damping::Ratio(0.02),
+            damping: Damping::Ratios(ratios),
             kind: ResponseKind::Receptance,
         },
     )

@@ -71,6 +71,7 @@ const READ: &[(&str, &[&str])] = &[
     ("ELASTIC", &["TYPE", "DEPENDENCIES", "MODULI"]),
     ("DENSITY", &["DEPENDENCIES"]),
     ("DAMPING", &["STRUCTURAL", "ALPHA", "BETA", "COMPOSITE"]),
+    ("MODAL DAMPING", &["RAYLEIGH", "MODAL", "DEFINITION"]),
     (
         "SOLID SECTION",
         &[
@@ -174,7 +175,6 @@ const NO_EFFECT: &[&str] = &[
     "FILM",
     "HEAT TRANSFER",
     "INITIAL CONDITIONS",
-    "MODAL DAMPING",
     "MODAL DYNAMIC",
     "NODE FILE",
     "NODE OUTPUT",
@@ -422,6 +422,10 @@ pub struct InpDeck {
     /// The structural damping coefficient of each material with `*DAMPING, STRUCTURAL=` (by
     /// upper-case name): the `GE` of the elements of its sections.
     pub material_damping: BTreeMap<String, f64>,
+    /// `*MODAL DAMPING` ranges: modes `first..=last` with a viscous damping ratio.
+    pub mode_ratios: Vec<(usize, usize, f64)>,
+    /// `*MODAL DAMPING, RAYLEIGH`: the modes' Rayleigh damping `(alpha, beta)`.
+    pub modal_rayleigh: Option<(f64, f64)>,
     /// Plane-stress ply materials (`*ELASTIC, TYPE=LAMINA`) by upper-case name: for composite
     /// shell sections only.
     pub(crate) laminae: BTreeMap<String, structural::Lamina>,

@@ -88,6 +88,17 @@ impl InpDeck {
                 }
             }
         }
+        model
+            .set_mode_ratios(self.mode_ratios.clone())
+            .map_err(|source| self.at_element(None, source))?;
+        if let Some((alpha, beta)) = self.modal_rayleigh {
+            model
+                .set_uniform_damping(Some(femu_fem::model::UniformDamping::Rayleigh {
+                    alpha,
+                    beta,
+                }))
+                .map_err(|source| self.at_element(None, source))?;
+        }
         structural::add_structural(
             &self.structural,
             &self.materials,

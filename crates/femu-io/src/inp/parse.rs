@@ -114,6 +114,8 @@ struct DeckBuilder {
     mass_cards: Vec<MassCard>,
     materials: BTreeMap<String, Material>,
     material_damping: BTreeMap<String, f64>,
+    mode_ratios: Vec<(usize, usize, f64)>,
+    modal_rayleigh: Option<(f64, f64)>,
     laminae: BTreeMap<String, structural::Lamina>,
     pending: Option<PendingMaterial>,
     sections: Vec<Section>,
@@ -762,6 +764,7 @@ impl DeckBuilder {
             "DENSITY" => self.density_line(&f, l, t),
             "BOUNDARY" => self.boundary_line(&f, l, t, warnings),
             "FREQUENCY" if self.frequency.is_none() => self.frequency_line(&f, l, t),
+            "MODAL DAMPING" => self.modal_damping_line(&f, l, t),
             "EQUATION" => self.equation_line(&f, l, t),
             "KINEMATIC COUPLING" => self.kinematic_coupling_line(&f, l),
             "KINEMATIC" | "DISTRIBUTING" => {
@@ -1072,6 +1075,74 @@ impl DeckBuilder {
         Ok(())
     }
 
+    /// A `*MODAL DAMPING` line (Abaqus and CalculiX): `first mode, last mode, ratio` (MODAL=DIRECT,
+    /// the default), or `, , alpha, beta` with `RAYLEIGH`. Damping defined by frequency range or
+    /// composite modal damping is refused.
+    fn modal_damping_line(&mut self, f: &[&str], l: &Line, t: &str) -> Result<(), IoError> {
+        let p = &self.block_params;
+        if let Some(v) = p
+            .get("DEFINITION")
+            .filter(|v| !v.eq_ignore_ascii_case("MODE NUMBERS"))
+        {
+            return Err(err(
+                l,
+                format!("*MODAL DAMPING, DEFINITION={v}: femu reads damping by mode numbers"),
+            ));
+        }
+        if let Some(v) = p.get("MODAL").filter(|v| !v.eq_ignore_ascii_case("DIRECT")) {
+            return Err(err(
+                l,
+                format!(
+                    "*MODAL DAMPING, MODAL={v}: femu reads direct modal damping (MODAL=DIRECT)"
+                ),
+            ));
+        }
+        let number = |i: usize, what: &str| -> Result<f64, IoError> {
+            let v = f.get(i).copied().unwrap_or("");
+            if v.is_empty() {
+                return Ok(0.0);
+            }
+            parse_f64(v)
+                .filter(|x| x.is_finite() && *x >= 0.0)
+                .ok_or_else(|| {
+                    err(
+                        l,
+                        format!(
+                            "*MODAL DAMPING: {what} {v:?} is not a number of at least 0 ({t:?})"
+                        ),
+                    )
+                })
+        };
+        if p.contains_key("RAYLEIGH") {
+            self.modal_rayleigh = Some((number(2, "alpha")?, number(3, "beta")?));
+            return Ok(());
+        }
+        let mode = |i: usize, what: &str| -> Result<usize, IoError> {
+            f.get(i)
+                .and_then(|v| v.parse::<usize>().ok())
+                .filter(|m| *m > 0)
+                .ok_or_else(|| {
+                    err(
+                        l,
+                        format!("*MODAL DAMPING: the {what} mode of {t:?} is not a mode number"),
+                    )
+                })
+        };
+        let first = mode(0, "first")?;
+        let last = match f.get(1).copied() {
+            None | Some("") => first,
+            Some(_) => mode(1, "last")?,
+        };
+        if last < first {
+            return Err(err(
+                l,
+                format!("*MODAL DAMPING: modes {first} to {last} end before they start"),
+            ));
+        }
+        self.mode_ratios.push((first, last, number(2, "ratio")?));
+        Ok(())
+    }
+
     /// An `*EQUATION`'s lines: the number of terms, then node, DOF, coefficient triples.
     fn equation_line(&mut self, f: &[&str], l: &Line, t: &str) -> Result<(), IoError> {
         let Some((n, terms, _)) = &mut self.equation else {
@@ -1253,6 +1324,8 @@ impl DeckBuilder {
             mesh,
             materials: self.materials,
             material_damping: self.material_damping,
+            mode_ratios: self.mode_ratios,
+            modal_rayleigh: self.modal_rayleigh,
             laminae: self.laminae,
             sections: self.sections,
             boundaries: self.boundaries,
