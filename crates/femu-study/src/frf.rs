@@ -144,6 +144,15 @@ impl Default for FrfRequest {
 }
 
 impl FrfRequest {
+    /// Whether the request names a damping of its own (a ratio, a loss factor, Rayleigh
+    /// coefficients or the test's ratios), which the deck's then does not replace.
+    fn names_damping(&self) -> bool {
+        self.damping_ratio.is_some()
+            || self.loss_factor.is_some()
+            || self.rayleigh.is_some()
+            || self.damping_from.is_some()
+    }
+
     /// The damping this request asks for.
     ///
     /// # Errors
@@ -188,11 +197,7 @@ fn deck_damping(
     model: &femu_fem::model::Model,
     notes: &mut Vec<String>,
 ) -> Option<Damping> {
-    let named = request.damping_ratio.is_some()
-        || request.loss_factor.is_some()
-        || request.rayleigh.is_some()
-        || request.damping_from.is_some();
-    if named {
+    if request.names_damping() {
         return None;
     }
     let (damping, what) = match model.uniform_damping()? {
@@ -292,6 +297,34 @@ fn deck_group_loss_factors(
         );
     let rest = one("the elements in no updated set", &mut rest_ids)?;
     Ok(FrfDamping::GroupLossFactors { rest, groups })
+}
+
+/// The modes' damping ratios the deck states, with a note: Nastran's `SDAMPING` table at each
+/// mode's frequency (`hz`), or Abaqus' and CalculiX's `*MODAL DAMPING` by mode number (a mode in
+/// no range undamped); `None` when it states neither.
+fn deck_mode_ratios(
+    model: &femu_fem::model::Model,
+    hz: &[f64],
+    notes: &mut Vec<String>,
+) -> Option<Vec<f64>> {
+    if let Some(table) = model.modal_damping() {
+        let ratios: Vec<f64> = hz.iter().map(|f| table.ratio_at(*f)).collect();
+        notes.push(format!(
+            "damping: the deck's modal damping table (SDAMPING), each mode's ratio at its frequency ({:.4} to {:.4})",
+            ratios.iter().copied().fold(f64::INFINITY, f64::min),
+            ratios.iter().copied().fold(0.0, f64::max)
+        ));
+        return Some(ratios);
+    }
+    model.mode_ratio(1)?;
+    let ratios: Vec<f64> = (1..=hz.len())
+        .map(|r| model.mode_ratio(r).unwrap_or(0.0))
+        .collect();
+    notes.push(format!(
+        "damping: the deck's modal damping (*MODAL DAMPING) on modes 1 to {}, those it names with their ratio and the others undamped",
+        ratios.len()
+    ));
+    Some(ratios)
 }
 
 /// The test's identified damping on the model modes it pairs with (MAC pairing with the
@@ -635,7 +668,6 @@ pub fn frf_correlation_with(
                 model,
                 &mut progress,
                 request,
-                &dampers,
                 &outputs,
                 &inputs,
                 &triples,
@@ -747,7 +779,6 @@ fn update_from_frfs(
     model: &LoadedModel,
     progress: &mut dyn FnMut(&str),
     request: &FrfRequest,
-    dampers: &femu_fem::assembly::Dampers,
     outputs: &SensorLayout,
     inputs: &SensorLayout,
     pairs: &[(usize, usize, &[c64])],
@@ -765,7 +796,6 @@ fn update_from_frfs(
             "updating from FRFs fits a loss factor or Rayleigh coefficients: give --loss-factor or --rayleigh (their start), not modal damping ratios",
         ));
     }
-    let _ = dampers;
     {
         use femu_fem::structural::StructuralKind;
         let own = model.model.structural().iter().find(|e| match &e.kind {
@@ -1296,61 +1326,18 @@ fn modal_route(
         )?),
     };
     let mut from_deck = deck_damping(request, &model.model, notes);
-    // the deck's modal damping table (Nastran's SDAMPING and TABDMP1): each mode's ratio at its
-    // frequency
-    if let (Some(table), true) = (
-        model.model.modal_damping(),
-        request.damping_ratio.is_none()
-            && request.loss_factor.is_none()
-            && request.rayleigh.is_none()
-            && request.damping_from.is_none(),
-    ) {
+    if !request.names_damping()
+        && let Some(ratios) = deck_mode_ratios(&model.model, &modes.frequencies_hz(), notes)
+    {
         if from_deck.is_some() {
             return Err(StudyError::invalid(
                 "damping",
-                "the deck gives both PARAM,G and a modal damping table (SDAMPING): Nastran adds them, femu takes one; give --loss-factor or --damping-ratio",
+                "the deck gives both a damping of the whole model (PARAM,G, or *MODAL DAMPING, RAYLEIGH) and modal damping ratios (SDAMPING's table, or *MODAL DAMPING): Nastran adds them, femu takes one; give --damping-ratio, --loss-factor or --rayleigh",
             ));
         }
-        let ratios: Vec<f64> = modes
-            .frequencies_hz()
-            .iter()
-            .map(|f| table.ratio_at(*f))
-            .collect();
-        notes.push(format!(
-            "damping: the deck's modal damping table (SDAMPING), each mode's ratio at its frequency ({:.4} to {:.4})",
-            ratios.iter().copied().fold(f64::INFINITY, f64::min),
-            ratios.iter().copied().fold(0.0, f64::max)
-        ));
         from_deck = Some(Damping::Ratios(ratios));
     }
-    // the deck's modal damping by mode number (Abaqus' and CalculiX's *MODAL DAMPING)
-    if let (Some(_), true) = (
-        model.model.mode_ratio(1),
-        request.damping_ratio.is_none()
-            && request.loss_factor.is_none()
-            && request.rayleigh.is_none()
-            && request.damping_from.is_none(),
-    ) {
-        if from_deck.is_some() {
-            return Err(StudyError::invalid(
-                "damping",
-                "the deck gives modal damping ratios (*MODAL DAMPING) and another damping of the whole model: femu takes one; give --damping-ratio, --loss-factor or --rayleigh",
-            ));
-        }
-        let ratios: Vec<f64> = (1..=modes.values.len())
-            .map(|r| model.model.mode_ratio(r).unwrap_or(0.0))
-            .collect();
-        notes.push(format!(
-            "damping: the deck's modal damping (*MODAL DAMPING) on modes 1 to {}, those it names with their ratio and the others undamped",
-            ratios.len()
-        ));
-        from_deck = Some(Damping::Ratios(ratios));
-    }
-    let by_default = from_deck.is_none()
-        && request.damping_ratio.is_none()
-        && request.loss_factor.is_none()
-        && request.rayleigh.is_none()
-        && request.damping_from.is_none();
+    let by_default = from_deck.is_none() && !request.names_damping();
     let damping = match (&request.damping_from, from_deck) {
         (Some(test), _) => test_damping(model, test, request, &modes, notes)?,
         (None, Some(d)) => d,
