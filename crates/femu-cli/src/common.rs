@@ -34,7 +34,7 @@ pub struct ModelArgs {
     /// give them); repeat for several.
     #[arg(long)]
     pub fix: Vec<String>,
-    /// Gmsh meshes: a physical group of surfaces (3-node triangles, 4-node quadrangles) made
+    /// Gmsh meshes: a physical group of surfaces (3-node triangles, 4- and 8-node quadrangles) made
     /// shells of the given thickness in m, as GROUP=THICKNESS; repeat for several.
     #[arg(long, value_name = "GROUP=THICKNESS")]
     pub shell: Vec<String>,

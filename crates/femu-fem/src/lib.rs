@@ -2,7 +2,8 @@
 //!
 //! The finite element core of femu: meshes of mixed 3D solid elements with the user's ids,
 //! isoparametric elements (tet4, tet10, hex8, hex20, penta6, penta15, pyramid5, pyramid13), beams,
-//! rods, springs, bushings and 4-node shells on nodes with rotations ([`structural`], [`shell`]), linear elastic materials,
+//! rods, springs, bushings and 3-, 4- and 8-node shells on nodes with rotations ([`structural`], [`shell`],
+//! [`shell8`]), linear elastic materials,
 //! point masses, multipoint constraints (docs/MATH.md),
 //! DOF maps with fixed DOFs, and parallel assembly of the sparse stiffness `K` and mass `M` on a
 //! pattern computed once, with parameter groups `K(p) = K_0 + sum_g p_g K_g` for updating
@@ -39,6 +40,7 @@ pub mod mesh;
 pub mod model;
 pub mod quadrature;
 pub mod shell;
+pub mod shell8;
 pub mod structural;
 
 pub use error::FemError;

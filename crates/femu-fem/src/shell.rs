@@ -216,7 +216,7 @@ pub fn laminate(plies: &[Ply]) -> Result<Shell, LaminateError> {
 /// The section's membrane, bending and transverse shear matrices in the element's axes `e` (rows
 /// `e1`, `e2`, `n`) with the parts scaled by `sc`, and the shear modulus of the drilling
 /// stiffness.
-fn section(s: &Shell, e: &[V3; 3], sc: Scales) -> Result<SectionMatrices, String> {
+pub(crate) fn section(s: &Shell, e: &[V3; 3], sc: Scales) -> Result<SectionMatrices, String> {
     let t = s.t;
     let shear_factor = s.shear.unwrap_or(1000.0 * 5.0 / 6.0);
     let Some(mat) = &s.material else {
@@ -288,17 +288,17 @@ fn section(s: &Shell, e: &[V3; 3], sc: Scales) -> Result<SectionMatrices, String
 /// shear modulus.
 type SectionMatrices = ([[f64; 3]; 3], [[f64; 3]; 3], [[f64; 2]; 2], f64);
 
-type V3 = [f64; 3];
+pub(crate) type V3 = [f64; 3];
 
 fn sub(a: V3, b: V3) -> V3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
-fn dot(a: V3, b: V3) -> f64 {
+pub(crate) fn dot(a: V3, b: V3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-fn cross(a: V3, b: V3) -> V3 {
+pub(crate) fn cross(a: V3, b: V3) -> V3 {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
@@ -306,7 +306,7 @@ fn cross(a: V3, b: V3) -> V3 {
     ]
 }
 
-fn unit(a: V3) -> Option<V3> {
+pub(crate) fn unit(a: V3) -> Option<V3> {
     let n = dot(a, a).sqrt();
     (n > 0.0 && n.is_finite()).then(|| [a[0] / n, a[1] / n, a[2] / n])
 }
@@ -339,7 +339,13 @@ fn plane_stress(d: f64, nu: f64) -> [[f64; 3]; 3] {
 }
 
 /// `k += w B^T D B` for the first `rows` rows of `b` (each `N` columns) and `d`, row-major `k`.
-fn add_btdb<const N: usize>(k: &mut [f64], b: &[[f64; N]], d: &[[f64; 3]; 3], rows: usize, w: f64) {
+pub(crate) fn add_btdb<const N: usize>(
+    k: &mut [f64],
+    b: &[[f64; N]],
+    d: &[[f64; 3]; 3],
+    rows: usize,
+    w: f64,
+) {
     for r in 0..N {
         for c in 0..N {
             let mut v = 0.0;
@@ -463,9 +469,10 @@ fn checked_quad(x: &[V3; 4]) -> Result<([V3; 3], [[f64; 2]; 4]), String> {
     Ok((axes, p))
 }
 
-/// Checks a shell's corners (three or four, basic frame) without forming its matrices: a
+/// Checks a shell's nodes (three, four or eight, basic frame) without forming its matrices: a
 /// triangle that spans an area; a quadrilateral whose corners go round it, warped no more than
-/// [`MAX_WARP`], with a positive Jacobian at every Gauss point.
+/// [`MAX_WARP`], with a positive Jacobian at every Gauss point; an 8-node shell as
+/// [`crate::shell8::check8`].
 ///
 /// # Errors
 /// The message [`matrices`] or [`matrices3`] would give for the geometry.
@@ -475,7 +482,8 @@ pub fn check(x: &[V3]) -> Result<(), String> {
         [a, b, c] => unit(cross(sub(*b, *a), sub(*c, *a)))
             .map(|_| ())
             .ok_or_else(|| "its corners do not span a triangle (collinear or coincident)".into()),
-        _ => Err(format!("a shell has 3 or 4 corners, not {}", x.len())),
+        [_, _, _, _, _, _, _, _] => crate::shell8::check8(&std::array::from_fn(|i| x[i])),
+        _ => Err(format!("a shell has 3, 4 or 8 nodes, not {}", x.len())),
     }
 }
 

@@ -1,6 +1,6 @@
 //! Structural elements on nodes with rotations: two-node beams (Timoshenko, with Euler-Bernoulli
 //! as the shear-rigid limit), rods, scalar springs and bushings (docs/MATH.md, "Beams, springs
-//! and bushings"), and 4-node shells ([`crate::shell`]).
+//! and bushings"), and shells ([`crate::shell`], [`crate::shell8`]).
 //!
 //! Each element's matrices are formed in closed form (beams: the exact stiffness of a uniform
 //! Timoshenko beam and the consistent mass of its interdependent interpolation) on the DOFs it
@@ -141,7 +141,7 @@ pub enum StructuralKind {
     Spring(Spring),
     /// A bushing.
     Bushing(Bushing),
-    /// A 4-node shell ([`crate::shell`]).
+    /// A shell: 3 nodes (MITC3), 4 (MITC4; [`crate::shell`]) or 8 (curved; [`crate::shell8`]).
     Shell(crate::shell::Shell),
 }
 
@@ -368,7 +368,7 @@ impl StructuralElement {
             }
             StructuralKind::Bushing(_) => (1..=2).contains(&count),
             StructuralKind::Shell(_) => {
-                (3..=4).contains(&count)
+                matches!(count, 3 | 4 | 8)
                     && (0..count).all(|i| (0..i).all(|j| self.nodes[i] != self.nodes[j]))
             }
         };
@@ -376,7 +376,7 @@ impl StructuralElement {
             return Err(FemError::InvalidStructural {
                 element: id,
                 reason: format!(
-                    "{count} nodes {:?} do not fit the element (beams and rods two, springs and bushings one or two, a spring's ends among them, shells three or four distinct)",
+                    "{count} nodes {:?} do not fit the element (beams and rods two, springs and bushings one or two, a spring's ends among them, shells three, four or eight distinct)",
                     self.nodes
                 ),
             });
@@ -555,12 +555,11 @@ impl StructuralElement {
                 // the two triangles of the quadrilateral
                 let x = |i: usize| coords[self.nodes[i]];
                 let tri = |a: V3, b: V3, c: V3| 0.5 * norm(cross(sub(b, a), sub(c, a)));
-                let area = tri(x(0), x(1), x(2))
-                    + if self.nodes.len() == 4 {
-                        tri(x(0), x(2), x(3))
-                    } else {
-                        0.0
-                    };
+                let area = match self.nodes.len() {
+                    8 => crate::shell8::area8(&std::array::from_fn(x)),
+                    4 => tri(x(0), x(1), x(2)) + tri(x(0), x(2), x(3)),
+                    _ => tri(x(0), x(1), x(2)),
+                };
                 (s.rho * s.t + s.nsm) * area
             }
         }
@@ -577,6 +576,9 @@ impl StructuralElement {
         if self.nodes.len() == 3 {
             let x: [[f64; 3]; 3] = std::array::from_fn(|i| coords[self.nodes[i]]);
             crate::shell::matrices3_scaled(s, &x, mass, sc)
+        } else if self.nodes.len() == 8 {
+            let x: [[f64; 3]; 8] = std::array::from_fn(|i| coords[self.nodes[i]]);
+            crate::shell8::matrices8_scaled(s, &x, mass, sc)
         } else {
             let x: [[f64; 3]; 4] = std::array::from_fn(|i| coords[self.nodes[i]]);
             crate::shell::matrices_scaled(s, &x, mass, sc)

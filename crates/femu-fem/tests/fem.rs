@@ -13,5 +13,6 @@ mod fem {
     mod pyramids;
     mod refine;
     mod shell;
+    mod shell8;
     mod structural;
 }

@@ -187,9 +187,10 @@ pub fn vtu_string_with(
         let _ = writeln!(s, "{}", ids.join(" "));
         off += st.nodes.len();
         offsets.push(off);
-        // VTK_QUAD or VTK_TRIANGLE for a shell, VTK_LINE, or VTK_VERTEX for a grounded spring or
-        // bushing
+        // VTK_QUADRATIC_QUAD, VTK_QUAD or VTK_TRIANGLE for a shell (VTK's node order is femu's),
+        // VTK_LINE, or VTK_VERTEX for a grounded spring or bushing
         types.push(match st.nodes.len() {
+            8 => 23,
             4 => 9,
             3 => 5,
             2 => 3,

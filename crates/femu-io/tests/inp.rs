@@ -180,9 +180,9 @@ fn malformed_decks_name_the_line() {
             "TYPE",
         ),
         (
-            format!("{nodes}*ELEMENT, TYPE=S8R\n1, 1, 2, 3, 4, 5, 6, 7, 8\n"),
+            format!("{nodes}*ELEMENT, TYPE=S9R5\n1, 1, 2, 3, 4, 5, 6, 7, 8\n"),
             10,
-            "S8R is not read",
+            "S9R5 is not read",
         ),
         (
             format!("{nodes}*ELEMENT, TYPE=C3D8\n1, 1, 2, 3, 4, 5, 6, 7, 8, 9\n"),

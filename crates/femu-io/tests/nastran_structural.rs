@@ -1324,3 +1324,215 @@ fn sdamping_selects_a_modal_damping_table() {
         );
     }
 }
+
+/// A cylindrical panel (radius 1 m, 60 degrees, 1 m long, 10 mm, steel) of `n x n` CQUAD8 on a
+/// PSHELL (MID1 = MID2 = MID3), clamped along one straight edge by SPC1; `extra` bulk data added.
+fn cquad8_panel(n: usize, coupled: bool, extra: &str) -> String {
+    let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\n");
+    if coupled {
+        s.push_str("PARAM,COUPMASS,1\n");
+    }
+    let id = |i: usize, j: usize| 1 + i + (2 * n + 1) * j;
+    for j in 0..=2 * n {
+        for i in 0..=2 * n {
+            if i % 2 == 1 && j % 2 == 1 {
+                continue;
+            }
+            let a = (PI / 3.0) * (i as f64 / (2 * n) as f64 - 0.5);
+            s.push_str(&format!(
+                "GRID*,{},,{:.12},{:.12}\n*,{:.12}\n",
+                id(i, j),
+                a.sin(),
+                j as f64 / (2 * n) as f64,
+                a.cos()
+            ));
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let (a, b) = (2 * i, 2 * j);
+            s.push_str(&format!(
+                "CQUAD8,{},7,{},{},{},{},{},{}\n,{},{}\n",
+                1 + i + n * j,
+                id(a, b),
+                id(a + 2, b),
+                id(a + 2, b + 2),
+                id(a, b + 2),
+                id(a + 1, b),
+                id(a + 2, b + 1),
+                id(a + 1, b + 2),
+                id(a, b + 1)
+            ));
+        }
+    }
+    s.push_str("PSHELL,7,3,0.01,3,,3\nMAT1,3,2.+11,,0.3,8000.\n");
+    for i in 0..=2 * n {
+        s.push_str(&format!("SPC1,1,123456,{}\n", id(i, 0)));
+    }
+    s.push_str(extra);
+    s.push_str("ENDDATA\n");
+    s
+}
+
+/// CQUAD8 read as the QRG lays it out (G7 and G8, T1-T4, THETA/MCID and ZOFFS on the second
+/// line): NAFEMS FV16 on 8 x 8 CQUAD8 (T1-T4 given, equal to the PSHELL's) to 1 % with the
+/// coupled mass and 3 % with Nastran's default lumped one (0.421, 1.029, 2.582, 3.306, 3.753,
+/// 6.555 Hz); a cylindrical panel's mass is `rho t R theta L` (the quadratic edges follow the arc
+/// to 1e-6), a ZOFFS in its field moves the frequencies, and a T1 other than the PSHELL's is
+/// refused with its line.
+#[test]
+fn cquad8_decks_are_read_as_the_quick_reference_guide_lays_them_out() {
+    for coupled in [true, false] {
+        let n = 8;
+        let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\n");
+        if coupled {
+            s.push_str("PARAM,COUPMASS,1\n");
+        }
+        let id = |i: usize, j: usize| 1 + i + (2 * n + 1) * j;
+        for j in 0..=2 * n {
+            for i in 0..=2 * n {
+                if i % 2 == 0 || j % 2 == 0 {
+                    s.push_str(&format!(
+                        "GRID,{},,{},{},0.\n",
+                        id(i, j),
+                        10.0 * i as f64 / (2 * n) as f64,
+                        10.0 * j as f64 / (2 * n) as f64
+                    ));
+                }
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let (a, b) = (2 * i, 2 * j);
+                s.push_str(&format!(
+                    "CQUAD8,{},7,{},{},{},{},{},{}\n,{},{},0.05,0.05,0.05,0.05\n",
+                    1 + i + n * j,
+                    id(a, b),
+                    id(a + 2, b),
+                    id(a + 2, b + 2),
+                    id(a, b + 2),
+                    id(a + 1, b),
+                    id(a + 2, b + 1),
+                    id(a + 1, b + 2),
+                    id(a, b + 1)
+                ));
+            }
+        }
+        s.push_str("PSHELL,7,3,0.05,3,,3\nMAT1,3,2.+11,,0.3,8000.\n");
+        for j in 0..=2 * n {
+            s.push_str(&format!("SPC1,1,123456,{}\n", id(0, j)));
+        }
+        s.push_str("ENDDATA\n");
+        let d = parse_bdf(&s, "fv16.bdf", &BdfOptions::default()).unwrap();
+        let sys = d.model.assemble(d.mass).unwrap();
+        let modes = sys
+            .modes(Which::Lowest(6), &EigenOptions::default())
+            .unwrap();
+        for (l, r) in modes
+            .values
+            .iter()
+            .zip([0.421, 1.029, 2.582, 3.306, 3.753, 6.555])
+        {
+            let f = l.sqrt() / (2.0 * PI);
+            let tolerance = if coupled { 1e-2 } else { 3e-2 };
+            assert!(
+                (f / r - 1.0).abs() < tolerance,
+                "coupled {coupled}: {f} Hz against {r}"
+            );
+        }
+    }
+    // the panel's mass, and its thickness fields
+    let d = parse_bdf(
+        &cquad8_panel(8, true, ""),
+        "panel.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    let mass: f64 = d
+        .model
+        .structural()
+        .iter()
+        .map(|e| e.mass(d.model.mesh().coords()))
+        .sum();
+    let want = 8000.0 * 0.01 * PI / 3.0;
+    assert!((mass / want - 1.0).abs() < 1e-6, "{mass} against {want}");
+    let frequencies = |text: &str| -> Vec<f64> {
+        let d = parse_bdf(text, "panel.bdf", &BdfOptions::default()).unwrap();
+        let sys = d.model.assemble(d.mass).unwrap();
+        sys.modes(Which::Lowest(3), &EigenOptions::default())
+            .unwrap()
+            .values
+    };
+    // element 1's second line with T1-T4 equal to the PSHELL's and a ZOFFS, then a T1 that is not
+    let plain = frequencies(&cquad8_panel(4, true, ""));
+    let deck = cquad8_panel(4, true, "");
+    let lines: Vec<&str> = deck.lines().collect();
+    let at = lines
+        .iter()
+        .position(|l| l.starts_with("CQUAD8,1,"))
+        .unwrap();
+    let mut edited: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+    edited[at + 1] = format!("{},0.01,0.01,0.01,0.01,,0.002", edited[at + 1]);
+    let offset = frequencies(&edited.join("\n"));
+    assert!(
+        offset
+            .iter()
+            .zip(&plain)
+            .any(|(a, b)| (a / b - 1.0).abs() > 1e-6),
+        "{offset:?} {plain:?}"
+    );
+    edited[at + 1] = format!("{},0.011", lines[at + 1]);
+    let e = parse_bdf(&edited.join("\n"), "panel.bdf", &BdfOptions::default())
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(&format!("panel.bdf:{}", at + 1)) && e.contains("corner thickness T1"),
+        "{e}"
+    );
+}
+
+/// CQUAD8 that femu cannot build are refused with card and line: a blank edge grid (Nastran
+/// builds a transition element; femu asks for all eight), and an anisotropic material oriented
+/// by THETA on a curved element (a CQUAD8 measures THETA from its xi direction at each point,
+/// which turns on the arc); the same material by MCID is read.
+#[test]
+fn cquad8_femu_cannot_build_are_refused_with_card_and_line() {
+    let blank = cquad8_panel(2, true, "").replacen(
+        "CQUAD8,1,7,1,3,13,11,2,8\n,12,6",
+        "CQUAD8,1,7,1,3,13,11,2,8\n,,6",
+        1,
+    );
+    assert_ne!(blank, cquad8_panel(2, true, ""));
+    let e = parse_bdf(&blank, "panel.bdf", &BdfOptions::default())
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("edge grid G7 is blank"), "{e}");
+    let line = blank
+        .lines()
+        .position(|l| l.starts_with("CQUAD8,1,"))
+        .unwrap()
+        + 1;
+    assert!(e.contains(&format!("panel.bdf:{line}")), "{e}");
+    // every element's THETA/MCID field (the sixth of its second line)
+    let orthotropic = |orientation: &str| {
+        cquad8_panel(2, true, "MAT8,8,1.4+11,1.+10,0.3,5.+9,,,1600.\n")
+            .replace("PSHELL,7,3,0.01,3,,3", "PSHELL,7,8,0.01,8,,8")
+            .lines()
+            .map(|l| {
+                if l.starts_with(',') {
+                    format!("{l},,,,,{orientation}\n")
+                } else {
+                    format!("{l}\n")
+                }
+            })
+            .collect::<String>()
+    };
+    let e = parse_bdf(&orthotropic("30."), "panel.bdf", &BdfOptions::default())
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("give an MCID instead"), "{e}");
+    parse_bdf(&orthotropic("0"), "panel.bdf", &BdfOptions::default()).unwrap();
+}

@@ -282,3 +282,40 @@ fn structural_elements_are_lines_with_their_sections() {
     .to_string();
     assert!(e.contains("2 values for 3 elements"), "{e}");
 }
+
+/// An 8-node shell is a VTK_QUADRATIC_QUAD (type 23) whose eight points are its nodes in femu's
+/// order (corners, then the midsides of edges 1-2, 2-3, 3-4, 4-1: VTK's order), with its
+/// thickness as cell data.
+#[test]
+fn eight_node_shells_are_quadratic_quads() {
+    use femu_fem::structural::{StructuralElement, StructuralKind};
+    use femu_io::vtk::vtu_string_with;
+    let mesh = box_mesh(&BoxSpec::new(
+        [1.0, 1.0, 1.0],
+        [1, 1, 1],
+        BoxCells::Hex,
+        false,
+    ))
+    .unwrap();
+    let shell = StructuralElement {
+        id: 9,
+        nodes: vec![7, 6, 5, 4, 3, 2, 1, 0],
+        kind: StructuralKind::Shell(femu_fem::shell::Shell {
+            e: 2e11,
+            nu: 0.3,
+            rho: 7800.0,
+            t: 0.004,
+            bending: 1.0,
+            shear: Some(5.0 / 6.0),
+            nsm: 0.0,
+            material: None,
+            offset: 0.0,
+        }),
+    };
+    let text = vtu_string_with(&mesh, &[shell], &[], &[]).unwrap();
+    let (conn, offsets, types) = arrays(&text);
+    assert_eq!(types, vec![12, 23]);
+    assert_eq!(offsets, vec![8, 16]);
+    assert_eq!(&conn[8..], &[7, 6, 5, 4, 3, 2, 1, 0]);
+    assert!(text.contains("Name=\"thickness\""), "{text}");
+}

@@ -476,6 +476,7 @@ fn describe_gmsh(
                     1 => "2-node line",
                     2 => "3-node triangle",
                     3 => "4-node quadrangle",
+                    16 => "8-node quadrangle",
                     _ => "quadratic element femu does not build",
                 };
                 format!("{n} {name}{} (type {t})", if *n == 1 { "" } else { "s" })

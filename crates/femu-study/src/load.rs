@@ -40,7 +40,7 @@ pub struct ModelOptions {
     /// rotations too where shells give them rotations).
     pub fix: Vec<String>,
     /// Shell sections of a Gmsh mesh: each named physical group of surfaces (3-node triangles,
-    /// 4-node quadrangles) becomes shells of this thickness (m) in the model's material.
+    /// 4- and 8-node quadrangles) becomes shells of this thickness (m) in the model's material.
     pub shells: Vec<(String, f64)>,
     /// Beam sections of a Gmsh mesh: each named physical group of 2-node lines becomes
     /// Timoshenko beams of this section in the model's material, written as Abaqus' `*BEAM
@@ -74,7 +74,7 @@ impl ModelOptions {
 }
 
 /// Physical groups of a Gmsh mesh made structural elements in the material `mat`: the shells of
-/// `options.shells` (group, thickness) on its surfaces (MITC4 quadrangles and MITC3 triangles,
+/// `options.shells` (group, thickness) on its surfaces (MITC4 and 8-node quadrangles, MITC3 triangles,
 /// a solid section: `12I/T^3 = 1`, `TS/T = 5/6`) and the beams of `options.beams` (group,
 /// section) on its lines; each group an element set of its name. A mesh without volume elements
 /// needs one or the other.
@@ -130,7 +130,7 @@ fn add_sections(
         add_group(
             model,
             surfaces,
-            (group, "surfaces", &[2, 3]),
+            (group, "surfaces", &[2, 3, 16]),
             path,
             StructuralKind::Shell(shell),
         )?;
@@ -233,7 +233,7 @@ fn add_group(
                 path,
                 "sections",
                 format!(
-                    "line {}: element {} of {group} is of Gmsh type {}: femu builds {what} of type{} {:?} (3-node triangles 2, 4-node quadrangles 3, 2-node lines 1)",
+                    "line {}: element {} of {group} is of Gmsh type {}: femu builds {what} of type{} {:?} (3-node triangles 2, 4-node quadrangles 3, 8-node quadrangles 16, 2-node lines 1)",
                     f.line,
                     f.tag,
                     f.gmsh_type,

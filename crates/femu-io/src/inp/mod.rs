@@ -13,7 +13,7 @@
 //! "Multipoint constraints"); beams `B31` and `B33` with `*BEAM SECTION` (`RECT`, `CIRC`, `PIPE`)
 //! or `*BEAM GENERAL SECTION` (`GENERAL`), springs `SPRING1`, `SPRING2`, `SPRINGA` with `*SPRING`
 //! (`structural.rs`; their nodes get rotations, which `*BOUNDARY` DOFs 4-6 then fix), and shells
-//! `S4`, `S4R`, `S3`, `S3R` with `*SHELL SECTION` (one isotropic material, its thickness, its
+//! `S4`, `S4R`, `S3`, `S3R`, `S8R`, `S8` with `*SHELL SECTION` (one isotropic material, its thickness, its
 //! `OFFSET`).
 //!
 //! The writer states multipoint constraints as `*EQUATION`s; the rotations of a rigid link's
@@ -456,6 +456,7 @@ pub struct InpDeck {
     path: PathBuf,
 }
 
+#[derive(Clone)]
 struct Line {
     path: PathBuf,
     number: usize,

@@ -138,6 +138,8 @@ struct DeckBuilder {
     incompatible_modes: Vec<u64>,
     element_buffer: Vec<String>,
     element_start: usize,
+    /// A structural element's ids so far and its first line, while a trailing comma continues it
+    structural_buffer: Option<(Vec<u64>, Line)>,
     seen_keyword: bool,
 }
 
@@ -147,6 +149,12 @@ impl DeckBuilder {
         if !self.element_buffer.is_empty() {
             return Err(err(
                 &lines[self.element_start],
+                "element definition cut short by a keyword".into(),
+            ));
+        }
+        if let Some((_, start)) = &self.structural_buffer {
+            return Err(err(
+                start,
                 "element definition cut short by a keyword".into(),
             ));
         }
@@ -533,7 +541,7 @@ impl DeckBuilder {
             return Ok(());
         }
         let (kind, formulation, approx) = element_kind(ty).ok_or_else(|| {
-            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; B31, B33, SPRING1, SPRING2, SPRINGA; S4, S4R, S3, S3R)"))
+            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; B31, B33, SPRING1, SPRING2, SPRINGA; S4, S4R, S3, S3R, S8R, S8)"))
         })?;
         if approx {
             warn(
@@ -857,19 +865,34 @@ impl DeckBuilder {
         Ok(())
     }
 
-    /// A beam's or spring's line: its id and nodes.
+    /// A beam's, spring's or shell's line: its id and nodes (a line that ends in a comma
+    /// continues on the next, as Abaqus writes elements of many nodes).
     fn structural_line(&mut self, f: &[&str], l: &Line, t: &str) -> Result<(), IoError> {
         let (ty, nn) = self.structural_now.expect("checked");
-        let ids: Vec<u64> = f
+        let more: Vec<u64> = f
             .iter()
             .filter(|s| !s.is_empty())
             .map(|s| s.parse::<u64>())
             .collect::<Result<_, _>>()
             .map_err(|_| err(l, format!("element line has a non-integer entry: {t:?}")))?;
+        let (mut ids, start) = self
+            .structural_buffer
+            .take()
+            .unwrap_or_else(|| (Vec::new(), l.clone()));
+        ids.extend(more);
+        if ids.len() < nn + 1 && t.trim_end().ends_with(',') {
+            self.structural_buffer = Some((ids, start));
+            return Ok(());
+        }
+        let l = &start;
         if ids.len() != nn + 1 {
             return Err(err(
                 l,
-                format!("a {} element is an id and {nn} nodes, got {t:?}", ty.name()),
+                format!(
+                    "a {} element is an id and {nn} nodes, got {}",
+                    ty.name(),
+                    ids.len()
+                ),
             ));
         }
         self.structural

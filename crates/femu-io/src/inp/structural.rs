@@ -35,6 +35,8 @@ pub(super) enum StructuralType {
     S4,
     /// A 3-node shell (S3, S3R).
     S3,
+    /// An 8-node shell (S8R, and S8 built the same way).
+    S8,
 }
 
 impl StructuralType {
@@ -49,10 +51,11 @@ impl StructuralType {
             "SPRINGA" => (Self::SpringA, 2),
             "S4" | "S4R" => (Self::S4, 4),
             "S3" | "S3R" => (Self::S3, 3),
-            t @ ("S8R" | "S8R5" | "S4R5" | "S9R5" | "STRI3" | "STRI65" | "M3D4" | "M3D4R"
-            | "M3D3" | "SC8R") => {
+            "S8R" | "S8" => (Self::S8, 8),
+            t @ ("S8R5" | "S4R5" | "S9R5" | "STRI3" | "STRI65" | "M3D4" | "M3D4R" | "M3D3"
+            | "SC8R") => {
                 return Err(format!(
-                    "element type {t} is not read: femu's shells are S4, S4R, S3 and S3R (8-node, thin-only, membrane and continuum shells are not built)"
+                    "element type {t} is not read: femu's shells are S4, S4R, S3, S3R, S8R and S8 (6- and 9-node, thin-only, membrane and continuum shells are not built)"
                 ));
             }
             t @ ("B32" | "B32H" | "B31OS" | "B32OS" | "PIPE31" | "PIPE32" | "B21" | "B22"
@@ -74,6 +77,7 @@ impl StructuralType {
             Self::SpringA => "SPRINGA",
             Self::S4 => "S4",
             Self::S3 => "S3",
+            Self::S8 => "S8R",
         }
     }
 }
@@ -455,7 +459,7 @@ pub(super) fn add_structural(
                     releases: [[false; 6]; 2],
                 })
             }
-            StructuralType::S4 | StructuralType::S3 => {
+            StructuralType::S4 | StructuralType::S3 | StructuralType::S8 => {
                 let k = *shell_of.get(id).ok_or_else(|| {
                     at_err(
                         l,

@@ -34,7 +34,7 @@
 //!   (three moduli that are not isotropic within 1 % refused) or `MAT9` in the material frame
 //!   `CORDM` (a rectangular system; cylindrical, spherical and the element frame refused).
 //! - **Bars, beams, rods, springs, bushings, shells** (`structural.rs`): `CBAR`, `CBEAM`, `CROD`,
-//!   `CONROD`, `CELAS1`, `CELAS2`, `CBUSH`, `CQUAD4`, `CTRIA3` with `PBAR`, `PBARL`, `PBEAM`, `PBEAML`,
+//!   `CONROD`, `CELAS1`, `CELAS2`, `CBUSH`, `CQUAD4`, `CQUAD8`, `CTRIA3` with `PBAR`, `PBARL`, `PBEAM`, `PBEAML`,
 //!   `PROD`, `PELAS`, `PBUSH`, `PSHELL` and `BAROR`/`BEAMOR` defaults, into femu's structural elements on grids with
 //!   rotations (docs/MATH.md, "Beams, springs and bushings"); each property's elements are the set
 //!   `PID<n>`.
@@ -116,7 +116,6 @@ const NO_EFFECT: &[&str] = &[
 
 /// Cards that change `K` or `M` and that femu cannot model yet, with what they are.
 const UNSUPPORTED: &[(&str, &str)] = &[
-    ("CQUAD8", "shells"),
     ("CTRIA6", "shells"),
     ("CQUADR", "shells"),
     ("CTRIAR", "shells"),
@@ -457,7 +456,7 @@ fn sort<'a>(
             .min_by_key(|c| c.line)
             .expect("non-empty");
         let text = format!(
-            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, bars and beams (CBAR, CBEAM with PBAR, PBARL, PBEAM, PBEAML), rods (CROD, CONROD), springs and bushings (CELAS1, CELAS2, CBUSH), shells (CQUAD4, CTRIA3 with PSHELL), CONM2 masses, RBE2 and RBE3 links and SPC constraints",
+            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, bars and beams (CBAR, CBEAM with PBAR, PBARL, PBEAM, PBEAML), rods (CROD, CONROD), springs and bushings (CELAS1, CELAS2, CBUSH), shells (CQUAD4, CQUAD8, CTRIA3 with PSHELL), CONM2 masses, RBE2 and RBE3 links and SPC constraints",
             list.join(", ")
         );
         if options.lenient {
@@ -852,7 +851,7 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
         return Err(IoError::Content {
             path: path.to_path_buf(),
             reason: format!(
-                "the deck defines {} GRID{} and no element (solids: CHEXA, CPENTA, CTETRA, CPYRAM; bars, beams, rods, springs, shells: CBAR, CBEAM, CROD, CONROD, CELAS1, CELAS2, CBUSH, CQUAD4, CTRIA3)",
+                "the deck defines {} GRID{} and no element (solids: CHEXA, CPENTA, CTETRA, CPYRAM; bars, beams, rods, springs, shells: CBAR, CBEAM, CROD, CONROD, CELAS1, CELAS2, CBUSH, CQUAD4, CQUAD8, CTRIA3)",
                 mesh.node_count(),
                 if mesh.node_count() == 1 { "" } else { "s" }
             ),

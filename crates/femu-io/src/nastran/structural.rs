@@ -1,6 +1,6 @@
 //! Bars, beams, rods, springs, bushings and shells: `CBAR` (`PBAR`, `PBARL`), `CBEAM` (`PBEAM`,
 //! `PBEAML`, prismatic), `CROD` (`PROD`), `CONROD`, `CELAS1` (`PELAS`), `CELAS2`, `CBUSH`
-//! (`PBUSH`), `CQUAD4` and `CTRIA3` (`PSHELL` of MAT1, MAT2 or MAT8 materials, THETA or MCID
+//! (`PBUSH`), `CQUAD4`, `CQUAD8` (all eight grids) and `CTRIA3` (`PSHELL` of MAT1, MAT2 or MAT8 materials, THETA or MCID
 //! material axes), with `BAROR` and
 //! `BEAMOR` defaults, read as the Quick Reference Guide defines them
 //! (cited by card) into femu's structural elements ([`femu_fem::structural`]). What femu cannot
@@ -32,7 +32,7 @@ pub(super) struct StructuralCards<'a> {
 
 /// The structural element card names.
 pub(super) const ELEMENTS: &[&str] = &[
-    "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CBUSH", "CQUAD4", "CTRIA3",
+    "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CBUSH", "CQUAD4", "CTRIA3", "CQUAD8",
 ];
 /// The structural property card names.
 pub(super) const PROPERTIES: &[&str] = &[
@@ -802,22 +802,38 @@ pub(super) fn add_structural(
                 });
                 (kind, nodes, pid)
             }
-            "CQUAD4" | "CTRIA3" => {
+            "CQUAD4" | "CTRIA3" | "CQUAD8" => {
                 let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
                 let p = prop(pid, &["PSHELL", "PCOMP", "PCOMPG"])?;
-                let corners = if c.name == "CQUAD4" { 4 } else { 3 };
-                let nodes = (2..2 + corners)
-                    .map(|i| node(model, c.id(i, "G")?, c, "a corner"))
+                let (grids, corners) = match c.name.as_str() {
+                    "CQUAD8" => (8, 4),
+                    "CQUAD4" => (4, 4),
+                    _ => (3, 3),
+                };
+                if c.name == "CQUAD8"
+                    && let Some(k) = (6..10).find(|&i| c.field(i).trim().is_empty())
+                {
+                    return Err(c.err(format!(
+                        "{eid}: edge grid G{} is blank; femu builds a CQUAD8 with all eight grids (give the edge grids, or model the element as a CQUAD4)",
+                        k - 1
+                    )));
+                }
+                let nodes = (2..2 + grids)
+                    .map(|i| node(model, c.id(i, "G")?, c, "a grid"))
                     .collect::<Result<Vec<_>, _>>()?;
                 // THETA/MCID and ZOFFS follow the corners: fields 8 and 9 of a CQUAD4, 7 and 8
-                // of a CTRIA3
+                // of a CTRIA3; a CQUAD8 has them after T1-T4 on its second line (QRG CQUAD8)
+                let (theta_field, zoffs_field, tflag_field, t_field) = match c.name.as_str() {
+                    "CQUAD8" => (14, 15, 16, 10),
+                    _ => (corners + 2, corners + 3, 10, 11),
+                };
                 let (mut shell, laminate) = if p.name == "PSHELL" {
                     (pshell(p, pid, ctx)?, None)
                 } else {
                     let (s, shift) = pcomp(p, pid, ctx)?;
                     (s, Some(shift))
                 };
-                let element_offset = zoffs(c, corners + 3, shell.t)?;
+                let element_offset = zoffs(c, zoffs_field, shell.t)?;
                 match laminate {
                     // a laminate's mid-plane is `Z0 + T/2` from its reference plane, which the
                     // element's ZOFFS moves from the grids
@@ -831,12 +847,24 @@ pub(super) fn add_structural(
                 if let Some(m) = &mut shell.material {
                     let x: Vec<[f64; 3]> =
                         nodes.iter().map(|n| model.mesh().coords()[*n]).collect();
-                    m.axis = shell_axis(c, corners + 2, &x, ctx)?;
+                    m.axis = shell_axis(c, theta_field, &x[..corners], ctx)?;
+                    // a CQUAD8's THETA is measured from its xi direction at each point (QRG
+                    // CQUAD8, remark 3); femu's material axis is one direction, projected at each
+                    // point: the same where xi keeps its direction
+                    let by_theta = c.field(theta_field).trim().parse::<i64>().is_err();
+                    if c.name == "CQUAD8"
+                        && by_theta
+                        && !femu_fem::shell8::uniform_xi(&std::array::from_fn(|i| x[i]))
+                    {
+                        return Err(c.err(format!(
+                            "{eid}: its anisotropic material is oriented by THETA, which a CQUAD8 measures from its own xi direction at each point, and that direction turns across this element (curved or not a parallelogram); femu orients a CQUAD8's material by one axis: give an MCID instead"
+                        )));
+                    }
                 }
                 // T1-T4: corner thicknesses, refused unless they are the property's
-                let tflag = c.int(10, "TFLAG")?.unwrap_or(0);
+                let tflag = c.int(tflag_field, "TFLAG")?.unwrap_or(0);
                 for k in 0..corners {
-                    if let Some(tk) = c.real(11 + k, "T")? {
+                    if let Some(tk) = c.real(t_field + k, "T")? {
                         let t = if tflag == 1 { tk * shell.t } else { tk };
                         if (t - shell.t).abs() > 1e-12 * shell.t {
                             return Err(c.err(format!(
