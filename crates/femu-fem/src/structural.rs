@@ -556,7 +556,7 @@ impl StructuralElement {
                 let x = |i: usize| coords[self.nodes[i]];
                 let tri = |a: V3, b: V3, c: V3| 0.5 * norm(cross(sub(b, a), sub(c, a)));
                 let area = match self.nodes.len() {
-                    8 => crate::shell8::area8(&std::array::from_fn(x)),
+                    8 => crate::shell8::area8(&std::array::from_fn::<_, 8, _>(x)),
                     4 => tri(x(0), x(1), x(2)) + tri(x(0), x(2), x(3)),
                     _ => tri(x(0), x(1), x(2)),
                 };

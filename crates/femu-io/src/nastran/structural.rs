@@ -852,10 +852,7 @@ pub(super) fn add_structural(
                     // CQUAD8, remark 3); femu's material axis is one direction, projected at each
                     // point: the same where xi keeps its direction
                     let by_theta = c.field(theta_field).trim().parse::<i64>().is_err();
-                    if c.name == "CQUAD8"
-                        && by_theta
-                        && !femu_fem::shell8::uniform_xi(&std::array::from_fn(|i| x[i]))
-                    {
+                    if c.name == "CQUAD8" && by_theta && !femu_fem::shell8::uniform_xi(&x) {
                         return Err(c.err(format!(
                             "{eid}: its anisotropic material is oriented by THETA, which a CQUAD8 measures from its own xi direction at each point, and that direction turns across this element (curved or not a parallelogram); femu orients a CQUAD8's material by one axis: give an MCID instead"
                         )));
