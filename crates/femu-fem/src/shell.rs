@@ -338,7 +338,9 @@ fn plane_stress(d: f64, nu: f64) -> [[f64; 3]; 3] {
     ]
 }
 
-/// `k += w B^T D B` for the first `rows` rows of `b` (each `N` columns) and `d`, row-major `k`.
+/// `k += w B^T D B` for the first `rows` rows of `b` (each `N` columns) and `d`, row-major `k`
+/// (`D` symmetric: the upper triangle is formed and mirrored; columns of `B` that are zero in
+/// every row are skipped).
 pub(crate) fn add_btdb<const N: usize>(
     k: &mut [f64],
     b: &[[f64; N]],
@@ -346,15 +348,30 @@ pub(crate) fn add_btdb<const N: usize>(
     rows: usize,
     w: f64,
 ) {
-    for r in 0..N {
+    // w D B, rows x N
+    let mut db = [[0.0; N]; 3];
+    for a in 0..rows {
         for c in 0..N {
             let mut v = 0.0;
-            for a in 0..rows {
-                for bb in 0..rows {
-                    v += b[a][r] * d[a][bb] * b[bb][c];
-                }
+            for q in 0..rows {
+                v += d[a][q] * b[q][c];
             }
-            k[r * N + c] += w * v;
+            db[a][c] = w * v;
+        }
+    }
+    for r in 0..N {
+        if (0..rows).all(|a| b[a][r] == 0.0) {
+            continue;
+        }
+        for c in r..N {
+            let mut v = 0.0;
+            for a in 0..rows {
+                v += b[a][r] * db[a][c];
+            }
+            k[r * N + c] += v;
+            if c != r {
+                k[c * N + r] += v;
+            }
         }
     }
 }

@@ -238,35 +238,42 @@ fn point<const M: usize>(topo: &Topology<M>, x: &[V3; M], n: &[V3; M], xi: f64, 
     let p = j0.try_inverse().unwrap_or_else(nalgebra::Matrix3::zeros);
     let q = -p * j1 * p;
     let r = nalgebra::Matrix3::from_rows(&axes.map(nalgebra::RowVector3::from));
+    // du/dX = sum_a P[:, a] (x) G_a (G_a = du/dxi_a, the rows of G), so in the tangent axes L =
+    // sum_a (R P[:, a]) (x) (R G_a): each DOF's gradient is an outer product
+    let turned = |m: &nalgebra::Matrix3<f64>, a: usize| -> V3 {
+        let v = r * m.column(a);
+        [v[0], v[1], v[2]]
+    };
+    let (rp, rq) = (
+        [turned(&p, 0), turned(&p, 1), turned(&p, 2)],
+        [turned(&q, 0), turned(&q, 1), turned(&q, 2)],
+    );
+    let outer = |a: V3, b: V3| -> [[f64; 3]; 3] {
+        std::array::from_fn(|i| std::array::from_fn(|j| a[i] * b[j]))
+    };
     let mut l0 = Vec::with_capacity(6 * M);
     let mut l1 = Vec::with_capacity(6 * M);
     for node in 0..M {
-        for dof in 0..6 {
-            // G[a][c] = d u_c / d xi_a at z = 0, and its z derivative
-            let mut g0 = nalgebra::Matrix3::zeros();
-            let mut gz = nalgebra::Matrix3::zeros();
-            if dof < 3 {
-                g0[(0, dof)] = dxi[node];
-                g0[(1, dof)] = deta[node];
-            } else {
-                let mut e = [0.0; 3];
-                e[dof - 3] = 1.0;
-                let rot = cross(e, n[node]);
-                for c in 0..3 {
-                    g0[(2, c)] = nn[node] * rot[c];
-                    gz[(0, c)] = dxi[node] * rot[c];
-                    gz[(1, c)] = deta[node] * rot[c];
-                }
-            }
-            // d u_c / d X_d = (J^-1 G)[d][c]; in the tangent axes R (J^-1 G) R^T
-            let d0 = p * g0;
-            let d1 = p * gz + q * g0;
-            let turn = |d: nalgebra::Matrix3<f64>| -> [[f64; 3]; 3] {
-                let m = r * d * r.transpose();
-                std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
-            };
-            l0.push(turn(d0));
-            l1.push(turn(d1));
+        let (d1, d2, w) = (dxi[node], deta[node], nn[node]);
+        let along: V3 = std::array::from_fn(|k| d1 * rp[0][k] + d2 * rp[1][k]);
+        // a translation along c: G_xi = d1 e_c, G_eta = d2 e_c, no z derivative
+        let bent: V3 = std::array::from_fn(|k| d1 * rq[0][k] + d2 * rq[1][k]);
+        for c in 0..3 {
+            let beta = [r[(0, c)], r[(1, c)], r[(2, c)]];
+            l0.push(outer(along, beta));
+            l1.push(outer(bent, beta));
+        }
+        // a rotation about c moves the director by e_c x n: G_z = w (e_c x n), and the z
+        // derivatives G_xi = d1 (e_c x n), G_eta = d2 (e_c x n)
+        let normal: V3 = std::array::from_fn(|k| w * rp[2][k]);
+        let curl: V3 = std::array::from_fn(|k| along[k] + w * rq[2][k]);
+        for c in 0..3 {
+            let mut e = [0.0; 3];
+            e[c] = 1.0;
+            let rot = cross(e, n[node]);
+            let beta = std::array::from_fn(|k| dot(axes[k], rot));
+            l0.push(outer(normal, beta));
+            l1.push(outer(curl, beta));
         }
     }
     Point { l0, l1, axes, da }
