@@ -25,9 +25,9 @@ pub enum Format {
     /// `job.pch` or OUTPUT4 `job.op4`, or MatrixMarket `X_K.mtx` (with `X_M.mtx`,
     /// `X_dofs.csv`); [`crate::matrices`].
     Matrices,
-    /// Another solver's modes: CalculiX's `.frd` ([`crate::frd`]) or Nastran's `.f06` or `.op2`
-    /// ([`crate::f06`], [`crate::op2`], the grids from its deck), the model side of a correlation
-    /// only (no `K` and `M`).
+    /// Another solver's modes: CalculiX's `.frd` ([`crate::frd`]) or Nastran's `.f06`, `.op2` or
+    /// punch `.pch` ([`crate::f06`], [`crate::op2`], [`crate::punch`], the grids from its deck),
+    /// the model side of a correlation only (no `K` and `M`).
     Results,
 }
 
@@ -94,7 +94,7 @@ pub const FORMATS: &[FormatInfo] = &[
     },
     FormatInfo {
         format: Format::Results,
-        extensions: &["frd", "f06", "op2"],
+        extensions: &["frd", "f06", "op2", "pch"],
         model: true,
         deck: true,
         test: false,
@@ -120,11 +120,12 @@ pub const FORMATS: &[FormatInfo] = &[
 
 /// Whether the file at `path` opens as CalculiX's printed output (its first 4 KiB); a file that
 /// cannot be read is not (its reader then says why).
-fn calculix_output(path: &Path) -> bool {
+/// The first 4 KB of a file as text (empty if unreadable).
+fn head(path: &Path) -> String {
     use std::io::Read;
     let mut head = vec![0u8; 4096];
     let Ok(mut f) = std::fs::File::open(path) else {
-        return false;
+        return String::new();
     };
     let mut n = 0;
     while n < head.len() {
@@ -133,16 +134,19 @@ fn calculix_output(path: &Path) -> bool {
             Ok(k) => n += k,
         }
     }
-    crate::ccx_dat::looks_like_calculix(&String::from_utf8_lossy(&head[..n]))
+    String::from_utf8_lossy(&head[..n]).into_owned()
 }
 
 impl Format {
     /// The format of `path` by its extension (any case), if femu reads it. A `.dat` is Nastran
     /// bulk data unless its first kilobytes are CalculiX's printed output
-    /// ([`crate::ccx_dat::looks_like_calculix`]): then another solver's modes.
+    /// ([`crate::ccx_dat::looks_like_calculix`]), and a `.pch` DMIG matrices unless they are
+    /// result output ([`crate::punch::looks_like_results`]): then another solver's modes.
     pub fn from_path(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
-        if ext == "dat" && calculix_output(path) {
+        if (ext == "dat" && crate::ccx_dat::looks_like_calculix(&head(path)))
+            || (ext == "pch" && crate::punch::looks_like_results(&head(path)))
+        {
             return Some(Format::Results);
         }
         FORMATS
@@ -179,10 +183,14 @@ pub fn described(models: bool) -> String {
 
 /// Every extension femu reads, for `femu info`'s refusal.
 pub fn all_extensions() -> Vec<&'static str> {
-    FORMATS
-        .iter()
-        .flat_map(|f| f.extensions.iter().copied())
-        .collect()
+    // `.pch` is in two rows (DMIG matrices, punched modes): listed once
+    let mut out: Vec<&'static str> = Vec::new();
+    for e in FORMATS.iter().flat_map(|f| f.extensions.iter().copied()) {
+        if !out.contains(&e) {
+            out.push(e);
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -206,7 +214,7 @@ mod tests {
         assert!(Format::Inp.info().deck && !Format::Gmsh.info().deck);
         assert_eq!(
             described(true),
-            "Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh), universal files (.unv, .uff), stiffness and mass matrices with their DOF table (.sti, .mtx, .pch, .op4) and another solver's modes (.frd, .f06, .op2)"
+            "Abaqus/CalculiX decks (.inp), Nastran bulk data (.bdf, .dat, .nas), Gmsh meshes (.msh), universal files (.unv, .uff), stiffness and mass matrices with their DOF table (.sti, .mtx, .pch, .op4) and another solver's modes (.frd, .f06, .op2, .pch)"
         );
         assert_eq!(
             described(false),
@@ -215,6 +223,11 @@ mod tests {
         assert_eq!(all_extensions().len(), 17);
         assert_eq!(
             Format::from_path(Path::new("job.sti")),
+            Some(Format::Matrices)
+        );
+        // a .pch that is not there (or holds DMIG cards) is matrices
+        assert_eq!(
+            Format::from_path(Path::new("no/such/job.pch")),
             Some(Format::Matrices)
         );
     }

@@ -23,6 +23,7 @@ mod memory;
 pub mod nastran;
 pub mod op2;
 pub mod op4;
+pub mod punch;
 mod spelling;
 mod stream;
 pub mod test_data;

@@ -246,6 +246,50 @@ fn f06_reader_never_panics() {
     });
 }
 
+/// Nastran's punch reader on mutated records of pyNastran's punch files: the first mode of
+/// `fsi.pch` made real (its output form `$REAL OUTPUT`, its eigenvalue a number, each grid's two
+/// imaginary records and the scalar points left out), which reads as 9 grids, and `cbush.pch`
+/// (static results).
+#[test]
+fn punch_reader_never_panics() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/nastran/pynastran");
+    let fsi = std::fs::read_to_string(dir.join("fsi.pch")).unwrap();
+    let mut real = String::new();
+    let mut after_point = 0;
+    for l in fsi.lines() {
+        if l.contains("     S    ") {
+            break;
+        }
+        if l.starts_with("-CONT-") {
+            after_point += 1;
+            if after_point > 1 {
+                continue;
+            }
+        } else {
+            after_point = 0;
+        }
+        real.push_str(
+            &l.replace("$REAL-IMAGINARY OUTPUT", "$REAL OUTPUT          ")
+                .replace(
+                    "(  0.0000000E+00,  0.0000000E+00)",
+                    "  1.0000000E+00                  ",
+                ),
+        );
+        real.push('\n');
+    }
+    let path = dir.join("fsi.pch");
+    let modes = femu_io::punch::parse_punch_modes(&real, &path).unwrap();
+    assert_eq!(modes.modes.len(), 1);
+    assert_eq!(modes.modes[0].points.len(), 9);
+    let cbush = std::fs::read_to_string(dir.join("cbush.pch")).unwrap();
+    let corpus = [real, cbush];
+    let config = config();
+    proptest!(config, |(k in 0..2usize, edits in prop::collection::vec(edit(), 1..6))| {
+        let bytes = apply(corpus[k].as_bytes(), &edits);
+        let _ = femu_io::punch::parse_punch_modes(&String::from_utf8_lossy(&bytes), &path);
+    });
+}
+
 /// Nastran's OP2 reader on mutated bytes of a real run's OP2
 /// (`fixtures/nastran/pynastran/mode_solid_shell_bar.op2`): record lengths, markers and values
 /// changed, records cut, must give modes or an error.

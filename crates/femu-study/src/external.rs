@@ -118,26 +118,30 @@ pub fn load_result_modes(path: &Path, nodes: Option<&Path>) -> Result<ResultMode
 }
 
 /// Nodes, modes `(eigenvalue, line, translations per node in the basic frame)` and warnings of a
-/// Whether `path` is Nastran's results (`.f06` or `.op2`), by its extension.
+/// Whether `path` is Nastran's results (`.f06`, `.op2` or a punch `.pch`), by its extension.
 pub fn nastran_results(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("f06") || e.eq_ignore_ascii_case("op2"))
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+        ["f06", "op2", "pch"]
+            .iter()
+            .any(|x| e.eq_ignore_ascii_case(x))
+    })
 }
 
-/// The real modes of Nastran's results, by extension: an `.op2`'s ([`femu_io::op2::read_op2`])
-/// or an `.f06`'s ([`femu_io::f06::read_f06`]).
+/// The real modes of Nastran's results, by extension: an `.op2`'s ([`femu_io::op2::read_op2`]),
+/// a punch file's ([`femu_io::punch::read_punch_modes`]) or an `.f06`'s
+/// ([`femu_io::f06::read_f06`]).
 ///
 /// # Errors
 /// The readers' errors.
 pub fn read_nastran_modes(path: &Path) -> Result<femu_io::f06::F06, StudyError> {
-    let op2 = path
+    let ext = path
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("op2"));
-    Ok(if op2 {
-        femu_io::op2::read_op2(path)?
-    } else {
-        femu_io::f06::read_f06(path)?
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    Ok(match ext.as_deref() {
+        Some("op2") => femu_io::op2::read_op2(path)?,
+        Some("pch") => femu_io::punch::read_punch_modes(path)?,
+        _ => femu_io::f06::read_f06(path)?,
     })
 }
 

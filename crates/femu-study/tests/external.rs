@@ -481,7 +481,8 @@ fn calculix_modes_are_the_model_side() {
 /// from the run's deck, which holds shells, bars, beams and rods) as the model side, against a
 /// test written from pyNastran's reading of the same run's OP2 (an independent reader): the
 /// translations of grids 1-13 in x, y and z. Each pairs one to one with MAC 1 to 1e-9 and the
-/// same frequencies to 1e-6.
+/// same frequencies to 1e-6. The same modes punched (`.pch`, written here in Nastran's punch
+/// layout from pyNastran's reading, the deck beside it) pair the same way.
 #[test]
 fn nastran_modes_are_the_model_side() {
     let fixtures =
@@ -506,8 +507,64 @@ fn nastran_modes_are_the_model_side() {
         }
     }
     std::fs::write(d.join("test.csv"), csv).unwrap();
-    for file in ["mode_solid_shell_bar.f06", "mode_solid_shell_bar.op2"] {
-        let results = femu_study::external::load_result_modes(&fixtures.join(file), None).unwrap();
+    // the same modes as a punch file (VECTOR(PUNCH)), written here from pyNastran's reading in
+    // Nastran's punch layout, beside a copy of the run's deck
+    let mut pch = String::new();
+    let mut rec = |text: String| {
+        let n = pch.lines().count() + 1;
+        pch.push_str(&format!("{text:<72}{n:>8}\n"));
+    };
+    let e = |v: f64| {
+        let s = format!("{v:.6E}");
+        let (m, x) = s.split_once('E').unwrap();
+        let x: i32 = x.parse().unwrap();
+        format!(
+            "{:>18}",
+            format!("{m}E{}{:02}", if x < 0 { '-' } else { '+' }, x.abs())
+        )
+    };
+    for j in 0..3 {
+        for h in [
+            "$TITLE   =",
+            "$SUBTITLE=",
+            "$LABEL   =",
+            "$EIGENVECTOR",
+            "$REAL OUTPUT",
+        ] {
+            rec(h.to_string());
+        }
+        rec("$SUBCASE ID =           1".to_string());
+        let value = reference["eigenvalues"][j].as_f64().unwrap();
+        rec(format!("$EIGENVALUE = {:.7E}  MODE = {:>5}", value, j + 1));
+        for (k, node) in reference["nodes"].as_array().unwrap().iter().enumerate() {
+            let v: Vec<f64> = (0..6)
+                .map(|c| reference["vectors"][j][k][c].as_f64().unwrap())
+                .collect();
+            rec(format!(
+                "{:>10}       G{}{}{}",
+                node.as_u64().unwrap(),
+                e(v[0]),
+                e(v[1]),
+                e(v[2])
+            ));
+            rec(format!("{:<18}{}{}{}", "-CONT-", e(v[3]), e(v[4]), e(v[5])));
+        }
+    }
+    std::fs::write(d.join("mode_solid_shell_bar.pch"), pch).unwrap();
+    for deck in ["mode_solid_shell_bar.bdf", "geom.inc"] {
+        std::fs::copy(fixtures.join(deck), d.join(deck)).unwrap();
+    }
+    assert_eq!(
+        femu_io::Format::from_path(&d.join("mode_solid_shell_bar.pch")),
+        Some(femu_io::Format::Results)
+    );
+    for path in [
+        fixtures.join("mode_solid_shell_bar.f06"),
+        fixtures.join("mode_solid_shell_bar.op2"),
+        d.join("mode_solid_shell_bar.pch"),
+    ] {
+        let file = path.file_name().unwrap().to_string_lossy().into_owned();
+        let results = femu_study::external::load_result_modes(&path, None).unwrap();
         assert_eq!(results.model.mesh().node_count(), 25);
         let report = correlate_on(&results, &d.join("test.csv"));
         assert_eq!(report.pairing.pairs.len(), 3);
