@@ -1147,12 +1147,11 @@ impl Model {
         let mut out: BTreeMap<usize, nalgebra::Matrix3<f64>> = BTreeMap::new();
         for s in &self.structural {
             // a beam or a shell stiffens all three rotations of each of its nodes (torsion and two
-            // bending planes; two bending rotations and the drilling one): no need to form it
-            if matches!(
-                s.kind,
-                crate::structural::StructuralKind::Beam(_)
-                    | crate::structural::StructuralKind::Shell(_)
-            ) {
+            // bending planes; two bending rotations and the drilling one): no need to form it (a
+            // membrane reaches no rotation)
+            if matches!(s.kind, crate::structural::StructuralKind::Beam(_))
+                || matches!(&s.kind, crate::structural::StructuralKind::Shell(sh) if sh.bending > 0.0)
+            {
                 for n in &s.nodes {
                     *out.entry(*n).or_insert_with(nalgebra::Matrix3::zeros) +=
                         nalgebra::Matrix3::identity();

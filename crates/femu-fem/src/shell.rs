@@ -27,6 +27,9 @@ pub struct Shell {
     /// Thickness (m).
     pub t: f64,
     /// The bending stiffness's factor over a solid section's `t^3 / 12` (Nastran's `12I/T^3`).
+    /// Zero makes a membrane alone (Nastran's PSHELL with MID2 blank): no bending, no transverse
+    /// shear, no drilling stiffness, and the element does not reach its nodes' rotations (its
+    /// `shear` must then be `None` and its `offset` zero).
     pub bending: f64,
     /// The transverse shear factor (Nastran's `TS/T`, 5/6 for a solid section); `None`: no shear
     /// flexibility (Nastran's blank MID3), built as a shear stiffness 1,000 times a solid
@@ -218,7 +221,12 @@ pub fn laminate(plies: &[Ply]) -> Result<Shell, LaminateError> {
 /// stiffness.
 pub(crate) fn section(s: &Shell, e: &[V3; 3], sc: Scales) -> Result<SectionMatrices, String> {
     let t = s.t;
-    let shear_factor = s.shear.unwrap_or(1000.0 * 5.0 / 6.0);
+    // a membrane alone has no transverse shear
+    let shear_factor = if s.bending == 0.0 {
+        0.0
+    } else {
+        s.shear.unwrap_or(1000.0 * 5.0 / 6.0)
+    };
     let Some(mat) = &s.material else {
         let (e, nu) = (s.e, s.nu);
         let g = e / (2.0 * (1.0 + nu));
@@ -265,7 +273,7 @@ pub(crate) fn section(s: &Shell, e: &[V3; 3], sc: Scales) -> Result<SectionMatri
     let g = turn(&mat.membrane, 1.0)[2][2];
     let rs = [[c, sn], [-sn, c]];
     let cs: [[f64; 2]; 2] = match s.shear {
-        Some(k) => std::array::from_fn(|i| {
+        Some(k) if s.bending > 0.0 => std::array::from_fn(|i| {
             std::array::from_fn(|j| {
                 let mut v = 0.0;
                 for a in 0..2 {
@@ -276,7 +284,7 @@ pub(crate) fn section(s: &Shell, e: &[V3; 3], sc: Scales) -> Result<SectionMatri
                 sc.linear * k * t * v
             })
         }),
-        None => {
+        _ => {
             let ds = sc.linear * shear_factor * g * t;
             [[ds, 0.0], [0.0, ds]]
         }
@@ -393,6 +401,12 @@ fn strain_rows<const N: usize>(nx: &[f64], ny: &[f64]) -> ([[f64; N]; 3], [[f64;
         bb[2][6 * i + 3] = -nx[i];
     }
     (bm, bb)
+}
+
+/// The drilling stiffness's factor on `G t A`: `1e-3`, or none for a membrane alone (which does
+/// not reach the rotations).
+pub(crate) fn drilling(s: &Shell) -> f64 {
+    if s.bending == 0.0 { 0.0 } else { 1e-3 }
 }
 
 /// The drilling stiffness `kd sum_i (theta_z,i - omega)^2`, `omega = (v_,x - u_,y) / 2` from the
@@ -679,7 +693,7 @@ pub(crate) fn matrices_scaled(
     ];
     let nx: [f64; 4] = std::array::from_fn(|i| inv[0][0] * dxi[i] + inv[0][1] * deta[i]);
     let ny: [f64; 4] = std::array::from_fn(|i| inv[1][0] * dxi[i] + inv[1][1] * deta[i]);
-    add_drilling::<24>(&mut k, &nx, &ny, sc.linear * 1e-3 * g * t * area);
+    add_drilling::<24>(&mut k, &nx, &ny, sc.linear * drilling(s) * g * t * area);
     Ok(to_basic::<24>(&k, m, &axes, mass, s.offset))
 }
 
@@ -802,7 +816,7 @@ pub(crate) fn matrices3_scaled(
         }
     }
     // drilling: k_d (theta_z,i - omega)^2, omega = (v_,x - u_,y) / 2
-    add_drilling::<18>(&mut k, &nx, &ny, sc.linear * 1e-3 * g * t * area);
+    add_drilling::<18>(&mut k, &nx, &ny, sc.linear * drilling(s) * g * t * area);
     Ok(to_basic::<18>(&k, m, &[e1, e2, n], mass, s.offset))
 }
 
@@ -866,12 +880,18 @@ impl Shell {
                 self.rho, self.nsm
             ));
         }
-        if !(self.bending > 0.0 && self.bending.is_finite())
+        if !(self.bending >= 0.0 && self.bending.is_finite())
             || self.shear.is_some_and(|k| !(k > 0.0))
         {
             return bad(format!(
-                "its bending factor {} and shear factor {:?} must be positive",
+                "its bending factor {} and shear factor {:?} must be positive (a bending factor of 0: a membrane)",
                 self.bending, self.shear
+            ));
+        }
+        if self.bending == 0.0 && (self.shear.is_some() || self.offset != 0.0) {
+            return bad(format!(
+                "it is a membrane (no bending), which has no transverse shear and no offset: shear factor {:?}, offset {}",
+                self.shear, self.offset
             ));
         }
         Ok(())

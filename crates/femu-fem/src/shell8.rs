@@ -417,7 +417,7 @@ fn curved<const M: usize, const ND: usize>(
     let mut kg = kg;
     let (cx, cy) = centre(topo);
     let (_, _, _, g) = section(s, &point(topo, x, &n0, cx, cy).axes, sc)?;
-    let kd = sc.linear * 1e-3 * g * s.t * area * 4.0 / M as f64;
+    let kd = sc.linear * crate::shell::drilling(s) * g * s.t * area * 4.0 / M as f64;
     for (i, &(a, b)) in topo.nodes.iter().enumerate() {
         let pt = point(topo, x, &n0, a, b);
         let mut d = [0.0; ND];

@@ -464,6 +464,11 @@ impl StructuralElement {
     pub fn parts(&self) -> Vec<(usize, Part)> {
         let both = |n: usize| [(n, Part::Translations), (n, Part::Rotations)];
         match &self.kind {
+            StructuralKind::Shell(s) if s.bending == 0.0 => self
+                .nodes
+                .iter()
+                .map(|n| (*n, Part::Translations))
+                .collect(),
             StructuralKind::Beam(_) | StructuralKind::Shell(_) => {
                 self.nodes.iter().flat_map(|n| both(*n)).collect()
             }
@@ -565,8 +570,33 @@ impl StructuralElement {
         }
     }
 
-    /// A shell's matrices with their parts scaled (`crate::shell::Scales`).
+    /// A shell's matrices with their parts scaled (`crate::shell::Scales`); a membrane's on its
+    /// nodes' translations alone.
     fn shell_matrices(
+        &self,
+        s: &crate::shell::Shell,
+        coords: &[[f64; 3]],
+        mass: MassKind,
+        sc: crate::shell::Scales,
+    ) -> Result<(Vec<f64>, Vec<f64>), String> {
+        let (k, m) = self.shell_matrices_six(s, coords, mass, sc)?;
+        if s.bending > 0.0 {
+            return Ok((k, m));
+        }
+        // a membrane: no term reaches the rotations (no bending, shear, drilling or rotary
+        // inertia), so its translations' block is the element
+        let n = 6 * self.nodes.len();
+        let keep: Vec<usize> = (0..n).filter(|i| i % 6 < 3).collect();
+        let block = |a: &[f64]| -> Vec<f64> {
+            keep.iter()
+                .flat_map(|&r| keep.iter().map(move |&c| a[r * n + c]))
+                .collect()
+        };
+        Ok((block(&k), block(&m)))
+    }
+
+    /// A shell's matrices on all six DOFs of its nodes.
+    fn shell_matrices_six(
         &self,
         s: &crate::shell::Shell,
         coords: &[[f64; 3]],

@@ -406,9 +406,24 @@ MAT1,2,7.+10,,0.3,2700.
             "positive thickness",
         ),
         (
-            "CQUAD4,1,1,1,2,3,4\nPSHELL,1,1,0.01\n",
+            "CQUAD4,1,1,1,2,3,4\nPSHELL,1,,0.01,1\n",
             "bad.bdf:10",
-            "a membrane or a plate alone",
+            "a plate without a membrane",
+        ),
+        (
+            "CQUAD4,1,1,1,2,3,4\nPSHELL,1,1,0.01,,,1\n",
+            "bad.bdf:10",
+            "MID3 to be blank when MID2 is",
+        ),
+        (
+            "CQUAD4,1,1,1,2,3,4\nPSHELL,1,1,0.01,-1\n",
+            "bad.bdf:10",
+            "plane strain",
+        ),
+        (
+            "CQUAD4,1,1,1,2,3,4,,0.002\nPSHELL,1,1,0.01\n",
+            "bad.bdf:9",
+            "it is a membrane",
         ),
         (
             "CTRIA3,1,1,1,2,3,,nan\nPSHELL,1,1,0.01,1\n",
@@ -1535,4 +1550,55 @@ fn cquad8_femu_cannot_build_are_refused_with_card_and_line() {
         .to_string();
     assert!(e.contains("give an MCID instead"), "{e}");
     parse_bdf(&orthotropic("0"), "panel.bdf", &BdfOptions::default()).unwrap();
+}
+
+/// A PSHELL of MID1 alone is a membrane (no bending, no transverse shear, no rotations): NAFEMS
+/// FV32's tapered membrane as CQUAD4 on such a PSHELL, the out-of-plane DOFs held by SPC1 and the
+/// root clamped, has three DOFs a grid and NAFEMS's six frequencies (44.623, 130.03, 162.70,
+/// 246.05, 379.90, 391.44 Hz) to 1.2 % on 32 x 16 elements, as the shells' in-plane motion has.
+#[test]
+fn a_pshell_of_mid1_alone_is_a_membrane() {
+    let (nx, ny) = (32, 16);
+    let id = |i: usize, j: usize| 1 + i + (nx + 1) * j;
+    let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let x = 10.0 * i as f64 / nx as f64;
+            let half = 2.5 - 0.2 * x;
+            let y = 2.5 - half + 2.0 * half * j as f64 / ny as f64;
+            s.push_str(&format!("GRID,{},,{x},{y},0.\n", id(i, j)));
+            s.push_str(&format!(
+                "SPC1,1,{},{}\n",
+                if i == 0 { "123" } else { "3" },
+                id(i, j)
+            ));
+        }
+    }
+    for j in 0..ny {
+        for i in 0..nx {
+            s.push_str(&format!(
+                "CQUAD4,{},1,{},{},{},{}\n",
+                1 + i + nx * j,
+                id(i, j),
+                id(i + 1, j),
+                id(i + 1, j + 1),
+                id(i, j + 1)
+            ));
+        }
+    }
+    s.push_str("PSHELL,1,3,0.05\nMAT1,3,2.+11,,0.3,8000.\nENDDATA\n");
+    let d = parse_bdf(&s, "fv32.bdf", &BdfOptions::default()).unwrap();
+    let sys = d.model.assemble(d.mass).unwrap();
+    assert_eq!(sys.dofs.free_count(), 2 * nx * (ny + 1));
+    let modes = sys
+        .modes(Which::Lowest(6), &EigenOptions::default())
+        .unwrap();
+    for (l, r) in modes
+        .values
+        .iter()
+        .zip([44.623, 130.03, 162.70, 246.05, 379.90, 391.44])
+    {
+        let f = l.sqrt() / (2.0 * PI);
+        assert!((f / r - 1.0).abs() < 1.2e-2, "{f} Hz against {r}");
+    }
 }

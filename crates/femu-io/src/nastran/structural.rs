@@ -927,12 +927,27 @@ fn pshell(
     ctx: &mut Context<'_, '_>,
 ) -> Result<femu_fem::shell::Shell, IoError> {
     let mid1 = p.int(1, "MID1")?.filter(|m| *m > 0);
-    let mid2 = p.int(3, "MID2")?.filter(|m| *m > 0);
+    let raw2 = p.int(3, "MID2")?;
+    let mid2 = raw2.filter(|m| *m > 0);
     let mid3 = p.int(5, "MID3")?.filter(|m| *m > 0);
     let mid4 = p.int(10, "MID4")?.filter(|m| *m > 0);
+    if raw2 == Some(-1) {
+        return Err(p.err(format!(
+            "{pid}: MID2 = -1 makes a plane strain element, which femu does not build"
+        )));
+    }
+    // MID1 alone: a membrane (QRG PSHELL: MID3 must then be blank)
+    if let (Some(m1), None) = (mid1, mid2) {
+        if let Some(m3) = mid3 {
+            return Err(p.err(format!(
+                "{pid}: MID3 = {m3} with MID2 blank: the QRG asks MID3 to be blank when MID2 is"
+            )));
+        }
+        return membrane_pshell(p, pid, m1, ctx);
+    }
     let (Some(m1), Some(m2)) = (mid1, mid2) else {
         return Err(p.err(format!(
-            "{pid}: MID1 = {mid1:?} and MID2 = {mid2:?}: femu's shells have both membrane and bending stiffness (a membrane or a plate alone is not built)"
+            "{pid}: MID1 = {mid1:?} and MID2 = {mid2:?}: a plate without a membrane (MID1 blank) is not built"
         )));
     };
     if let Some(m4) = mid4 {
@@ -1003,6 +1018,66 @@ fn pshell(
             axis: [1.0, 0.0, 0.0],
         }),
         offset,
+    })
+}
+
+/// A PSHELL of MID1 alone: a membrane of that material (`12I/T**3 = 0`: no bending, no
+/// transverse shear, no rotations; [`femu_fem::shell::Shell::bending`]).
+fn membrane_pshell(
+    p: &Card,
+    pid: u64,
+    m1: i64,
+    ctx: &mut Context<'_, '_>,
+) -> Result<femu_fem::shell::Shell, IoError> {
+    let t = p
+        .real(2, "T")?
+        .filter(|t| *t > 0.0)
+        .ok_or_else(|| p.err(format!("{pid}: a shell needs a positive thickness T")))?;
+    let c1 = ctx.materials.get(&(m1 as u64)).copied().ok_or_else(|| {
+        p.err(format!(
+            "{pid} refers to material {m1}, which the deck does not define"
+        ))
+    })?;
+    let rho = shell_density(c1, pid, p)? * ctx.wtmass;
+    let nsm = p.real(7, "NSM")?.unwrap_or(0.0) * ctx.wtmass;
+    let offset = zoffs(p, 13, t)?.unwrap_or(0.0);
+    if offset != 0.0 {
+        return Err(p.err(format!(
+            "{pid}: ZOFFS = {offset} on a membrane (MID2 blank): an offset needs MID1 and MID2 (QRG CQUAD4, remark 6)"
+        )));
+    }
+    if c1.name == "MAT1" {
+        let mut scratch = Vec::new();
+        let (e, nu) = super::materials::mat1_moduli(c1, &mut scratch)?;
+        return Ok(femu_fem::shell::Shell {
+            e,
+            nu,
+            rho,
+            t,
+            bending: 0.0,
+            shear: None,
+            nsm,
+            material: None,
+            offset: 0.0,
+        });
+    }
+    let membrane = plane_material(c1, pid, p)?;
+    Ok(femu_fem::shell::Shell {
+        e: 0.0,
+        nu: 0.0,
+        rho,
+        t,
+        bending: 0.0,
+        shear: None,
+        nsm,
+        material: Some(femu_fem::shell::ShellMaterial {
+            membrane,
+            // no bending: any positive definite placeholder the section scales by zero
+            bending: membrane,
+            shear: [[0.0; 2]; 2],
+            axis: [1.0, 0.0, 0.0],
+        }),
+        offset: 0.0,
     })
 }
 
