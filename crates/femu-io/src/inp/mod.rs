@@ -13,7 +13,8 @@
 //! "Multipoint constraints"); beams `B31` and `B33` with `*BEAM SECTION` (`RECT`, `CIRC`, `PIPE`)
 //! or `*BEAM GENERAL SECTION` (`GENERAL`), springs `SPRING1`, `SPRING2`, `SPRINGA` with `*SPRING`
 //! (`structural.rs`; their nodes get rotations, which `*BOUNDARY` DOFs 4-6 then fix), and shells
-//! `S4`, `S4R`, `S3`, `S3R`, `S8R`, `S8` with `*SHELL SECTION` (one isotropic material, its thickness, its
+//! `S4`, `S4R`, `S3`, `S3R`, `S8R`, `S8` with `*SHELL SECTION` and membranes `M3D3`, `M3D4`, `M3D4R`,
+//! `M3D8`, `M3D8R` with `*MEMBRANE SECTION` (one isotropic material, its thickness, its
 //! `OFFSET`).
 //!
 //! The writer states multipoint constraints as `*EQUATION`s; the rotations of a rigid link's
@@ -98,6 +99,10 @@ const READ: &[(&str, &[&str])] = &[
     ("BEAM SECTION", &["ELSET", "MATERIAL", "SECTION"]),
     ("BEAM GENERAL SECTION", &["ELSET", "SECTION", "DENSITY"]),
     ("SPRING", &["ELSET"]),
+    (
+        "MEMBRANE SECTION",
+        &["ELSET", "MATERIAL", "POISSON", "ORIENTATION"],
+    ),
     (
         "SHELL SECTION",
         &[

@@ -365,6 +365,37 @@ impl DeckBuilder {
                         offset,
                         composite,
                         symmetric: params.contains_key("SYMMETRIC"),
+                        membrane: false,
+                        lines: Vec::new(),
+                        line: at(l),
+                    });
+                Ok(())
+            }
+            "MEMBRANE SECTION" => {
+                let elset = params
+                    .get("ELSET")
+                    .ok_or_else(|| err(l, "*MEMBRANE SECTION without ELSET=".into()))?;
+                let material = params
+                    .get("MATERIAL")
+                    .ok_or_else(|| err(l, "*MEMBRANE SECTION without MATERIAL=".into()))?;
+                if let Some(o) = params.get("ORIENTATION") {
+                    return Err(err(
+                        l,
+                        format!(
+                            "*MEMBRANE SECTION, ORIENTATION={o}: femu does not read *ORIENTATION (an isotropic membrane needs none)"
+                        ),
+                    ));
+                }
+                // POISSON sets the thickness change under large strain: no effect on K or M
+                self.structural
+                    .shell_sections
+                    .push(structural::ShellSectionCard {
+                        elset: elset.to_ascii_uppercase(),
+                        material: material.to_ascii_uppercase(),
+                        offset: 0.0,
+                        composite: false,
+                        symmetric: false,
+                        membrane: true,
                         lines: Vec::new(),
                         line: at(l),
                     });
@@ -541,7 +572,7 @@ impl DeckBuilder {
             return Ok(());
         }
         let (kind, formulation, approx) = element_kind(ty).ok_or_else(|| {
-            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; B31, B33, SPRING1, SPRING2, SPRINGA; S4, S4R, S3, S3R, S8R, S8)"))
+            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; B31, B33, SPRING1, SPRING2, SPRINGA; S4, S4R, S3, S3R, S8R, S8; M3D3, M3D4, M3D4R, M3D8, M3D8R)"))
         })?;
         if approx {
             warn(
@@ -750,7 +781,7 @@ impl DeckBuilder {
                 }
                 Ok(())
             }
-            "SHELL SECTION" => {
+            "SHELL SECTION" | "MEMBRANE SECTION" => {
                 if let Some(c) = self.structural.shell_sections.last_mut() {
                     c.lines.push(f.iter().map(|s| s.to_string()).collect());
                 }

@@ -37,6 +37,9 @@ pub(super) enum StructuralType {
     S3,
     /// An 8-node shell (S8R, and S8 built the same way).
     S8,
+    /// A membrane (M3D4 and M3D4R built fully integrated, M3D3, M3D8R and M3D8 as the 8-node
+    /// shell's membrane) of `*MEMBRANE SECTION`, with its node count.
+    Membrane(usize),
 }
 
 impl StructuralType {
@@ -52,10 +55,13 @@ impl StructuralType {
             "S4" | "S4R" => (Self::S4, 4),
             "S3" | "S3R" => (Self::S3, 3),
             "S8R" | "S8" => (Self::S8, 8),
-            t @ ("S8R5" | "S4R5" | "S9R5" | "STRI3" | "STRI65" | "M3D4" | "M3D4R" | "M3D3"
+            "M3D4" | "M3D4R" => (Self::Membrane(4), 4),
+            "M3D3" => (Self::Membrane(3), 3),
+            "M3D8R" | "M3D8" => (Self::Membrane(8), 8),
+            t @ ("S8R5" | "S4R5" | "S9R5" | "STRI3" | "STRI65" | "S6" | "M3D6" | "M3D9R"
             | "SC8R") => {
                 return Err(format!(
-                    "element type {t} is not read: femu's shells are S4, S4R, S3, S3R, S8R and S8 (6- and 9-node, thin-only, membrane and continuum shells are not built)"
+                    "element type {t} is not read: femu's shells are S4, S4R, S3, S3R, S8R and S8, its membranes M3D3, M3D4, M3D4R, M3D8 and M3D8R (6- and 9-node, thin-only and continuum shells are not built)"
                 ));
             }
             t @ ("B32" | "B32H" | "B31OS" | "B32OS" | "PIPE31" | "PIPE32" | "B21" | "B22"
@@ -78,6 +84,9 @@ impl StructuralType {
             Self::S4 => "S4",
             Self::S3 => "S3",
             Self::S8 => "S8R",
+            Self::Membrane(3) => "M3D3",
+            Self::Membrane(4) => "M3D4",
+            Self::Membrane(_) => "M3D8R",
         }
     }
 }
@@ -113,6 +122,8 @@ pub(super) struct ShellSectionCard {
     pub(super) composite: bool,
     /// `SYMMETRIC`: the plies given are the lower half, mirrored.
     pub(super) symmetric: bool,
+    /// A `*MEMBRANE SECTION` (for membrane elements): the thickness alone.
+    pub(super) membrane: bool,
     pub(super) lines: Vec<Vec<String>>,
     pub(super) line: Location,
 }
@@ -459,19 +470,50 @@ pub(super) fn add_structural(
                     releases: [[false; 6]; 2],
                 })
             }
-            StructuralType::S4 | StructuralType::S3 | StructuralType::S8 => {
+            StructuralType::S4
+            | StructuralType::S3
+            | StructuralType::S8
+            | StructuralType::Membrane(_) => {
+                let membrane = matches!(ty, StructuralType::Membrane(_));
+                let keyword = if membrane {
+                    "*MEMBRANE SECTION"
+                } else {
+                    "*SHELL SECTION"
+                };
                 let k = *shell_of.get(id).ok_or_else(|| {
                     at_err(
                         l,
                         format!(
-                            "{} element {id} has no *SHELL SECTION (none names a set that holds it)",
+                            "{} element {id} has no {keyword} (none names a set that holds it)",
                             ty.name()
                         ),
                     )
                 })?;
+                let card = &records.shell_sections[k];
+                if card.membrane != membrane {
+                    return Err(at_err(
+                        l,
+                        format!(
+                            "{} element {id} is given a {} (line {}): a membrane element takes a *MEMBRANE SECTION, a shell a *SHELL SECTION",
+                            ty.name(),
+                            if card.membrane {
+                                "*MEMBRANE SECTION"
+                            } else {
+                                "*SHELL SECTION"
+                            },
+                            card.line.line
+                        ),
+                    ));
+                }
                 let x: Vec<[f64; 3]> = nodes.iter().map(|n| model.mesh().coords()[*n]).collect();
-                ge = shell_damping(&records.shell_sections[k], material_damping)?;
-                shell(&records.shell_sections[k], materials, laminae, &x)?
+                ge = shell_damping(card, material_damping)?;
+                let mut kind = shell(card, materials, laminae, &x)?;
+                // a membrane: no bending, no transverse shear (docs/MATH.md, "Shells")
+                if let (true, StructuralKind::Shell(s)) = (membrane, &mut kind) {
+                    s.bending = 0.0;
+                    s.shear = None;
+                }
+                kind
             }
             _ => {
                 let k = *spring_of.get(id).ok_or_else(|| {
@@ -565,23 +607,23 @@ fn shell(
     if c.composite {
         return composite_shell(c, materials, laminae, x);
     }
+    let keyword = if c.membrane {
+        "*MEMBRANE SECTION"
+    } else {
+        "*SHELL SECTION"
+    };
     let t = c
         .lines
         .first()
         .and_then(|r| r.first())
         .filter(|s| !s.is_empty())
-        .ok_or_else(|| {
-            at_err(
-                l,
-                "*SHELL SECTION needs the thickness on its data line".into(),
-            )
-        })
+        .ok_or_else(|| at_err(l, format!("{keyword} needs the thickness on its data line")))
         .and_then(|s| number(l, "the thickness", s))?;
     let m = materials.get(&c.material).ok_or_else(|| {
         at_err(
             l,
             format!(
-                "*SHELL SECTION names material {}, which no *MATERIAL defines",
+                "{keyword} names material {}, which no *MATERIAL defines",
                 c.material
             ),
         )
