@@ -76,13 +76,7 @@ fn b31_cantilever_against_calculix() {
     let mut previous: Option<Vec<f64>> = None;
     for n in [20, 40] {
         let text = cantilever(n, "B31", true);
-        let dir = std::env::temp_dir().join(format!("femu-b31-{n}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        std::fs::write(dir.join("job.inp"), &text).unwrap();
-        femu_testkit::ccx::run(&dir, "job");
-        let ccx =
-            femu_testkit::ccx::eigenvalues(&std::fs::read_to_string(dir.join("job.dat")).unwrap());
-        let _ = std::fs::remove_dir_all(&dir);
+        let ccx = femu_testkit::ccx::frequency_eigenvalues(&text, &format!("b31-{n}"));
         let (femu, _, _) = lowest(&text, 4);
         let diff: Vec<f64> = femu
             .iter()
@@ -314,13 +308,7 @@ fn s4_plate_against_nafems_fv16_and_calculix() {
     let mut previous: Option<f64> = None;
     for n in [16, 32] {
         let text = fv16(n);
-        let dir = std::env::temp_dir().join(format!("femu-s4-{n}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        std::fs::write(dir.join("job.inp"), &text).unwrap();
-        femu_testkit::ccx::run(&dir, "job");
-        let ccx =
-            femu_testkit::ccx::eigenvalues(&std::fs::read_to_string(dir.join("job.dat")).unwrap());
-        let _ = std::fs::remove_dir_all(&dir);
+        let ccx = femu_testkit::ccx::frequency_eigenvalues(&text, &format!("s4-{n}"));
         let (femu, _, _) = lowest(&text, 6);
         let worst = femu
             .iter()
@@ -652,43 +640,31 @@ fn material_structural_damping_reaches_solids_and_shells() {
 /// line continues on the next.
 fn s8r_panel(n: usize, t: f64, extra: &str) -> String {
     let mut s = String::from("*HEADING\ncylindrical panel\n*NODE\n");
-    let id = |i: usize, j: usize| 1 + i + (2 * n + 1) * j;
-    for j in 0..=2 * n {
-        for i in 0..=2 * n {
-            if i % 2 == 1 && j % 2 == 1 {
-                continue;
-            }
-            let a = (PI / 3.0) * (i as f64 / (2 * n) as f64 - 0.5);
-            s.push_str(&format!(
-                "{}, {:.12}, {:.12}, {:.12}\n",
-                id(i, j),
-                a.sin(),
-                j as f64 / (2 * n) as f64,
-                a.cos()
-            ));
-        }
+    let id = |(i, j): (usize, usize)| 1 + i + (2 * n + 1) * j;
+    for p in femu_testkit::quad8_points(n, n) {
+        let a = (PI / 3.0) * (p.0 as f64 / (2 * n) as f64 - 0.5);
+        s.push_str(&format!(
+            "{}, {:.12}, {:.12}, {:.12}\n",
+            id(p),
+            a.sin(),
+            p.1 as f64 / (2 * n) as f64,
+            a.cos()
+        ));
     }
     s.push_str("*ELEMENT, TYPE=S8R, ELSET=PANEL\n");
-    for j in 0..n {
-        for i in 0..n {
-            let (a, b) = (2 * i, 2 * j);
-            // the first element continued on a second line after a trailing comma, as Abaqus
-            // writes long element lines
-            let split = if i + j == 0 { ",\n" } else { "," };
-            s.push_str(&format!(
-                "{}, {}, {}, {}, {}{split} {}, {}, {}, {}\n",
-                1 + i + n * j,
-                id(a, b),
-                id(a + 2, b),
-                id(a + 2, b + 2),
-                id(a, b + 2),
-                id(a + 1, b),
-                id(a + 2, b + 1),
-                id(a + 1, b + 2),
-                id(a, b + 1)
-            ));
-        }
+    for (e, cell) in femu_testkit::quad8_cells(n, n).iter().enumerate() {
+        let g: Vec<String> = cell.iter().map(|&p| id(p).to_string()).collect();
+        // the first element continued on a second line after a trailing comma, as Abaqus
+        // writes long element lines
+        let split = if e == 0 { ",\n" } else { "," };
+        s.push_str(&format!(
+            "{}, {}{split} {}\n",
+            e + 1,
+            g[..4].join(", "),
+            g[4..].join(", ")
+        ));
     }
+    let id = |i: usize, j: usize| id((i, j));
     s.push_str("*NSET, NSET=CLAMP\n");
     for i in 0..=2 * n {
         s.push_str(&format!("{}\n", id(i, 0)));
@@ -716,13 +692,7 @@ fn s8r_panel_against_calculix() {
     for n in [4usize, 8, 16] {
         let text = s8r_panel(n, 0.01, "");
         let (femu, _, _) = lowest(&text, 6);
-        let dir = std::env::temp_dir().join(format!("femu-s8r-{n}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        std::fs::write(dir.join("job.inp"), &text).unwrap();
-        femu_testkit::ccx::run(&dir, "job");
-        let ccx =
-            femu_testkit::ccx::eigenvalues(&std::fs::read_to_string(dir.join("job.dat")).unwrap());
-        let _ = std::fs::remove_dir_all(&dir);
+        let ccx = femu_testkit::ccx::frequency_eigenvalues(&text, &format!("s8r-{n}"));
         assert_eq!(ccx.len(), 6, "{ccx:?}");
         worst.push(
             femu.iter()
@@ -747,47 +717,41 @@ fn s8r_panel_against_calculix() {
 fn fv32_membrane(nx: usize, ny: usize, ty: &str) -> String {
     let eight = ty.starts_with("M3D8");
     let (mx, my) = if eight { (2 * nx, 2 * ny) } else { (nx, ny) };
-    let id = |i: usize, j: usize| 1 + i + (mx + 1) * j;
+    let id = |(i, j): (usize, usize)| 1 + i + (mx + 1) * j;
+    type Cells = Vec<Vec<(usize, usize)>>;
+    let (points, cells): (Vec<(usize, usize)>, Cells) = if eight {
+        (
+            femu_testkit::quad8_points(nx, ny),
+            femu_testkit::quad8_cells(nx, ny)
+                .iter()
+                .map(|c| c.to_vec())
+                .collect(),
+        )
+    } else {
+        (
+            (0..=ny)
+                .flat_map(|j| (0..=nx).map(move |i| (i, j)))
+                .collect(),
+            (0..ny)
+                .flat_map(|j| {
+                    (0..nx).map(move |i| vec![(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)])
+                })
+                .collect(),
+        )
+    };
     let mut s = String::from("*HEADING\nfv32\n*NODE, NSET=ALL\n");
-    for j in 0..=my {
-        for i in 0..=mx {
-            if eight && i % 2 == 1 && j % 2 == 1 {
-                continue;
-            }
-            let x = 10.0 * i as f64 / mx as f64;
-            let half = 2.5 - 0.2 * x;
-            let y = 2.5 - half + 2.0 * half * j as f64 / my as f64;
-            s.push_str(&format!("{}, {x:.12}, {y:.12}, 0.\n", id(i, j)));
-        }
+    for p in points {
+        let x = 10.0 * p.0 as f64 / mx as f64;
+        let half = 2.5 - 0.2 * x;
+        let y = 2.5 - half + 2.0 * half * p.1 as f64 / my as f64;
+        s.push_str(&format!("{}, {x:.12}, {y:.12}, 0.\n", id(p)));
     }
     s.push_str(&format!("*ELEMENT, TYPE={ty}, ELSET=SKIN\n"));
-    for j in 0..ny {
-        for i in 0..nx {
-            let e = 1 + i + nx * j;
-            if eight {
-                let (a, b) = (2 * i, 2 * j);
-                s.push_str(&format!(
-                    "{e}, {}, {}, {}, {}, {}, {}, {}, {}\n",
-                    id(a, b),
-                    id(a + 2, b),
-                    id(a + 2, b + 2),
-                    id(a, b + 2),
-                    id(a + 1, b),
-                    id(a + 2, b + 1),
-                    id(a + 1, b + 2),
-                    id(a, b + 1)
-                ));
-            } else {
-                s.push_str(&format!(
-                    "{e}, {}, {}, {}, {}\n",
-                    id(i, j),
-                    id(i + 1, j),
-                    id(i + 1, j + 1),
-                    id(i, j + 1)
-                ));
-            }
-        }
+    for (e, cell) in cells.iter().enumerate() {
+        let g: Vec<String> = cell.iter().map(|&p| id(p).to_string()).collect();
+        s.push_str(&format!("{}, {}\n", e + 1, g.join(", ")));
     }
+    let id = |i: usize, j: usize| id((i, j));
     s.push_str("*NSET, NSET=ROOT\n");
     for j in 0..=my {
         s.push_str(&format!("{}\n", id(0, j)));
@@ -817,13 +781,7 @@ fn membranes_against_calculix_and_nafems() {
         if !femu_testkit::ccx::available() {
             continue;
         }
-        let dir = std::env::temp_dir().join(format!("femu-m3d4-{n}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        std::fs::write(dir.join("job.inp"), &text).unwrap();
-        femu_testkit::ccx::run(&dir, "job");
-        let ccx =
-            femu_testkit::ccx::eigenvalues(&std::fs::read_to_string(dir.join("job.dat")).unwrap());
-        let _ = std::fs::remove_dir_all(&dir);
+        let ccx = femu_testkit::ccx::frequency_eigenvalues(&text, &format!("m3d4-{n}"));
         assert_eq!(ccx.len(), 6);
         for (f, c) in femu.iter().zip(&ccx) {
             assert!(((c / f).sqrt() - 1.0).abs() < 2e-5, "{n}: {femu:?} {ccx:?}");

@@ -1340,53 +1340,57 @@ fn sdamping_selects_a_modal_damping_table() {
     }
 }
 
-/// A cylindrical panel (radius 1 m, 60 degrees, 1 m long, 10 mm, steel) of `n x n` CQUAD8 on a
-/// PSHELL (MID1 = MID2 = MID3), clamped along one straight edge by SPC1; `extra` bulk data added.
-fn cquad8_panel(n: usize, coupled: bool, extra: &str) -> String {
+/// A deck of `n x n` CQUAD8 on the surface `place(u, v)` (`(u, v)` in the unit square; GRID* of
+/// 12 decimals), each element's second line `G7,G8` followed by `tail`, a PSHELL of thickness `t`
+/// (MID1 = MID2 = MID3, a MAT1 of steel) and the grids at `u = 0` (`at_u0`) or `v = 0` clamped
+/// by SPC1; `extra` bulk data added.
+fn cquad8_deck(
+    n: usize,
+    coupled: bool,
+    (t, tail, extra): (f64, &str, &str),
+    at_u0: bool,
+    place: impl Fn(f64, f64) -> [f64; 3],
+) -> String {
     let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\n");
     if coupled {
         s.push_str("PARAM,COUPMASS,1\n");
     }
-    let id = |i: usize, j: usize| 1 + i + (2 * n + 1) * j;
-    for j in 0..=2 * n {
-        for i in 0..=2 * n {
-            if i % 2 == 1 && j % 2 == 1 {
-                continue;
-            }
-            let a = (PI / 3.0) * (i as f64 / (2 * n) as f64 - 0.5);
-            s.push_str(&format!(
-                "GRID*,{},,{:.12},{:.12}\n*,{:.12}\n",
-                id(i, j),
-                a.sin(),
-                j as f64 / (2 * n) as f64,
-                a.cos()
-            ));
+    let id = |(i, j): (usize, usize)| 1 + i + (2 * n + 1) * j;
+    for p in femu_testkit::quad8_points(n, n) {
+        let x = place(p.0 as f64 / (2 * n) as f64, p.1 as f64 / (2 * n) as f64);
+        s.push_str(&format!(
+            "GRID*,{},,{:.12},{:.12}\n*,{:.12}\n",
+            id(p),
+            x[0],
+            x[1],
+            x[2]
+        ));
+        if (at_u0 && p.0 == 0) || (!at_u0 && p.1 == 0) {
+            s.push_str(&format!("SPC1,1,123456,{}\n", id(p)));
         }
     }
-    for j in 0..n {
-        for i in 0..n {
-            let (a, b) = (2 * i, 2 * j);
-            s.push_str(&format!(
-                "CQUAD8,{},7,{},{},{},{},{},{}\n,{},{}\n",
-                1 + i + n * j,
-                id(a, b),
-                id(a + 2, b),
-                id(a + 2, b + 2),
-                id(a, b + 2),
-                id(a + 1, b),
-                id(a + 2, b + 1),
-                id(a + 1, b + 2),
-                id(a, b + 1)
-            ));
-        }
+    for (e, cell) in femu_testkit::quad8_cells(n, n).iter().enumerate() {
+        let g: Vec<String> = cell.iter().map(|&p| id(p).to_string()).collect();
+        s.push_str(&format!(
+            "CQUAD8,{},7,{}\n,{}{tail}\n",
+            e + 1,
+            g[..6].join(","),
+            g[6..].join(",")
+        ));
     }
-    s.push_str("PSHELL,7,3,0.01,3,,3\nMAT1,3,2.+11,,0.3,8000.\n");
-    for i in 0..=2 * n {
-        s.push_str(&format!("SPC1,1,123456,{}\n", id(i, 0)));
-    }
+    s.push_str(&format!("PSHELL,7,3,{t},3,,3\nMAT1,3,2.+11,,0.3,8000.\n"));
     s.push_str(extra);
     s.push_str("ENDDATA\n");
     s
+}
+
+/// A cylindrical panel (radius 1 m, 60 degrees, 1 m long, 10 mm, steel) of `n x n` CQUAD8 on a
+/// PSHELL (MID1 = MID2 = MID3), clamped along one straight edge by SPC1; `extra` bulk data added.
+fn cquad8_panel(n: usize, coupled: bool, extra: &str) -> String {
+    cquad8_deck(n, coupled, (0.01, "", extra), false, |u, v| {
+        let a = (PI / 3.0) * (u - 0.5);
+        [a.sin(), v, a.cos()]
+    })
 }
 
 /// CQUAD8 read as the QRG lays it out (G7 and G8, T1-T4, THETA/MCID and ZOFFS on the second
@@ -1398,46 +1402,13 @@ fn cquad8_panel(n: usize, coupled: bool, extra: &str) -> String {
 #[test]
 fn cquad8_decks_are_read_as_the_quick_reference_guide_lays_them_out() {
     for coupled in [true, false] {
-        let n = 8;
-        let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\n");
-        if coupled {
-            s.push_str("PARAM,COUPMASS,1\n");
-        }
-        let id = |i: usize, j: usize| 1 + i + (2 * n + 1) * j;
-        for j in 0..=2 * n {
-            for i in 0..=2 * n {
-                if i % 2 == 0 || j % 2 == 0 {
-                    s.push_str(&format!(
-                        "GRID,{},,{},{},0.\n",
-                        id(i, j),
-                        10.0 * i as f64 / (2 * n) as f64,
-                        10.0 * j as f64 / (2 * n) as f64
-                    ));
-                }
-            }
-        }
-        for j in 0..n {
-            for i in 0..n {
-                let (a, b) = (2 * i, 2 * j);
-                s.push_str(&format!(
-                    "CQUAD8,{},7,{},{},{},{},{},{}\n,{},{},0.05,0.05,0.05,0.05\n",
-                    1 + i + n * j,
-                    id(a, b),
-                    id(a + 2, b),
-                    id(a + 2, b + 2),
-                    id(a, b + 2),
-                    id(a + 1, b),
-                    id(a + 2, b + 1),
-                    id(a + 1, b + 2),
-                    id(a, b + 1)
-                ));
-            }
-        }
-        s.push_str("PSHELL,7,3,0.05,3,,3\nMAT1,3,2.+11,,0.3,8000.\n");
-        for j in 0..=2 * n {
-            s.push_str(&format!("SPC1,1,123456,{}\n", id(0, j)));
-        }
-        s.push_str("ENDDATA\n");
+        let s = cquad8_deck(
+            8,
+            coupled,
+            (0.05, ",0.05,0.05,0.05,0.05", ""),
+            true,
+            |u, v| [10.0 * u, 10.0 * v, 0.0],
+        );
         let d = parse_bdf(&s, "fv16.bdf", &BdfOptions::default()).unwrap();
         let sys = d.model.assemble(d.mass).unwrap();
         let modes = sys

@@ -47,3 +47,15 @@ pub fn eigenvalues(dat: &str) -> Vec<f64> {
         .map(|l| l.split_whitespace().nth(1).unwrap().parse::<f64>().unwrap())
         .collect()
 }
+
+/// The eigenvalues CalculiX prints for `deck` (its `*FREQUENCY` step), run in a fresh folder of
+/// the temporary directory named by `tag` (removed afterwards).
+pub fn frequency_eigenvalues(deck: &str, tag: &str) -> Vec<f64> {
+    let dir = std::env::temp_dir().join(format!("femu-ccx-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temporary folder");
+    std::fs::write(dir.join("job.inp"), deck).expect("the deck written");
+    run(&dir, "job");
+    let dat = std::fs::read_to_string(dir.join("job.dat")).expect("CalculiX's job.dat");
+    let _ = std::fs::remove_dir_all(&dir);
+    eigenvalues(&dat)
+}

@@ -108,3 +108,33 @@ pub fn mixed_steel_aluminium_plate(through: usize, quadratic: bool) -> Model {
         .expect("the tet set");
     model
 }
+
+/// The points of an `nx x ny` mesh of 8-node quadrilaterals on a `(2 nx + 1) x (2 ny + 1)` grid:
+/// every `(i, j)` but the cells' centres (both odd), row by row.
+pub fn quad8_points(nx: usize, ny: usize) -> Vec<(usize, usize)> {
+    (0..=2 * ny)
+        .flat_map(|j| (0..=2 * nx).map(move |i| (i, j)))
+        .filter(|(i, j)| i % 2 == 0 || j % 2 == 0)
+        .collect()
+}
+
+/// The cells of [`quad8_points`], row by row, each as its eight grid points in the element order
+/// of Nastran's CQUAD8, Abaqus's S8R and Gmsh's 8-node quadrangle: the corners counterclockwise
+/// from `(2i, 2j)`, then the midsides of the edges 1-2, 2-3, 3-4, 4-1.
+pub fn quad8_cells(nx: usize, ny: usize) -> Vec<[(usize, usize); 8]> {
+    (0..ny)
+        .flat_map(|j| (0..nx).map(move |i| (2 * i, 2 * j)))
+        .map(|(a, b)| {
+            [
+                (a, b),
+                (a + 2, b),
+                (a + 2, b + 2),
+                (a, b + 2),
+                (a + 1, b),
+                (a + 2, b + 1),
+                (a + 1, b + 2),
+                (a, b + 1),
+            ]
+        })
+        .collect()
+}

@@ -41,43 +41,28 @@ fn surface(
     place: impl Fn(f64, f64) -> [f64; 3],
 ) -> Model {
     let mut mesh = Mesh::new();
-    let columns = if wrap { 2 * nx } else { 2 * nx + 1 };
-    for j in 0..=2 * ny {
-        for i in 0..columns {
-            if i % 2 == 1 && j % 2 == 1 {
-                continue;
-            }
+    // a ring's last column is its first
+    let column = |i: usize| if wrap { i % (2 * nx) } else { i };
+    for (i, j) in femu_testkit::quad8_points(nx, ny) {
+        if column(i) == i {
             let x = place(i as f64 / (2 * nx) as f64, j as f64 / (2 * ny) as f64);
             mesh.add_node(id(nx, i, j), x).unwrap();
         }
     }
     let mut model = Model::new(mesh).unwrap();
-    for j in 0..ny {
-        for i in 0..nx {
-            let at = |a: usize, b: usize| {
-                let a = if wrap { a % (2 * nx) } else { a };
-                model.mesh().node_index(id(nx, a, b)).unwrap()
-            };
-            let (a, b) = (2 * i, 2 * j);
-            let nodes = vec![
-                at(a, b),
-                at(a + 2, b),
-                at(a + 2, b + 2),
-                at(a, b + 2),
-                at(a + 1, b),
-                at(a + 2, b + 1),
-                at(a + 1, b + 2),
-                at(a, b + 1),
-            ];
-            for (k, s) in layers.iter().enumerate() {
-                model
-                    .add_structural(StructuralElement {
-                        id: (1 + i + nx * j + 1000 * k) as u64,
-                        nodes: nodes.clone(),
-                        kind: StructuralKind::Shell(*s),
-                    })
-                    .unwrap();
-            }
+    for (e, cell) in femu_testkit::quad8_cells(nx, ny).iter().enumerate() {
+        let nodes: Vec<usize> = cell
+            .iter()
+            .map(|&(i, j)| model.mesh().node_index(id(nx, column(i), j)).unwrap())
+            .collect();
+        for (k, s) in layers.iter().enumerate() {
+            model
+                .add_structural(StructuralElement {
+                    id: (1 + e + 1000 * k) as u64,
+                    nodes: nodes.clone(),
+                    kind: StructuralKind::Shell(*s),
+                })
+                .unwrap();
         }
     }
     model
