@@ -2692,6 +2692,12 @@ fn gmsh_surfaces_as_shells() {
     let from_msh = freqs(&json);
     let (out, json) = modes("fv16_8.bdf", &[], "bdf8.json");
     succeeded(&out);
+    let info = femu()
+        .args(["info", dir.join("fv16_8.bdf").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let info = String::from_utf8_lossy(&info.stdout);
+    assert!(info.contains("shells: 64 of 8 nodes"), "{info}");
     let from_bdf = freqs(&json);
     // (the two models number their DOFs differently: the eigensolver's convergence, not the
     // models, sets the agreement, 2e-9 measured)

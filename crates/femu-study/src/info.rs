@@ -53,6 +53,25 @@ fn structural_lines(s: &mut String, model: &femu_fem::model::Model) {
         count(|k| matches!(k, StructuralKind::Bushing(_))),
         model.rotation_nodes().len()
     );
+    // the shells by kind, when there are any
+    let mut kinds: std::collections::BTreeMap<&str, usize> = Default::default();
+    for e in all {
+        if let StructuralKind::Shell(sh) = &e.kind {
+            let kind = match (e.nodes.len(), sh.bending == 0.0) {
+                (3, false) => "of 3 nodes",
+                (4, false) => "of 4 nodes",
+                (_, false) => "of 8 nodes",
+                (3, true) => "membranes of 3 nodes",
+                (4, true) => "membranes of 4 nodes",
+                (_, true) => "membranes of 8 nodes",
+            };
+            *kinds.entry(kind).or_default() += 1;
+        }
+    }
+    if !kinds.is_empty() {
+        let list: Vec<String> = kinds.iter().map(|(k, n)| format!("{n} {k}")).collect();
+        let _ = writeln!(s, "shells: {}", list.join(", "));
+    }
     for (name, set) in model.structural_sets() {
         let _ = writeln!(s, "element set {name}: {} structural elements", set.len());
     }
