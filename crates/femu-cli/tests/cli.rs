@@ -2845,3 +2845,118 @@ fn gmsh_lines_as_beams() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `femu modes --damped`: the complex modes of a deck's structural damping. A cantilevered plate
+/// of CQUAD4 whose two halves' MAT1 have `GE` 0.06 (clamped half) and 0.01: each damped mode's
+/// loss factor lies between the two and they differ from mode to mode; with both `GE` 0.03 the
+/// damping is proportional (`K_4 = 0.03 K`): every loss factor is 0.03 and every mode real (an
+/// MPC of 1) to 1e-9, and the frequencies are the undamped ones. A deck without damping, or with
+/// a bushing's viscous `B`, is refused with the reason.
+#[test]
+fn modes_damped_reports_the_complex_modes() {
+    let dir = std::env::temp_dir().join(format!("femu-cli-damped-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let n = 8;
+    let deck = |ge1: &str, ge2: &str, extra: &str| {
+        let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
+        let id = |i: usize, j: usize| 1 + i + (n + 1) * j;
+        for j in 0..=n {
+            for i in 0..=n {
+                s.push_str(&format!(
+                    "GRID,{},,{},{},0.\n",
+                    id(i, j),
+                    i as f64 / n as f64,
+                    0.5 * j as f64 / n as f64
+                ));
+            }
+            s.push_str(&format!("SPC1,1,123456,{}\n", id(0, j)));
+        }
+        for j in 0..n {
+            for i in 0..n {
+                s.push_str(&format!(
+                    "CQUAD4,{},{},{},{},{},{}\n",
+                    1 + i + n * j,
+                    if 2 * i < n { 1 } else { 2 },
+                    id(i, j),
+                    id(i + 1, j),
+                    id(i + 1, j + 1),
+                    id(i, j + 1)
+                ));
+            }
+        }
+        s.push_str(&format!(
+            "PSHELL,1,1,0.005,1,,1\nPSHELL,2,2,0.005,2,,2\n\
+             MAT1,1,2.1+11,,0.3,7850.,,,{ge1}\nMAT1,2,2.1+11,,0.3,7850.,,,{ge2}\n{extra}ENDDATA\n"
+        ));
+        s
+    };
+    let run = |name: &str, text: String| {
+        std::fs::write(dir.join(name), text).unwrap();
+        let json = dir.join(format!("{name}.json"));
+        let out = femu()
+            .args(["modes", dir.join(name).to_str().unwrap(), "--count", "6"])
+            .args(["--damped", "--json", json.to_str().unwrap()])
+            .output()
+            .unwrap();
+        (out, json)
+    };
+    let (out, json) = run("mixed.bdf", deck("0.06", "0.01", ""));
+    succeeded(&out);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("Damped modes") && stdout.contains("loss factor"),
+        "{stdout}"
+    );
+    let v = json_of(&json);
+    let damped = v["damped"].as_array().unwrap();
+    assert_eq!(damped.len(), 6);
+    let eta: Vec<f64> = damped
+        .iter()
+        .map(|d| d["loss_factor"].as_f64().unwrap())
+        .collect();
+    assert!(eta.iter().all(|e| *e > 0.01 && *e < 0.06), "{eta:?}");
+    assert!(
+        eta.iter().fold(0.0f64, |m, e| m.max(*e)) - eta.iter().fold(1.0f64, |m, e| m.min(*e))
+            > 1e-3,
+        "{eta:?}"
+    );
+    let (out, json) = run("uniform.bdf", deck("0.03", "0.03", ""));
+    succeeded(&out);
+    let v = json_of(&json);
+    for (d, f) in v["damped"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(v["frequencies_hz"].as_array().unwrap())
+    {
+        assert!(
+            (d["loss_factor"].as_f64().unwrap() - 0.03).abs() < 1e-9,
+            "{d}"
+        );
+        assert!((d["mpc"].as_f64().unwrap() - 1.0).abs() < 1e-9, "{d}");
+        assert!(
+            (d["frequency_hz"].as_f64().unwrap() / f.as_f64().unwrap() - 1.0).abs() < 1e-9,
+            "{d}"
+        );
+    }
+    for (name, text, says) in [
+        ("undamped.bdf", deck("", "", ""), "no structural damping"),
+        (
+            "bushing.bdf",
+            deck(
+                "0.03",
+                "0.03",
+                "CBUSH,900,90,81,,1.,0.,0.,0\nPBUSH,90,K,1.e3,1.e3,1.e3,,,,+P\n+P,B,1.,1.,1.\n",
+            ),
+            "viscous dampers",
+        ),
+    ] {
+        let (out, _) = run(name, text);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && stderr.contains(says),
+            "{name}: {stderr}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

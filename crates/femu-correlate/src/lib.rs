@@ -48,6 +48,7 @@
 pub mod bounds;
 pub mod complexity;
 pub mod correlation;
+pub mod damped;
 mod error;
 pub mod estimators;
 pub mod expansion;

@@ -293,9 +293,13 @@ impl Model {
     /// (docs/MATH.md, "The eigensolver's evidence"). `progress` is called with the number of
     /// vectors solved so far after every block. `block_size` vectors are solved together (the
     /// default 4; docs/SCALING.md, "Block size and the count of solved vectors"), and
-    /// `to_dict()["eigensolver"]` says where the time went. Releases the GIL; Ctrl-C, or an
-    /// exception raised by `progress`, stops the solve at the next block.
-    #[pyo3(signature = (count=None, *, shift_hz=None, band_hz=None, block_size=None, progress=None))]
+    /// `to_dict()["eigensolver"]` says where the time went. With `damped=True`,
+    /// `to_dict()["damped"]` lists the complex modes of the model's structural damping (each one's
+    /// `frequency_hz`, `loss_factor`, `eigenvalue` `[re, im]`, `mpc`, `mpd_degrees`; docs/MATH.md,
+    /// "Damped modes"). Releases the GIL; Ctrl-C, or an exception raised by `progress`, stops the
+    /// solve at the next block.
+    #[pyo3(signature = (count=None, *, shift_hz=None, band_hz=None, block_size=None, progress=None, damped=false))]
+    #[allow(clippy::too_many_arguments)]
     fn modes(
         &self,
         py: Python<'_>,
@@ -304,6 +308,7 @@ impl Model {
         band_hz: Option<(f64, f64)>,
         block_size: Option<usize>,
         progress: Option<Py<PyAny>>,
+        damped: bool,
     ) -> PyResult<Modes> {
         let defaults = femu_sparse::eigen::EigenOptions::default();
         let options = ModesOptions {
@@ -314,6 +319,7 @@ impl Model {
                 block_size: block_size.unwrap_or(defaults.block_size),
                 ..defaults
             },
+            damped,
         };
         let stop: std::sync::Arc<std::sync::Mutex<Option<PyErr>>> = Default::default();
         let seen = stop.clone();

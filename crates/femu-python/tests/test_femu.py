@@ -451,3 +451,23 @@ def test_update_finds_a_shell_thickness_and_a_conm2_mass(tmp_path):
     assert got["t:PID2"] == pytest.approx(-0.1, abs=1e-6), got
     assert got["m:CONM2_7000"] == pytest.approx(0.5, abs=1e-6), got
     assert abs(got["t:PID1"]) < 1e-6, got
+
+
+def test_damped_modes_of_a_structurally_damped_box(tmp_path):
+    """`modes(damped=True)`: the box's steel with `*DAMPING, STRUCTURAL=0.02` damps every element
+    alike (`K_4 = 0.02 K`), so each complex mode has the real mode's frequency and a loss factor of
+    0.02 and is real (MPC 1), checked against the real modes' frequencies here; undamped, the
+    request is refused with the reason."""
+    path = box_deck(tmp_path / "box.inp")
+    text = path.read_text().replace("*DENSITY", "*DAMPING, STRUCTURAL=0.02\n*DENSITY")
+    damped_path = tmp_path / "damped.inp"
+    damped_path.write_text(text)
+    modes = femu.read_model(damped_path).modes(4, damped=True)
+    d = modes.to_dict()
+    assert len(d["damped"]) == 4
+    for mode, f in zip(d["damped"], d["frequencies_hz"]):
+        assert mode["loss_factor"] == pytest.approx(0.02, abs=1e-10)
+        assert mode["mpc"] == pytest.approx(1.0, abs=1e-9)
+        assert mode["frequency_hz"] == pytest.approx(f, rel=1e-9)
+    with pytest.raises(femu.FemuError, match="no structural damping"):
+        femu.read_model(path).modes(4, damped=True)

@@ -25,6 +25,10 @@ pub struct ModesOptions {
     /// and 131 vectors where blocks of 2 solved 53 and 99 (ARPACK: 53 and 100) and took 6-21 %
     /// longer (docs/SCALING.md, "Block size and the count of solved vectors").
     pub eigen: EigenOptions,
+    /// Also the complex modes of the model's structural damping (each material's `GE`, a
+    /// model-wide loss factor), in the space of the real modes solved ([`damped_modes`];
+    /// docs/MATH.md, "Damped modes").
+    pub damped: bool,
 }
 
 /// Where an eigensolve's time went and how much work it did: [`EigenStats`] with the block size
@@ -140,6 +144,92 @@ pub struct ModesReport {
     pub load: crate::load::LoadTimings,
     /// Where the eigensolve's time went.
     pub eigensolver: EigenReport,
+    /// The damped (complex) modes, when asked for ([`ModesOptions::damped`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub damped: Vec<DampedMode>,
+}
+
+/// One complex mode of the model's structural damping, as `femu modes --damped` reports it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DampedMode {
+    /// `sqrt(Re mu) / (2 pi)`, Hz.
+    pub frequency_hz: f64,
+    /// `Im mu / Re mu` (twice the damping ratio).
+    pub loss_factor: f64,
+    /// The complex eigenvalue `mu = omega^2 (1 + i eta)`, `[re, im]`, s^-2.
+    pub eigenvalue: [f64; 2],
+    /// The shape's modal phase collinearity over the free DOFs (1: real up to one phase).
+    pub mpc: f64,
+    /// Its mean phase deviation, degrees.
+    pub mpd_degrees: f64,
+}
+
+/// The complex modes of `loaded`'s structural damping in the space of its real `modes`
+/// (docs/MATH.md, "Damped modes"): `K_4` of the elements' and springs' `GE` projected on them,
+/// plus a model-wide loss factor `g` as `g Lambda`. The frequencies are the real modes' count,
+/// the lowest of them the accurate ones (a Rayleigh-Ritz approximation in the real modes).
+///
+/// # Errors
+/// A model without structural damping, one with viscous dampers (a bushing's `B`, a model-wide
+/// Rayleigh damping: a quadratic eigenproblem femu does not solve), and the projection's errors.
+pub fn damped_modes(loaded: &LoadedModel, modes: &Modes) -> Result<Vec<DampedMode>, StudyError> {
+    let dampers = loaded.asm.dampers(&loaded.model)?;
+    let refuse = |reason: String| StudyError::invalid("damped modes", reason);
+    if dampers.viscous.is_some() {
+        return Err(refuse(
+            "the model has viscous dampers (a bushing's B): its complex modes solve a quadratic eigenproblem, which femu does not; its frequency responses (femu frf) include them".into(),
+        ));
+    }
+    let uniform = match loaded.model.uniform_damping() {
+        None => 0.0,
+        Some(femu_fem::model::UniformDamping::LossFactor(g)) => g,
+        Some(femu_fem::model::UniformDamping::Rayleigh { .. }) => {
+            return Err(refuse(
+                "the model's damping is Rayleigh's (viscous): its complex modes solve a quadratic eigenproblem, which femu does not".into(),
+            ));
+        }
+    };
+    if dampers.structural.is_none() && uniform == 0.0 {
+        return Err(refuse(
+            "the model has no structural damping (no material or spring GE, no PARAM,G)".into(),
+        ));
+    }
+    let n = modes.values.len();
+    let projected = femu_correlate::frf::ModalDampers::project(
+        dampers.structural.as_ref(),
+        None,
+        modes.vectors.as_ref(),
+    )?;
+    let mut s = projected
+        .structural
+        .unwrap_or_else(|| faer::Mat::zeros(n, n));
+    for (r, l) in modes.values.iter().enumerate() {
+        s[(r, r)] += uniform * l;
+    }
+    let d = femu_correlate::damped::damped_modes(&modes.values, s.as_ref())?;
+    let dofs = modes.vectors.nrows();
+    Ok((0..n)
+        .map(|r| {
+            // the shape Phi q over the free DOFs
+            let shape: Vec<(f64, f64)> = (0..dofs)
+                .map(|i| {
+                    let mut v = faer::c64::new(0.0, 0.0);
+                    for j in 0..n {
+                        v += d.coordinates[(j, r)] * modes.vectors[(i, j)];
+                    }
+                    (v.re, v.im)
+                })
+                .collect();
+            let c = femu_correlate::complexity::Complexity::of(&shape);
+            DampedMode {
+                frequency_hz: d.frequency_hz(r),
+                loss_factor: d.loss_factor(r),
+                eigenvalue: [d.values[r].re, d.values[r].im],
+                mpc: c.map_or(1.0, |c| c.mpc),
+                mpd_degrees: c.map_or(0.0, |c| c.mpd_degrees),
+            }
+        })
+        .collect())
 }
 
 /// Where a model read as matrices came from, as [`ModesReport`] states it.
@@ -274,7 +364,12 @@ pub fn solve_modes(
             &modes.stats,
             matches!(eigen.engine, Engine::Femu).then_some(eigen.block_size),
         ),
+        damped: Vec::new(),
     };
+    let mut report = report;
+    if options.damped {
+        report.damped = damped_modes(loaded, &modes)?;
+    }
     Ok((modes, report))
 }
 

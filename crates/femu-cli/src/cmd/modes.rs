@@ -43,6 +43,10 @@ pub struct ModesArgs {
     /// in all but read the factor more often; on large models 4 is the faster.
     #[arg(long, value_name = "N")]
     pub block_size: Option<usize>,
+    /// Also the complex modes of the model's structural damping (each material's GE, PARAM,G,
+    /// *DAMPING, STRUCTURAL=), with each one's loss factor and phase collinearity.
+    #[arg(long)]
+    pub damped: bool,
     #[command(flatten)]
     pub model_args: ModelArgs,
     #[command(flatten)]
@@ -66,6 +70,7 @@ pub fn run(a: &ModesArgs, quiet: bool) -> Result<(), CliError> {
         shift_hz: a.shift,
         band_hz: a.band.as_ref().map(|b| (b[0], b[1])),
         eigen,
+        damped: a.damped,
     };
     let (result, report) = solve_modes(&loaded, &options)?;
     pb.finish_and_clear();
@@ -107,6 +112,24 @@ pub fn run(a: &ModesArgs, quiet: bool) -> Result<(), CliError> {
         }
         for note in &report.notes {
             println!("note: {note}");
+        }
+        if !report.damped.is_empty() {
+            println!(
+                "Damped modes (structural damping, in the space of the {} real modes):",
+                f.len()
+            );
+            println!("| mode | f (Hz) | loss factor | MPC | MPD (deg) |");
+            println!("|---|---|---|---|---|");
+            for (j, d) in report.damped.iter().enumerate() {
+                println!(
+                    "| {} | {:.6} | {:.4e} | {:.4} | {:.2} |",
+                    j + 1,
+                    d.frequency_hz,
+                    d.loss_factor,
+                    d.mpc,
+                    d.mpd_degrees
+                );
+            }
         }
         println!(
             "Sturm check: {} eigenvalues in {} by inertia, {} returned: {}",

@@ -44,6 +44,7 @@ class Model:
         band_hz: Optional[Tuple[float, float]] = None,
         block_size: Optional[int] = None,
         progress: Optional[Callable[[int], Any]] = None,
+        damped: bool = False,
     ) -> Modes: ...
 
 class Modes:
