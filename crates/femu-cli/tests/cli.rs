@@ -2960,3 +2960,26 @@ fn modes_damped_reports_the_complex_modes() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `femu correlate --damped` compares complex shapes with the model's damped modes, so it needs
+/// the model's structural damping: the undamped two-hex deck is refused with the reason (the same
+/// test without `--damped` correlates).
+#[test]
+fn correlate_damped_needs_the_model_s_damping() {
+    use femu_correlate::TestModes;
+    let deck = fixture("two_hex.inp");
+    let (modes, sensors, layout) = two_hex_case(4);
+    let at = layout.measure_all(modes.vectors.as_ref()).unwrap();
+    let f = modes.frequencies_hz();
+    let shapes = femu_sparse::faer::Mat::from_fn(at.nrows(), 2, |i, j| at[(i, j)]);
+    let test = TestModes::new(f[..2].to_vec(), None, shapes).unwrap();
+    let dir = std::env::temp_dir().join(format!("femu-cli-corr-damped-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("test.csv");
+    std::fs::write(&csv, femu_io::csv::test_csv_string(&sensors, &test)).unwrap();
+    let args = ["correlate", deck.to_str().unwrap(), csv.to_str().unwrap()];
+    stdout_of_success(&args);
+    let err = stderr_of_failure(&[&args[..], &["--damped"]].concat());
+    assert!(err.contains("no structural damping"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

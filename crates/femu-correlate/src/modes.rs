@@ -3,7 +3,7 @@
 
 use crate::CorrelateError;
 use crate::estimators::SpectrumProof;
-use faer::{Mat, MatRef};
+use faer::{Mat, MatRef, c64};
 use femu_sparse::SparseMatrix;
 use femu_sparse::eigen::Modes;
 
@@ -63,6 +63,10 @@ pub struct ModeSet {
     /// What proves that no eigenvalue among `values` was skipped (the eigensolver's Sturm
     /// check; [`SpectrumProof::Unverified`] for modes given by hand).
     pub proof: SpectrumProof,
+    /// The model's damped (complex) modes in the coordinates of these (modes x modes, column `r`
+    /// the damped mode paired as mode `r`; [`crate::damped::DampedModes::coordinates`]), when the
+    /// correlation compares complex shapes with them ([`ModeSet::with_damped`]).
+    pub damped: Option<Mat<c64>>,
 }
 
 impl ModeSet {
@@ -95,6 +99,7 @@ impl ModeSet {
             shapes,
             mass_normalised,
             proof: SpectrumProof::Unverified,
+            damped: None,
         })
     }
 
@@ -105,7 +110,26 @@ impl ModeSet {
             shapes: modes.vectors.clone(),
             mass_normalised: true,
             proof: SpectrumProof::of(modes),
+            damped: None,
         }
+    }
+
+    /// These modes with the coordinates of the model's damped modes in them (`coordinates`, modes
+    /// x modes), which the correlation's complex MAC then compares with.
+    ///
+    /// # Errors
+    /// Coordinates of another size than the modes.
+    pub fn with_damped(mut self, coordinates: Mat<c64>) -> Result<Self, CorrelateError> {
+        let n = self.values.len();
+        if coordinates.nrows() != n || coordinates.ncols() != n {
+            return Err(CorrelateError::DimensionMismatch {
+                what: "damped modes' coordinates (modes x modes)",
+                expected: n,
+                got: coordinates.nrows(),
+            });
+        }
+        self.damped = Some(coordinates);
+        Ok(self)
     }
 
     /// Scales every shape to `phi^T M phi = 1` and records it.

@@ -23,6 +23,13 @@ pub struct PairingOptions {
     /// [`LARGE_FREQUENCY_ERROR`]).
     #[serde(default)]
     pub max_frequency_error: Option<f64>,
+    /// Compare each pair's complex shapes with the model's damped modes ([`ModeSet::damped`],
+    /// which must then be there) instead of its real ones: the complex MAC with both sides
+    /// complex.
+    ///
+    /// [`ModeSet::damped`]: crate::ModeSet::damped
+    #[serde(default)]
+    pub damped: bool,
 }
 
 impl PairingOptions {
@@ -46,6 +53,7 @@ impl Default for PairingOptions {
         Self {
             mac_threshold: 0.8,
             max_frequency_error: None,
+            damped: false,
         }
     }
 }

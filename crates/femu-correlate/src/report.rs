@@ -28,6 +28,10 @@ pub struct CorrelationReport {
     pub msd: Vec<f64>,
     /// COMAC per sensor over the pairs (empty when nothing paired).
     pub comac: Vec<f64>,
+    /// Whether each pair's complex MAC compares with the model's damped (complex) modes
+    /// ([`PairingOptions::damped`]) rather than its real ones.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub damped: bool,
 }
 
 /// What a test of frequencies alone cannot give, said with its correlation.
@@ -60,6 +64,11 @@ pub fn correlate(
         let mut pairing =
             crate::pairing::pair_by_frequency(&test.frequencies_hz, &f_model, options)?;
         pairing.warnings.insert(0, FREQUENCIES_ONLY.to_string());
+        if options.damped {
+            pairing.warnings.push(
+                "the damped modes were asked for, but without test shapes there is no complex MAC to compare them with".into(),
+            );
+        }
         return Ok(CorrelationReport {
             f_test: test.frequencies_hz.clone(),
             f_model,
@@ -67,6 +76,7 @@ pub fn correlate(
             pairing,
             msd: Vec::new(),
             comac: Vec::new(),
+            damped: false,
         });
     }
     // a repeated eigenvalue's basis is the eigensolver's: turn it towards the test first
@@ -106,8 +116,37 @@ pub fn correlate(
             )
         })
         .collect::<Result<Vec<_>, _>>()?;
-    if let Some(im) = &test.imaginary {
-        let zeros = vec![0.0; layout.len()];
+    let zeros = vec![0.0; layout.len()];
+    if options.damped {
+        // the model's damped modes at the sensors, Phi_a q (the raw shapes: q is in their
+        // coordinates), against the test's complex shapes (or real ones)
+        let q = model.damped.as_ref().ok_or_else(|| CorrelateError::Invalid {
+            what: "damped correlation",
+            reason: "the model's modes carry no damped modes (a model of K, M and its structural damping is needed: another solver's modes have none)".into(),
+        })?;
+        let raw = layout.measure_all(model.shapes.as_ref())?;
+        for p in &mut pairing.pairs {
+            let (re, im): (Vec<f64>, Vec<f64>) = (0..layout.len())
+                .map(|i| {
+                    let mut v = faer::c64::new(0.0, 0.0);
+                    for j in 0..raw.ncols() {
+                        v += q[(j, p.model)] * raw[(i, j)];
+                    }
+                    (v.re, v.im)
+                })
+                .unzip();
+            let test_im = test
+                .imaginary
+                .as_ref()
+                .map_or_else(|| zeros.clone(), |im| col(im.as_ref(), p.test));
+            p.complex_mac = Some(crate::correlation::complex_mac(
+                &col(test.shapes.as_ref(), p.test),
+                &test_im,
+                &re,
+                &im,
+            )?);
+        }
+    } else if let Some(im) = &test.imaginary {
         for p in &mut pairing.pairs {
             p.complex_mac = Some(crate::correlation::complex_mac(
                 &col(test.shapes.as_ref(), p.test),
@@ -132,6 +171,7 @@ pub fn correlate(
         pairing,
         msd,
         comac,
+        damped: options.damped,
     })
 }
 
@@ -199,7 +239,14 @@ impl fmt::Display for CorrelationReport {
                  on the sensor readings; pairs by optimal assignment at MAC >= {}{window}.",
                 self.pairing.mac_threshold,
             )?;
-            if complex {
+            if self.damped {
+                writeln!(
+                    f,
+                    "complex MAC = |psi^H phi|^2 / ((psi^H psi)(phi^H phi)) against the model's \
+                     damped modes phi = Phi q of its structural damping (both sides complex); MAC \
+                     and MSD use the real shapes."
+                )?;
+            } else if complex {
                 writeln!(
                     f,
                     "The test's modes are complex: MAC and MSD use each shape turned by the phase \

@@ -10,8 +10,8 @@
 //! line, node and element.
 
 use faer::Mat;
+use femu_correlate::TestModes;
 use femu_correlate::expansion::Method;
-use femu_correlate::{ModeSet, TestModes};
 use femu_io::TestData;
 use femu_study::load::{
     LoadedModel, LoadedTest, MaterialOptions, ModelOptions, TestOptions, load_model, load_test_with,
@@ -725,9 +725,10 @@ fn expand<'py>(
 /// The a priori estimate of the paper: the test shapes expanded (`expansion`), the model's lowest
 /// `count` modes paired with them (Table 1), and per test mode `rho_M`, `rho_2`, the frequency
 /// interval that must hold a model frequency and every bound of Theorems 1-4 in the paper's and
-/// the rigorous forms (Table 2), as a dict. Releases the GIL.
+/// the rigorous forms (Table 2), as a dict; `damped=True` as in `correlate`. Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (model, test, *, expansion="dynamic", count=None, mac_threshold=0.8, max_frequency_error=None))]
+#[pyo3(signature = (model, test, *, expansion="dynamic", count=None, mac_threshold=0.8, max_frequency_error=None, damped=false))]
+#[allow(clippy::too_many_arguments)]
 fn estimate<'py>(
     py: Python<'py>,
     model: &Model,
@@ -736,10 +737,11 @@ fn estimate<'py>(
     count: Option<usize>,
     mac_threshold: f64,
     max_frequency_error: Option<f64>,
+    damped: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let options = femu_study::estimate::EstimateOptions {
         expansion: method(expansion)?,
-        pairing: pairing(mac_threshold, max_frequency_error),
+        pairing: pairing(mac_threshold, max_frequency_error, damped),
         count,
         eigen: Default::default(),
     };
@@ -753,10 +755,15 @@ fn estimate<'py>(
 
 /// The pairing settings of `correlate` and `estimate`: the one definition of the command line's
 /// and the study file's (a frequency error in percent).
-fn pairing(mac_threshold: f64, max_frequency_error: Option<f64>) -> femu_correlate::PairingOptions {
+fn pairing(
+    mac_threshold: f64,
+    max_frequency_error: Option<f64>,
+    damped: bool,
+) -> femu_correlate::PairingOptions {
     femu_study::study_file::PairingSection {
         mac_threshold,
         max_frequency_error,
+        damped,
     }
     .options()
 }
@@ -792,9 +799,11 @@ fn run_demo<'py>(
 
 /// Test-analysis correlation (the paper's Table 1): the model's lowest `count` modes (default
 /// twice the test modes plus 4) paired with the test modes by MAC, frequency errors, MAC, MSD and
-/// COMAC, as a dict. Releases the GIL.
+/// COMAC, as a dict. `damped=True` compares complex test shapes with the model's damped modes of
+/// its structural damping (each pair's `complex_mac`; docs/MATH.md, "Damped modes"). Releases the
+/// GIL.
 #[pyfunction]
-#[pyo3(signature = (model, test, *, count=None, mac_threshold=0.8, max_frequency_error=None))]
+#[pyo3(signature = (model, test, *, count=None, mac_threshold=0.8, max_frequency_error=None, damped=false))]
 fn correlate<'py>(
     py: Python<'py>,
     model: ModelSide<'py>,
@@ -802,9 +811,10 @@ fn correlate<'py>(
     count: Option<usize>,
     mac_threshold: f64,
     max_frequency_error: Option<f64>,
+    damped: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let t = &test.loaded.data.modes;
-    let options = pairing(mac_threshold, max_frequency_error);
+    let options = pairing(mac_threshold, max_frequency_error, damped);
     let report = match &model {
         ModelSide::Model(m) => {
             let loaded = &m.loaded;
@@ -816,7 +826,7 @@ fn correlate<'py>(
                     &Default::default(),
                 )?;
                 Ok(femu_correlate::correlate(
-                    &ModeSet::from_modes(&modes),
+                    &femu_study::modes::mode_set(loaded, &modes, damped)?,
                     t,
                     &test.loaded.layout,
                     &options,

@@ -76,12 +76,11 @@ pub fn estimate_loaded(
         "solving for the model's modes ({} DOF)",
         model.sys.k.rows()
     ));
-    let modes = ModeSet::from_modes(&lowest_for_test(
+    let modes = crate::modes::mode_set(
         model,
-        options.count,
-        n_test,
-        &options.eigen,
-    )?);
+        &lowest_for_test(model, options.count, n_test, &options.eigen)?,
+        options.pairing.damped,
+    )?;
     progress(&format!(
         "expanding {n_test} test modes ({}) and estimating",
         options.expansion

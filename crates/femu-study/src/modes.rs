@@ -173,6 +173,58 @@ pub struct DampedMode {
 /// A model without structural damping, one with viscous dampers (a bushing's `B`, a model-wide
 /// Rayleigh damping: a quadratic eigenproblem femu does not solve), and the projection's errors.
 pub fn damped_modes(loaded: &LoadedModel, modes: &Modes) -> Result<Vec<DampedMode>, StudyError> {
+    let d = damped_in(loaded, modes)?;
+    let n = modes.values.len();
+    let dofs = modes.vectors.nrows();
+    Ok((0..n)
+        .map(|r| {
+            // the shape Phi q over the free DOFs
+            let shape: Vec<(f64, f64)> = (0..dofs)
+                .map(|i| {
+                    let mut v = faer::c64::new(0.0, 0.0);
+                    for j in 0..n {
+                        v += d.coordinates[(j, r)] * modes.vectors[(i, j)];
+                    }
+                    (v.re, v.im)
+                })
+                .collect();
+            let c = femu_correlate::complexity::Complexity::of(&shape);
+            DampedMode {
+                frequency_hz: d.frequency_hz(r),
+                loss_factor: d.loss_factor(r),
+                eigenvalue: [d.values[r].re, d.values[r].im],
+                mpc: c.map_or(1.0, |c| c.mpc),
+                mpd_degrees: c.map_or(0.0, |c| c.mpd_degrees),
+            }
+        })
+        .collect())
+}
+
+/// `modes` as the correlation's mode set, with the coordinates of the model's damped modes in
+/// them when `damped` (the complex MAC then compares with those: [`PairingOptions::damped`]).
+///
+/// # Errors
+/// As [`damped_modes`] when `damped`.
+///
+/// [`PairingOptions::damped`]: femu_correlate::PairingOptions::damped
+pub fn mode_set(
+    loaded: &LoadedModel,
+    modes: &Modes,
+    damped: bool,
+) -> Result<femu_correlate::ModeSet, StudyError> {
+    let set = femu_correlate::ModeSet::from_modes(modes);
+    if !damped {
+        return Ok(set);
+    }
+    let d = damped_in(loaded, modes)?;
+    Ok(set.with_damped(d.coordinates)?)
+}
+
+/// The damped modes of `loaded` in the space of `modes` ([`damped_modes`]).
+fn damped_in(
+    loaded: &LoadedModel,
+    modes: &Modes,
+) -> Result<femu_correlate::damped::DampedModes, StudyError> {
     let dampers = loaded.asm.dampers(&loaded.model)?;
     let refuse = |reason: String| StudyError::invalid("damped modes", reason);
     if dampers.viscous.is_some() {
@@ -206,30 +258,10 @@ pub fn damped_modes(loaded: &LoadedModel, modes: &Modes) -> Result<Vec<DampedMod
     for (r, l) in modes.values.iter().enumerate() {
         s[(r, r)] += uniform * l;
     }
-    let d = femu_correlate::damped::damped_modes(&modes.values, s.as_ref())?;
-    let dofs = modes.vectors.nrows();
-    Ok((0..n)
-        .map(|r| {
-            // the shape Phi q over the free DOFs
-            let shape: Vec<(f64, f64)> = (0..dofs)
-                .map(|i| {
-                    let mut v = faer::c64::new(0.0, 0.0);
-                    for j in 0..n {
-                        v += d.coordinates[(j, r)] * modes.vectors[(i, j)];
-                    }
-                    (v.re, v.im)
-                })
-                .collect();
-            let c = femu_correlate::complexity::Complexity::of(&shape);
-            DampedMode {
-                frequency_hz: d.frequency_hz(r),
-                loss_factor: d.loss_factor(r),
-                eigenvalue: [d.values[r].re, d.values[r].im],
-                mpc: c.map_or(1.0, |c| c.mpc),
-                mpd_degrees: c.map_or(0.0, |c| c.mpd_degrees),
-            }
-        })
-        .collect())
+    Ok(femu_correlate::damped::damped_modes(
+        &modes.values,
+        s.as_ref(),
+    )?)
 }
 
 /// Where a model read as matrices came from, as [`ModesReport`] states it.

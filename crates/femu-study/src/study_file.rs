@@ -205,6 +205,12 @@ pub struct PairingSection {
     #[cfg_attr(feature = "clap", arg(long, value_name = "PERCENT"))]
     #[serde(default)]
     pub max_frequency_error: Option<f64>,
+    /// Compare the complex test shapes with the model's damped (complex) modes of its
+    /// structural damping: the complex MAC with both sides complex (docs/MATH.md, "Damped
+    /// modes").
+    #[cfg_attr(feature = "clap", arg(long))]
+    #[serde(default)]
+    pub damped: bool,
 }
 
 impl Default for PairingSection {
@@ -212,6 +218,7 @@ impl Default for PairingSection {
         Self {
             mac_threshold: default_mac_threshold(),
             max_frequency_error: None,
+            damped: false,
         }
     }
 }
@@ -222,6 +229,7 @@ impl PairingSection {
         PairingOptions {
             mac_threshold: self.mac_threshold,
             max_frequency_error: self.max_frequency_error.map(|p| p / 100.0),
+            damped: self.damped,
         }
     }
 }

@@ -136,3 +136,160 @@ fn report_without_imaginary(
     )
     .unwrap()
 }
+
+/// The complex MAC with both sides complex: a cantilevered plate of CQUAD4 whose halves' MAT1 have
+/// `GE` 0.06 and 0.01 (its damped modes complex), and a complex test written here from the model's
+/// own damped modes at 12 grids (`psi = c Phi_a q_r`, each turned by a phase `c`). With
+/// `damped`, each pair's complex MAC equals the formula `|psi^H phi|^2 / ((psi^H psi)(phi^H
+/// phi))` of the written `psi` and `phi = Phi_a q` computed here (to 1e-12) and is 1 (to 1e-9);
+/// against the real modes (no `damped`) it falls below 1 (0.99996 for the most complex of the
+/// three: the damping is light). Asked of modes without their damped coordinates, correlation
+/// refuses.
+#[test]
+fn damped_correlation_compares_complex_with_complex() {
+    use faer::c64;
+    let n = 8;
+    let dir = std::env::temp_dir().join(format!("femu-damped-mac-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let id = |i: usize, j: usize| 1 + i + (n + 1) * j;
+    let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
+    for j in 0..=n {
+        for i in 0..=n {
+            s.push_str(&format!(
+                "GRID,{},,{},{},0.\n",
+                id(i, j),
+                i as f64 / n as f64,
+                0.5 * j as f64 / n as f64
+            ));
+        }
+        s.push_str(&format!("SPC1,1,123456,{}\n", id(0, j)));
+    }
+    for j in 0..n {
+        for i in 0..n {
+            s.push_str(&format!(
+                "CQUAD4,{},{},{},{},{},{}\n",
+                1 + i + n * j,
+                if 2 * i < n { 1 } else { 2 },
+                id(i, j),
+                id(i + 1, j),
+                id(i + 1, j + 1),
+                id(i, j + 1)
+            ));
+        }
+    }
+    s.push_str(
+        "PSHELL,1,1,0.005,1,,1\nPSHELL,2,2,0.005,2,,2\n\
+         MAT1,1,2.1+11,,0.3,7850.,,,0.06\nMAT1,2,2.1+11,,0.3,7850.,,,0.01\nENDDATA\n",
+    );
+    std::fs::write(dir.join("plate.bdf"), s).unwrap();
+    let loaded = load_model(&dir.join("plate.bdf"), &ModelOptions::default()).unwrap();
+    let modes =
+        femu_study::modes::lowest_for_test(&loaded, Some(8), 3, &EigenOptions::default()).unwrap();
+    let set = femu_study::modes::mode_set(&loaded, &modes, true).unwrap();
+    let q = set.damped.clone().unwrap();
+    let grids: Vec<u64> = [
+        (2, 2),
+        (4, 2),
+        (6, 2),
+        (8, 2),
+        (2, 6),
+        (4, 6),
+        (6, 6),
+        (8, 6),
+        (8, 4),
+        (6, 4),
+        (4, 4),
+        (8, 0),
+    ]
+    .iter()
+    .map(|&(i, j)| id(i, j) as u64)
+    .collect();
+    let mesh = loaded.model.mesh();
+    // Phi at the grids' x, y, z, in the file's order
+    let rows: Vec<usize> = grids
+        .iter()
+        .flat_map(|g| {
+            let i = mesh.node_index(*g).unwrap();
+            (0..3).map(move |c| (i, c))
+        })
+        .map(|(i, c)| loaded.sys.dofs.free_index(i, c).unwrap())
+        .collect();
+    let damped_at = |r: usize| -> Vec<c64> {
+        rows.iter()
+            .map(|&f| {
+                (0..modes.values.len())
+                    .map(|j| q[(j, r)] * modes.vectors[(f, j)])
+                    .sum()
+            })
+            .collect()
+    };
+    let mut text = String::new();
+    let mut written: Vec<Vec<c64>> = Vec::new();
+    for (k, (mode, c)) in [
+        (0usize, c64::new(0.6, -0.8)),
+        (1, c64::new(-0.28, 0.96)),
+        (2, c64::new(1.0, 0.0)),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let psi: Vec<c64> = damped_at(*mode).iter().map(|v| c * v).collect();
+        let w = modes.values[*mode].sqrt();
+        text.push_str(&format!(
+            "    -1\n    55\nid1\nid2\nid3\nid4\nid5\n         1         3         2         8         5         3\n         2         6         1{:>10}\n{:.15E} {:.15E}  0.0D+00  0.0D+00  0.0D+00  0.0D+00\n",
+            k + 1,
+            -0.01 * w,
+            w
+        ));
+        for (g, node) in grids.iter().enumerate() {
+            text.push_str(&format!("{node:>10}\n"));
+            for comp in 0..3 {
+                let v = psi[3 * g + comp];
+                text.push_str(&format!(" {:.15E} {:.15E}", v.re, v.im));
+            }
+            text.push('\n');
+        }
+        text.push_str("    -1\n");
+        written.push(psi);
+    }
+    std::fs::write(dir.join("test.unv"), text).unwrap();
+    let t = load_test(&dir.join("test.unv"), &loaded).unwrap();
+    let damped = PairingOptions {
+        damped: true,
+        ..Default::default()
+    };
+    let report = correlate(&set, &t.data.modes, &t.layout, &damped).unwrap();
+    assert!(report.damped);
+    assert_eq!(report.pairing.pairs.len(), 3);
+    for p in &report.pairing.pairs {
+        assert_eq!(p.test, p.model);
+        let (psi, phi) = (&written[p.test], damped_at(p.model));
+        let dot: c64 = psi.iter().zip(&phi).map(|(a, b)| a.conj() * b).sum();
+        let norm = |v: &[c64]| v.iter().map(|x| x.norm_sqr()).sum::<f64>();
+        let want = dot.norm_sqr() / (norm(psi) * norm(&phi));
+        let got = p.complex_mac.unwrap();
+        assert!((got - want).abs() < 1e-12, "{got} against {want}");
+        assert!((got - 1.0).abs() < 1e-9, "{got}");
+    }
+    assert!(format!("{report}").contains("damped modes"));
+    // against the real modes: the complex modes' complex MAC falls below 1
+    let real = correlate(&set, &t.data.modes, &t.layout, &PairingOptions::default()).unwrap();
+    let worst = real
+        .pairing
+        .pairs
+        .iter()
+        .map(|p| p.complex_mac.unwrap())
+        .fold(1.0f64, f64::min);
+    assert!(worst < 1.0 - 1e-6, "{worst}");
+    // modes without their damped coordinates are refused
+    let e = correlate(
+        &ModeSet::from_modes(&modes),
+        &t.data.modes,
+        &t.layout,
+        &damped,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("no damped modes"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -3,7 +3,7 @@
 use crate::common::{Inputs, load_model, spinner, write_json};
 use crate::error::CliError;
 use clap::Args;
-use femu::correlate::{ModeSet, correlate};
+use femu::correlate::correlate;
 use femu::study::modes::lowest_for_test;
 use femu::study::study_file::PairingSection;
 use std::path::PathBuf;
@@ -72,7 +72,10 @@ pub fn run(a: &CorrelateArgs, quiet: bool) -> Result<(), CliError> {
         let test = crate::common::load_test(&a.test, &loaded, &a.inputs.test, quiet)?;
         pb.set_message("solving for the model's modes");
         let modes = lowest_for_test(&loaded, a.count, test.data.modes.len(), &eigen)?;
-        (ModeSet::from_modes(&modes), test)
+        (
+            femu::study::modes::mode_set(&loaded, &modes, a.pairing.damped)?,
+            test,
+        )
     };
     pb.finish_and_clear();
     let options = a.pairing.options();

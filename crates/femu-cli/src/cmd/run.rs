@@ -25,6 +25,7 @@ use std::path::PathBuf;
 ///   align = "101:3,102:6,103:9"    # test:model node pairs, or "auto"
 ///   [pairing]
 ///   mac_threshold = 0.8
+///   damped = false                 # complex MAC against the model's damped modes
 ///   [expansion]
 ///   method = "dynamic"             # static, dynamic, serep:M, min-residual, mdre
 ///   study = true                   # the sensor-removal study (Figure 1)

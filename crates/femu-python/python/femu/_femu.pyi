@@ -135,6 +135,7 @@ def estimate(
     count: Optional[int] = None,
     mac_threshold: float = 0.8,
     max_frequency_error: Optional[float] = None,
+    damped: bool = False,
 ) -> Dict[str, Any]: ...
 def run_demo(
     out: _Path, *, quick: bool = False, progress: Optional[Callable[[str], Any]] = None
@@ -146,6 +147,7 @@ def correlate(
     count: Optional[int] = None,
     mac_threshold: float = 0.8,
     max_frequency_error: Optional[float] = None,
+    damped: bool = False,
 ) -> Dict[str, Any]: ...
 def frf(
     model: Model,
