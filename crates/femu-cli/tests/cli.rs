@@ -2857,39 +2857,8 @@ fn modes_damped_reports_the_complex_modes() {
     let dir = std::env::temp_dir().join(format!("femu-cli-damped-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let n = 8;
-    let deck = |ge1: &str, ge2: &str, extra: &str| {
-        let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
-        let id = |i: usize, j: usize| 1 + i + (n + 1) * j;
-        for j in 0..=n {
-            for i in 0..=n {
-                s.push_str(&format!(
-                    "GRID,{},,{},{},0.\n",
-                    id(i, j),
-                    i as f64 / n as f64,
-                    0.5 * j as f64 / n as f64
-                ));
-            }
-            s.push_str(&format!("SPC1,1,123456,{}\n", id(0, j)));
-        }
-        for j in 0..n {
-            for i in 0..n {
-                s.push_str(&format!(
-                    "CQUAD4,{},{},{},{},{},{}\n",
-                    1 + i + n * j,
-                    if 2 * i < n { 1 } else { 2 },
-                    id(i, j),
-                    id(i + 1, j),
-                    id(i + 1, j + 1),
-                    id(i, j + 1)
-                ));
-            }
-        }
-        s.push_str(&format!(
-            "PSHELL,1,1,0.005,1,,1\nPSHELL,2,2,0.005,2,,2\n\
-             MAT1,1,2.1+11,,0.3,7850.,,,{ge1}\nMAT1,2,2.1+11,,0.3,7850.,,,{ge2}\n{extra}ENDDATA\n"
-        ));
-        s
-    };
+    let deck =
+        |ge1: &str, ge2: &str, extra: &str| femu_testkit::damped_plate_deck(n, ge1, ge2, extra);
     let run = |name: &str, text: String| {
         std::fs::write(dir.join(name), text).unwrap();
         let json = dir.join(format!("{name}.json"));

@@ -138,3 +138,40 @@ pub fn quad8_cells(nx: usize, ny: usize) -> Vec<[(usize, usize); 8]> {
         })
         .collect()
 }
+
+/// A Nastran deck of a cantilevered steel plate (1 m x 0.5 m, 5 mm, `n x n` CQUAD4, coupled
+/// mass, clamped at `x = 0`) whose halves `x < 0.5` and `x > 0.5` are PSHELLs 1 and 2 of MAT1s with
+/// structural damping `GE` `ge1` and `ge2` (blank: undamped); `extra` bulk data added.
+pub fn damped_plate_deck(n: usize, ge1: &str, ge2: &str, extra: &str) -> String {
+    let mut s = String::from("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nPARAM,COUPMASS,1\n");
+    let id = |i: usize, j: usize| 1 + i + (n + 1) * j;
+    for j in 0..=n {
+        for i in 0..=n {
+            s.push_str(&format!(
+                "GRID,{},,{},{},0.\n",
+                id(i, j),
+                i as f64 / n as f64,
+                0.5 * j as f64 / n as f64
+            ));
+        }
+        s.push_str(&format!("SPC1,1,123456,{}\n", id(0, j)));
+    }
+    for j in 0..n {
+        for i in 0..n {
+            s.push_str(&format!(
+                "CQUAD4,{},{},{},{},{},{}\n",
+                1 + i + n * j,
+                if 2 * i < n { 1 } else { 2 },
+                id(i, j),
+                id(i + 1, j),
+                id(i + 1, j + 1),
+                id(i, j + 1)
+            ));
+        }
+    }
+    s.push_str(&format!(
+        "PSHELL,1,1,0.005,1,,1\nPSHELL,2,2,0.005,2,,2\n\
+         MAT1,1,2.1+11,,0.3,7850.,,,{ge1}\nMAT1,2,2.1+11,,0.3,7850.,,,{ge2}\n{extra}ENDDATA\n"
+    ));
+    s
+}
