@@ -373,17 +373,12 @@ fn within_fv16(text: &str, tolerance: f64, what: &str) {
     let modes = sys
         .modes(Which::Lowest(6), &EigenOptions::default())
         .unwrap();
-    for (l, r) in modes
-        .values
-        .iter()
-        .zip([0.421, 1.029, 2.582, 3.306, 3.753, 6.555])
-    {
-        let f = l.sqrt() / (2.0 * PI);
-        assert!(
-            (f / r - 1.0).abs() < tolerance,
-            "{what}: {f} Hz against {r}"
-        );
-    }
+    femu_testkit::assert_frequencies(
+        &modes.values,
+        &[0.421, 1.029, 2.582, 3.306, 3.753, 6.555],
+        tolerance,
+        what,
+    );
 }
 
 /// Shell cards femu cannot build, or a deck gets wrong, are refused with card and line.
@@ -1562,12 +1557,10 @@ fn a_pshell_of_mid1_alone_is_a_membrane() {
     let modes = sys
         .modes(Which::Lowest(6), &EigenOptions::default())
         .unwrap();
-    for (l, r) in modes
-        .values
-        .iter()
-        .zip([44.623, 130.03, 162.70, 246.05, 379.90, 391.44])
-    {
-        let f = l.sqrt() / (2.0 * PI);
-        assert!((f / r - 1.0).abs() < 1.2e-2, "{f} Hz against {r}");
-    }
+    femu_testkit::assert_frequencies(
+        &modes.values,
+        &[44.623, 130.03, 162.70, 246.05, 379.90, 391.44],
+        1.2e-2,
+        "FV32 membranes",
+    );
 }

@@ -175,3 +175,19 @@ pub fn damped_plate_deck(n: usize, ge1: &str, ge2: &str, extra: &str) -> String 
     ));
     s
 }
+
+/// Asserts that the frequencies of `eigenvalues` (`omega^2`, s^-2) are `reference` (Hz) to the
+/// relative `tolerance`, pairwise in order (`what` names the case in a failure).
+pub fn assert_frequencies(eigenvalues: &[f64], reference: &[f64], tolerance: f64, what: &str) {
+    assert!(
+        eigenvalues.len() >= reference.len(),
+        "{what}: {eigenvalues:?}"
+    );
+    for (l, r) in eigenvalues.iter().zip(reference) {
+        let f = l.sqrt() / (2.0 * std::f64::consts::PI);
+        assert!(
+            (f / r - 1.0).abs() < tolerance,
+            "{what}: {f} Hz against {r}"
+        );
+    }
+}
