@@ -2846,12 +2846,14 @@ fn gmsh_lines_as_beams() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `femu modes --damped`: the complex modes of a deck's structural damping. A cantilevered plate
-/// of CQUAD4 whose two halves' MAT1 have `GE` 0.06 (clamped half) and 0.01: each damped mode's
-/// loss factor lies between the two and they differ from mode to mode; with both `GE` 0.03 the
-/// damping is proportional (`K_4 = 0.03 K`): every loss factor is 0.03 and every mode real (an
-/// MPC of 1) to 1e-9, and the frequencies are the undamped ones. A deck without damping, or with
-/// a bushing's viscous `B`, is refused with the reason.
+/// `femu modes --damped`: the complex modes of a deck's damping. A cantilevered plate of CQUAD4
+/// whose two halves' MAT1 have `GE` 0.06 (clamped half) and 0.01: each damped mode's damping
+/// coefficient lies between the two and they differ from mode to mode; with both `GE` 0.03 the
+/// damping is proportional (`K_4 = 0.03 K`): every mode is real (an MPC of 1) to 1e-9 with the
+/// root `p = i omega sqrt(1 + 0.03 i)` of its real mode's `omega`, computed here (frequency `Im p
+/// / 2 pi`, damping `-2 Re p / Im p`, to 1e-9). The two-hex deck with Rayleigh damping (`*MODAL
+/// DAMPING, RAYLEIGH`, alpha 2 s^-1, beta 1e-6 s) keeps its real modes with the ratio `alpha / (2
+/// omega) + beta omega / 2` of each (to 1e-9). A deck without damping is refused with the reason.
 #[test]
 fn modes_damped_reports_the_complex_modes() {
     let dir = std::env::temp_dir().join(format!("femu-cli-damped-{}", std::process::id()));
@@ -2873,23 +2875,62 @@ fn modes_damped_reports_the_complex_modes() {
     succeeded(&out);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
-        stdout.contains("Damped modes") && stdout.contains("loss factor"),
+        stdout.contains("Damped modes") && stdout.contains("damping g"),
         "{stdout}"
     );
     let v = json_of(&json);
     let damped = v["damped"].as_array().unwrap();
     assert_eq!(damped.len(), 6);
-    let eta: Vec<f64> = damped
+    let g: Vec<f64> = damped
         .iter()
-        .map(|d| d["loss_factor"].as_f64().unwrap())
+        .map(|d| d["damping"].as_f64().unwrap())
         .collect();
-    assert!(eta.iter().all(|e| *e > 0.01 && *e < 0.06), "{eta:?}");
+    assert!(g.iter().all(|e| *e > 0.01 && *e < 0.06), "{g:?}");
     assert!(
-        eta.iter().fold(0.0f64, |m, e| m.max(*e)) - eta.iter().fold(1.0f64, |m, e| m.min(*e))
-            > 1e-3,
-        "{eta:?}"
+        g.iter().fold(0.0f64, |m, e| m.max(*e)) - g.iter().fold(1.0f64, |m, e| m.min(*e)) > 1e-3,
+        "{g:?}"
     );
     let (out, json) = run("uniform.bdf", deck("0.03", "0.03", ""));
+    succeeded(&out);
+    let v = json_of(&json);
+    // p = i omega sqrt(1 + i eta) = i omega (a + i b): a^2 - b^2 = 1, 2 a b = eta
+    let eta: f64 = 0.03;
+    let a = ((1.0 + (1.0 + eta * eta).sqrt()) / 2.0).sqrt();
+    let b = eta / (2.0 * a);
+    for (d, f) in v["damped"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(v["frequencies_hz"].as_array().unwrap())
+    {
+        let f = f.as_f64().unwrap();
+        let close = |key: &str, want: f64| {
+            let got = d[key].as_f64().unwrap();
+            assert!(
+                (got - want).abs() < 1e-9 * want.abs().max(1.0),
+                "{key}: {d}"
+            );
+        };
+        close("damping", 2.0 * b / a);
+        close("frequency_hz", f * a);
+        close("mpc", 1.0);
+        let omega = 2.0 * std::f64::consts::PI * f;
+        let p = &d["eigenvalue"];
+        assert!(
+            (p[0].as_f64().unwrap() + omega * b).abs() < 1e-9 * omega,
+            "{d}"
+        );
+    }
+    // Rayleigh damping on the two-hex deck
+    let text = std::fs::read_to_string(fixture("two_hex.inp"))
+        .unwrap()
+        .replace(
+            "*FREQUENCY\n4\n",
+            "*FREQUENCY\n4\n*MODAL DAMPING, RAYLEIGH\n, , 2., 1e-6\n",
+        );
+    assert!(text.contains("RAYLEIGH"));
+    std::fs::copy(fixture("two_hex_nodes.inp"), dir.join("two_hex_nodes.inp")).unwrap();
+    let (out, json) = run("rayleigh.inp", text);
     succeeded(&out);
     let v = json_of(&json);
     for (d, f) in v["damped"]
@@ -2898,35 +2939,18 @@ fn modes_damped_reports_the_complex_modes() {
         .iter()
         .zip(v["frequencies_hz"].as_array().unwrap())
     {
-        assert!(
-            (d["loss_factor"].as_f64().unwrap() - 0.03).abs() < 1e-9,
-            "{d}"
-        );
+        let omega = 2.0 * std::f64::consts::PI * f.as_f64().unwrap();
+        let zeta = 2.0 / (2.0 * omega) + 1e-6 * omega / 2.0;
+        let ratio = d["damping_ratio"].as_f64().unwrap();
+        assert!((ratio - zeta).abs() < 1e-9 * zeta, "{ratio} {zeta}");
         assert!((d["mpc"].as_f64().unwrap() - 1.0).abs() < 1e-9, "{d}");
-        assert!(
-            (d["frequency_hz"].as_f64().unwrap() / f.as_f64().unwrap() - 1.0).abs() < 1e-9,
-            "{d}"
-        );
     }
-    for (name, text, says) in [
-        ("undamped.bdf", deck("", "", ""), "no structural damping"),
-        (
-            "bushing.bdf",
-            deck(
-                "0.03",
-                "0.03",
-                "CBUSH,900,90,81,,1.,0.,0.,0\nPBUSH,90,K,1.e3,1.e3,1.e3,,,,+P\n+P,B,1.,1.,1.\n",
-            ),
-            "viscous dampers",
-        ),
-    ] {
-        let (out, _) = run(name, text);
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            !out.status.success() && stderr.contains(says),
-            "{name}: {stderr}"
-        );
-    }
+    let (out, _) = run("undamped.bdf", deck("", "", ""));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("has no damping"),
+        "{stderr}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -2949,6 +2973,6 @@ fn correlate_damped_needs_the_model_s_damping() {
     let args = ["correlate", deck.to_str().unwrap(), csv.to_str().unwrap()];
     stdout_of_success(&args);
     let err = stderr_of_failure(&[&args[..], &["--damped"]].concat());
-    assert!(err.contains("no structural damping"), "{err}");
+    assert!(err.contains("has no damping"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -294,8 +294,9 @@ impl Model {
     /// vectors solved so far after every block. `block_size` vectors are solved together (the
     /// default 4; docs/SCALING.md, "Block size and the count of solved vectors"), and
     /// `to_dict()["eigensolver"]` says where the time went. With `damped=True`,
-    /// `to_dict()["damped"]` lists the complex modes of the model's structural damping (each one's
-    /// `frequency_hz`, `loss_factor`, `eigenvalue` `[re, im]`, `mpc`, `mpd_degrees`; docs/MATH.md,
+    /// `to_dict()["damped"]` lists the complex modes of the model's damping, structural and
+    /// viscous (each one's root `eigenvalue` `[re, im]` = `p`, `frequency_hz` `Im p / 2 pi`,
+    /// Nastran's `damping` `-2 Re p / Im p`, `damping_ratio`, `mpc`, `mpd_degrees`; docs/MATH.md,
     /// "Damped modes"). Releases the GIL; Ctrl-C, or an exception raised by `progress`, stops the
     /// solve at the next block.
     #[pyo3(signature = (count=None, *, shift_hz=None, band_hz=None, block_size=None, progress=None, damped=false))]
@@ -800,7 +801,7 @@ fn run_demo<'py>(
 /// Test-analysis correlation (the paper's Table 1): the model's lowest `count` modes (default
 /// twice the test modes plus 4) paired with the test modes by MAC, frequency errors, MAC, MSD and
 /// COMAC, as a dict. `damped=True` compares complex test shapes with the model's damped modes of
-/// its structural damping (each pair's `complex_mac`; docs/MATH.md, "Damped modes"). Releases the
+/// its damping (each pair's `complex_mac`; docs/MATH.md, "Damped modes"). Releases the
 /// GIL.
 #[pyfunction]
 #[pyo3(signature = (model, test, *, count=None, mac_threshold=0.8, max_frequency_error=None, damped=false))]

@@ -273,7 +273,7 @@ def test_complex_test_modes_have_a_complex_mac(plate):
         assert p["complex_mac"] == pytest.approx(expected, rel=1e-10)
     assert "complex_mac" not in femu.correlate(model, test)["pairing"]["pairs"][0]
     # the damped comparison needs the model's structural damping, which this plate has none of
-    with pytest.raises(femu.FemuError, match="no structural damping"):
+    with pytest.raises(femu.FemuError, match="has no damping"):
         femu.correlate(model, complex_test, count=14, damped=True)
     with pytest.raises(femu.FemuError, match="imaginary"):
         femu.Test.from_arrays(
@@ -458,9 +458,9 @@ def test_update_finds_a_shell_thickness_and_a_conm2_mass(tmp_path):
 
 def test_damped_modes_of_a_structurally_damped_box(tmp_path):
     """`modes(damped=True)`: the box's steel with `*DAMPING, STRUCTURAL=0.02` damps every element
-    alike (`K_4 = 0.02 K`), so each complex mode has the real mode's frequency and a loss factor of
-    0.02 and is real (MPC 1), checked against the real modes' frequencies here; undamped, the
-    request is refused with the reason."""
+    alike (`K_4 = 0.02 K`), so each complex mode is real (MPC 1) with the root `p = i omega sqrt(1 +
+    0.02 i)` of its real mode's `omega`, computed here (frequency `Im p / 2 pi`, damping `-2 Re p /
+    Im p`); undamped, the request is refused with the reason."""
     path = box_deck(tmp_path / "box.inp")
     text = path.read_text().replace("*DENSITY", "*DAMPING, STRUCTURAL=0.02\n*DENSITY")
     damped_path = tmp_path / "damped.inp"
@@ -469,8 +469,10 @@ def test_damped_modes_of_a_structurally_damped_box(tmp_path):
     d = modes.to_dict()
     assert len(d["damped"]) == 4
     for mode, f in zip(d["damped"], d["frequencies_hz"]):
-        assert mode["loss_factor"] == pytest.approx(0.02, abs=1e-10)
+        p = 1j * 2 * np.pi * f * np.sqrt(1 + 0.02j)
+        assert mode["eigenvalue"] == pytest.approx([p.real, p.imag], rel=1e-9)
+        assert mode["damping"] == pytest.approx(-2 * p.real / p.imag, rel=1e-9)
         assert mode["mpc"] == pytest.approx(1.0, abs=1e-9)
-        assert mode["frequency_hz"] == pytest.approx(f, rel=1e-9)
-    with pytest.raises(femu.FemuError, match="no structural damping"):
+        assert mode["frequency_hz"] == pytest.approx(p.imag / (2 * np.pi), rel=1e-9)
+    with pytest.raises(femu.FemuError, match="has no damping"):
         femu.read_model(path).modes(4, damped=True)

@@ -302,7 +302,7 @@ fn deck_group_loss_factors(
 /// The modes' damping ratios the deck states, with a note: Nastran's `SDAMPING` table at each
 /// mode's frequency (`hz`), or Abaqus' and CalculiX's `*MODAL DAMPING` by mode number (a mode in
 /// no range undamped); `None` when it states neither.
-fn deck_mode_ratios(
+pub(crate) fn deck_mode_ratios(
     model: &femu_fem::model::Model,
     hz: &[f64],
     notes: &mut Vec<String>,

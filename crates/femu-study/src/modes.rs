@@ -25,9 +25,9 @@ pub struct ModesOptions {
     /// and 131 vectors where blocks of 2 solved 53 and 99 (ARPACK: 53 and 100) and took 6-21 %
     /// longer (docs/SCALING.md, "Block size and the count of solved vectors").
     pub eigen: EigenOptions,
-    /// Also the complex modes of the model's structural damping (each material's `GE`, a
-    /// model-wide loss factor), in the space of the real modes solved ([`damped_modes`];
-    /// docs/MATH.md, "Damped modes").
+    /// Also the complex modes of the model's damping (structural: each material's `GE`, a
+    /// model-wide loss factor; viscous: dampers, Rayleigh, modal ratios), in the space of the real
+    /// modes solved ([`damped_modes`]; docs/MATH.md, "Damped modes").
     pub damped: bool,
 }
 
@@ -149,14 +149,18 @@ pub struct ModesReport {
     pub damped: Vec<DampedMode>,
 }
 
-/// One complex mode of the model's structural damping, as `femu modes --damped` reports it.
+/// One complex mode of the damped model, as `femu modes --damped` reports it (Nastran's complex
+/// eigenvalue conventions).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DampedMode {
-    /// `sqrt(Re mu) / (2 pi)`, Hz.
+    /// `Im p / (2 pi)`, Hz (0 for a mode that does not oscillate).
     pub frequency_hz: f64,
-    /// `Im mu / Re mu` (twice the damping ratio).
-    pub loss_factor: f64,
-    /// The complex eigenvalue `mu = omega^2 (1 + i eta)`, `[re, im]`, s^-2.
+    /// Nastran's damping coefficient `g = -2 Re p / Im p` (a structural loss factor, twice a
+    /// light viscous ratio).
+    pub damping: f64,
+    /// The ratio to critical damping `-Re p / |p|`.
+    pub damping_ratio: f64,
+    /// The root `p` (`u = phi e^(p t)`), `[re, im]`, s^-1.
     pub eigenvalue: [f64; 2],
     /// The shape's modal phase collinearity over the free DOFs (1: real up to one phase).
     pub mpc: f64,
@@ -164,16 +168,23 @@ pub struct DampedMode {
     pub mpd_degrees: f64,
 }
 
-/// The complex modes of `loaded`'s structural damping in the space of its real `modes`
-/// (docs/MATH.md, "Damped modes"): `K_4` of the elements' and springs' `GE` projected on them,
-/// plus a model-wide loss factor `g` as `g Lambda`. The frequencies are the real modes' count,
-/// the lowest of them the accurate ones (a Rayleigh-Ritz approximation in the real modes).
+/// The complex modes of `loaded`'s damping in the space of its real `modes` (docs/MATH.md,
+/// "Damped modes"): the structural damping `K_4` of the elements' and springs' `GE` projected on
+/// them plus a model-wide loss factor `g` as `g Lambda`, and the viscous damping of its dampers
+/// (bushings' `B`) projected, plus Rayleigh's `alpha I + beta Lambda` and the deck's modal ratios
+/// (`SDAMPING`'s table, `*MODAL DAMPING`) as `2 zeta_r omega_r`. As many modes as real ones, the
+/// lowest of them the accurate ones (a Rayleigh-Ritz approximation in the real modes).
+///
+/// The deck's modal ratios are stated in `notes`.
 ///
 /// # Errors
-/// A model without structural damping, one with viscous dampers (a bushing's `B`, a model-wide
-/// Rayleigh damping: a quadratic eigenproblem femu does not solve), and the projection's errors.
-pub fn damped_modes(loaded: &LoadedModel, modes: &Modes) -> Result<Vec<DampedMode>, StudyError> {
-    let d = damped_in(loaded, modes)?;
+/// A model without damping, and the projection's errors.
+pub fn damped_modes(
+    loaded: &LoadedModel,
+    modes: &Modes,
+    notes: &mut Vec<String>,
+) -> Result<Vec<DampedMode>, StudyError> {
+    let d = damped_in(loaded, modes, notes)?;
     let n = modes.values.len();
     let dofs = modes.vectors.nrows();
     Ok((0..n)
@@ -191,8 +202,9 @@ pub fn damped_modes(loaded: &LoadedModel, modes: &Modes) -> Result<Vec<DampedMod
             let c = femu_correlate::complexity::Complexity::of(&shape);
             DampedMode {
                 frequency_hz: d.frequency_hz(r),
-                loss_factor: d.loss_factor(r),
-                eigenvalue: [d.values[r].re, d.values[r].im],
+                damping: d.damping(r),
+                damping_ratio: d.ratio(r),
+                eigenvalue: [d.roots[r].re, d.roots[r].im],
                 mpc: c.map_or(1.0, |c| c.mpc),
                 mpd_degrees: c.map_or(0.0, |c| c.mpd_degrees),
             }
@@ -216,52 +228,55 @@ pub fn mode_set(
     if !damped {
         return Ok(set);
     }
-    let d = damped_in(loaded, modes)?;
+    let d = damped_in(loaded, modes, &mut Vec::new())?;
     Ok(set.with_damped(d.coordinates)?)
 }
 
-/// The damped modes of `loaded` in the space of `modes` ([`damped_modes`]).
+/// The damped modes of `loaded` in the space of `modes` ([`damped_modes`]), with a note in
+/// `notes` for the deck's modal ratios.
 fn damped_in(
     loaded: &LoadedModel,
     modes: &Modes,
+    notes: &mut Vec<String>,
 ) -> Result<femu_correlate::damped::DampedModes, StudyError> {
+    use femu_fem::model::UniformDamping;
     let dampers = loaded.asm.dampers(&loaded.model)?;
-    let refuse = |reason: String| StudyError::invalid("damped modes", reason);
-    if dampers.viscous.is_some() {
-        return Err(refuse(
-            "the model has viscous dampers (a bushing's B): its complex modes solve a quadratic eigenproblem, which femu does not; its frequency responses (femu frf) include them".into(),
-        ));
-    }
-    let uniform = match loaded.model.uniform_damping() {
-        None => 0.0,
-        Some(femu_fem::model::UniformDamping::LossFactor(g)) => g,
-        Some(femu_fem::model::UniformDamping::Rayleigh { .. }) => {
-            return Err(refuse(
-                "the model's damping is Rayleigh's (viscous): its complex modes solve a quadratic eigenproblem, which femu does not".into(),
-            ));
-        }
-    };
-    if dampers.structural.is_none() && uniform == 0.0 {
-        return Err(refuse(
-            "the model has no structural damping (no material or spring GE, no PARAM,G)".into(),
-        ));
-    }
-    let n = modes.values.len();
-    let projected = femu_correlate::frf::ModalDampers::project(
+    let mut projected = femu_correlate::frf::ModalDampers::project(
         dampers.structural.as_ref(),
-        None,
+        dampers.viscous.as_ref(),
         modes.vectors.as_ref(),
     )?;
-    let mut s = projected
-        .structural
-        .unwrap_or_else(|| faer::Mat::zeros(n, n));
-    for (r, l) in modes.values.iter().enumerate() {
-        s[(r, r)] += uniform * l;
+    let n = modes.values.len();
+    let values = &modes.values;
+    let diagonal = |m: &mut Option<faer::Mat<f64>>, of: &dyn Fn(usize) -> f64| {
+        let m = m.get_or_insert_with(|| faer::Mat::zeros(n, n));
+        for r in 0..n {
+            m[(r, r)] += of(r);
+        }
+    };
+    match loaded.model.uniform_damping() {
+        None => {}
+        Some(UniformDamping::LossFactor(g)) => {
+            diagonal(&mut projected.structural, &|r| g * values[r]);
+        }
+        Some(UniformDamping::Rayleigh { alpha, beta }) => {
+            diagonal(&mut projected.viscous, &|r| alpha + beta * values[r]);
+        }
     }
-    Ok(femu_correlate::damped::damped_modes(
-        &modes.values,
-        s.as_ref(),
-    )?)
+    if let Some(ratios) =
+        crate::frf::deck_mode_ratios(&loaded.model, &modes.frequencies_hz(), notes)
+    {
+        diagonal(&mut projected.viscous, &|r| {
+            2.0 * ratios[r] * values[r].max(0.0).sqrt()
+        });
+    }
+    if projected.structural.is_none() && projected.viscous.is_none() {
+        return Err(StudyError::invalid(
+            "damped modes",
+            "the model has no damping (no material, spring or bushing GE or B, no PARAM,G, Rayleigh or modal damping)",
+        ));
+    }
+    Ok(femu_correlate::damped::damped_modes(values, &projected)?)
 }
 
 /// Where a model read as matrices came from, as [`ModesReport`] states it.
@@ -400,7 +415,7 @@ pub fn solve_modes(
     };
     let mut report = report;
     if options.damped {
-        report.damped = damped_modes(loaded, &modes)?;
+        report.damped = damped_modes(loaded, &modes, &mut report.notes)?;
     }
     Ok((modes, report))
 }

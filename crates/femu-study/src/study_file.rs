@@ -206,7 +206,7 @@ pub struct PairingSection {
     #[serde(default)]
     pub max_frequency_error: Option<f64>,
     /// Compare the complex test shapes with the model's damped (complex) modes of its
-    /// structural damping: the complex MAC with both sides complex (docs/MATH.md, "Damped
+    /// structural and viscous damping: the complex MAC with both sides complex (docs/MATH.md, "Damped
     /// modes").
     #[cfg_attr(feature = "clap", arg(long))]
     #[serde(default)]

@@ -43,8 +43,9 @@ pub struct ModesArgs {
     /// in all but read the factor more often; on large models 4 is the faster.
     #[arg(long, value_name = "N")]
     pub block_size: Option<usize>,
-    /// Also the complex modes of the model's structural damping (each material's GE, PARAM,G,
-    /// *DAMPING, STRUCTURAL=), with each one's loss factor and phase collinearity.
+    /// Also the complex modes of the model's damping (structural: each material's GE, PARAM,G,
+    /// *DAMPING, STRUCTURAL=; viscous: a bushing's B, Rayleigh, modal ratios), each one's root p,
+    /// frequency, damping and phase collinearity as Nastran's complex eigenvalue output.
     #[arg(long)]
     pub damped: bool,
     #[command(flatten)]
@@ -115,17 +116,22 @@ pub fn run(a: &ModesArgs, quiet: bool) -> Result<(), CliError> {
         }
         if !report.damped.is_empty() {
             println!(
-                "Damped modes (structural damping, in the space of the {} real modes):",
+                "Damped modes (complex eigenvalues p, u = phi e^(p t); in the space of the {} real modes):",
                 f.len()
             );
-            println!("| mode | f (Hz) | loss factor | MPC | MPD (deg) |");
-            println!("|---|---|---|---|---|");
+            println!(
+                "| mode | Re p (1/s) | Im p (1/s) | f (Hz) | damping g | ratio | MPC | MPD (deg) |"
+            );
+            println!("|---|---|---|---|---|---|---|---|");
             for (j, d) in report.damped.iter().enumerate() {
                 println!(
-                    "| {} | {:.6} | {:.4e} | {:.4} | {:.2} |",
+                    "| {} | {:.6e} | {:.6e} | {:.6} | {:.4e} | {:.4e} | {:.4} | {:.2} |",
                     j + 1,
+                    d.eigenvalue[0],
+                    d.eigenvalue[1],
                     d.frequency_hz,
-                    d.loss_factor,
+                    d.damping,
+                    d.damping_ratio,
                     d.mpc,
                     d.mpd_degrees
                 );
