@@ -38,7 +38,7 @@ pub struct ModelArgs {
     /// shells of the given thickness in m, as GROUP=THICKNESS; repeat for several.
     #[arg(long, value_name = "GROUP=THICKNESS")]
     pub shell: Vec<String>,
-    /// Gmsh meshes: a physical group of 2-node lines made Timoshenko beams of a section, as
+    /// Gmsh meshes: a physical group of 2- or 3-node lines made Timoshenko beams of a section, as
     /// GROUP=rect:A,B (circ:R, pipe:R,T; Abaqus' *BEAM SECTION shapes), with @X,Y,Z for the
     /// section's 1-axis direction n1 (default 0,0,-1); repeat for several.
     #[arg(long, value_name = "GROUP=SECTION")]

@@ -2716,6 +2716,106 @@ fn gmsh_surfaces_as_shells() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Three-node beams from a Gmsh mesh and an Abaqus deck: a 1 m steel cantilever along x as 10
+/// three-node lines (Gmsh type 8: ends, then middle) made beams by `--beam frame=rect:0.02,0.04`
+/// has the four lowest frequencies of the same beam read as B32 (nodes end, middle, end) to 1e-9,
+/// the first Euler-Bernoulli's to 0.1 %, and the VTU written of it holds ten quadratic edges (VTK
+/// type 21) on the ends and middle nodes in that order.
+#[test]
+fn gmsh_three_node_lines_and_b32_are_one_beam() {
+    let dir = std::env::temp_dir().join(format!("femu-cli-gmsh-b32-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let n = 10;
+    let mut msh = String::from(
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n0 1 \"root\"\n1 2 \"frame\"\n$EndPhysicalNames\n",
+    );
+    msh.push_str(&format!("$Nodes\n{}\n", 2 * n + 1));
+    let mut inp = String::from("*NODE\n");
+    for i in 0..=2 * n {
+        let x = i as f64 / (2 * n) as f64;
+        msh.push_str(&format!("{} {x:e} 0 0\n", i + 1));
+        inp.push_str(&format!("{}, {x:e}, 0., 0.\n", i + 1));
+    }
+    msh.push_str(&format!("$EndNodes\n$Elements\n{}\n1 15 2 1 1 1\n", n + 1));
+    inp.push_str("*ELEMENT, TYPE=B32, ELSET=FRAME\n");
+    for e in 0..n {
+        let (a, m, b) = (2 * e + 1, 2 * e + 2, 2 * e + 3);
+        msh.push_str(&format!("{} 8 2 2 2 {a} {b} {m}\n", e + 2));
+        inp.push_str(&format!("{}, {a}, {m}, {b}\n", e + 2));
+    }
+    msh.push_str("$EndElements\n");
+    inp.push_str(
+        "*MATERIAL, NAME=STEEL\n*ELASTIC\n2.1e11, 0.3\n*DENSITY\n7850.\n\
+         *BEAM SECTION, ELSET=FRAME, MATERIAL=STEEL, SECTION=RECT\n0.02, 0.04\n0., 0., -1.\n\
+         *BOUNDARY\n1, 1, 6\n",
+    );
+    std::fs::write(dir.join("beam.msh"), msh).unwrap();
+    std::fs::write(dir.join("beam.inp"), inp).unwrap();
+    let run = |file: &str, extra: &[&str]| {
+        let json = dir.join(format!("{file}.json"));
+        let out = femu()
+            .args(["modes", dir.join(file).to_str().unwrap(), "--count", "4"])
+            .args(extra)
+            .args(["--json", json.to_str().unwrap(), "--quiet"])
+            .output()
+            .unwrap();
+        succeeded(&out);
+        json_of(&json)["frequencies_hz"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f.as_f64().unwrap())
+            .collect::<Vec<f64>>()
+    };
+    let vtu = dir.join("beam.vtu");
+    let from_msh = run(
+        "beam.msh",
+        &[
+            "--young",
+            "2.1e11",
+            "--poisson",
+            "0.3",
+            "--density",
+            "7850",
+            "--beam",
+            "frame=rect:0.02,0.04",
+            "--fix",
+            "root",
+            "--vtu",
+            vtu.to_str().unwrap(),
+        ],
+    );
+    let from_inp = run("beam.inp", &[]);
+    for k in 0..4 {
+        assert!(
+            (from_msh[k] / from_inp[k] - 1.0).abs() < 1e-9,
+            "{from_msh:?} {from_inp:?}"
+        );
+    }
+    let (e, rho, a, i) = (2.1e11, 7850.0, 0.02 * 0.04, 0.04 * 0.02f64.powi(3) / 12.0);
+    let f1 = 1.8751f64.powi(2) / (2.0 * std::f64::consts::PI) * (e * i / (rho * a)).sqrt();
+    assert!(
+        (from_msh[0] / f1 - 1.0).abs() < 1e-3,
+        "{} {f1}",
+        from_msh[0]
+    );
+    let text = std::fs::read_to_string(&vtu).unwrap();
+    let types = text.split("Name=\"types\"").nth(1).unwrap();
+    let types: Vec<&str> = types
+        .split('>')
+        .nth(1)
+        .unwrap()
+        .split('<')
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .collect();
+    assert_eq!(types, vec!["21"; n], "{types:?}");
+    // the first edge: nodes 1, 3 and 2 (0-based 0, 2, 1)
+    assert!(text.contains("\n0 2 1\n"), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Beams from a Gmsh mesh: a 1 m steel cantilever along x as 20 two-node lines in a physical
 /// curve "frame", clamped at a physical point "root", made beams by `--beam frame=rect:0.02,0.04`
 /// (Abaqus' RECT: 0.02 along the section's 1-axis, n1 = (0, 0, -1) by default): the four lowest

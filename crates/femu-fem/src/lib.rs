@@ -28,6 +28,7 @@
 
 pub mod align;
 pub mod assembly;
+pub mod beam3;
 pub mod dof;
 pub mod element;
 mod error;

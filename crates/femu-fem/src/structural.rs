@@ -1,6 +1,7 @@
 //! Structural elements on nodes with rotations: two-node beams (Timoshenko, with Euler-Bernoulli
-//! as the shear-rigid limit), rods, scalar springs and bushings (docs/MATH.md, "Beams, springs
-//! and bushings"), and shells ([`crate::shell`], [`crate::shell8`]).
+//! as the shear-rigid limit) and three-node beams ([`crate::beam3`]), rods, scalar springs and
+//! bushings (docs/MATH.md, "Beams, springs and bushings"), and shells ([`crate::shell`],
+//! [`crate::shell8`]).
 //!
 //! Each element's matrices are formed in closed form (beams: the exact stiffness of a uniform
 //! Timoshenko beam and the consistent mass of its interdependent interpolation) on the DOFs it
@@ -42,7 +43,8 @@ pub struct BeamSection {
     pub nsm: f64,
 }
 
-/// A two-node beam: material, section, the orientation of its cross-section and rigid offsets.
+/// A beam: material, section, the orientation of its cross-section and rigid offsets (two-node
+/// beams; a three-node beam has none, nor releases, and needs shear factors).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Beam {
     /// Young's modulus (Pa).
@@ -133,7 +135,7 @@ pub struct Bushing {
 /// What a structural element is.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum StructuralKind {
-    /// A two-node beam.
+    /// A two-node beam, or a three-node one (ends, then the middle node; [`crate::beam3`]).
     Beam(Beam),
     /// A two-node rod.
     Rod(Rod),
@@ -163,7 +165,8 @@ impl StructuralKind {
 pub struct StructuralElement {
     /// The user's element id (shared with the mesh's solid elements: ids are unique in a model).
     pub id: u64,
-    /// Internal node indices: two for beams and rods, one or two for springs and bushings.
+    /// Internal node indices: two for rods, two or three for beams (ends, then the middle node),
+    /// one or two for springs and bushings, three, four or eight for shells.
     pub nodes: Vec<usize>,
     /// The element.
     pub kind: StructuralKind,
@@ -360,7 +363,11 @@ impl StructuralElement {
         let id = self.id;
         let count = self.nodes.len();
         let wanted = match &self.kind {
-            StructuralKind::Beam(_) | StructuralKind::Rod(_) => count == 2,
+            StructuralKind::Beam(_) => {
+                (count == 2 || count == 3)
+                    && (0..count).all(|i| (0..i).all(|j| self.nodes[i] != self.nodes[j]))
+            }
+            StructuralKind::Rod(_) => count == 2,
             StructuralKind::Spring(s) => {
                 let mut ends = vec![s.a.node];
                 ends.extend(s.b.map(|b| b.node));
@@ -376,7 +383,7 @@ impl StructuralElement {
             return Err(FemError::InvalidStructural {
                 element: id,
                 reason: format!(
-                    "{count} nodes {:?} do not fit the element (beams and rods two, springs and bushings one or two, a spring's ends among them, shells three, four or eight distinct)",
+                    "{count} nodes {:?} do not fit the element (beams two or three distinct, rods two, springs and bushings one or two, a spring's ends among them, shells three, four or eight distinct)",
                     self.nodes
                 ),
             });
@@ -410,6 +417,16 @@ impl StructuralElement {
                     return Err(FemError::InvalidStructural {
                         element: id,
                         reason: "its orientation vector or offsets are not finite".into(),
+                    });
+                }
+                if count == 3
+                    && (s.shear.is_none()
+                        || b.offsets.iter().flatten().any(|v| *v != 0.0)
+                        || b.releases.iter().flatten().any(|r| *r))
+                {
+                    return Err(FemError::InvalidStructural {
+                        element: id,
+                        reason: "a three-node beam is shear-flexible (its section needs shear factors) and has neither offsets nor released DOFs".into(),
                     });
                 }
             }
@@ -506,6 +523,11 @@ impl StructuralElement {
         b.k[3..].iter().chain(&b.b[3..]).any(|v| *v != 0.0) || b.point.is_some()
     }
 
+    /// The positions of a three-node element's nodes.
+    fn three(&self, coords: &[[f64; 3]]) -> [[f64; 3]; 3] {
+        std::array::from_fn(|a| coords[self.nodes[a]])
+    }
+
     /// Checks the element's values ([`StructuralElement::validate`]) and geometry at node
     /// positions `coords` (coincident ends, an orientation vector along the axis, a degenerate,
     /// inverted or warped shell) without forming its matrices.
@@ -519,6 +541,9 @@ impl StructuralElement {
             reason,
         };
         match &self.kind {
+            StructuralKind::Beam(b) if self.nodes.len() == 3 => {
+                crate::beam3::check(b, &self.three(coords)).map_err(bad)
+            }
             StructuralKind::Beam(b) => line_axes(
                 add(coords[self.nodes[0]], b.offsets[0]),
                 add(coords[self.nodes[1]], b.offsets[1]),
@@ -547,6 +572,9 @@ impl StructuralElement {
     pub fn mass(&self, coords: &[[f64; 3]]) -> f64 {
         let length = || norm(sub(coords[self.nodes[1]], coords[self.nodes[0]]));
         match &self.kind {
+            StructuralKind::Beam(b) if self.nodes.len() == 3 => {
+                (b.rho * b.section.area + b.section.nsm) * crate::beam3::length(&self.three(coords))
+            }
             StructuralKind::Beam(b) => {
                 let l = norm(sub(
                     add(coords[self.nodes[1]], b.offsets[1]),
@@ -682,6 +710,10 @@ impl StructuralElement {
                 let (k, m) = self
                     .shell_matrices(s, coords, mass, crate::shell::Scales::ALL)
                     .map_err(bad)?;
+                Ok(StructuralMatrices { parts, k, m })
+            }
+            StructuralKind::Beam(b) if self.nodes.len() == 3 => {
+                let (k, m) = crate::beam3::matrices(b, &self.three(coords), mass).map_err(bad)?;
                 Ok(StructuralMatrices { parts, k, m })
             }
             StructuralKind::Beam(b) => {

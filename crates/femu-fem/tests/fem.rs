@@ -3,6 +3,7 @@
 mod fem {
     mod align;
     mod assembly;
+    mod beam3;
     pub mod common;
     mod constraints;
     mod convergence;

@@ -493,6 +493,7 @@ fn describe_gmsh(
             .map(|(t, n)| {
                 let name = match t {
                     1 => "2-node line",
+                    8 => "3-node line",
                     2 => "3-node triangle",
                     3 => "4-node quadrangle",
                     16 => "8-node quadrangle",

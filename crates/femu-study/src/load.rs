@@ -42,7 +42,7 @@ pub struct ModelOptions {
     /// Shell sections of a Gmsh mesh: each named physical group of surfaces (3-node triangles,
     /// 4- and 8-node quadrangles) becomes shells of this thickness (m) in the model's material.
     pub shells: Vec<(String, f64)>,
-    /// Beam sections of a Gmsh mesh: each named physical group of 2-node lines becomes
+    /// Beam sections of a Gmsh mesh: each named physical group of 2- or 3-node lines becomes
     /// Timoshenko beams of this section in the model's material, written as Abaqus' `*BEAM
     /// SECTION` shapes: `rect:A,B`, `circ:R` or `pipe:R,T`, with `@X,Y,Z` for the direction of
     /// the section's 1-axis (`n1`; default `0,0,-1`, Abaqus' default).
@@ -160,7 +160,7 @@ fn add_sections(
         add_group(
             model,
             curves,
-            (group, "lines", &[1]),
+            (group, "lines", &[1, 8]),
             path,
             StructuralKind::Beam(beam),
         )?;
@@ -233,7 +233,7 @@ fn add_group(
                 path,
                 "sections",
                 format!(
-                    "line {}: element {} of {group} is of Gmsh type {}: femu builds {what} of type{} {:?} (3-node triangles 2, 4-node quadrangles 3, 8-node quadrangles 16, 2-node lines 1)",
+                    "line {}: element {} of {group} is of Gmsh type {}: femu builds {what} of type{} {:?} (3-node triangles 2, 4-node quadrangles 3, 8-node quadrangles 16, 2-node lines 1, 3-node lines 8)",
                     f.line,
                     f.tag,
                     f.gmsh_type,

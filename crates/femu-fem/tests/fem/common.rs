@@ -143,3 +143,26 @@ pub fn assert_no_shear_locking(clamped: impl Fn(f64) -> femu_fem::model::Model) 
     assert!((per_t[2] / per_t[1] - 1.0).abs() < 1e-2, "{per_t:?}");
     assert!(per_t[0] < per_t[1], "{per_t:?}");
 }
+
+/// `w^2` of mode `n` of a simply supported Timoshenko beam (shear and rotary inertia), the lower
+/// root of its frequency equation `(rho A w^2 - k G A q^2)(rho I w^2 - E I q^2 - k G A) = (k G A
+/// q)^2`, `q = n pi / L`.
+#[allow(clippy::too_many_arguments)]
+pub fn timoshenko_simply_supported(
+    e: f64,
+    g: f64,
+    rho: f64,
+    area: f64,
+    i: f64,
+    k: f64,
+    l: f64,
+    n: f64,
+) -> f64 {
+    let kga = k * g * area;
+    let q = n * std::f64::consts::PI / l;
+    // a x^2 + b x + c = 0 in x = w^2
+    let a = rho * area * rho * i;
+    let b = -(rho * area * (e * i * q * q + kga) + kga * q * q * rho * i);
+    let c = kga * q * q * e * i * q * q;
+    (-b - (b * b - 4.0 * a * c).sqrt()) / (2.0 * a)
+}

@@ -305,14 +305,8 @@ fn deep_simply_supported_beam_matches_timoshenko() {
     model.fix_node_dofs(1, &[0, 1, 2, 3]).unwrap();
     model.fix_node_dofs(121, &[1, 2]).unwrap();
     let vals = lowest(&model, MassKind::Consistent, 6);
-    let kga = 5.0 / 6.0 * g() * sec.area;
     let timoshenko = |i: f64, n: f64| {
-        let q = n * PI / l;
-        // a x^2 + b x + c = 0 in x = w^2
-        let a = RHO * sec.area * RHO * i;
-        let bb = -(RHO * sec.area * (E * i * q * q + kga) + kga * q * q * RHO * i);
-        let c = kga * q * q * E * i * q * q;
-        (-bb - (bb * bb - 4.0 * a * c).sqrt()) / (2.0 * a)
+        super::common::timoshenko_simply_supported(E, g(), RHO, sec.area, i, 5.0 / 6.0, l, n)
     };
     let eb = |i: f64, n: f64| (n * PI / l).powi(4) * E * i / (RHO * sec.area);
     let mut bending: Vec<(f64, f64)> = Vec::new();

@@ -310,7 +310,7 @@ impl DeckBuilder {
                             warn(
                                 warnings,
                                 l,
-                                "*BEAM GENERAL SECTION: the shear area of its B31 elements is taken as A (shear factor 1); femu's *BEAM SECTION shapes use 5/6 (RECT), 0.9 (CIRC), 1/2 (PIPE)".into(),
+                                "*BEAM GENERAL SECTION: the shear area of its B31 and B32 elements is taken as A (shear factor 1); femu's *BEAM SECTION shapes use 5/6 (RECT), 0.9 (CIRC), 1/2 (PIPE)".into(),
                             );
                         }
                         name == "BEAM GENERAL SECTION"
@@ -572,7 +572,7 @@ impl DeckBuilder {
             return Ok(());
         }
         let (kind, formulation, approx) = element_kind(ty).ok_or_else(|| {
-            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; B31, B33, SPRING1, SPRING2, SPRINGA; S4, S4R, S3, S3R, S8R, S8; M3D3, M3D4, M3D4R, M3D8, M3D8R)"))
+            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; B31, B32, B32R, B33, SPRING1, SPRING2, SPRINGA; S4, S4R, S3, S3R, S8R, S8; M3D3, M3D4, M3D4R, M3D8, M3D8R)"))
         })?;
         if approx {
             warn(

@@ -1,5 +1,6 @@
 //! Beams and springs of an Abaqus/CalculiX deck: `B31` (shear-flexible) and `B33`
-//! (Euler-Bernoulli) two-node beams with `*BEAM SECTION` (`RECT`, `CIRC`, `PIPE`) or `*BEAM
+//! (Euler-Bernoulli) two-node beams and `B32` three-node beams (shear-flexible, possibly curved;
+//! nodes end, middle, end) with `*BEAM SECTION` (`RECT`, `CIRC`, `PIPE`) or `*BEAM
 //! GENERAL SECTION` (`GENERAL`), and `SPRING1`, `SPRING2`, `SPRINGA` with `*SPRING`, as the
 //! Abaqus Keywords Reference defines them, into femu's structural elements
 //! (docs/MATH.md, "Beams, springs and bushings").
@@ -25,6 +26,8 @@ pub(super) enum StructuralType {
     B31,
     /// Euler-Bernoulli two-node beam.
     B33,
+    /// Shear-flexible three-node beam (B32, B32H, CalculiX's B32R).
+    B32,
     /// A spring from a DOF to ground.
     Spring1,
     /// A spring between two DOFs.
@@ -49,6 +52,7 @@ impl StructuralType {
         Ok(Some(match ty.to_ascii_uppercase().as_str() {
             "B31" | "B31H" => (Self::B31, 2),
             "B33" | "B33H" => (Self::B33, 2),
+            "B32" | "B32H" | "B32R" => (Self::B32, 3),
             "SPRING1" => (Self::Spring1, 1),
             "SPRING2" => (Self::Spring2, 2),
             "SPRINGA" => (Self::SpringA, 2),
@@ -64,10 +68,10 @@ impl StructuralType {
                     "element type {t} is not read: femu's shells are S4, S4R, S3, S3R, S8R and S8, its membranes M3D3, M3D4, M3D4R, M3D8 and M3D8R (6- and 9-node, thin-only and continuum shells are not built)"
                 ));
             }
-            t @ ("B32" | "B32H" | "B31OS" | "B32OS" | "PIPE31" | "PIPE32" | "B21" | "B22"
-            | "B23" | "T3D2" | "T3D3" | "T2D2") => {
+            t @ ("B31OS" | "B32OS" | "PIPE31" | "PIPE32" | "B21" | "B22" | "B23" | "T3D2"
+            | "T3D3" | "T2D2") => {
                 return Err(format!(
-                    "element type {t} is not read: femu's beams are the two-node B31 and B33 in space (three-node, open-section, pipe, planar beams and trusses are not built)"
+                    "element type {t} is not read: femu's beams are B31, B32 and B33 in space (open-section, pipe, planar beams and trusses are not built)"
                 ));
             }
             _ => return Ok(None),
@@ -78,6 +82,7 @@ impl StructuralType {
         match self {
             Self::B31 => "B31",
             Self::B33 => "B33",
+            Self::B32 => "B32",
             Self::Spring1 => "SPRING1",
             Self::Spring2 => "SPRING2",
             Self::SpringA => "SPRINGA",
@@ -432,7 +437,7 @@ pub(super) fn add_structural(
         // the structural damping of the element's material
         let mut ge = 0.0;
         let kind = match ty {
-            StructuralType::B31 | StructuralType::B33 => {
+            StructuralType::B31 | StructuralType::B33 | StructuralType::B32 => {
                 let k = *section_of.get(id).ok_or_else(|| {
                     at_err(
                         l,
@@ -461,7 +466,7 @@ pub(super) fn add_structural(
                         i1,
                         i2,
                         j,
-                        shear: (*ty == StructuralType::B31).then_some(kf),
+                        shear: (*ty != StructuralType::B33).then_some(kf),
                         nsm: 0.0,
                     },
                     orientation: n1(c)?,
@@ -527,6 +532,11 @@ pub(super) fn add_structural(
                 })?;
                 spring(&records.springs[k], *ty, *id, &nodes, model)?
             }
+        };
+        // B32's nodes are end, middle, end; femu's the ends, then the middle
+        let nodes = match ty {
+            StructuralType::B32 => vec![nodes[0], nodes[2], nodes[1]],
+            _ => nodes,
         };
         model
             .add_structural(StructuralElement {
