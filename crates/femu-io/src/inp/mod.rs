@@ -10,7 +10,8 @@
 //! is dependent), `*KINEMATIC COUPLING` and `*COUPLING` with `*KINEMATIC` (rigid links: the
 //! reference node gets rotations) or `*DISTRIBUTING` (weighted averages, with the weights of a
 //! `*SURFACE, TYPE=NODE`), `*INCLUDE`, `*STEP`, `*FREQUENCY`, `*END STEP` (docs/MATH.md,
-//! "Multipoint constraints"); beams `B31`, `B32` and `B33` with `*BEAM SECTION` (`RECT`, `CIRC`, `PIPE`)
+//! "Multipoint constraints"); trusses `T3D2` with `*SOLID SECTION` (the area on its data line);
+//! beams `B31`, `B32` and `B33` with `*BEAM SECTION` (`RECT`, `CIRC`, `PIPE`)
 //! or `*BEAM GENERAL SECTION` (`GENERAL`), springs `SPRING1`, `SPRING2`, `SPRINGA` with `*SPRING`
 //! (`structural.rs`; their nodes get rotations, which `*BOUNDARY` DOFs 4-6 then fix), and shells
 //! `S4`, `S4R`, `S3`, `S3R`, `S8R`, `S8` with `*SHELL SECTION` and membranes `M3D3`, `M3D4`, `M3D4R`,
@@ -344,13 +345,16 @@ pub struct Boundary {
     pub line: Location,
 }
 
-/// A `*SOLID SECTION`: the material of an element set.
+/// A `*SOLID SECTION`: the material of an element set (and a truss's cross-sectional area).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Section {
     /// Element set (upper case).
     pub elset: String,
     /// Material name (upper case).
     pub material: String,
+    /// The first field of its first data line: a truss's cross-sectional area (Abaqus assumes
+    /// 1 where none is given).
+    pub area: Option<String>,
     /// Where it was defined.
     pub line: Location,
 }

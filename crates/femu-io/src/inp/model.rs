@@ -54,6 +54,10 @@ impl InpDeck {
                 }
             })?;
             if self.mesh.element_sets().get(&s.elset).is_none() {
+                // a set of trusses alone: its elements take the section as trusses
+                if self.structural.sets.contains_key(&s.elset) {
+                    continue;
+                }
                 let hint = crate::spelling::suggestion(
                     &s.elset,
                     self.mesh.element_sets().keys().map(String::as_str),
@@ -101,6 +105,7 @@ impl InpDeck {
         }
         structural::add_structural(
             &self.structural,
+            &self.sections,
             &self.materials,
             &self.material_damping,
             &self.laminae,

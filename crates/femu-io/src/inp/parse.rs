@@ -572,7 +572,7 @@ impl DeckBuilder {
             return Ok(());
         }
         let (kind, formulation, approx) = element_kind(ty).ok_or_else(|| {
-            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; B31, B32, B32R, B33, SPRING1, SPRING2, SPRINGA; S4, S4R, S3, S3R, S8R, S8; M3D3, M3D4, M3D4R, M3D8, M3D8R)"))
+            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; T3D2, B31, B32, B32R, B33, SPRING1, SPRING2, SPRINGA; S4, S4R, S3, S3R, S8R, S8; M3D3, M3D4, M3D4R, M3D8, M3D8R)"))
         })?;
         if approx {
             warn(
@@ -733,6 +733,7 @@ impl DeckBuilder {
         self.sections.push(Section {
             elset: elset.to_ascii_uppercase(),
             material: material.to_ascii_uppercase(),
+            area: None,
             line: at(l),
         });
         Ok(())
@@ -778,6 +779,15 @@ impl DeckBuilder {
             "BEAM SECTION" | "BEAM GENERAL SECTION" => {
                 if let Some(c) = self.structural.sections.last_mut() {
                     c.lines.push(f.iter().map(|s| s.to_string()).collect());
+                }
+                Ok(())
+            }
+            "SOLID SECTION" => {
+                // the first data line's first field: a truss's area
+                if let Some(s) = self.sections.last_mut()
+                    && s.area.is_none()
+                {
+                    s.area = Some(f.first().map_or(String::new(), |v| v.to_string()));
                 }
                 Ok(())
             }

@@ -14,7 +14,7 @@ use crate::IoError;
 use femu_fem::material::Elasticity;
 use femu_fem::model::Model;
 use femu_fem::structural::{
-    Beam, BeamSection, Part, Spring, SpringEnd, StructuralElement, StructuralKind,
+    Beam, BeamSection, Part, Rod, Spring, SpringEnd, StructuralElement, StructuralKind,
 };
 use std::collections::{BTreeMap, HashMap};
 use std::f64::consts::PI;
@@ -28,6 +28,8 @@ pub(super) enum StructuralType {
     B33,
     /// Shear-flexible three-node beam (B32, B32H, CalculiX's B32R).
     B32,
+    /// A two-node truss (T3D2, T3D2H) of a `*SOLID SECTION`: a rod without torsion.
+    T3D2,
     /// A spring from a DOF to ground.
     Spring1,
     /// A spring between two DOFs.
@@ -53,6 +55,7 @@ impl StructuralType {
             "B31" | "B31H" => (Self::B31, 2),
             "B33" | "B33H" => (Self::B33, 2),
             "B32" | "B32H" | "B32R" => (Self::B32, 3),
+            "T3D2" | "T3D2H" => (Self::T3D2, 2),
             "SPRING1" => (Self::Spring1, 1),
             "SPRING2" => (Self::Spring2, 2),
             "SPRINGA" => (Self::SpringA, 2),
@@ -68,10 +71,10 @@ impl StructuralType {
                     "element type {t} is not read: femu's shells are S4, S4R, S3, S3R, S8R and S8, its membranes M3D3, M3D4, M3D4R, M3D8 and M3D8R (6- and 9-node, thin-only and continuum shells are not built)"
                 ));
             }
-            t @ ("B31OS" | "B32OS" | "PIPE31" | "PIPE32" | "B21" | "B22" | "B23" | "T3D2"
-            | "T3D3" | "T2D2") => {
+            t @ ("B31OS" | "B32OS" | "PIPE31" | "PIPE32" | "B21" | "B22" | "B23" | "T3D3"
+            | "T3D3H" | "T2D2" | "T2D3") => {
                 return Err(format!(
-                    "element type {t} is not read: femu's beams are B31, B32 and B33 in space (open-section, pipe, planar beams and trusses are not built)"
+                    "element type {t} is not read: femu's beams are B31, B32 and B33 in space and its trusses T3D2 (open-section, pipe, planar beams and three-node or planar trusses are not built)"
                 ));
             }
             _ => return Ok(None),
@@ -83,6 +86,7 @@ impl StructuralType {
             Self::B31 => "B31",
             Self::B33 => "B33",
             Self::B32 => "B32",
+            Self::T3D2 => "T3D2",
             Self::Spring1 => "SPRING1",
             Self::Spring2 => "SPRING2",
             Self::SpringA => "SPRINGA",
@@ -370,6 +374,7 @@ fn n1(c: &BeamSectionCard) -> Result<[f64; 3], IoError> {
 /// the model's errors, each with the line that defined it.
 pub(super) fn add_structural(
     records: &StructuralRecords,
+    solid_sections: &[super::Section],
     materials: &BTreeMap<String, Material>,
     material_damping: &BTreeMap<String, f64>,
     laminae: &BTreeMap<String, Lamina>,
@@ -421,6 +426,13 @@ pub(super) fn add_structural(
             shell_of.entry(*id).or_insert(k);
         }
     }
+    // a truss's *SOLID SECTION (the first that names a set holding it)
+    let mut truss_of: HashMap<u64, usize> = HashMap::new();
+    for (k, c) in solid_sections.iter().enumerate() {
+        for id in records.sets.get(&c.elset).into_iter().flatten() {
+            truss_of.entry(*id).or_insert(k);
+        }
+    }
     let mut values: HashMap<usize, SectionValues> = HashMap::new();
     for (id, ty, node_ids, l) in &records.elements {
         let nodes = node_ids
@@ -437,6 +449,40 @@ pub(super) fn add_structural(
         // the structural damping of the element's material
         let mut ge = 0.0;
         let kind = match ty {
+            StructuralType::T3D2 => {
+                let c = &solid_sections[*truss_of.get(id).ok_or_else(|| {
+                    at_err(
+                        l,
+                        format!(
+                            "T3D2 element {id} has no *SOLID SECTION (none names a set that holds it)"
+                        ),
+                    )
+                })?];
+                let m = materials.get(&c.material).ok_or_else(|| {
+                    at_err(
+                        &c.line,
+                        format!(
+                            "*SOLID SECTION names material {}, which no *MATERIAL defines",
+                            c.material
+                        ),
+                    )
+                })?;
+                ge = material_damping.get(&c.material).copied().unwrap_or(0.0);
+                let (e, g, rho) = moduli(m).map_err(|r| at_err(&c.line, r))?;
+                // Abaqus assumes a unit area where the data line gives none
+                let area = match c.area.as_deref().map(str::trim) {
+                    None | Some("") => 1.0,
+                    Some(a) => number(&c.line, "the truss's cross-sectional area", a)?,
+                };
+                StructuralKind::Rod(Rod {
+                    e,
+                    g,
+                    rho,
+                    area,
+                    j: 0.0,
+                    nsm: 0.0,
+                })
+            }
             StructuralType::B31 | StructuralType::B33 | StructuralType::B32 => {
                 let k = *section_of.get(id).ok_or_else(|| {
                     at_err(
