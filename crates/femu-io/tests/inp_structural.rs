@@ -248,6 +248,39 @@ fn t3d2_trusses_against_rod_theory_and_a_hand_solved_tripod() {
     assert_eq!(r.area, 1.0);
 }
 
+/// Abaqus' `LUMPED` of a beam section: `LUMPED=NO` (Abaqus' consistent beam mass) is read and gives
+/// the same frequencies as no `LUMPED`, which warns that Abaqus lumps B31 mass by default (with the
+/// section's line; B33 beams, whose mass Abaqus does not lump, get no warning); `LUMPED=YES` and
+/// a value that is neither are refused with the line.
+#[test]
+fn a_beam_section_s_lumped_parameter() {
+    let plain = cantilever(10, "B31", false);
+    let no = plain.replace("SECTION=RECT", "SECTION=RECT, LUMPED=NO");
+    let read = |text: &str| parse_inp(text, "deck.inp").unwrap();
+    let warned = |d: &femu_io::inp::InpDeck| {
+        d.warnings
+            .iter()
+            .filter(|w| w.message.contains("lumps their mass"))
+            .map(|w| w.line)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(warned(&read(&plain)), vec![31]);
+    assert!(warned(&read(&no)).is_empty());
+    assert!(warned(&read(&cantilever(10, "B33", false))).is_empty());
+    let (a, _, _) = lowest(&plain, 4);
+    let (b, _, _) = lowest(&no, 4);
+    assert_eq!(a, b);
+    for (value, says) in [("YES", "LUMPED=YES is not read"), ("MAYBE", "YES or NO")] {
+        let e = parse_inp(
+            &plain.replace("SECTION=RECT", &format!("SECTION=RECT, LUMPED={value}")),
+            "deck.inp",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("deck.inp:31") && e.contains(says), "{e}");
+    }
+}
+
 /// SPRING1 to ground under a *MASS: `k / m`; SPRING2 between two masses on DOF 2: `k (m1 + m2) /
 /// (m1 m2)`; SPRINGA between two masses along their skew line, the same.
 #[test]

@@ -97,8 +97,11 @@ const READ: &[(&str, &[&str])] = &[
         ],
     ),
     ("INCLUDE", &["INPUT"]),
-    ("BEAM SECTION", &["ELSET", "MATERIAL", "SECTION"]),
-    ("BEAM GENERAL SECTION", &["ELSET", "SECTION", "DENSITY"]),
+    ("BEAM SECTION", &["ELSET", "MATERIAL", "SECTION", "LUMPED"]),
+    (
+        "BEAM GENERAL SECTION",
+        &["ELSET", "SECTION", "DENSITY", "LUMPED"],
+    ),
     ("SPRING", &["ELSET"]),
     (
         "MEMBRANE SECTION",

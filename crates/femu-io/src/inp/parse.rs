@@ -298,6 +298,21 @@ impl DeckBuilder {
                     ),
                     None => None,
                 };
+                // Abaqus' LUMPED: NO is the consistent mass of a cubic deflection and a quadratic
+                // rotation, femu's; YES (Abaqus' default for B31) a lumped mass femu cannot match
+                let lumped_stated = match params.get("LUMPED") {
+                    None => false,
+                    Some(v) if v.eq_ignore_ascii_case("NO") => true,
+                    Some(v) if v.eq_ignore_ascii_case("YES") => {
+                        return Err(err(
+                            l,
+                            format!(
+                                "*{name}, LUMPED=YES is not read: Abaqus' lumped mass of linear Timoshenko beams, whose rotary terms femu does not know; LUMPED=NO (the consistent mass of a cubic deflection and a quadratic rotation, which femu builds) or no LUMPED (femu then builds that consistent mass, as CalculiX does)"
+                            ),
+                        ));
+                    }
+                    Some(v) => return Err(err(l, format!("LUMPED={v}: YES or NO"))),
+                };
                 self.structural.sections.push(structural::BeamSectionCard {
                     elset: elset.to_ascii_uppercase(),
                     material: params.get("MATERIAL").map(|m| m.to_ascii_uppercase()),
@@ -316,6 +331,7 @@ impl DeckBuilder {
                         name == "BEAM GENERAL SECTION"
                     },
                     density,
+                    lumped_stated,
                     lines: Vec::new(),
                     line: at(l),
                 });
@@ -1381,6 +1397,27 @@ impl DeckBuilder {
             }
             if !beams.is_empty() {
                 self.structural.sets.insert(name.clone(), beams);
+            }
+        }
+        // B31 beams whose section leaves LUMPED to Abaqus' default
+        let b31: std::collections::HashSet<u64> = self
+            .structural
+            .elements
+            .iter()
+            .filter(|e| e.1 == structural::StructuralType::B31)
+            .map(|e| e.0)
+            .collect();
+        for c in &self.structural.sections {
+            let held = self.structural.sets.get(&c.elset).into_iter().flatten();
+            if !c.lumped_stated && held.clone().any(|id| b31.contains(id)) {
+                warnings.push(Warning {
+                    path: c.line.path.clone(),
+                    line: c.line.line,
+                    message: format!(
+                        "*BEAM SECTION of {}: femu builds its B31 beams' consistent mass (as CalculiX does, and Abaqus with LUMPED=NO); Abaqus/Standard lumps their mass in frequency extraction by default, so its frequencies of a coarse beam mesh differ",
+                        c.elset
+                    ),
+                });
             }
         }
         let (point_masses, point_mass_sets) = self.point_masses(lines, &mesh, &elem_sets)?;

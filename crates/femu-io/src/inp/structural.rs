@@ -108,6 +108,9 @@ pub(super) struct BeamSectionCard {
     pub(super) section: String,
     pub(super) general: bool,
     pub(super) density: Option<f64>,
+    /// Whether it states `LUMPED=NO` (Abaqus' consistent beam mass); absent, Abaqus/Standard
+    /// lumps a linear Timoshenko beam's mass in frequency extraction.
+    pub(super) lumped_stated: bool,
     pub(super) lines: Vec<Vec<String>>,
     pub(super) line: Location,
 }
