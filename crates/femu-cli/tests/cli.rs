@@ -2183,14 +2183,20 @@ fn frf_update_finds_the_softer_half() {
 /// what it was. With one loss factor for the whole beam the fit cannot reproduce the lines.
 /// Rayleigh coefficients with the flag are refused. The nominal deck with its material damped
 /// (`*DAMPING, STRUCTURAL=0.02`), updated with no damping option, fits a loss factor per set from
-/// the deck's values to the same result; `--loss-factor` beside the deck's damping is refused.
+/// the deck's values to the same result; `--loss-factor` beside the deck's damping is refused, and
+/// so is a material's Rayleigh damping (`*DAMPING, ALPHA=`), which updating does not model.
 #[test]
 fn frf_update_fits_a_loss_factor_per_set() {
     let (dir, _, outputs, tip) = softer_halves("per-set", "*DAMPING, STRUCTURAL=0.01\n");
     let (min, step, count) = (5.0, 2.5, 360usize);
     let (model, sys, k, m) = dense_deck(&dir.join("softer.inp"));
     let asm = femu_fem::assembly::Assembler::new(&model).unwrap();
-    let k4 = femu_sparse::csc::to_dense(&asm.dampers(&model).unwrap().structural.unwrap());
+    let k4 = femu_sparse::csc::to_dense(
+        &asm.dampers(&model, femu_fem::assembly::MassKind::Consistent)
+            .unwrap()
+            .structural
+            .unwrap(),
+    );
     let free = |node: u64, c: usize| {
         sys.dofs
             .free_index(model.mesh().node_index(node).unwrap(), c)
@@ -2291,6 +2297,17 @@ fn frf_update_fits_a_loss_factor_per_set() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         !out.status.success() && stderr.contains("materials damp their elements"),
+        "{stderr}"
+    );
+    // a material's Rayleigh damping, which updating does not model: refused
+    let rayleigh = std::fs::read_to_string(dir.join("damped.inp"))
+        .unwrap()
+        .replace("*DAMPING, STRUCTURAL=0.02\n", "*DAMPING, ALPHA=2.\n");
+    std::fs::write(dir.join("damped.inp"), rayleigh).unwrap();
+    let out = from_deck(&[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("Rayleigh damping (*DAMPING, ALPHA="),
         "{stderr}"
     );
     eprintln!("held-out error: per set {before:.3e} -> {after:.3e}, one loss factor {one:.3e}");
@@ -2951,9 +2968,11 @@ fn gmsh_lines_as_beams() {
 /// coefficient lies between the two and they differ from mode to mode; with both `GE` 0.03 the
 /// damping is proportional (`K_4 = 0.03 K`): every mode is real (an MPC of 1) to 1e-9 with the
 /// root `p = i omega sqrt(1 + 0.03 i)` of its real mode's `omega`, computed here (frequency `Im p
-/// / 2 pi`, damping `-2 Re p / Im p`, to 1e-9). The two-hex deck with Rayleigh damping (`*MODAL
-/// DAMPING, RAYLEIGH`, alpha 2 s^-1, beta 1e-6 s) keeps its real modes with the ratio `alpha / (2
-/// omega) + beta omega / 2` of each (to 1e-9). A deck without damping is refused with the reason.
+/// / 2 pi`, damping `-2 Re p / Im p`, to 1e-9). The two-hex deck with Rayleigh damping, alpha 2
+/// s^-1 and beta 1e-6 s, of its modes (`*MODAL DAMPING, RAYLEIGH`) or of its material (`*DAMPING,
+/// ALPHA=, BETA=` in the `*MATERIAL`: `alpha M_e + beta K_e` of each element) keeps its real modes
+/// with the ratio `alpha / (2 omega) + beta omega / 2` of each (to 1e-9). A deck without damping
+/// is refused with the reason.
 #[test]
 fn modes_damped_reports_the_complex_modes() {
     let dir = std::env::temp_dir().join(format!("femu-cli-damped-{}", std::process::id()));
@@ -3021,29 +3040,32 @@ fn modes_damped_reports_the_complex_modes() {
             "{d}"
         );
     }
-    // Rayleigh damping on the two-hex deck
-    let text = std::fs::read_to_string(fixture("two_hex.inp"))
-        .unwrap()
-        .replace(
-            "*FREQUENCY\n4\n",
-            "*FREQUENCY\n4\n*MODAL DAMPING, RAYLEIGH\n, , 2., 1e-6\n",
-        );
-    assert!(text.contains("RAYLEIGH"));
+    // Rayleigh damping on the two-hex deck: the modes' (*MODAL DAMPING) and the material's
+    // (*DAMPING in *MATERIAL, alpha M_e + beta K_e of every element: the same C)
+    let hexes = std::fs::read_to_string(fixture("two_hex.inp")).unwrap();
+    let modal = hexes.replace(
+        "*FREQUENCY\n4\n",
+        "*FREQUENCY\n4\n*MODAL DAMPING, RAYLEIGH\n, , 2., 1e-6\n",
+    );
+    let material = hexes.replace("*DENSITY\n", "*DAMPING, ALPHA=2., BETA=1e-6\n*DENSITY\n");
+    assert!(modal.contains("RAYLEIGH") && material.contains("ALPHA"));
     std::fs::copy(fixture("two_hex_nodes.inp"), dir.join("two_hex_nodes.inp")).unwrap();
-    let (out, json) = run("rayleigh.inp", text);
-    succeeded(&out);
-    let v = json_of(&json);
-    for (d, f) in v["damped"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .zip(v["frequencies_hz"].as_array().unwrap())
-    {
-        let omega = 2.0 * std::f64::consts::PI * f.as_f64().unwrap();
-        let zeta = 2.0 / (2.0 * omega) + 1e-6 * omega / 2.0;
-        let ratio = d["damping_ratio"].as_f64().unwrap();
-        assert!((ratio - zeta).abs() < 1e-9 * zeta, "{ratio} {zeta}");
-        assert!((d["mpc"].as_f64().unwrap() - 1.0).abs() < 1e-9, "{d}");
+    for (name, text) in [("rayleigh.inp", modal), ("material.inp", material)] {
+        let (out, json) = run(name, text);
+        succeeded(&out);
+        let v = json_of(&json);
+        for (d, f) in v["damped"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(v["frequencies_hz"].as_array().unwrap())
+        {
+            let omega = 2.0 * std::f64::consts::PI * f.as_f64().unwrap();
+            let zeta = 2.0 / (2.0 * omega) + 1e-6 * omega / 2.0;
+            let ratio = d["damping_ratio"].as_f64().unwrap();
+            assert!((ratio - zeta).abs() < 1e-9 * zeta, "{name}: {ratio} {zeta}");
+            assert!((d["mpc"].as_f64().unwrap() - 1.0).abs() < 1e-9, "{d}");
+        }
     }
     let (out, _) = run("undamped.bdf", deck("", "", ""));
     let stderr = String::from_utf8_lossy(&out.stderr);

@@ -620,19 +620,29 @@ impl Assembler {
     }
 
     /// The model's own damping, on the stiffness pattern: the viscous damping `C_d` of its
-    /// bushings (`B1..B6`, formed as their stiffness with `B` for `K`) and the structural damping
-    /// `K_4 = sum_e GE_e K_e` of its springs and bushings and of the elements with a `GE` of their
-    /// material ([`Model::set_element_damping`]) (Nastran's `B` and `K4` matrices of a
-    /// direct frequency response; docs/MATH.md, "Frequency responses, directly"). Each is `None`
-    /// when no element has it.
+    /// bushings (`B1..B6`, formed as their stiffness with `B` for `K`) and of the elements with a
+    /// Rayleigh damping of their material (`alpha M_e + beta K_e`, [`Model::set_element_rayleigh`],
+    /// `M_e` of `mass`), and the structural damping `K_4 = sum_e GE_e K_e` of its springs and
+    /// bushings and of the elements with a `GE` of their material ([`Model::set_element_damping`])
+    /// (Nastran's `B` and `K4` matrices of a direct frequency response; docs/MATH.md, "Frequency
+    /// responses, directly"). Each is `None` when no element has it.
     ///
     /// # Errors
     /// The elements' own errors (as in assembly).
-    pub fn dampers(&self, model: &Model) -> Result<Dampers, FemError> {
+    pub fn dampers(&self, model: &Model, mass: MassKind) -> Result<Dampers, FemError> {
         use crate::structural::StructuralKind;
         let coords = model.mesh().coords();
         let (mut c, mut k4) = (None::<Vec<f64>>, None::<Vec<f64>>);
+        let rayleigh = model.element_rayleigh();
         for s in model.structural() {
+            if let Some(&(alpha, beta)) = rayleigh.get(&s.id) {
+                let sm = s.matrices(coords, mass)?;
+                let pts = structural_points(&self.dofs, &sm.parts);
+                let v = c.get_or_insert_with(|| vec![0.0; self.nnz()]);
+                self.scatter(&pts, |at, l, w| {
+                    v[at] += w * (alpha * sm.m[l] + beta * sm.k[l]);
+                });
+            }
             let (ge, viscous) = match &s.kind {
                 StructuralKind::Spring(sp) => (sp.ge, None),
                 StructuralKind::Bushing(b) => (
@@ -672,6 +682,17 @@ impl Assembler {
             let (ke, _) = element_matrices(model, e, MassKind::Lumped)?;
             let v = k4.get_or_insert_with(|| vec![0.0; self.nnz()]);
             self.scatter(mesh.element(e).nodes, |at, l, w| v[at] += ge * w * ke[l]);
+        }
+        // the solids with a Rayleigh damping of their material
+        for (&id, &(alpha, beta)) in rayleigh {
+            let Some(e) = mesh.element_index(id) else {
+                continue;
+            };
+            let (ke, me) = element_matrices(model, e, mass)?;
+            let v = c.get_or_insert_with(|| vec![0.0; self.nnz()]);
+            self.scatter(mesh.element(e).nodes, |at, l, w| {
+                v[at] += w * (alpha * me[l] + beta * ke[l]);
+            });
         }
         Ok(Dampers {
             viscous: c.map(|v| self.without_zeros(&v)),

@@ -36,6 +36,9 @@ pub struct Model {
     /// The structural damping coefficient `GE` of solids, beams, rods and shells by element id
     /// (from their material); absent: none.
     element_damping: BTreeMap<u64, f64>,
+    /// The Rayleigh damping `(alpha, beta)` of solids, beams, rods and shells by element id (from
+    /// their material: Abaqus' `*DAMPING, ALPHA=, BETA=`); absent: none.
+    element_rayleigh: BTreeMap<u64, (f64, f64)>,
     /// The damping the deck gives the whole model (Nastran's `PARAM,G`, CalculiX's `*DAMPING,
     /// ALPHA=, BETA=`).
     uniform_damping: Option<UniformDamping>,
@@ -194,6 +197,7 @@ impl Model {
             structural_lookup: std::collections::HashMap::new(),
             mass_sets: BTreeMap::new(),
             element_damping: BTreeMap::new(),
+            element_rayleigh: BTreeMap::new(),
             uniform_damping: None,
             modal_damping: None,
             mode_ratios: Vec::new(),
@@ -313,20 +317,7 @@ impl Model {
     /// [`FemError::UnknownElement`] for an id of no element; [`FemError::InvalidStructural`] for
     /// a spring or a bushing, or a `ge` that is negative or not finite.
     pub fn set_element_damping(&mut self, id: u64, ge: f64) -> Result<(), FemError> {
-        if let Some(s) = self.structural_index(id) {
-            use crate::structural::StructuralKind;
-            if matches!(
-                self.structural[s].kind,
-                StructuralKind::Spring(_) | StructuralKind::Bushing(_)
-            ) {
-                return Err(FemError::InvalidStructural {
-                    element: id,
-                    reason: "a spring or a bushing has its own GE".into(),
-                });
-            }
-        } else if self.mesh.element_index(id).is_none() {
-            return Err(FemError::UnknownElement { element: id });
-        }
+        self.check_damped_element(id)?;
         if !(ge.is_finite() && ge >= 0.0) {
             return Err(FemError::InvalidStructural {
                 element: id,
@@ -343,10 +334,61 @@ impl Model {
         Ok(())
     }
 
+    /// That `id` is a solid, beam, rod or shell, which a material damps (a spring or a bushing has
+    /// its own damping).
+    fn check_damped_element(&self, id: u64) -> Result<(), FemError> {
+        if let Some(s) = self.structural_index(id) {
+            use crate::structural::StructuralKind;
+            if matches!(
+                self.structural[s].kind,
+                StructuralKind::Spring(_) | StructuralKind::Bushing(_)
+            ) {
+                return Err(FemError::InvalidStructural {
+                    element: id,
+                    reason: "a spring or a bushing has its own damping (GE, B)".into(),
+                });
+            }
+        } else if self.mesh.element_index(id).is_none() {
+            return Err(FemError::UnknownElement { element: id });
+        }
+        Ok(())
+    }
+
     /// The structural damping coefficients `GE` of solids, beams, rods and shells, by element id
     /// ([`Model::set_element_damping`]); elements without one are absent.
     pub fn element_damping(&self) -> &BTreeMap<u64, f64> {
         &self.element_damping
+    }
+
+    /// Gives the solid, beam, rod or shell `id` Rayleigh damping `C_e = alpha M_e + beta K_e` (its
+    /// material's: Abaqus' `*DAMPING, ALPHA=, BETA=`; docs/MATH.md, "Frequency responses,
+    /// directly"), viscous damping that adds `i w C_e` to the dynamic stiffness and enters the
+    /// damped modes. It changes neither `K` nor `M`; `(0, 0)` removes the element's.
+    ///
+    /// # Errors
+    /// As [`Model::set_element_damping`], for a coefficient that is negative or not finite.
+    pub fn set_element_rayleigh(&mut self, id: u64, alpha: f64, beta: f64) -> Result<(), FemError> {
+        self.check_damped_element(id)?;
+        if !(alpha.is_finite() && alpha >= 0.0 && beta.is_finite() && beta >= 0.0) {
+            return Err(FemError::InvalidStructural {
+                element: id,
+                reason: format!(
+                    "Rayleigh damping alpha {alpha}, beta {beta}: each must be finite and at least 0"
+                ),
+            });
+        }
+        if alpha == 0.0 && beta == 0.0 {
+            self.element_rayleigh.remove(&id);
+        } else {
+            self.element_rayleigh.insert(id, (alpha, beta));
+        }
+        Ok(())
+    }
+
+    /// The Rayleigh damping `(alpha, beta)` of solids, beams, rods and shells, by element id
+    /// ([`Model::set_element_rayleigh`]); elements without one are absent.
+    pub fn element_rayleigh(&self) -> &BTreeMap<u64, (f64, f64)> {
+        &self.element_rayleigh
     }
 
     /// Adds a beam, rod, spring, bushing or shell; its nodes get rotations where it acts on them

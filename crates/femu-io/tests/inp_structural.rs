@@ -723,11 +723,12 @@ fn composite_shell_sections_are_the_nastran_laminate() {
 }
 
 /// `*DAMPING, STRUCTURAL=` in a `*MATERIAL` gives the solids and shells of its sections that
-/// structural damping coefficient (`GE`); `ALPHA` and `BETA` (Rayleigh damping of an Abaqus
-/// material in direct procedures, of a CalculiX `*DYNAMIC` step, which its steady-state dynamics
-/// ignores) are not read, with a warning on their line; `STRUCTURAL=` outside a material, a
-/// negative value and a composite section whose plies' materials differ in it are refused with
-/// the line.
+/// structural damping coefficient (`GE`: `K_4` is 0.03 `K`, to 1e-14) and `ALPHA=`, `BETA=` their
+/// Rayleigh damping (Abaqus' material damping: the viscous `C` is `2 M + 1e-5 K` of the consistent
+/// mass and the stiffness assembled, to 1e-14); outside a material `ALPHA` (CalculiX's Rayleigh
+/// damping of a `*DYNAMIC` step) is not read, with a warning on its line; `STRUCTURAL=` outside a
+/// material, a negative value, a negative `ALPHA` and a composite section whose plies' materials
+/// are damped differently are refused with the line.
 #[test]
 fn material_structural_damping_reaches_solids_and_shells() {
     let base = "\
@@ -754,23 +755,55 @@ fn material_structural_damping_reaches_solids_and_shells() {
 ";
     let read = |rest: &str| femu_io::inp::parse_inp(&format!("{base}{rest}"), "d.inp");
     let deck = read(
-        "*DAMPING, STRUCTURAL=0.03, ALPHA=2.\n*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n\
+        "*DAMPING, STRUCTURAL=0.03, ALPHA=2., BETA=1e-5\n*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n\
          *SHELL SECTION, ELSET=SKIN, MATERIAL=STEEL\n0.01\n",
     )
     .unwrap();
-    let w: Vec<String> = deck.warnings.iter().map(|w| w.to_string()).collect();
-    assert!(
-        w.iter()
-            .any(|w| w.contains("d.inp:21") && w.contains("ALPHA")),
-        "{w:?}"
-    );
+    assert!(deck.warnings.is_empty(), "{:?}", deck.warnings);
     let model = deck.to_model().unwrap();
     assert_eq!(
         model.element_damping().iter().collect::<Vec<_>>(),
         vec![(&1, &0.03), (&2, &0.03)]
     );
+    assert_eq!(
+        model.element_rayleigh().iter().collect::<Vec<_>>(),
+        vec![(&1, &(2.0, 1e-5)), (&2, &(2.0, 1e-5))]
+    );
+    let consistent = femu_fem::assembly::MassKind::Consistent;
     let asm = femu_fem::assembly::Assembler::new(&model).unwrap();
-    let k4 = asm.dampers(&model).unwrap().structural.unwrap();
+    let c = femu_sparse::csc::to_dense(&asm.dampers(&model, consistent).unwrap().viscous.unwrap());
+    let sys = model.assemble(consistent).unwrap();
+    let (k, m) = (
+        femu_sparse::csc::to_dense(&sys.k),
+        femu_sparse::csc::to_dense(&sys.m),
+    );
+    let scale = (0..k.nrows())
+        .flat_map(|i| (0..k.ncols()).map(move |j| (i, j)))
+        .map(|(i, j)| (2.0 * m[(i, j)] + 1e-5 * k[(i, j)]).abs())
+        .fold(0.0, f64::max);
+    let worst = (0..k.nrows())
+        .flat_map(|i| (0..k.ncols()).map(move |j| (i, j)))
+        .map(|(i, j)| (c[(i, j)] - 2.0 * m[(i, j)] - 1e-5 * k[(i, j)]).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-14 * scale, "{worst:e}");
+    let outside = read(
+        "*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n*SHELL SECTION, ELSET=SKIN, MATERIAL=STEEL\n0.01\n\
+         *DAMPING, ALPHA=2.\n",
+    )
+    .unwrap();
+    let w: Vec<String> = outside.warnings.iter().map(|w| w.to_string()).collect();
+    assert!(
+        w.iter()
+            .any(|w| w.contains("d.inp:24") && w.contains("ALPHA")),
+        "{w:?}"
+    );
+    assert!(outside.to_model().unwrap().element_rayleigh().is_empty());
+    let asm = femu_fem::assembly::Assembler::new(&model).unwrap();
+    let k4 = asm
+        .dampers(&model, femu_fem::assembly::MassKind::Consistent)
+        .unwrap()
+        .structural
+        .unwrap();
     let sys = model
         .assemble(femu_fem::assembly::MassKind::Lumped)
         .unwrap();
@@ -822,6 +855,7 @@ fn material_structural_damping_reaches_solids_and_shells() {
             "by mode numbers",
         ),
         ("*DAMPING, STRUCTURAL=-0.1\n", 21, "at least 0"),
+        ("*DAMPING, ALPHA=-1.\n", 21, "at least 0"),
         (
             "*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n*DAMPING, STRUCTURAL=0.1\n",
             22,
@@ -832,7 +866,7 @@ fn material_structural_damping_reaches_solids_and_shells() {
              *SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n\
              *SHELL SECTION, ELSET=SKIN, COMPOSITE\n0.005, 3, STEEL, 0.\n0.005, 3, SOFT, 90.\n",
             28,
-            "different structural damping",
+            "damped differently",
         ),
     ] {
         let e = read(rest)

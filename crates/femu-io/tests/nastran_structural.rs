@@ -1154,7 +1154,10 @@ fn material_damping_is_the_elements_structural_damping() {
         let bdf = parse_bdf(&deck, "plate.bdf", &BdfOptions::default()).unwrap();
         let asm = femu_fem::assembly::Assembler::new(&bdf.model).unwrap();
         let sys = bdf.model.assemble(MassKind::Consistent).unwrap();
-        let k4 = asm.dampers(&bdf.model).unwrap().structural;
+        let k4 = asm
+            .dampers(&bdf.model, femu_fem::assembly::MassKind::Consistent)
+            .unwrap()
+            .structural;
         (sys, k4)
     };
     let (sys, k4) = damped("PSHELL,1,1,0.005,1,,1\nMAT1,1,2.1+11,,0.3,7850.,,,0.04\n");
@@ -1221,7 +1224,11 @@ ENDDATA
         vec![(&1, &0.05)]
     );
     let asm = femu_fem::assembly::Assembler::new(&bdf.model).unwrap();
-    let k4 = asm.dampers(&bdf.model).unwrap().structural.unwrap();
+    let k4 = asm
+        .dampers(&bdf.model, femu_fem::assembly::MassKind::Consistent)
+        .unwrap()
+        .structural
+        .unwrap();
     let sys = bdf.model.assemble(MassKind::Consistent).unwrap();
     let node = |g: u64, c: usize| {
         sys.dofs

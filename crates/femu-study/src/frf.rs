@@ -594,7 +594,7 @@ pub fn frf_correlation_with(
         .map_err(|e| StudyError::within(path, e))?;
     let inputs = SensorLayout::new(mesh, &model.sys.dofs, inputs)
         .map_err(|e| StudyError::within(path, e))?;
-    let dampers = model.asm.dampers(&model.model)?;
+    let dampers = model.asm.dampers(&model.model, model.sys.mass_kind)?;
     let solved = if request.direct {
         direct_route(
             model, request, &dampers, &outputs, &inputs, &lines, kind, &mut notes,
@@ -812,6 +812,14 @@ fn update_from_frfs(
                 ),
             ));
         }
+    }
+    if let Some((id, _)) = model.model.element_rayleigh().iter().next() {
+        return Err(StudyError::invalid(
+            "update",
+            format!(
+                "element {id}'s material has Rayleigh damping (*DAMPING, ALPHA=, BETA=), which updating from FRFs does not model: remove it (updating fits a loss factor or Rayleigh damping of the whole model) or correlate only"
+            ),
+        ));
     }
     // a deck whose materials damp their elements (GE, *DAMPING STRUCTURAL) is updated with a loss
     // factor per set, started from the deck's
@@ -1354,7 +1362,7 @@ fn modal_route(
     // modal equations solved together at each line
     let projected = if dampers.any() {
         notes.push(format!(
-            "the model's own dampers (bushings' B, the GE of springs, bushings and damped materials) projected on the {} modes and the modal equations solved together at each line (--direct solves the whole model)",
+            "the model's own dampers (bushings' B, the GE of springs, bushings and damped materials, the materials' Rayleigh damping) projected on the {} modes and the modal equations solved together at each line (--direct solves the whole model)",
             modes.values.len()
         ));
         Some(ModalDampers::project(

@@ -217,7 +217,19 @@ fn describe_inp(path: &Path, s: &mut String, warnings: &mut Vec<String>) -> Resu
             _ => "anisotropic".to_string(),
         };
         let damping = match deck.material_damping.get(name) {
-            Some(ge) => format!(", structural damping {ge}"),
+            Some(d) => {
+                let mut parts = Vec::new();
+                if d.structural != 0.0 {
+                    parts.push(format!(", structural damping {}", d.structural));
+                }
+                if d.alpha != 0.0 || d.beta != 0.0 {
+                    parts.push(format!(
+                        ", Rayleigh damping alpha {:e} s^-1, beta {:e} s",
+                        d.alpha, d.beta
+                    ));
+                }
+                parts.concat()
+            }
             None => String::new(),
         };
         let _ = writeln!(

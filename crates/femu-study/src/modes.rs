@@ -240,7 +240,7 @@ fn damped_in(
     notes: &mut Vec<String>,
 ) -> Result<femu_correlate::damped::DampedModes, StudyError> {
     use femu_fem::model::UniformDamping;
-    let dampers = loaded.asm.dampers(&loaded.model)?;
+    let dampers = loaded.asm.dampers(&loaded.model, loaded.sys.mass_kind)?;
     let mut projected = femu_correlate::frf::ModalDampers::project(
         dampers.structural.as_ref(),
         dampers.viscous.as_ref(),

@@ -264,7 +264,9 @@ fn material_structural_damping_agrees_with_calculix() {
     assert_eq!(model.element_damping().len(), 6);
     let sys = model.assemble(MassKind::Consistent).unwrap();
     let asm = femu_fem::assembly::Assembler::new(&model).unwrap();
-    let dampers = asm.dampers(&model).unwrap();
+    let dampers = asm
+        .dampers(&model, femu_fem::assembly::MassKind::Consistent)
+        .unwrap();
     let k4 = dampers.structural.as_ref().expect("the materials' damping");
     let (kd, md, k4d) = (
         femu_sparse::csc::to_dense(&sys.k),

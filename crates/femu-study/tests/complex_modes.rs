@@ -298,7 +298,10 @@ fn viscous_and_structural_damped_modes_are_the_full_problem() {
     let loaded = load_model(&dir.join("plate.bdf"), &ModelOptions::default()).unwrap();
     let dense = |a: &femu_sparse::SparseMatrix| femu_sparse::csc::to_dense(a);
     let (k, m) = (dense(&loaded.sys.k), dense(&loaded.sys.m));
-    let dampers = loaded.asm.dampers(&loaded.model).unwrap();
+    let dampers = loaded
+        .asm
+        .dampers(&loaded.model, femu_fem::assembly::MassKind::Consistent)
+        .unwrap();
     let (c, k4) = (
         dense(dampers.viscous.as_ref().unwrap()),
         dense(dampers.structural.as_ref().unwrap()),

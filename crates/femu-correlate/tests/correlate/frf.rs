@@ -730,7 +730,9 @@ fn a_damped_bushing_is_a_single_dof_oscillator() {
     model.add_rigid_mass(7, mass, [0.0; 3], jb).unwrap();
     let asm = Assembler::new(&model).unwrap();
     let sys = asm.assemble(&model, MassKind::Consistent).unwrap();
-    let dampers = asm.dampers(&model).unwrap();
+    let dampers = asm
+        .dampers(&model, femu_fem::assembly::MassKind::Consistent)
+        .unwrap();
     let along = SensorLayout::new(model.mesh(), &sys.dofs, vec![Sensor::new(7, axes[0])]).unwrap();
     let system = DirectSystem {
         k: &sys.k,
@@ -763,7 +765,9 @@ fn a_damped_bushing_is_a_single_dof_oscillator() {
     }
     let plain = bar([2, 1, 1], true);
     let pasm = Assembler::new(&plain).unwrap();
-    let none = pasm.dampers(&plain).unwrap();
+    let none = pasm
+        .dampers(&plain, femu_fem::assembly::MassKind::Consistent)
+        .unwrap();
     assert!(none.viscous.is_none() && none.structural.is_none());
 }
 

@@ -348,6 +348,36 @@ pub struct Boundary {
     pub line: Location,
 }
 
+/// A material's `*DAMPING` (Abaqus' material damping): `STRUCTURAL=` the structural damping
+/// coefficient `GE` of its elements (`i GE K_e`), `ALPHA=` and `BETA=` their Rayleigh damping
+/// `alpha M_e + beta K_e`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MaterialDamping {
+    /// `STRUCTURAL=`.
+    pub structural: f64,
+    /// `ALPHA=` (s^-1).
+    pub alpha: f64,
+    /// `BETA=` (s).
+    pub beta: f64,
+}
+
+impl MaterialDamping {
+    /// Gives element `id` of `model` this damping ([`Model::set_element_damping`],
+    /// [`Model::set_element_rayleigh`]).
+    ///
+    /// # Errors
+    /// Those of the two.
+    pub fn apply(&self, model: &mut Model, id: u64) -> Result<(), femu_fem::FemError> {
+        if self.structural != 0.0 {
+            model.set_element_damping(id, self.structural)?;
+        }
+        if self.alpha != 0.0 || self.beta != 0.0 {
+            model.set_element_rayleigh(id, self.alpha, self.beta)?;
+        }
+        Ok(())
+    }
+}
+
 /// A `*SOLID SECTION`: the material of an element set (and a truss's cross-sectional area).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Section {
@@ -431,9 +461,9 @@ pub struct InpDeck {
     pub mesh: Mesh,
     /// Materials by upper-case name.
     pub materials: BTreeMap<String, Material>,
-    /// The structural damping coefficient of each material with `*DAMPING, STRUCTURAL=` (by
-    /// upper-case name): the `GE` of the elements of its sections.
-    pub material_damping: BTreeMap<String, f64>,
+    /// The damping of each material with a `*DAMPING` (by upper-case name): the `GE` and the
+    /// Rayleigh damping of the elements of its sections.
+    pub material_damping: BTreeMap<String, MaterialDamping>,
     /// `*MODAL DAMPING` ranges: modes `first..=last` with a viscous damping ratio.
     pub mode_ratios: Vec<(usize, usize, f64)>,
     /// `*MODAL DAMPING, RAYLEIGH`: the modes' Rayleigh damping `(alpha, beta)`.
@@ -614,6 +644,9 @@ struct PendingMaterial {
     density: Option<f64>,
     /// `*DAMPING, STRUCTURAL=`: the material's structural damping coefficient.
     structural: Option<f64>,
+    /// `*DAMPING, ALPHA=, BETA=`: the material's Rayleigh damping.
+    alpha: Option<f64>,
+    beta: Option<f64>,
     line: usize,
     path: PathBuf,
 }

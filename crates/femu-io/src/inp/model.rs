@@ -79,11 +79,11 @@ impl InpDeck {
                     line: s.line.line,
                     source,
                 })?;
-            if let Some(&ge) = self.material_damping.get(&s.material) {
+            if let Some(damping) = self.material_damping.get(&s.material) {
                 for &e in &self.mesh.element_sets()[&s.elset] {
                     let id = self.mesh.element(e).id;
-                    model
-                        .set_element_damping(id, ge)
+                    damping
+                        .apply(&mut model, id)
                         .map_err(|source| IoError::Model {
                             path: s.line.path.clone(),
                             line: s.line.line,

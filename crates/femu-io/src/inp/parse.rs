@@ -113,7 +113,7 @@ struct DeckBuilder {
     mass_block: Option<String>,
     mass_cards: Vec<MassCard>,
     materials: BTreeMap<String, Material>,
-    material_damping: BTreeMap<String, f64>,
+    material_damping: BTreeMap<String, super::MaterialDamping>,
     mode_ratios: Vec<(usize, usize, f64)>,
     modal_rayleigh: Option<(f64, f64)>,
     laminae: BTreeMap<String, structural::Lamina>,
@@ -191,8 +191,15 @@ impl DeckBuilder {
         let Some(p) = self.pending.take() else {
             return Ok(());
         };
-        if let Some(ge) = p.structural {
-            self.material_damping.insert(p.name.clone(), ge);
+        if p.structural.is_some() || p.alpha.is_some() || p.beta.is_some() {
+            self.material_damping.insert(
+                p.name.clone(),
+                super::MaterialDamping {
+                    structural: p.structural.unwrap_or(0.0),
+                    alpha: p.alpha.unwrap_or(0.0),
+                    beta: p.beta.unwrap_or(0.0),
+                },
+            );
         }
         if p.lamina_type {
             let at = Location {
@@ -644,9 +651,9 @@ impl DeckBuilder {
     }
 
     /// `*DAMPING`: in a `*MATERIAL`, `STRUCTURAL=s` is the structural damping coefficient of its
-    /// elements (Abaqus' material damping, CalculiX's too: `i s K_e` in a frequency response);
-    /// `ALPHA` and `BETA` (Abaqus' Rayleigh damping of the material, CalculiX's of the model when
-    /// given outside a material) are not read, with a warning that says where they would act.
+    /// elements (Abaqus' material damping, CalculiX's too: `i s K_e` in a frequency response) and
+    /// `ALPHA`, `BETA` their Rayleigh damping `alpha M_e + beta K_e` (Abaqus'); outside a material
+    /// (CalculiX's Rayleigh damping of a `*DYNAMIC` step) they are not read, with a warning.
     fn damping_keyword(
         &mut self,
         params: &HashMap<String, String>,
@@ -684,18 +691,30 @@ impl DeckBuilder {
             .into_iter()
             .filter(|k| params.contains_key(*k))
             .collect();
-        if !rayleigh.is_empty() {
+        if let Some(p) = self.pending.as_mut() {
+            for key in &rayleigh {
+                let v = &params[*key];
+                let value = parse_f64(v)
+                    .filter(|x| x.is_finite() && *x >= 0.0)
+                    .ok_or_else(|| {
+                        err(
+                            l,
+                            format!("{key}={v:?}: a Rayleigh damping coefficient is a number of at least 0"),
+                        )
+                    })?;
+                if *key == "ALPHA" {
+                    p.alpha = Some(value);
+                } else {
+                    p.beta = Some(value);
+                }
+            }
+        } else if !rayleigh.is_empty() {
             warn(
                 warnings,
                 l,
                 format!(
-                    "*DAMPING {} not read: Rayleigh damping of {} (CalculiX's steady-state dynamics does not use it either); femu frf takes Rayleigh damping from --rayleigh",
-                    rayleigh.join(", "),
-                    if self.pending.is_some() {
-                        "a material (Abaqus' direct procedures)"
-                    } else {
-                        "a dynamic step (CalculiX's *DYNAMIC)"
-                    }
+                    "*DAMPING {} outside a *MATERIAL not read: the Rayleigh damping of a dynamic step (CalculiX's *DYNAMIC); femu frf takes Rayleigh damping of the model from --rayleigh or *MODAL DAMPING, RAYLEIGH, and of a material from its *DAMPING",
+                    rayleigh.join(", ")
                 ),
             );
         }

@@ -379,7 +379,7 @@ pub(super) fn add_structural(
     records: &StructuralRecords,
     solid_sections: &[super::Section],
     materials: &BTreeMap<String, Material>,
-    material_damping: &BTreeMap<String, f64>,
+    material_damping: &BTreeMap<String, super::MaterialDamping>,
     laminae: &BTreeMap<String, Lamina>,
     model: &mut Model,
 ) -> Result<(), IoError> {
@@ -449,8 +449,8 @@ pub(super) fn add_structural(
                 })
             })
             .collect::<Result<Vec<_>, _>>()?;
-        // the structural damping of the element's material
-        let mut ge = 0.0;
+        // the damping of the element's material
+        let mut damping = super::MaterialDamping::default();
         let kind = match ty {
             StructuralType::T3D2 => {
                 let c = &solid_sections[*truss_of.get(id).ok_or_else(|| {
@@ -470,7 +470,10 @@ pub(super) fn add_structural(
                         ),
                     )
                 })?;
-                ge = material_damping.get(&c.material).copied().unwrap_or(0.0);
+                damping = material_damping
+                    .get(&c.material)
+                    .copied()
+                    .unwrap_or_default();
                 let (e, g, rho) = moduli(m).map_err(|r| at_err(&c.line, r))?;
                 // Abaqus assumes a unit area where the data line gives none
                 let area = match c.area.as_deref().map(str::trim) {
@@ -498,7 +501,7 @@ pub(super) fn add_structural(
                 })?;
                 let c = &records.sections[k];
                 if let Some(m) = &c.material {
-                    ge = material_damping.get(m).copied().unwrap_or(0.0);
+                    damping = material_damping.get(m).copied().unwrap_or_default();
                 }
                 let ((area, i1, i2, j, kf), (e, g, rho)) = match values.entry(k) {
                     std::collections::hash_map::Entry::Occupied(v) => *v.get(),
@@ -560,7 +563,7 @@ pub(super) fn add_structural(
                     ));
                 }
                 let x: Vec<[f64; 3]> = nodes.iter().map(|n| model.mesh().coords()[*n]).collect();
-                ge = shell_damping(card, material_damping)?;
+                damping = shell_damping(card, material_damping)?;
                 let mut kind = shell(card, materials, laminae, &x)?;
                 // a membrane: no bending, no transverse shear (docs/MATH.md, "Shells")
                 if let (true, StructuralKind::Shell(s)) = (membrane, &mut kind) {
@@ -593,10 +596,7 @@ pub(super) fn add_structural(
                 nodes,
                 kind,
             })
-            .and_then(|_| match ge {
-                0.0 => Ok(()),
-                _ => model.set_element_damping(*id, ge),
-            })
+            .and_then(|_| damping.apply(model, *id))
             .map_err(|source| IoError::Model {
                 path: l.path.clone(),
                 line: l.line,
@@ -618,23 +618,23 @@ pub(super) fn add_structural(
     Ok(())
 }
 
-/// The structural damping coefficient of a `*SHELL SECTION`'s material; for a composite section,
-/// its plies' (one value: femu damps an element by one coefficient, so plies of materials with
-/// different ones are refused with the section's line).
+/// The damping of a `*SHELL SECTION`'s material; for a composite section, its plies' (one value:
+/// femu damps an element by one set of coefficients, so plies of materials damped differently are
+/// refused with the section's line).
 fn shell_damping(
     c: &ShellSectionCard,
-    material_damping: &BTreeMap<String, f64>,
-) -> Result<f64, IoError> {
+    material_damping: &BTreeMap<String, super::MaterialDamping>,
+) -> Result<super::MaterialDamping, IoError> {
     let ge = |m: &str| {
         material_damping
             .get(&m.to_ascii_uppercase())
             .copied()
-            .unwrap_or(0.0)
+            .unwrap_or_default()
     };
     if !c.composite {
         return Ok(ge(&c.material));
     }
-    let plies: Vec<(String, f64)> = c
+    let plies: Vec<(String, super::MaterialDamping)> = c
         .lines
         .iter()
         .filter_map(|f| f.get(2))
@@ -644,11 +644,11 @@ fn shell_damping(
         Some((m, g)) => Err(at_err(
             &c.line,
             format!(
-                "the plies' materials have different structural damping ({} {}, {m} {g}): femu damps a shell by one coefficient",
+                "the plies' materials are damped differently ({} {:?}, {m} {g:?}): femu damps a shell by one set of coefficients",
                 plies[0].0, plies[0].1
             ),
         )),
-        None => Ok(plies.first().map_or(0.0, |p| p.1)),
+        None => Ok(plies.first().map_or_else(Default::default, |p| p.1)),
     }
 }
 

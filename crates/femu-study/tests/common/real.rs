@@ -179,7 +179,11 @@ pub fn measure_frf_damped(
     use faer::c64;
     let asm = femu_fem::assembly::Assembler::new(real).unwrap();
     let sys = asm.assemble(real, MassKind::Consistent).unwrap();
-    let k4 = asm.dampers(real).unwrap().structural.unwrap();
+    let k4 = asm
+        .dampers(real, femu_fem::assembly::MassKind::Consistent)
+        .unwrap()
+        .structural
+        .unwrap();
     let (sensors, dofs, force_dof) = frf_dofs(real, &sys, model, reference);
     let combination =
         femu_sparse::complex::Combination::new(&[&sys.k, &sys.m, &k4], &["K", "M", "K4"]).unwrap();
