@@ -2970,8 +2970,9 @@ fn gmsh_lines_as_beams() {
 /// root `p = i omega sqrt(1 + 0.03 i)` of its real mode's `omega`, computed here (frequency `Im p
 /// / 2 pi`, damping `-2 Re p / Im p`, to 1e-9). The two-hex deck with Rayleigh damping, alpha 2
 /// s^-1 and beta 1e-6 s, of its modes (`*MODAL DAMPING, RAYLEIGH`) or of its material (`*DAMPING,
-/// ALPHA=, BETA=` in the `*MATERIAL`: `alpha M_e + beta K_e` of each element) keeps its real modes
-/// with the ratio `alpha / (2 omega) + beta omega / 2` of each (to 1e-9). A deck without damping
+/// ALPHA=, BETA=` in the `*MATERIAL`: `alpha M_e + beta K_e` of each element), and the plate with
+/// Nastran's `PARAM,ALPHA1` and `ALPHA2` of the same values, keep their real modes with the ratio
+/// `alpha / (2 omega) + beta omega / 2` of each (to 1e-9). A deck without damping
 /// is refused with the reason.
 #[test]
 fn modes_damped_reports_the_complex_modes() {
@@ -3050,7 +3051,12 @@ fn modes_damped_reports_the_complex_modes() {
     let material = hexes.replace("*DENSITY\n", "*DAMPING, ALPHA=2., BETA=1e-6\n*DENSITY\n");
     assert!(modal.contains("RAYLEIGH") && material.contains("ALPHA"));
     std::fs::copy(fixture("two_hex_nodes.inp"), dir.join("two_hex_nodes.inp")).unwrap();
-    for (name, text) in [("rayleigh.inp", modal), ("material.inp", material)] {
+    let nastran = deck("", "", "PARAM,ALPHA1,2.\nPARAM,ALPHA2,1e-6\n");
+    for (name, text) in [
+        ("rayleigh.inp", modal),
+        ("material.inp", material),
+        ("alpha.bdf", nastran),
+    ] {
         let (out, json) = run(name, text);
         succeeded(&out);
         let v = json_of(&json);

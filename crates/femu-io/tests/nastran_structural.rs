@@ -1145,8 +1145,9 @@ fn pin_flags_make_a_pinned_beam() {
 /// made of them: a simply supported CQUAD4 plate whose PSHELL's MAT1 has `GE = 0.04` gives
 /// `K_4 = 0.04 K` entry by entry (the identity of one damped material), and a CHEXA of a damped
 /// PSOLID beside an undamped one damps the first alone. A PCOMP's own `GE` (field 8) is its
-/// elements'; `PARAM,G` is the whole model's loss factor. A PSHELL whose membrane and bending
-/// materials disagree, a negative `GE` and a negative `G` are refused with the card and line.
+/// elements'; `PARAM,G` is the whole model's loss factor, `PARAM,ALPHA1` and `ALPHA2` its Rayleigh
+/// damping. A PSHELL whose membrane and bending materials disagree, a negative `GE`, a negative
+/// `G` or `ALPHA1`, a complex `ALPHA2` and `ALPHA1` beside `G` are refused with the card and line.
 #[test]
 fn material_damping_is_the_elements_structural_damping() {
     let damped = |property: &str| {
@@ -1192,6 +1193,20 @@ fn material_damping_is_the_elements_structural_damping() {
         Some(femu_fem::model::UniformDamping::LossFactor(0.03))
     );
     assert!(bdf.model.element_damping().is_empty());
+    // PARAM,ALPHA1 and ALPHA2: the whole model's Rayleigh damping `ALPHA1 M + ALPHA2 K` (QRG)
+    let deck = simply_supported(
+        (0.6, 0.4, 4),
+        "",
+        "PARAM,ALPHA1,2.\nPARAM,ALPHA2,1.-6,0.\nPSHELL,1,1,0.005,1,,1\nMAT1,1,2.1+11,,0.3,7850.\n",
+    );
+    let bdf = parse_bdf(&deck, "a.bdf", &BdfOptions::default()).unwrap();
+    assert_eq!(
+        bdf.model.uniform_damping(),
+        Some(femu_fem::model::UniformDamping::Rayleigh {
+            alpha: 2.0,
+            beta: 1e-6
+        })
+    );
 
     // two CHEXA, one of a damped PSOLID: K_4 is its element's stiffness times GE
     let deck = "\
@@ -1259,6 +1274,21 @@ ENDDATA
             "PARAM,G,-0.01\nPSHELL,1,1,0.005,1,,1\nMAT1,1,2.1+11,,0.3,7850.\n",
             "PARAM,G",
             "at least 0",
+        ),
+        (
+            "PARAM,ALPHA1,-2.\nPSHELL,1,1,0.005,1,,1\nMAT1,1,2.1+11,,0.3,7850.\n",
+            "PARAM,ALPHA1",
+            "at least 0",
+        ),
+        (
+            "PARAM,ALPHA2,1.-6,1.-7\nPSHELL,1,1,0.005,1,,1\nMAT1,1,2.1+11,,0.3,7850.\n",
+            "PARAM,ALPHA2",
+            "complex",
+        ),
+        (
+            "PARAM,G,0.02\nPARAM,ALPHA1,2.\nPSHELL,1,1,0.005,1,,1\nMAT1,1,2.1+11,,0.3,7850.\n",
+            "PARAM,ALPHA1",
+            "beside PARAM,G",
         ),
     ] {
         let deck = simply_supported((0.6, 0.4, 4), "", property);

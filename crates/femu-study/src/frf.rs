@@ -189,7 +189,8 @@ impl FrfRequest {
     }
 }
 
-/// The damping the deck gives the whole model (Nastran's `PARAM,G`, CalculiX's `*DAMPING, ALPHA=,
+/// The damping the deck gives the whole model (Nastran's `PARAM,G` or `PARAM,ALPHA1`/`ALPHA2`,
+/// CalculiX's `*DAMPING, ALPHA=,
 /// BETA=`: [`femu_fem::model::UniformDamping`]) when the request names none, with a note that
 /// says so.
 fn deck_damping(
@@ -210,7 +211,7 @@ fn deck_damping(
         ),
     };
     notes.push(format!(
-        "damping: the deck's own ({what}: Nastran's PARAM,G, or *MODAL DAMPING, RAYLEIGH); --damping-ratio, --loss-factor or --rayleigh give another"
+        "damping: the deck's own ({what}: Nastran's PARAM,G or PARAM,ALPHA1/ALPHA2, or *MODAL DAMPING, RAYLEIGH); --damping-ratio, --loss-factor or --rayleigh give another"
     ));
     Some(damping)
 }
@@ -1340,7 +1341,7 @@ fn modal_route(
         if from_deck.is_some() {
             return Err(StudyError::invalid(
                 "damping",
-                "the deck gives both a damping of the whole model (PARAM,G, or *MODAL DAMPING, RAYLEIGH) and modal damping ratios (SDAMPING's table, or *MODAL DAMPING): Nastran adds them, femu takes one; give --damping-ratio, --loss-factor or --rayleigh",
+                "the deck gives both a damping of the whole model (PARAM,G or ALPHA1/ALPHA2, or *MODAL DAMPING, RAYLEIGH) and modal damping ratios (SDAMPING's table, or *MODAL DAMPING): Nastran adds them, femu takes one; give --damping-ratio, --loss-factor or --rayleigh",
             ));
         }
         from_deck = Some(Damping::Ratios(ratios));

@@ -265,6 +265,9 @@ struct Sorted<'a> {
     coupmass: Option<(i64, &'a Card)>,
     /// `PARAM,G`: the uniform structural damping coefficient.
     g: Option<(f64, &'a Card)>,
+    /// `PARAM,ALPHA1` and `PARAM,ALPHA2`: the Rayleigh damping `ALPHA1 M + ALPHA2 K` of a
+    /// frequency response.
+    alpha: [Option<(f64, &'a Card)>; 2],
     /// `PARAM,KDAMP`, when given.
     kdamp: Option<(i64, &'a Card)>,
     /// `TABDMP1` cards by table id.
@@ -285,9 +288,9 @@ const PARAM_NO_EFFECT: &[&str] = &[
     "POST", "PRTMAXIM", "GRDPNT", "AUTOSPC", "MAXRATIO", "BAILOUT", "OGEOM", "NOCOMPS", "SNORM",
     "PATVER", "PRGPST", "OUGCORD", "EST", "NOFISR", "SRCOMPS", "OMACHPR", "USETPRT", "K6ROT",
     "RESVEC", "PEDGEP", "LGDISP", "NASPRT", "PRTGPL", "PRTEQXIN", "PRTGPDT", "PRTCSTM", "PRTBGPDT",
-    "PRTGPTT", "PRTMGG", "PRTPG", "DBALL", "DBDICT", "CHECKOUT", "SEMAP", "OLDSEQ", "TINY",
-    "ALPHA1", "ALPHA2", "W3", "W4", "OIBULK", "POSTEXT", "UNITSYS", "LFREQ", "HFREQ", "LMODES",
-    "NOELOF", "NOELOP", "NOGPF", "SRTOUT", "PRTRESLT",
+    "PRTGPTT", "PRTMGG", "PRTPG", "DBALL", "DBDICT", "CHECKOUT", "SEMAP", "OLDSEQ", "TINY", "W3",
+    "W4", "OIBULK", "POSTEXT", "UNITSYS", "LFREQ", "HFREQ", "LMODES", "NOELOF", "NOELOP", "NOGPF",
+    "SRTOUT", "PRTRESLT",
 ];
 
 /// Cards that act only in other solutions than a linear modal one: contact (nonlinear or contact
@@ -492,6 +495,23 @@ fn param<'a>(
                 .real(1, "WTMASS")?
                 .filter(|v| *v > 0.0)
                 .ok_or_else(|| c.err("WTMASS needs a positive value".into()))?;
+        }
+        "ALPHA1" | "ALPHA2" => {
+            // QRG PARAM ALPHA1, ALPHA2: real or complex (the imaginary part in field 3)
+            let v = c
+                .real(1, &name)?
+                .filter(|v| v.is_finite() && *v >= 0.0)
+                .ok_or_else(|| {
+                    c.err(format!(
+                        "{name} needs a value of at least 0 (a Rayleigh damping coefficient)"
+                    ))
+                })?;
+            if c.real(2, &name)?.is_some_and(|im| im != 0.0) {
+                return Err(c.err(format!(
+                    "{name} is complex: femu takes real Rayleigh damping coefficients"
+                )));
+            }
+            s.alpha[usize::from(name == "ALPHA2")] = Some((v, c));
         }
         "KDAMP" => {
             let v = c
@@ -936,11 +956,31 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
         reason: source.to_string(),
     })?;
     let eigrl = selected_method(&sorted, deck.case_control.method.as_ref())?;
-    // QRG PARAM,G: the uniform structural damping of a frequency response, `K (1 + i G)`
-    if let Some((g, c)) = sorted.g {
-        model
-            .set_uniform_damping(Some(femu_fem::model::UniformDamping::LossFactor(g)))
-            .map_err(c.located())?;
+    // QRG PARAM,G: the uniform structural damping of a frequency response, `K (1 + i G)`; QRG
+    // PARAM,ALPHA1, ALPHA2: its Rayleigh damping `ALPHA1 M + ALPHA2 K`
+    let rayleigh = sorted.alpha.iter().flatten().next().map(|(_, c)| *c);
+    match (sorted.g, rayleigh) {
+        (Some((_, g)), Some(a)) => {
+            return Err(a.err(format!(
+                "PARAM,ALPHA1/ALPHA2 beside PARAM,G (line {}): Nastran adds a Rayleigh and a structural damping of the whole model, femu holds one; keep one of them (or give each material its GE)",
+                g.line
+            )));
+        }
+        (Some((g, c)), None) => {
+            model
+                .set_uniform_damping(Some(femu_fem::model::UniformDamping::LossFactor(g)))
+                .map_err(c.located())?;
+        }
+        (None, Some(c)) => {
+            let value = |k: usize| sorted.alpha[k].map_or(0.0, |(v, _)| v);
+            model
+                .set_uniform_damping(Some(femu_fem::model::UniformDamping::Rayleigh {
+                    alpha: value(0),
+                    beta: value(1),
+                }))
+                .map_err(c.located())?;
+        }
+        (None, None) => {}
     }
     // QRG SDAMPING and TABDMP1: the modes' damping as a function of their frequency
     if let Some(sel) = deck.case_control.sdamping.as_ref() {
