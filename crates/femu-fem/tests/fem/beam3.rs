@@ -20,28 +20,11 @@ fn g() -> f64 {
 
 /// A rectangle `b x h` (plane 1 bends over `h`, along local y), shear factors 5/6.
 fn rect(b: f64, h: f64) -> BeamSection {
-    let (a, c) = if b > h { (b, h) } else { (h, b) };
-    BeamSection {
-        area: b * h,
-        i1: b * h.powi(3) / 12.0,
-        i2: h * b.powi(3) / 12.0,
-        j: a * c.powi(3) * (1.0 / 3.0 - 0.21 * c / a * (1.0 - c.powi(4) / (12.0 * a.powi(4)))),
-        shear: Some([5.0 / 6.0, 5.0 / 6.0]),
-        nsm: 0.0,
-    }
+    super::common::rect_section(b, h, true)
 }
 
 fn beam(section: BeamSection, orientation: [f64; 3]) -> StructuralKind {
-    StructuralKind::Beam(Beam {
-        e: E,
-        g: g(),
-        rho: RHO,
-        section,
-        orientation,
-        offsets: [[0.0; 3]; 2],
-        lumped_torsion: false,
-        releases: [[false; 6]; 2],
-    })
+    super::common::beam_kind((E, NU, RHO), section, orientation)
 }
 
 /// `n` three-node beams along the curve `place(s)`, `s` in `[0, 1]`: nodes `1 + k` at `s = k /

@@ -166,3 +166,37 @@ pub fn timoshenko_simply_supported(
     let c = kga * q * q * e * i * q * q;
     (-b - (b * b - 4.0 * a * c).sqrt()) / (2.0 * a)
 }
+
+/// A rectangle `b x h` (plane 1 bends over `h`, along local y): Roark's torsion constant of a
+/// rectangle, shear factors 5/6 when `shear`.
+pub fn rect_section(b: f64, h: f64, shear: bool) -> femu_fem::structural::BeamSection {
+    let (a, c) = if b > h { (b, h) } else { (h, b) };
+    let j = a * c.powi(3) * (1.0 / 3.0 - 0.21 * c / a * (1.0 - c.powi(4) / (12.0 * a.powi(4))));
+    femu_fem::structural::BeamSection {
+        area: b * h,
+        i1: b * h.powi(3) / 12.0,
+        i2: h * b.powi(3) / 12.0,
+        j,
+        shear: shear.then_some([5.0 / 6.0, 5.0 / 6.0]),
+        nsm: 0.0,
+    }
+}
+
+/// A beam of modulus `e`, Poisson's ratio `nu`, density `rho`, `section` and `orientation`, no
+/// offsets or releases.
+pub fn beam_kind(
+    (e, nu, rho): (f64, f64, f64),
+    section: femu_fem::structural::BeamSection,
+    orientation: [f64; 3],
+) -> femu_fem::structural::StructuralKind {
+    femu_fem::structural::StructuralKind::Beam(femu_fem::structural::Beam {
+        e,
+        g: e / (2.0 * (1.0 + nu)),
+        rho,
+        section,
+        orientation,
+        offsets: [[0.0; 3]; 2],
+        lumped_torsion: false,
+        releases: [[false; 6]; 2],
+    })
+}

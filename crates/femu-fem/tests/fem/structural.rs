@@ -22,30 +22,11 @@ fn g() -> f64 {
 
 /// A rectangular section `b x h` (plane 1 bends over the height `h` along local y).
 fn rect(b: f64, h: f64, shear: bool) -> BeamSection {
-    // Roark's torsion constant of a rectangle, a = long side, c = short side
-    let (a, c) = if b > h { (b, h) } else { (h, b) };
-    let j = a * c.powi(3) * (1.0 / 3.0 - 0.21 * c / a * (1.0 - c.powi(4) / (12.0 * a.powi(4))));
-    BeamSection {
-        area: b * h,
-        i1: b * h.powi(3) / 12.0,
-        i2: h * b.powi(3) / 12.0,
-        j,
-        shear: shear.then_some([5.0 / 6.0, 5.0 / 6.0]),
-        nsm: 0.0,
-    }
+    super::common::rect_section(b, h, shear)
 }
 
 fn beam(section: BeamSection, orientation: [f64; 3]) -> StructuralKind {
-    StructuralKind::Beam(Beam {
-        e: E,
-        g: g(),
-        rho: RHO,
-        section,
-        orientation,
-        offsets: [[0.0; 3]; 2],
-        lumped_torsion: false,
-        releases: [[false; 6]; 2],
-    })
+    super::common::beam_kind((E, NU, RHO), section, orientation)
 }
 
 /// A straight beam of `n` elements from the origin along `dir` (unit), nodes 1..=n+1.
