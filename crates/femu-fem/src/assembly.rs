@@ -620,7 +620,8 @@ impl Assembler {
     }
 
     /// The model's own damping, on the stiffness pattern: the viscous damping `C_d` of its
-    /// bushings (`B1..B6`, formed as their stiffness with `B` for `K`) and of the elements with a
+    /// bushings (`B1..B6`, formed as their stiffness with `B` for `K`), of its scalar dampers
+    /// (a spring's viscous coefficient, formed likewise) and of the elements with a
     /// Rayleigh damping of their material (`alpha M_e + beta K_e`, [`Model::set_element_rayleigh`],
     /// `M_e` of `mass`), and the structural damping `K_4 = sum_e GE_e K_e` of its springs and
     /// bushings and of the elements with a `GE` of their material ([`Model::set_element_damping`])
@@ -644,7 +645,17 @@ impl Assembler {
                 });
             }
             let (ge, viscous) = match &s.kind {
-                StructuralKind::Spring(sp) => (sp.ge, None),
+                // a scalar damper: its viscous coefficient in place of the stiffness
+                StructuralKind::Spring(sp) => (
+                    sp.ge,
+                    (sp.viscous != 0.0).then(|| {
+                        let mut d = s.clone();
+                        if let StructuralKind::Spring(ds) = &mut d.kind {
+                            ds.k = sp.viscous;
+                        }
+                        d
+                    }),
+                ),
                 StructuralKind::Bushing(b) => (
                     b.ge,
                     b.b.iter().any(|v| *v != 0.0).then(|| {

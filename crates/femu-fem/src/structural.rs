@@ -102,13 +102,17 @@ pub struct SpringEnd {
 }
 
 /// A scalar spring `k (d_a . u_a - d_b . u_b)^2 / 2` between two DOFs, or to ground (Nastran
-/// CELAS1/CELAS2, Abaqus SPRING1/SPRING2).
+/// CELAS1/CELAS2, Abaqus SPRING1/SPRING2), or a scalar damper `c` on the same relative motion
+/// (Nastran CDAMP1/CDAMP2: `k = 0`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Spring {
-    /// Stiffness (N/m or N m/rad).
+    /// Stiffness (N/m or N m/rad); 0 for a damper alone.
     pub k: f64,
     /// Structural damping coefficient (`GE`), kept for frequency responses.
     pub ge: f64,
+    /// Viscous damping coefficient (N s/m or N m s/rad), for frequency responses and damped
+    /// modes; 0 for none.
+    pub viscous: f64,
     /// The first end.
     pub a: SpringEnd,
     /// The second end; `None`: grounded.
@@ -441,12 +445,14 @@ impl StructuralElement {
                 }
             }
             StructuralKind::Spring(s) => {
-                if !s.k.is_finite() || s.k == 0.0 || !s.ge.is_finite() {
+                if !(s.k.is_finite() && s.ge.is_finite() && s.viscous.is_finite())
+                    || (s.k == 0.0 && s.viscous == 0.0)
+                {
                     return Err(FemError::InvalidStructural {
                         element: id,
                         reason: format!(
-                            "its stiffness is {} (and GE {}): a spring needs a finite, non-zero stiffness",
-                            s.k, s.ge
+                            "its stiffness is {} (GE {}, viscous damping {}): a spring needs a finite, non-zero stiffness, a damper a finite, non-zero damping",
+                            s.k, s.ge, s.viscous
                         ),
                     });
                 }

@@ -279,6 +279,16 @@ MAT1,1,2.1+11,,0.3,7850.
         ("CBUSH,1,2,1,1\nPBUSH,2,K,1.e4\n", "bad.bdf:5", "need a CID"),
         ("CELAS2,1,1.e4,1,7\n", "bad.bdf:5", "component 7"),
         (
+            "CDAMP2,1,0.,1,2,2,2\n",
+            "bad.bdf:5",
+            "a damper a finite, non-zero damping",
+        ),
+        (
+            "CDAMP1,1,4,1,2,2,2\nPDAMP,5,1.\n",
+            "bad.bdf:5",
+            "refers to property 4",
+        ),
+        (
             "CBEAM,1,1,1,2,0.,1.,0.\nPBEAM,1,1,1.e-4,1.e-8,1.e-8,,1.e-8,,+A\n+A,,,,,,,,,+B\n+B,YESA,1.,2.e-4\n",
             "bad.bdf:6",
             "tapered PBEAM",

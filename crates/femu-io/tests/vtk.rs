@@ -221,6 +221,7 @@ fn structural_elements_are_lines_with_their_sections() {
         kind: StructuralKind::Spring(Spring {
             k: 1234.0,
             ge: 0.0,
+            viscous: 0.0,
             a: SpringEnd {
                 node: 2,
                 part: Part::Translations,

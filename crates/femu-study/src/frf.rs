@@ -800,7 +800,7 @@ fn update_from_frfs(
     {
         use femu_fem::structural::StructuralKind;
         let own = model.model.structural().iter().find(|e| match &e.kind {
-            StructuralKind::Spring(sp) => sp.ge != 0.0,
+            StructuralKind::Spring(sp) => sp.ge != 0.0 || sp.viscous != 0.0,
             StructuralKind::Bushing(b) => b.ge != 0.0 || b.b.iter().any(|v| *v != 0.0),
             _ => false,
         });

@@ -381,3 +381,63 @@ fn viscous_and_structural_damped_modes_are_the_full_problem() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Nastran's scalar dampers (QRG CDAMP1 with PDAMP, CDAMP2) beside scalar springs: a chain of two
+/// CONM2 masses (1 and 2 kg) on grids moving along y, springs of 100 and 300 N/m and dampers of
+/// 0.5 N s/m (CDAMP2) and 0.8 N s/m (CDAMP1 of the PDAMP's second property, 9. the first's). The
+/// model's viscous damping is the hand-written `C = [[1.3, -0.8], [-0.8, 0.8]]` (1e-14) and its
+/// damped modes are the roots of `det(p^2 M + p C + K) = 0` written here as the 4 x 4 companion
+/// matrix of the hand-written `M`, `C`, `K` (1e-12).
+#[test]
+fn scalar_dampers_are_viscous_damping() {
+    use faer::c64;
+    use femu_sparse::eigen::Which;
+    let dir = std::env::temp_dir().join(format!("femu-cdamp-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let deck = "SOL 103\nCEND\nSPC = 1\nBEGIN BULK\n\
+        GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,2.,0.,0.\n\
+        CONM2,10,2,,1.\nCONM2,11,3,,2.\n\
+        CELAS2,20,100.,1,2,2,2\nCELAS2,21,300.,2,2,3,2\n\
+        CDAMP2,30,0.5,1,2,2,2\nCDAMP1,31,7,2,2,3,2\nPDAMP,5,9.,7,0.8\n\
+        SPC1,1,123456,1\nSPC1,1,13456,2,3\nENDDATA\n";
+    std::fs::write(dir.join("chain.bdf"), deck).unwrap();
+    let loaded = load_model(&dir.join("chain.bdf"), &ModelOptions::default()).unwrap();
+    let c = femu_sparse::csc::to_dense(
+        loaded
+            .asm
+            .dampers(&loaded.model, loaded.sys.mass_kind)
+            .unwrap()
+            .viscous
+            .as_ref()
+            .unwrap(),
+    );
+    assert_eq!(c.nrows(), 2);
+    let want_c = [[1.3, -0.8], [-0.8, 0.8]];
+    for i in 0..2 {
+        for j in 0..2 {
+            assert!((c[(i, j)] - want_c[i][j]).abs() < 1e-14, "{c:?}");
+        }
+    }
+    let modes = loaded
+        .sys
+        .modes(Which::Lowest(2), &EigenOptions::default())
+        .unwrap();
+    let damped = femu_study::modes::damped_modes(&loaded, &modes, &mut Vec::new()).unwrap();
+    // the companion matrix of M^-1 K and M^-1 C, by hand
+    let (m, k) = ([1.0, 2.0], [[400.0, -300.0], [-300.0, 300.0]]);
+    let a = faer::Mat::<c64>::from_fn(4, 4, |i, j| match (i < 2, j < 2) {
+        (true, true) => c64::new(0.0, 0.0),
+        (true, false) => c64::new(f64::from(u8::from(j - 2 == i)), 0.0),
+        (false, true) => c64::new(-k[i - 2][j] / m[i - 2], 0.0),
+        (false, false) => c64::new(-want_c[i - 2][j - 2] / m[i - 2], 0.0),
+    });
+    let evd = faer::linalg::solvers::Eigen::<f64>::new(a.as_ref()).unwrap();
+    let mut roots: Vec<c64> = (0..4).map(|j| evd.S()[j]).filter(|p| p.im > 0.0).collect();
+    roots.sort_by(|x, y| x.im.total_cmp(&y.im));
+    assert_eq!((roots.len(), damped.len()), (2, 2));
+    for (d, p) in damped.iter().zip(&roots) {
+        let got = c64::new(d.eigenvalue[0], d.eigenvalue[1]);
+        assert!((got - p).norm() < 1e-12 * p.norm(), "{got:?} {p:?}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -337,6 +337,7 @@ fn springs_and_bushings_match_hand_solved_oscillators() {
             kind: StructuralKind::Spring(Spring {
                 k,
                 ge: 0.0,
+                viscous: 0.0,
                 a: end(0),
                 b: Some(end(1)),
             }),

@@ -941,6 +941,7 @@ fn spring(
     Ok(StructuralKind::Spring(Spring {
         k,
         ge: 0.0,
+        viscous: 0.0,
         a: SpringEnd {
             node: nodes[0],
             part: a.0,

@@ -122,8 +122,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("CONM1", "general mass matrices"),
     ("CELAS3", "scalar springs on scalar points"),
     ("CELAS4", "scalar springs on scalar points"),
-    ("CDAMP1", "scalar dampers"),
-    ("CDAMP2", "scalar dampers"),
     ("CVISC", "viscous dampers"),
     ("PVISC", "viscous dampers"),
     ("CBUSH1D", "one-dimensional bushings"),

@@ -32,11 +32,13 @@ pub(super) struct StructuralCards<'a> {
 
 /// The structural element card names.
 pub(super) const ELEMENTS: &[&str] = &[
-    "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CBUSH", "CQUAD4", "CTRIA3", "CQUAD8",
+    "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CDAMP1", "CDAMP2", "CBUSH", "CQUAD4",
+    "CTRIA3", "CQUAD8",
 ];
 /// The structural property card names.
 pub(super) const PROPERTIES: &[&str] = &[
-    "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PELAS", "PBUSH", "PSHELL", "PCOMP", "PCOMPG",
+    "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PELAS", "PDAMP", "PBUSH", "PSHELL", "PCOMP",
+    "PCOMPG",
 ];
 
 impl<'a> StructuralCards<'a> {
@@ -45,10 +47,12 @@ impl<'a> StructuralCards<'a> {
         let name = c.name.as_str();
         if ELEMENTS.contains(&name) {
             self.elements.push(c);
-        } else if name == "PELAS" {
-            // QRG PELAS: two properties per card, fields 1-4 and 5-8
-            for first in [0, 4] {
-                if first == 4 && c.field(4).is_empty() {
+        } else if name == "PELAS" || name == "PDAMP" {
+            // QRG PELAS: two properties per card, fields 1-4 and 5-8; PDAMP: four, fields 1-2,
+            // 3-4, 5-6 and 7-8
+            let width = if name == "PELAS" { 4 } else { 2 };
+            for first in (0..8).step_by(width) {
+                if first > 0 && c.field(first).is_empty() {
                     break;
                 }
                 let pid = c.id(first, "PID")?;
@@ -742,22 +746,31 @@ pub(super) fn add_structural(
                 });
                 (kind, vec![n1, n2], pid)
             }
-            "CELAS1" | "CELAS2" => {
-                // CELAS1: EID PID G1 C1 G2 C2; CELAS2: EID K G1 C1 G2 C2 GE S
-                let (k, ge, pid) = if c.name == "CELAS1" {
+            "CELAS1" | "CELAS2" | "CDAMP1" | "CDAMP2" => {
+                // CELAS1: EID PID G1 C1 G2 C2; CELAS2: EID K G1 C1 G2 C2 GE S; CDAMP1: EID PID
+                // G1 C1 G2 C2; CDAMP2: EID B G1 C1 G2 C2 (QRG)
+                let damper = c.name.starts_with("CDAMP");
+                let (value, ge, pid) = if c.name == "CELAS1" || c.name == "CDAMP1" {
                     let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
-                    let p = prop(pid, &["PELAS"])?;
-                    // the property's own four fields: the first or the second PID on the card
-                    let first = if p.int(0, "PID")? == Some(pid as i64) {
-                        0
-                    } else {
-                        4
-                    };
+                    let p = prop(pid, &[if damper { "PDAMP" } else { "PELAS" }])?;
+                    // the property's own fields: the first PID on the card that is this one
+                    let width = if damper { 2 } else { 4 };
+                    let first = (0..8)
+                        .step_by(width)
+                        .find(|&f| p.int(f, "PID").ok().flatten() == Some(pid as i64))
+                        .unwrap_or(0);
                     (
-                        p.real(first + 1, "K")?.unwrap_or(0.0),
-                        p.real(first + 2, "GE")?.unwrap_or(0.0),
+                        p.real(first + 1, if damper { "B" } else { "K" })?
+                            .unwrap_or(0.0),
+                        if damper {
+                            0.0
+                        } else {
+                            p.real(first + 2, "GE")?.unwrap_or(0.0)
+                        },
                         pid,
                     )
+                } else if damper {
+                    (c.real(1, "B")?.unwrap_or(0.0), 0.0, eid)
                 } else {
                     (
                         c.real(1, "K")?.unwrap_or(0.0),
@@ -765,6 +778,7 @@ pub(super) fn add_structural(
                         eid,
                     )
                 };
+                let (k, viscous) = if damper { (0.0, value) } else { (value, 0.0) };
                 let mut ends = Vec::new();
                 for (gf, cf) in [(2, 3), (4, 5)] {
                     let g = c.int(gf, "G")?.unwrap_or(0);
@@ -797,6 +811,7 @@ pub(super) fn add_structural(
                 let kind = StructuralKind::Spring(Spring {
                     k,
                     ge,
+                    viscous,
                     a,
                     b: ends.get(1).copied(),
                 });
