@@ -441,3 +441,43 @@ fn scalar_dampers_are_viscous_damping() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Abaqus' dashpots (`DASHPOT1` of a `*DASHPOT`, the `*SPRING` layout with a dashpot coefficient
+/// on its second line): a 2 kg `*MASS` on a `SPRING1` of 800 N/m and a `DASHPOT1` of 4 N s/m
+/// along y has the textbook root `p = -c / (2 m) + i sqrt(k / m - (c / (2 m))^2)` (1e-12); a
+/// `DASHPOT1` element whose set is given a `*SPRING` is refused with the line.
+#[test]
+fn an_abaqus_dashpot_is_viscous_damping() {
+    use femu_sparse::eigen::Which;
+    let dir = std::env::temp_dir().join(format!("femu-dashpot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let deck = "*NODE\n1, 0., 0., 0.\n\
+        *ELEMENT, TYPE=MASS, ELSET=M\n1, 1\n*MASS, ELSET=M\n2.\n\
+        *ELEMENT, TYPE=SPRING1, ELSET=S\n2, 1\n*SPRING, ELSET=S\n2\n800.\n\
+        *ELEMENT, TYPE=DASHPOT1, ELSET=D\n3, 1\n*DASHPOT, ELSET=D\n2\n4.\n\
+        *BOUNDARY\n1, 1, 1\n1, 3, 3\n";
+    std::fs::write(dir.join("sdof.inp"), deck).unwrap();
+    let loaded = load_model(&dir.join("sdof.inp"), &ModelOptions::default()).unwrap();
+    let modes = loaded
+        .sys
+        .modes(Which::Lowest(1), &EigenOptions::default())
+        .unwrap();
+    let damped = femu_study::modes::damped_modes(&loaded, &modes, &mut Vec::new()).unwrap();
+    let (m, k, c) = (2.0f64, 800.0f64, 4.0f64);
+    let want = [-c / (2.0 * m), (k / m - (c / (2.0 * m)).powi(2)).sqrt()];
+    let got = damped[0].eigenvalue;
+    assert!(
+        (got[0] - want[0]).abs() < 1e-12 * want[1] && (got[1] - want[1]).abs() < 1e-12 * want[1],
+        "{got:?} {want:?}"
+    );
+    let wrong = deck.replace("*DASHPOT, ELSET=D", "*SPRING, ELSET=D");
+    std::fs::write(dir.join("wrong.inp"), wrong).unwrap();
+    let e = load_model(&dir.join("wrong.inp"), &ModelOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("wrong.inp:13") && e.contains("takes a *DASHPOT"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -103,6 +103,7 @@ const READ: &[(&str, &[&str])] = &[
         &["ELSET", "SECTION", "DENSITY", "LUMPED"],
     ),
     ("SPRING", &["ELSET"]),
+    ("DASHPOT", &["ELSET"]),
     (
         "MEMBRANE SECTION",
         &["ELSET", "MATERIAL", "POISSON", "ORIENTATION"],

@@ -424,12 +424,13 @@ impl DeckBuilder {
                     });
                 Ok(())
             }
-            "SPRING" => {
+            "SPRING" | "DASHPOT" => {
                 let elset = params
                     .get("ELSET")
-                    .ok_or_else(|| err(l, "*SPRING without ELSET=".into()))?;
+                    .ok_or_else(|| err(l, format!("*{name} without ELSET=")))?;
                 self.structural.springs.push(structural::SpringCard {
                     elset: elset.to_ascii_uppercase(),
+                    dashpot: name == "DASHPOT",
                     lines: Vec::new(),
                     line: at(l),
                 });
@@ -595,7 +596,7 @@ impl DeckBuilder {
             return Ok(());
         }
         let (kind, formulation, approx) = element_kind(ty).ok_or_else(|| {
-            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; T3D2, B31, B32, B32R, B33, SPRING1, SPRING2, SPRINGA; S4, S4R, S3, S3R, S8R, S8; M3D3, M3D4, M3D4R, M3D8, M3D8R)"))
+            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; T3D2, B31, B32, B32R, B33, SPRING1, SPRING2, SPRINGA, DASHPOT1, DASHPOT2, DASHPOTA; S4, S4R, S3, S3R, S8R, S8; M3D3, M3D4, M3D4R, M3D8, M3D8R)"))
         })?;
         if approx {
             warn(
@@ -832,7 +833,7 @@ impl DeckBuilder {
                 }
                 Ok(())
             }
-            "SPRING" => {
+            "SPRING" | "DASHPOT" => {
                 if let Some(c) = self.structural.springs.last_mut() {
                     c.lines.push(f.iter().map(|s| s.to_string()).collect());
                 }

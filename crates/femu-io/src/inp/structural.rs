@@ -1,7 +1,8 @@
 //! Beams and springs of an Abaqus/CalculiX deck: `B31` (shear-flexible) and `B33`
 //! (Euler-Bernoulli) two-node beams and `B32` three-node beams (shear-flexible, possibly curved;
 //! nodes end, middle, end) with `*BEAM SECTION` (`RECT`, `CIRC`, `PIPE`) or `*BEAM
-//! GENERAL SECTION` (`GENERAL`), and `SPRING1`, `SPRING2`, `SPRINGA` with `*SPRING`, as the
+//! GENERAL SECTION` (`GENERAL`), `SPRING1`, `SPRING2`, `SPRINGA` with `*SPRING` and `DASHPOT1`,
+//! `DASHPOT2`, `DASHPOTA` with `*DASHPOT` (the same layout, a dashpot coefficient), as the
 //! Abaqus Keywords Reference defines them, into femu's structural elements
 //! (docs/MATH.md, "Beams, springs and bushings").
 //!
@@ -18,6 +19,17 @@ use femu_fem::structural::{
 };
 use std::collections::{BTreeMap, HashMap};
 use std::f64::consts::PI;
+
+/// The three kinds of Abaqus spring and dashpot: to ground on one DOF, between two DOFs, axial.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum SpringKind {
+    /// `SPRING1`, `DASHPOT1`.
+    One,
+    /// `SPRING2`, `DASHPOT2`.
+    Two,
+    /// `SPRINGA`, `DASHPOTA`.
+    Axial,
+}
 
 /// The structural element types femu reads from a deck.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -36,6 +48,9 @@ pub(super) enum StructuralType {
     Spring2,
     /// An axial spring between two nodes.
     SpringA,
+    /// A dashpot (`DASHPOT1`, `DASHPOT2`, `DASHPOTA` of a `*DASHPOT`): the spring of that kind
+    /// with a viscous coefficient in place of its stiffness.
+    Dashpot(SpringKind),
     /// A 4-node shell (S4, and S4R built fully integrated).
     S4,
     /// A 3-node shell (S3, S3R).
@@ -59,6 +74,9 @@ impl StructuralType {
             "SPRING1" => (Self::Spring1, 1),
             "SPRING2" => (Self::Spring2, 2),
             "SPRINGA" => (Self::SpringA, 2),
+            "DASHPOT1" => (Self::Dashpot(SpringKind::One), 1),
+            "DASHPOT2" => (Self::Dashpot(SpringKind::Two), 2),
+            "DASHPOTA" => (Self::Dashpot(SpringKind::Axial), 2),
             "S4" | "S4R" => (Self::S4, 4),
             "S3" | "S3R" => (Self::S3, 3),
             "S8R" | "S8" => (Self::S8, 8),
@@ -90,6 +108,9 @@ impl StructuralType {
             Self::Spring1 => "SPRING1",
             Self::Spring2 => "SPRING2",
             Self::SpringA => "SPRINGA",
+            Self::Dashpot(SpringKind::One) => "DASHPOT1",
+            Self::Dashpot(SpringKind::Two) => "DASHPOT2",
+            Self::Dashpot(SpringKind::Axial) => "DASHPOTA",
             Self::S4 => "S4",
             Self::S3 => "S3",
             Self::S8 => "S8R",
@@ -119,6 +140,8 @@ pub(super) struct BeamSectionCard {
 #[derive(Debug, Clone)]
 pub(super) struct SpringCard {
     pub(super) elset: String,
+    /// A `*DASHPOT` (its coefficient a viscous one), not a `*SPRING`.
+    pub(super) dashpot: bool,
     pub(super) lines: Vec<Vec<String>>,
     pub(super) line: Location,
 }
@@ -573,16 +596,30 @@ pub(super) fn add_structural(
                 kind
             }
             _ => {
+                let dashpot = matches!(ty, StructuralType::Dashpot(_));
+                let keyword = if dashpot { "*DASHPOT" } else { "*SPRING" };
                 let k = *spring_of.get(id).ok_or_else(|| {
                     at_err(
                         l,
                         format!(
-                            "{} element {id} has no *SPRING (none names a set that holds it)",
+                            "{} element {id} has no {keyword} (none names a set that holds it)",
                             ty.name()
                         ),
                     )
                 })?;
-                spring(&records.springs[k], *ty, *id, &nodes, model)?
+                let card = &records.springs[k];
+                if card.dashpot != dashpot {
+                    return Err(at_err(
+                        l,
+                        format!(
+                            "{} element {id} takes a {keyword}, and the set that holds it is given a {} (line {})",
+                            ty.name(),
+                            if card.dashpot { "*DASHPOT" } else { "*SPRING" },
+                            card.line.line
+                        ),
+                    ));
+                }
+                spring(card, *ty, *id, &nodes, model)?
             }
         };
         // B32's nodes are end, middle, end; femu's the ends, then the middle
@@ -878,6 +915,7 @@ fn spring(
     model: &Model,
 ) -> Result<StructuralKind, IoError> {
     let l = &c.line;
+    let keyword = if c.dashpot { "*DASHPOT" } else { "*SPRING" };
     let value = |row: usize, k: usize, what: &str| -> Result<&str, IoError> {
         c.lines
             .get(row)
@@ -887,7 +925,7 @@ fn spring(
             .ok_or_else(|| {
                 at_err(
                     l,
-                    format!("*SPRING for element {id} ({}) lacks {what}", ty.name()),
+                    format!("{keyword} for element {id} ({}) lacks {what}", ty.name()),
                 )
             })
     };
@@ -897,7 +935,12 @@ fn spring(
             .parse()
             .ok()
             .filter(|d| (1..=6).contains(d))
-            .ok_or_else(|| at_err(l, format!("*SPRING: degree of freedom {s:?} is not 1 to 6")))?;
+            .ok_or_else(|| {
+                at_err(
+                    l,
+                    format!("{keyword}: degree of freedom {s:?} is not 1 to 6"),
+                )
+            })?;
         let mut dir = [0.0; 3];
         dir[(d - 1) % 3] = 1.0;
         Ok((
@@ -909,16 +952,21 @@ fn spring(
             dir,
         ))
     };
+    let what = if c.dashpot {
+        "the dashpot coefficient"
+    } else {
+        "the stiffness"
+    };
     let (a, b, k) = match ty {
-        StructuralType::Spring1 => {
+        StructuralType::Spring1 | StructuralType::Dashpot(SpringKind::One) => {
             let (p, d) = dof(0)?;
-            let k = number(l, "the stiffness", value(1, 0, "its stiffness")?)?;
+            let k = number(l, what, value(1, 0, what)?)?;
             ((p, d), None, k)
         }
-        StructuralType::Spring2 => {
+        StructuralType::Spring2 | StructuralType::Dashpot(SpringKind::Two) => {
             let (pa, da) = dof(0)?;
             let (pb, db) = dof(1)?;
-            let k = number(l, "the stiffness", value(1, 0, "its stiffness")?)?;
+            let k = number(l, what, value(1, 0, what)?)?;
             ((pa, da), Some((pb, db)), k)
         }
         _ => {
@@ -929,19 +977,23 @@ fn spring(
             if !(n > 0.0) {
                 return Err(at_err(
                     l,
-                    format!("SPRINGA element {id}: its nodes coincide, so it has no axis"),
+                    format!(
+                        "{} element {id}: its nodes coincide, so it has no axis",
+                        ty.name()
+                    ),
                 ));
             }
             let d = [d[0] / n, d[1] / n, d[2] / n];
             let row = c.lines.len().saturating_sub(1);
-            let k = number(l, "the stiffness", value(row, 0, "its stiffness")?)?;
+            let k = number(l, what, value(row, 0, what)?)?;
             ((Part::Translations, d), Some((Part::Translations, d)), k)
         }
     };
+    let (k, viscous) = if c.dashpot { (0.0, k) } else { (k, 0.0) };
     Ok(StructuralKind::Spring(Spring {
         k,
         ge: 0.0,
-        viscous: 0.0,
+        viscous,
         a: SpringEnd {
             node: nodes[0],
             part: a.0,
