@@ -952,21 +952,21 @@ fn spring(
             dir,
         ))
     };
-    let what = if c.dashpot {
-        "the dashpot coefficient"
+    let (what, its) = if c.dashpot {
+        ("the dashpot coefficient", "its dashpot coefficient")
     } else {
-        "the stiffness"
+        ("the stiffness", "its stiffness")
     };
     let (a, b, k) = match ty {
         StructuralType::Spring1 | StructuralType::Dashpot(SpringKind::One) => {
             let (p, d) = dof(0)?;
-            let k = number(l, what, value(1, 0, what)?)?;
+            let k = number(l, what, value(1, 0, its)?)?;
             ((p, d), None, k)
         }
         StructuralType::Spring2 | StructuralType::Dashpot(SpringKind::Two) => {
             let (pa, da) = dof(0)?;
             let (pb, db) = dof(1)?;
-            let k = number(l, what, value(1, 0, what)?)?;
+            let k = number(l, what, value(1, 0, its)?)?;
             ((pa, da), Some((pb, db)), k)
         }
         _ => {
@@ -985,7 +985,7 @@ fn spring(
             }
             let d = [d[0] / n, d[1] / n, d[2] / n];
             let row = c.lines.len().saturating_sub(1);
-            let k = number(l, what, value(row, 0, what)?)?;
+            let k = number(l, what, value(row, 0, its)?)?;
             ((Part::Translations, d), Some((Part::Translations, d)), k)
         }
     };
