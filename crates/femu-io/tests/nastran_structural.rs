@@ -1611,3 +1611,43 @@ fn a_pshell_of_mid1_alone_is_a_membrane() {
         "FV32 membranes",
     );
 }
+
+/// A CVISC (QRG CVISC, PVISC: an extensional damper `CE` along the line of its two grids): between
+/// a clamped grid and one at (0.6, 0.8, 0), held by three grounded CELAS2 springs, with the second
+/// of the PVISC's two properties (`CE` 3 N s/m), the model's viscous damping on the free grid's
+/// translations is the hand-written `3 d d^T`, `d = (0.6, 0.8, 0)` (1e-14); a CVISC of coincident
+/// grids is refused with its line.
+#[test]
+fn a_cvisc_is_an_axial_damper() {
+    let deck = |g2: &str| {
+        format!(
+            "BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,{g2}\nCONM2,9,2,,1.\n\
+             CELAS2,11,100.,2,1\nCELAS2,12,200.,2,2\nCELAS2,13,300.,2,3\n\
+             CVISC,20,8,1,2\nPVISC,7,1.,,,8,3.\nSPC1,1,123456,1\nENDDATA\n"
+        )
+    };
+    let bdf = parse_bdf(&deck("0.6,0.8,0."), "visc.bdf", &BdfOptions::default()).unwrap();
+    let asm = femu_fem::assembly::Assembler::new(&bdf.model).unwrap();
+    let c = femu_sparse::csc::to_dense(
+        &asm.dampers(&bdf.model, MassKind::Lumped)
+            .unwrap()
+            .viscous
+            .unwrap(),
+    );
+    let sys = bdf.model.assemble(MassKind::Lumped).unwrap();
+    let g2 = bdf.model.mesh().node_index(2).unwrap();
+    let d = [0.6, 0.8, 0.0];
+    for i in 0..3 {
+        for j in 0..3 {
+            let (a, b) = (
+                sys.dofs.free_index(g2, i).unwrap(),
+                sys.dofs.free_index(g2, j).unwrap(),
+            );
+            assert!((c[(a, b)] - 3.0 * d[i] * d[j]).abs() < 1e-14, "{c:?}");
+        }
+    }
+    let e = parse_bdf(&deck("0.,0.,0."), "visc.bdf", &BdfOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("visc.bdf:8") && e.contains("coincide"), "{e}");
+}

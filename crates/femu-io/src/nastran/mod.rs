@@ -122,8 +122,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("CONM1", "general mass matrices"),
     ("CELAS3", "scalar springs on scalar points"),
     ("CELAS4", "scalar springs on scalar points"),
-    ("CVISC", "viscous dampers"),
-    ("PVISC", "viscous dampers"),
     ("CBUSH1D", "one-dimensional bushings"),
     ("PBUSH1D", "one-dimensional bushings"),
     ("CTUBE", "tubes"),

@@ -1,5 +1,6 @@
 //! Bars, beams, rods, springs, bushings and shells: `CBAR` (`PBAR`, `PBARL`), `CBEAM` (`PBEAM`,
-//! `PBEAML`, prismatic), `CROD` (`PROD`), `CONROD`, `CELAS1` (`PELAS`), `CELAS2`, `CBUSH`
+//! `PBEAML`, prismatic), `CROD` (`PROD`), `CONROD`, `CELAS1` (`PELAS`), `CELAS2`, `CDAMP1`
+//! (`PDAMP`), `CDAMP2`, `CVISC` (`PVISC`), `CBUSH`
 //! (`PBUSH`), `CQUAD4`, `CQUAD8` (all eight grids) and `CTRIA3` (`PSHELL` of MAT1, MAT2 or MAT8 materials, THETA or MCID
 //! material axes), with `BAROR` and
 //! `BEAMOR` defaults, read as the Quick Reference Guide defines them
@@ -32,13 +33,13 @@ pub(super) struct StructuralCards<'a> {
 
 /// The structural element card names.
 pub(super) const ELEMENTS: &[&str] = &[
-    "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CDAMP1", "CDAMP2", "CBUSH", "CQUAD4",
-    "CTRIA3", "CQUAD8",
+    "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CDAMP1", "CDAMP2", "CVISC", "CBUSH",
+    "CQUAD4", "CTRIA3", "CQUAD8",
 ];
 /// The structural property card names.
 pub(super) const PROPERTIES: &[&str] = &[
-    "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PELAS", "PDAMP", "PBUSH", "PSHELL", "PCOMP",
-    "PCOMPG",
+    "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PELAS", "PDAMP", "PVISC", "PBUSH", "PSHELL",
+    "PCOMP", "PCOMPG",
 ];
 
 impl<'a> StructuralCards<'a> {
@@ -47,10 +48,13 @@ impl<'a> StructuralCards<'a> {
         let name = c.name.as_str();
         if ELEMENTS.contains(&name) {
             self.elements.push(c);
-        } else if name == "PELAS" || name == "PDAMP" {
+        } else if name == "PELAS" || name == "PDAMP" || name == "PVISC" {
             // QRG PELAS: two properties per card, fields 1-4 and 5-8; PDAMP: four, fields 1-2,
-            // 3-4, 5-6 and 7-8
-            let width = if name == "PELAS" { 4 } else { 2 };
+            // 3-4, 5-6 and 7-8; PVISC: two, fields 1-3 and 5-7
+            let width = match name {
+                "PELAS" | "PVISC" => 4,
+                _ => 2,
+            };
             for first in (0..8).step_by(width) {
                 if first > 0 && c.field(first).is_empty() {
                     break;
@@ -895,11 +899,61 @@ pub(super) fn add_structural(
                 let (kind, nodes) = cbush(c, eid, pid, p, model, ctx)?;
                 (kind, nodes, pid)
             }
+            "CVISC" => {
+                // QRG CVISC: EID PID G1 G2; PVISC: PID CE CR (PID CE CR): an extensional and a
+                // rotational damper along the line G1-G2, a bushing of dampers alone on the
+                // grids' relative motion in a frame whose first axis is that line
+                let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
+                let p = prop(pid, &["PVISC"])?;
+                let first = if p.int(0, "PID")? == Some(pid as i64) {
+                    0
+                } else {
+                    4
+                };
+                let ce = p.real(first + 1, "CE")?.unwrap_or(0.0);
+                let cr = p.real(first + 2, "CR")?.unwrap_or(0.0);
+                let (g1, g2) = (c.id(2, "G1")?, c.id(3, "G2")?);
+                let (n1, n2) = (node(model, g1, c, "G1")?, node(model, g2, c, "G2")?);
+                let x = model.mesh().coords();
+                let d: [f64; 3] = std::array::from_fn(|k| x[n2][k] - x[n1][k]);
+                let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                if !(l > 0.0) {
+                    return Err(c.err(format!(
+                        "{eid}: grids {g1} and {g2} coincide, so the damper has no axis"
+                    )));
+                }
+                let t = d.map(|v| v / l);
+                // two axes normal to it (any: only the first carries damping)
+                let helper = if t[0].abs() < 0.9 {
+                    [1.0, 0.0, 0.0]
+                } else {
+                    [0.0, 1.0, 0.0]
+                };
+                let cross = |a: [f64; 3], b: [f64; 3]| {
+                    [
+                        a[1] * b[2] - a[2] * b[1],
+                        a[2] * b[0] - a[0] * b[2],
+                        a[0] * b[1] - a[1] * b[0],
+                    ]
+                };
+                let y = cross(t, helper);
+                let ny = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt();
+                let y = y.map(|v| v / ny);
+                let z = cross(t, y);
+                let kind = StructuralKind::Bushing(Bushing {
+                    k: [0.0; 6],
+                    b: [ce, 0.0, 0.0, cr, 0.0, 0.0],
+                    ge: 0.0,
+                    axes: [t, y, z],
+                    point: None,
+                });
+                (kind, vec![n1, n2], pid)
+            }
             _ => unreachable!("sorted as structural"),
         };
         let ge = match c.name.as_str() {
             "CONROD" => mid_ge(ctx, c, &[3])?,
-            "CELAS1" | "CELAS2" | "CBUSH" => 0.0,
+            "CELAS1" | "CELAS2" | "CDAMP1" | "CDAMP2" | "CVISC" | "CBUSH" => 0.0,
             _ => match cards.properties.get(&pid) {
                 Some(p) => property_ge(ctx, p)?,
                 None => 0.0,
