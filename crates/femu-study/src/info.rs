@@ -44,12 +44,13 @@ fn structural_lines(s: &mut String, model: &femu_fem::model::Model) {
     let count = |f: fn(&StructuralKind) -> bool| all.iter().filter(|e| f(&e.kind)).count();
     let _ = writeln!(
         s,
-        "structural elements: {} ({} shells, {} beams, {} rods, {} springs, {} bushings; nodes with rotations: {})",
+        "structural elements: {} ({} shells, {} beams, {} rods, {} springs, {} dampers, {} bushings; nodes with rotations: {})",
         all.len(),
         count(|k| matches!(k, StructuralKind::Shell(_))),
         count(|k| matches!(k, StructuralKind::Beam(_))),
         count(|k| matches!(k, StructuralKind::Rod(_))),
-        count(|k| matches!(k, StructuralKind::Spring(_))),
+        count(|k| matches!(k, StructuralKind::Spring(s) if s.k != 0.0)),
+        count(|k| matches!(k, StructuralKind::Spring(s) if s.k == 0.0)),
         count(|k| matches!(k, StructuralKind::Bushing(_))),
         model.rotation_nodes().len()
     );

@@ -867,7 +867,7 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
         return Err(IoError::Content {
             path: path.to_path_buf(),
             reason: format!(
-                "the deck defines {} GRID{} and no element (solids: CHEXA, CPENTA, CTETRA, CPYRAM; bars, beams, rods, springs, shells: CBAR, CBEAM, CROD, CONROD, CELAS1, CELAS2, CBUSH, CQUAD4, CQUAD8, CTRIA3)",
+                "the deck defines {} GRID{} and no element (solids: CHEXA, CPENTA, CTETRA, CPYRAM; bars, beams, rods, springs, dampers, bushings, shells: CBAR, CBEAM, CROD, CONROD, CELAS1, CELAS2, CDAMP1, CDAMP2, CVISC, CBUSH, CQUAD4, CQUAD8, CTRIA3)",
                 mesh.node_count(),
                 if mesh.node_count() == 1 { "" } else { "s" }
             ),
