@@ -3078,8 +3078,8 @@ fn modes_damped_reports_the_complex_modes() {
 }
 
 /// `femu correlate --damped` compares complex shapes with the model's damped modes, so it needs
-/// the model's structural damping: the undamped two-hex deck is refused with the reason (the same
-/// test without `--damped` correlates).
+/// the model's damping: the undamped two-hex deck is refused with the reason (the same test
+/// without `--damped` correlates).
 #[test]
 fn correlate_damped_needs_the_model_s_damping() {
     use femu_correlate::TestModes;
