@@ -3077,6 +3077,93 @@ fn modes_damped_reports_the_complex_modes() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `femu modes --uff`: the model's modes as a universal file. The cantilevered plate's six lowest
+/// modes, read back: every node (2411) and each mode's frequency to the file's six digits (the
+/// file's shapes against femu's own vectors are checked by pyuff in
+/// `test_modes_written_as_a_universal_file`). With `--damped` on
+/// the plate of uniform `GE` 0.03, each mode is complex data whose eigenvalue is the root `p = i
+/// omega sqrt(1 + 0.03 i)` of its real mode (frequency `|p| / 2 pi`, ratio `-Re p / |p|`, to
+/// 1e-5: the file's digits), and `femu correlate --damped` of the model against that file pairs
+/// each mode with itself, complex MAC 1 to 1e-6.
+#[test]
+fn modes_written_as_a_universal_file() {
+    let dir = std::env::temp_dir().join(format!("femu-cli-modes-uff-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("plate.bdf"),
+        femu_testkit::damped_plate_deck(6, "0.03", "0.03", ""),
+    )
+    .unwrap();
+    let deck = dir.join("plate.bdf");
+    let run = |extra: &[&str], name: &str| {
+        let (uff, json) = (
+            dir.join(format!("{name}.unv")),
+            dir.join(format!("{name}.json")),
+        );
+        let out = femu()
+            .args(["modes", deck.to_str().unwrap(), "--count", "6", "--quiet"])
+            .args([
+                "--uff",
+                uff.to_str().unwrap(),
+                "--json",
+                json.to_str().unwrap(),
+            ])
+            .args(extra)
+            .output()
+            .unwrap();
+        succeeded(&out);
+        (femu_io::uff::read_uff(&uff).unwrap(), json_of(&json), uff)
+    };
+    let (real, v, _) = run(&[], "real");
+    assert_eq!(real.nodes.len(), 49);
+    let f: Vec<f64> = v["frequencies_hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(real.modes.len(), 6);
+    for (m, f) in real.modes.iter().zip(&f) {
+        assert!(
+            (m.frequency_hz / f - 1.0).abs() < 1e-5,
+            "{} {f}",
+            m.frequency_hz
+        );
+        assert!(!m.complex);
+    }
+    let (damped, _, uff) = run(&["--damped"], "damped");
+    let eta: f64 = 0.03;
+    let a = ((1.0 + (1.0 + eta * eta).sqrt()) / 2.0).sqrt();
+    let b = eta / (2.0 * a);
+    for (m, f) in damped.modes.iter().zip(&f) {
+        assert!(m.complex && m.imaginary.is_some());
+        // p = i omega (a + i b): |p| = omega sqrt(a^2 + b^2), -Re p / |p| = b / sqrt(a^2 + b^2)
+        let r = (a * a + b * b).sqrt();
+        assert!((m.frequency_hz / (f * r) - 1.0).abs() < 1e-5, "{m:?}");
+        assert!((m.damping / (b / r) - 1.0).abs() < 1e-4, "{}", m.damping);
+    }
+    let json = dir.join("corr.json");
+    let out = femu()
+        .args(["correlate", deck.to_str().unwrap(), uff.to_str().unwrap()])
+        .args(["--damped", "--json", json.to_str().unwrap()])
+        .output()
+        .unwrap();
+    succeeded(&out);
+    let pairs = json_of(&json)["pairing"]["pairs"]
+        .as_array()
+        .unwrap()
+        .clone();
+    assert!(pairs.len() >= 4, "{pairs:?}");
+    for p in &pairs {
+        assert_eq!(p["test"], p["model"], "{p}");
+        assert!(
+            (p["complex_mac"].as_f64().unwrap() - 1.0).abs() < 1e-6,
+            "{p}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `femu correlate --damped` compares complex shapes with the model's damped modes, so it needs
 /// the model's damping: the undamped two-hex deck is refused with the reason (the same test
 /// without `--damped` correlates).

@@ -351,6 +351,16 @@ impl Model {
         }
     }
 
+    /// Writes `modes` (of this model) as a universal file at `path`: every node (dataset 2411)
+    /// and each mode's translations (dataset 55); with `damped=True` the damped modes, as complex
+    /// data whose eigenvalue is each root (`femu modes --uff`; docs/MATH.md, "Damped modes").
+    #[pyo3(signature = (modes, path, *, damped=false))]
+    fn write_modes_uff(&self, modes: &Modes, path: PathBuf, damped: bool) -> PyResult<()> {
+        let uff =
+            femu_study::modes::modes_universal(&self.loaded, &modes.modes, damped).map_err(err)?;
+        femu_io::uff::write_uff(&path, &uff).map_err(err)
+    }
+
     fn __repr__(&self) -> String {
         let mesh = self.loaded.model.mesh();
         format!(

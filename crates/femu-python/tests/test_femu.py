@@ -456,6 +456,34 @@ def test_update_finds_a_shell_thickness_and_a_conm2_mass(tmp_path):
     assert abs(got["t:PID1"]) < 1e-6, got
 
 
+def test_modes_written_as_a_universal_file(model, tmp_path):
+    """`Model.write_modes_uff`: the box's four lowest modes written as a universal file and read
+    by pyuff (an independent reader): each mode's frequency and its translations at every free DOF
+    equal femu's own (the file's six digits: 1e-5 of the largest component), and the clamped nodes'
+    translations are zero."""
+    pyuff = pytest.importorskip("pyuff")
+    modes = model.modes(4)
+    path = tmp_path / "modes.unv"
+    model.write_modes_uff(modes, path)
+    sets = pyuff.UFF(str(path)).read_sets()
+    nodes = [s for s in sets if s["type"] == 2411]
+    assert len(nodes) == 1 and len(nodes[0]["node_nums"]) == len(model.node_ids)
+    shapes = [s for s in sets if s["type"] == 55]
+    assert len(shapes) == 4
+    dofs = model.dofs
+    for k, s in enumerate(shapes):
+        assert s["freq"] == pytest.approx(modes.frequencies_hz[k], rel=1e-5)
+        at = {int(n): (r1, r2, r3) for n, r1, r2, r3 in zip(s["node_nums"], s["r1"], s["r2"], s["r3"])}
+        phi = modes.vectors[:, k]
+        scale = np.abs(phi).max()
+        for row, (node, comp) in enumerate(dofs):
+            assert at[int(node)][comp] == pytest.approx(phi[row], abs=1e-5 * scale)
+        free = {int(n) for n, _ in dofs}
+        for node, values in at.items():
+            if node not in free:
+                assert values == (0.0, 0.0, 0.0)
+
+
 def test_damped_modes_of_a_structurally_damped_box(tmp_path):
     """`modes(damped=True)`: the box's steel with `*DAMPING, STRUCTURAL=0.02` damps every element
     alike (`K_4 = 0.02 K`), so each complex mode is real (MPC 1) with the root `p = i omega sqrt(1 +

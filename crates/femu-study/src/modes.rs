@@ -212,6 +212,93 @@ pub fn damped_modes(
         .collect())
 }
 
+/// The model's `modes` as a universal file (docs/MATH.md, "Damped modes"): units (SI), every mesh
+/// node (dataset 2411) and each mode as dataset 55 on the nodes' translations (`u = T z`: zeros at
+/// held DOFs); with `damped`, the damped modes instead, as complex data whose eigenvalue is the
+/// root `p` (frequency `|p| / 2 pi` and ratio `-Re p / |p|` in the file's terms), which test
+/// software imports for pre-test analysis and which `femu correlate` reads back as a test.
+///
+/// # Errors
+/// As [`damped_modes`] when `damped`; a vector of another length than the free DOFs.
+pub fn modes_universal(
+    loaded: &LoadedModel,
+    modes: &Modes,
+    damped: bool,
+) -> Result<femu_io::uff::Universal, StudyError> {
+    use femu_io::uff::{UffMode, UffNode, UffUnits, Universal};
+    let mesh = loaded.model.mesh();
+    let dofs = &loaded.sys.dofs;
+    let n = modes.values.len();
+    let expand = |j: usize| -> Result<Vec<f64>, StudyError> {
+        Ok(dofs.expand(&modes.vectors.col(j).iter().copied().collect::<Vec<f64>>())?)
+    };
+    let real: Vec<Vec<f64>> = (0..n).map(expand).collect::<Result<_, _>>()?;
+    let at = |u: &[f64], i: usize| [u[3 * i], u[3 * i + 1], u[3 * i + 2]];
+    let mut uff = Universal {
+        units: Some(UffUnits {
+            code: 1,
+            description: "SI".into(),
+            factors: [1.0, 1.0, 1.0],
+        }),
+        nodes: (0..mesh.node_count())
+            .map(|i| UffNode {
+                id: mesh.node_id(i),
+                x: mesh.coords()[i],
+            })
+            .collect(),
+        nodes_2411: true,
+        ..Default::default()
+    };
+    let ids: Vec<u64> = (0..mesh.node_count()).map(|i| mesh.node_id(i)).collect();
+    if !damped {
+        for (j, u) in real.iter().enumerate() {
+            uff.modes.push(UffMode {
+                number: j as i64 + 1,
+                frequency_hz: modes.values[j].max(0.0).sqrt() / (2.0 * std::f64::consts::PI),
+                damping: 0.0,
+                modal_mass: 1.0,
+                values: ids
+                    .iter()
+                    .enumerate()
+                    .map(|(i, id)| (*id, at(u, i)))
+                    .collect(),
+                complex: false,
+                complexity: None,
+                imaginary: None,
+            });
+        }
+        return Ok(uff);
+    }
+    let d = damped_in(loaded, modes, &mut Vec::new())?;
+    for r in 0..n {
+        // Phi q over the nodes' translations
+        let (mut re, mut im) = (vec![0.0; real[0].len()], vec![0.0; real[0].len()]);
+        for (j, u) in real.iter().enumerate() {
+            let q = d.coordinates[(j, r)];
+            for (k, v) in u.iter().enumerate() {
+                re[k] += q.re * v;
+                im[k] += q.im * v;
+            }
+        }
+        let p = d.roots[r];
+        uff.modes.push(UffMode {
+            number: r as i64 + 1,
+            frequency_hz: p.norm() / (2.0 * std::f64::consts::PI),
+            damping: d.ratio(r),
+            modal_mass: 0.0,
+            values: ids
+                .iter()
+                .enumerate()
+                .map(|(i, id)| (*id, at(&re, i)))
+                .collect(),
+            complex: true,
+            complexity: None,
+            imaginary: Some((0..ids.len()).map(|i| at(&im, i)).collect()),
+        });
+    }
+    Ok(uff)
+}
+
 /// `modes` as the correlation's mode set, with the coordinates of the model's damped modes in
 /// them when `damped` (the complex MAC then compares with those: [`PairingOptions::damped`]).
 ///

@@ -48,6 +48,10 @@ pub struct ModesArgs {
     /// frequency, damping and phase collinearity as Nastran's complex eigenvalue output.
     #[arg(long)]
     pub damped: bool,
+    /// Writes the modes (the damped ones with --damped, as complex data) as a universal file:
+    /// every node (dataset 2411) and each mode's translations (dataset 55).
+    #[arg(long, value_name = "FILE")]
+    pub uff: Option<PathBuf>,
     #[command(flatten)]
     pub model_args: ModelArgs,
     #[command(flatten)]
@@ -169,6 +173,10 @@ pub fn run(a: &ModesArgs, quiet: bool) -> Result<(), CliError> {
             &names,
             &[],
         )?;
+    }
+    if let Some(path) = &a.uff {
+        let uff = femu::study::modes::modes_universal(&loaded, &result, a.damped)?;
+        femu::io::uff::write_uff(path, &uff)?;
     }
     write_json(a.json.as_deref(), &report)
 }

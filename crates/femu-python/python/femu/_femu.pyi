@@ -46,6 +46,7 @@ class Model:
         progress: Optional[Callable[[int], Any]] = None,
         damped: bool = False,
     ) -> Modes: ...
+    def write_modes_uff(self, modes: Modes, path: _Path, *, damped: bool = False) -> None: ...
 
 class Modes:
     """Eigenvalues, M-normalised shapes, residuals and the Sturm proof."""
