@@ -3080,11 +3080,11 @@ fn modes_damped_reports_the_complex_modes() {
 /// `femu modes --uff`: the model's modes as a universal file. The cantilevered plate's six lowest
 /// modes, read back: every node (2411) and each mode's frequency to the file's six digits (the
 /// file's shapes against femu's own vectors are checked by pyuff in
-/// `test_modes_written_as_a_universal_file`). With `--damped` on
-/// the plate of uniform `GE` 0.03, each mode is complex data whose eigenvalue is the root `p = i
-/// omega sqrt(1 + 0.03 i)` of its real mode (frequency `|p| / 2 pi`, ratio `-Re p / |p|`, to
-/// 1e-5: the file's digits), and `femu correlate --damped` of the model against that file pairs
-/// each mode with itself, complex MAC 1 to 1e-6.
+/// `test_modes_written_as_a_universal_file`). With `--damped` on the plate of uniform `GE` 0.03,
+/// each mode is complex data whose eigenvalue is the root `p = i omega sqrt(1 + 0.03 i)` of its
+/// real mode (frequency `|p| / 2 pi`, ratio `-Re p / |p|`, to 1e-5: the file's digits), and `femu
+/// correlate --damped` of the model against that file pairs each mode with itself, complex MAC 1
+/// to 1e-6.
 #[test]
 fn modes_written_as_a_universal_file() {
     let dir = std::env::temp_dir().join(format!("femu-cli-modes-uff-{}", std::process::id()));
