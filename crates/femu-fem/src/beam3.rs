@@ -16,25 +16,10 @@
 //! and `rho (I1 + I2)` about the axis.
 
 use crate::assembly::MassKind;
-use crate::structural::Beam;
+use crate::shell::dot;
+use crate::structural::{Beam, line_axes};
 
 type V3 = [f64; 3];
-
-fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn norm(a: V3) -> f64 {
-    dot(a, a).sqrt()
-}
 
 /// The shape functions and their derivatives by `xi` at `xi` (ends, then the middle node).
 fn shape(xi: f64) -> ([f64; 3], [f64; 3]) {
@@ -50,28 +35,15 @@ fn tangent(x: &[V3; 3], xi: f64) -> V3 {
     std::array::from_fn(|c| (0..3).map(|a| d[a] * x[a][c]).sum())
 }
 
-/// The local axes `[t, y, z]` and `|dx/dxi|` at `xi`.
+/// The local axes `[t, y, z]` and `|dx/dxi|` at `xi`: the two-node beam's axes
+/// ([`line_axes`]) of the tangent `dx/dxi`.
 ///
 /// # Errors
 /// A message for a degenerate point or an orientation vector along the axis there.
 fn axes(x: &[V3; 3], v: V3, xi: f64) -> Result<([V3; 3], f64), String> {
-    let d = tangent(x, xi);
-    let j = norm(d);
-    if !(j > 0.0 && j.is_finite()) {
-        return Err(format!(
-            "its axis has no direction at xi = {xi} (coincident nodes)"
-        ));
-    }
-    let t = d.map(|c| c / j);
-    let z = cross(t, v);
-    let (nv, nz) = (norm(v), norm(z));
-    if !(nv > 0.0 && nz > 1e-6 * nv) {
-        return Err(format!(
-            "its orientation vector {v:?} is parallel to its axis {t:?} at xi = {xi} (or zero): the cross-section's axes are undefined"
-        ));
-    }
-    let z = z.map(|c| c / nz);
-    Ok(([t, cross(z, t), z], j))
+    let (j, axes) =
+        line_axes([0.0; 3], tangent(x, xi), v).map_err(|e| format!("{e} (at xi = {xi})"))?;
+    Ok((axes, j))
 }
 
 /// Checks a three-node beam's geometry at node positions `x` (ends, then the middle node): the
@@ -83,7 +55,7 @@ fn axes(x: &[V3; 3], v: V3, xi: f64) -> Result<([V3; 3], f64), String> {
 /// A message naming what is wrong.
 pub fn check(b: &Beam, x: &[V3; 3]) -> Result<(), String> {
     let chord: V3 = std::array::from_fn(|c| x[1][c] - x[0][c]);
-    let l = norm(chord);
+    let l = dot(chord, chord).sqrt();
     if !(l > 0.0 && l.is_finite()) {
         return Err(format!("its ends coincide (length {l:e})"));
     }
@@ -120,7 +92,13 @@ const GAUSS5: [(f64, f64); 5] = [
 /// The beam's length along its axis (the 5-point Gauss rule: the consistent and lumped masses
 /// add up to `(rho A + nsm)` times it).
 pub fn length(x: &[V3; 3]) -> f64 {
-    GAUSS5.iter().map(|(xi, w)| w * norm(tangent(x, *xi))).sum()
+    GAUSS5
+        .iter()
+        .map(|(xi, w)| {
+            let d = tangent(x, *xi);
+            w * dot(d, d).sqrt()
+        })
+        .sum()
 }
 
 /// Stiffness and mass (18 x 18, row-major) on `(u, theta)` of the ends and the middle node in

@@ -914,32 +914,21 @@ pub(super) fn add_structural(
                 let cr = p.real(first + 2, "CR")?.unwrap_or(0.0);
                 let (g1, g2) = (c.id(2, "G1")?, c.id(3, "G2")?);
                 let (n1, n2) = (node(model, g1, c, "G1")?, node(model, g2, c, "G2")?);
+                // the line's axes, with any vector off the line for the two normal to it (only
+                // the first axis carries damping)
                 let x = model.mesh().coords();
                 let d: [f64; 3] = std::array::from_fn(|k| x[n2][k] - x[n1][k]);
-                let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-                if !(l > 0.0) {
-                    return Err(c.err(format!(
-                        "{eid}: grids {g1} and {g2} coincide, so the damper has no axis"
-                    )));
-                }
-                let t = d.map(|v| v / l);
-                // two axes normal to it (any: only the first carries damping)
-                let helper = if t[0].abs() < 0.9 {
+                let helper = if d[0].abs() < 0.9 * d.iter().map(|v| v * v).sum::<f64>().sqrt() {
                     [1.0, 0.0, 0.0]
                 } else {
                     [0.0, 1.0, 0.0]
                 };
-                let cross = |a: [f64; 3], b: [f64; 3]| {
-                    [
-                        a[1] * b[2] - a[2] * b[1],
-                        a[2] * b[0] - a[0] * b[2],
-                        a[0] * b[1] - a[1] * b[0],
-                    ]
-                };
-                let y = cross(t, helper);
-                let ny = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt();
-                let y = y.map(|v| v / ny);
-                let z = cross(t, y);
+                let (_, [t, y, z]) = femu_fem::structural::line_axes(x[n1], x[n2], helper)
+                    .map_err(|_| {
+                        c.err(format!(
+                            "{eid}: grids {g1} and {g2} coincide, so the damper has no axis"
+                        ))
+                    })?;
                 let kind = StructuralKind::Bushing(Bushing {
                     k: [0.0; 6],
                     b: [ce, 0.0, 0.0, cr, 0.0, 0.0],
