@@ -43,6 +43,9 @@ pub struct Pcg<'a> {
     /// where two thirds of the entries (x-y, x-z, y-z couplings) are exact zeros; dropping them
     /// cuts the memory traffic of every CG product by three.
     m: Cow<'a, SparseMatrix>,
+    /// The massless DOFs and the mass they are given ([`MassSolver::new`]), added to `M`'s
+    /// products.
+    massless: Vec<(usize, f64)>,
     inv_diag: Vec<f64>,
     /// Stop when `sqrt(r^T D^-1 r / b^T D^-1 b) <= tol` for every right-hand side.
     pub tol: f64,
@@ -59,7 +62,12 @@ pub struct SolveReport {
     pub residual: f64,
 }
 
-fn diagonal(m: &SparseMatrix) -> Result<(Vec<f64>, bool), CorrelateError> {
+/// `M`'s diagonal, whether `M` is diagonal, and its massless DOFs: a zero diagonal entry whose row
+/// is zero (a lumped beam's rotations, a CBAR's torsion under Nastran's coupled mass) is given the
+/// smallest positive diagonal entry, as the residual metric gives it (docs/MATH.md, "The residual
+/// metric on massless DOFs"): a massless DOF has no inertia force, and its residual is weighed as
+/// the most heavily weighted DOF's.
+fn diagonal(m: &SparseMatrix) -> Result<(Vec<f64>, bool, Vec<usize>), CorrelateError> {
     let n = m.rows();
     if m.cols() != n {
         return Err(SparseError::DimensionMismatch {
@@ -71,6 +79,7 @@ fn diagonal(m: &SparseMatrix) -> Result<(Vec<f64>, bool), CorrelateError> {
     }
     let mut d = vec![0.0; n];
     let mut is_diagonal = true;
+    let mut coupled = vec![false; n];
     for (v, (r, c)) in m.iter() {
         if !v.is_finite() {
             return Err(SparseError::NonFinite {
@@ -84,16 +93,31 @@ fn diagonal(m: &SparseMatrix) -> Result<(Vec<f64>, bool), CorrelateError> {
             d[r] = *v;
         } else if *v != 0.0 {
             is_diagonal = false;
+            coupled[r] = true;
+            coupled[c] = true;
         }
     }
-    if let Some(i) = d.iter().position(|v| *v <= 0.0) {
-        return Err(SparseError::NotPositiveDefinite {
-            matrix: "M (diagonal entry)",
-            index: i,
-        }
-        .into());
+    let floor = d
+        .iter()
+        .copied()
+        .filter(|v| *v > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let bad = |i: usize| SparseError::NotPositiveDefinite {
+        matrix: "M (diagonal entry)",
+        index: i,
+    };
+    if let Some(i) = d
+        .iter()
+        .enumerate()
+        .position(|(i, v)| *v < 0.0 || (*v == 0.0 && (coupled[i] || !floor.is_finite())))
+    {
+        return Err(bad(i).into());
     }
-    Ok((d, is_diagonal))
+    let massless: Vec<usize> = (0..n).filter(|i| d[*i] == 0.0).collect();
+    for &i in &massless {
+        d[i] = floor;
+    }
+    Ok((d, is_diagonal, massless))
 }
 
 impl<'a> MassSolver<'a> {
@@ -102,15 +126,18 @@ impl<'a> MassSolver<'a> {
     /// about `kappa(D^-1 M) 1e-18`, machine precision) and 1000 iterations.
     ///
     /// # Errors
-    /// A non-square `M`, a non-finite entry, or a diagonal entry `<= 0` (not positive definite).
+    /// A non-square `M`, a non-finite entry, a negative diagonal entry, or a zero one whose row
+    /// is not zero (`M` is not positive semi-definite).
     pub fn new(m: &'a SparseMatrix) -> Result<Self, CorrelateError> {
-        let (d, is_diagonal) = diagonal(m)?;
+        let (d, is_diagonal, massless) = diagonal(m)?;
         let inv: Vec<f64> = d.iter().map(|v| 1.0 / v).collect();
         Ok(if is_diagonal {
             Self::Diagonal(inv)
         } else {
+            let floor = massless.first().map_or(0.0, |i| d[*i]);
             Self::Pcg(Pcg {
                 m: without_zeros(m),
+                massless: massless.into_iter().map(|i| (i, floor)).collect(),
                 inv_diag: inv,
                 tol: 1e-9,
                 max_iterations: 1000,
@@ -123,7 +150,15 @@ impl<'a> MassSolver<'a> {
     /// # Errors
     /// [`SparseError::NotPositiveDefinite`] with the failing pivot, or a malformed `M`.
     pub fn cholesky(m: &SparseMatrix) -> Result<Self, CorrelateError> {
-        diagonal(m)?;
+        if let (_, _, massless) = diagonal(m)?
+            && let Some(i) = massless.first()
+        {
+            return Err(SparseError::NotPositiveDefinite {
+                matrix: "M (a massless DOF: its Cholesky factor does not exist)",
+                index: *i,
+            }
+            .into());
+        }
         let symbolic = SymbolicFactor::new(m, Ordering::NestedDissection)?;
         Ok(Self::Cholesky(Box::new(symbolic.llt(m, "M")?)))
     }
@@ -233,6 +268,11 @@ impl Pcg<'_> {
             }
             report.iterations += 1;
             femu_sparse::csc::sym_mul_rows(&self.m, &p, k, &mut q)?;
+            for &(i, w) in &self.massless {
+                for j in 0..k {
+                    q[i * k + j] += w * p[i * k + j];
+                }
+            }
             let pq = col_dot(&p, &q);
             for j in 0..k {
                 alpha[j] = 0.0;

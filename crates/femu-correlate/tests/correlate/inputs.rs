@@ -196,3 +196,50 @@ fn bad_test_modes_and_estimator_inputs() {
     let lumped = MassSolver::new(&sys.m).unwrap();
     assert!(femu_correlate::residues::eil_residuals(&sys.k, &lumped, &[0.0], xm).is_err());
 }
+
+/// A massless DOF (a zero row of a positive semi-definite `M`: a lumped beam's rotation, a
+/// CBAR's torsion under Nastran's coupled mass) weighs its residual by the smallest positive
+/// diagonal entry, the residual metric's rule: by hand, `M = [[2, 1, 0], [1, 2, 0], [0, 0, 0]]`
+/// (CG) gives `M^-1 (1, 0, 4) = (2/3, -1/3, 4/2)`, and the diagonal `diag(3, 0, 5)` gives
+/// `(3, 1, 5) -> (1, 1/3, 1)`. A zero diagonal entry whose row is not zero (not positive
+/// semi-definite), and a mass with no positive entry, are refused.
+#[test]
+fn massless_dofs_take_the_smallest_mass() {
+    use femu_sparse::csc::from_entries;
+    let m = from_entries(
+        3,
+        3,
+        &[
+            (0, 0, 2.0),
+            (0, 1, 1.0),
+            (1, 0, 1.0),
+            (1, 1, 2.0),
+            (2, 2, 0.0),
+        ],
+    );
+    let (x, _) = MassSolver::new(&m)
+        .unwrap()
+        .solve(MatRef::from_column_major_slice(&[1.0, 0.0, 4.0], 3, 1))
+        .unwrap();
+    for (got, want) in x.col(0).iter().zip([2.0 / 3.0, -1.0 / 3.0, 2.0]) {
+        assert!((got - want).abs() < 1e-9, "{got} {want}");
+    }
+    let d = from_entries(3, 3, &[(0, 0, 3.0), (1, 1, 0.0), (2, 2, 5.0)]);
+    let (x, _) = MassSolver::new(&d)
+        .unwrap()
+        .solve(MatRef::from_column_major_slice(&[3.0, 1.0, 5.0], 3, 1))
+        .unwrap();
+    for (got, want) in x.col(0).iter().zip([1.0, 1.0 / 3.0, 1.0]) {
+        assert!((got - want).abs() < 1e-15, "{got} {want}");
+    }
+    assert!(MassSolver::cholesky(&m).is_err());
+    let coupled = from_entries(2, 2, &[(0, 0, 0.0), (0, 1, 1.0), (1, 0, 1.0), (1, 1, 2.0)]);
+    assert!(matches!(
+        MassSolver::new(&coupled),
+        Err(CorrelateError::Sparse(
+            femu_sparse::SparseError::NotPositiveDefinite { index: 0, .. }
+        ))
+    ));
+    let none = from_entries(2, 2, &[(0, 0, 0.0), (1, 1, 0.0)]);
+    assert!(MassSolver::new(&none).is_err());
+}
