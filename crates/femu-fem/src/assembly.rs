@@ -172,6 +172,33 @@ pub struct Assembler {
     /// Global assemblies made on this pattern, shared by the assembler's clones
     /// ([`Assembler::assemblies`]).
     assemblies: std::sync::Arc<std::sync::atomic::AtomicUsize>,
+    /// Whether a concentrated mass couples DOFs (a rigid mass with an offset or products of
+    /// inertia, a point mass with off-diagonal terms): the lumped mass then keeps it whole, on the
+    /// stiffness pattern ([`Assembler::lumped_on_pattern`]).
+    coupled_masses: bool,
+}
+
+/// Whether a concentrated mass of `model` couples two DOFs (its matrix has an entry off the
+/// diagonal): Nastran adds a CONM2's whole 6 x 6 and a CMASS's whole matrix to the mass matrix
+/// whatever the mass formulation, so the lumped mass keeps such masses whole
+/// ([`Assembler::lumped_on_pattern`]). A scalar mass couples DOFs when it joins two, or acts
+/// along a direction that is not a basic axis.
+fn has_coupled_masses(model: &Model, dofs: &DofMap) -> bool {
+    fn off_diagonal<const N: usize>(a: &[[f64; N]; N]) -> bool {
+        (0..N).any(|i| (0..N).any(|j| i != j && a[i][j] != 0.0))
+    }
+    let scalar = |s: &crate::structural::Spring| {
+        s.mass != 0.0 && (s.b.is_some() || s.a.direction.iter().filter(|v| **v != 0.0).count() > 1)
+    };
+    model
+        .rigid_masses()
+        .iter()
+        .any(|r| dofs.rotation_point(r.node).is_some() && off_diagonal(&r.matrix))
+        || model.point_masses().iter().any(|p| off_diagonal(&p.mass))
+        || model.structural().iter().any(|e| match &e.kind {
+            crate::structural::StructuralKind::Spring(s) => scalar(s),
+            _ => false,
+        })
 }
 
 /// How many element nodes (counted with repetition) a chunk of the colouring holds at least: a
@@ -392,6 +419,7 @@ impl Assembler {
             color_of[ch] = c;
             colors[c].push(ch);
         }
+        let coupled_masses = has_coupled_masses(model, &dofs);
         Ok(Self {
             dofs,
             nbr_ptr,
@@ -402,6 +430,7 @@ impl Assembler {
             chunk_ptr,
             colors,
             assemblies: Default::default(),
+            coupled_masses,
         })
     }
 
@@ -416,9 +445,10 @@ impl Assembler {
     }
 
     /// Whether the lumped mass is stored on the stiffness pattern: with dependent DOFs, whose
-    /// `T^T M T` couples the DOFs a dependent one is made of.
+    /// `T^T M T` couples the DOFs a dependent one is made of, and with a concentrated mass that
+    /// couples DOFs (a CONM2 with an offset or products of inertia), which it keeps whole.
     pub fn lumped_on_pattern(&self) -> bool {
-        self.dofs.has_dependents()
+        self.dofs.has_dependents() || self.coupled_masses
     }
 
     /// Position of entry `(r, c)` in the pattern's values.
@@ -912,7 +942,7 @@ impl Assembler {
             )?;
         }
         // rigid masses: the 6x6 block of the node's translations and rotations (kept whole with
-        // the lumped mass too, which is then on the stiffness pattern whenever rotations exist)
+        // the lumped mass too, which is then on the stiffness pattern when one couples DOFs)
         for r in model.rigid_masses() {
             let Some(rp) = self.dofs.rotation_point(r.node) else {
                 continue;
@@ -938,6 +968,12 @@ impl Assembler {
                     ks.add(at, w * sm.k[l]);
                     ms.add(at, w * sm.m[l]);
                 }),
+                // a lumped mass on the pattern keeps a scalar mass's coupling (the other
+                // elements' lumped masses are diagonal: the same either way)
+                MassKind::Lumped if self.lumped_on_pattern() => self.scatter(&pts, |at, l, w| {
+                    ks.add(at, w * sm.k[l]);
+                    ms.add(at, w * sm.m[l]);
+                }),
                 MassKind::Lumped => {
                     self.scatter(&pts, |at, l, w| ks.add(at, w * sm.k[l]));
                     let nd = sm.k.len().isqrt();
@@ -949,17 +985,14 @@ impl Assembler {
                 }
             }
         }
-        // point masses: the 3x3 block of their node (the lumped mass keeps its diagonal; an
-        // off-diagonal coupling needs the consistent pattern)
+        // point masses: the 3x3 block of their node (whole; a diagonal one through the lumped
+        // mass's own path when that is diagonal)
         for p in model.point_masses() {
-            match mass {
-                MassKind::Consistent => {
-                    let local: Vec<f64> = p.mass.iter().flatten().copied().collect();
-                    self.scatter(&[p.node], |at, l, w| ms.add(at, w * local[l]));
-                }
-                MassKind::Lumped => {
-                    self.scatter_lumped(&[p.node], |_, c| p.mass[c][c], |at, v| ms.add(at, v));
-                }
+            if mass == MassKind::Lumped && !self.lumped_on_pattern() {
+                self.scatter_lumped(&[p.node], |_, c| p.mass[c][c], |at, v| ms.add(at, v));
+            } else {
+                let local: Vec<f64> = p.mass.iter().flatten().copied().collect();
+                self.scatter(&[p.node], |at, l, w| ms.add(at, w * local[l]));
             }
         }
         if mass == MassKind::Consistent {

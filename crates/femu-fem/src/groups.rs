@@ -452,7 +452,7 @@ impl ParameterGroups {
                 });
             }
         }
-        let mass_items = mass_group_items(model, &groups, mass_kind)?;
+        let mass_items = mass_group_items(model, &groups)?;
         Ok(Self {
             groups,
             mass_kind,
@@ -1134,12 +1134,11 @@ fn element_product(
 
 /// The points and mass matrices of each [`GroupLaw::Mass`] group's masses (empty lists for the
 /// other groups): a point mass's 3 x 3 on its node, a rigid mass's 6 x 6 on its node and its
-/// rotation point, as the assembly adds them. With a lumped mass only diagonal masses can be
-/// scaled on the lumped (diagonal) pattern; an offset or a coupled matrix is refused.
+/// rotation point, as the assembly adds them (a coupled one keeps the lumped mass on the stiffness
+/// pattern, [`Assembler::lumped_on_pattern`]).
 fn mass_group_items(
     model: &Model,
     groups: &[ParameterGroup],
-    mass_kind: MassKind,
 ) -> Result<Vec<Vec<MassItem>>, FemError> {
     use crate::model::MassRef;
     if groups.iter().all(|g| g.law != GroupLaw::Mass) {
@@ -1154,42 +1153,34 @@ fn mass_group_items(
             }
             let mut items = Vec::with_capacity(g.masses.len());
             for m in &g.masses {
-                let (points, a): (Vec<usize>, Vec<f64>) = match *m {
-                    MassRef::Point(i) => {
-                        let p = model.point_masses().get(i).ok_or_else(|| {
-                            FemError::InvalidGroup {
-                                name: g.name.clone(),
-                                reason: format!("point mass {i} out of range"),
-                            }
-                        })?;
-                        (vec![p.node], p.mass.iter().flatten().copied().collect())
-                    }
-                    MassRef::Rigid(i) => {
-                        let r = model.rigid_masses().get(i).ok_or_else(|| {
-                            FemError::InvalidGroup {
-                                name: g.name.clone(),
-                                reason: format!("rigid mass {i} out of range"),
-                            }
-                        })?;
-                        // the assembly skips a rigid mass whose node lost its rotations
-                        let Some(rp) = dofs.rotation_point(r.node) else {
-                            continue;
-                        };
-                        (vec![r.node, rp], r.matrix.iter().flatten().copied().collect())
-                    }
-                };
-                let nd = 3 * points.len();
-                if mass_kind == MassKind::Lumped
-                    && (0..nd).any(|i| (0..nd).any(|j| i != j && a[i * nd + j] != 0.0))
-                {
-                    return Err(FemError::InvalidGroup {
-                        name: g.name.clone(),
-                        reason: format!(
-                            "the mass on node {} has an offset or coupled terms, which a lumped mass cannot scale: update it with the consistent mass",
-                            model.mesh().node_id(points[0])
-                        ),
-                    });
-                }
+                let (points, a): (Vec<usize>, Vec<f64>) =
+                    match *m {
+                        MassRef::Point(i) => {
+                            let p = model.point_masses().get(i).ok_or_else(|| {
+                                FemError::InvalidGroup {
+                                    name: g.name.clone(),
+                                    reason: format!("point mass {i} out of range"),
+                                }
+                            })?;
+                            (vec![p.node], p.mass.iter().flatten().copied().collect())
+                        }
+                        MassRef::Rigid(i) => {
+                            let r = model.rigid_masses().get(i).ok_or_else(|| {
+                                FemError::InvalidGroup {
+                                    name: g.name.clone(),
+                                    reason: format!("rigid mass {i} out of range"),
+                                }
+                            })?;
+                            // the assembly skips a rigid mass whose node lost its rotations
+                            let Some(rp) = dofs.rotation_point(r.node) else {
+                                continue;
+                            };
+                            (
+                                vec![r.node, rp],
+                                r.matrix.iter().flatten().copied().collect(),
+                            )
+                        }
+                    };
                 items.push((points, a));
             }
             Ok(items)
@@ -1224,6 +1215,11 @@ fn add_scaled_mass(
 ) {
     match target {
         MassTarget::Consistent(m) => asm.scatter(points, |i, l, w| m[i] += factor * w * a[l]),
+        // a lumped mass on the stiffness pattern keeps coupled masses whole (a diagonal one is
+        // the same either way)
+        MassTarget::Lumped(md) if asm.lumped_on_pattern() => {
+            asm.scatter(points, |i, l, w| md[i] += factor * w * a[l]);
+        }
         MassTarget::Lumped(md) => {
             let nd = 3 * points.len();
             asm.scatter_lumped(

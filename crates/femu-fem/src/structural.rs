@@ -64,6 +64,11 @@ pub struct Beam {
     /// end's rotation about the axis (Nastran's CBEAM does, its CBAR does not); the lumped mass
     /// never carries bending rotary inertia.
     pub lumped_torsion: bool,
+    /// Whether the consistent mass carries the polar inertia `rho (I1 + I2)` along the axis
+    /// (Nastran's CBEAM and Abaqus' beams do; Nastran's CBAR does not: pyNastran's `pt145`,
+    /// MSC Nastran's 30 eigenvalues of CBARs under COUPMASS to their seven printed digits
+    /// without it, its torsion modes 5e-4 off with it).
+    pub coupled_torsion: bool,
     /// The DOFs released at each end (`[end][c]`, `c` the element frame's x, y, z translations
     /// then rotations): the end no longer passes that force or moment to its node (Nastran's
     /// pin flags PA and PB; docs/MATH.md, "Beams"). The released DOFs are condensed out of the
@@ -102,8 +107,10 @@ pub struct SpringEnd {
 }
 
 /// A scalar spring `k (d_a . u_a - d_b . u_b)^2 / 2` between two DOFs, or to ground (Nastran
-/// CELAS1/CELAS2, Abaqus SPRING1/SPRING2), or a scalar damper `c` on the same relative motion
-/// (Nastran CDAMP1/CDAMP2: `k = 0`).
+/// CELAS1/CELAS2, Abaqus SPRING1/SPRING2), a scalar damper `c` on the same relative motion
+/// (Nastran CDAMP1/CDAMP2: `k = 0`), or a scalar mass `m` with kinetic energy
+/// `m (d_a . v_a - d_b . v_b)^2 / 2` (Nastran CMASS1/CMASS2: `k = 0`): each the matrix
+/// `g g^T` with `g = (d_a, -d_b)` times its value (docs/MATH.md, "Beams, springs and bushings").
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Spring {
     /// Stiffness (N/m or N m/rad); 0 for a damper alone.
@@ -113,6 +120,8 @@ pub struct Spring {
     /// Viscous damping coefficient (N s/m or N m s/rad), for frequency responses and damped
     /// modes; 0 for none.
     pub viscous: f64,
+    /// Scalar mass (kg or kg m^2) on the same relative motion; 0 for none.
+    pub mass: f64,
     /// The first end.
     pub a: SpringEnd,
     /// The second end; `None`: grounded.
@@ -152,11 +161,14 @@ pub enum StructuralKind {
 }
 
 impl StructuralKind {
-    /// What the element is, in a word: `"beam"`, `"rod"`, `"spring"`, `"bushing"`, `"shell"`.
+    /// What the element is, in a word or two: `"beam"`, `"rod"`, `"spring"`, `"damper"`,
+    /// `"scalar mass"`, `"bushing"`, `"shell"`.
     pub fn name(&self) -> &'static str {
         match self {
             StructuralKind::Beam(_) => "beam",
             StructuralKind::Rod(_) => "rod",
+            StructuralKind::Spring(s) if s.k == 0.0 && s.viscous == 0.0 => "scalar mass",
+            StructuralKind::Spring(s) if s.k == 0.0 => "damper",
             StructuralKind::Spring(_) => "spring",
             StructuralKind::Bushing(_) => "bushing",
             StructuralKind::Shell(_) => "shell",
@@ -400,9 +412,9 @@ impl StructuralElement {
                 check_positive(id, "the density", b.rho, true)?;
                 let s = &b.section;
                 check_positive(id, "the area A", s.area, false)?;
-                check_positive(id, "I1", s.i1, false)?;
-                check_positive(id, "I2", s.i2, false)?;
-                check_positive(id, "the torsion constant J", s.j, false)?;
+                check_positive(id, "I1", s.i1, true)?;
+                check_positive(id, "I2", s.i2, true)?;
+                check_positive(id, "the torsion constant J", s.j, true)?;
                 check_positive(id, "the non-structural mass", s.nsm, true)?;
                 if let Some(k) = s.shear
                     && !(k[0] > 0.0 && k[1] > 0.0)
@@ -445,14 +457,17 @@ impl StructuralElement {
                 }
             }
             StructuralKind::Spring(s) => {
-                if !(s.k.is_finite() && s.ge.is_finite() && s.viscous.is_finite())
-                    || (s.k == 0.0 && s.viscous == 0.0)
+                if !(s.k.is_finite()
+                    && s.ge.is_finite()
+                    && s.viscous.is_finite()
+                    && s.mass.is_finite())
+                    || (s.k == 0.0 && s.viscous == 0.0 && s.mass == 0.0)
                 {
                     return Err(FemError::InvalidStructural {
                         element: id,
                         reason: format!(
-                            "its stiffness is {} (GE {}, viscous damping {}): a spring needs a finite, non-zero stiffness, a damper a finite, non-zero damping",
-                            s.k, s.ge, s.viscous
+                            "its stiffness is {} (GE {}, viscous damping {}, mass {}): a spring needs a finite, non-zero stiffness, a damper a finite, non-zero damping, a scalar mass a finite, non-zero mass",
+                            s.k, s.ge, s.viscous, s.mass
                         ),
                     });
                 }
@@ -574,7 +589,10 @@ impl StructuralElement {
     }
 
     /// The element's mass (kg): `(rho A + nsm) L` for beams and rods (between the nodes, offsets
-    /// aside), zero for springs and bushings.
+    /// aside); for a scalar mass the mean over the three directions of its mass in a rigid
+    /// translation, `m |g_t|^2 / 3` with `g_t` the translational part of `(d_a, -d_b)` (a
+    /// point mass's convention, [`crate::model::Model::total_mass`]); zero for springs and
+    /// bushings.
     pub fn mass(&self, coords: &[[f64; 3]]) -> f64 {
         let length = || norm(sub(coords[self.nodes[1]], coords[self.nodes[0]]));
         match &self.kind {
@@ -589,7 +607,18 @@ impl StructuralElement {
                 (b.rho * b.section.area + b.section.nsm) * l
             }
             StructuralKind::Rod(r) => (r.rho * r.area + r.nsm) * length(),
-            StructuralKind::Spring(_) | StructuralKind::Bushing(_) => 0.0,
+            StructuralKind::Spring(s) => {
+                let translation = |e: &SpringEnd| match e.part {
+                    Part::Translations => e.direction,
+                    Part::Rotations => [0.0; 3],
+                };
+                let g = sub(
+                    translation(&s.a),
+                    s.b.as_ref().map_or([0.0; 3], translation),
+                );
+                s.mass * (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) / 3.0
+            }
+            StructuralKind::Bushing(_) => 0.0,
             StructuralKind::Shell(s) => {
                 // the two triangles of the quadrilateral
                 let x = |i: usize| coords[self.nodes[i]];
@@ -834,11 +863,12 @@ impl StructuralElement {
                 let k: Vec<f64> = (0..nd * nd)
                     .map(|ij| s.k * g[ij / nd] * g[ij % nd])
                     .collect();
-                Ok(StructuralMatrices {
-                    parts,
-                    k,
-                    m: vec![0.0; nd * nd],
-                })
+                // a scalar mass is the same matrix whatever the mass formulation (Nastran adds a
+                // CMASS's whole matrix to the lumped mass too)
+                let m: Vec<f64> = (0..nd * nd)
+                    .map(|ij| s.mass * g[ij / nd] * g[ij % nd])
+                    .collect();
+                Ok(StructuralMatrices { parts, k, m })
             }
             StructuralKind::Bushing(b) => {
                 // relative motion at the spring point in the bushing's axes:
@@ -956,7 +986,11 @@ fn beam_local(b: &Beam, l: f64, mass: MassKind) -> (Vec<f64>, Vec<f64>) {
             }
         }
         MassKind::Consistent => {
-            let ip = b.rho * (s.i1 + s.i2);
+            let ip = if b.coupled_torsion {
+                b.rho * (s.i1 + s.i2)
+            } else {
+                0.0
+            };
             for (i, j, f) in [(0, 0, 2.0), (6, 6, 2.0), (0, 6, 1.0), (6, 0, 1.0)] {
                 put(&mut m, i, j, f * mpl * l / 6.0);
                 put(&mut m, i + 3, j + 3, f * ip * l / 6.0);

@@ -304,8 +304,8 @@ fn bad_decks_name_the_card_and_line() {
             "cube.bdf:3: SPC = 300 selects a set that no SPC, SPC1 or SPCADD defines",
         ),
         (
-            base.replace("PARAM    WTMASS  1.", "CTRIA6   2       1       1       2       3\nRBAR     3       7       6       123456\nCTRIA6   4       1       5       6       7\nPARAM    WTMASS  1."),
-            "cube.bdf:23: the deck has cards that change the stiffness or the mass and that femu cannot model: 1 rigid links (RBAR), 2 shells (CTRIA6)",
+            base.replace("PARAM    WTMASS  1.", "CTRIA6   2       1       1       2       3\nRROD     3       7       6       1\nCTRIA6   4       1       5       6       7\nPARAM    WTMASS  1."),
+            "cube.bdf:23: the deck has cards that change the stiffness or the mass and that femu cannot model: 1 rigid rods (RROD), 2 shells (CTRIA6)",
         ),
     ];
     for (text, want) in cases {

@@ -62,6 +62,245 @@ fn beam_modes_against_simcenter_nastran() {
     }
 }
 
+/// pyNastran's `pt145.bdf` (BSD), MSC Nastran's flutter demonstration run in 2023 (its
+/// `pt145.f06`): ten CBARs under COUPMASS, grids in a frame turned 15 degrees with permanent
+/// constraints, ten CMASS2 rotational masses on that frame's component 5, the older CBAR flag
+/// `F = 1`, a continuation paired by columns 2-8 of its label (`KFREQ` with `+FREQ`), aeroelastic
+/// cards read past. All 30 eigenvalues Nastran prints agree with femu's to their seven digits;
+/// with the polar inertia of a CBEAM in the CBARs' coupled mass, six torsion modes were 3-5e-4
+/// low.
+#[test]
+fn a_swept_wing_with_scalar_masses_against_msc_nastran() {
+    let deck = read_bdf(fixture("pt145.bdf"), &BdfOptions::default()).unwrap();
+    assert_eq!(deck.mass, MassKind::Consistent);
+    // the Givens method's ND: the lowest six, its F1 and F2 aside
+    assert_eq!(deck.eigrl, Some((None, None, Some(6))));
+    let masses: Vec<f64> = deck
+        .model
+        .structural()
+        .iter()
+        .filter_map(|e| match &e.kind {
+            StructuralKind::Spring(s) if s.k == 0.0 && s.viscous == 0.0 => Some(s.mass),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(masses.len(), 10);
+    assert_eq!(masses.iter().sum::<f64>(), 9.0 * 2.8e-6 + 1.4e-6);
+    // R E A L   E I G E N V A L U E S (BEFORE AUGMENTATION OF RESIDUAL VECTORS)
+    let nastran = [
+        6.304383E+04,
+        2.206505E+06,
+        2.476140E+06,
+        1.942194E+07,
+        1.953390E+07,
+        5.249255E+07,
+        7.468511E+07,
+        9.785625E+07,
+        1.511845E+08,
+        2.047278E+08,
+        2.072571E+08,
+        2.605853E+08,
+        3.059490E+08,
+        3.389077E+08,
+        3.562351E+08,
+        4.594797E+08,
+        9.045066E+08,
+        1.623464E+09,
+        2.714134E+09,
+        4.194444E+09,
+        7.430218E+09,
+        1.084491E+10,
+        1.593668E+10,
+        2.321477E+10,
+        3.352112E+10,
+        4.794976E+10,
+        6.754207E+10,
+        9.205614E+10,
+        1.167388E+11,
+        1.828389E+11,
+    ];
+    let sys = deck.model.assemble(deck.mass).unwrap();
+    assert_eq!(sys.dofs.free_count(), 30);
+    let modes = sys
+        .modes(Which::Lowest(30), &EigenOptions::default())
+        .unwrap();
+    for (got, want) in modes.values.iter().zip(nastran) {
+        assert!(
+            (got / want - 1.0).abs() < 6e-7,
+            "{got:e} against Nastran's {want:e}"
+        );
+    }
+}
+
+/// Scalar masses by hand, under the lumped mass a deck gets by default, which keeps their matrices
+/// whole: a CMASS2 on component 1 of a grid whose displacement frame is turned 45 degrees, with
+/// CELAS2 springs on its three components, has the one finite `w^2 = k1 / m` (its mass acts
+/// along the frame's x axis, `(1, 1, 0) / sqrt 2` in basic: its diagonal alone would be
+/// `m / 2` on basic x and y); two grids on springs `ka`, `kb` with grounded masses `ma`, `mb`
+/// and a CMASS1 (PMASS, two properties on the card) `mc` between them have
+/// `M = [[ma + mc, -mc], [-mc, mb + mc]]`, whose two `w^2` solve a quadratic written here. A
+/// CMASS on a scalar point, and one without a mass, are refused with card and line.
+#[test]
+fn scalar_masses_give_hand_solved_frequencies() {
+    let deck = "\
+SOL 103
+CEND
+BEGIN BULK
+GRID,2,,1.,0.,0.,,3
+CORD2R,3,,0.,0.,0.,0.,0.,1.,+F
++F,1.,1.,0.
+CELAS2,10,4.+4,2,1
+CELAS2,11,7.+4,2,2
+CELAS2,12,9.+4,2,3
+CMASS2,20,2.5,2,1
+ENDDATA
+";
+    let d = parse_bdf(deck, "turned.bdf", &BdfOptions::default()).unwrap();
+    assert_eq!(d.mass, MassKind::Lumped);
+    let modes = d
+        .model
+        .assemble(MassKind::Lumped)
+        .unwrap()
+        .modes(Which::Lowest(1), &EigenOptions::default())
+        .unwrap();
+    assert!(
+        (modes.values[0] / (4e4 / 2.5) - 1.0).abs() < 1e-10,
+        "{:?}",
+        modes.values
+    );
+
+    let deck = "\
+SOL 103
+CEND
+SPC = 1
+BEGIN BULK
+GRID,4,,0.,0.,0.
+GRID,5,,1.,0.,0.
+CELAS2,10,3.+4,4,1
+CELAS2,11,5.+4,5,1
+CMASS2,20,2.,4,1
+CMASS2,21,3.,5,1
+CMASS1,22,7,4,1,5,1
+PMASS,6,9.,7,1.5
+SPC1,1,23,4,5
+ENDDATA
+";
+    let d = parse_bdf(deck, "chain.bdf", &BdfOptions::default()).unwrap();
+    let (ka, kb, ma, mb, mc): (f64, f64, f64, f64, f64) = (3e4, 5e4, 2.0, 3.0, 1.5);
+    // det(K - l M) = 0: (ma mb + mc (ma + mb)) l^2 - (ka (mb + mc) + kb (ma + mc)) l + ka kb
+    let (a, b, c) = (
+        ma * mb + mc * (ma + mb),
+        ka * (mb + mc) + kb * (ma + mc),
+        ka * kb,
+    );
+    let disc = (b * b - 4.0 * a * c).sqrt();
+    let want = [(b - disc) / (2.0 * a), (b + disc) / (2.0 * a)];
+    let total = d.model.total_mass().unwrap();
+    // grounded masses count a third each (a point mass's mean over three directions); the
+    // CMASS1 between two translations along x moves with them in a rigid translation: none
+    assert!((total - (ma + mb) / 3.0).abs() < 1e-12, "{total}");
+    for kind in [MassKind::Lumped, MassKind::Consistent] {
+        let modes = d
+            .model
+            .assemble(kind)
+            .unwrap()
+            .modes(Which::Lowest(2), &EigenOptions::default())
+            .unwrap();
+        for (g, w) in modes.values.iter().zip(want) {
+            assert!(
+                (g / w - 1.0).abs() < 1e-10,
+                "{kind:?}: {:?} against {want:?}",
+                modes.values
+            );
+        }
+    }
+
+    for (card, needle) in [
+        ("CMASS2,20,2.,4,0", "component 0 of GRID 4"),
+        ("CMASS2,20,,4,1", "mass 0"),
+        ("CMASS3,20,6,7,8", "CMASS3"),
+    ] {
+        let text = format!("BEGIN BULK\nGRID,4,,0.,0.,0.\nCELAS2,10,3.+4,4,1\n{card}\nENDDATA\n");
+        let err = parse_bdf(&text, "bad.bdf", &BdfOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains(needle) && err.contains("bad.bdf:4"),
+            "{card}: {err}"
+        );
+    }
+}
+
+/// RBAR and RBAR1 are rigid links: grid 2 on a CBUSH of six stiffnesses to a clamped grid, a
+/// rigid bar to grid 3 at `d = 0.3` along x carrying a CONM2 `m` with inertias `J1..J3` about its
+/// own centre. `x` and `theta_x` are alone (`k1 / m`, `k4 / J1`); `y` with `theta_z` and `z`
+/// with `theta_y` are coupled through the arm, each pair's `w^2` the roots of
+/// `m J lambda^2 - (k (J + m d^2) + k_r m) lambda + k k_r = 0`, solved here. The same with the
+/// link written as an RBAR from either end
+/// (CMA or CMB blank, the other end's six components dependent) and as an RBAR1; independent
+/// components split between the ends, and a dependent component on the independent end, are
+/// refused with card and line.
+#[test]
+fn rigid_bars_carry_an_offset_mass() {
+    let (m, d) = (10.0, 0.3);
+    let [k1, k2, k3, k4, k5, k6] = [1e4, 2e4, 3e4, 500.0, 700.0, 900.0];
+    let [j1, j2, j3] = [0.5, 0.7, 0.9];
+    let pair = |k: f64, kr: f64, j: f64| {
+        let (a, b, c) = (m * j, k * (j + m * d * d) + kr * m, k * kr);
+        let disc = (b * b - 4.0 * a * c).sqrt();
+        [(b - disc) / (2.0 * a), (b + disc) / (2.0 * a)]
+    };
+    let mut want = vec![k1 / m, k4 / j1];
+    want.extend(pair(k2, k6, j3));
+    want.extend(pair(k3, k5, j2));
+    want.sort_by(f64::total_cmp);
+    let deck = |link: &str| {
+        format!(
+            "SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,0.,0.,0.\nGRID,3,,0.3,0.,0.\nCBUSH,7,8,1,2,,,,0\nPBUSH,8,K,1.+4,2.+4,3.+4,500.,700.,900.\n{link}\nCONM2,9,3,,10.,,,,,+C\n+C,0.5,,0.7,,,0.9\nSPC1,1,123456,1\nENDDATA\n"
+        )
+    };
+    for link in [
+        "RBAR,30,2,3,123456,,,123456",
+        "RBAR,30,2,3,123456",
+        "RBAR,30,3,2,,123456",
+        "RBAR1,30,2,3,123456",
+    ] {
+        let d = parse_bdf(&deck(link), "rbar.bdf", &BdfOptions::default()).unwrap();
+        for kind in [MassKind::Lumped, MassKind::Consistent] {
+            let modes = d
+                .model
+                .assemble(kind)
+                .unwrap()
+                .modes(Which::Lowest(6), &EigenOptions::default())
+                .unwrap();
+            for (g, w) in modes.values.iter().zip(&want) {
+                assert!(
+                    (g / w - 1.0).abs() < 1e-10,
+                    "{link} {kind:?}: {:?} against {want:?}",
+                    modes.values
+                );
+            }
+        }
+    }
+    for (link, needle) in [
+        ("RBAR,30,2,3,123,456", "CNA \"123\" and CNB \"456\""),
+        (
+            "RBAR,30,2,3,123456,,1",
+            "CMA \"1\" makes components of the independent GRID 2",
+        ),
+        ("RBAR,30,2,2,123456", "GA and GB are both GRID 2"),
+        ("RBAR1,30,2,3,7", "CB"),
+    ] {
+        let err = parse_bdf(&deck(link), "rbar.bdf", &BdfOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains(needle) && err.contains("rbar.bdf:10"),
+            "{link}: {err}"
+        );
+    }
+}
+
 /// A CELAS2 to ground under a CONM2: `w^2 = k / m`; a CELAS1 between two masses along a turned
 /// displacement frame: `w^2 = k (m1 + m2) / (m1 m2)` on the frame's axis; a CBUSH with a CID and
 /// six stiffnesses between a clamped grid and a CONM2 with inertia: `k_i / m` and `k_{3+i} / J_i`.
@@ -158,6 +397,58 @@ ENDDATA
     assert_eq!(b.b, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
     // CID 5's x axis, turned 30 degrees about z
     assert!((b.axes[0][0] - 0.75f64.sqrt()).abs() < 1e-11 && (b.axes[0][1] - 0.5).abs() < 1e-11);
+}
+
+/// A CONM2 offset from its grid acts through the offset whatever the mass formulation: Nastran adds
+/// its whole 6 x 6 (`[[m I, -m S(d)], [m S(d), J - m S(d)^2]]`) to the mass matrix, and the lumped
+/// mass a deck gets by default keeps it whole. Grid 2 on a CBUSH to a clamped grid (six
+/// stiffnesses), a mass `m` at `d` along x with inertias `J1..J3`: `x` and `theta_x` are alone
+/// (`k1 / m`, `k4 / J1`); `y` with `theta_z` and `z` with `theta_y` are coupled by `m d`, so each
+/// pair's `w^2` are the roots of `m J lambda^2 - (k (J + m d^2) + k_r m) lambda + k k_r = 0`,
+/// solved here. With the offset dropped they would be `k / m` and `k_r / (J + m d^2)`, 6-50 % off.
+#[test]
+fn an_offset_conm2_couples_rotations_under_the_default_lumped_mass() {
+    let deck = "\
+SOL 103
+CEND
+SPC = 1
+BEGIN BULK
+GRID,1,,0.,0.,0.
+GRID,2,,0.,0.,0.
+CBUSH,7,8,1,2,,,,0
+PBUSH,8,K,1.+4,2.+4,3.+4,500.,700.,900.
+CONM2,9,2,,10.,0.3,,,,+C
++C,0.5,,0.7,,,0.9
+SPC1,1,123456,1
+ENDDATA
+";
+    let d = parse_bdf(deck, "offset.bdf", &BdfOptions::default()).unwrap();
+    assert_eq!(d.mass, MassKind::Lumped);
+    let (m, dx) = (10.0, 0.3);
+    let [k1, k2, k3, k4, k5, k6] = [1e4, 2e4, 3e4, 500.0, 700.0, 900.0];
+    let [j1, j2, j3] = [0.5, 0.7, 0.9];
+    let pair = |k: f64, kr: f64, j: f64| {
+        let (a, b, c) = (m * j, k * (j + m * dx * dx) + kr * m, k * kr);
+        let disc = (b * b - 4.0 * a * c).sqrt();
+        [(b - disc) / (2.0 * a), (b + disc) / (2.0 * a)]
+    };
+    let mut want = vec![k1 / m, k4 / j1];
+    want.extend(pair(k2, k6, j3));
+    want.extend(pair(k3, k5, j2));
+    want.sort_by(f64::total_cmp);
+    for kind in [MassKind::Lumped, MassKind::Consistent] {
+        let sys = d.model.assemble(kind).unwrap();
+        let modes = sys
+            .modes(Which::Lowest(6), &EigenOptions::default())
+            .unwrap();
+        for (g, w) in modes.values.iter().zip(&want) {
+            assert!(
+                (g / w - 1.0).abs() < 1e-10,
+                "{kind:?}: {:?} against {want:?}",
+                modes.values
+            );
+        }
+    }
 }
 
 /// PBARL and PBEAML sections against hand formulas: a BAR's `b h^3 / 12` with DIM2 along y, a

@@ -212,6 +212,7 @@ fn structural_elements_are_lines_with_their_sections() {
             orientation: [0.0, 0.0, 1.0],
             offsets: [[0.0; 3]; 2],
             lumped_torsion: false,
+            coupled_torsion: true,
             releases: [[false; 6]; 2],
         }),
     };
@@ -222,6 +223,7 @@ fn structural_elements_are_lines_with_their_sections() {
             k: 1234.0,
             ge: 0.0,
             viscous: 0.0,
+            mass: 0.0,
             a: SpringEnd {
                 node: 2,
                 part: Part::Translations,

@@ -44,13 +44,14 @@ fn structural_lines(s: &mut String, model: &femu_fem::model::Model) {
     let count = |f: fn(&StructuralKind) -> bool| all.iter().filter(|e| f(&e.kind)).count();
     let _ = writeln!(
         s,
-        "structural elements: {} ({} shells, {} beams, {} rods, {} springs, {} dampers, {} bushings; nodes with rotations: {})",
+        "structural elements: {} ({} shells, {} beams, {} rods, {} springs, {} dampers, {} scalar masses, {} bushings; nodes with rotations: {})",
         all.len(),
         count(|k| matches!(k, StructuralKind::Shell(_))),
         count(|k| matches!(k, StructuralKind::Beam(_))),
         count(|k| matches!(k, StructuralKind::Rod(_))),
         count(|k| matches!(k, StructuralKind::Spring(s) if s.k != 0.0)),
-        count(|k| matches!(k, StructuralKind::Spring(s) if s.k == 0.0)),
+        count(|k| matches!(k, StructuralKind::Spring(s) if s.k == 0.0 && s.viscous != 0.0)),
+        count(|k| matches!(k, StructuralKind::Spring(s) if s.k == 0.0 && s.viscous == 0.0)),
         count(|k| matches!(k, StructuralKind::Bushing(_))),
         model.rotation_nodes().len()
     );
@@ -443,7 +444,7 @@ fn describe_nastran(
     formulation_line(s, model);
     let _ = writeln!(
         s,
-        "point masses (CONM2): {}; constrained DOFs: {} (SPC set {}, permanent constraints of {} grids); dependent DOFs (RBE2, RBE3, blank mid-side grids): {}",
+        "point masses (CONM2): {}; constrained DOFs: {} (SPC set {}, permanent constraints of {} grids); dependent DOFs (RBE2, RBAR, RBE3, blank mid-side grids): {}",
         model.point_masses().len() + model.rigid_masses().len(),
         model.fixed_dofs().count(),
         deck.spc_set

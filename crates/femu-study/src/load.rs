@@ -155,6 +155,7 @@ fn add_sections(
             orientation: n1,
             offsets: [[0.0; 3]; 2],
             lumped_torsion: false,
+            coupled_torsion: true,
             releases: [[false; 6]; 2],
         };
         add_group(

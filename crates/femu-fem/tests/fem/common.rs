@@ -197,6 +197,7 @@ pub fn beam_kind(
         orientation,
         offsets: [[0.0; 3]; 2],
         lumped_torsion: false,
+        coupled_torsion: true,
         releases: [[false; 6]; 2],
     })
 }

@@ -205,6 +205,7 @@ fn a_free_beam_has_six_rigid_body_modes() {
             orientation: [0.3, -1.0, 0.2],
             offsets: [[0.0, 0.01, 0.02], [0.01, -0.02, 0.0]],
             lumped_torsion: false,
+            coupled_torsion: true,
             releases: [[false; 6]; 2],
         }),
     };
@@ -338,6 +339,7 @@ fn springs_and_bushings_match_hand_solved_oscillators() {
                 k,
                 ge: 0.0,
                 viscous: 0.0,
+                mass: 0.0,
                 a: end(0),
                 b: Some(end(1)),
             }),
@@ -542,6 +544,7 @@ fn nafems_fv2_pin_ended_double_cross() {
             orientation: [0.0, 0.0, 1.0],
             offsets: [[0.0; 3]; 2],
             lumped_torsion: false,
+            coupled_torsion: true,
             releases: [[false; 6]; 2],
         });
         for arm in 0..8 {

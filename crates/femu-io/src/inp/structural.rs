@@ -547,6 +547,7 @@ pub(super) fn add_structural(
                     orientation: n1(c)?,
                     offsets: [[0.0; 3]; 2],
                     lumped_torsion: false,
+                    coupled_torsion: true,
                     releases: [[false; 6]; 2],
                 })
             }
@@ -994,6 +995,7 @@ fn spring(
         k,
         ge: 0.0,
         viscous,
+        mass: 0.0,
         a: SpringEnd {
             node: nodes[0],
             part: a.0,

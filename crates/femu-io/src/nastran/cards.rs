@@ -234,6 +234,21 @@ fn label_key(s: &str) -> String {
         .to_ascii_uppercase()
 }
 
+/// Whether a continuation's field 1 (`cont`) names the parent's field 10 (`parent`): the same
+/// label after a leading `+` or `*`, or, as Nastran pairs them, the same columns 2-8 whatever
+/// column 1 holds (MSC Nastran pairs pyNastran's `pt145.bdf` FLFACT ending `KFREQ` with its
+/// continuation `+FREQ`: its flutter summary lists the continuation's two values).
+fn labels_match(parent: &str, cont: &str) -> bool {
+    let tail = |s: &str| {
+        let s = s.trim();
+        s.get(1..).map(|t| t.trim().to_ascii_uppercase())
+    };
+    let key = label_key(cont);
+    !key.is_empty()
+        && (label_key(parent) == key
+            || matches!((tail(parent), tail(cont)), (Some(a), Some(b)) if !a.is_empty() && a == b))
+}
+
 /// The deck split into its case control and its bulk data cards.
 pub(super) struct Deck {
     /// The case control (empty when the file is bulk data only).
@@ -275,13 +290,13 @@ pub(super) fn deck(lines: &[Line]) -> Result<Deck, IoError> {
         for p in split(l) {
             if is_continuation(&p.first) {
                 let key = label_key(&p.first);
-                let last_open = open.last().cloned().unwrap_or_default();
+                let last_open = open.last().map_or(String::new(), |l| label_key(l));
                 // a labelled continuation goes to the card whose field 10 holds the label; an
                 // unlabelled one, or one the card above leaves unlabelled, to the card above
                 let at = if key.is_empty() {
                     out.len().checked_sub(1)
                 } else {
-                    match open.iter().rposition(|o| *o == key) {
+                    match open.iter().rposition(|o| labels_match(o, &p.first)) {
                         Some(i) => Some(i),
                         // a label no field 10 holds, below a card that leaves field 10 blank:
                         // written without labels on the parents, as many exporters do
@@ -312,7 +327,7 @@ pub(super) fn deck(lines: &[Line]) -> Result<Deck, IoError> {
                     });
                 };
                 out[at].fields.extend(p.fields);
-                open[at] = label_key(&p.label);
+                open[at] = p.label.clone();
                 continue;
             }
             let name = p.first.trim_end_matches('*').to_ascii_uppercase();
@@ -322,7 +337,7 @@ pub(super) fn deck(lines: &[Line]) -> Result<Deck, IoError> {
                 path: path.clone(),
                 line: *number,
             });
-            open.push(label_key(&p.label));
+            open.push(p.label.clone());
         }
     }
     Ok(Deck {

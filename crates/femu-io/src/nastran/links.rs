@@ -1,4 +1,5 @@
-//! `RBE2` (rigid links) and `RBE3` (weighted averages) as multipoint constraints.
+//! `RBE2`, `RBAR` and `RBAR1` (rigid links) and `RBE3` (weighted averages) as multipoint
+//! constraints.
 
 use super::cards::Card;
 use crate::{IoError, Warning};
@@ -31,9 +32,60 @@ pub(super) fn components(c: &Card, i: usize, what: &str) -> Result<Vec<usize>, I
     Ok(out)
 }
 
-/// RBE2 (rigid links) and RBE3 (weighted averages) into the model's multipoint constraints
-/// (docs/MATH.md, "Multipoint constraints"). Reference grids of RBE2 get rotations first, so that
-/// RBE2 chains, RBE3 references with rotational components and SPCs on 4-6 find them.
+/// An RBAR or RBAR1 as the rigid link it is: its reference grid (all six components
+/// independent), its dependent components and grid (QRG RBAR: `EID GA GB CNA CNB CMA CMB`, the
+/// dependent components by default those of the six not independent; RBAR1: `EID GA GB CB`, GA
+/// independent). An RBAR whose independent components are split between its ends is refused:
+/// femu links one grid's rigid motion to another.
+fn bar_link(c: &Card) -> Result<(u64, Vec<usize>, u64), IoError> {
+    let eid = c.id(0, "EID")?;
+    let (ga, gb) = (c.id(1, "GA")?, c.id(2, "GB")?);
+    if ga == gb {
+        return Err(c.err(format!("{} {eid}: GA and GB are both GRID {ga}", c.name)));
+    }
+    if c.name == "RBAR1" {
+        return Ok((ga, components(c, 3, "CB")?, gb));
+    }
+    let opt = |i: usize, what: &str| -> Result<Vec<usize>, IoError> {
+        let t = c.field(i).trim();
+        if t.is_empty() || t == "0" {
+            Ok(Vec::new())
+        } else {
+            components(c, i, what)
+        }
+    };
+    let (cna, cnb, cma, cmb) = (
+        opt(3, "CNA")?,
+        opt(4, "CNB")?,
+        opt(5, "CMA")?,
+        opt(6, "CMB")?,
+    );
+    let all = |v: &[usize]| v.len() == 6;
+    let (reference, dependent, (own, other), cm) = match (all(&cna), all(&cnb)) {
+        (true, false) if cnb.is_empty() => (ga, gb, (&cma, "CMA"), cmb),
+        (false, true) if cna.is_empty() => (gb, ga, (&cmb, "CMB"), cma),
+        _ => {
+            return Err(c.err(format!(
+                "RBAR {eid}: independent components CNA {:?} and CNB {:?}: femu links one end's six components to the other's (CNA = 123456 with CNB blank, or the reverse)",
+                c.field(3),
+                c.field(4)
+            )));
+        }
+    };
+    if !own.is_empty() {
+        return Err(c.err(format!(
+            "RBAR {eid}: {other} {:?} makes components of the independent GRID {reference} dependent",
+            c.field(if other == "CMA" { 5 } else { 6 })
+        )));
+    }
+    let cm = if cm.is_empty() { (0..6).collect() } else { cm };
+    Ok((reference, cm, dependent))
+}
+
+/// RBE2, RBAR and RBAR1 (rigid links) and RBE3 (weighted averages) into the model's multipoint
+/// constraints (docs/MATH.md, "Multipoint constraints"). Reference grids of the rigid links get
+/// rotations first, so that chains of links, RBE3 references with rotational components and SPCs
+/// on 4-6 find them.
 pub(super) fn read_links(
     links: &[&Card],
     model: &mut Model,
@@ -49,8 +101,12 @@ pub(super) fn read_links(
             ))
         })
     };
-    for c in links.iter().filter(|c| c.name == "RBE2") {
-        let gn = c.id(1, "GN")?;
+    for c in links.iter().filter(|c| c.name != "RBE3") {
+        let gn = if c.name == "RBE2" {
+            c.id(1, "GN")?
+        } else {
+            bar_link(c)?.0
+        };
         grid(model, c, gn)?;
         model.add_rotations(gn).map_err(c.located())?;
     }
@@ -58,34 +114,40 @@ pub(super) fn read_links(
     for c in links {
         let eid = c.id(0, "EID")?;
         let label = format!("{} {eid} ({} line {})", c.name, c.path.display(), c.line);
-        if c.name == "RBE2" {
-            let gn = c.id(1, "GN")?;
-            let cm = components(c, 2, "CM")?;
-            let mut gm = Vec::new();
-            for t in c
-                .fields
-                .get(3..)
-                .unwrap_or_default()
-                .iter()
-                .map(|s| s.trim())
-            {
-                if t.is_empty() {
-                    continue;
-                }
-                // the optional ALPHA (and TREF) after the grids are reals
-                if t.contains('.') || t.contains(['E', 'e']) {
-                    break;
-                }
-                let g =
-                    t.parse::<u64>().ok().filter(|g| *g > 0).ok_or_else(|| {
+        if c.name != "RBE3" {
+            let (gn, cm, gm) = if c.name == "RBE2" {
+                let gn = c.id(1, "GN")?;
+                let cm = components(c, 2, "CM")?;
+                let mut gm = Vec::new();
+                for t in c
+                    .fields
+                    .get(3..)
+                    .unwrap_or_default()
+                    .iter()
+                    .map(|s| s.trim())
+                {
+                    if t.is_empty() {
+                        continue;
+                    }
+                    // the optional ALPHA (and TREF) after the grids are reals
+                    if t.contains('.') || t.contains(['E', 'e']) {
+                        break;
+                    }
+                    let g = t.parse::<u64>().ok().filter(|g| *g > 0).ok_or_else(|| {
                         c.err(format!("{eid}: dependent grid {t:?} is not an id"))
                     })?;
+                    grid(model, c, g)?;
+                    gm.push(g);
+                }
+                if gm.is_empty() {
+                    return Err(c.err(format!("{eid} has no dependent grids (GMi)")));
+                }
+                (gn, cm, gm)
+            } else {
+                let (gn, cm, g) = bar_link(c)?;
                 grid(model, c, g)?;
-                gm.push(g);
-            }
-            if gm.is_empty() {
-                return Err(c.err(format!("{eid} has no dependent grids (GMi)")));
-            }
+                (gn, cm, vec![g])
+            };
             let trans: Vec<usize> = cm.iter().copied().filter(|k| *k < 3).collect();
             if trans.len() < 3
                 && let Some(g) = gm.iter().find(|g| turned.contains_key(g))
@@ -118,7 +180,8 @@ pub(super) fn read_links(
                         path: c.path.clone(),
                         line: c.line,
                         message: format!(
-                            "RBE2 {eid}: components 4-6 of solid grids are ignored (they have no rotations; the rigid link acts on their translations)"
+                            "{} {eid}: components 4-6 of solid grids are ignored (they have no rotations; the rigid link acts on their translations)",
+                            c.name
                         ),
                     });
                 }

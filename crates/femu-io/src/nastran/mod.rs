@@ -112,6 +112,13 @@ const NO_EFFECT: &[&str] = &[
     "PLOAD2", "PLOAD4", "EIGR", "EIGRL", "SPOINT", "DAREA", "NSM", "SET1", "DESVAR", "DRESP1",
     "DCONSTR", "MONPNT1", "ASET", "ASET1", "OMIT", "OMIT1", "SUPORT", "SUPORT1", "MDLPRM", "LSEQ",
     "RLOAD1", "RLOAD2", "USET", "USET1",
+    // aeroelastic data (QRG, "Aeroelastic"): the aerodynamic model, its splines to the
+    // structure and the flutter, trim and gust conditions act on the modes, not in `K` or `M`
+    "AERO", "AEROS", "AEFACT", "AELINK", "AELIST", "AEPARM", "AESTAT", "AESURF", "AESURFS",
+    "AECOMP", "AECOMPL", "AEDW", "AEFORCE", "AEPRESS", "AESCALE", "CAERO1", "CAERO2", "CAERO3",
+    "CAERO4", "CAERO5", "PAERO1", "PAERO2", "PAERO3", "PAERO4", "PAERO5", "SPLINE1", "SPLINE2",
+    "SPLINE3", "SPLINE4", "SPLINE5", "SPLINE6", "SPLINE7", "MKAERO1", "MKAERO2", "FLFACT",
+    "FLUTTER", "GUST", "TRIM", "TRIM2", "DIVERG", "CSSCHD", "UXVEC", "MONPNT2",
 ];
 
 /// Cards that change `K` or `M` and that femu cannot model yet, with what they are.
@@ -122,6 +129,10 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("CONM1", "general mass matrices"),
     ("CELAS3", "scalar springs on scalar points"),
     ("CELAS4", "scalar springs on scalar points"),
+    ("CMASS3", "scalar masses on scalar points"),
+    ("CMASS4", "scalar masses on scalar points"),
+    ("CDAMP3", "scalar dampers on scalar points"),
+    ("CDAMP4", "scalar dampers on scalar points"),
     ("CBUSH1D", "one-dimensional bushings"),
     ("PBUSH1D", "one-dimensional bushings"),
     ("CTUBE", "tubes"),
@@ -131,10 +142,14 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("PBCOMP", "composite beams"),
     ("PBRSECT", "arbitrary beam sections"),
     ("PBMSECT", "arbitrary beam sections"),
-    ("CMASS1", "scalar masses"),
-    ("CMASS2", "scalar masses"),
-    ("RBAR", "rigid links"),
     ("MPC", "multipoint constraints"),
+    ("RBE1", "rigid elements"),
+    ("RROD", "rigid rods"),
+    ("RTRPLT", "rigid triangles"),
+    ("RTRPLT1", "rigid triangles"),
+    ("RSPLINE", "interpolation constraints"),
+    ("RSSCON", "shell-solid connectors"),
+    ("RJOINT", "rigid joints"),
     ("MPCADD", "multipoint constraints"),
     ("CORD3G", "coordinate systems"),
     ("GENEL", "general elements"),
@@ -325,7 +340,8 @@ fn known_cards() -> Vec<&'static str> {
     let mut v: Vec<&'static str> = vec![
         "GRID", "GRDSET", "CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S", "CHEXA",
         "CPENTA", "CTETRA", "CPYRAM", "PSOLID", "MAT1", "MAT9", "MAT2", "MAT8", "SPC", "SPC1",
-        "SPCADD", "CONM2", "RBE2", "RBE3", "PARAM", "EIGRL", "EIGR", "BAROR", "BEAMOR",
+        "SPCADD", "CONM2", "RBE2", "RBE3", "RBAR", "RBAR1", "PARAM", "EIGRL", "EIGR", "BAROR",
+        "BEAMOR",
     ];
     v.extend(structural::ELEMENTS);
     v.extend(structural::PROPERTIES);
@@ -382,7 +398,7 @@ fn sort<'a>(
             }
             "SPC" | "SPC1" | "SPCADD" => s.spcs.push(c),
             "CONM2" => s.conm2.push(c),
-            "RBE2" | "RBE3" => s.links.push(c),
+            "RBE2" | "RBE3" | "RBAR" | "RBAR1" => s.links.push(c),
             "TABDMP1" => {
                 let tid = c.id(0, "TID")? as i64;
                 if let Some(first) = s.tabdmp.insert(tid, c) {
@@ -455,7 +471,7 @@ fn sort<'a>(
             .min_by_key(|c| c.line)
             .expect("non-empty");
         let text = format!(
-            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, bars and beams (CBAR, CBEAM with PBAR, PBARL, PBEAM, PBEAML), rods (CROD, CONROD), springs and bushings (CELAS1, CELAS2, CBUSH), shells (CQUAD4, CQUAD8, CTRIA3 with PSHELL), CONM2 masses, RBE2 and RBE3 links and SPC constraints",
+            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, bars and beams (CBAR, CBEAM with PBAR, PBARL, PBEAM, PBEAML), rods (CROD, CONROD), springs, dampers, scalar masses and bushings (CELAS1, CELAS2, CDAMP1, CDAMP2, CMASS1, CMASS2, CVISC, CBUSH), shells (CQUAD4, CQUAD8, CTRIA3 with PSHELL, PCOMP, PCOMPG), CONM2 masses, RBE2, RBAR, RBAR1 and RBE3 links and SPC constraints",
             list.join(", ")
         );
         if options.lenient {
@@ -844,6 +860,18 @@ fn selected_method(
     } else {
         (2, 3, 5)
     };
+    // EIGR's tridiagonal methods find every eigenvalue and the vectors of the lowest ND, F1 and
+    // F2 aside when ND is given: pyNastran's pt145 (GIV, F1 0, F2 0.1 Hz, ND 6) prints all 30
+    // eigenvalues of its run and the generalized masses of the six lowest modes, the first at
+    // 40 Hz
+    let tridiagonal = c.name == "EIGR"
+        && matches!(
+            c.field(1).trim().to_ascii_uppercase().as_str(),
+            "GIV" | "MGIV" | "HOU" | "MHOU" | "AHOU" | "AGIV"
+        );
+    if tridiagonal && let Some(n) = c.int(nd, "ND")?.filter(|n| *n > 0) {
+        return Ok(Some((None, None, Some(n as usize))));
+    }
     Ok(Some((
         c.real(f1, "V1")?,
         c.real(f2, "V2")?,

@@ -33,13 +33,13 @@ pub(super) struct StructuralCards<'a> {
 
 /// The structural element card names.
 pub(super) const ELEMENTS: &[&str] = &[
-    "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CDAMP1", "CDAMP2", "CVISC", "CBUSH",
-    "CQUAD4", "CTRIA3", "CQUAD8",
+    "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CDAMP1", "CDAMP2", "CMASS1", "CMASS2",
+    "CVISC", "CBUSH", "CQUAD4", "CTRIA3", "CQUAD8",
 ];
 /// The structural property card names.
 pub(super) const PROPERTIES: &[&str] = &[
-    "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PELAS", "PDAMP", "PVISC", "PBUSH", "PSHELL",
-    "PCOMP", "PCOMPG",
+    "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PELAS", "PDAMP", "PMASS", "PVISC", "PBUSH",
+    "PSHELL", "PCOMP", "PCOMPG",
 ];
 
 impl<'a> StructuralCards<'a> {
@@ -48,9 +48,9 @@ impl<'a> StructuralCards<'a> {
         let name = c.name.as_str();
         if ELEMENTS.contains(&name) {
             self.elements.push(c);
-        } else if name == "PELAS" || name == "PDAMP" || name == "PVISC" {
-            // QRG PELAS: two properties per card, fields 1-4 and 5-8; PDAMP: four, fields 1-2,
-            // 3-4, 5-6 and 7-8; PVISC: two, fields 1-3 and 5-7
+        } else if matches!(name, "PELAS" | "PDAMP" | "PMASS" | "PVISC") {
+            // QRG PELAS: two properties per card, fields 1-4 and 5-8; PDAMP and PMASS: four,
+            // fields 1-2, 3-4, 5-6 and 7-8; PVISC: two, fields 1-3 and 5-7
             let width = match name {
                 "PELAS" | "PVISC" => 4,
                 _ => 2,
@@ -523,6 +523,25 @@ fn orientation(
         && !src.field(4).contains(['e', 'E'])
         && src.field(5).is_empty()
         && src.field(6).is_empty();
+    // the older format's flag `F` in OFFT's field: 1, the vector X1 X2 X3, 2, the grid G0, both
+    // in GA's displacement frame with offsets in the grids' frames (the OFFT GGG of today's QRG;
+    // the GEOM2 table of the DMAP Programmer's Guide still stores F)
+    let offt = match offt.as_str() {
+        "1" | "2" if (offt == "2") == is_g0 => "GGG".to_string(),
+        "1" | "2" => {
+            return Err(c.err(format!(
+                "{}: the flag F = {offt} in field 9 says the orientation is {}, but fields 5-7 give {}",
+                c.field(0),
+                if offt == "1" {
+                    "a vector X1 X2 X3"
+                } else {
+                    "a grid G0"
+                },
+                if is_g0 { "a grid G0" } else { "a vector" }
+            )));
+        }
+        _ => offt,
+    };
     let xa = model.mesh().coords()[node(model, ga, c, "GA")?];
     if is_g0 {
         let g0 = src.id(4, "G0")?;
@@ -719,6 +738,7 @@ pub(super) fn add_structural(
                     // Nastran's lumped CBEAM mass carries the polar inertia, its CBAR's does not
                     // (the grid point weight of pyNastran's beam_modes run: docs/VERIFICATION.md)
                     lumped_torsion: c.name == "CBEAM",
+                    coupled_torsion: c.name == "CBEAM",
                     releases,
                 });
                 (kind, vec![na, nb], pid)
@@ -750,23 +770,30 @@ pub(super) fn add_structural(
                 });
                 (kind, vec![n1, n2], pid)
             }
-            "CELAS1" | "CELAS2" | "CDAMP1" | "CDAMP2" => {
-                // CELAS1: EID PID G1 C1 G2 C2; CELAS2: EID K G1 C1 G2 C2 GE S; CDAMP1: EID PID
-                // G1 C1 G2 C2; CDAMP2: EID B G1 C1 G2 C2 (QRG)
+            "CELAS1" | "CELAS2" | "CDAMP1" | "CDAMP2" | "CMASS1" | "CMASS2" => {
+                // CELAS1: EID PID G1 C1 G2 C2; CELAS2: EID K G1 C1 G2 C2 GE S; CDAMP1, CMASS1:
+                // EID PID G1 C1 G2 C2; CDAMP2: EID B G1 C1 G2 C2; CMASS2: EID M G1 C1 G2 C2 (QRG)
                 let damper = c.name.starts_with("CDAMP");
-                let (value, ge, pid) = if c.name == "CELAS1" || c.name == "CDAMP1" {
+                let scalar_mass = c.name.starts_with("CMASS");
+                let (value, ge, pid) = if c.name.ends_with('1') {
                     let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
-                    let p = prop(pid, &[if damper { "PDAMP" } else { "PELAS" }])?;
+                    let (property, value) = if damper {
+                        ("PDAMP", "B")
+                    } else if scalar_mass {
+                        ("PMASS", "M")
+                    } else {
+                        ("PELAS", "K")
+                    };
+                    let p = prop(pid, &[property])?;
                     // the property's own fields: the first PID on the card that is this one
-                    let width = if damper { 2 } else { 4 };
+                    let width = if damper || scalar_mass { 2 } else { 4 };
                     let first = (0..8)
                         .step_by(width)
                         .find(|&f| p.int(f, "PID").ok().flatten() == Some(pid as i64))
                         .unwrap_or(0);
                     (
-                        p.real(first + 1, if damper { "B" } else { "K" })?
-                            .unwrap_or(0.0),
-                        if damper {
+                        p.real(first + 1, value)?.unwrap_or(0.0),
+                        if damper || scalar_mass {
                             0.0
                         } else {
                             p.real(first + 2, "GE")?.unwrap_or(0.0)
@@ -775,6 +802,8 @@ pub(super) fn add_structural(
                     )
                 } else if damper {
                     (c.real(1, "B")?.unwrap_or(0.0), 0.0, eid)
+                } else if scalar_mass {
+                    (c.real(1, "M")?.unwrap_or(0.0), 0.0, eid)
                 } else {
                     (
                         c.real(1, "K")?.unwrap_or(0.0),
@@ -782,7 +811,14 @@ pub(super) fn add_structural(
                         eid,
                     )
                 };
-                let (k, viscous) = if damper { (0.0, value) } else { (value, 0.0) };
+                let (k, viscous, mass) = if damper {
+                    (0.0, value, 0.0)
+                } else if scalar_mass {
+                    // PARAM,WTMASS scales every term of the mass matrix (QRG PARAM WTMASS)
+                    (0.0, 0.0, value * ctx.wtmass)
+                } else {
+                    (value, 0.0, 0.0)
+                };
                 let mut ends = Vec::new();
                 for (gf, cf) in [(2, 3), (4, 5)] {
                     let g = c.int(gf, "G")?.unwrap_or(0);
@@ -816,6 +852,7 @@ pub(super) fn add_structural(
                     k,
                     ge,
                     viscous,
+                    mass,
                     a,
                     b: ends.get(1).copied(),
                 });
@@ -942,7 +979,9 @@ pub(super) fn add_structural(
         };
         let ge = match c.name.as_str() {
             "CONROD" => mid_ge(ctx, c, &[3])?,
-            "CELAS1" | "CELAS2" | "CDAMP1" | "CDAMP2" | "CVISC" | "CBUSH" => 0.0,
+            "CELAS1" | "CELAS2" | "CDAMP1" | "CDAMP2" | "CMASS1" | "CMASS2" | "CVISC" | "CBUSH" => {
+                0.0
+            }
             _ => match cards.properties.get(&pid) {
                 Some(p) => property_ge(ctx, p)?,
                 None => 0.0,
