@@ -14,6 +14,38 @@ fn fixture(name: &str) -> std::path::PathBuf {
         .join(name)
 }
 
+/// The lowest eigenvalues of `model` with `kind` against those Nastran printed to seven digits.
+fn assert_nastran_eigenvalues(model: &femu_fem::model::Model, kind: MassKind, nastran: &[f64]) {
+    let modes = model
+        .assemble(kind)
+        .unwrap()
+        .modes(Which::Lowest(nastran.len()), &EigenOptions::default())
+        .unwrap();
+    for (got, want) in modes.values.iter().zip(nastran) {
+        assert!(
+            (got / want - 1.0).abs() < 6e-7,
+            "{got:e} against Nastran's {want:e}"
+        );
+    }
+}
+
+/// The six `w^2` of a mass `m` with inertias `j` about its centre, carried at `d` along x from a
+/// node held by six stiffnesses `k`: `k1 / m`, `k4 / J1`, and for `y` with `theta_z` and `z` with
+/// `theta_y` (coupled through the arm by `m d`) the roots of
+/// `m J lambda^2 - (k (J + m d^2) + k_r m) lambda + k k_r = 0`; increasing.
+fn offset_mass_eigenvalues(m: f64, d: f64, k: [f64; 6], j: [f64; 3]) -> Vec<f64> {
+    let pair = |k: f64, kr: f64, j: f64| {
+        let (a, b, c) = (m * j, k * (j + m * d * d) + kr * m, k * kr);
+        let disc = (b * b - 4.0 * a * c).sqrt();
+        [(b - disc) / (2.0 * a), (b + disc) / (2.0 * a)]
+    };
+    let mut want = vec![k[0] / m, k[3] / j[0]];
+    want.extend(pair(k[1], k[5], j[2]));
+    want.extend(pair(k[2], k[4], j[1]));
+    want.sort_by(f64::total_cmp);
+    want
+}
+
 /// pyNastran's `beam_modes.dat` (BSD), run by Simcenter Nastran 2019.2 (its `beam_modes.f06`):
 /// nine CBAR with a PBARL ROD, one CBEAM with a PBEAML ROD, a CONM2 with inertia at the tip,
 /// clamped, lumped mass (no COUPMASS). Nastran replaced the PBARL by a PBAR with K1 = K2 = 0.9,
@@ -50,16 +82,7 @@ fn beam_modes_against_simcenter_nastran() {
         4.874295E+09,
         4.874295E+09,
     ];
-    let sys = model.assemble(MassKind::Lumped).unwrap();
-    let modes = sys
-        .modes(Which::Lowest(10), &EigenOptions::default())
-        .unwrap();
-    for (got, want) in modes.values.iter().zip(nastran) {
-        assert!(
-            (got / want - 1.0).abs() < 6e-7,
-            "{got:e} against Nastran's {want:e}"
-        );
-    }
+    assert_nastran_eigenvalues(&model, MassKind::Lumped, &nastran);
 }
 
 /// pyNastran's `pt145.bdf` (BSD), MSC Nastran's flutter demonstration run in 2023 (its
@@ -119,17 +142,8 @@ fn a_swept_wing_with_scalar_masses_against_msc_nastran() {
         1.167388E+11,
         1.828389E+11,
     ];
-    let sys = deck.model.assemble(deck.mass).unwrap();
-    assert_eq!(sys.dofs.free_count(), 30);
-    let modes = sys
-        .modes(Which::Lowest(30), &EigenOptions::default())
-        .unwrap();
-    for (got, want) in modes.values.iter().zip(nastran) {
-        assert!(
-            (got / want - 1.0).abs() < 6e-7,
-            "{got:e} against Nastran's {want:e}"
-        );
-    }
+    assert_eq!(deck.model.dof_map().unwrap().free_count(), 30);
+    assert_nastran_eigenvalues(&deck.model, deck.mass, &nastran);
 }
 
 /// Scalar masses by hand, under the lumped mass a deck gets by default, which keeps their matrices
@@ -242,18 +256,12 @@ ENDDATA
 /// refused with card and line.
 #[test]
 fn rigid_bars_carry_an_offset_mass() {
-    let (m, d) = (10.0, 0.3);
-    let [k1, k2, k3, k4, k5, k6] = [1e4, 2e4, 3e4, 500.0, 700.0, 900.0];
-    let [j1, j2, j3] = [0.5, 0.7, 0.9];
-    let pair = |k: f64, kr: f64, j: f64| {
-        let (a, b, c) = (m * j, k * (j + m * d * d) + kr * m, k * kr);
-        let disc = (b * b - 4.0 * a * c).sqrt();
-        [(b - disc) / (2.0 * a), (b + disc) / (2.0 * a)]
-    };
-    let mut want = vec![k1 / m, k4 / j1];
-    want.extend(pair(k2, k6, j3));
-    want.extend(pair(k3, k5, j2));
-    want.sort_by(f64::total_cmp);
+    let want = offset_mass_eigenvalues(
+        10.0,
+        0.3,
+        [1e4, 2e4, 3e4, 500.0, 700.0, 900.0],
+        [0.5, 0.7, 0.9],
+    );
     let deck = |link: &str| {
         format!(
             "SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,0.,0.,0.\nGRID,3,,0.3,0.,0.\nCBUSH,7,8,1,2,,,,0\nPBUSH,8,K,1.+4,2.+4,3.+4,500.,700.,900.\n{link}\nCONM2,9,3,,10.,,,,,+C\n+C,0.5,,0.7,,,0.9\nSPC1,1,123456,1\nENDDATA\n"
@@ -424,18 +432,12 @@ ENDDATA
 ";
     let d = parse_bdf(deck, "offset.bdf", &BdfOptions::default()).unwrap();
     assert_eq!(d.mass, MassKind::Lumped);
-    let (m, dx) = (10.0, 0.3);
-    let [k1, k2, k3, k4, k5, k6] = [1e4, 2e4, 3e4, 500.0, 700.0, 900.0];
-    let [j1, j2, j3] = [0.5, 0.7, 0.9];
-    let pair = |k: f64, kr: f64, j: f64| {
-        let (a, b, c) = (m * j, k * (j + m * dx * dx) + kr * m, k * kr);
-        let disc = (b * b - 4.0 * a * c).sqrt();
-        [(b - disc) / (2.0 * a), (b + disc) / (2.0 * a)]
-    };
-    let mut want = vec![k1 / m, k4 / j1];
-    want.extend(pair(k2, k6, j3));
-    want.extend(pair(k3, k5, j2));
-    want.sort_by(f64::total_cmp);
+    let want = offset_mass_eigenvalues(
+        10.0,
+        0.3,
+        [1e4, 2e4, 3e4, 500.0, 700.0, 900.0],
+        [0.5, 0.7, 0.9],
+    );
     for kind in [MassKind::Lumped, MassKind::Consistent] {
         let sys = d.model.assemble(kind).unwrap();
         let modes = sys
