@@ -291,6 +291,89 @@ fn rigid_bars_carry_an_offset_mass() {
     }
 }
 
+/// MPC equations as Nastran writes them (`sum A_j u_j = 0`, the first term dependent), by hand on
+/// grids held by springs `k_i` to ground with CONM2 masses `m_i`, each moving along x only: a
+/// lever `u2 = 2 u1` (`MPC 1 2 1 1. 1 1 -2.`) leaves one DOF with `w^2 = (k1 + 4 k2) / (m1 + 4
+/// m2)`; the average `u3 = (u1 + u2) / 2` written on a continuation (`2 u3 - u1 - u2 = 0`) and
+/// joined by an MPCADD leaves two, `T = [[1, 0], [0, 1], [1/2, 1/2]]`, whose `w^2` are the roots of
+/// `det(T^T K T - w^2 T^T M T) = 0` solved here. A set the case control does not select is not
+/// applied (Nastran's rule), and bad terms are refused with card and line.
+#[test]
+fn mpc_equations_give_hand_solved_frequencies() {
+    let [k1, k2, k3]: [f64; 3] = [3e4, 5e4, 2e4];
+    let [m1, m2, m3]: [f64; 3] = [2.0, 3.0, 1.5];
+    let deck = |case: &str, mpc: &str| {
+        format!(
+            "SOL 103\nCEND\nSPC = 1\n{case}BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,2.,0.,0.\nCELAS2,11,3.+4,1,1\nCELAS2,12,5.+4,2,1\nCELAS2,13,2.+4,3,1\nCONM2,21,1,,2.\nCONM2,22,2,,3.\nCONM2,23,3,,1.5\nSPC1,1,23,1,2,3\n{mpc}ENDDATA\n"
+        )
+    };
+    // the lever
+    let lever = (k1 + 4.0 * k2) / (m1 + 4.0 * m2);
+    let d = parse_bdf(
+        &deck("MPC = 7\n", "MPC,7,2,1,1.,1,1,-2.\nCELAS2,14,1.+9,3,1\n"),
+        "lever.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    // grid 3 is held by a stiff spring out of the way: the lowest mode is the lever's
+    assert_lowest(&d.model, MassKind::Lumped, &[lever], 1e-10);
+    // the average, on a continuation, through an MPCADD
+    let d = parse_bdf(
+        &deck(
+            "MPC = 9\n",
+            "MPCADD,9,8\nMPC,8,3,1,2.,1,1,-1.,+M\n+M,,2,1,-1.\n",
+        ),
+        "average.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    // T^T K T = [[k1 + k3/4, k3/4], [k3/4, k2 + k3/4]], and M alike
+    let (ka, kb, kc) = (k1 + k3 / 4.0, k2 + k3 / 4.0, k3 / 4.0);
+    let (ma, mb, mc) = (m1 + m3 / 4.0, m2 + m3 / 4.0, m3 / 4.0);
+    // det([[ka - l ma, kc - l mc], [kc - l mc, kb - l mb]]) = 0
+    let a = ma * mb - mc * mc;
+    let b = -(ka * mb + kb * ma - 2.0 * kc * mc);
+    let c = ka * kb - kc * kc;
+    let disc = (b * b - 4.0 * a * c).sqrt();
+    let want = [(-b - disc) / (2.0 * a), (-b + disc) / (2.0 * a)];
+    for kind in [MassKind::Lumped, MassKind::Consistent] {
+        assert_lowest(&d.model, kind, &want, 1e-10);
+    }
+    // not selected: not applied (three free DOFs, the lowest the softest spring's)
+    let d = parse_bdf(
+        &deck("", "MPC,8,3,1,2.,1,1,-1.\n"),
+        "unselected.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(d.model.dof_map().unwrap().free_count(), 3);
+    assert!(
+        d.warnings
+            .iter()
+            .any(|w| w.message.contains("none is applied"))
+    );
+    for (case, mpc, needle) in [
+        ("MPC = 7\n", "MPC,7,2,1,0.,1,1,-2.\n", "A1 is 0"),
+        (
+            "MPC = 7\n",
+            "MPC,7,2,0,1.,1,1,-2.\n",
+            "component 0 of GRID 2",
+        ),
+        ("MPC = 7\n", "MPC,7,2,1,1.,1,4,-2.\n", "no DOF 4"),
+        ("MPC = 7\n", "MPC,7,2,1,1.,9,1,-2.\n", "9"),
+        (
+            "MPC = 5\n",
+            "MPC,7,2,1,1.,1,1,-2.\n",
+            "MPC = 5 selects a set that no MPC or MPCADD defines",
+        ),
+    ] {
+        let err = parse_bdf(&deck(case, mpc), "bad.bdf", &BdfOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(needle), "{mpc}: {err}");
+    }
+}
+
 /// A CELAS2 to ground under a CONM2: `w^2 = k / m`; a CELAS1 between two masses along a turned
 /// displacement frame: `w^2 = k (m1 + m2) / (m1 m2)` on the frame's axis; a CBUSH with a CID and
 /// six stiffnesses between a clamped grid and a CONM2 with inertia: `k_i / m` and `k_{3+i} / J_i`.

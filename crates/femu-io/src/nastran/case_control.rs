@@ -3,8 +3,8 @@
 //! `NAME(options) = value`, `$` starting a comment, a line ending in a comma continued on the next,
 //! commands abbreviated to their first four letters, `SUBCASE n` opening a subcase whose commands
 //! override those above the first subcase. femu takes what changes the model it builds: the `SPC`
-//! set and the `METHOD` (the `EIGRL` of the modes); subcases that select different ones are
-//! refused, since femu solves one model.
+//! and `MPC` sets and the `METHOD` (the `EIGRL` of the modes); subcases that select different ones
+//! are refused, since femu solves one model.
 
 use super::cards::Line;
 use crate::IoError;
@@ -26,6 +26,8 @@ pub(super) struct Selected {
 pub(super) struct CaseControl {
     /// `SPC = n`, the same in every subcase.
     pub(super) spc: Option<Selected>,
+    /// `MPC = n`, the same in every subcase.
+    pub(super) mpc: Option<Selected>,
     /// `METHOD = n` (the `EIGRL` or `EIGR` of the modes), the same in every subcase.
     pub(super) method: Option<Selected>,
     /// `SDAMPING = n` (the `TABDMP1` of the modes' damping), the same in every subcase.
@@ -39,6 +41,7 @@ pub(super) struct CaseControl {
 struct Scope {
     id: Option<i64>,
     spc: Option<Selected>,
+    mpc: Option<Selected>,
     method: Option<Selected>,
     sdamping: Option<Selected>,
 }
@@ -130,6 +133,8 @@ impl CaseControl {
                 });
             } else if word == "SPC" {
                 scope.spc = Some(selected("SPC")?);
+            } else if word == "MPC" {
+                scope.mpc = Some(selected("MPC")?);
             } else if is(&word, "SDAMPING") {
                 // SDAMPING(STRUCTURE) = n and SDAMPING(FLUID) = n: the structure's
                 let fluid = option_of(raw).is_some_and(|o| o == "FLUID");
@@ -155,6 +160,7 @@ impl CaseControl {
                 "SPC",
                 (|s: &Scope| s.spc.clone()) as fn(&Scope) -> Option<Selected>,
             ),
+            ("MPC", |s: &Scope| s.mpc.clone()),
             ("METHOD", |s: &Scope| s.method.clone()),
             ("SDAMPING", |s: &Scope| s.sdamping.clone()),
         ] {
@@ -195,6 +201,7 @@ impl CaseControl {
             }
             match what {
                 "SPC" => out.spc = first.1,
+                "MPC" => out.mpc = first.1,
                 "METHOD" => out.method = first.1,
                 _ => out.sdamping = first.1,
             }

@@ -259,3 +259,152 @@ pub(super) fn apply_spc(
     }
     Ok(())
 }
+
+/// The `MPC` set the case control selects (`MPC = n`; a deck without case control, its only set)
+/// as linear constraints of the model (QRG MPC: `SID G1 C1 A1 G2 C2 A2`, then `G3 C3 A3 G4 C4 A4`
+/// on each continuation after a blank field; `sum_j A_j u_j = 0` with the first term's DOF the
+/// dependent one, `u_1 = -sum_{j>1} (A_j / A_1) u_j`; `MPCADD SID S1 S2 ...` the union of sets).
+/// Components are those of the grid's displacement frame: femu's constraints are in the basic
+/// frame, so a term on a grid whose frame is turned is refused, as are scalar points (component 0)
+/// and a first coefficient of zero. A term on a rotation needs a grid with rotations (a beam's,
+/// a shell's, a rigid link's reference).
+///
+/// # Errors
+/// A malformed card, one of the above, a set the case control selects that no card defines, and
+/// what [`Model::add_constraint`] refuses (an unknown grid), each with the card's line.
+pub(super) fn apply_mpc(
+    mpcs: &[&Card],
+    selected: Option<&Selected>,
+    has_case_control: bool,
+    model: &mut Model,
+    turned: &HashMap<u64, i64>,
+    path: &Path,
+    warnings: &mut Vec<Warning>,
+) -> Result<(), IoError> {
+    let mut sets: BTreeMap<i64, Vec<&Card>> = BTreeMap::new();
+    for c in mpcs {
+        let sid = c
+            .int(0, "SID")?
+            .ok_or_else(|| c.err("needs a set id (SID)".into()))?;
+        sets.entry(sid).or_default().push(c);
+    }
+    let chosen = match selected.map(|s| s.id) {
+        Some(s) => s,
+        None => {
+            let Some(first) = mpcs.first() else {
+                return Ok(());
+            };
+            let ids: Vec<i64> = sets.keys().copied().collect();
+            if has_case_control || ids.len() > 1 {
+                warn(
+                    warnings,
+                    first,
+                    format!(
+                        "MPC sets {ids:?} are defined and {}: none is applied, as Nastran applies only the set MPC = n selects",
+                        if has_case_control {
+                            "the case control selects none"
+                        } else {
+                            "no case control selects one"
+                        }
+                    ),
+                );
+                return Ok(());
+            }
+            warn(
+                warnings,
+                first,
+                format!(
+                    "no case control: the deck's only MPC set {} is applied",
+                    ids[0]
+                ),
+            );
+            ids[0]
+        }
+    };
+    let mut todo = vec![chosen];
+    let mut seen = Vec::new();
+    while let Some(s) = todo.pop() {
+        if seen.contains(&s) {
+            continue;
+        }
+        seen.push(s);
+        let cards = sets.get(&s).cloned().unwrap_or_default();
+        if cards.is_empty() {
+            return Err(match selected.filter(|sel| sel.id == s) {
+                Some(sel) => IoError::Parse {
+                    path: sel.path.clone(),
+                    line: sel.line,
+                    reason: format!("MPC = {s} selects a set that no MPC or MPCADD defines"),
+                },
+                None => IoError::Content {
+                    path: path.to_path_buf(),
+                    reason: format!("MPC set {s} is named by an MPCADD but no MPC defines it"),
+                },
+            });
+        }
+        for c in cards {
+            if c.name == "MPCADD" {
+                let ids: Vec<&str> = c
+                    .fields
+                    .get(1..)
+                    .unwrap_or_default()
+                    .iter()
+                    .map(|s| s.trim())
+                    .filter(|s| !s.is_empty())
+                    .collect();
+                if ids.is_empty() {
+                    return Err(c.err("names no set (MPCADD SID S1 S2 ...)".into()));
+                }
+                for t in ids {
+                    todo.push(
+                        t.parse::<i64>()
+                            .map_err(|_| c.err(format!("set {t:?} is not an id")))?,
+                    );
+                }
+                continue;
+            }
+            // the terms: fields 1-3 and 4-6 of the first line, 8k+1.. and 8k+4.. after
+            let mut terms: Vec<((u64, usize), f64)> = Vec::new();
+            let mut at = 1;
+            while at < c.fields.len() {
+                for start in [at, at + 3] {
+                    if (start..start + 3).all(|i| c.field(i).trim().is_empty()) {
+                        continue;
+                    }
+                    let g = c.id(start, "G")?;
+                    let comp = c.int(start + 1, "C")?.unwrap_or(0);
+                    if !(1..=6).contains(&comp) {
+                        return Err(c.err(format!(
+                            "component {comp} of GRID {g} is not 1 to 6 (scalar points are not modelled)"
+                        )));
+                    }
+                    if let Some(cd) = turned.get(&g) {
+                        return Err(c.err(format!(
+                            "GRID {g}'s component {comp} is in its displacement frame {cd}, which is turned: femu's constraints are in the basic frame"
+                        )));
+                    }
+                    let a = c.real(start + 2, "A")?.ok_or_else(|| {
+                        c.err(format!("GRID {g} component {comp} has no coefficient A"))
+                    })?;
+                    terms.push(((g, comp as usize - 1), a));
+                }
+                at += 8;
+            }
+            let Some((&(dependent, a1), rest)) = terms.split_first() else {
+                return Err(c.err("has no term (MPC SID G1 C1 A1 ...)".into()));
+            };
+            if !(a1.is_finite() && a1 != 0.0) {
+                return Err(c.err(format!(
+                    "the first term's coefficient A1 is {a1}: it is the dependent DOF's (u1 = -sum Aj uj / A1) and must not be zero"
+                )));
+            }
+            let weights: Vec<((u64, usize), f64)> =
+                rest.iter().map(|&(d, a)| (d, -a / a1)).collect();
+            let label = format!("MPC {s} ({} line {})", c.path.display(), c.line);
+            model
+                .add_constraint(dependent, &weights, &label)
+                .map_err(c.located())?;
+        }
+    }
+    Ok(())
+}

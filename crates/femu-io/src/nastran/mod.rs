@@ -142,7 +142,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("PBCOMP", "composite beams"),
     ("PBRSECT", "arbitrary beam sections"),
     ("PBMSECT", "arbitrary beam sections"),
-    ("MPC", "multipoint constraints"),
     ("RBE1", "rigid elements"),
     ("RROD", "rigid rods"),
     ("RTRPLT", "rigid triangles"),
@@ -150,7 +149,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("RSPLINE", "interpolation constraints"),
     ("RSSCON", "shell-solid connectors"),
     ("RJOINT", "rigid joints"),
-    ("MPCADD", "multipoint constraints"),
     ("CORD3G", "coordinate systems"),
     ("GENEL", "general elements"),
     ("DMIG", "direct matrix input"),
@@ -267,6 +265,8 @@ struct Sorted<'a> {
     psolids: HashMap<u64, (u64, &'a Card)>,
     materials: HashMap<u64, &'a Card>,
     spcs: Vec<&'a Card>,
+    /// `MPC` and `MPCADD` cards.
+    mpcs: Vec<&'a Card>,
     conm2: Vec<&'a Card>,
     links: Vec<&'a Card>,
     structural: structural::StructuralCards<'a>,
@@ -340,8 +340,8 @@ fn known_cards() -> Vec<&'static str> {
     let mut v: Vec<&'static str> = vec![
         "GRID", "GRDSET", "CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S", "CHEXA",
         "CPENTA", "CTETRA", "CPYRAM", "PSOLID", "MAT1", "MAT9", "MAT2", "MAT8", "SPC", "SPC1",
-        "SPCADD", "CONM2", "RBE2", "RBE3", "RBAR", "RBAR1", "PARAM", "EIGRL", "EIGR", "BAROR",
-        "BEAMOR",
+        "SPCADD", "MPC", "MPCADD", "CONM2", "RBE2", "RBE3", "RBAR", "RBAR1", "PARAM", "EIGRL",
+        "EIGR", "BAROR", "BEAMOR",
     ];
     v.extend(structural::ELEMENTS);
     v.extend(structural::PROPERTIES);
@@ -397,6 +397,7 @@ fn sort<'a>(
                 }
             }
             "SPC" | "SPC1" | "SPCADD" => s.spcs.push(c),
+            "MPC" | "MPCADD" => s.mpcs.push(c),
             "CONM2" => s.conm2.push(c),
             "RBE2" | "RBE3" | "RBAR" | "RBAR1" => s.links.push(c),
             "TABDMP1" => {
@@ -943,6 +944,15 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
         );
     }
     let dependents = links::read_links(&sorted.links, &mut model, &turned, &mut warnings)?;
+    constraints::apply_mpc(
+        &sorted.mpcs,
+        deck.case_control.mpc.as_ref(),
+        deck.has_case_control,
+        &mut model,
+        &turned,
+        path,
+        &mut warnings,
+    )?;
     let mut fix = |c: &Card, g: u64, comps: &[usize]| {
         constraints::fix_components(&mut model, &turned, c, g, comps)
     };
