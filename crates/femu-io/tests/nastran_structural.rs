@@ -152,6 +152,57 @@ fn a_swept_wing_with_scalar_masses_against_msc_nastran() {
     assert_nastran_eigenvalues(&deck.model, deck.mass, &nastran);
 }
 
+/// pyNastran's `ha144ds.bdf` (BSD), MSC Nastran's example HA144D as a normal modes run (its
+/// `ha144ds.f06`): massless CBARs carrying CONM2 masses, six of them on RBARs off the beam line,
+/// `WTMASS`, a second `BEGIN BULK` line. femu's lowest twelve eigenvalues agree with Nastran's
+/// to their seven printed digits (its three rigid-body modes, printed 0.0, within 1e-9 of the
+/// first elastic one).
+#[test]
+fn a_swept_wing_on_rigid_bars_against_msc_nastran() {
+    let deck = read_bdf(fixture("ha144ds.bdf"), &BdfOptions::default()).unwrap();
+    assert_eq!(deck.mass, MassKind::Lumped);
+    assert_eq!(deck.model.dof_map().unwrap().free_count(), 30);
+    // R E A L   E I G E N V A L U E S, modes 4-12
+    let nastran = [
+        3.814892E+03,
+        1.312566E+04,
+        5.288868E+04,
+        7.263895E+04,
+        1.243099E+05,
+        1.938939E+05,
+        6.936338E+05,
+        8.249879E+05,
+        1.772247E+06,
+    ];
+    let modes = deck
+        .model
+        .assemble(deck.mass)
+        .unwrap()
+        .modes(Which::Lowest(12), &EigenOptions::default())
+        .unwrap();
+    for l in &modes.values[..3] {
+        assert!(l.abs() < 1e-9 * nastran[0], "{:?}", modes.values);
+    }
+    for (got, want) in modes.values[3..].iter().zip(nastran) {
+        assert!(
+            (got / want - 1.0).abs() < 6e-7,
+            "{got:e} against Nastran's {want:e}"
+        );
+    }
+    // a superelement's partition is refused with its line
+    let err = parse_bdf(
+        "BEGIN BULK\nGRID,1,,0.,0.,0.\nBEGIN SUPER=2\nGRID,2,,1.,0.,0.\nENDDATA\n",
+        "super.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("super.bdf:3") && err.contains("partitioned"),
+        "{err}"
+    );
+}
+
 /// Scalar masses by hand, under the lumped mass a deck gets by default, which keeps their matrices
 /// whole: a CMASS2 on component 1 of a grid whose displacement frame is turned 45 degrees, with
 /// CELAS2 springs on its three components, has the one finite `w^2 = k1 / m` (its mass acts

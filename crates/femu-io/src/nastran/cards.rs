@@ -287,6 +287,25 @@ pub(super) fn deck(lines: &[Line]) -> Result<Deck, IoError> {
         if t.is_empty() || t.starts_with('$') {
             continue;
         }
+        // a further BEGIN BULK opens the main bulk data again (MSC Nastran runs pyNastran's
+        // ha144ds with two); BEGIN SUPER or AUXMODEL opens a partition femu does not read
+        let upper = t.to_ascii_uppercase();
+        if upper.starts_with("BEGIN") && !upper.starts_with("BEGIN,") {
+            let words: Vec<&str> = upper
+                .split(|c: char| c.is_whitespace() || c == '=')
+                .filter(|w| !w.is_empty())
+                .collect();
+            if words.get(1) == Some(&"BULK") {
+                continue;
+            }
+            return Err(IoError::Parse {
+                path: path.clone(),
+                line: *number,
+                reason: format!(
+                    "{t:?}: partitioned bulk data (superelements, auxiliary models) is not read; femu reads one model's bulk data"
+                ),
+            });
+        }
         for p in split(l) {
             if is_continuation(&p.first) {
                 let key = label_key(&p.first);
