@@ -107,6 +107,12 @@ const SCREEN: f64 = 1e-2;
 /// residuals: a zero-energy mode can only meet this test, its `K x` being round-off.
 const BACKWARD_LOCK: f64 = 1e-13;
 
+/// A lowest-mode solve of a pencil of at most this many DOFs whose iteration does not converge
+/// (a request that nearly fills the space the DOFs with mass span) finds its pairs by the dense
+/// route instead (`O(n^3)`: about a second at this size), then locks and checks them as the
+/// iteration's.
+const DENSE_PAIRS: usize = 2000;
+
 /// A mode is zero-energy when `||K x|| <= ZERO_ENERGY ||K||_1 ||x||`: `K x` is then round-off.
 const ZERO_ENERGY: f64 = 1e-11;
 

@@ -424,7 +424,7 @@ impl<'a> Pencil<'a> {
                 max_restarts: params.max_restarts.min(HINTED_RESTARTS),
                 ..params.clone()
             };
-            match self.solve_counted(which, &hinted, Some(hint), &mut stats, started) {
+            match self.solve_counted(which, &hinted, Some(hint), false, &mut stats, started) {
                 // a misplaced hint: start again as if none had been given; `stats` keeps the
                 // work already done
                 Err(
@@ -433,7 +433,7 @@ impl<'a> Pencil<'a> {
                 r => return r,
             }
         }
-        match self.solve_counted(which, params, None, &mut stats, started) {
+        match self.solve_counted(which, params, None, false, &mut stats, started) {
             // With massless DOFs the space the basis can span is the DOFs with mass; when the
             // request nearly fills a small one, blocks of several vectors can outrun it (18 DOF,
             // 10 with mass, 8 pairs in blocks of 4 did not converge): single vectors then, once;
@@ -445,7 +445,16 @@ impl<'a> Pencil<'a> {
                     block_size: 1,
                     ..params.clone()
                 };
-                self.solve_counted(which, &single, None, &mut stats, started)
+                match self.solve_counted(which, &single, None, false, &mut stats, started) {
+                    // still not: a small pencil's lowest pairs by the dense route, locked before
+                    // the iteration, which then only confirms them (and the Sturm count checks)
+                    Err(SparseError::NoConvergence { .. })
+                        if matches!(which, Which::Lowest(_)) && self.dim() <= DENSE_PAIRS =>
+                    {
+                        self.solve_counted(which, params, None, true, &mut stats, started)
+                    }
+                    r => r,
+                }
             }
             r => r,
         }
@@ -506,29 +515,88 @@ impl<'a> Pencil<'a> {
         let (_, y) = crate::dense::symmetric_eigen((b.transpose() * &kc * &b).as_ref())?;
         let coef = &b * &y;
         let (x, kx, mx) = (r * &coef, &kr * &coef, &mr * &coef);
-        let mut pairs = Vec::new();
-        for j in 0..coef.ncols() {
-            let col = |a: &Mat<f64>| -> Vec<f64> { a.col(j).iter().copied().collect() };
-            let (x, kx, mx) = (col(&x), col(&kx), col(&mx));
-            let lambda = dot(&kx, &x) / dot(&mx, &x).max(f64::MIN_POSITIVE);
-            let res: Vec<f64> = kx.iter().zip(&mx).map(|(k, m)| k - lambda * m).collect();
-            let r_norm = norm(&res);
-            let eta = r_norm
-                / ((self.k_norm + lambda.abs() * self.m_norm) * norm(&x)).max(f64::MIN_POSITIVE);
-            if eta < BACKWARD_LOCK {
-                let (kk, km, mm) = (dot(&kx, &kx), dot(&kx, &mx), dot(&mx, &mx));
-                pairs.push(Known {
-                    x,
-                    mx,
-                    lambda,
-                    r_norm,
-                    kk,
-                    km,
-                    mm,
-                });
+        Ok((0..coef.ncols())
+            .filter_map(|j| {
+                let col = |a: &Mat<f64>| -> Vec<f64> { a.col(j).iter().copied().collect() };
+                self.known_pair(col(&x), col(&kx), col(&mx))
+            })
+            .collect())
+    }
+
+    /// The pair of the M-normalised vector `x` (with `K x`, `M x`) and its Rayleigh quotient, if
+    /// its backward error is below [`BACKWARD_LOCK`] (the test a pair the iteration locks meets).
+    fn known_pair(&self, x: Vec<f64>, kx: Vec<f64>, mx: Vec<f64>) -> Option<Known> {
+        let lambda = dot(&kx, &x) / dot(&mx, &x).max(f64::MIN_POSITIVE);
+        let res: Vec<f64> = kx.iter().zip(&mx).map(|(k, m)| k - lambda * m).collect();
+        let r_norm = norm(&res);
+        let eta =
+            r_norm / ((self.k_norm + lambda.abs() * self.m_norm) * norm(&x)).max(f64::MIN_POSITIVE);
+        (eta < BACKWARD_LOCK).then(|| {
+            let (kk, km, mm) = (dot(&kx, &kx), dot(&kx, &mx), dot(&mx, &mx));
+            Known {
+                x,
+                mx,
+                lambda,
+                r_norm,
+                kk,
+                km,
+                mm,
             }
-        }
-        Ok(pairs)
+        })
+    }
+
+    /// The `count` lowest pairs of a small pencil by the dense route, for a lowest-mode solve
+    /// whose iteration did not converge because the request nearly fills the space the DOFs with
+    /// mass span (a singular `M`; MSC's HA144D wing, 30 DOFs of which 21 have mass, did not
+    /// converge for 15 modes). With `M = Q1 L1 Q1^T` (`Q0` its null space), a finite eigenvector
+    /// is `x = Q1 a + Q0 b` with `Q0^T K x = 0` (no inertia force in the massless directions), so
+    /// `b = -(Q0^T K Q0)^-1 Q0^T K Q1 a` and `a` solves the condensed pencil `(K_r, L1)`, `K_r`
+    /// the Schur complement: no shift, so every pair is accurate to the round-off of `K`. The
+    /// pairs, M-normalised, whose backward error passes [`BACKWARD_LOCK`], and the rank of `M`
+    /// (how many eigenvalues are finite).
+    fn dense_pairs(&self, count: usize) -> Result<(Vec<Known>, usize), SparseError> {
+        let (kd, md) = (crate::csc::to_dense(self.k), crate::csc::to_dense(self.m));
+        let (mv, mq) = crate::dense::symmetric_eigen(md.as_ref())?;
+        let top = mv.last().copied().unwrap_or(0.0);
+        let (range, null): (Vec<usize>, Vec<usize>) =
+            (0..mv.len()).partition(|&i| mv[i] > 1e-12 * top);
+        let cols = |idx: &[usize]| Mat::from_fn(mq.nrows(), idx.len(), |i, j| mq[(i, idx[j])]);
+        let (q1, q0) = (cols(&range), cols(&null));
+        let k11 = q1.transpose() * &kd * &q1;
+        let k10 = q1.transpose() * &kd * &q0;
+        let k00 = q0.transpose() * &kd * &q0;
+        // Z = K00^-1 K01 (K00 is definite when every massless direction has stiffness)
+        let z = if null.is_empty() {
+            Mat::zeros(0, range.len())
+        } else {
+            let llt = k00
+                .llt(faer::Side::Lower)
+                .map_err(|_| SparseError::NotPositiveDefinite {
+                    matrix: "K on the massless DOFs (a massless mechanism)",
+                    index: 0,
+                })?;
+            let mut z = k10.transpose().to_owned();
+            let l = llt.L();
+            l.solve_lower_triangular_in_place(z.as_mut());
+            l.transpose().solve_upper_triangular_in_place(z.as_mut());
+            z
+        };
+        let kr = &k11 - &k10 * &z;
+        let s: Vec<f64> = range.iter().map(|&i| 1.0 / mv[i].sqrt()).collect();
+        let ks = Mat::from_fn(range.len(), range.len(), |i, j| {
+            0.5 * (kr[(i, j)] + kr[(j, i)]) * s[i] * s[j]
+        });
+        let (_, v) = crate::dense::symmetric_eigen(ks.as_ref())?;
+        let a = Mat::from_fn(v.nrows(), v.ncols(), |i, j| v[(i, j)] * s[i]);
+        let x = &q1 * &a - &q0 * (&z * &a);
+        let (kx, mx) = (&kd * &x, &md * &x);
+        let pairs = (0..x.ncols().min(count))
+            .filter_map(|j| {
+                let col = |a: &Mat<f64>| -> Vec<f64> { a.col(j).iter().copied().collect() };
+                self.known_pair(col(&x), col(&kx), col(&mx))
+            })
+            .collect();
+        Ok((pairs, range.len()))
     }
 
     /// [`Pencil::solve`] from the lowest-mode shift `hint` when given (the probe is then
@@ -540,15 +608,26 @@ impl<'a> Pencil<'a> {
         which: Which,
         params: &EigenOptions,
         hint: Option<f64>,
+        dense: bool,
         stats: &mut EigenStats,
         started: Instant,
     ) -> Result<Modes, SparseError> {
         // the number of finite eigenvalues: the DOFs with mass (massless DOFs, a lumped beam's
         // rotations, have a zero row in M and an infinite eigenvalue)
-        let n = crate::csc::diagonal(self.m)
+        let mut n = crate::csc::diagonal(self.m)
             .iter()
             .filter(|d| **d > 0.0)
             .count();
+        // the dense route's pairs, and the rank of M it finds (the finite eigenvalues exactly)
+        let dense_known = if dense {
+            let t = Instant::now();
+            let (pairs, rank) = self.dense_pairs(n)?;
+            stats.ritz_seconds += t.elapsed().as_secs_f64();
+            n = n.min(rank);
+            Some(pairs)
+        } else {
+            None
+        };
         let requested = match which {
             Which::Lowest(k) => k,
             Which::Nearest { count, .. } => count,
@@ -622,6 +701,10 @@ impl<'a> Pencil<'a> {
         let mut fallback: Option<f64> = None;
         // the pairs a run finds beyond a Lowest or Nearest request (none for a band)
         let guard = if band.is_some() { 0 } else { 3.min(n - want) };
+        if let Some(mut pairs) = dense_known {
+            pairs.truncate(want + guard);
+            known = pairs;
+        }
         // a hinted shift is already placed: no probe; nor when the given zero-energy pairs already
         // hold every pair the run wants (the request and its guard pairs)
         let covered = known.len() >= want + guard;
