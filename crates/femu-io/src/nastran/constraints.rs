@@ -134,126 +134,82 @@ pub(super) fn apply_spc(
         },
     };
     if let Some(sid) = chosen {
-        let mut todo = vec![sid];
-        let mut seen = Vec::new();
-        while let Some(s) = todo.pop() {
-            if seen.contains(&s) {
-                continue;
-            }
-            seen.push(s);
-            let cards = sets.get(&s).cloned().unwrap_or_default();
-            if cards.is_empty() {
-                return Err(match selected.filter(|sel| sel.id == s) {
-                    Some(sel) => IoError::Parse {
-                        path: sel.path.clone(),
-                        line: sel.line,
-                        reason: format!(
-                            "SPC = {s} selects a set that no SPC, SPC1 or SPCADD defines"
-                        ),
-                    },
-                    None => IoError::Content {
-                        path: path.to_path_buf(),
-                        reason: format!(
-                            "SPC set {s} is selected but no SPC, SPC1 or SPCADD defines it"
-                        ),
-                    },
-                });
-            }
-            for c in cards {
-                let comps = |c: &Card, i: usize| -> Result<Vec<usize>, IoError> {
-                    let t = c.field(i);
-                    let mut out = Vec::new();
-                    for ch in t.chars() {
-                        match ch {
-                            '1'..='6' => out.push(ch as usize - '1' as usize),
-                            '0' => {}
-                            _ => return Err(c.err(format!("component {t:?} is not a list of 1-6"))),
-                        }
+        for c in union_cards(&sets, sid, selected, path, ("SPC", "SPC, SPC1 or SPCADD"))? {
+            let comps = |c: &Card, i: usize| -> Result<Vec<usize>, IoError> {
+                let t = c.field(i);
+                let mut out = Vec::new();
+                for ch in t.chars() {
+                    match ch {
+                        '1'..='6' => out.push(ch as usize - '1' as usize),
+                        '0' => {}
+                        _ => return Err(c.err(format!("component {t:?} is not a list of 1-6"))),
                     }
-                    Ok(out)
-                };
-                match c.name.as_str() {
-                    "SPC" => {
-                        for k in 0..2 {
-                            let base = 1 + 3 * k;
-                            if c.field(base).is_empty() {
-                                continue;
-                            }
-                            let g = c.id(base, "G")?;
-                            let cs = comps(c, base + 1)?;
-                            if c.real(base + 2, "D")?.is_some_and(|d| d != 0.0) {
-                                warn(
-                                    warnings,
-                                    c,
-                                    "an enforced value is read as 0 (modal analysis)".into(),
-                                );
-                            }
-                            fix(c, g, &cs)?;
+                }
+                Ok(out)
+            };
+            match c.name.as_str() {
+                "SPC" => {
+                    for k in 0..2 {
+                        let base = 1 + 3 * k;
+                        if c.field(base).is_empty() {
+                            continue;
                         }
+                        let g = c.id(base, "G")?;
+                        let cs = comps(c, base + 1)?;
+                        if c.real(base + 2, "D")?.is_some_and(|d| d != 0.0) {
+                            warn(
+                                warnings,
+                                c,
+                                "an enforced value is read as 0 (modal analysis)".into(),
+                            );
+                        }
+                        fix(c, g, &cs)?;
                     }
-                    "SPC1" => {
-                        let cs = comps(c, 1)?;
-                        let rest: Vec<String> = c
-                            .fields
-                            .get(2..)
-                            .unwrap_or_default()
-                            .iter()
-                            .map(|s| s.trim().to_ascii_uppercase())
-                            .filter(|s| !s.is_empty())
-                            .collect();
-                        let mut grids_here = Vec::new();
-                        if rest.len() == 3 && rest[1] == "THRU" {
-                            let (a, b) = (rest[0].parse::<u64>(), rest[2].parse::<u64>());
-                            match (a, b) {
-                                (Ok(a), Ok(b)) if a <= b => {
-                                    // the defined grids in the range (not every id of it: a
-                                    // range may span billions of ids)
-                                    let mut ids: Vec<u64> = geometry
-                                        .grid_of
-                                        .keys()
-                                        .copied()
-                                        .filter(|g| (a..=b).contains(g))
-                                        .collect();
-                                    ids.sort_unstable();
-                                    grids_here.extend(ids);
-                                }
-                                _ => return Err(c.err(format!("THRU range {rest:?} is invalid"))),
+                }
+                "SPC1" => {
+                    let cs = comps(c, 1)?;
+                    let rest: Vec<String> = c
+                        .fields
+                        .get(2..)
+                        .unwrap_or_default()
+                        .iter()
+                        .map(|s| s.trim().to_ascii_uppercase())
+                        .filter(|s| !s.is_empty())
+                        .collect();
+                    let mut grids_here = Vec::new();
+                    if rest.len() == 3 && rest[1] == "THRU" {
+                        let (a, b) = (rest[0].parse::<u64>(), rest[2].parse::<u64>());
+                        match (a, b) {
+                            (Ok(a), Ok(b)) if a <= b => {
+                                // the defined grids in the range (not every id of it: a
+                                // range may span billions of ids)
+                                let mut ids: Vec<u64> = geometry
+                                    .grid_of
+                                    .keys()
+                                    .copied()
+                                    .filter(|g| (a..=b).contains(g))
+                                    .collect();
+                                ids.sort_unstable();
+                                grids_here.extend(ids);
                             }
-                        } else {
-                            for t in &rest {
-                                grids_here.push(
-                                    t.parse::<u64>()
-                                        .map_err(|_| c.err(format!("grid {t:?} is not an id")))?,
-                                );
-                            }
+                            _ => return Err(c.err(format!("THRU range {rest:?} is invalid"))),
                         }
-                        if rest.is_empty() {
-                            return Err(c.err("names no grid (SPC1 SID C G1 G2 ...)".into()));
-                        }
-                        for g in grids_here {
-                            fix(c, g, &cs)?;
-                        }
-                    }
-                    _ => {
-                        // SPCADD SID S1 S2 ...
-                        if c.fields.iter().skip(1).all(|s| s.trim().is_empty()) {
-                            return Err(c.err("names no set (SPCADD SID S1 S2 ...)".into()));
-                        }
-                        for t in c
-                            .fields
-                            .get(1..)
-                            .unwrap_or_default()
-                            .iter()
-                            .map(|s| s.trim())
-                            .filter(|s| !s.is_empty())
-                        {
-                            todo.push(
-                                t.parse::<i64>()
-                                    .map_err(|_| c.err(format!("set {t:?} is not an id")))?,
+                    } else {
+                        for t in &rest {
+                            grids_here.push(
+                                t.parse::<u64>()
+                                    .map_err(|_| c.err(format!("grid {t:?} is not an id")))?,
                             );
                         }
                     }
+                    if rest.is_empty() {
+                        return Err(c.err("names no grid (SPC1 SID C G1 G2 ...)".into()));
+                    }
+                    for g in grids_here {
+                        fix(c, g, &cs)?;
+                    }
                 }
+                _ => unreachable!("union_cards returns the sets' own cards"),
             }
         }
     }
@@ -321,7 +277,65 @@ pub(super) fn apply_mpc(
             ids[0]
         }
     };
-    let mut todo = vec![chosen];
+    for c in union_cards(&sets, chosen, selected, path, ("MPC", "MPC or MPCADD"))? {
+        let s = c.int(0, "SID")?.unwrap_or(chosen);
+        // the terms: fields 1-3 and 4-6 of the first line, 8k+1.. and 8k+4.. after
+        let mut terms: Vec<((u64, usize), f64)> = Vec::new();
+        let mut at = 1;
+        while at < c.fields.len() {
+            for start in [at, at + 3] {
+                if (start..start + 3).all(|i| c.field(i).trim().is_empty()) {
+                    continue;
+                }
+                let g = c.id(start, "G")?;
+                let comp = c.int(start + 1, "C")?.unwrap_or(0);
+                if !(1..=6).contains(&comp) {
+                    return Err(c.err(format!(
+                        "component {comp} of GRID {g} is not 1 to 6 (scalar points are not modelled)"
+                    )));
+                }
+                if let Some(cd) = turned.get(&g) {
+                    return Err(c.err(format!(
+                        "GRID {g}'s component {comp} is in its displacement frame {cd}, which is turned: femu's constraints are in the basic frame"
+                    )));
+                }
+                let a = c.real(start + 2, "A")?.ok_or_else(|| {
+                    c.err(format!("GRID {g} component {comp} has no coefficient A"))
+                })?;
+                terms.push(((g, comp as usize - 1), a));
+            }
+            at += 8;
+        }
+        let Some((&(dependent, a1), rest)) = terms.split_first() else {
+            return Err(c.err("has no term (MPC SID G1 C1 A1 ...)".into()));
+        };
+        if !(a1.is_finite() && a1 != 0.0) {
+            return Err(c.err(format!(
+                "the first term's coefficient A1 is {a1}: it is the dependent DOF's (u1 = -sum Aj uj / A1) and must not be zero"
+            )));
+        }
+        let weights: Vec<((u64, usize), f64)> = rest.iter().map(|&(d, a)| (d, -a / a1)).collect();
+        let label = format!("MPC {s} ({} line {})", c.path.display(), c.line);
+        model
+            .add_constraint(dependent, &weights, &label)
+            .map_err(c.located())?;
+    }
+    Ok(())
+}
+
+/// The cards of set `sid` and of the sets its `SPCADD`/`MPCADD` cards name, recursively (each set
+/// once), without the union cards themselves. `what` is the set's kind and the cards that define
+/// one, for the error naming a set nothing defines (at the case control's line when it selected
+/// it).
+fn union_cards<'c>(
+    sets: &BTreeMap<i64, Vec<&'c Card>>,
+    sid: i64,
+    selected: Option<&Selected>,
+    path: &Path,
+    (kind, defined_by): (&str, &str),
+) -> Result<Vec<&'c Card>, IoError> {
+    let mut out = Vec::new();
+    let mut todo = vec![sid];
     let mut seen = Vec::new();
     while let Some(s) = todo.pop() {
         if seen.contains(&s) {
@@ -334,77 +348,38 @@ pub(super) fn apply_mpc(
                 Some(sel) => IoError::Parse {
                     path: sel.path.clone(),
                     line: sel.line,
-                    reason: format!("MPC = {s} selects a set that no MPC or MPCADD defines"),
+                    reason: format!("{kind} = {s} selects a set that no {defined_by} defines"),
                 },
                 None => IoError::Content {
                     path: path.to_path_buf(),
-                    reason: format!("MPC set {s} is named by an MPCADD but no MPC defines it"),
+                    reason: format!("{kind} set {s} is selected but no {defined_by} defines it"),
                 },
             });
         }
         for c in cards {
-            if c.name == "MPCADD" {
-                let ids: Vec<&str> = c
-                    .fields
-                    .get(1..)
-                    .unwrap_or_default()
-                    .iter()
-                    .map(|s| s.trim())
-                    .filter(|s| !s.is_empty())
-                    .collect();
-                if ids.is_empty() {
-                    return Err(c.err("names no set (MPCADD SID S1 S2 ...)".into()));
-                }
-                for t in ids {
-                    todo.push(
-                        t.parse::<i64>()
-                            .map_err(|_| c.err(format!("set {t:?} is not an id")))?,
-                    );
-                }
+            if !c.name.ends_with("ADD") {
+                out.push(c);
                 continue;
             }
-            // the terms: fields 1-3 and 4-6 of the first line, 8k+1.. and 8k+4.. after
-            let mut terms: Vec<((u64, usize), f64)> = Vec::new();
-            let mut at = 1;
-            while at < c.fields.len() {
-                for start in [at, at + 3] {
-                    if (start..start + 3).all(|i| c.field(i).trim().is_empty()) {
-                        continue;
-                    }
-                    let g = c.id(start, "G")?;
-                    let comp = c.int(start + 1, "C")?.unwrap_or(0);
-                    if !(1..=6).contains(&comp) {
-                        return Err(c.err(format!(
-                            "component {comp} of GRID {g} is not 1 to 6 (scalar points are not modelled)"
-                        )));
-                    }
-                    if let Some(cd) = turned.get(&g) {
-                        return Err(c.err(format!(
-                            "GRID {g}'s component {comp} is in its displacement frame {cd}, which is turned: femu's constraints are in the basic frame"
-                        )));
-                    }
-                    let a = c.real(start + 2, "A")?.ok_or_else(|| {
-                        c.err(format!("GRID {g} component {comp} has no coefficient A"))
-                    })?;
-                    terms.push(((g, comp as usize - 1), a));
-                }
-                at += 8;
+            // SPCADD / MPCADD SID S1 S2 ...
+            let ids: Vec<&str> = c
+                .fields
+                .get(1..)
+                .unwrap_or_default()
+                .iter()
+                .map(|s| s.trim())
+                .filter(|s| !s.is_empty())
+                .collect();
+            if ids.is_empty() {
+                return Err(c.err(format!("names no set ({} SID S1 S2 ...)", c.name)));
             }
-            let Some((&(dependent, a1), rest)) = terms.split_first() else {
-                return Err(c.err("has no term (MPC SID G1 C1 A1 ...)".into()));
-            };
-            if !(a1.is_finite() && a1 != 0.0) {
-                return Err(c.err(format!(
-                    "the first term's coefficient A1 is {a1}: it is the dependent DOF's (u1 = -sum Aj uj / A1) and must not be zero"
-                )));
+            for t in ids {
+                todo.push(
+                    t.parse::<i64>()
+                        .map_err(|_| c.err(format!("set {t:?} is not an id")))?,
+                );
             }
-            let weights: Vec<((u64, usize), f64)> =
-                rest.iter().map(|&(d, a)| (d, -a / a1)).collect();
-            let label = format!("MPC {s} ({} line {})", c.path.display(), c.line);
-            model
-                .add_constraint(dependent, &weights, &label)
-                .map_err(c.located())?;
         }
     }
-    Ok(())
+    Ok(out)
 }
