@@ -963,26 +963,22 @@ impl Assembler {
         for s in model.structural() {
             let sm = s.matrices(mesh.coords(), mass)?;
             let pts = structural_points(&self.dofs, &sm.parts);
-            match mass {
-                MassKind::Consistent => self.scatter(&pts, |at, l, w| {
+            // whole with the consistent mass, and with a lumped mass on the pattern, which keeps
+            // a scalar mass's coupling (the other elements' lumped masses are diagonal: the same
+            // either way)
+            if mass == MassKind::Lumped && !self.lumped_on_pattern() {
+                self.scatter(&pts, |at, l, w| ks.add(at, w * sm.k[l]));
+                let nd = sm.k.len().isqrt();
+                self.scatter_lumped(
+                    &pts,
+                    |a, i| sm.m[(3 * a + i) * nd + 3 * a + i],
+                    |at, v| ms.add(at, v),
+                );
+            } else {
+                self.scatter(&pts, |at, l, w| {
                     ks.add(at, w * sm.k[l]);
                     ms.add(at, w * sm.m[l]);
-                }),
-                // a lumped mass on the pattern keeps a scalar mass's coupling (the other
-                // elements' lumped masses are diagonal: the same either way)
-                MassKind::Lumped if self.lumped_on_pattern() => self.scatter(&pts, |at, l, w| {
-                    ks.add(at, w * sm.k[l]);
-                    ms.add(at, w * sm.m[l]);
-                }),
-                MassKind::Lumped => {
-                    self.scatter(&pts, |at, l, w| ks.add(at, w * sm.k[l]));
-                    let nd = sm.k.len().isqrt();
-                    self.scatter_lumped(
-                        &pts,
-                        |a, i| sm.m[(3 * a + i) * nd + 3 * a + i],
-                        |at, v| ms.add(at, v),
-                    );
-                }
+                });
             }
         }
         // point masses: the 3x3 block of their node (whole; a diagonal one through the lumped
