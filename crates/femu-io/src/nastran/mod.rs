@@ -112,6 +112,9 @@ const NO_EFFECT: &[&str] = &[
     "PLOAD2", "PLOAD4", "EIGR", "EIGRL", "SPOINT", "DAREA", "NSM", "SET1", "DESVAR", "DRESP1",
     "DCONSTR", "MONPNT1", "ASET", "ASET1", "OMIT", "OMIT1", "SUPORT", "SUPORT1", "MDLPRM", "LSEQ",
     "RLOAD1", "RLOAD2", "USET", "USET1",
+    // design optimisation data (SOL 200) that leaves the initial design as the cards give it
+    // (a DVGRID moves its grid by the change of its design variable from XINIT: none at first)
+    "DCONADD", "DRESP2", "DRESP3", "DVGRID", "DLINK", "DOPTPRM", "DEQATN", "DTABLE", "DSCREEN",
     // aeroelastic data (QRG, "Aeroelastic"): the aerodynamic model, its splines to the
     // structure and the flutter, trim and gust conditions act on the modes, not in `K` or `M`
     "AERO", "AEROS", "AEFACT", "AELINK", "AELIST", "AEPARM", "AESTAT", "AESURF", "AESURFS",
@@ -129,6 +132,32 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("CONM1", "general mass matrices"),
     ("CELAS3", "scalar springs on scalar points"),
     ("CELAS4", "scalar springs on scalar points"),
+    (
+        "DVPREL1",
+        "design relations (SOL 200 sets the initial design's properties from them)",
+    ),
+    (
+        "DVPREL2",
+        "design relations (SOL 200 sets the initial design's properties from them)",
+    ),
+    (
+        "DVCREL1",
+        "design relations (SOL 200 sets the initial design's properties from them)",
+    ),
+    (
+        "DVCREL2",
+        "design relations (SOL 200 sets the initial design's properties from them)",
+    ),
+    (
+        "DVMREL1",
+        "design relations (SOL 200 sets the initial design's properties from them)",
+    ),
+    (
+        "DVMREL2",
+        "design relations (SOL 200 sets the initial design's properties from them)",
+    ),
+    ("EPOINT", "extra points (transfer functions)"),
+    ("TF", "transfer functions"),
     ("CMASS3", "scalar masses on scalar points"),
     ("CMASS4", "scalar masses on scalar points"),
     ("CDAMP3", "scalar dampers on scalar points"),
