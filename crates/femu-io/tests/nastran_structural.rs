@@ -14,6 +14,13 @@ fn fixture(name: &str) -> std::path::PathBuf {
         .join(name)
 }
 
+/// The error of reading `text` as the file `path`, as text.
+fn refused(text: &str, path: &str) -> String {
+    parse_bdf(text, path, &BdfOptions::default())
+        .unwrap_err()
+        .to_string()
+}
+
 /// The lowest eigenvalues of `model` with `kind`, each within `tol` (relative) of `want`'s.
 fn assert_lowest(model: &femu_fem::model::Model, kind: MassKind, want: &[f64], tol: f64) {
     let modes = model
@@ -211,13 +218,10 @@ fn a_swept_wing_on_rigid_bars_against_msc_nastran() {
     ];
     assert_nastran_eigenvalues(&deck.model, deck.mass, 3, &nastran);
     // a superelement's partition is refused with its line
-    let err = parse_bdf(
+    let err = refused(
         "BEGIN BULK\nGRID,1,,0.,0.,0.\nBEGIN SUPER=2\nGRID,2,,1.,0.,0.\nENDDATA\n",
         "super.bdf",
-        &BdfOptions::default(),
-    )
-    .unwrap_err()
-    .to_string();
+    );
     assert!(
         err.contains("super.bdf:3") && err.contains("partitioned"),
         "{err}"
@@ -272,9 +276,7 @@ fn design_cards_are_read_past_or_refused_by_what_they_change() {
         ("DVPREL1,1,PELAS,10,K1\n,1,1.\n", "design relations"),
         ("EPOINT,7\n", "extra points"),
     ] {
-        let err = parse_bdf(&deck(extra), "design.bdf", &BdfOptions::default())
-            .unwrap_err()
-            .to_string();
+        let err = refused(&deck(extra), "design.bdf");
         assert!(err.contains(needle), "{extra}: {err}");
     }
 }
@@ -356,9 +358,7 @@ ENDDATA
         ("CMASS3,20,6,7,8", "CMASS3"),
     ] {
         let text = format!("BEGIN BULK\nGRID,4,,0.,0.,0.\nCELAS2,10,3.+4,4,1\n{card}\nENDDATA\n");
-        let err = parse_bdf(&text, "bad.bdf", &BdfOptions::default())
-            .unwrap_err()
-            .to_string();
+        let err = refused(&text, "bad.bdf");
         assert!(
             err.contains(needle) && err.contains("bad.bdf:4"),
             "{card}: {err}"
@@ -423,9 +423,7 @@ fn rigid_bars_carry_an_offset_mass() {
         ("RBAR,30,2,2,123456", "GA and GB are both GRID 2"),
         ("RBAR1,30,2,3,7", "CB"),
     ] {
-        let err = parse_bdf(&deck(link), "rbar.bdf", &BdfOptions::default())
-            .unwrap_err()
-            .to_string();
+        let err = refused(&deck(link), "rbar.bdf");
         assert!(
             err.contains(needle) && err.contains("rbar.bdf:10"),
             "{link}: {err}"
@@ -509,9 +507,7 @@ fn mpc_equations_give_hand_solved_frequencies() {
             "MPC = 5 selects a set that no MPC or MPCADD defines",
         ),
     ] {
-        let err = parse_bdf(&deck(case, mpc), "bad.bdf", &BdfOptions::default())
-            .unwrap_err()
-            .to_string();
+        let err = refused(&deck(case, mpc), "bad.bdf");
         assert!(err.contains(needle), "{mpc}: {err}");
     }
 }
@@ -1793,9 +1789,7 @@ ENDDATA
     ] {
         let deck = simply_supported((0.6, 0.4, 4), "", property);
         let line = 1 + deck.lines().position(|l| l.starts_with(at)).unwrap();
-        let e = parse_bdf(&deck, "bad.bdf", &BdfOptions::default())
-            .unwrap_err()
-            .to_string();
+        let e = refused(&deck, "bad.bdf");
         assert!(
             e.contains(&format!("bad.bdf:{line}:")) && e.contains(says),
             "{e}"
@@ -2136,8 +2130,6 @@ fn a_cvisc_is_an_axial_damper() {
             assert!((c[(a, b)] - 3.0 * d[i] * d[j]).abs() < 1e-14, "{c:?}");
         }
     }
-    let e = parse_bdf(&deck("0.,0.,0."), "visc.bdf", &BdfOptions::default())
-        .unwrap_err()
-        .to_string();
+    let e = refused(&deck("0.,0.,0."), "visc.bdf");
     assert!(e.contains("visc.bdf:8") && e.contains("coincide"), "{e}");
 }
