@@ -43,9 +43,9 @@ pub struct Pcg<'a> {
     /// where two thirds of the entries (x-y, x-z, y-z couplings) are exact zeros; dropping them
     /// cuts the memory traffic of every CG product by three.
     m: Cow<'a, SparseMatrix>,
-    /// The massless DOFs and the mass they are given ([`MassSolver::new`]), added to `M`'s
-    /// products.
-    massless: Vec<(usize, f64)>,
+    /// The massless DOFs, each given the mass `floor` ([`MassSolver::new`]) in `M`'s products.
+    massless: Vec<usize>,
+    floor: f64,
     inv_diag: Vec<f64>,
     /// Stop when `sqrt(r^T D^-1 r / b^T D^-1 b) <= tol` for every right-hand side.
     pub tol: f64,
@@ -137,7 +137,8 @@ impl<'a> MassSolver<'a> {
             let floor = massless.first().map_or(0.0, |i| d[*i]);
             Self::Pcg(Pcg {
                 m: without_zeros(m),
-                massless: massless.into_iter().map(|i| (i, floor)).collect(),
+                massless,
+                floor,
                 inv_diag: inv,
                 tol: 1e-9,
                 max_iterations: 1000,
@@ -150,9 +151,8 @@ impl<'a> MassSolver<'a> {
     /// # Errors
     /// [`SparseError::NotPositiveDefinite`] with the failing pivot, or a malformed `M`.
     pub fn cholesky(m: &SparseMatrix) -> Result<Self, CorrelateError> {
-        if let (_, _, massless) = diagonal(m)?
-            && let Some(i) = massless.first()
-        {
+        let (_, _, massless) = diagonal(m)?;
+        if let Some(i) = massless.first() {
             return Err(SparseError::NotPositiveDefinite {
                 matrix: "M (a massless DOF: its Cholesky factor does not exist)",
                 index: *i,
@@ -268,9 +268,9 @@ impl Pcg<'_> {
             }
             report.iterations += 1;
             femu_sparse::csc::sym_mul_rows(&self.m, &p, k, &mut q)?;
-            for &(i, w) in &self.massless {
+            for &i in &self.massless {
                 for j in 0..k {
-                    q[i * k + j] += w * p[i * k + j];
+                    q[i * k + j] += self.floor * p[i * k + j];
                 }
             }
             let pq = col_dot(&p, &q);

@@ -93,13 +93,7 @@ pub(super) fn apply_spc(
     fix: &mut impl FnMut(&Card, u64, &[usize]) -> Result<(), IoError>,
 ) -> Result<(), IoError> {
     // constraints: the case control's SPC set, or the only one a bulk-only file has
-    let mut sets: BTreeMap<i64, Vec<&Card>> = BTreeMap::new();
-    for c in spcs {
-        let sid = c
-            .int(0, "SID")?
-            .ok_or_else(|| c.err("needs a set id (SID)".into()))?;
-        sets.entry(sid).or_default().push(c);
-    }
+    let sets = by_set(spcs)?;
     let chosen = match selected.map(|s| s.id) {
         Some(s) => Some(s),
         None if has_case_control => {
@@ -237,13 +231,7 @@ pub(super) fn apply_mpc(
     path: &Path,
     warnings: &mut Vec<Warning>,
 ) -> Result<(), IoError> {
-    let mut sets: BTreeMap<i64, Vec<&Card>> = BTreeMap::new();
-    for c in mpcs {
-        let sid = c
-            .int(0, "SID")?
-            .ok_or_else(|| c.err("needs a set id (SID)".into()))?;
-        sets.entry(sid).or_default().push(c);
-    }
+    let sets = by_set(mpcs)?;
     let chosen = match selected.map(|s| s.id) {
         Some(s) => s,
         None => {
@@ -321,6 +309,18 @@ pub(super) fn apply_mpc(
             .map_err(c.located())?;
     }
     Ok(())
+}
+
+/// The cards by their set id (field 1, `SID`).
+fn by_set<'c>(cards: &[&'c Card]) -> Result<BTreeMap<i64, Vec<&'c Card>>, IoError> {
+    let mut sets: BTreeMap<i64, Vec<&Card>> = BTreeMap::new();
+    for c in cards {
+        let sid = c
+            .int(0, "SID")?
+            .ok_or_else(|| c.err("needs a set id (SID)".into()))?;
+        sets.entry(sid).or_default().push(c);
+    }
+    Ok(sets)
 }
 
 /// The cards of set `sid` and of the sets its `SPCADD`/`MPCADD` cards name, recursively (each set
