@@ -5,7 +5,7 @@
 //! `cargo run --release --example shell_assembly -- [SHELLS_PER_SIDE] [4|8]` (default 400 4-node:
 //! 966,000 DOF against a 68^3 cube of 985,000; 230 8-node shells a side: about 950,000 DOF).
 
-use femu::fem::shell::Shell;
+use femu::fem::shell::{Membrane, Shell};
 use femu::fem::structural::{StructuralElement, StructuralKind};
 use femu::prelude::*;
 use std::time::Instant;
@@ -52,6 +52,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         nsm: 0.0,
         material: None,
         offset: 0.0,
+        membrane: Membrane::Incompatible,
     };
     for j in 0..n {
         for i in 0..n {

@@ -43,6 +43,26 @@ pub struct Shell {
     /// The reference plane's offset from the grids along the element's normal (m; Nastran's
     /// ZOFFS): the grids drive it through rigid links (docs/MATH.md, "Shells").
     pub offset: f64,
+    /// The 4-node shell's membrane (docs/MATH.md, "Shells"); the 3- and 8-node shells have one
+    /// membrane each and ignore it.
+    pub membrane: Membrane,
+}
+
+/// The 4-node shell's membrane (docs/MATH.md, "Shells").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Membrane {
+    /// The bilinear membrane: the strains of the corners' displacements at the 2 x 2 Gauss
+    /// points. It is stiff in in-plane bending on coarse meshes (a bending strain linear across
+    /// the element comes with a parasitic shear); Abaqus's and CalculiX's M3D4.
+    Full,
+    /// The bilinear membrane enriched by the incompatible modes `(1 - xi^2)` and `(1 - eta^2)` of
+    /// each in-plane displacement, their gradients taken with the centre's Jacobian (Taylor,
+    /// Beresford and Wilson's QM6, which passes the patch test on any quadrilateral) and condensed
+    /// out in the element: exact in-plane bending on rectangles. MSC and Simcenter Nastran's
+    /// CQUAD4 membrane (their eigenvalues to the printed digits; docs/VERIFICATION.md) and the
+    /// in-plane behaviour of Abaqus's S4.
+    #[default]
+    Incompatible,
 }
 
 /// A shell section's material matrices in its material axes, and the material's first axis.
@@ -213,6 +233,7 @@ pub fn laminate(plies: &[Ply]) -> Result<Shell, LaminateError> {
             axis: [1.0, 0.0, 0.0],
         }),
         offset: 0.0,
+        membrane: Membrane::Incompatible,
     })
 }
 
@@ -617,6 +638,20 @@ pub(crate) fn matrices_scaled(
     };
     let (a_row, c_row) = (shear_row(0.0, 1.0, true), shear_row(0.0, -1.0, true));
     let (b_row, d_row) = (shear_row(1.0, 0.0, false), shear_row(-1.0, 0.0, false));
+    // the centre's Jacobian: the drilling's rotation and the incompatible modes' gradients
+    let (inv0, det0) = {
+        let j = jac(0.0, 0.0);
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        let inv = [
+            [j[1][1] / det, -j[0][1] / det],
+            [-j[1][0] / det, j[0][0] / det],
+        ];
+        (inv, det)
+    };
+    // the incompatible modes (u: 0, 1; v: 2, 3) with the membrane (rows) and with each other
+    let incompatible = s.membrane == Membrane::Incompatible && sc.linear != 0.0;
+    let mut k_ma = [[0.0; 4]; 24];
+    let mut k_aa = [[0.0; 4]; 4];
     let gp = 1.0 / 3f64.sqrt();
     let mut area = 0.0;
     for (xi, eta) in [(-gp, -gp), (gp, -gp), (gp, gp), (-gp, gp)] {
@@ -636,6 +671,41 @@ pub(crate) fn matrices_scaled(
             ny[i] = inv[1][0] * dxi[i] + inv[1][1] * deta[i];
         }
         let (bm, bb) = strain_rows::<24>(&nx, &ny);
+        if incompatible {
+            // Taylor's QM6: the modes' strains B_a (1 - xi^2, 1 - eta^2 for u, then for v) with
+            // J0^-1, weighted by det0 in place of det, so that their integral vanishes
+            let grad = |q: usize| {
+                let d = if q == 0 {
+                    [-2.0 * xi, 0.0]
+                } else {
+                    [0.0, -2.0 * eta]
+                };
+                [
+                    inv0[0][0] * d[0] + inv0[0][1] * d[1],
+                    inv0[1][0] * d[0] + inv0[1][1] * d[1],
+                ]
+            };
+            let mut ba = [[0.0; 4]; 3];
+            for q in 0..2 {
+                let [gx, gy] = grad(q);
+                ba[0][q] = gx;
+                ba[2][q] = gy;
+                ba[1][2 + q] = gy;
+                ba[2][2 + q] = gx;
+            }
+            let cba: [[f64; 4]; 3] = std::array::from_fn(|a| {
+                std::array::from_fn(|c| (0..3).map(|b| cm[a][b] * ba[b][c]).sum())
+            });
+            for c in 0..4 {
+                for r in 0..24 {
+                    k_ma[r][c] += (0..3).map(|a| bm[a][r] * cba[a][c]).sum::<f64>() * det0;
+                }
+                for r in 0..4 {
+                    k_aa[r][c] +=
+                        (0..3).map(|a| ba[a][r] * cba[a][c]).sum::<f64>() * det0 * det0 / det;
+                }
+            }
+        }
         // MITC4: gamma_xi from A (0, 1) and C (0, -1), gamma_eta from B (1, 0) and D (-1, 0),
         // then (gamma_xz, gamma_yz) = J^-1 (gamma_xi, gamma_eta)
         let mut gxi = [0.0; 24];
@@ -683,18 +753,52 @@ pub(crate) fn matrices_scaled(
             }
         }
     }
+    if incompatible {
+        condense(&mut k, &k_ma, &k_aa)?;
+    }
     // drilling: k_d (theta_z,i - omega)^2 at each corner, omega = (v_,x - u_,y) / 2 at the centre
     let (_, dxi, deta) = shape(0.0, 0.0);
-    let j = jac(0.0, 0.0);
-    let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-    let inv = [
-        [j[1][1] / det, -j[0][1] / det],
-        [-j[1][0] / det, j[0][0] / det],
-    ];
-    let nx: [f64; 4] = std::array::from_fn(|i| inv[0][0] * dxi[i] + inv[0][1] * deta[i]);
-    let ny: [f64; 4] = std::array::from_fn(|i| inv[1][0] * dxi[i] + inv[1][1] * deta[i]);
+    let nx: [f64; 4] = std::array::from_fn(|i| inv0[0][0] * dxi[i] + inv0[0][1] * deta[i]);
+    let ny: [f64; 4] = std::array::from_fn(|i| inv0[1][0] * dxi[i] + inv0[1][1] * deta[i]);
     add_drilling::<24>(&mut k, &nx, &ny, sc.linear * drilling(s) * g * t * area);
     Ok(to_basic::<24>(&k, m, &axes, mass, s.offset))
+}
+
+/// The incompatible modes condensed out of the element's stiffness: `k -= k_ma k_aa^-1 k_ma^T`
+/// (`k_aa` is positive definite for a membrane material that is and a convex quadrilateral).
+fn condense(k: &mut [f64], k_ma: &[[f64; 4]; 24], k_aa: &[[f64; 4]; 4]) -> Result<(), String> {
+    // Cholesky of the 4 x 4
+    let mut l = [[0.0; 4]; 4];
+    for r in 0..4 {
+        for c in 0..=r {
+            let v = k_aa[r][c] - (0..c).map(|q| l[r][q] * l[c][q]).sum::<f64>();
+            if r == c {
+                if !(v > 1e-12 * k_aa[r][r]) {
+                    return Err(
+                        "its membrane's incompatible modes have no stiffness (a membrane material that is not positive definite)"
+                            .into(),
+                    );
+                }
+                l[r][r] = v.sqrt();
+            } else {
+                l[r][c] = v / l[c][c];
+            }
+        }
+    }
+    // w = L^-1 k_ma^T, one column per element DOF; then k -= w^T w
+    let mut w = [[0.0; 24]; 4];
+    for col in 0..24 {
+        for r in 0..4 {
+            let v = k_ma[col][r] - (0..r).map(|q| l[r][q] * w[q][col]).sum::<f64>();
+            w[r][col] = v / l[r][r];
+        }
+    }
+    for r in 0..24 {
+        for c in 0..24 {
+            k[r * 24 + c] -= (0..4).map(|q| w[q][r] * w[q][c]).sum::<f64>();
+        }
+    }
+    Ok(())
 }
 
 /// The 3-node shell (MITC3, Lee and Bathe 2004) on `(u, v, w, theta_x, theta_y, theta_z)` of

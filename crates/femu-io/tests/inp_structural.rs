@@ -535,10 +535,12 @@ fn s4_plate_against_nafems_fv16_and_calculix() {
 
 /// `*SHELL SECTION, OFFSET=` as Abaqus defines it (the nodes' surface from the midsurface, a
 /// fraction of the thickness): two S4 layers 0.05 thick on the same nodes, one `OFFSET=SNEG`
-/// (the nodes on its bottom face), the other `OFFSET=SPOS`, are the FV16 plate 0.1 thick (its
-/// six lowest frequencies to 1e-6); with `OFFSET=0.5` on both their midsurfaces coincide, two
-/// plates 0.05 thick with a quarter of its bending stiffness per mass (the first eigenvalue a
-/// quarter of the plate's).
+/// (the nodes on its bottom face), the other `OFFSET=SPOS`, are the FV16 plate 0.1 thick: its six
+/// lowest eigenvalues to 1 %, from below (3.5e-4 to 6.8e-3 measured on 8 x 8 shells: S4's
+/// incompatible-mode membranes relax the layers' share `z kappa` of the bending; with the bilinear
+/// membrane the identity holds to 1e-6, `two_offset_layers_are_one_plate_twice_as_thick`); with
+/// `OFFSET=0.5` on both their midsurfaces coincide, two plates 0.05 thick with a quarter of its
+/// bending stiffness per mass (the first eigenvalue a quarter of the plate's).
 #[test]
 fn shell_section_offsets_make_one_plate_of_two() {
     let n = 8;
@@ -575,7 +577,7 @@ fn shell_section_offsets_make_one_plate_of_two() {
     let (got, _, _) = lowest(&layered("SNEG", "SPOS"), 6);
     let (same_side, _, _) = lowest(&layered("0.5", "0.5"), 6);
     for (w, g) in want.iter().zip(&got) {
-        assert!((g / w - 1.0).abs() < 1e-6, "{got:?} against {want:?}");
+        assert!(g < w && g / w > 0.99, "{got:?} against {want:?}");
     }
     assert!(
         same_side[0] / want[0] < 0.3,

@@ -250,8 +250,9 @@ fn the_bah_plane_against_msc_nastran() {
 }
 
 /// Cards of other solutions: the design cards that leave the initial design as the cards give it
-/// (DCONADD, DVGRID, DSCREEN) are read past with a warning; a DVPREL1, from which SOL 200 sets
-/// the initial design's property, and an EPOINT (transfer functions) are refused, named.
+/// (DCONADD, DVGRID, DSCREEN) are read past with a warning; a DVPREL2, from which SOL 200 sets
+/// the initial design's property by an equation, and an EPOINT (transfer functions) are refused,
+/// named.
 #[test]
 fn design_cards_are_read_past_or_refused_by_what_they_change() {
     let deck = |extra: &str| {
@@ -273,12 +274,116 @@ fn design_cards_are_read_past_or_refused_by_what_they_change() {
         );
     }
     for (extra, needle) in [
-        ("DVPREL1,1,PELAS,10,K1\n,1,1.\n", "design relations"),
+        ("DVPREL2,1,PELAS,10,K1,,,7\n", "design relations"),
         ("EPOINT,7\n", "extra points"),
     ] {
         let err = refused(&deck(extra), "design.bdf");
         assert!(err.contains(needle), "{extra}: {err}");
     }
+}
+
+/// DVPREL1 as SOL 200 evaluates it at the initial design, `P = C0 + sum COEF_i XINIT_i` (QRG
+/// DVPREL1, DESVAR): a spring `k = 3e4` (PELAS) on a mass 2 whose relation gives `3e4` (by
+/// `1.0 x 3e4`, by `1e4 + 0.5 x 4e4` and by the field position FID 3) is read past with a warning
+/// and has `w^2 = k / m = 1.5e4`; one that gives `4e4` is refused with both values and the
+/// PELAS's line (read as the cards give it under `--lenient`, with a warning); a blank GE1 is its
+/// default 0 and a relation giving it 0.02 is refused; a property name femu does not compare, an
+/// undefined design variable and a relation of an undefined property are refused with card and
+/// line.
+#[test]
+fn dvprel1_relations_are_checked_at_the_initial_design() {
+    let deck = |design: &str| {
+        format!(
+            "SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nGRID,1,,0.,0.,0.\nCELAS1,10,5,1,1\nPELAS,5,3.+4\nCONM2,11,1,,2.\nSPC1,1,23456,1\n{design}ENDDATA\n"
+        )
+    };
+    for design in [
+        "DESVAR,1,K,3.+4,1.,1.+6\nDVPREL1,7,PELAS,5,K1\n,1,1.\n",
+        "DESVAR,1,K,4.+4,1.,1.+6\nDVPREL1,7,PELAS,5,K1,,,1.+4\n,1,0.5\n",
+        "DESVAR,1,K,3.+4,1.,1.+6\nDVPREL1,7,PELAS,5,3\n,1,1.\n",
+    ] {
+        let d = parse_bdf(&deck(design), "design.bdf", &BdfOptions::default()).unwrap();
+        assert!(
+            d.warnings
+                .iter()
+                .any(|w| w.line == 11 && w.message.starts_with("1 DVPREL1 relation agrees")),
+            "{design}: {:?}",
+            d.warnings
+        );
+        assert_lowest(&d.model, d.mass, &[1.5e4], 1e-12);
+    }
+    let mismatch = deck("DESVAR,1,K,4.+4,1.,1.+6\nDVPREL1,7,PELAS,5,K1\n,1,1.\n");
+    let err = refused(&mismatch, "design.bdf");
+    assert!(
+        err.contains("design.bdf:11")
+            && err.contains("4e4")
+            && err.contains("3e4")
+            && err.contains("line 7"),
+        "{err}"
+    );
+    let lenient = parse_bdf(&mismatch, "design.bdf", &BdfOptions { lenient: true }).unwrap();
+    assert!(
+        lenient
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("--lenient") && w.message.contains("4e4")),
+        "{:?}",
+        lenient.warnings
+    );
+    assert_lowest(&lenient.model, lenient.mass, &[1.5e4], 1e-12);
+    for (design, needle) in [
+        (
+            "DESVAR,1,G,0.02,0.,1.\nDVPREL1,7,PELAS,5,GE1\n,1,1.\n",
+            "gives 0e0",
+        ),
+        (
+            "DESVAR,1,S,1.,0.,2.\nDVPREL1,7,PELAS,5,S1\n,1,1.\n",
+            "femu compares its K1, GE1",
+        ),
+        ("DVPREL1,7,PELAS,5,K1\n,1,1.\n", "no DESVAR defines"),
+        (
+            "DESVAR,1,K,3.+4,1.,1.+6\nDVPREL1,7,PELAS,6,K1\n,1,1.\n",
+            "does not define",
+        ),
+        (
+            "DESVAR,1,K,3.+4,1.,1.+6\nDVPREL1,7,PCOMP,5,T1\n,1,1.\n",
+            "femu compares PSHELL",
+        ),
+    ] {
+        let err = refused(&deck(design), "design.bdf");
+        assert!(
+            err.contains(needle) && err.contains("design.bdf:"),
+            "{design}: {err}"
+        );
+    }
+}
+
+/// MSC's Goland wing box (pyNastran's `goland_final_test.bdf`, BSD, with the `.f06` of its MSC
+/// Nastran 2018.1 run): 92 CQUAD4 membranes (PSHELLs of MID1 alone) as skin, spars and ribs, 137
+/// CROD caps and posts and 66 CONM2, a SOL 200 deck whose two DVPREL1 give their properties'
+/// values at the initial design. Nastran's first eigenvalue, 1.549873E+02, to its seven digits:
+/// the CQUAD4's incompatible-mode membrane (docs/MATH.md, "Shells"); the bilinear membrane gives
+/// 1.879429e2, 21 % stiff, as the webs bend in their plane.
+#[test]
+fn the_goland_wing_box_against_msc_nastran() {
+    let deck = read_bdf(fixture("goland_final_test.bdf"), &BdfOptions::default()).unwrap();
+    assert!(
+        deck.warnings
+            .iter()
+            .any(|w| w.message.starts_with("2 DVPREL1 relations agree")),
+        "{:?}",
+        deck.warnings
+    );
+    assert_eq!(deck.eigrl, Some((None, None, Some(1))));
+    let f06 = std::fs::read_to_string(fixture("goland_final_test.f06")).unwrap();
+    let row = f06
+        .lines()
+        .skip_while(|l| !l.contains("R E A L   E I G E N V A L U E S"))
+        .nth(3)
+        .unwrap();
+    let nastran: f64 = row.split_whitespace().nth(2).unwrap().parse().unwrap();
+    assert_eq!(nastran, 1.549873E+02);
+    assert_nastran_eigenvalues(&deck.model, deck.mass, 0, &[nastran]);
 }
 
 /// Scalar masses by hand, under the lumped mass a deck gets by default, which keeps their matrices
@@ -1182,8 +1287,11 @@ fn orthotropic_shells_as_nastran_decks() {
 
 /// ZOFFS as Nastran reads it: two CQUAD4 layers of thickness `t` on the same grids, one with
 /// ZOFFS = `t/2` on the element, the other taking `BOTTOM` (`-t/2`) from its PSHELL's ZOFFS,
-/// are the plate `2t` thick of one PSHELL (a cantilever's four lowest frequencies to 1e-6, with
-/// Nastran's lumped mass and with the coupled mass); the same layers without offsets are half as
+/// are the plate `2t` thick of one PSHELL (a cantilever's four lowest frequencies, with Nastran's
+/// lumped mass and with the coupled mass, to 2e-3: the CQUAD4's incompatible-mode membrane relaxes
+/// the layers' share `z kappa` of the bending, so the pair's eigenvalues are 3.3e-4 to 1.6e-3
+/// below the plate's; with the bilinear membrane the identity holds to 1e-6,
+/// `two_offset_layers_are_one_plate_twice_as_thick`); the same layers without offsets are half as
 /// stiff per mass in bending.
 #[test]
 fn offset_layers_as_a_nastran_deck() {
@@ -1245,7 +1353,7 @@ fn offset_layers_as_a_nastran_deck() {
         );
         for ((a, b), l) in single.iter().zip(&offset).zip(&loose) {
             assert!(
-                (b / a - 1.0).abs() < 1e-6,
+                b < a && b / a > 1.0 - 2e-3,
                 "coupled {coupled}: {offset:?} against {single:?}"
             );
             assert!(
@@ -1448,9 +1556,11 @@ fn a_tabbed_deck_s_isotropic_laminate_is_the_homogeneous_plate() {
 /// with its `.f06`): four CQUAD4 in the x-z plane, a PCOMPG of ten MAT8 fabric plies
 /// `[0/90/0/90/0]s`, clamped along one edge and pulled along z by three FORCEs (a static run,
 /// SOL 101). femu's `K` of the deck solved for the same forces gives the stretch along the load
-/// (T3) at every grid within 2e-4 of the `.f06`'s displacements (1.4e-4 measured) and the lateral
-/// contraction (T1) within 1.5 % (1.1 % measured: on a mesh of 2 x 2 elements it is the
-/// membrane formulation's, MITC4's bilinear membrane against Nastran's QUAD4).
+/// (T3) at every grid within 2e-6 of the largest in the `.f06`'s displacements (7.8e-7 measured,
+/// the `.f06`'s seven digits)
+/// and the lateral contraction (T1) within 1e-4 of the largest (2.3e-5 measured). With the
+/// bilinear membrane ([`femu_fem::shell::Membrane::Full`]) in place of the CQUAD4's
+/// incompatible-mode one they were 1.4e-4 and 1.1e-2 apart.
 #[test]
 fn a_simcenter_laminate_stretches_as_nastran_solved_it() {
     use faer::linalg::solvers::Solve;
@@ -1496,13 +1606,13 @@ fn a_simcenter_laminate_stretches_as_nastran_solved_it() {
         let node = mesh.node_index(*g).unwrap();
         let ours = |c: usize| sys.dofs.free_index(node, c).map_or(0.0, |i| u[(i, 0)]);
         assert!(
-            (ours(2) - nastran[2]).abs() < 2e-4 * stretch,
+            (ours(2) - nastran[2]).abs() < 2e-6 * stretch,
             "grid {g} T3: {} vs {}",
             ours(2),
             nastran[2]
         );
         assert!(
-            (ours(0) - nastran[0]).abs() < 1.5e-2 * contraction,
+            (ours(0) - nastran[0]).abs() < 1e-4 * contraction,
             "grid {g} T1: {} vs {}",
             ours(0),
             nastran[0]

@@ -313,6 +313,7 @@ fn eight_node_shells_are_quadratic_quads() {
             nsm: 0.0,
             material: None,
             offset: 0.0,
+            membrane: femu_fem::shell::Membrane::Incompatible,
         }),
     };
     let text = vtu_string_with(&mesh, &[shell], &[], &[]).unwrap();

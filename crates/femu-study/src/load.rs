@@ -126,6 +126,7 @@ fn add_sections(
             nsm: 0.0,
             material: None,
             offset: 0.0,
+            membrane: femu_fem::shell::Membrane::Incompatible,
         };
         add_group(
             model,

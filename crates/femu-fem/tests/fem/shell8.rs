@@ -21,6 +21,7 @@ fn steel(t: f64) -> Shell {
         nsm: 0.0,
         material: None,
         offset: 0.0,
+        membrane: femu_fem::shell::Membrane::Incompatible,
     }
 }
 

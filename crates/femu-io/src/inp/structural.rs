@@ -51,7 +51,7 @@ pub(super) enum StructuralType {
     /// A dashpot (`DASHPOT1`, `DASHPOT2`, `DASHPOTA` of a `*DASHPOT`): the spring of that kind
     /// with a viscous coefficient in place of its stiffness.
     Dashpot(SpringKind),
-    /// A 4-node shell (S4, and S4R built fully integrated).
+    /// A 4-node shell (S4, and S4R built fully integrated), with the incompatible-mode membrane.
     S4,
     /// A 3-node shell (S3, S3R).
     S3,
@@ -745,6 +745,13 @@ fn shell(
         material: None,
         // the nodes OFFSET t above the midsurface: the midsurface is -OFFSET t from them
         offset: -c.offset * t,
+        // S4's assumed-strain membrane is free of in-plane shear locking (the incompatible
+        // modes'); M3D4 is the bilinear membrane (CalculiX's frequencies on the same deck)
+        membrane: if c.membrane {
+            femu_fem::shell::Membrane::Full
+        } else {
+            femu_fem::shell::Membrane::Incompatible
+        },
     }))
 }
 

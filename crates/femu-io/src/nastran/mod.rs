@@ -53,6 +53,7 @@
 mod cards;
 mod case_control;
 mod constraints;
+mod design;
 mod dmig;
 mod elements;
 mod geometry;
@@ -132,10 +133,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("CONM1", "general mass matrices"),
     ("CELAS3", "scalar springs on scalar points"),
     ("CELAS4", "scalar springs on scalar points"),
-    (
-        "DVPREL1",
-        "design relations (SOL 200 sets the initial design's properties from them)",
-    ),
     (
         "DVPREL2",
         "design relations (SOL 200 sets the initial design's properties from them)",
@@ -312,6 +309,8 @@ struct Sorted<'a> {
     kdamp: Option<(i64, &'a Card)>,
     /// `TABDMP1` cards by table id.
     tabdmp: BTreeMap<i64, &'a Card>,
+    /// `DVPREL1` design relations, checked at the initial design.
+    dvprel1: Vec<&'a Card>,
 }
 
 fn warn(warnings: &mut Vec<Warning>, c: &Card, message: String) {
@@ -445,6 +444,7 @@ fn sort<'a>(
                 }
             }
             "PARAM" => param(c, &mut s, &mut warned, warnings)?,
+            "DVPREL1" => s.dvprel1.push(c),
             _ if s.structural.take(c)? => {}
             name => {
                 if let Some((card, kind)) = UNSUPPORTED.iter().find(|(n, _)| *n == name) {
@@ -517,6 +517,16 @@ fn sort<'a>(
                 reason: format!("{text} (--lenient reads the rest)"),
             });
         }
+    }
+    if let Err(e) = design::check_dvprel1(cards, &s.dvprel1, warnings) {
+        if !options.lenient {
+            return Err(e);
+        }
+        warnings.push(Warning {
+            path: s.dvprel1[0].path.clone(),
+            line: s.dvprel1[0].line,
+            message: format!("{e}; read as the analysis model gives it (--lenient)"),
+        });
     }
     Ok(s)
 }

@@ -1083,6 +1083,7 @@ fn pshell(
             nsm,
             material: None,
             offset,
+            membrane: femu_fem::shell::Membrane::Incompatible,
         });
     }
     if let Some(cs) = p.int(11, "MCSID")?.filter(|c| *c >= 0) {
@@ -1115,6 +1116,7 @@ fn pshell(
             axis: [1.0, 0.0, 0.0],
         }),
         offset,
+        membrane: femu_fem::shell::Membrane::Incompatible,
     })
 }
 
@@ -1156,6 +1158,7 @@ fn membrane_pshell(
             nsm,
             material: None,
             offset: 0.0,
+            membrane: femu_fem::shell::Membrane::Incompatible,
         });
     }
     let membrane = plane_material(c1, pid, p)?;
@@ -1175,6 +1178,7 @@ fn membrane_pshell(
             axis: [1.0, 0.0, 0.0],
         }),
         offset: 0.0,
+        membrane: femu_fem::shell::Membrane::Incompatible,
     })
 }
 
