@@ -250,7 +250,7 @@ fn the_bah_plane_against_msc_nastran() {
 }
 
 /// Cards of other solutions: the design cards that leave the initial design as the cards give it
-/// (DCONADD, DVGRID, DSCREEN) are read past with a warning; a DVPREL2, from which SOL 200 sets
+/// (DCONADD, DVGRID, DSCREEN) and a plot element (PLOTEL) are read past with a warning; a DVPREL2, from which SOL 200 sets
 /// the initial design's property by an equation, and an EPOINT (transfer functions) are refused,
 /// named.
 #[test]
@@ -261,12 +261,12 @@ fn design_cards_are_read_past_or_refused_by_what_they_change() {
         )
     };
     let d = parse_bdf(
-        &deck("DCONADD,10,1\nDVGRID,1,1,,1.,1.,0.,0.\nDSCREEN,FREQ,-0.5\n"),
+        &deck("DCONADD,10,1\nDVGRID,1,1,,1.,1.,0.,0.\nDSCREEN,FREQ,-0.5\nPLOTEL,30,1,1\n"),
         "design.bdf",
         &BdfOptions::default(),
     )
     .unwrap();
-    for card in ["DCONADD", "DVGRID", "DSCREEN"] {
+    for card in ["DCONADD", "DVGRID", "DSCREEN", "PLOTEL"] {
         assert!(
             d.warnings.iter().any(|w| w.message.starts_with(card)),
             "{card}: {:?}",
@@ -1910,7 +1910,9 @@ ENDDATA
 /// The case control's `SDAMPING` selects a `TABDMP1` (QRG: pairs `f g` to `ENDT`, `SKIP` drops a
 /// pair, ascending or descending): the model's modal damping table, whose ratio at a frequency is
 /// worked by hand here: linear between points, linearly extrapolated past the ends, the mean at a
-/// discontinuity, `g / 2` for TYPE G, `1 / (2 Q)` for Q. Refused with card and line: an SDAMPING
+/// discontinuity, `g / 2` for TYPE G, `1 / (2 Q)` for Q. A normal modes subcase without SDAMPING
+/// before a response subcase with one (SOL 146's layout) takes the response's table; two subcases
+/// that select different tables are refused. Refused with card and line: an SDAMPING
 /// that selects no table, a TYPE that is not G, CRIT or Q, frequencies that go up and down,
 /// `PARAM,KDAMP,-1` with a G table (complex modal stiffness, not built).
 #[test]
@@ -1950,6 +1952,24 @@ fn sdamping_selects_a_modal_damping_table() {
     // a table the case control does not select is not the model's
     let unselected = read("TABDMP1,6\n,0.,0.04,100.,0.04,ENDT\n", "").unwrap();
     assert!(unselected.model.modal_damping().is_none());
+    // a modes subcase and a response subcase
+    let tables = "TABDMP1,5\n,0.,0.08,100.,0.08,ENDT\nTABDMP1,6\n,0.,0.04,100.,0.04,ENDT\n";
+    let two = read(
+        tables,
+        "SUBCASE 10\n  ANALYSIS = MODES\nSUBCASE 20\n  SDAMP = 6\n",
+    )
+    .unwrap();
+    assert!(near(
+        two.model.modal_damping().unwrap().ratio_at(50.0),
+        0.02
+    ));
+    let e = read(tables, "SUBCASE 10\n  SDAMP = 5\nSUBCASE 20\n  SDAMP = 6\n")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("d.bdf:6:") && e.contains("select different SDAMPING sets"),
+        "{e}"
+    );
     for (table, sdamping, at, says) in [
         (
             "TABDMP1,6\n,0.,0.04,ENDT\n",

@@ -3,8 +3,9 @@
 //! `NAME(options) = value`, `$` starting a comment, a line ending in a comma continued on the next,
 //! commands abbreviated to their first four letters, `SUBCASE n` opening a subcase whose commands
 //! override those above the first subcase. femu takes what changes the model it builds: the `SPC`
-//! and `MPC` sets and the `METHOD` (the `EIGRL` of the modes); subcases that select different ones
-//! are refused, since femu solves one model.
+//! and `MPC` sets, the `METHOD` (the `EIGRL` of the modes) and the `SDAMPING` (the modal damping
+//! of the responses); subcases that select different ones are refused, since femu solves one
+//! model (a subcase without `SDAMPING`, which computes no damped response, differs from none).
 
 use super::cards::Line;
 use crate::IoError;
@@ -164,7 +165,7 @@ impl CaseControl {
             ("METHOD", |s: &Scope| s.method.clone()),
             ("SDAMPING", |s: &Scope| s.sdamping.clone()),
         ] {
-            let chosen: Vec<(Option<i64>, Option<Selected>)> = if subcases.is_empty() {
+            let mut chosen: Vec<(Option<i64>, Option<Selected>)> = if subcases.is_empty() {
                 vec![(None, pick(&global))]
             } else {
                 subcases
@@ -172,6 +173,11 @@ impl CaseControl {
                     .map(|s| (s.id, pick(s).or_else(|| pick(&global))))
                     .collect()
             };
+            // SDAMPING damps the responses of the subcases that select it: one that selects none
+            // (the normal modes subcase before a SOL 146 or SOL 111 response) does not differ
+            if what == "SDAMPING" && chosen.iter().any(|c| c.1.is_some()) {
+                chosen.retain(|c| c.1.is_some());
+            }
             let first = chosen[0].clone();
             if let Some((other_id, other)) = chosen
                 .iter()

@@ -113,6 +113,9 @@ const NO_EFFECT: &[&str] = &[
     "PLOAD2", "PLOAD4", "EIGR", "EIGRL", "SPOINT", "DAREA", "NSM", "SET1", "DESVAR", "DRESP1",
     "DCONSTR", "MONPNT1", "ASET", "ASET1", "OMIT", "OMIT1", "SUPORT", "SUPORT1", "MDLPRM", "LSEQ",
     "RLOAD1", "RLOAD2", "USET", "USET1",
+    // plot elements (lines drawn between grids) and monitor points (loads and displacements
+    // integrated for output): neither stiffness nor mass
+    "PLOTEL", "MONDSP1", "MONPNT3",
     // design optimisation data (SOL 200) that leaves the initial design as the cards give it
     // (a DVGRID moves its grid by the change of its design variable from XINIT: none at first)
     "DCONADD", "DRESP2", "DRESP3", "DVGRID", "DLINK", "DOPTPRM", "DEQATN", "DTABLE", "DSCREEN",
