@@ -53,8 +53,12 @@ pub struct Beam {
     pub g: f64,
     /// Density (kg/m^3).
     pub rho: f64,
-    /// The section.
+    /// The section (at end A when the beam is tapered).
     pub section: BeamSection,
+    /// End B's section of a tapered two-node beam (`None`: prismatic). `A`, `I1`, `I2`, `J` and
+    /// the non-structural mass vary linearly from end A's to end B's; the shear factors are end
+    /// A's, which end B's must repeat (docs/MATH.md, "Tapered beams").
+    pub taper: Option<BeamSection>,
     /// A vector (basic frame) in plane 1, not parallel to the axis: local `z = x cross v`,
     /// `y = z cross x` (Nastran's orientation vector `v`, Abaqus' `n1` direction).
     pub orientation: [f64; 3],
@@ -411,11 +415,27 @@ impl StructuralElement {
                 check_positive(id, "the shear modulus G", b.g, false)?;
                 check_positive(id, "the density", b.rho, true)?;
                 let s = &b.section;
-                check_positive(id, "the area A", s.area, false)?;
-                check_positive(id, "I1", s.i1, true)?;
-                check_positive(id, "I2", s.i2, true)?;
-                check_positive(id, "the torsion constant J", s.j, true)?;
-                check_positive(id, "the non-structural mass", s.nsm, true)?;
+                for (end, s) in [("", s)]
+                    .into_iter()
+                    .chain(b.taper.iter().map(|t| (" at end B", t)))
+                {
+                    check_positive(id, &format!("the area A{end}"), s.area, false)?;
+                    check_positive(id, &format!("I1{end}"), s.i1, true)?;
+                    check_positive(id, &format!("I2{end}"), s.i2, true)?;
+                    check_positive(id, &format!("the torsion constant J{end}"), s.j, true)?;
+                    check_positive(id, &format!("the non-structural mass{end}"), s.nsm, true)?;
+                }
+                if let Some(t) = &b.taper
+                    && (count == 3 || t.shear != s.shear)
+                {
+                    return Err(FemError::InvalidStructural {
+                        element: id,
+                        reason: format!(
+                            "a tapered beam has two nodes and one pair of shear factors (end A's {:?}, end B's {:?}, {count} nodes)",
+                            s.shear, t.shear
+                        ),
+                    });
+                }
                 if let Some(k) = s.shear
                     && !(k[0] > 0.0 && k[1] > 0.0)
                 {
@@ -604,7 +624,10 @@ impl StructuralElement {
                     add(coords[self.nodes[1]], b.offsets[1]),
                     add(coords[self.nodes[0]], b.offsets[0]),
                 ));
-                (b.rho * b.section.area + b.section.nsm) * l
+                // linear along a tapered beam: the mean of the ends
+                let b_end = b.taper.as_ref().unwrap_or(&b.section);
+                let per_length = |s: &BeamSection| b.rho * s.area + s.nsm;
+                0.5 * (per_length(&b.section) + per_length(b_end)) * l
             }
             StructuralKind::Rod(r) => (r.rho * r.area + r.nsm) * length(),
             StructuralKind::Spring(s) => {
@@ -958,6 +981,9 @@ fn release(k: &mut [f64], m: &[f64], releases: &[[bool; 6]; 2]) -> Result<(), St
 }
 
 fn beam_local(b: &Beam, l: f64, mass: MassKind) -> (Vec<f64>, Vec<f64>) {
+    if let Some(end_b) = &b.taper {
+        return tapered_local(b, end_b, l, mass);
+    }
     let s = &b.section;
     let mut k = vec![0.0; 144];
     let mut m = vec![0.0; 144];
@@ -1021,4 +1047,177 @@ fn beam_local(b: &Beam, l: f64, mass: MassKind) -> (Vec<f64>, Vec<f64>) {
         }
     }
     (k, m)
+}
+
+/// A tapered two-node beam's stiffness and mass in its frame (docs/MATH.md, "Tapered beams"):
+/// `A`, `I1`, `I2`, `J` and the non-structural mass linear from end A's section to `end_b`. The
+/// stiffness is exact for the tapered Timoshenko beam: each plane's flexibility of the beam
+/// clamped at end A, `F = int [[(L - x)^2 / E I + 1 / k G A, (L - x) / E I], [(L - x) / E I, 1 /
+/// E I]] dx`, inverted and carried to end A by equilibrium; the axial and torsional stiffnesses
+/// are `1 / int dx / (E A)` and `1 / int dx / (G J)`; the integrals in closed form
+/// ([`inverse_moments`]). A property zero at an end leaves no stiffness of its kind (the integral
+/// diverges). The consistent mass integrates the varying mass and rotary inertia over the
+/// prismatic beam's shape functions at the mean section; the lumped mass puts each end's share
+/// `int m (1 - x/L) dx` and `int m x/L dx` on its translations.
+fn tapered_local(b: &Beam, end_b: &BeamSection, l: f64, mass: MassKind) -> (Vec<f64>, Vec<f64>) {
+    let a = &b.section;
+    let at = |t: f64, f: fn(&BeamSection) -> f64| f(a) + (f(end_b) - f(a)) * t;
+    let mut k = vec![0.0; 144];
+    let mut m = vec![0.0; 144];
+    let put = |mat: &mut Vec<f64>, i: usize, j: usize, v: f64| mat[i * 12 + j] += v;
+    // the mass's integrands are polynomials of degree 7 at most: 8 points are exact
+    let (gp, gw) = crate::quadrature::gauss_legendre(8);
+    let points: Vec<(f64, f64)> = gp
+        .iter()
+        .zip(&gw)
+        .map(|(x, w)| (0.5 * (x + 1.0), 0.5 * w * l))
+        .collect();
+    let integral = |f: &dyn Fn(f64) -> f64| points.iter().map(|(t, w)| w * f(*t)).sum::<f64>();
+    // int_0^1 t^k / (c f(t)) dt for a property f linear between the ends, k = 0, 1, 2; None
+    // when f is zero at an end
+    let moments = |c: f64, f: fn(&BeamSection) -> f64| -> Option<[f64; 3]> {
+        (f(a) > 0.0 && f(end_b) > 0.0).then(|| inverse_moments(c * f(a), c * (f(end_b) - f(a))))
+    };
+    let stiffness = |m: Option<[f64; 3]>| m.map_or(0.0, |m| 1.0 / (l * m[0]));
+    let ea = stiffness(moments(b.e, |s| s.area));
+    let gj = stiffness(moments(b.g, |s| s.j));
+    for (i, j, sign) in [(0, 0, 1.0), (6, 6, 1.0), (0, 6, -1.0), (6, 0, -1.0)] {
+        put(&mut k, i, j, sign * ea);
+        put(&mut k, i + 3, j + 3, sign * gj);
+    }
+    let mpl = |t: f64| b.rho * at(t, |s| s.area) + at(t, |s| s.nsm);
+    let polar = |t: f64| b.rho * (at(t, |s| s.i1) + at(t, |s| s.i2));
+    match mass {
+        MassKind::Lumped => {
+            let share = [integral(&|t| mpl(t) * (1.0 - t)), integral(&|t| mpl(t) * t)];
+            let spin = [
+                integral(&|t| polar(t) * (1.0 - t)),
+                integral(&|t| polar(t) * t),
+            ];
+            for end in 0..2 {
+                for i in 0..3 {
+                    put(&mut m, 6 * end + i, 6 * end + i, share[end]);
+                }
+                if b.lumped_torsion {
+                    put(&mut m, 6 * end + 3, 6 * end + 3, spin[end]);
+                }
+            }
+        }
+        MassKind::Consistent => {
+            for (t, w) in &points {
+                let n = [1.0 - t, *t];
+                let ip = if b.coupled_torsion { polar(*t) } else { 0.0 };
+                for (x, nx) in n.iter().enumerate() {
+                    for (y, ny) in n.iter().enumerate() {
+                        put(&mut m, 6 * x, 6 * y, w * mpl(*t) * nx * ny);
+                        put(&mut m, 6 * x + 3, 6 * y + 3, w * ip * nx * ny);
+                    }
+                }
+            }
+        }
+    }
+    // each plane: its second moment, shear factor index, DOFs and their signs (as beam_local)
+    type Plane = (fn(&BeamSection) -> f64, usize, [usize; 4], [f64; 4]);
+    let planes: [Plane; 2] = [
+        (|s| s.i1, 0, [1, 5, 7, 11], [1.0, 1.0, 1.0, 1.0]),
+        (|s| s.i2, 1, [2, 4, 8, 10], [1.0, -1.0, 1.0, -1.0]),
+    ];
+    for (inertia, p, dofs, signs) in planes {
+        let shear = a.shear.map(|kf| kf[p]);
+        // an infinite shear factor: rigid in shear
+        let slide = match shear {
+            Some(kf) if kf.is_finite() => moments(kf * b.g, |s| s.area).map_or(0.0, |m| l * m[0]),
+            _ => 0.0,
+        };
+        let kbb = match moments(b.e, inertia) {
+            Some(m) => {
+                let f11 = l.powi(3) * (m[0] - 2.0 * m[1] + m[2]) + slide;
+                let f12 = l * l * (m[0] - m[1]);
+                let f22 = l * m[0];
+                let det = f11 * f22 - f12 * f12;
+                [[f22 / det, -f12 / det], [-f12 / det, f11 / det]]
+            }
+            None => [[0.0; 2]; 2],
+        };
+        // d_B - R d_A with R = [[1, L], [0, 1]] (w_B = w_A + L theta_A rigidly)
+        let r = [[1.0, l], [0.0, 1.0]];
+        let mut bmat = [[0.0; 4]; 2];
+        for i in 0..2 {
+            for j in 0..2 {
+                bmat[i][j] = -r[i][j];
+            }
+            bmat[i][2 + i] = 1.0;
+        }
+        let mut kp = [[0.0; 4]; 4];
+        for (x, row) in kp.iter_mut().enumerate() {
+            for (y, v) in row.iter_mut().enumerate() {
+                *v = (0..2)
+                    .map(|i| {
+                        (0..2)
+                            .map(|j| bmat[i][x] * kbb[i][j] * bmat[j][y])
+                            .sum::<f64>()
+                    })
+                    .sum();
+            }
+        }
+        // mass: the prismatic shape functions at the mean section
+        let mean = |f: fn(&BeamSection) -> f64| 0.5 * (f(a) + f(end_b));
+        let phi = shear.map_or(0.0, |kf| {
+            12.0 * b.e * mean(inertia) / (kf * b.g * mean(|s| s.area) * l * l)
+        });
+        let mut mp = [[0.0; 4]; 4];
+        if mass == MassKind::Consistent {
+            for (t, w) in &points {
+                let (nw, nt) = timoshenko_shape(*t, l, phi);
+                let rotary = if shear.is_some() {
+                    b.rho * at(*t, inertia)
+                } else {
+                    0.0
+                };
+                for i in 0..4 {
+                    for j in 0..4 {
+                        mp[i][j] += w * (mpl(*t) * nw[i] * nw[j] + rotary * nt[i] * nt[j]);
+                    }
+                }
+            }
+        }
+        for x in 0..4 {
+            for y in 0..4 {
+                let sg = signs[x] * signs[y];
+                put(&mut k, dofs[x], dofs[y], sg * kp[x][y]);
+                put(&mut m, dofs[x], dofs[y], sg * mp[x][y]);
+            }
+        }
+    }
+    (k, m)
+}
+
+/// `int_0^1 t^k / (a + b t) dt` for `k = 0, 1, 2` (`a > 0`, `a + b > 0`), to round-off for any
+/// ratio of the ends: by the series of `1 / (a + b t)` in `b t / a` when `|b| <= a / 2`, else
+/// `ln(1 + b/a) / b` and the recurrence `I_k = (1/k - a I_(k-1)) / b`, which then loses at most a
+/// factor `(a / |b|)^2 <= 4` (docs/MATH.md, "Tapered beams").
+pub fn inverse_moments(a: f64, b: f64) -> [f64; 3] {
+    let r = b / a;
+    if r.abs() <= 0.5 {
+        let mut out = [0.0; 3];
+        for (k, slot) in out.iter_mut().enumerate() {
+            let mut power = 1.0;
+            let mut sum = 0.0;
+            for n in 0..200 {
+                let term = power / (n + k + 1) as f64;
+                sum += term;
+                if term.abs() < 1e-18 * sum.abs() {
+                    break;
+                }
+                power *= -r;
+            }
+            *slot = sum / a;
+        }
+        out
+    } else {
+        let i0 = r.ln_1p() / b;
+        let i1 = (1.0 - a * i0) / b;
+        let i2 = (0.5 - a * i1) / b;
+        [i0, i1, i2]
+    }
 }

@@ -386,6 +386,85 @@ fn the_goland_wing_box_against_msc_nastran() {
     assert_nastran_eigenvalues(&deck.model, deck.mass, 0, &[nastran]);
 }
 
+/// Tapered beams as the Quick Reference Guide writes them (docs/MATH.md, "Tapered beams"): a
+/// PBEAM whose end B station (`X/XB = 1`) gives other values is end A's section tapering to
+/// them, a blank station value repeating end A's; an intermediate station on the line between
+/// the ends is read, one off it refused with its X/XB; a PBEAML TUBE whose end B has other radii
+/// tapers to the tube of those radii (`A = pi (r1^2 - r2^2)`, `I = pi (r1^4 - r2^4) / 4`, `J = 2 I`
+/// by hand here), with end A's shear factors.
+#[test]
+fn tapered_pbeam_and_pbeaml_are_read_to_their_ends() {
+    use femu_fem::structural::StructuralKind;
+    let deck = |pbeam: &str| {
+        format!(
+            "SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,2.,0.,0.\nGRID,3,,4.,0.,0.\nSPC1,1,123456,1\nMAT1,1,2.1+11,,0.3,7850.\nCBEAM,10,5,1,2,0.,1.,0.\nCBEAM,11,6,2,3,0.,1.,0.\n{pbeam}PBEAML,6,1,,TUBE\n,0.02,0.015,0.,NO,1.,0.01,0.008,0.\nENDDATA\n"
+        )
+    };
+    let end_b = ",NO,1.,1.2-4,8.-9,1.75-8,,2.5-8,0.1\n";
+    let pbeam = format!("PBEAM,5,1,3.-4,4.-8,2.5-8,,5.-8,0.2\n,,,,,,,,\n{end_b}");
+    let read = |text: &str| parse_bdf(text, "taper.bdf", &BdfOptions::default());
+    let ends = |d: &femu_io::nastran::BdfDeck, id: u64| {
+        let el = d.model.structural().iter().find(|e| e.id == id).unwrap();
+        let StructuralKind::Beam(b) = &el.kind else {
+            panic!("{id} is not a beam")
+        };
+        (b.section, b.taper)
+    };
+    let d = read(&deck(&pbeam)).unwrap();
+    let (a, b) = ends(&d, 10);
+    let b = b.expect("a tapered PBEAM");
+    assert_eq!(
+        [a.area, a.i1, a.i2, a.j, a.nsm],
+        [3e-4, 4e-8, 2.5e-8, 5e-8, 0.2]
+    );
+    assert_eq!(
+        [b.area, b.i1, b.i2, b.j, b.nsm],
+        [1.2e-4, 8e-9, 1.75e-8, 2.5e-8, 0.1]
+    );
+    assert_eq!(a.shear, b.shear);
+    // the tube's ends
+    let tube = |r1: f64, r2: f64| {
+        let i = std::f64::consts::PI * (r1.powi(4) - r2.powi(4)) / 4.0;
+        [std::f64::consts::PI * (r1 * r1 - r2 * r2), i, i, 2.0 * i]
+    };
+    let (a, b) = ends(&d, 11);
+    let b = b.expect("a tapered PBEAML");
+    for (got, want) in [
+        ([a.area, a.i1, a.i2, a.j], tube(0.02, 0.015)),
+        ([b.area, b.i1, b.i2, b.j], tube(0.01, 0.008)),
+    ] {
+        for (g, w) in got.iter().zip(want) {
+            assert!((g / w - 1.0).abs() < 1e-12, "{got:?} against {want:?}");
+        }
+    }
+    assert_eq!(a.shear, b.shear);
+    // blank end B values: end A's (prismatic)
+    let blank = read(&deck(
+        "PBEAM,5,1,3.-4,4.-8,2.5-8,,5.-8,0.2\n,,,,,,,,\n,NO,1.\n",
+    ))
+    .unwrap();
+    assert!(ends(&blank, 10).1.is_none());
+    // an intermediate station on the line, and off it
+    let middle = |a: &str| {
+        format!(
+            "PBEAM,5,1,3.-4,4.-8,2.5-8,,5.-8,0.2\n,,,,,,,,\n,NO,0.5,{a},2.4-8,2.125-8,,3.75-8,0.15\n{end_b}"
+        )
+    };
+    assert!(
+        read(&deck(&middle("2.1-4")))
+            .unwrap()
+            .model
+            .structural()
+            .len()
+            == 2
+    );
+    let e = read(&deck(&middle("2.5-4"))).unwrap_err().to_string();
+    assert!(
+        e.contains("taper.bdf:") && e.contains("X/XB = 0.5") && e.contains("A = 0.00025"),
+        "{e}"
+    );
+}
+
 /// Scalar masses by hand, under the lumped mass a deck gets by default, which keeps their matrices
 /// whole: a CMASS2 on component 1 of a grid whose displacement frame is turned 45 degrees, with
 /// CELAS2 springs on its three components, has the one finite `w^2 = k1 / m` (its mass acts
@@ -880,9 +959,9 @@ MAT1,1,2.1+11,,0.3,7850.
             "refers to property 4",
         ),
         (
-            "CBEAM,1,1,1,2,0.,1.,0.\nPBEAM,1,1,1.e-4,1.e-8,1.e-8,,1.e-8,,+A\n+A,,,,,,,,,+B\n+B,YESA,1.,2.e-4\n",
+            "CBEAM,1,1,1,2,0.,1.,0.\nPBEAM,1,1,1.e-4,1.e-8,1.e-8,,1.e-8,,+A\n+A,,,,,,,,,+B\n+B,YESA,1.,2.e-4,,,3.e-9\n",
             "bad.bdf:6",
-            "tapered PBEAM",
+            "end B's I12",
         ),
         (
             "CROD,1,9,1,2\nPBAR,9,1,1.e-4,1.e-8,1.e-8,1.e-8\n",

@@ -209,6 +209,7 @@ fn structural_elements_are_lines_with_their_sections() {
             g: 8e10,
             rho: 7800.0,
             section,
+            taper: None,
             orientation: [0.0, 0.0, 1.0],
             offsets: [[0.0; 3]; 2],
             lumped_torsion: false,

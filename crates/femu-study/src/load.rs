@@ -153,6 +153,7 @@ fn add_sections(
                 shear: Some(shear),
                 nsm: 0.0,
             },
+            taper: None,
             orientation: n1,
             offsets: [[0.0; 3]; 2],
             lumped_torsion: false,

@@ -194,6 +194,7 @@ pub fn beam_kind(
         g: e / (2.0 * (1.0 + nu)),
         rho,
         section,
+        taper: None,
         orientation,
         offsets: [[0.0; 3]; 2],
         lumped_torsion: false,

@@ -544,6 +544,7 @@ pub(super) fn add_structural(
                         shear: (*ty != StructuralType::B33).then_some(kf),
                         nsm: 0.0,
                     },
+                    taper: None,
                     orientation: n1(c)?,
                     offsets: [[0.0; 3]; 2],
                     lumped_torsion: false,

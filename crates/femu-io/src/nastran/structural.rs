@@ -319,18 +319,20 @@ fn dims_of(kind: &str) -> Option<usize> {
     })
 }
 
-/// A beam's material and section from its property card: `(E, G, rho, section)`.
+/// A beam's material and section from its property card: `(E, G, rho, section, end B's section
+/// when it tapers)`.
 fn beam_property(
     ctx: &mut Context<'_, '_>,
     p: &Card,
     warnings: &mut Vec<Warning>,
     warned: &mut Vec<u64>,
-) -> Result<(f64, f64, f64, BeamSection), IoError> {
+) -> Result<(f64, f64, f64, BeamSection, Option<BeamSection>), IoError> {
     let pid = p.id(0, "PID")?;
     let mid = p.id(1, "MID")?;
     let (e, g, rho) = mat1(ctx, mid, p)?;
     let wt = ctx.wtmass;
     let r = |i: usize, what: &str| -> Result<f64, IoError> { Ok(p.real(i, what)?.unwrap_or(0.0)) };
+    let mut taper = None;
     let section = match p.name.as_str() {
         "PBAR" => {
             // QRG PBAR: PID MID A I1 I2 J NSM / C1..F2 / K1 K2 I12
@@ -359,7 +361,11 @@ fn beam_property(
                 nsm: r(6, "NSM")? * wt,
             }
         }
-        "PBEAM" => pbeam(p, pid, wt)?,
+        "PBEAM" => {
+            let (a, b) = pbeam(p, pid, wt)?;
+            taper = b;
+            a
+        }
         "PBARL" | "PBEAML" => {
             if !p.field(2).is_empty() && !p.field(2).eq_ignore_ascii_case("MSCBML0") {
                 return Err(p.err(format!(
@@ -380,28 +386,67 @@ fn beam_property(
                 })
                 .collect::<Result<Vec<_>, _>>()?;
             let nsm = r(8 + n, "NSM")?;
+            // end B's DIMs and NSM (blank: end A's), from the stations after end A
+            let mut end_b: Option<(Vec<f64>, f64)> = None;
             if p.name == "PBEAML" {
-                // further stations (SO, X/XB, DIMs, NSM) must repeat end A's
+                // stations: SO, X/XB, n DIMs, NSM
                 let rest: Vec<&str> = (9 + n..p.fields.len()).map(|i| p.field(i)).collect();
+                let mut stations = Vec::new();
                 let mut k = 0;
                 while k < rest.len() {
                     if rest[k].is_empty() {
                         k += 1;
                         continue;
                     }
-                    // SO at rest[k], X/XB at k + 1, then n DIMs and NSM
-                    for (m, want) in d.iter().chain([&nsm]).enumerate() {
-                        let v = rest.get(k + 2 + m).and_then(|s| super::cards::real(s));
-                        if v.is_some_and(|v| (v - want).abs() > 1e-12 * want.abs()) {
-                            return Err(p.err(format!(
-                                "{pid}: the section changes along the beam (a tapered PBEAML); femu builds prismatic beams"
-                            )));
-                        }
-                    }
+                    let x = rest
+                        .get(k + 1)
+                        .and_then(|s| super::cards::real(s))
+                        .ok_or_else(|| {
+                            p.err(format!(
+                                "{pid}: a station (SO {}) without its X/XB",
+                                rest[k]
+                            ))
+                        })?;
+                    let values: Vec<f64> = d
+                        .iter()
+                        .chain([&nsm])
+                        .enumerate()
+                        .map(|(m, a)| {
+                            rest.get(k + 2 + m)
+                                .and_then(|s| super::cards::real(s))
+                                .unwrap_or(*a)
+                        })
+                        .collect();
+                    stations.push((x, values));
                     k += n + 3;
+                }
+                let differs = |v: &[f64]| {
+                    v.iter()
+                        .zip(d.iter().chain([&nsm]))
+                        .any(|(v, a)| (v - a).abs() > 1e-12 * a.abs())
+                };
+                for (x, v) in &stations {
+                    if (x - 1.0).abs() < 1e-9 {
+                        end_b = differs(v).then(|| (v[..n].to_vec(), v[n]));
+                    } else if differs(v) {
+                        return Err(p.err(format!(
+                            "{pid}: the section changes at the intermediate station X/XB = {x}; femu's tapered beams vary from end A's section to end B's (give the two ends)"
+                        )));
+                    }
                 }
             }
             let (area, i1, i2, j, k) = shape(p, &kind, &d)?;
+            if let Some((db, nsm_b)) = &end_b {
+                let (area, i1, i2, j, _) = shape(p, &kind, db)?;
+                taper = Some(BeamSection {
+                    area,
+                    i1,
+                    i2,
+                    j,
+                    shear: Some(k),
+                    nsm: nsm_b * wt,
+                });
+            }
             if !warned.contains(&pid) {
                 warned.push(pid);
                 warnings.push(Warning {
@@ -426,13 +471,15 @@ fn beam_property(
             return Err(p.err(format!("{pid} is a {other}, not a bar or beam property")));
         }
     };
-    Ok((e, g, rho, section))
+    Ok((e, g, rho, section, taper))
 }
 
-/// A prismatic `PBEAM` (QRG PBEAM): end A's `A I1 I2 I12 J NSM`, stations that repeat them, then
-/// `K1 K2` (default 1.0; 0.0 is rigid in shear) and the shear relief, warping and offset fields,
-/// which must be blank or zero.
-fn pbeam(p: &Card, pid: u64, wt: f64) -> Result<BeamSection, IoError> {
+/// A `PBEAM` (QRG PBEAM): end A's `A I1 I2 I12 J NSM`, the stations after it (blank values:
+/// end A's), then `K1 K2` (default 1.0; 0.0 is rigid in shear) and the shear relief, warping
+/// and offset fields, which must be blank or zero. Returns end A's section and end B's when the
+/// beam tapers (docs/MATH.md, "Tapered beams"); an intermediate station must lie on the line
+/// between the ends.
+fn pbeam(p: &Card, pid: u64, wt: f64) -> Result<(BeamSection, Option<BeamSection>), IoError> {
     let r = |i: usize| -> Result<f64, IoError> { Ok(p.real(i, "PBEAM field")?.unwrap_or(0.0)) };
     let (a, i1, i2, i12, j, nsm) = (r(2)?, r(3)?, r(4)?, r(5)?, r(6)?, r(7)?);
     if i12 != 0.0 {
@@ -441,23 +488,52 @@ fn pbeam(p: &Card, pid: u64, wt: f64) -> Result<BeamSection, IoError> {
         )));
     }
     // stations: blocks starting with SO (YES, YESA, NO); 16 fields with SO = YES, else 8
+    let end_a = [a, i1, i2, i12, j, nsm];
+    let mut stations: Vec<(f64, [f64; 6], usize)> = Vec::new();
     let mut at = 16;
     loop {
         let so = p.field(at).to_ascii_uppercase();
         if !matches!(so.as_str(), "YES" | "YESA" | "NO") {
             break;
         }
-        for (k, want) in [a, i1, i2, i12, j, nsm].iter().enumerate() {
-            if let Some(v) = p.real(at + 2 + k, "station value")?
-                && (v - want).abs() > 1e-12 * want.abs().max(f64::MIN_POSITIVE)
-            {
+        let x = p.real(at + 1, "X/XB")?.ok_or_else(|| {
+            p.err(format!(
+                "{pid}: a station (SO {so}) without its X/XB (field {})",
+                at + 3
+            ))
+        })?;
+        let mut v = end_a;
+        for (k, slot) in v.iter_mut().enumerate() {
+            if let Some(value) = p.real(at + 2 + k, "station value")? {
+                *slot = value;
+            }
+        }
+        stations.push((x, v, at));
+        at += if so == "YES" { 16 } else { 8 };
+    }
+    let end_b = stations
+        .iter()
+        .find(|s| (s.0 - 1.0).abs() < 1e-9)
+        .map_or(end_a, |s| s.1);
+    if end_b[3] != 0.0 {
+        return Err(p.err(format!(
+            "{pid}: end B's I12 = {} couples the two bending planes; femu builds beams on principal axes",
+            end_b[3]
+        )));
+    }
+    let names = ["A", "I1", "I2", "I12", "J", "NSM"];
+    for (x, v, field) in &stations {
+        for k in 0..6 {
+            let line = end_a[k] + (end_b[k] - end_a[k]) * x;
+            if (v[k] - line).abs() > 1e-6 * v[k].abs().max(line.abs()).max(f64::MIN_POSITIVE) {
                 return Err(p.err(format!(
-                    "{pid}: the section changes along the beam (a tapered PBEAM: field {} is {v}, end A's {want}); femu builds prismatic beams",
-                    at + 2 + k + 2
+                    "{pid}: at the station X/XB = {x} (field {}), {} = {} is not on the line between the ends ({line}); femu's tapered beams vary linearly from end A to end B",
+                    field + 2 + k + 2,
+                    names[k],
+                    v[k]
                 )));
             }
         }
-        at += if so == "YES" { 16 } else { 8 };
     }
     let k1 = p.real(at, "K1")?.unwrap_or(1.0);
     let k2 = p.real(at + 1, "K2")?.unwrap_or(1.0);
@@ -474,14 +550,19 @@ fn pbeam(p: &Card, pid: u64, wt: f64) -> Result<BeamSection, IoError> {
         }
     }
     let rigid = |k: f64| if k == 0.0 { f64::INFINITY } else { k };
-    Ok(BeamSection {
-        area: a,
-        i1,
-        i2,
-        j,
+    let section = |v: [f64; 6]| BeamSection {
+        area: v[0],
+        i1: v[1],
+        i2: v[2],
+        j: v[4],
         shear: Some([rigid(k1), rigid(k2)]),
-        nsm: nsm * wt,
-    })
+        nsm: v[5] * wt,
+    };
+    let tapered = end_b
+        .iter()
+        .zip(&end_a)
+        .any(|(b, a)| (b - a).abs() > 1e-12 * a.abs().max(f64::MIN_POSITIVE));
+    Ok((section(end_a), tapered.then(|| section(end_b))))
 }
 
 /// The orientation vector of a CBAR or CBEAM (fields 4-6: `X1 X2 X3`, or `G0` as an integer in
@@ -727,12 +808,13 @@ pub(super) fn add_structural(
                         }
                     };
                 }
-                let (e, g, rho, section) = beam_property(ctx, p, warnings, &mut warned)?;
+                let (e, g, rho, section, taper) = beam_property(ctx, p, warnings, &mut warned)?;
                 let kind = StructuralKind::Beam(Beam {
                     e,
                     g,
                     rho,
                     section,
+                    taper,
                     orientation: v,
                     offsets,
                     // Nastran's lumped CBEAM mass carries the polar inertia, its CBAR's does not
