@@ -970,6 +970,33 @@ fn a_nastran_deck_s_eigrl_and_mass_are_honoured() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A deck whose EIGRL asks for more modes than the model has (pyNastran's two-mode flutter model:
+/// ND = 20, two free DOFs) gets all it has, as Nastran returns them, with a note; a `--count`
+/// above them is still refused.
+#[test]
+fn a_deck_asking_for_more_modes_than_exist_gets_them_all() {
+    let deck = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/nastran/pynastran/two_mode_flutter/0012_flutter.bdf");
+    let dir = std::env::temp_dir().join(format!("femu-cli-nd-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("m.json");
+    let (p, j) = (deck.to_str().unwrap(), json.to_str().unwrap());
+    stdout_of_success(&["modes", p, "--json", j]);
+    let v = json_of(&json);
+    assert_eq!(v["frequencies_hz"].as_array().unwrap().len(), 2);
+    assert!(
+        v["notes"].as_array().unwrap().iter().any(|n| n
+            .as_str()
+            .unwrap()
+            .contains("asks for 20 modes and the model has 2 free degrees of freedom: all 2")),
+        "{}",
+        v["notes"]
+    );
+    let err = stderr_of_failure(&["modes", p, "--count", "3"]);
+    assert!(err.contains("3 modes requested"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A test with one reading for three modes: every MAC is 1, so the pairs rest on the
 /// frequencies; correlate says so (it paired without a word), and the pairs are the nearest
 /// frequencies (test modes 1.5 % above the model's first three, read at one sensor).

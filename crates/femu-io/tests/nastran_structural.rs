@@ -465,6 +465,30 @@ fn tapered_pbeam_and_pbeaml_are_read_to_their_ends() {
     );
 }
 
+/// pyNastran's two-mode flutter model (BSD, with the `.f06` of its MSC Nastran run of 2018, SOL
+/// 145): a plate of 84 CQUAD4 made rigid by one RBE2 of its 116 grids on a reference grid free in
+/// plunge and pitch alone (SPC1 1246), two CELAS2 on those, the aerodynamic and flutter cards read
+/// past. Its two eigenvalues are Nastran's to the seven printed digits: the plate's mass and its
+/// pitch inertia are those of Nastran's lumped CQUAD4 mass (a quarter of each element's on each
+/// corner's translations, nothing on its rotations).
+#[test]
+fn a_rigid_plate_on_pitch_and_plunge_springs_against_msc_nastran() {
+    let deck = read_bdf(
+        fixture("two_mode_flutter/0012_flutter.bdf"),
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    let f06 = std::fs::read_to_string(fixture("two_mode_flutter/0012_flutter.f06")).unwrap();
+    let nastran: Vec<f64> = f06
+        .lines()
+        .skip_while(|l| !l.contains("R E A L   E I G E N V A L U E S"))
+        .skip(4)
+        .map_while(|l| l.split_whitespace().nth(2).and_then(|v| v.parse().ok()))
+        .collect();
+    assert_eq!(nastran, [2.808246E+02, 4.459431E+03]);
+    assert_nastran_eigenvalues(&deck.model, deck.mass, 0, &nastran);
+}
+
 /// Scalar masses by hand, under the lumped mass a deck gets by default, which keeps their matrices
 /// whole: a CMASS2 on component 1 of a grid whose displacement frame is turned 45 degrees, with
 /// CELAS2 springs on its three components, has the one finite `w^2 = k1 / m` (its mass acts

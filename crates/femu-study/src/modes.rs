@@ -437,9 +437,17 @@ pub fn solve_modes(
             (_, None, None) => {}
         }
     }
-    let count = options.count.or(deck_count).unwrap_or(10);
+    let mut count = options.count.or(deck_count).unwrap_or(10);
     if count == 0 {
         return Err(StudyError::invalid("count", "must be at least 1"));
+    }
+    // a deck's count is what its solver would look for: it returns the modes that exist
+    let dim = sys.k.rows();
+    if options.count.is_none() && count > dim && dim > 0 {
+        deck_notes.push(format!(
+            "the deck asks for {count} modes and the model has {dim} free degrees of freedom: all {dim}, as its solver returns the modes that exist"
+        ));
+        count = dim;
     }
     let which = match (options.shift_hz, band_hz) {
         (Some(hz), _) => {
