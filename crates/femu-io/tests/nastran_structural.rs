@@ -21,6 +21,13 @@ fn refused(text: &str, path: &str) -> String {
         .to_string()
 }
 
+/// Reading `text` as the file `path` is refused with an error that names `at` (`path:line`) and
+/// says `needle`.
+fn assert_refused(text: &str, path: &str, at: &str, needle: &str) {
+    let err = refused(text, path);
+    assert!(err.contains(needle) && err.contains(at), "{text}: {err}");
+}
+
 /// The lowest eigenvalues of `model` with `kind`, each within `tol` (relative) of `want`'s.
 fn assert_lowest(model: &femu_fem::model::Model, kind: MassKind, want: &[f64], tol: f64) {
     let modes = model
@@ -350,11 +357,7 @@ fn dvprel1_relations_are_checked_at_the_initial_design() {
             "femu compares PSHELL",
         ),
     ] {
-        let err = refused(&deck(design), "design.bdf");
-        assert!(
-            err.contains(needle) && err.contains("design.bdf:"),
-            "{design}: {err}"
-        );
+        assert_refused(&deck(design), "design.bdf", "design.bdf:", needle);
     }
 }
 
@@ -566,11 +569,7 @@ ENDDATA
         ("CMASS3,20,6,7,8", "CMASS3"),
     ] {
         let text = format!("BEGIN BULK\nGRID,4,,0.,0.,0.\nCELAS2,10,3.+4,4,1\n{card}\nENDDATA\n");
-        let err = refused(&text, "bad.bdf");
-        assert!(
-            err.contains(needle) && err.contains("bad.bdf:4"),
-            "{card}: {err}"
-        );
+        assert_refused(&text, "bad.bdf", "bad.bdf:4", needle);
     }
 }
 
@@ -631,11 +630,7 @@ fn rigid_bars_carry_an_offset_mass() {
         ("RBAR,30,2,2,123456", "GA and GB are both GRID 2"),
         ("RBAR1,30,2,3,7", "CB"),
     ] {
-        let err = refused(&deck(link), "rbar.bdf");
-        assert!(
-            err.contains(needle) && err.contains("rbar.bdf:10"),
-            "{link}: {err}"
-        );
+        assert_refused(&deck(link), "rbar.bdf", "rbar.bdf:10", needle);
     }
 }
 
@@ -2002,11 +1997,7 @@ ENDDATA
     ] {
         let deck = simply_supported((0.6, 0.4, 4), "", property);
         let line = 1 + deck.lines().position(|l| l.starts_with(at)).unwrap();
-        let e = refused(&deck, "bad.bdf");
-        assert!(
-            e.contains(&format!("bad.bdf:{line}:")) && e.contains(says),
-            "{e}"
-        );
+        assert_refused(&deck, "bad.bdf", &format!("bad.bdf:{line}:"), says);
     }
 }
 
@@ -2363,6 +2354,5 @@ fn a_cvisc_is_an_axial_damper() {
             assert!((c[(a, b)] - 3.0 * d[i] * d[j]).abs() < 1e-14, "{c:?}");
         }
     }
-    let e = refused(&deck("0.,0.,0."), "visc.bdf");
-    assert!(e.contains("visc.bdf:8") && e.contains("coincide"), "{e}");
+    assert_refused(&deck("0.,0.,0."), "visc.bdf", "visc.bdf:8", "coincide");
 }
