@@ -295,9 +295,9 @@ fn bad_decks_name_the_card_and_line() {
             "cube.bdf:19: MAT1 1: two of E, G and NU are needed",
         ),
         (
-            base.replace("GRID     1               0.      0.      0.", "GRID     1               0.      0.      0.      5")
-                .replace("SPC1     100     123     1       THRU    4", "SPC1     100     3       1       THRU    4"),
-            "cube.bdf:20: SPC1 constrains components [3] of GRID 1 in its displacement frame 5, which is turned from the basic frame",
+            base.replace("GRID     3       5       1.41421 45.     0.", "GRID,3,5,1.41421,45.,0.,5")
+                .replace("SPC1     100     123     1       THRU    4", "SPC1     100     1       1       THRU    4"),
+            "cube.bdf:20: SPC1 constrains the translations [1] of GRID 3 in its displacement frame 5, whose axes for them are not along basic ones",
         ),
         (
             base.replace("SPC = 100", "SPC = 300"),

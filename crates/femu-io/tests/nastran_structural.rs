@@ -492,6 +492,57 @@ fn a_rigid_plate_on_pitch_and_plunge_springs_against_msc_nastran() {
     assert_nastran_eigenvalues(&deck.model, deck.mass, 0, &nastran);
 }
 
+/// SPC and PS components of a grid whose displacement frame is turned (QRG GRID: constraints act
+/// in the CD frame): a frame whose x, y and z are basic z, -y and x makes `SPC1 126` basic y, z
+/// and rx, the same model as `SPC1 234` on a grid without CD (its four lowest eigenvalues, 1e-12;
+/// femu once fixed basic 1, 2 and 6 there, a different structure); a frame turned 30 degrees
+/// about z makes the permanent constraint `PS = 12` basic x and y together and `SPC1 6` basic rz.
+/// A component whose frame axis is not along a basic one (`SPC1 1` in the frame turned about z)
+/// is refused with its line.
+#[test]
+fn constraints_in_turned_displacement_frames_act_along_the_frame() {
+    let deck = |frames: &str, cd: &str, ps: &str, spc: &str| {
+        format!(
+            "SOL 103\nCEND\nSPC = 1\nBEGIN BULK\n{frames}GRID,1,,0.,0.,0.,{cd},{ps}\nGRID,2,,1.,0.,0.\nCBAR,10,1,1,2,0.,1.,0.\nPBAR,1,1,1.-4,1.-8,2.-8,1.5-8\nMAT1,1,2.1+11,,.3,7850.\nSPC1,1,{spc},1\nCONM2,20,2,,1.,,,,,+M\n+M,0.1,,0.2,,,0.3\nPARAM,COUPMASS,1\nENDDATA\n"
+        )
+    };
+    let lowest = |text: &str| {
+        let d = parse_bdf(text, "cd.bdf", &BdfOptions::default()).unwrap();
+        d.model
+            .assemble(d.mass)
+            .unwrap()
+            .modes(Which::Lowest(4), &EigenOptions::default())
+            .unwrap()
+            .values
+    };
+    let same = |a: &[f64], b: &[f64]| {
+        for (x, y) in a.iter().zip(b) {
+            assert!((x - y).abs() <= 1e-12 * y.abs().max(1.0), "{a:?} {b:?}");
+        }
+    };
+    // x = basic z, y = -basic y, z = basic x
+    let flipped = "CORD2R,1,,0.,0.,0.,1.,0.,0.,+C\n+C,0.,0.,1.\n";
+    same(
+        &lowest(&deck(flipped, "1", "", "126")),
+        &lowest(&deck("", "", "", "234")),
+    );
+    // turned 30 degrees about z: PS 12 is basic 12, SPC 6 basic 6
+    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let about_z = format!("CORD2R,2,,0.,0.,0.,0.,0.,1.,+D\n+D,{c:.15},{s:.15},0.\n");
+    same(
+        &lowest(&deck(&about_z, "2", "12", "6")),
+        &lowest(&deck("", "", "12", "6")),
+    );
+    let text = deck(&about_z, "2", "", "1");
+    let line = 1 + text.lines().position(|l| l.starts_with("SPC1")).unwrap();
+    assert_refused(
+        &text,
+        "cd.bdf",
+        &format!("cd.bdf:{line}"),
+        "not along basic ones",
+    );
+}
+
 /// Scalar masses by hand, under the lumped mass a deck gets by default, which keeps their matrices
 /// whole: a CMASS2 on component 1 of a grid whose displacement frame is turned 45 degrees, with
 /// CELAS2 springs on its three components, has the one finite `w^2 = k1 / m` (its mass acts

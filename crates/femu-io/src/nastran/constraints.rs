@@ -23,6 +23,7 @@ fn warn(warnings: &mut Vec<Warning>, c: &Card, message: String) {
 pub(super) fn fix_components(
     model: &mut Model,
     turned: &HashMap<u64, i64>,
+    turned_axes: &HashMap<u64, [[f64; 3]; 3]>,
     c: &Card,
     g: u64,
     comps: &[usize],
@@ -38,16 +39,59 @@ pub(super) fn fix_components(
         .copied()
         .filter(|k| *k < 3 || has_rotations)
         .collect();
-    if let Some(cd) = turned
-        .get(&g)
-        .filter(|_| !comps.is_empty() && comps.len() < 3)
-    {
-        return Err(c.err(format!(
-            "constrains components {:?} of GRID {g} in its displacement frame {cd}, which is turned from the basic frame: femu constrains basic components only (a constraint in a turned frame needs a multipoint constraint, not read yet)",
-            comps.iter().map(|c| c + 1).collect::<Vec<_>>()
-        )));
+    let (Some(cd), Some(axes)) = (turned.get(&g), turned_axes.get(&g)) else {
+        return model.fix_node_dofs(g, &comps).map_err(c.located());
+    };
+    // the translations and the rotations each: the frame's constrained axes must span the same
+    // subspace as some basic axes (all three, or axes turned about the one left free, ...)
+    let mut basic = Vec::new();
+    for (offset, part) in [(0, "translations"), (3, "rotations")] {
+        let mine: Vec<usize> = comps
+            .iter()
+            .filter(|k| (offset..offset + 3).contains(*k))
+            .map(|k| k - offset)
+            .collect();
+        match coordinate_span(axes, &mine) {
+            Some(keep) => basic.extend(keep.into_iter().map(|k| k + offset)),
+            None => {
+                return Err(c.err(format!(
+                    "constrains the {part} {:?} of GRID {g} in its displacement frame {cd}, whose axes for them are not along basic ones: femu constrains basic components (a constraint along a turned direction is not built)",
+                    mine.iter().map(|k| k + offset + 1).collect::<Vec<_>>()
+                )));
+            }
+        }
     }
-    model.fix_node_dofs(g, &comps).map_err(c.located())
+    model.fix_node_dofs(g, &basic).map_err(c.located())
+}
+
+/// The basic axes whose span is the span of the frame's axes `chosen` (`axes`' columns), when
+/// there are such: the projector `sum e_c e_c^T` is then diagonal with ones and zeros.
+fn coordinate_span(axes: &[[f64; 3]; 3], chosen: &[usize]) -> Option<Vec<usize>> {
+    let mut p = [[0.0; 3]; 3];
+    for &c in chosen {
+        for i in 0..3 {
+            for j in 0..3 {
+                p[i][j] += axes[i][c] * axes[j][c];
+            }
+        }
+    }
+    let mut keep = Vec::new();
+    for i in 0..3 {
+        for j in 0..3 {
+            let want = if i == j && (p[i][i] - 1.0).abs() < 1e-9 {
+                1.0
+            } else {
+                0.0
+            };
+            if (p[i][j] - want).abs() > 1e-9 {
+                return None;
+            }
+        }
+        if p[i][i] > 0.5 {
+            keep.push(i);
+        }
+    }
+    Some(keep)
 }
 
 /// The permanent single-point constraints of the grids (QRG GRID field 8, `PS`: "permanent

@@ -619,6 +619,8 @@ fn param<'a>(
 struct Grids<'a> {
     mesh: Mesh,
     turned: HashMap<u64, i64>,
+    /// The turned grids' displacement axes at their positions (columns the axes).
+    turned_axes: HashMap<u64, [[f64; 3]; 3]>,
     named_cd: Option<(usize, &'a Card)>,
 }
 
@@ -629,6 +631,7 @@ fn grids_into_mesh<'a>(geometry: &mut Geometry<'a>) -> Result<Grids<'a>, IoError
     ids.sort_unstable();
     let mut named_cd: Option<(usize, &Card)> = None;
     let mut turned: HashMap<u64, i64> = HashMap::new();
+    let mut turned_axes = HashMap::new();
     for id in &ids {
         let g = geometry.grid_of[id];
         let p = geometry.position(*id, g)?;
@@ -636,8 +639,10 @@ fn grids_into_mesh<'a>(geometry: &mut Geometry<'a>) -> Result<Grids<'a>, IoError
         if cd != 0 {
             let e = named_cd.get_or_insert((0, g));
             e.0 += 1;
-            if !geometry.frame(cd, g)?.is_global_orientation() {
+            let frame = geometry.frame(cd, g)?;
+            if !frame.is_global_orientation() {
                 turned.insert(*id, cd);
+                turned_axes.insert(*id, frame.axes_at(p));
             }
         }
         mesh.add_node(*id, p).map_err(g.located())?;
@@ -645,6 +650,7 @@ fn grids_into_mesh<'a>(geometry: &mut Geometry<'a>) -> Result<Grids<'a>, IoError
     Ok(Grids {
         mesh,
         turned,
+        turned_axes,
         named_cd,
     })
 }
@@ -930,6 +936,7 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
     let Grids {
         mut mesh,
         turned,
+        turned_axes,
         named_cd,
     } = grids_into_mesh(&mut geometry)?;
     let max_grid = geometry.grid_of.keys().copied().max().unwrap_or(0);
@@ -996,7 +1003,7 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
         &mut warnings,
     )?;
     let mut fix = |c: &Card, g: u64, comps: &[usize]| {
-        constraints::fix_components(&mut model, &turned, c, g, comps)
+        constraints::fix_components(&mut model, &turned, &turned_axes, c, g, comps)
     };
     let permanent = constraints::apply_permanent(&sorted.grids, &geometry, &mut fix)?;
     constraints::apply_spc(
