@@ -498,7 +498,8 @@ fn a_rigid_plate_on_pitch_and_plunge_springs_against_msc_nastran() {
 /// femu once fixed basic 1, 2 and 6 there, a different structure); a frame turned 30 degrees
 /// about z makes the permanent constraint `PS = 12` basic x and y together and `SPC1 6` basic rz.
 /// A component whose frame axis is not along a basic one (`SPC1 1` in the frame turned about z)
-/// is refused with its line.
+/// is refused with its line; so are an RBE2's dependent component 1 and an RBE3's REFC 1 on a
+/// grid in that frame, where 12 and 3 are read.
 #[test]
 fn constraints_in_turned_displacement_frames_act_along_the_frame() {
     let deck = |frames: &str, cd: &str, ps: &str, spc: &str| {
@@ -541,6 +542,25 @@ fn constraints_in_turned_displacement_frames_act_along_the_frame() {
         &format!("cd.bdf:{line}"),
         "not along basic ones",
     );
+    // rigid links name their dependent (RBE2, RBAR) and reference (RBE3 REFC) components in those
+    // grids' frames: the frame turned about z leaves 12 and 3 the basic ones, not 1 alone
+    let linked = |link: &str| {
+        format!(
+            "BEGIN BULK\n{about_z}GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.,2\nGRID,3,,0.,1.,0.\nCBAR,10,1,1,3,0.,0.,1.\nPBAR,1,1,1.-4,1.-8,2.-8,1.5-8\nMAT1,1,2.1+11,,.3,7850.\n{link}\nENDDATA\n"
+        )
+    };
+    for link in ["RBE2,5,1,12,2", "RBE3,5,,2,3,1.,123,1,3"] {
+        parse_bdf(&linked(link), "link.bdf", &BdfOptions::default()).unwrap();
+    }
+    for (link, needle) in [
+        ("RBE2,5,1,1,2", "components 1 of GRID 2"),
+        (
+            "RBE3,5,,2,1,1.,123,1,3",
+            "REFC's translations [1] of GRID 2",
+        ),
+    ] {
+        assert_refused(&linked(link), "link.bdf", "link.bdf:10", needle);
+    }
 }
 
 /// Scalar masses by hand, under the lumped mass a deck gets by default, which keeps their matrices

@@ -39,11 +39,28 @@ pub(super) fn fix_components(
         .copied()
         .filter(|k| *k < 3 || has_rotations)
         .collect();
+    let basic = basic_components(turned, turned_axes, g, &comps).map_err(|(part, mine, cd)| {
+        c.err(format!(
+            "constrains the {part} {mine:?} of GRID {g} in its displacement frame {cd}, whose axes for them are not along basic ones: femu constrains basic components (a constraint along a turned direction is not built)"
+        ))
+    })?;
+    model.fix_node_dofs(g, &basic).map_err(c.located())
+}
+
+/// The basic components (0-5) that act as components `comps` (0-5) of grid `g` in its
+/// displacement frame: the same for a grid in the basic orientation; for a turned frame, the
+/// translations and the rotations each must span the same directions as some basic axes (all
+/// three, two turned about the third, or one along a basic axis), whose components they are.
+/// Else the part (`"translations"` or `"rotations"`), its components (1-6) and the frame.
+pub(super) fn basic_components(
+    turned: &HashMap<u64, i64>,
+    turned_axes: &HashMap<u64, [[f64; 3]; 3]>,
+    g: u64,
+    comps: &[usize],
+) -> Result<Vec<usize>, (&'static str, Vec<usize>, i64)> {
     let (Some(cd), Some(axes)) = (turned.get(&g), turned_axes.get(&g)) else {
-        return model.fix_node_dofs(g, &comps).map_err(c.located());
+        return Ok(comps.to_vec());
     };
-    // the translations and the rotations each: the frame's constrained axes must span the same
-    // subspace as some basic axes (all three, or axes turned about the one left free, ...)
     let mut basic = Vec::new();
     for (offset, part) in [(0, "translations"), (3, "rotations")] {
         let mine: Vec<usize> = comps
@@ -53,15 +70,10 @@ pub(super) fn fix_components(
             .collect();
         match coordinate_span(axes, &mine) {
             Some(keep) => basic.extend(keep.into_iter().map(|k| k + offset)),
-            None => {
-                return Err(c.err(format!(
-                    "constrains the {part} {:?} of GRID {g} in its displacement frame {cd}, whose axes for them are not along basic ones: femu constrains basic components (a constraint along a turned direction is not built)",
-                    mine.iter().map(|k| k + offset + 1).collect::<Vec<_>>()
-                )));
-            }
+            None => return Err((part, mine.iter().map(|k| k + offset + 1).collect(), *cd)),
         }
     }
-    model.fix_node_dofs(g, &basic).map_err(c.located())
+    Ok(basic)
 }
 
 /// The basic axes whose span is the span of the frame's axes `chosen` (`axes`' columns), when

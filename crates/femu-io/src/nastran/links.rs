@@ -90,6 +90,7 @@ pub(super) fn read_links(
     links: &[&Card],
     model: &mut Model,
     turned: &HashMap<u64, i64>,
+    turned_axes: &HashMap<u64, [[f64; 3]; 3]>,
     warnings: &mut Vec<Warning>,
 ) -> Result<HashMap<u64, (u64, Vec<usize>)>, IoError> {
     let mut dependents: HashMap<u64, (u64, Vec<usize>)> = HashMap::new();
@@ -148,16 +149,19 @@ pub(super) fn read_links(
                 grid(model, c, g)?;
                 (gn, cm, vec![g])
             };
-            let trans: Vec<usize> = cm.iter().copied().filter(|k| *k < 3).collect();
-            if trans.len() < 3
-                && let Some(g) = gm.iter().find(|g| turned.contains_key(g))
-            {
-                return Err(c.err(format!(
-                    "{eid}: components {} of GRID {g} are in its displacement frame {}, which is turned: femu links partial components in the basic frame only",
-                    c.field(2),
-                    turned[g]
-                )));
+            // the dependent components are in each dependent grid's displacement frame: in a
+            // turned one they must be the basic components of the same numbers
+            for g in &gm {
+                let basic = super::constraints::basic_components(turned, turned_axes, *g, &cm);
+                if basic.as_ref() != Ok(&cm) {
+                    return Err(c.err(format!(
+                        "{eid}: components {} of GRID {g} are in its displacement frame {}, which is turned: femu links the basic components of the same numbers only (all three translations or rotations, or those of axes the frame leaves in place)",
+                        cm.iter().map(|k| (k + 1).to_string()).collect::<String>(),
+                        turned[g]
+                    )));
+                }
             }
+            let trans: Vec<usize> = cm.iter().copied().filter(|k| *k < 3).collect();
             model
                 .add_rigid_link(gn, &gm, &trans, &label)
                 .map_err(c.located())?;
@@ -242,6 +246,13 @@ pub(super) fn read_links(
             }
             let has_rot = model.has_rotations(refi);
             let comps: Vec<usize> = refc.iter().copied().filter(|k| *k < 3 || has_rot).collect();
+            // REFC is in the reference grid's displacement frame
+            let comps = super::constraints::basic_components(turned, turned_axes, refgrid, &comps)
+                .map_err(|(part, mine, cd)| {
+                    c.err(format!(
+                        "{eid}: REFC's {part} {mine:?} of GRID {refgrid} are in its displacement frame {cd}, whose axes for them are not along basic ones: femu averages along basic components"
+                    ))
+                })?;
             model
                 .add_weighted_average(refgrid, &comps, &nodes, &label)
                 .map_err(c.located())?;

@@ -992,7 +992,13 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
             ),
         );
     }
-    let dependents = links::read_links(&sorted.links, &mut model, &turned, &mut warnings)?;
+    let dependents = links::read_links(
+        &sorted.links,
+        &mut model,
+        &turned,
+        &turned_axes,
+        &mut warnings,
+    )?;
     constraints::apply_mpc(
         &sorted.mpcs,
         deck.case_control.mpc.as_ref(),
