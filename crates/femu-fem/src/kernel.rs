@@ -284,24 +284,46 @@ fn hex8_incompatible(
     condense(&k, out)
 }
 
-/// `K_uu - K_ua K_aa^-1 K_au` of the 33 x 33 brick-and-bubbles matrix `k` into `out` (24 x 24):
-/// `K_aa = L L^T` (Cholesky, 9 x 9), `Y = L^-1 K_au`, `out = K_uu - Y^T Y`.
+/// `K_uu - K_ua K_aa^-1 K_au` of the 33 x 33 brick-and-bubbles matrix `k` into `out` (24 x 24).
 fn condense(k: &[f64], out: &mut [f64]) -> Result<(), BadJacobian> {
     const N: usize = 33;
-    const A: usize = 9;
+    let k_aa: [[f64; 9]; 9] =
+        std::array::from_fn(|i| std::array::from_fn(|j| k[(24 + i) * N + 24 + j]));
+    condensation::<9, 24>(
+        &k_aa,
+        |i, c| k[(24 + i) * N + c],
+        |r, c, v| {
+            let v = k[r * N + c] - v;
+            out[r * 24 + c] = v;
+            out[c * 24 + r] = v;
+        },
+    )
+    .map_err(|det| BadJacobian {
+        point: [0.0; 3],
+        det,
+    })
+}
+
+/// Static condensation of `A` internal DOFs from `N` outer ones: with `K_aa = L L^T` (Cholesky)
+/// and `Y = L^-1 K_au`, `apply(r, c, (Y^T Y)[r][c])` for each outer pair `r <= c` (the matrix is
+/// symmetric), the term `K_ua K_aa^-1 K_au` that `K_uu` loses. `K_au(i, c)` is internal row `i`,
+/// outer column `c`. Fails with the pivot when `K_aa` is not positive definite (a pivot not above
+/// `1e-12` of its diagonal).
+pub(crate) fn condensation<const A: usize, const N: usize>(
+    k_aa: &[[f64; A]; A],
+    k_au: impl Fn(usize, usize) -> f64,
+    mut apply: impl FnMut(usize, usize, f64),
+) -> Result<(), f64> {
     let mut l = [[0.0; A]; A];
     for i in 0..A {
         for j in 0..=i {
-            let mut v = k[(24 + i) * N + 24 + j];
+            let mut v = k_aa[i][j];
             for p in 0..j {
                 v -= l[i][p] * l[j][p];
             }
             if i == j {
-                if !(v.is_finite() && v > 0.0) {
-                    return Err(BadJacobian {
-                        point: [0.0; 3],
-                        det: v,
-                    });
+                if !(v.is_finite() && v > 1e-12 * k_aa[i][i]) {
+                    return Err(v);
                 }
                 l[i][i] = v.sqrt();
             } else {
@@ -310,22 +332,19 @@ fn condense(k: &[f64], out: &mut [f64]) -> Result<(), BadJacobian> {
         }
     }
     // Y = L^-1 K_au by forward substitution, column by column of K_au
-    let mut y = [[0.0; 24]; A];
-    for c in 0..24 {
+    let mut y = [[0.0; A]; N];
+    for (c, yc) in y.iter_mut().enumerate() {
         for i in 0..A {
-            let mut v = k[(24 + i) * N + c];
+            let mut v = k_au(i, c);
             for p in 0..i {
-                v -= l[i][p] * y[p][c];
+                v -= l[i][p] * yc[p];
             }
-            y[i][c] = v / l[i][i];
+            yc[i] = v / l[i][i];
         }
     }
-    for r in 0..24 {
-        for c in r..24 {
-            let yy: f64 = (0..A).map(|i| y[i][r] * y[i][c]).sum();
-            let v = k[r * N + c] - yy;
-            out[r * 24 + c] = v;
-            out[c * 24 + r] = v;
+    for r in 0..N {
+        for c in r..N {
+            apply(r, c, (0..A).map(|i| y[r][i] * y[c][i]).sum());
         }
     }
     Ok(())

@@ -767,38 +767,20 @@ pub(crate) fn matrices_scaled(
 /// The incompatible modes condensed out of the element's stiffness: `k -= k_ma k_aa^-1 k_ma^T`
 /// (`k_aa` is positive definite for a membrane material that is and a convex quadrilateral).
 fn condense(k: &mut [f64], k_ma: &[[f64; 4]; 24], k_aa: &[[f64; 4]; 4]) -> Result<(), String> {
-    // Cholesky of the 4 x 4
-    let mut l = [[0.0; 4]; 4];
-    for r in 0..4 {
-        for c in 0..=r {
-            let v = k_aa[r][c] - (0..c).map(|q| l[r][q] * l[c][q]).sum::<f64>();
-            if r == c {
-                if !(v > 1e-12 * k_aa[r][r]) {
-                    return Err(
-                        "its membrane's incompatible modes have no stiffness (a membrane material that is not positive definite)"
-                            .into(),
-                    );
-                }
-                l[r][r] = v.sqrt();
-            } else {
-                l[r][c] = v / l[c][c];
+    crate::kernel::condensation::<4, 24>(
+        k_aa,
+        |i, c| k_ma[c][i],
+        |r, c, v| {
+            k[r * 24 + c] -= v;
+            if r != c {
+                k[c * 24 + r] -= v;
             }
-        }
-    }
-    // w = L^-1 k_ma^T, one column per element DOF; then k -= w^T w
-    let mut w = [[0.0; 24]; 4];
-    for col in 0..24 {
-        for r in 0..4 {
-            let v = k_ma[col][r] - (0..r).map(|q| l[r][q] * w[q][col]).sum::<f64>();
-            w[r][col] = v / l[r][r];
-        }
-    }
-    for r in 0..24 {
-        for c in 0..24 {
-            k[r * 24 + c] -= (0..4).map(|q| w[q][r] * w[q][c]).sum::<f64>();
-        }
-    }
-    Ok(())
+        },
+    )
+    .map_err(|_| {
+        "its membrane's incompatible modes have no stiffness (a membrane material that is not positive definite)"
+            .to_string()
+    })
 }
 
 /// The 3-node shell (MITC3, Lee and Bathe 2004) on `(u, v, w, theta_x, theta_y, theta_z)` of
