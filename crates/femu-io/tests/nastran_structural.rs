@@ -257,9 +257,9 @@ fn the_bah_plane_against_msc_nastran() {
 }
 
 /// Cards of other solutions: the design cards that leave the initial design as the cards give it
-/// (DCONADD, DVGRID, DSCREEN) and a plot element (PLOTEL) are read past with a warning; a DVPREL2, from which SOL 200 sets
-/// the initial design's property by an equation, and an EPOINT (transfer functions) are refused,
-/// named.
+/// (DCONADD, DVGRID, DSCREEN), a plot element (PLOTEL) and an extra point (EPOINT, the dynamic
+/// responses' p-set) are read past with a warning; a DVPREL2, from which SOL 200 sets the initial
+/// design's property by an equation, and a transfer function (TF) are refused, named.
 #[test]
 fn design_cards_are_read_past_or_refused_by_what_they_change() {
     let deck = |extra: &str| {
@@ -268,12 +268,14 @@ fn design_cards_are_read_past_or_refused_by_what_they_change() {
         )
     };
     let d = parse_bdf(
-        &deck("DCONADD,10,1\nDVGRID,1,1,,1.,1.,0.,0.\nDSCREEN,FREQ,-0.5\nPLOTEL,30,1,1\n"),
+        &deck(
+            "DCONADD,10,1\nDVGRID,1,1,,1.,1.,0.,0.\nDSCREEN,FREQ,-0.5\nPLOTEL,30,1,1\nEPOINT,7\n",
+        ),
         "design.bdf",
         &BdfOptions::default(),
     )
     .unwrap();
-    for card in ["DCONADD", "DVGRID", "DSCREEN", "PLOTEL"] {
+    for card in ["DCONADD", "DVGRID", "DSCREEN", "PLOTEL", "EPOINT"] {
         assert!(
             d.warnings.iter().any(|w| w.message.starts_with(card)),
             "{card}: {:?}",
@@ -282,7 +284,7 @@ fn design_cards_are_read_past_or_refused_by_what_they_change() {
     }
     for (extra, needle) in [
         ("DVPREL2,1,PELAS,10,K1,,,7\n", "design relations"),
-        ("EPOINT,7\n", "extra points"),
+        ("TF,3,1,1,1.,0.,0.\n", "transfer functions"),
     ] {
         let err = refused(&deck(extra), "design.bdf");
         assert!(err.contains(needle), "{extra}: {err}");
@@ -561,6 +563,47 @@ fn constraints_in_turned_displacement_frames_act_along_the_frame() {
     ] {
         assert_refused(&linked(link), "link.bdf", "link.bdf:10", needle);
     }
+}
+
+/// DMIG as Nastran applies it (QRG DMIG, remark 1: only where the case control names it): a
+/// stiffness `KX` on a spring's DOF that `K2GG = KX` adds to the structure is refused with the
+/// command's line (left out under `--lenient`, with a warning); the same matrix named only by
+/// `K2PP` (the dynamic responses' p-set, as MSC's fmondsp glider names its EPOINT's) or by no
+/// command is read past with a warning, and the model is the one without it (`w^2 = k / m`).
+#[test]
+fn dmig_acts_where_the_case_control_names_it() {
+    let deck = |case: &str| {
+        format!(
+            "SOL 103\nCEND\nSPC = 1\n{case}BEGIN BULK\nGRID,1,,0.,0.,0.\nCELAS2,10,3.+4,1,1\nCONM2,11,1,,2.\nSPC1,1,23456,1\nDMIG,KX,0,6,1,0\nDMIG,KX,1,1,,1,1,5.+4\nENDDATA\n"
+        )
+    };
+    for (case, says) in [("K2PP = KX\n", "K2PP adds it"), ("", "no K2GG")] {
+        let d = parse_bdf(&deck(case), "dmig.bdf", &BdfOptions::default()).unwrap();
+        assert!(
+            d.warnings
+                .iter()
+                .any(|w| w.message.starts_with("DMIG KX skipped") && w.message.contains(says)),
+            "{:?}",
+            d.warnings
+        );
+        assert_lowest(&d.model, d.mass, &[1.5e4], 1e-12);
+    }
+    let added = deck("K2GG = 1.0*KX\n");
+    assert_refused(
+        &added,
+        "dmig.bdf",
+        "dmig.bdf:10: DMIG KX is added",
+        "K2GG = KX (dmig.bdf line 4)",
+    );
+    let lenient = parse_bdf(&added, "dmig.bdf", &BdfOptions { lenient: true }).unwrap();
+    assert!(
+        lenient
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("left out (--lenient)")),
+        "{:?}",
+        lenient.warnings
+    );
 }
 
 /// Scalar masses by hand, under the lumped mass a deck gets by default, which keeps their matrices

@@ -35,7 +35,13 @@ pub(super) struct CaseControl {
     pub(super) sdamping: Option<Selected>,
     /// The subcases' ids (empty: none).
     pub(super) subcases: Vec<i64>,
+    /// The direct matrices (DMIG names) the case control adds, in any subcase: the command
+    /// (`K2GG`, `M2GG`, `K42GG`, `B2GG`, `K2PP`, `M2PP`, `B2PP`), the name, where.
+    pub(super) direct: Vec<(String, String, PathBuf, usize)>,
 }
+
+/// The case control commands that add direct input matrices (QRG, "K2GG", "K2PP", ...).
+const DIRECT: &[&str] = &["K2GG", "M2GG", "K42GG", "B2GG", "K2PP", "M2PP", "B2PP"];
 
 /// What one scope (above the first subcase, or one subcase) selects.
 #[derive(Debug, Clone, Default)]
@@ -85,6 +91,7 @@ impl CaseControl {
             })
             .map_or(0, |i| i + 1);
         let mut scopes = vec![Scope::default()];
+        let mut direct = Vec::new();
         let mut joined = String::new();
         let mut at: Option<(PathBuf, usize)> = None;
         for (path, number, raw) in &lines[start..] {
@@ -132,6 +139,19 @@ impl CaseControl {
                     id: Some(id),
                     ..Default::default()
                 });
+            } else if DIRECT.contains(&word.as_str()) {
+                // K2GG = KAAX, or a list of names each with an optional factor (1.5*KAAX)
+                for item in value.split(',') {
+                    let name = item
+                        .rsplit('*')
+                        .next()
+                        .unwrap_or("")
+                        .trim()
+                        .to_ascii_uppercase();
+                    if !name.is_empty() {
+                        direct.push((word.clone(), name, path.clone(), line));
+                    }
+                }
             } else if word == "SPC" {
                 scope.spc = Some(selected("SPC")?);
             } else if word == "MPC" {
@@ -154,6 +174,7 @@ impl CaseControl {
         let subcases: Vec<Scope> = scopes[1..].to_vec();
         let mut out = CaseControl {
             subcases: subcases.iter().filter_map(|s| s.id).collect(),
+            direct,
             ..Default::default()
         };
         for (what, pick) in [

@@ -156,7 +156,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
         "DVMREL2",
         "design relations (SOL 200 sets the initial design's properties from them)",
     ),
-    ("EPOINT", "extra points (transfer functions)"),
     ("TF", "transfer functions"),
     ("CMASS3", "scalar masses on scalar points"),
     ("CMASS4", "scalar masses on scalar points"),
@@ -180,7 +179,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("RJOINT", "rigid joints"),
     ("CORD3G", "coordinate systems"),
     ("GENEL", "general elements"),
-    ("DMIG", "direct matrix input"),
 ];
 
 /// Reads a bulk data deck.
@@ -314,6 +312,8 @@ struct Sorted<'a> {
     tabdmp: BTreeMap<i64, &'a Card>,
     /// `DVPREL1` design relations, checked at the initial design.
     dvprel1: Vec<&'a Card>,
+    /// `DMIG` direct matrices, checked against the case control that selects them.
+    dmigs: Vec<&'a Card>,
 }
 
 fn warn(warnings: &mut Vec<Warning>, c: &Card, message: String) {
@@ -339,6 +339,7 @@ const PARAM_NO_EFFECT: &[&str] = &[
 /// solutions), nonlinear and transient controls, temperature-dependent material tables (a modal
 /// analysis has no temperature field): skipped with a warning that says why.
 const OTHER_SOLUTIONS: &[(&str, &str)] = &[
+    ("EPOINT", "extra points (the dynamic responses' p-set)"),
     ("BCTSET", "contact"),
     ("BCTPARA", "contact"),
     ("BCTPARM", "contact"),
@@ -448,6 +449,7 @@ fn sort<'a>(
             }
             "PARAM" => param(c, &mut s, &mut warned, warnings)?,
             "DVPREL1" => s.dvprel1.push(c),
+            "DMIG" => s.dmigs.push(c),
             _ if s.structural.take(c)? => {}
             name => {
                 if let Some((card, kind)) = UNSUPPORTED.iter().find(|(n, _)| *n == name) {
@@ -532,6 +534,66 @@ fn sort<'a>(
         });
     }
     Ok(s)
+}
+
+/// The `DMIG` matrices against the case control (QRG DMIG, remark 1: a DMIG acts only where a
+/// `K2GG`, `M2GG`, `K42GG`, `B2GG`, `K2PP`, `M2PP` or `B2PP` command names it). One that `K2GG`,
+/// `M2GG` or `K42GG` adds to the structure's stiffness or mass is refused (femu does not add
+/// direct matrices to its model; under `--lenient` left out, with a warning); one that only the
+/// dynamic responses' commands name (`B2GG`, `K2PP`, `M2PP`, `B2PP`: damping, or the p-set of
+/// the responses, not the normal modes) and one no command names are read past with a warning.
+fn direct_matrices(
+    dmigs: &[&Card],
+    case_control: &case_control::CaseControl,
+    options: &BdfOptions,
+    warnings: &mut Vec<Warning>,
+) -> Result<(), IoError> {
+    let mut names: Vec<(String, &Card)> = Vec::new();
+    for c in dmigs {
+        let name = c.field(0).to_ascii_uppercase();
+        if !names.iter().any(|(n, _)| *n == name) {
+            names.push((name, c));
+        }
+    }
+    for (name, c) in names {
+        let by: Vec<&(String, String, PathBuf, usize)> =
+            case_control.direct.iter().filter(|d| d.1 == name).collect();
+        if let Some((command, _, path, line)) = by
+            .iter()
+            .find(|d| matches!(d.0.as_str(), "K2GG" | "M2GG" | "K42GG"))
+            .copied()
+        {
+            let text = format!(
+                "{name} is added to the structure by {command} = {name} ({} line {line}): femu does not add direct input matrices to its model",
+                path.display()
+            );
+            if !options.lenient {
+                return Err(c.err(format!("{text} (--lenient leaves it out)")));
+            }
+            warn(
+                warnings,
+                c,
+                format!("DMIG {text}: left out (--lenient), so the model's K and M are incomplete"),
+            );
+        } else if let Some((command, _, _, _)) = by.first() {
+            warn(
+                warnings,
+                c,
+                format!(
+                    "DMIG {name} skipped: {command} adds it to the dynamic responses (damping or their p-set), not to the normal modes' stiffness and mass; femu's FRFs leave it out"
+                ),
+            );
+        } else {
+            warn(
+                warnings,
+                c,
+                format!(
+                    "DMIG {name} skipped: no K2GG, M2GG, K42GG, B2GG, K2PP, M2PP or B2PP command names it, so it has no effect (as in Nastran)"
+                ),
+            );
+        }
+    }
+    Ok(())
 }
 
 /// A `PARAM`: `WTMASS` (the mass factor) and `COUPMASS` (coupled or lumped mass) change the model
@@ -932,6 +994,7 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
     let deck = cards::deck(lines)?;
     let mut warnings = Vec::new();
     let sorted = sort(&deck.cards, options, &mut warnings)?;
+    direct_matrices(&sorted.dmigs, &deck.case_control, options, &mut warnings)?;
     let mut geometry = Geometry::new(&sorted.cords, &sorted.grids, sorted.grdset)?;
     let Grids {
         mut mesh,
