@@ -606,6 +606,56 @@ fn dmig_acts_where_the_case_control_names_it() {
     );
 }
 
+/// PBEAML BOX sections as MSC Nastran makes them: the PBEAMs its run of MSC's fmondsp glider
+/// (pyNastran's `models/aero/fmondsp.f06`, "THE USER SUPPLIED PBEAML BULK DATA ENTRIES ARE
+/// REPLACED BY THE FOLLOWING PBEAM ENTRIES") prints for its three BOX sections, `A I1 I2 J K1 K2`
+/// to five digits, are femu's rounded to five digits: the walls' shear areas without the corners
+/// (femu once counted the corners in the horizontal walls: K2 0.7547 against 0.74843).
+#[test]
+fn pbeaml_box_sections_are_msc_nastran_s() {
+    let text = "BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nMAT1,1,7.+10,,.3,2700.\n\
+        CBEAM,5,5,1,2,0.,0.,1.\nPBEAML,5,1,,BOX\n,.6,.2,.0025,.0025\n\
+        CBEAM,6,6,1,2,0.,0.,1.\nPBEAML,6,1,,BOX\n,.05,.5,.001,.001\n\
+        CBEAM,7,7,1,2,0.,0.,1.\nPBEAML,7,1,,BOX\n,.5,.05,.001,.001\nENDDATA\n";
+    let d = parse_bdf(text, "box.bdf", &BdfOptions::default()).unwrap();
+    let msc: [(u64, [f64; 6]); 3] = [
+        (
+            5,
+            [
+                3.9750E-03, 3.2346E-05, 1.7702E-04, 8.7582E-05, 2.4528E-01, 7.4843E-01,
+            ],
+        ),
+        (
+            6,
+            [
+                1.0960E-03, 2.6809E-05, 6.1877E-07, 2.1819E-06, 9.0876E-01, 8.7591E-02,
+            ],
+        ),
+        (
+            7,
+            [
+                1.0960E-03, 6.1877E-07, 2.6809E-05, 2.1819E-06, 8.7591E-02, 9.0876E-01,
+            ],
+        ),
+    ];
+    let five = |v: f64| format!("{v:.4e}").parse::<f64>().unwrap();
+    for (id, want) in msc {
+        let el = d.model.structural().iter().find(|e| e.id == id).unwrap();
+        let femu_fem::structural::StructuralKind::Beam(b) = &el.kind else {
+            panic!("{id} is not a beam")
+        };
+        let s = b.section;
+        let k = s.shear.unwrap();
+        let got = [s.area, s.i1, s.i2, s.j, k[0], k[1]].map(five);
+        for (g, w) in got.iter().zip(want) {
+            assert!(
+                (g / w - 1.0).abs() < 1e-12,
+                "PBEAML {id}: {got:?} against {want:?}"
+            );
+        }
+    }
+}
+
 /// Scalar masses by hand, under the lumped mass a deck gets by default, which keeps their matrices
 /// whole: a CMASS2 on component 1 of a grid whose displacement frame is turned 45 degrees, with
 /// CELAS2 springs on its three components, has the one finite `w^2 = k1 / m` (its mass acts

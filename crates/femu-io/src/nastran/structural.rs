@@ -235,8 +235,10 @@ fn shape(c: &Card, kind: &str, d: &[f64]) -> Result<(f64, f64, f64, f64, [f64; 2
             let a = b * h - bi * hi;
             let j = 2.0 * t1 * t2 * (b - t2).powi(2) * (h - t1).powi(2)
                 / (b * t2 + h * t1 - t2 * t2 - t1 * t1);
+            // the shear areas of the walls along each direction, corners in neither (MSC's
+            // PBEAML BOX converted to PBEAM: docs/VERIFICATION.md)
             let web = 2.0 * t2 * hi;
-            let flanges = 2.0 * t1 * b;
+            let flanges = 2.0 * t1 * bi;
             (
                 a,
                 (b * h.powi(3) - bi * hi.powi(3)) / 12.0,
