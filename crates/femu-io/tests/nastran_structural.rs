@@ -501,7 +501,8 @@ fn a_rigid_plate_on_pitch_and_plunge_springs_against_msc_nastran() {
 /// about z makes the permanent constraint `PS = 12` basic x and y together and `SPC1 6` basic rz.
 /// A component whose frame axis is not along a basic one (`SPC1 1` in the frame turned about z)
 /// is refused with its line; so are an RBE2's dependent component 1 and an RBE3's REFC 1 on a
-/// grid in that frame, where 12 and 3 are read.
+/// grid in that frame, where 12 and 3 are read (and 124 on a grid without rotations, whose 4 is
+/// ignored).
 #[test]
 fn constraints_in_turned_displacement_frames_act_along_the_frame() {
     let deck = |frames: &str, cd: &str, ps: &str, spc: &str| {
@@ -551,7 +552,8 @@ fn constraints_in_turned_displacement_frames_act_along_the_frame() {
             "BEGIN BULK\n{about_z}GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.,2\nGRID,3,,0.,1.,0.\nCBAR,10,1,1,3,0.,0.,1.\nPBAR,1,1,1.-4,1.-8,2.-8,1.5-8\nMAT1,1,2.1+11,,.3,7850.\n{link}\nENDDATA\n"
         )
     };
-    for link in ["RBE2,5,1,12,2", "RBE3,5,,2,3,1.,123,1,3"] {
+    // (grid 2 has no rotations: an RBE2's component 4 on it is ignored, not refused)
+    for link in ["RBE2,5,1,12,2", "RBE2,5,1,124,2", "RBE3,5,,2,3,1.,123,1,3"] {
         parse_bdf(&linked(link), "link.bdf", &BdfOptions::default()).unwrap();
     }
     for (link, needle) in [

@@ -152,8 +152,11 @@ pub(super) fn read_links(
             // the dependent components are in each dependent grid's displacement frame: in a
             // turned one they must be the basic components of the same numbers
             for g in &gm {
-                let basic = super::constraints::basic_components(turned, turned_axes, *g, &cm);
-                if basic.as_ref() != Ok(&cm) {
+                // a grid without rotations (a solid's) ignores components 4-6
+                let has_rot = model.has_rotations(grid(model, c, *g)?);
+                let mine: Vec<usize> = cm.iter().copied().filter(|k| *k < 3 || has_rot).collect();
+                let basic = super::constraints::basic_components(turned, turned_axes, *g, &mine);
+                if basic.as_ref() != Ok(&mine) {
                     return Err(c.err(format!(
                         "{eid}: components {} of GRID {g} are in its displacement frame {}, which is turned: femu links the basic components of the same numbers only (all three translations or rotations, or those of axes the frame leaves in place)",
                         cm.iter().map(|k| (k + 1).to_string()).collect::<String>(),
