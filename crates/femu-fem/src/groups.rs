@@ -1151,36 +1151,35 @@ fn mass_group_items(
             if g.law != GroupLaw::Mass {
                 return Ok(Vec::new());
             }
+            let out_of_range = |kind: &str, i: usize| FemError::InvalidGroup {
+                name: g.name.clone(),
+                reason: format!("{kind} mass {i} out of range"),
+            };
             let mut items = Vec::with_capacity(g.masses.len());
             for m in &g.masses {
-                let (points, a): (Vec<usize>, Vec<f64>) =
-                    match *m {
-                        MassRef::Point(i) => {
-                            let p = model.point_masses().get(i).ok_or_else(|| {
-                                FemError::InvalidGroup {
-                                    name: g.name.clone(),
-                                    reason: format!("point mass {i} out of range"),
-                                }
-                            })?;
-                            (vec![p.node], p.mass.iter().flatten().copied().collect())
-                        }
-                        MassRef::Rigid(i) => {
-                            let r = model.rigid_masses().get(i).ok_or_else(|| {
-                                FemError::InvalidGroup {
-                                    name: g.name.clone(),
-                                    reason: format!("rigid mass {i} out of range"),
-                                }
-                            })?;
-                            // the assembly skips a rigid mass whose node lost its rotations
-                            let Some(rp) = dofs.rotation_point(r.node) else {
-                                continue;
-                            };
-                            (
-                                vec![r.node, rp],
-                                r.matrix.iter().flatten().copied().collect(),
-                            )
-                        }
-                    };
+                let (points, a): (Vec<usize>, Vec<f64>) = match *m {
+                    MassRef::Point(i) => {
+                        let p = model
+                            .point_masses()
+                            .get(i)
+                            .ok_or_else(|| out_of_range("point", i))?;
+                        (vec![p.node], p.mass.iter().flatten().copied().collect())
+                    }
+                    MassRef::Rigid(i) => {
+                        let r = model
+                            .rigid_masses()
+                            .get(i)
+                            .ok_or_else(|| out_of_range("rigid", i))?;
+                        // the assembly skips a rigid mass whose node lost its rotations
+                        let Some(rp) = dofs.rotation_point(r.node) else {
+                            continue;
+                        };
+                        (
+                            vec![r.node, rp],
+                            r.matrix.iter().flatten().copied().collect(),
+                        )
+                    }
+                };
                 items.push((points, a));
             }
             Ok(items)
