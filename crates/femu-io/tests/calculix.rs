@@ -467,3 +467,227 @@ fn incompatible_mode_bricks_agree_with_calculix_c3d8i() {
         ours[0]
     );
 }
+
+/// A cantilevered block of C3D8 bricks (6 x 3 x 2 over 0.6 x 0.3 x 0.2 m, clamped at x = 0)
+/// with `material` (a `*MATERIAL` block) in a `*SOLID SECTION` with `orientation` (the section's
+/// parameter and any `*ORIENTATION` cards).
+fn oriented_block(material: &str, orientation: (&str, &str)) -> String {
+    let (nx, ny, nz) = (6usize, 3usize, 2usize);
+    let id = |i: usize, j: usize, k: usize| 1 + i + (nx + 1) * (j + (ny + 1) * k);
+    let mut s = String::from("*HEADING\noriented block\n*NODE\n");
+    for k in 0..=nz {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                s.push_str(&format!(
+                    "{}, {}, {}, {}\n",
+                    id(i, j, k),
+                    0.1 * i as f64,
+                    0.1 * j as f64,
+                    0.1 * k as f64
+                ));
+            }
+        }
+    }
+    s.push_str("*ELEMENT, TYPE=C3D8, ELSET=EALL\n");
+    let mut e = 0;
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                e += 1;
+                s.push_str(&format!(
+                    "{e}, {}, {}, {}, {}, {}, {}, {}, {}\n",
+                    id(i, j, k),
+                    id(i + 1, j, k),
+                    id(i + 1, j + 1, k),
+                    id(i, j + 1, k),
+                    id(i, j, k + 1),
+                    id(i + 1, j, k + 1),
+                    id(i + 1, j + 1, k + 1),
+                    id(i, j + 1, k + 1)
+                ));
+            }
+        }
+    }
+    let root: Vec<String> = (0..=nz)
+        .flat_map(|k| (0..=ny).map(move |j| id(0, j, k).to_string()))
+        .collect();
+    s.push_str(&format!("*NSET, NSET=ROOT\n{}\n", root.join(", ")));
+    s.push_str(&format!(
+        "*BOUNDARY\nROOT, 1, 3\n{material}{}*SOLID SECTION, ELSET=EALL, MATERIAL=PLY{}\n\
+         *STEP\n*FREQUENCY\n6\n*END STEP\n",
+        orientation.1, orientation.0
+    ));
+    s
+}
+
+/// Anisotropic solids and `*ORIENTATION` against CalculiX on the same decks (docs/MATH.md,
+/// "Material orientations"): a block of an orthotropic carbon-epoxy (`ENGINEERING CONSTANTS`)
+/// in a rectangular orientation of three points off the axes with an additional rotation of 20
+/// degrees about its 2-axis, the same material's `ORTHOTROPIC` constants (its compliance
+/// inverted by hand in the test) in an orientation turned about the 3-axis, and a general
+/// `ANISOTROPIC` material of 21 constants with no orientation: femu's six eigenvalues equal
+/// CalculiX's to 1e-6 (its printed digits; the constants written with ten digits, as CalculiX
+/// reads a field of 20 characters), the orientations move them by more than 1 %; an orientation
+/// of three nodes by number (`DEFINITION=NODES`, which CalculiX does not read) is the one of their
+/// coordinates to 1e-12, and one with Abaqus's origin `c` (CalculiX takes `a` and `b` about the
+/// global origin) is the one of `a - c` and `b - c` to 1e-12. femu's writer states the turned
+/// material as 21 constants in the global axes: CalculiX's eigenvalues of that deck equal femu's.
+#[test]
+fn anisotropic_solids_and_orientations_agree_with_calculix() {
+    if !ccx_available() {
+        return;
+    }
+    let engineering = "*MATERIAL, NAME=PLY\n*ELASTIC, TYPE=ENGINEERING CONSTANTS\n\
+                       1.4e11, 1.e10, 1.1e10, 0.3, 0.28, 0.45, 5.e9, 4.5e9,\n3.5e9\n*DENSITY\n1600.\n";
+    let turned = (
+        ", ORIENTATION=OR1",
+        "*ORIENTATION, NAME=OR1\n1.1, 0.6, 0.35, -0.2, 1.05, 0.4\n2, 20.\n",
+    );
+    let femu_of = |text: &str| -> Vec<f64> {
+        femu_lowest(
+            &femu_io::inp::parse_inp(text, "block.inp")
+                .unwrap()
+                .to_model()
+                .unwrap(),
+            6,
+        )
+    };
+    let check = |text: &str, name: &str| -> Vec<f64> {
+        let ccx = ccx_of_text(text, 6, name);
+        let femu = femu_of(text);
+        for (j, c) in ccx.iter().enumerate() {
+            let rel = (femu[j] / c - 1.0).abs();
+            assert!(
+                rel < 1e-6,
+                "{name} mode {}: femu {} ccx {c} ({rel:.1e})",
+                j + 1,
+                femu[j]
+            );
+        }
+        femu
+    };
+    let plain = check(&oriented_block(engineering, ("", "")), "eng-plain");
+    let oriented = check(&oriented_block(engineering, turned), "eng-turned");
+    assert!(
+        (oriented[0] / plain[0] - 1.0).abs() > 1e-2,
+        "{oriented:?} {plain:?}"
+    );
+    // a frame of three of the block's nodes, by number and by their coordinates
+    let id = |i: usize, j: usize, k: usize| 1 + i + 7 * (j + 4 * k);
+    let frame_of = |points: &str, definition: &str| {
+        oriented_block(
+            engineering,
+            (
+                ", ORIENTATION=OR2",
+                &format!("*ORIENTATION, NAME=OR2{definition}\n{points}\n1, -15.\n"),
+            ),
+        )
+    };
+    let by_nodes = femu_of(&frame_of(
+        &format!("{}, {}, {}", id(6, 3, 2), id(0, 3, 1), id(1, 0, 0)),
+        ", DEFINITION=NODES",
+    ));
+    let by_coordinates = femu_of(&frame_of("0.6, 0.3, 0.2, 0., 0.3, 0.1, 0.1, 0., 0.", ""));
+    for (a, b) in by_nodes.iter().zip(&by_coordinates) {
+        assert!(
+            (a / b - 1.0).abs() < 1e-12,
+            "{by_nodes:?} {by_coordinates:?}"
+        );
+    }
+    assert!((by_nodes[0] / plain[0] - 1.0).abs() > 1e-2);
+    // Abaqus's origin c (CalculiX reads a and b alone, about the global origin): a and b moved
+    // by c with c given are the frame of a and b
+    let with_origin = femu_of(&frame_of(
+        "0.6, 0.4, 0.25, 0., 0.4, 0.15, 0.1, 0.1, 0.05",
+        "",
+    ));
+    for (a, b) in with_origin.iter().zip(&by_coordinates) {
+        assert!(
+            (a / b - 1.0).abs() < 1e-12,
+            "{with_origin:?} {by_coordinates:?}"
+        );
+    }
+    // ORTHOTROPIC: D of the same constants, by inverting the compliance here
+    let (e, nu, g) = (
+        [1.4e11, 1.0e10, 1.1e10],
+        [0.3, 0.28, 0.45],
+        [5.0e9, 4.5e9, 3.5e9],
+    );
+    let mut s = [[0.0f64; 3]; 3];
+    for i in 0..3 {
+        s[i][i] = 1.0 / e[i];
+    }
+    for (k, (i, j)) in [(0usize, 1usize), (0, 2), (1, 2)].into_iter().enumerate() {
+        s[i][j] = -nu[k] / e[i];
+        s[j][i] = s[i][j];
+    }
+    let det = s[0][0] * (s[1][1] * s[2][2] - s[1][2] * s[2][1])
+        - s[0][1] * (s[1][0] * s[2][2] - s[1][2] * s[2][0])
+        + s[0][2] * (s[1][0] * s[2][1] - s[1][1] * s[2][0]);
+    let cof = |i: usize, j: usize| {
+        let r: Vec<usize> = (0..3).filter(|&x| x != i).collect();
+        let c: Vec<usize> = (0..3).filter(|&x| x != j).collect();
+        let m = s[r[0]][c[0]] * s[r[1]][c[1]] - s[r[0]][c[1]] * s[r[1]][c[0]];
+        if (i + j).is_multiple_of(2) { m } else { -m }
+    };
+    let d = |i: usize, j: usize| cof(j, i) / det;
+    let orthotropic = format!(
+        // ten digits: CalculiX reads a field of up to 20 characters
+        "*MATERIAL, NAME=PLY\n*ELASTIC, TYPE=ORTHOTROPIC\n{:.10e}, {:.10e}, {:.10e}, {:.10e}, {:.10e}, {:.10e}, {:.10e}, {:.10e},\n{:.10e}\n*DENSITY\n1600.\n",
+        d(0, 0),
+        d(0, 1),
+        d(1, 1),
+        d(0, 2),
+        d(1, 2),
+        d(2, 2),
+        g[0],
+        g[1],
+        g[2]
+    );
+    let about_3 = (
+        ", ORIENTATION=OR3",
+        "*ORIENTATION, NAME=OR3\n1., 0., 0., 0., 1., 0.\n3, 35.\n",
+    );
+    let ortho = check(&oriented_block(&orthotropic, about_3), "ortho-turned");
+    assert!(
+        (ortho[0] / plain[0] - 1.0).abs() > 1e-2,
+        "{ortho:?} {plain:?}"
+    );
+    // ANISOTROPIC: 21 constants, the upper triangle column by column, with couplings
+    let mut dd = [[0.0f64; 6]; 6];
+    for i in 0..3 {
+        for j in 0..3 {
+            dd[i][j] = d(i, j);
+        }
+    }
+    dd[3][3] = g[0];
+    dd[4][4] = g[1];
+    dd[5][5] = g[2];
+    dd[0][3] = 2.0e9;
+    dd[1][3] = 1.0e9;
+    dd[4][5] = 0.5e9;
+    dd[2][4] = -0.8e9;
+    let mut values = Vec::new();
+    for j in 0..6 {
+        for i in 0..=j {
+            values.push(format!("{:.10e}", dd[i][j]));
+        }
+    }
+    let aniso = format!(
+        "*MATERIAL, NAME=PLY\n*ELASTIC, TYPE=ANISOTROPIC\n{},\n{},\n{}\n*DENSITY\n1600.\n",
+        values[..8].join(", "),
+        values[8..16].join(", "),
+        values[16..].join(", ")
+    );
+    let general = check(&oriented_block(&aniso, ("", "")), "aniso");
+    // femu's writer: the turned material as the 21 constants in the global axes
+    let model = femu_io::inp::parse_inp(&oriented_block(engineering, turned), "block.inp")
+        .unwrap()
+        .to_model()
+        .unwrap();
+    agree(&model, "aniso-written");
+    assert!(
+        (general[0] / plain[0] - 1.0).abs() > 1e-3,
+        "{general:?} {plain:?}"
+    );
+}

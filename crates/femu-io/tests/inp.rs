@@ -222,9 +222,19 @@ fn malformed_decks_name_the_line() {
             "no *DENSITY",
         ),
         (
-            "*MATERIAL, NAME=A\n*ELASTIC, TYPE=ANISO\n".into(),
+            "*MATERIAL, NAME=A\n*ELASTIC, TYPE=TRACTION\n".into(),
             2,
-            "not supported",
+            "TYPE=TRACTION is not read",
+        ),
+        (
+            "*MATERIAL, NAME=A\n*ELASTIC, TYPE=ANISO\n1e9, 2e8\n*DENSITY\n1\n".into(),
+            2,
+            "TYPE=ANISOTROPIC takes 21 constants, got 2",
+        ),
+        (
+            "*MATERIAL, NAME=A\n*ELASTIC, TYPE=ORTHOTROPIC\n1e9, 2e8, x\n".into(),
+            3,
+            "constant 3 = \"x\" is not a number",
         ),
         (
             "*MATERIAL, NAME=A\n*ELASTIC\n1e9, 0.7\n*DENSITY\n1\n".into(),

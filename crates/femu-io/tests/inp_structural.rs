@@ -593,7 +593,7 @@ fn shell_section_offsets_make_one_plate_of_two() {
 /// default, global x projected, is the CQUAD4's edge G1-G2 here) to 1e-9, all four layers listed
 /// or the lower two with `SYMMETRIC`; the default axis of a shell whose normal is global x is
 /// global z (the plate turned into the y-z plane, a 0-degree ply, is the flat plate's 90-degree
-/// one, to 1e-9); an `ORIENTATION=`, a layer's named orientation, an
+/// one, to 1e-9); an `ORIENTATION=` or a layer's orientation of no `*ORIENTATION`, an
 /// unsymmetric stack and a LAMINA short of its six constants are refused with their line.
 #[test]
 fn composite_shell_sections_are_the_nastran_laminate() {
@@ -701,14 +701,17 @@ fn composite_shell_sections_are_the_nastran_laminate() {
         "",
     );
     assert!(
-        e.contains("bad.inp:") && e.contains("ORIENTATION=ORI"),
+        e.contains("bad.inp:") && e.contains("ORIENTATION=ORI: no *ORIENTATION has that name"),
         "{e}"
     );
     let e = refused(
         "*SHELL SECTION, ELSET=PLATE, COMPOSITE\n0.01, 3, CFRP, ORI\n",
         "",
     );
-    assert!(e.contains("layer 1 takes orientation \"ORI\""), "{e}");
+    assert!(
+        e.contains("layer 1: ORIENTATION=ORI: no *ORIENTATION"),
+        "{e}"
+    );
     let e = refused(
         "*SHELL SECTION, ELSET=PLATE, COMPOSITE\n0.01, 3, CFRP, 0.\n0.01, 3, CFRP, 90.\n",
         "",
@@ -720,6 +723,146 @@ fn composite_shell_sections_are_the_nastran_laminate() {
     );
     assert!(
         e.contains("needs E1, E2, NU12, G12, G13, G23, got 3 values"),
+        "{e}"
+    );
+}
+
+/// `*ORIENTATION` on shells, as Abaqus defines it for shells (docs/MATH.md, "Material
+/// orientations"): the second data line names the local axis nearest the normal, the next axis
+/// of the cycle (1, 2, 3) projected onto the shell is the material 1-direction, and the rotation
+/// turns the two others about the named one. On NAFEMS FV16's plate (8 x 8 S4, in the x-y plane)
+/// of one CFRP ply, 50 mm, against the default axes with the ply at 30 degrees (each to 1e-9): a
+/// rectangular orientation whose 1-axis is at 30 degrees with `3, 0.`; the global axes with `3,
+/// 30.`; a `*SHELL SECTION` of the LAMINA itself (not composite) in that orientation; the same of
+/// a material of `ENGINEERING CONSTANTS` (its plane-stress constants those of the LAMINA); a
+/// composite layer that names the orientation instead of an angle. `1, 0.` on the global axes
+/// projects the 2-axis: the ply at 90 degrees. On the clamped cylindrical panel of S8R (radius 1
+/// m about y), a cylindrical orientation about the panel's axis with `1, 0.` (the radial axis
+/// nearest the normal: the circumferential axis projected) is Abaqus's default there (global x
+/// projected, which is circumferential) to 1e-9, and `1, 90.` the ply at 90 degrees. Refused with
+/// their line: an orientation no card defines (with the nearest name), a shell's orientation
+/// without its second data line, one whose projected axis is the shell's normal (the element
+/// named), an axis other than 1-3, `SYSTEM=SPHERICAL`, and a cylindrical orientation on an
+/// anisotropic solid section.
+#[test]
+fn shell_orientations_turn_the_plies_as_abaqus_does() {
+    let n = 8;
+    let base = fv16(n);
+    let head = &base[..base.find("*MATERIAL").unwrap()];
+    let tail = &base[base.find("*BOUNDARY").unwrap()..];
+    let materials = "*MATERIAL, NAME=CFRP\n*ELASTIC, TYPE=LAMINA\n1.4e11, 1.e10, 0.3, 5.e9, 4.e9, 3.e9\n*DENSITY\n1600.\n\
+                     *MATERIAL, NAME=ENG\n*ELASTIC, TYPE=ENGINEERING CONSTANTS\n1.4e11, 1.e10, 1.2e10, 0.3, 0.25, 0.4, 5.e9, 4.e9,\n3.e9\n*DENSITY\n1600.\n";
+    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let orientations = format!(
+        "*ORIENTATION, NAME=OR1\n{c}, {s}, 0., {}, {c}, 0.\n3, 0.\n\
+         *ORIENTATION, NAME=OR2\n1., 0., 0., 0., 1., 0.\n3, 30.\n\
+         *ORIENTATION, NAME=NORMAL1\n1., 0., 0., 0., 1., 0.\n1, 0.\n",
+        -s
+    );
+    let deck = |section: &str| format!("{head}{materials}{orientations}{section}{tail}");
+    let single = |angle: &str| {
+        deck(&format!(
+            "*SHELL SECTION, ELSET=PLATE, COMPOSITE\n0.05, 3, CFRP, {angle}\n"
+        ))
+    };
+    let (want, _, _) = lowest(&single("30."), 4);
+    let same = |text: &str, want: &[f64]| {
+        let (got, _, _) = lowest(text, 4);
+        for (a, b) in got.iter().zip(want) {
+            assert!((a / b - 1.0).abs() < 1e-9, "{got:?} vs {want:?}");
+        }
+    };
+    for section in [
+        "*SHELL SECTION, ELSET=PLATE, COMPOSITE, ORIENTATION=OR1\n0.05, 3, CFRP, 0.\n",
+        "*SHELL SECTION, ELSET=PLATE, COMPOSITE, ORIENTATION=OR2\n0.05, 3, CFRP, 0.\n",
+        "*SHELL SECTION, ELSET=PLATE, MATERIAL=CFRP, ORIENTATION=OR2\n0.05\n",
+        "*SHELL SECTION, ELSET=PLATE, MATERIAL=ENG, ORIENTATION=OR1\n0.05\n",
+        "*SHELL SECTION, ELSET=PLATE, COMPOSITE\n0.05, 3, CFRP, OR2\n",
+    ] {
+        same(&deck(section), &want);
+    }
+    let (zero, _, _) = lowest(&single("0."), 4);
+    assert!((zero[0] / want[0] - 1.0).abs() > 0.05, "{zero:?} {want:?}");
+    let (ninety, _, _) = lowest(&single("90."), 4);
+    same(
+        &deck("*SHELL SECTION, ELSET=PLATE, COMPOSITE, ORIENTATION=NORMAL1\n0.05, 3, CFRP, 0.\n"),
+        &ninety,
+    );
+    // the cylindrical panel: a cylindrical orientation about its axis (y)
+    let panel = |section: &str| {
+        let p = s8r_panel(4, 0.01, "");
+        let head = &p[..p.find("*MATERIAL").unwrap()];
+        let tail = &p[p.find("*BOUNDARY").unwrap()..];
+        format!(
+            "{head}{materials}*ORIENTATION, NAME=CYL, SYSTEM=CYLINDRICAL\n0., 0., 0., 0., 1., 0.\n1, 0.\n\
+             *ORIENTATION, NAME=CYL90, SYSTEM=CYLINDRICAL\n0., 0., 0., 0., 1., 0.\n1, 90.\n{section}{tail}"
+        )
+    };
+    let ply = |extra: &str, angle: &str| {
+        panel(&format!(
+            "*SHELL SECTION, ELSET=PANEL, COMPOSITE{extra}\n0.01, 3, CFRP, {angle}\n"
+        ))
+    };
+    let (default, _, _) = lowest(&ply("", "0."), 4);
+    same(&ply(", ORIENTATION=CYL", "0."), &default);
+    let (at90, _, _) = lowest(&ply("", "90."), 4);
+    same(&ply(", ORIENTATION=CYL90", "0."), &at90);
+    assert!(
+        (at90[0] / default[0] - 1.0).abs() > 0.05,
+        "{at90:?} {default:?}"
+    );
+    // refusals
+    let refused = |text: &str| -> String {
+        parse_inp(text, "bad.inp")
+            .and_then(|d| d.to_model().map(|_| ()))
+            .unwrap_err()
+            .to_string()
+    };
+    let e = refused(&deck(
+        "*SHELL SECTION, ELSET=PLATE, COMPOSITE, ORIENTATION=OR3\n0.05, 3, CFRP, 0.\n",
+    ));
+    assert!(
+        e.contains("ORIENTATION=OR3: no *ORIENTATION") && e.contains("OR1"),
+        "{e}"
+    );
+    let e = refused(
+        &deck("*SHELL SECTION, ELSET=PLATE, COMPOSITE, ORIENTATION=OR2\n0.05, 3, CFRP, 0.\n")
+            .replace("0., 1., 0.\n3, 30.\n", "0., 1., 0.\n"),
+    );
+    assert!(
+        e.contains("NAME=OR2") && e.contains("second data line"),
+        "{e}"
+    );
+    let e = refused(
+        &deck("*SHELL SECTION, ELSET=PLATE, COMPOSITE, ORIENTATION=OR2\n0.05, 3, CFRP, 0.\n")
+            .replace("0., 1., 0.\n3, 30.\n", "0., 1., 0.\n2, 0.\n"),
+    );
+    assert!(
+        e.contains("local 3-axis")
+            && e.contains("normal to the element")
+            && e.contains("element 1"),
+        "{e}"
+    );
+    let e = refused(
+        &deck("*SHELL SECTION, ELSET=PLATE, COMPOSITE, ORIENTATION=OR2\n0.05, 3, CFRP, 0.\n")
+            .replace("0., 1., 0.\n3, 30.\n", "0., 1., 0.\n4, 30.\n"),
+    );
+    assert!(e.contains("not 1, 2 or 3"), "{e}");
+    let e = refused(
+        &deck("*SHELL SECTION, ELSET=PLATE, MATERIAL=CFRP\n0.05\n").replace(
+            "*ORIENTATION, NAME=OR2",
+            "*ORIENTATION, NAME=OR2, SYSTEM=SPHERICAL",
+        ),
+    );
+    assert!(e.contains("SYSTEM=SPHERICAL is not read"), "{e}");
+    let solid = "*NODE\n1, 0., 0., 0.\n2, 1., 0., 0.\n3, 1., 1., 0.\n4, 0., 1., 0.\n5, 0., 0., 1.\n\
+                 6, 1., 0., 1.\n7, 1., 1., 1.\n8, 0., 1., 1.\n*ELEMENT, TYPE=C3D8, ELSET=B\n1, 1, 2, 3, 4, 5, 6, 7, 8\n\
+                 *MATERIAL, NAME=ENG\n*ELASTIC, TYPE=ENGINEERING CONSTANTS\n1.4e11, 1.e10, 1.2e10, 0.3, 0.25, 0.4, 5.e9, 4.e9,\n3.e9\n*DENSITY\n1600.\n\
+                 *ORIENTATION, NAME=CYL, SYSTEM=CYLINDRICAL\n5., 0., 0., 5., 0., 1.\n\
+                 *SOLID SECTION, ELSET=B, MATERIAL=ENG, ORIENTATION=CYL\n";
+    let e = refused(solid);
+    assert!(
+        e.contains("bad.inp:") && e.contains("changes from element to element"),
         "{e}"
     );
 }

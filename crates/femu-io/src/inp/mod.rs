@@ -4,8 +4,10 @@
 //! Supported keywords: `*HEADING`, `*NODE`, `*ELEMENT` (C3D4, C3D10, C3D8, C3D20, C3D6, C3D15, and
 //! C3D8I, the brick with incompatible modes; the reduced-integration C3D8R and C3D20R are read as
 //! full integration, with a warning), `*NSET`,
-//! `*ELSET` (lists of ids or set names, or `GENERATE`), `*MATERIAL`, `*ELASTIC` (isotropic),
-//! `*DENSITY`, `*SOLID SECTION`, `*BOUNDARY` (DOFs 1-3, and 4-6 on coupling reference nodes;
+//! `*ELSET` (lists of ids or set names, or `GENERATE`), `*MATERIAL`, `*ELASTIC` (isotropic,
+//! `ENGINEERING CONSTANTS`, `ORTHOTROPIC`, `ANISOTROPIC`; `LAMINA` for shells), `*DENSITY`,
+//! `*ORIENTATION` (rectangular or cylindrical; `orientation.rs`, docs/MATH.md, "Material
+//! orientations"), `*SOLID SECTION`, `*BOUNDARY` (DOFs 1-3, and 4-6 on coupling reference nodes;
 //! zero values), `*ELEMENT, TYPE=MASS` with `*MASS`, `*EQUATION` (node ids; the first term's DOF
 //! is dependent), `*KINEMATIC COUPLING` and `*COUPLING` with `*KINEMATIC` (rigid links: the
 //! reference node gets rotations) or `*DISTRIBUTING` (weighted averages, with the weights of a
@@ -15,8 +17,8 @@
 //! or `*BEAM GENERAL SECTION` (`GENERAL`), springs `SPRING1`, `SPRING2`, `SPRINGA` with `*SPRING`
 //! (`structural.rs`; their nodes get rotations, which `*BOUNDARY` DOFs 4-6 then fix), and shells
 //! `S4`, `S4R`, `S3`, `S3R`, `S8R`, `S8` with `*SHELL SECTION` and membranes `M3D3`, `M3D4`, `M3D4R`,
-//! `M3D8`, `M3D8R` with `*MEMBRANE SECTION` (one isotropic material, its thickness, its
-//! `OFFSET`).
+//! `M3D8`, `M3D8R` with `*MEMBRANE SECTION` (a material, its thickness, its `OFFSET`, its
+//! `ORIENTATION`).
 //!
 //! The writer states multipoint constraints as `*EQUATION`s; the rotations of a rigid link's
 //! reference are the DOFs 1-3 of an extra node (set `FEMU_ROT`), as CalculiX's rotational nodes.
@@ -45,6 +47,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 mod model;
+mod orientation;
 mod parse;
 mod structural;
 pub use structural::section_shape;
@@ -74,6 +77,7 @@ const READ: &[(&str, &[&str])] = &[
     ("DENSITY", &["DEPENDENCIES"]),
     ("DAMPING", &["STRUCTURAL", "ALPHA", "BETA", "COMPOSITE"]),
     ("MODAL DAMPING", &["RAYLEIGH", "MODAL", "DEFINITION"]),
+    ("ORIENTATION", &["NAME", "SYSTEM", "DEFINITION"]),
     (
         "SOLID SECTION",
         &[
@@ -219,7 +223,7 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("GAP", "gap elements are not supported"),
     (
         "HYPERELASTIC",
-        "only linear isotropic elasticity is supported",
+        "femu reads linear elasticity (*ELASTIC) alone",
     ),
     (
         "INSTANCE",
@@ -250,7 +254,7 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ),
     (
         "USER MATERIAL",
-        "only linear isotropic elasticity is supported",
+        "femu reads linear elasticity (*ELASTIC) alone",
     ),
 ];
 
@@ -389,6 +393,8 @@ pub struct Section {
     /// The first field of its first data line: a truss's cross-sectional area (Abaqus assumes
     /// 1 where none is given).
     pub area: Option<String>,
+    /// `ORIENTATION=`: the `*ORIENTATION` (upper case) that gives an anisotropic material's axes.
+    pub orientation: Option<String>,
     /// Where it was defined.
     pub line: Location,
 }
@@ -472,6 +478,8 @@ pub struct InpDeck {
     /// Plane-stress ply materials (`*ELASTIC, TYPE=LAMINA`) by upper-case name: for composite
     /// shell sections only.
     pub(crate) laminae: BTreeMap<String, structural::Lamina>,
+    /// `*ORIENTATION`s by upper-case name, resolved per element as the model is built.
+    orientations: BTreeMap<String, orientation::OrientationCard>,
     /// Solid sections in file order.
     pub sections: Vec<Section>,
     /// Boundary conditions in file order.
@@ -642,6 +650,12 @@ struct PendingMaterial {
     /// `*ELASTIC, TYPE=LAMINA` was given: the data line is `E1 E2 NU12 G12 G13 G23`.
     lamina_type: bool,
     lamina: Option<[f64; 6]>,
+    /// `*ELASTIC, TYPE=ENGINEERING CONSTANTS`, `ORTHOTROPIC` or `ANISOTROPIC`: the type, and its
+    /// constants as read so far (they run over several data lines).
+    aniso: Option<AnisoType>,
+    aniso_values: Vec<f64>,
+    /// the line of that `*ELASTIC`
+    aniso_line: usize,
     density: Option<f64>,
     /// `*DAMPING, STRUCTURAL=`: the material's structural damping coefficient.
     structural: Option<f64>,
@@ -650,6 +664,35 @@ struct PendingMaterial {
     beta: Option<f64>,
     line: usize,
     path: PathBuf,
+}
+
+/// An anisotropic `*ELASTIC`'s type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum AnisoType {
+    /// `E1 E2 E3 NU12 NU13 NU23 G12 G13 G23`.
+    EngineeringConstants,
+    /// `D1111 D1122 D2222 D1133 D2233 D3333 D1212 D1313 D2323`.
+    Orthotropic,
+    /// The 21 `D` of the upper triangle, column by column in the order 11, 22, 33, 12, 13, 23.
+    Anisotropic,
+}
+
+impl AnisoType {
+    /// How many constants it takes.
+    fn count(self) -> usize {
+        match self {
+            AnisoType::Anisotropic => 21,
+            _ => 9,
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            AnisoType::EngineeringConstants => "ENGINEERING CONSTANTS",
+            AnisoType::Orthotropic => "ORTHOTROPIC",
+            AnisoType::Anisotropic => "ANISOTROPIC",
+        }
+    }
 }
 
 /// Reads a deck from a file (with its includes).

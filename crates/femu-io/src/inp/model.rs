@@ -28,6 +28,45 @@ impl InpDeck {
         }
     }
 
+    /// An anisotropic solid section's material turned from the axes of `card` to the global
+    /// frame (docs/MATH.md, "Material orientations"): one frame for the whole section, so a
+    /// rectangular orientation of coordinates or nodes.
+    fn solid_orientation(
+        &self,
+        card: &orientation::OrientationCard,
+        d: &[[f64; 6]; 6],
+        material: &Material,
+        at: &Location,
+    ) -> Result<Material, IoError> {
+        if card.system != orientation::System::Rectangular
+            || card.definition == orientation::Definition::OffsetToNodes
+        {
+            return Err(structural::at_err(
+                at,
+                format!(
+                    "*SOLID SECTION, ORIENTATION={}: femu gives a solid section of an anisotropic material one frame; this orientation changes from element to element (a cylindrical system or OFFSET TO NODES)",
+                    card.name
+                ),
+            ));
+        }
+        let node = |id: u64| self.mesh.node_index(id).map(|i| self.mesh.coords()[i]);
+        let frame = card.frame(&orientation::At {
+            element: 0,
+            x: &[],
+            node: &node,
+        })?;
+        Material::anisotropic(
+            material.name.clone(),
+            orientation::rotate_elasticity(d, &frame),
+            material.density,
+        )
+        .map_err(|source| IoError::Model {
+            path: at.path.clone(),
+            line: at.line,
+            source,
+        })
+    }
+
     fn build_model(&self) -> Result<Model, IoError> {
         let mut model = Model::new(self.mesh.clone())
             .map_err(|source| self.at_element(element_of(&source), source))?;
@@ -47,12 +86,34 @@ impl InpDeck {
                 IoError::Parse {
                     path: s.line.path.clone(),
                     line: s.line.line,
-                    reason: format!(
-                        "*SOLID SECTION names material {}, which no *MATERIAL defines{hint}",
-                        s.material
-                    ),
+                    reason: if self.laminae.contains_key(&s.material) {
+                        format!(
+                            "*SOLID SECTION names material {}, a LAMINA (a shell's plane-stress ply); a solid takes an ISOTROPIC, ENGINEERING CONSTANTS, ORTHOTROPIC or ANISOTROPIC *ELASTIC",
+                            s.material
+                        )
+                    } else {
+                        format!(
+                            "*SOLID SECTION names material {}, which no *MATERIAL defines{hint}",
+                            s.material
+                        )
+                    },
                 }
             })?;
+            let oriented;
+            let material = match &s.orientation {
+                Some(name) => {
+                    let card = orientation::named(&self.orientations, name, &s.line)?;
+                    match &material.elasticity {
+                        // an isotropic material is the same in every frame
+                        Elasticity::Isotropic { .. } => material,
+                        Elasticity::Anisotropic(d) => {
+                            oriented = self.solid_orientation(card, d, material, &s.line)?;
+                            &oriented
+                        }
+                    }
+                }
+                None => material,
+            };
             if self.mesh.element_sets().get(&s.elset).is_none() {
                 // a set of trusses alone: its elements take the section as trusses
                 if self.structural.sets.contains_key(&s.elset) {
@@ -109,6 +170,7 @@ impl InpDeck {
             &self.materials,
             &self.material_damping,
             &self.laminae,
+            &self.orientations,
             &mut model,
         )?;
         self.apply_links(&mut model)?;

@@ -117,6 +117,7 @@ struct DeckBuilder {
     mode_ratios: Vec<(usize, usize, f64)>,
     modal_rayleigh: Option<(f64, f64)>,
     laminae: BTreeMap<String, structural::Lamina>,
+    orientations: Vec<orientation::OrientationCard>,
     pending: Option<PendingMaterial>,
     sections: Vec<Section>,
     boundaries: Vec<Boundary>,
@@ -201,6 +202,9 @@ impl DeckBuilder {
                 },
             );
         }
+        if let Some(ty) = p.aniso {
+            return self.finish_anisotropic(p, ty);
+        }
         if p.lamina_type {
             let at = Location {
                 path: p.path.clone(),
@@ -257,6 +261,105 @@ impl DeckBuilder {
         Ok(())
     }
 
+    /// An anisotropic material: its elasticity matrix from the constants of its type (docs/MATH.md,
+    /// "Material orientations"); ENGINEERING CONSTANTS are also a shell's ply
+    /// ([`structural::Lamina`]: `E1 E2 NU12 G12 G13 G23`, plane stress).
+    fn finish_anisotropic(&mut self, p: PendingMaterial, ty: AnisoType) -> Result<(), IoError> {
+        let at = Location {
+            path: p.path.clone(),
+            line: p.line,
+        };
+        if p.aniso_values.len() < ty.count() {
+            return Err(structural::at_err(
+                &Location {
+                    path: p.path.clone(),
+                    line: p.aniso_line,
+                },
+                format!(
+                    "material {}: *ELASTIC, TYPE={} takes {} constants, got {}",
+                    p.name,
+                    ty.name(),
+                    ty.count(),
+                    p.aniso_values.len()
+                ),
+            ));
+        }
+        let density = p.density.ok_or_else(|| {
+            structural::at_err(
+                &at,
+                format!(
+                    "material {} has no *DENSITY (a frequency analysis needs it)",
+                    p.name
+                ),
+            )
+        })?;
+        let v = &p.aniso_values;
+        let model_err = |source| IoError::Model {
+            path: p.path.clone(),
+            line: p.line,
+            source,
+        };
+        let m = match ty {
+            AnisoType::EngineeringConstants => {
+                let [e1, e2, e3, nu12, nu13, nu23, g12, g13, g23] =
+                    [v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]];
+                let lamina = structural::Lamina {
+                    e1,
+                    e2,
+                    nu12,
+                    g12,
+                    g13,
+                    g23,
+                    density,
+                };
+                lamina.check(&at, &p.name)?;
+                self.laminae.insert(p.name.clone(), lamina);
+                Material::orthotropic(
+                    p.name.clone(),
+                    [e1, e2, e3],
+                    [nu12, nu13, nu23],
+                    [g12, g13, g23],
+                    density,
+                )
+                .map_err(model_err)?
+            }
+            AnisoType::Orthotropic => {
+                let mut d = [[0.0; 6]; 6];
+                // D1111 D1122 D2222 D1133 D2233 D3333 D1212 D1313 D2323
+                d[0][0] = v[0];
+                d[0][1] = v[1];
+                d[1][1] = v[2];
+                d[0][2] = v[3];
+                d[1][2] = v[4];
+                d[2][2] = v[5];
+                d[3][3] = v[6];
+                d[4][4] = v[7];
+                d[5][5] = v[8];
+                for i in 0..6 {
+                    for j in 0..i {
+                        d[i][j] = d[j][i];
+                    }
+                }
+                Material::anisotropic(p.name.clone(), d, density).map_err(model_err)?
+            }
+            AnisoType::Anisotropic => {
+                // the upper triangle column by column: D(0,0); D(0,1) D(1,1); D(0,2) ...
+                let mut d = [[0.0; 6]; 6];
+                let mut k = 0;
+                for j in 0..6 {
+                    for i in 0..=j {
+                        d[i][j] = v[k];
+                        d[j][i] = v[k];
+                        k += 1;
+                    }
+                }
+                Material::anisotropic(p.name.clone(), d, density).map_err(model_err)?
+            }
+        };
+        self.materials.insert(p.name, m);
+        Ok(())
+    }
+
     /// A keyword femu reads: the block its data lines belong to.
     fn keyword(
         &mut self,
@@ -294,6 +397,7 @@ impl DeckBuilder {
             "ELASTIC" | "DENSITY" => self.material_option_keyword(&name, &params, l),
             "DAMPING" => self.damping_keyword(&params, l, warnings),
             "SOLID SECTION" => self.section_keyword(&params, l),
+            "ORIENTATION" => self.orientation_keyword(&params, l),
             "BEAM SECTION" | "BEAM GENERAL SECTION" => {
                 let elset = params
                     .get("ELSET")
@@ -354,14 +458,6 @@ impl DeckBuilder {
                     None if composite => String::new(),
                     None => return Err(err(l, "*SHELL SECTION without MATERIAL=".into())),
                 };
-                if let Some(o) = params.get("ORIENTATION") {
-                    return Err(err(
-                        l,
-                        format!(
-                            "*SHELL SECTION, ORIENTATION={o}: femu takes a shell's default local axes (the global x axis projected onto it, or z where x is within 0.1 degree of its normal) and does not read *ORIENTATION; give the plies' angles from those axes"
-                        ),
-                    ));
-                }
                 // OFFSET: the nodes' surface from the midsurface, a fraction of the thickness
                 // along the normal (SPOS the top surface, SNEG the bottom one)
                 let offset = match params.get("OFFSET").map(|o| o.to_ascii_uppercase()) {
@@ -389,6 +485,7 @@ impl DeckBuilder {
                         composite,
                         symmetric: params.contains_key("SYMMETRIC"),
                         membrane: false,
+                        orientation: params.get("ORIENTATION").map(|o| o.to_ascii_uppercase()),
                         lines: Vec::new(),
                         line: at(l),
                     });
@@ -401,14 +498,6 @@ impl DeckBuilder {
                 let material = params
                     .get("MATERIAL")
                     .ok_or_else(|| err(l, "*MEMBRANE SECTION without MATERIAL=".into()))?;
-                if let Some(o) = params.get("ORIENTATION") {
-                    return Err(err(
-                        l,
-                        format!(
-                            "*MEMBRANE SECTION, ORIENTATION={o}: femu does not read *ORIENTATION (an isotropic membrane needs none)"
-                        ),
-                    ));
-                }
                 // POISSON sets the thickness change under large strain: no effect on K or M
                 self.structural
                     .shell_sections
@@ -419,6 +508,7 @@ impl DeckBuilder {
                         composite: false,
                         symmetric: false,
                         membrane: true,
+                        orientation: params.get("ORIENTATION").map(|o| o.to_ascii_uppercase()),
                         lines: Vec::new(),
                         line: at(l),
                     });
@@ -745,13 +835,91 @@ impl DeckBuilder {
             .get("TYPE")
             .filter(|ty| !ty.eq_ignore_ascii_case("ISOTROPIC") && !ty.eq_ignore_ascii_case("ISO"));
         if let (true, Some(ty)) = (name == "ELASTIC", unsupported) {
+            // CalculiX spells ORTHO and ANISO
+            let aniso = match ty.to_ascii_uppercase().as_str() {
+                "ENGINEERING CONSTANTS" => AnisoType::EngineeringConstants,
+                "ORTHOTROPIC" | "ORTHO" => AnisoType::Orthotropic,
+                "ANISOTROPIC" | "ANISO" => AnisoType::Anisotropic,
+                _ => {
+                    return Err(err(
+                        l,
+                        format!(
+                            "*ELASTIC, TYPE={ty} is not read (ISOTROPIC, ENGINEERING CONSTANTS, ORTHOTROPIC, ANISOTROPIC, and LAMINA for shells, are)"
+                        ),
+                    ));
+                }
+            };
+            if let Some(p) = self.pending.as_mut()
+                && p.aniso.is_none()
+                && p.young.is_none()
+            {
+                p.aniso = Some(aniso);
+                p.aniso_line = l.number;
+            }
+        }
+        Ok(())
+    }
+
+    /// `*ORIENTATION, NAME=`: a rectangular or cylindrical frame of coordinates, nodes or the
+    /// element's own nodes (its data lines follow).
+    fn orientation_keyword(
+        &mut self,
+        params: &HashMap<String, String>,
+        l: &Line,
+    ) -> Result<(), IoError> {
+        let name = params
+            .get("NAME")
+            .ok_or_else(|| err(l, "*ORIENTATION without NAME=".into()))?
+            .to_ascii_uppercase();
+        if let Some(first) = self.orientations.iter().find(|o| o.name == name) {
             return Err(err(
                 l,
                 format!(
-                    "*ELASTIC, TYPE={ty} is not supported yet (isotropic, and LAMINA for composite shell sections)"
+                    "*ORIENTATION, NAME={name} is defined twice (first on line {})",
+                    first.line.line
                 ),
             ));
         }
+        let system = match params
+            .get("SYSTEM")
+            .map(|s| s.to_ascii_uppercase())
+            .as_deref()
+        {
+            None | Some("RECTANGULAR") => orientation::System::Rectangular,
+            Some("CYLINDRICAL") => orientation::System::Cylindrical,
+            Some(s) => {
+                return Err(err(
+                    l,
+                    format!(
+                        "*ORIENTATION, SYSTEM={s} is not read (RECTANGULAR and CYLINDRICAL are)"
+                    ),
+                ));
+            }
+        };
+        let definition = match params
+            .get("DEFINITION")
+            .map(|s| s.to_ascii_uppercase())
+            .as_deref()
+        {
+            None | Some("COORDINATES") => orientation::Definition::Coordinates,
+            Some("NODES") => orientation::Definition::Nodes,
+            Some("OFFSET TO NODES") => orientation::Definition::OffsetToNodes,
+            Some(s) => {
+                return Err(err(
+                    l,
+                    format!(
+                        "*ORIENTATION, DEFINITION={s} is not read (COORDINATES, NODES and OFFSET TO NODES are)"
+                    ),
+                ));
+            }
+        };
+        self.orientations.push(orientation::OrientationCard {
+            name,
+            system,
+            definition,
+            lines: Vec::new(),
+            line: at(l),
+        });
         Ok(())
     }
 
@@ -770,6 +938,7 @@ impl DeckBuilder {
             elset: elset.to_ascii_uppercase(),
             material: material.to_ascii_uppercase(),
             area: None,
+            orientation: params.get("ORIENTATION").map(|o| o.to_ascii_uppercase()),
             line: at(l),
         });
         Ok(())
@@ -824,6 +993,12 @@ impl DeckBuilder {
                     && s.area.is_none()
                 {
                     s.area = Some(f.first().map_or(String::new(), |v| v.to_string()));
+                }
+                Ok(())
+            }
+            "ORIENTATION" => {
+                if let Some(c) = self.orientations.last_mut() {
+                    c.lines.push(f.iter().map(|s| s.to_string()).collect());
                 }
                 Ok(())
             }
@@ -1043,6 +1218,35 @@ impl DeckBuilder {
         warnings: &mut Vec<Warning>,
     ) -> Result<(), IoError> {
         let p = self.pending.as_mut().expect("checked at the keyword");
+        if let Some(ty) = p.aniso {
+            // the constants run over the data lines, eight to a line; a line after they are
+            // complete is another temperature's
+            if p.aniso_values.len() >= ty.count() {
+                warn(
+                    warnings,
+                    l,
+                    "temperature-dependent elasticity: the first set of constants is used".into(),
+                );
+                return Ok(());
+            }
+            for s in f {
+                if p.aniso_values.len() == ty.count() {
+                    break;
+                }
+                let v = parse_f64(s).ok_or_else(|| {
+                    err(
+                        l,
+                        format!(
+                            "*ELASTIC, TYPE={}: constant {} = {s:?} is not a number",
+                            ty.name(),
+                            p.aniso_values.len() + 1
+                        ),
+                    )
+                })?;
+                p.aniso_values.push(v);
+            }
+            return Ok(());
+        }
         if p.lamina_type {
             if f.len() < 6 {
                 return Err(err(
@@ -1448,6 +1652,11 @@ impl DeckBuilder {
             mode_ratios: self.mode_ratios,
             modal_rayleigh: self.modal_rayleigh,
             laminae: self.laminae,
+            orientations: self
+                .orientations
+                .into_iter()
+                .map(|o| (o.name.clone(), o))
+                .collect(),
             sections: self.sections,
             boundaries: self.boundaries,
             point_masses,

@@ -159,6 +159,8 @@ pub(super) struct ShellSectionCard {
     pub(super) symmetric: bool,
     /// A `*MEMBRANE SECTION` (for membrane elements): the thickness alone.
     pub(super) membrane: bool,
+    /// `ORIENTATION=`: the `*ORIENTATION` (upper case) of its material axes.
+    pub(super) orientation: Option<String>,
     pub(super) lines: Vec<Vec<String>>,
     pub(super) line: Location,
 }
@@ -404,6 +406,7 @@ pub(super) fn add_structural(
     materials: &BTreeMap<String, Material>,
     material_damping: &BTreeMap<String, super::MaterialDamping>,
     laminae: &BTreeMap<String, Lamina>,
+    orientations: &BTreeMap<String, super::orientation::OrientationCard>,
     model: &mut Model,
 ) -> Result<(), IoError> {
     // the section (or spring card) of each element, by its set
@@ -589,7 +592,23 @@ pub(super) fn add_structural(
                 }
                 let x: Vec<[f64; 3]> = nodes.iter().map(|n| model.mesh().coords()[*n]).collect();
                 damping = shell_damping(card, material_damping)?;
-                let mut kind = shell(card, materials, laminae, &x)?;
+                let node = |nid: u64| {
+                    model
+                        .mesh()
+                        .node_index(nid)
+                        .map(|i| model.mesh().coords()[i])
+                };
+                let axes = super::orientation::ShellAxes {
+                    normal: super::orientation::shell_normal(&x),
+                    at: super::orientation::At {
+                        element: *id,
+                        x: &x,
+                        node: &node,
+                    },
+                    orientations,
+                    line: &card.line,
+                };
+                let mut kind = shell(card, materials, laminae, &axes)?;
                 // a membrane: no bending, no transverse shear (docs/MATH.md, "Shells")
                 if let (true, StructuralKind::Shell(s)) = (membrane, &mut kind) {
                     s.bending = 0.0;
@@ -699,11 +718,11 @@ fn shell(
     c: &ShellSectionCard,
     materials: &BTreeMap<String, Material>,
     laminae: &BTreeMap<String, Lamina>,
-    x: &[[f64; 3]],
+    axes: &super::orientation::ShellAxes,
 ) -> Result<StructuralKind, IoError> {
     let l = &c.line;
     if c.composite {
-        return composite_shell(c, materials, laminae, x);
+        return composite_shell(c, materials, laminae, axes);
     }
     let keyword = if c.membrane {
         "*MEMBRANE SECTION"
@@ -717,6 +736,25 @@ fn shell(
         .filter(|s| !s.is_empty())
         .ok_or_else(|| at_err(l, format!("{keyword} needs the thickness on its data line")))
         .and_then(|s| number(l, "the thickness", s))?;
+    if let Some(lam) = laminae.get(&c.material) {
+        // a LAMINA or ENGINEERING CONSTANTS: one orthotropic ply, in the section's material axes
+        let mut s = femu_fem::shell::laminate(&[lam.ply(t, 0.0)])
+            .map_err(|e| at_err(l, format!("{keyword}: {e}")))?;
+        if let Some(m) = s.material.as_mut() {
+            m.axis = axes.axis(c.orientation.as_deref())?;
+        }
+        s.offset = -c.offset * t;
+        s.membrane = if c.membrane {
+            femu_fem::shell::Membrane::Full
+        } else {
+            femu_fem::shell::Membrane::Incompatible
+        };
+        return Ok(StructuralKind::Shell(s));
+    }
+    if let Some(name) = &c.orientation {
+        // an isotropic material has no axes: the orientation is only checked to exist
+        super::orientation::named(axes.orientations, name, l)?;
+    }
     let m = materials.get(&c.material).ok_or_else(|| {
         at_err(
             l,
@@ -830,25 +868,32 @@ fn composite_shell(
     c: &ShellSectionCard,
     materials: &BTreeMap<String, Material>,
     laminae: &BTreeMap<String, Lamina>,
-    x: &[[f64; 3]],
+    axes: &super::orientation::ShellAxes,
 ) -> Result<StructuralKind, IoError> {
     let l = &c.line;
+    let axis = axes.axis(c.orientation.as_deref())?;
     let mut plies = Vec::with_capacity(c.lines.len());
     for (k, row) in c.lines.iter().enumerate() {
         let field = |i: usize| row.get(i).map(String::as_str).unwrap_or("").trim();
         let t = number(l, "a layer's thickness", field(0))?;
         let name = field(2).to_ascii_uppercase();
+        // an angle from the section's material axis, or an orientation's name (that
+        // orientation's own material axis)
         let theta = match field(3) {
             "" => 0.0,
-            s => s.parse::<f64>().map_err(|_| {
-                at_err(
-                    l,
-                    format!(
-                        "*SHELL SECTION, COMPOSITE: layer {} takes orientation {s:?}, an *ORIENTATION femu does not read; give its angle in degrees from the shell's default local axes",
-                        k + 1
-                    ),
-                )
-            })?,
+            s => match super::parse_f64(s) {
+                Some(v) if v.is_finite() => v,
+                _ => axes
+                    .angle_from(axis, &s.to_ascii_uppercase())
+                    .map_err(|e| match e {
+                        IoError::Parse { path, line, reason } => IoError::Parse {
+                            path,
+                            line,
+                            reason: format!("layer {}: {reason}", k + 1),
+                        },
+                        e => e,
+                    })?,
+            },
         };
         let ply = if let Some(lam) = laminae.get(&name) {
             lam.ply(t, theta)
@@ -888,26 +933,8 @@ fn composite_shell(
     }
     let mut s = femu_fem::shell::laminate(&plies)
         .map_err(|e| at_err(l, format!("*SHELL SECTION, COMPOSITE: {e}")))?;
-    // the default local 1-direction: global x, or z where x is within 0.1 degree of the normal
-    let normal = {
-        let (a, b) = (
-            [x[1][0] - x[0][0], x[1][1] - x[0][1], x[1][2] - x[0][2]],
-            [x[2][0] - x[0][0], x[2][1] - x[0][1], x[2][2] - x[0][2]],
-        );
-        let n = [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ];
-        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-        [n[0] / len, n[1] / len, n[2] / len]
-    };
     if let Some(m) = s.material.as_mut() {
-        m.axis = if normal[0].abs() > 0.1f64.to_radians().cos() {
-            [0.0, 0.0, 1.0]
-        } else {
-            [1.0, 0.0, 0.0]
-        };
+        m.axis = axis;
     }
     s.offset = -c.offset * s.t;
     Ok(StructuralKind::Shell(s))

@@ -20,7 +20,7 @@ pub(super) fn number_field(v: f64) -> String {
 /// a deck that was read gives the same deck.
 ///
 /// # Errors
-/// An element without material; an anisotropic material (not written yet).
+/// An element without material.
 pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String, IoError> {
     let mesh = model.mesh();
     let unwritable = |reason: String| IoError::Content {
@@ -223,12 +223,6 @@ fn write_materials(s: &mut String, model: &Model) -> Result<(), IoError> {
         }
     }
     for (i, (m, ids)) in distinct.iter().enumerate() {
-        let Elasticity::Isotropic { e, nu } = &m.elasticity else {
-            return Err(unwritable(format!(
-                "material {} is anisotropic: not written yet",
-                m.name
-            )));
-        };
         // the material's own name when it is a valid Abaqus name not used before
         let clean: String = m
             .name
@@ -252,11 +246,23 @@ fn write_materials(s: &mut String, model: &Model) -> Result<(), IoError> {
         };
         let _ = writeln!(s, "*ELSET, ELSET=FEMU_MAT{}", i + 1);
         write_ids(s, ids.clone());
+        let elastic = match &m.elasticity {
+            Elasticity::Isotropic { e, nu } => {
+                format!("*ELASTIC\n{}, {}", number_field(*e), number_field(*nu))
+            }
+            // the 21 constants in the global axes: the upper triangle column by column (11, 22,
+            // 33, 12, 13, 23), eight to a line
+            Elasticity::Anisotropic(d) => {
+                let values: Vec<String> = (0..6)
+                    .flat_map(|j| (0..=j).map(move |i| number_field(d[i][j])))
+                    .collect();
+                let lines: Vec<String> = values.chunks(8).map(|c| c.join(", ")).collect();
+                format!("*ELASTIC, TYPE=ANISO\n{}", lines.join(",\n"))
+            }
+        };
         let _ = writeln!(
             s,
-            "*MATERIAL, NAME={name}\n*ELASTIC\n{}, {}\n*DENSITY\n{}",
-            number_field(*e),
-            number_field(*nu),
+            "*MATERIAL, NAME={name}\n{elastic}\n*DENSITY\n{}",
             number_field(m.density)
         );
         let _ = writeln!(
