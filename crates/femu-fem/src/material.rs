@@ -192,6 +192,33 @@ impl Material {
     }
 }
 
+/// `D` given in a rectangular frame whose axes are the columns of `a` (basic components), turned
+/// into the basic (global) frame: `D' = T D T^T` with `T` the stress transformation of the rotation `a`
+/// (Voigt order 11, 22, 33, 12, 13, 23, engineering shears; docs/MATH.md, "Material
+/// orientations"): Nastran's MAT9 in a PSOLID's `CORDM`, Abaqus's material in an `*ORIENTATION`.
+pub fn rotate_voigt(d: &[[f64; 6]; 6], a: &[[f64; 3]; 3]) -> [[f64; 6]; 6] {
+    // stress in the frame s'_ij = a_ik a_jl s_kl with a_ik = (axis k)_i: basic = A local A^T
+    let pairs = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+    let t: [[f64; 6]; 6] = std::array::from_fn(|p| {
+        let (i, j) = pairs[p];
+        std::array::from_fn(|q| {
+            let (k, l) = pairs[q];
+            if k == l {
+                a[i][k] * a[j][l]
+            } else {
+                a[i][k] * a[j][l] + a[i][l] * a[j][k]
+            }
+        })
+    });
+    std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            (0..6)
+                .map(|p| (0..6).map(|q| t[i][p] * d[p][q] * t[j][q]).sum::<f64>())
+                .sum()
+        })
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

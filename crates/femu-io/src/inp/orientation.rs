@@ -354,40 +354,11 @@ pub(super) fn angle_about(from: [f64; 3], to: [f64; 3], normal: [f64; 3]) -> f64
         .to_degrees()
 }
 
-/// The elasticity matrix `d` (Voigt order 11, 22, 33, 12, 13, 23, engineering shears) given in
-/// the axes of `frame` (rows: the material axes in the global frame), in the global frame:
-/// `C_abcd = R_ia R_jb R_kc R_ld C_ijkl` with `R` the frame.
+/// The elasticity matrix `d` given in the axes of `frame` (rows: the material axes in the global
+/// frame), in the global frame ([`femu_fem::material::rotate_voigt`], whose frame is by columns).
 pub(super) fn rotate_elasticity(d: &[[f64; 6]; 6], frame: &Frame) -> [[f64; 6]; 6] {
-    const V: [[usize; 3]; 3] = [[0, 3, 4], [3, 1, 5], [4, 5, 2]];
-    const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
-    let mut out = [[0.0; 6]; 6];
-    for (p, &(a, b)) in PAIRS.iter().enumerate() {
-        for (q, &(c, dd)) in PAIRS.iter().enumerate() {
-            let mut s = 0.0;
-            for i in 0..3 {
-                for j in 0..3 {
-                    let rij = frame[i][a] * frame[j][b];
-                    if rij == 0.0 {
-                        continue;
-                    }
-                    for k in 0..3 {
-                        for l in 0..3 {
-                            s += rij * frame[k][c] * frame[l][dd] * d[V[i][j]][V[k][l]];
-                        }
-                    }
-                }
-            }
-            out[p][q] = s;
-        }
-    }
-    for p in 0..6 {
-        for q in 0..p {
-            let m = 0.5 * (out[p][q] + out[q][p]);
-            out[p][q] = m;
-            out[q][p] = m;
-        }
-    }
-    out
+    let columns: Frame = std::array::from_fn(|i| std::array::from_fn(|j| frame[j][i]));
+    femu_fem::material::rotate_voigt(d, &columns)
 }
 
 #[cfg(test)]
