@@ -622,7 +622,21 @@ fn couplings_and_equations_in_decks() {
         ),
         (
             text.replace("*KINEMATIC COUPLING, REF NODE=9", "*KINEMATIC COUPLING"),
-            "c.inp:27: *KINEMATIC COUPLING needs REF NODE=<node id>",
+            "c.inp:27: *KINEMATIC COUPLING needs REF NODE=<node id or node set>",
+        ),
+        (
+            text.replace(
+                "*KINEMATIC COUPLING, REF NODE=9",
+                "*KINEMATIC COUPLING, REF NODE=TOP",
+            ),
+            "c.inp:28: REF NODE=TOP: the set holds 2 nodes",
+        ),
+        (
+            text.replace(
+                "*KINEMATIC COUPLING, REF NODE=9",
+                "*KINEMATIC COUPLING, REF NODE=TOPP",
+            ),
+            "c.inp:28: REF NODE=TOPP: no node set has that name",
         ),
         (
             text.replace("TOP, 1, 3", "TOQ, 1, 3"),

@@ -1277,3 +1277,41 @@ fn membranes_against_calculix_and_nafems() {
         assert!(e.contains(what) && e.contains("deck.inp:"), "{what}: {e}");
     }
 }
+
+/// Abaqus's named boundary types (Keywords Reference, `*BOUNDARY`) fix the DOFs they name: on a
+/// B31 cantilever, `ENCASTRE` is `1, 6`, `PINNED` is `1, 3`, `XSYMM` is 1, 5, 6, `ZSYMM` 3, 4, 5
+/// and `YASYMM` (lower case) 1, 3, 5: the same fixed DOFs, and the stiffness to 1e-12, as the DOFs
+/// written out; a misspelt type is refused.
+#[test]
+fn named_boundary_types_fix_their_dofs() {
+    let base = cantilever(20, "B31", false);
+    let with = |bc: &str| base.replace("*BOUNDARY\n1, 1, 6\n", &format!("*BOUNDARY\n{bc}\n"));
+    for (named, dofs) in [
+        ("1, ENCASTRE", "1, 1, 6"),
+        ("1, PINNED", "1, 1, 3"),
+        ("1, XSYMM", "1, 1, 1\n1, 5, 6"),
+        ("1, ZSYMM", "1, 3, 5"),
+        ("1, yasymm", "1, 1, 1\n1, 3, 3\n1, 5, 5"),
+    ] {
+        let deck = |bc: &str| {
+            let d = parse_inp(&with(bc), "bc.inp").unwrap();
+            let m = d.to_model().unwrap();
+            let mut fixed: Vec<(usize, usize)> = m.fixed_dofs().collect();
+            fixed.sort();
+            let sys = m.assemble(MassKind::Consistent).unwrap();
+            let k = sys.k.to_dense();
+            (fixed, k)
+        };
+        let (a, ka) = deck(named);
+        let (b, kb) = deck(dofs);
+        assert_eq!(a, b, "{named}");
+        let scale = kb.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (x, y) in ka.iter().zip(&kb) {
+            assert!((x - y).abs() <= 1e-12 * scale, "{named}");
+        }
+    }
+    let e = parse_inp(&with("1, ENCASTER"), "bc.inp")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("neither an integer nor a boundary type"), "{e}");
+}

@@ -1,6 +1,9 @@
 //! Abaqus/CalculiX input decks (`.inp`): read a model (mesh, sets, materials, sections,
 //! boundary conditions, the `*FREQUENCY` step) and write one that CalculiX runs.
 //!
+//! Decks in parts and an assembly (`*PART`, `*ASSEMBLY`, `*INSTANCE` with its translation and
+//! rotation, Abaqus/CAE's layout) are placed into one flat deck first (`parts.rs`).
+//!
 //! Supported keywords: `*HEADING`, `*NODE`, `*ELEMENT` (C3D4, C3D10, C3D8, C3D20, C3D6, C3D15, and
 //! C3D8I, the brick with incompatible modes; the reduced-integration C3D8R and C3D20R are read as
 //! full integration, with a warning), `*NSET`,
@@ -8,7 +11,8 @@
 //! `ENGINEERING CONSTANTS`, `ORTHOTROPIC`, `ANISOTROPIC`; `LAMINA` for shells), `*DENSITY`,
 //! `*ORIENTATION` (rectangular or cylindrical; `orientation.rs`, docs/MATH.md, "Material
 //! orientations"), `*SOLID SECTION`, `*BOUNDARY` (DOFs 1-3, and 4-6 on coupling reference nodes;
-//! zero values), `*ELEMENT, TYPE=MASS` with `*MASS`, `*EQUATION` (node ids; the first term's DOF
+//! zero values; the named types `ENCASTRE`, `PINNED`, `XSYMM`, `YSYMM`, `ZSYMM`, `XASYMM`,
+//! `YASYMM`, `ZASYMM`), `*ELEMENT, TYPE=MASS` with `*MASS`, `*EQUATION` (node ids; the first term's DOF
 //! is dependent), `*KINEMATIC COUPLING` and `*COUPLING` with `*KINEMATIC` (rigid links: the
 //! reference node gets rotations) or `*DISTRIBUTING` (weighted averages, with the weights of a
 //! `*SURFACE, TYPE=NODE`), `*INCLUDE`, `*STEP`, `*FREQUENCY`, `*END STEP` (docs/MATH.md,
@@ -30,7 +34,7 @@
 //! - a keyword that cannot change `K` or `M` (output requests, loads, amplitudes, other steps) is
 //!   skipped with a warning;
 //! - a keyword that would change `K` or `M` and that femu cannot model (shells, three-node beams,
-//!   `*RIGID BODY`, `*TIE`, parts and instances, other materials) is an error;
+//!   `*RIGID BODY`, `*TIE`, other materials) is an error;
 //! - any other keyword is unknown: an error naming the nearest known spelling (`*BOUNDRY`: did you
 //!   mean `*BOUNDARY`?), or a warning with [`InpOptions::lenient`].
 //!
@@ -49,6 +53,7 @@ use std::path::{Path, PathBuf};
 mod model;
 mod orientation;
 mod parse;
+mod parts;
 mod structural;
 pub use structural::section_shape;
 mod write;
@@ -78,6 +83,13 @@ const READ: &[(&str, &[&str])] = &[
     ("DAMPING", &["STRUCTURAL", "ALPHA", "BETA", "COMPOSITE"]),
     ("MODAL DAMPING", &["RAYLEIGH", "MODAL", "DEFINITION"]),
     ("ORIENTATION", &["NAME", "SYSTEM", "DEFINITION"]),
+    // parts and the assembly: placed before the keywords are read (`parts.rs`)
+    ("PART", &["NAME"]),
+    ("END PART", &[]),
+    ("ASSEMBLY", &["NAME"]),
+    ("END ASSEMBLY", &[]),
+    ("INSTANCE", &["NAME", "PART"]),
+    ("END INSTANCE", &[]),
     (
         "SOLID SECTION",
         &[
@@ -183,7 +195,6 @@ const NO_EFFECT: &[&str] = &[
     "EL FILE",
     "EL PRINT",
     "ELEMENT OUTPUT",
-    "END PART",
     "ENERGY OUTPUT",
     "EXPANSION",
     "FILM",
@@ -209,10 +220,6 @@ const NO_EFFECT: &[&str] = &[
 /// Keywords that would change `K` or `M` and that femu cannot model: errors.
 const UNSUPPORTED: &[(&str, &str)] = &[
     (
-        "ASSEMBLY",
-        "part/instance input: flatten the deck (nodes and elements at the top level)",
-    ),
-    (
         "CONTACT PAIR",
         "contact changes the stiffness and is not supported",
     ),
@@ -226,10 +233,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
         "femu reads linear elasticity (*ELASTIC) alone",
     ),
     (
-        "INSTANCE",
-        "part/instance input: flatten the deck (nodes and elements at the top level)",
-    ),
-    (
         "MEMBRANE SECTION",
         "membrane elements are not supported (solids only)",
     ),
@@ -237,10 +240,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     (
         "NONSTRUCTURAL MASS",
         "non-structural mass is not supported yet",
-    ),
-    (
-        "PART",
-        "part/instance input: flatten the deck (nodes and elements at the top level)",
     ),
     ("RIGID BODY", "rigid bodies are not supported yet"),
     (
@@ -802,5 +801,7 @@ pub fn read_nodes(path: impl AsRef<Path>) -> Result<Vec<(u64, [f64; 3])>, IoErro
 
 fn parse(lines: &[Line], path: &Path, options: &InpOptions) -> Result<InpDeck, IoError> {
     let mut warnings = Vec::new();
+    let flat = parts::flatten(lines, &mut warnings).map_err(|e| e.after(&warnings))?;
+    let lines = flat.as_deref().unwrap_or(lines);
     parse_collecting(lines, path, options, &mut warnings).map_err(|e| e.after(&warnings))
 }

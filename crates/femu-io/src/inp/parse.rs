@@ -125,7 +125,10 @@ struct DeckBuilder {
     links: Vec<InpLink>,
     surfaces: BTreeMap<String, Vec<(Target, f64)>>,
     surface_now: Option<String>,
-    coupling_now: Option<(u64, String)>,
+    coupling_now: Option<(u64, String, Option<String>)>,
+    /// couplings whose `REF NODE=` names a node set (Abaqus allows a set of one node): the
+    /// link's index, the set and the keyword line, resolved once the sets are known
+    reference_sets: Vec<(usize, String, Location)>,
     /// an *EQUATION being read: number of terms, terms so far, keyword line
     equation: Option<(usize, Vec<EquationTerm>, Location)>,
     block: String,
@@ -542,14 +545,20 @@ impl DeckBuilder {
     ) -> Result<(), IoError> {
         let reference = params
             .get("REF NODE")
-            .and_then(|v| v.parse::<u64>().ok())
-            .ok_or_else(|| err(l, format!("*{name} needs REF NODE=<node id>")))?;
+            .filter(|v| !v.is_empty())
+            .ok_or_else(|| err(l, format!("*{name} needs REF NODE=<node id or node set>")))?;
+        // a node set's one node is found once the sets are known (`reference_sets`)
+        let set = reference
+            .parse::<u64>()
+            .is_err()
+            .then(|| reference.to_ascii_uppercase());
+        let reference = reference.parse::<u64>().unwrap_or(0);
         self.coupling_now = None;
         if name == "COUPLING" {
             let surface = params
                 .get("SURFACE")
                 .ok_or_else(|| err(l, "*COUPLING needs SURFACE=<node-based surface>".into()))?;
-            self.coupling_now = Some((reference, surface.to_ascii_uppercase()));
+            self.coupling_now = Some((reference, surface.to_ascii_uppercase(), set));
         }
         Ok(())
     }
@@ -560,7 +569,7 @@ impl DeckBuilder {
         params: &HashMap<String, String>,
         l: &Line,
     ) -> Result<(), IoError> {
-        let (reference, surface) = self
+        let (reference, surface, set) = self
             .coupling_now
             .clone()
             .ok_or_else(|| err(l, format!("*{name} without a *COUPLING before it")))?;
@@ -575,6 +584,7 @@ impl DeckBuilder {
             ));
         }
         let nodes = LinkNodes::Surface(surface);
+        self.note_reference_set(set.as_deref(), l);
         let kind = if name == "KINEMATIC" {
             LinkKind::Kinematic {
                 reference,
@@ -1319,9 +1329,41 @@ impl DeckBuilder {
             ));
         }
         let target = target(f[0]);
-        let first = f[1]
-            .parse::<usize>()
-            .map_err(|_| err(l, format!("DOF {:?} is not an integer", f[1])))?;
+        // Abaqus's named boundary types (Keywords Reference, *BOUNDARY): the DOFs each fixes
+        let named: Option<&[usize]> = match f[1].to_ascii_uppercase().as_str() {
+            "ENCASTRE" => Some(&[1, 2, 3, 4, 5, 6]),
+            "PINNED" => Some(&[1, 2, 3]),
+            "XSYMM" => Some(&[1, 5, 6]),
+            "YSYMM" => Some(&[2, 4, 6]),
+            "ZSYMM" => Some(&[3, 4, 5]),
+            "XASYMM" => Some(&[2, 3, 4]),
+            "YASYMM" => Some(&[1, 3, 5]),
+            "ZASYMM" => Some(&[1, 2, 6]),
+            _ => None,
+        };
+        if let Some(dofs) = named {
+            if dofs.iter().any(|d| *d > 3) && self.rotation_boundary.is_none() {
+                self.rotation_boundary = Some(at(l));
+            }
+            for &d in dofs {
+                self.boundaries.push(Boundary {
+                    target: target.clone(),
+                    first: d,
+                    last: d,
+                    line: at(l),
+                });
+            }
+            return Ok(());
+        }
+        let first = f[1].parse::<usize>().map_err(|_| {
+            err(
+                l,
+                format!(
+                    "DOF {:?} is neither an integer nor a boundary type (ENCASTRE, PINNED, XSYMM, YSYMM, ZSYMM, XASYMM, YASYMM, ZASYMM)",
+                    f[1]
+                ),
+            )
+        })?;
         let last = match f.get(2) {
             Some(s) if !s.is_empty() => s
                 .parse::<usize>()
@@ -1497,6 +1539,15 @@ impl DeckBuilder {
         Ok(())
     }
 
+    /// The link about to be pushed takes its reference from a node set when the block's `REF
+    /// NODE=` is a name.
+    fn note_reference_set(&mut self, name: Option<&str>, l: &Line) {
+        if let Some(name) = name.filter(|v| v.parse::<u64>().is_err()) {
+            self.reference_sets
+                .push((self.links.len(), name.to_ascii_uppercase(), at(l)));
+        }
+    }
+
     fn kinematic_coupling_line(&mut self, f: &[&str], l: &Line) -> Result<(), IoError> {
         let reference = self
             .block_params
@@ -1511,6 +1562,8 @@ impl DeckBuilder {
         };
         let dofs = dof_range(f.get(1).copied(), f.get(2).copied())
             .map_err(|reason| err(l, format!("*KINEMATIC COUPLING: {reason}")))?;
+        let set = self.block_params.get("REF NODE").cloned();
+        self.note_reference_set(set.as_deref(), l);
         self.links.push(InpLink {
             kind: LinkKind::Kinematic {
                 reference,
@@ -1603,6 +1656,32 @@ impl DeckBuilder {
                 "the deck defines {} nodes and no elements (*ELEMENT, TYPE=C3D8 and the other solids)",
                 self.nodes.len()
             )));
+        }
+        for (k, name, at) in &self.reference_sets {
+            let one = match node_sets.get(name) {
+                Some(ids) if ids.len() == 1 => ids[0],
+                found => {
+                    return Err(IoError::Parse {
+                        path: at.path.clone(),
+                        line: at.line,
+                        reason: match found {
+                            None => format!("REF NODE={name}: no node set has that name"),
+                            Some(ids) => format!(
+                                "REF NODE={name}: the set holds {} nodes; a reference is one node",
+                                ids.len()
+                            ),
+                        },
+                    });
+                }
+            };
+            if let Some(InpLink {
+                kind:
+                    LinkKind::Kinematic { reference, .. } | LinkKind::Distributing { reference, .. },
+                ..
+            }) = self.links.get_mut(*k)
+            {
+                *reference = one;
+            }
         }
         // the ids were checked where each set was defined
         for (name, ids) in &node_sets {
