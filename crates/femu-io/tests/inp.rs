@@ -610,7 +610,7 @@ fn couplings_and_equations_in_decks() {
         ),
         (
             text.replace("*SURFACE, TYPE=NODE, NAME=S1", "*SURFACE, NAME=S1"),
-            "c.inp:31: *SURFACE, TYPE=ELEMENT: femu reads node-based surfaces (TYPE=NODE) for couplings",
+            "c.inp:36: *DISTRIBUTING: surface S1 is element-based; a coupling takes a node-based surface (*SURFACE, TYPE=NODE)",
         ),
         (
             text.replace("SURFACE=S1", "SURFACE=S2"),

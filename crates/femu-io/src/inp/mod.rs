@@ -13,7 +13,8 @@
 //! orientations"), `*SOLID SECTION`, `*BOUNDARY` (DOFs 1-3, and 4-6 on coupling reference nodes;
 //! zero values; the named types `ENCASTRE`, `PINNED`, `XSYMM`, `YSYMM`, `ZSYMM`, `XASYMM`,
 //! `YASYMM`, `ZASYMM`), `*ELEMENT, TYPE=MASS` with `*MASS`, `*EQUATION` (node ids; the first term's DOF
-//! is dependent), `*KINEMATIC COUPLING` and `*COUPLING` with `*KINEMATIC` (rigid links: the
+//! is dependent), `*RIGID BODY` (`ELSET`, `TIE NSET` or CalculiX's `NSET`: rigid links; `PIN
+//! NSET`: their translations), `*KINEMATIC COUPLING` and `*COUPLING` with `*KINEMATIC` (rigid links: the
 //! reference node gets rotations) or `*DISTRIBUTING` (weighted averages, with the weights of a
 //! `*SURFACE, TYPE=NODE`), `*INCLUDE`, `*STEP`, `*FREQUENCY`, `*END STEP` (docs/MATH.md,
 //! "Multipoint constraints"); trusses `T3D2` with `*SOLID SECTION` (the area on its data line);
@@ -33,8 +34,8 @@
 //!   GENERTE`) is an error naming the nearest known spelling;
 //! - a keyword that cannot change `K` or `M` (output requests, loads, amplitudes, other steps) is
 //!   skipped with a warning;
-//! - a keyword that would change `K` or `M` and that femu cannot model (shells, three-node beams,
-//!   `*RIGID BODY`, `*TIE`, other materials) is an error;
+//! - a keyword that would change `K` or `M` and that femu cannot model (contact,
+//!   `*TIE`, nonlinear materials) is an error;
 //! - any other keyword is unknown: an error naming the nearest known spelling (`*BOUNDRY`: did you
 //!   mean `*BOUNDARY`?), or a warning with [`InpOptions::lenient`].
 //!
@@ -83,6 +84,19 @@ const READ: &[(&str, &[&str])] = &[
     ("DAMPING", &["STRUCTURAL", "ALPHA", "BETA", "COMPOSITE"]),
     ("MODAL DAMPING", &["RAYLEIGH", "MODAL", "DEFINITION"]),
     ("ORIENTATION", &["NAME", "SYSTEM", "DEFINITION"]),
+    (
+        "RIGID BODY",
+        &[
+            "REF NODE",
+            "ELSET",
+            "TIE NSET",
+            "PIN NSET",
+            "NSET",
+            "ROT NODE",
+            "POSITION",
+            "ISOTHERMAL",
+        ],
+    ),
     // parts and the assembly: placed before the keywords are read (`parts.rs`)
     ("PART", &["NAME"]),
     ("END PART", &[]),
@@ -241,7 +255,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
         "NONSTRUCTURAL MASS",
         "non-structural mass is not supported yet",
     ),
-    ("RIGID BODY", "rigid bodies are not supported yet"),
     (
         "ROTARY INERTIA",
         "rotary inertia is not supported (solid elements have no rotations)",
@@ -405,6 +418,8 @@ pub enum LinkNodes {
     Targets(Vec<Target>),
     /// A `*SURFACE, TYPE=NODE` (upper-case name), whose lines may give weights.
     Surface(String),
+    /// The nodes of an element set's elements (upper-case name; a `*RIGID BODY`'s `ELSET`).
+    Elements(String),
 }
 
 /// A multipoint constraint of the deck (docs/MATH.md, "Multipoint constraints").
@@ -492,6 +507,8 @@ pub struct InpDeck {
     pub links: Vec<InpLink>,
     /// Node-based surfaces by upper-case name: targets and weights.
     pub surfaces: BTreeMap<String, Vec<(Target, f64)>>,
+    /// element-based surfaces (read past; named when a coupling takes one)
+    element_surfaces: std::collections::BTreeSet<String>,
     /// The frequency step, if any.
     pub frequency: Option<FrequencyStep>,
     /// The ids of the elements read as C3D8I (incompatible modes).

@@ -322,18 +322,60 @@ impl InpDeck {
                 let list = self.surfaces.get(name).ok_or_else(|| IoError::Parse {
                     path: at.path.clone(),
                     line: at.line,
-                    reason: format!(
-                        "{what}: surface {name} is not defined (femu reads *SURFACE, TYPE=NODE){}",
-                        crate::spelling::suggestion(
-                            name,
-                            self.surfaces.keys().map(String::as_str),
-                            ""
+                    reason: if self.element_surfaces.contains(name) {
+                        format!(
+                            "{what}: surface {name} is element-based; a coupling takes a node-based surface (*SURFACE, TYPE=NODE)"
                         )
-                    ),
+                    } else {
+                        format!(
+                            "{what}: surface {name} is not defined (femu reads *SURFACE, TYPE=NODE){}",
+                            crate::spelling::suggestion(
+                                name,
+                                self.surfaces.keys().map(String::as_str),
+                                ""
+                            )
+                        )
+                    },
                 })?;
                 for (t, w) in list {
                     out.extend(self.target_ids(t, at, what)?.into_iter().map(|i| (i, *w)));
                 }
+            }
+            LinkNodes::Elements(name) => {
+                let mut ids: Vec<u64> = Vec::new();
+                let solids = self.mesh.element_sets().get(name);
+                for &e in solids.into_iter().flatten() {
+                    ids.extend(
+                        self.mesh
+                            .element(e)
+                            .nodes
+                            .iter()
+                            .map(|n| self.mesh.node_id(*n)),
+                    );
+                }
+                let structural = self.structural.sets.get(name);
+                for id in structural.into_iter().flatten() {
+                    if let Some(e) = self.structural.elements.iter().find(|e| e.0 == *id) {
+                        ids.extend(e.2.iter().copied());
+                    }
+                }
+                if solids.is_none() && structural.is_none() {
+                    return Err(IoError::Parse {
+                        path: at.path.clone(),
+                        line: at.line,
+                        reason: format!(
+                            "{what}: ELSET={name} names no element set of the deck{}",
+                            crate::spelling::suggestion(
+                                name,
+                                self.mesh.element_sets().keys().map(String::as_str),
+                                ""
+                            )
+                        ),
+                    });
+                }
+                ids.sort_unstable();
+                ids.dedup();
+                out.extend(ids.into_iter().map(|i| (i, 1.0)));
             }
         }
         Ok(out)

@@ -125,6 +125,8 @@ struct DeckBuilder {
     links: Vec<InpLink>,
     surfaces: BTreeMap<String, Vec<(Target, f64)>>,
     surface_now: Option<String>,
+    /// element-based surfaces (read past)
+    element_surfaces: std::collections::BTreeSet<String>,
     coupling_now: Option<(u64, String, Option<String>)>,
     /// couplings whose `REF NODE=` names a node set (Abaqus allows a set of one node): the
     /// link's index, the set and the keyword line, resolved once the sets are known
@@ -390,7 +392,7 @@ impl DeckBuilder {
         match name.as_str() {
             "KINEMATIC COUPLING" | "COUPLING" => self.coupling_keyword(&name, &params, l),
             "KINEMATIC" | "DISTRIBUTING" => self.coupling_method_keyword(&name, &params, l),
-            "SURFACE" => self.surface_keyword(&params, l),
+            "SURFACE" => self.surface_keyword(&params, l, warnings),
             "NODE" => self.node_keyword(&params, l),
             "ELEMENT" if is_mass_element() => self.mass_element_keyword(&params, l),
             "ELEMENT" => self.element_keyword(&params, l, warnings),
@@ -401,6 +403,7 @@ impl DeckBuilder {
             "DAMPING" => self.damping_keyword(&params, l, warnings),
             "SOLID SECTION" => self.section_keyword(&params, l),
             "ORIENTATION" => self.orientation_keyword(&params, l),
+            "RIGID BODY" => self.rigid_body_keyword(&params, l),
             "BEAM SECTION" | "BEAM GENERAL SECTION" => {
                 let elset = params
                     .get("ELSET")
@@ -606,21 +609,28 @@ impl DeckBuilder {
         &mut self,
         params: &HashMap<String, String>,
         l: &Line,
+        warnings: &mut Vec<Warning>,
     ) -> Result<(), IoError> {
         let ty = params.get("TYPE").map(|t| t.to_ascii_uppercase());
-        if ty.as_deref() != Some("NODE") {
-            return Err(err(
-                l,
-                format!(
-                    "*SURFACE, TYPE={}: femu reads node-based surfaces (TYPE=NODE) for couplings",
-                    ty.unwrap_or_else(|| "ELEMENT".into())
-                ),
-            ));
-        }
         let name = params
             .get("NAME")
             .ok_or_else(|| err(l, "*SURFACE without NAME=".into()))?
             .to_ascii_uppercase();
+        self.surface_now = None;
+        if ty.as_deref() != Some("NODE") {
+            // an element-based surface carries loads and contact, no stiffness or mass: read
+            // past, and refused where a coupling names it
+            warn(
+                warnings,
+                l,
+                format!(
+                    "*SURFACE, TYPE={}, NAME={name} read past: it changes no stiffness or mass (a coupling takes a node-based surface, TYPE=NODE)",
+                    ty.unwrap_or_else(|| "ELEMENT".into())
+                ),
+            );
+            self.element_surfaces.insert(name);
+            return Ok(());
+        }
         self.surfaces.entry(name.clone()).or_default();
         self.surface_now = Some(name);
         Ok(())
@@ -866,6 +876,81 @@ impl DeckBuilder {
                 p.aniso = Some(aniso);
                 p.aniso_line = l.number;
             }
+        }
+        Ok(())
+    }
+
+    /// `*RIGID BODY, REF NODE=`: the nodes of its `ELSET`'s elements and of its `TIE NSET` (CalculiX's
+    /// `NSET`) follow
+    /// the reference node rigidly (all their DOFs, a kinematic coupling's), those of its `PIN
+    /// NSET` in their translations alone (Abaqus's rigid body of deformable elements; docs/MATH.md,
+    /// "Multipoint constraints").
+    fn rigid_body_keyword(
+        &mut self,
+        params: &HashMap<String, String>,
+        l: &Line,
+    ) -> Result<(), IoError> {
+        let reference = params
+            .get("REF NODE")
+            .filter(|v| !v.is_empty())
+            .ok_or_else(|| err(l, "*RIGID BODY needs REF NODE=<node id or node set>".into()))?;
+        if let Some(p) = params
+            .get("POSITION")
+            .filter(|p| !p.eq_ignore_ascii_case("INPUT"))
+        {
+            return Err(err(
+                l,
+                format!(
+                    "*RIGID BODY, POSITION={p}: femu keeps the reference node where the deck puts it (POSITION=INPUT)"
+                ),
+            ));
+        }
+        if let Some(r) = params.get("ROT NODE") {
+            return Err(err(
+                l,
+                format!(
+                    "*RIGID BODY, ROT NODE={r}: femu gives the reference node its rotations (DOFs 4-6) instead of CalculiX's rotational node; fix or load them on the reference node"
+                ),
+            ));
+        }
+        let set = reference
+            .parse::<u64>()
+            .is_err()
+            .then_some(reference.as_str());
+        let id = reference.parse::<u64>().unwrap_or(0);
+        let mut any = false;
+        // CalculiX spells TIE NSET as NSET
+        for (key, dofs) in [
+            ("ELSET", Vec::new()),
+            ("TIE NSET", Vec::new()),
+            ("NSET", Vec::new()),
+            ("PIN NSET", vec![1, 2, 3]),
+        ] {
+            let Some(name) = params.get(key).filter(|v| !v.is_empty()) else {
+                continue;
+            };
+            let name = name.to_ascii_uppercase();
+            let nodes = if key == "ELSET" {
+                LinkNodes::Elements(name)
+            } else {
+                LinkNodes::Targets(vec![Target::Set(name)])
+            };
+            self.note_reference_set(set, l);
+            self.links.push(InpLink {
+                kind: LinkKind::Kinematic {
+                    reference: id,
+                    nodes,
+                    dofs,
+                },
+                line: at(l),
+            });
+            any = true;
+        }
+        if !any {
+            return Err(err(
+                l,
+                "*RIGID BODY without ELSET, TIE NSET or PIN NSET: it holds nothing".into(),
+            ));
         }
         Ok(())
     }
@@ -1742,6 +1827,7 @@ impl DeckBuilder {
             point_mass_sets,
             links: self.links,
             surfaces: self.surfaces,
+            element_surfaces: self.element_surfaces,
             frequency: self.frequency,
             incompatible_modes: self.incompatible_modes,
             warnings: std::mem::take(warnings),
