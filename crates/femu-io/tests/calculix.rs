@@ -798,3 +798,199 @@ fn rigid_bodies_agree_with_calculix() {
         assert!(e.contains("bad.inp:") && e.contains(needle), "{e}");
     }
 }
+
+/// Two hex8 blocks, steel: A of `na x na x 2` over 1 x 1 x 1 m, clamped at z = 0, and B of `nb x
+/// nb x 2` over 1 x 1 x 0.6 m on top of it (z from 1 to 1.6) with nodes of its own, B's bottom
+/// tied to A's top by `*TIE` (`slave` a surface of B's bottom, the master A's top faces, S2).
+fn tied_blocks(na: usize, nb: usize, slave: &str) -> String {
+    let mut s = String::from("*HEADING\ntied blocks\n*NODE\n");
+    let ida = |i: usize, j: usize, k: usize| 1 + i + (na + 1) * (j + (na + 1) * k);
+    let idb = |i: usize, j: usize, k: usize| 10_001 + i + (nb + 1) * (j + (nb + 1) * k);
+    for k in 0..=2 {
+        for j in 0..=na {
+            for i in 0..=na {
+                let (x, y, z) = (i as f64 / na as f64, j as f64 / na as f64, 0.5 * k as f64);
+                s.push_str(&format!("{}, {x:?}, {y:?}, {z:?}\n", ida(i, j, k)));
+            }
+        }
+        for j in 0..=nb {
+            for i in 0..=nb {
+                let (x, y, z) = (
+                    i as f64 / nb as f64,
+                    j as f64 / nb as f64,
+                    1.0 + 0.3 * k as f64,
+                );
+                s.push_str(&format!("{}, {x:?}, {y:?}, {z:?}\n", idb(i, j, k)));
+            }
+        }
+    }
+    let hex = |id: &dyn Fn(usize, usize, usize) -> usize, i: usize, j: usize, k: usize| {
+        format!(
+            "{}, {}, {}, {}, {}, {}, {}, {}",
+            id(i, j, k),
+            id(i + 1, j, k),
+            id(i + 1, j + 1, k),
+            id(i, j + 1, k),
+            id(i, j, k + 1),
+            id(i + 1, j, k + 1),
+            id(i + 1, j + 1, k + 1),
+            id(i, j + 1, k + 1)
+        )
+    };
+    let (mut atop, mut bbot) = (Vec::new(), Vec::new());
+    s.push_str("*ELEMENT, TYPE=C3D8, ELSET=EALL\n");
+    for k in 0..2 {
+        for j in 0..na {
+            for i in 0..na {
+                let e = 1 + i + na * (j + na * k);
+                s.push_str(&format!("{e}, {}\n", hex(&ida, i, j, k)));
+                if k == 1 {
+                    atop.push(e.to_string());
+                }
+            }
+        }
+        for j in 0..nb {
+            for i in 0..nb {
+                let e = 5001 + i + nb * (j + nb * k);
+                s.push_str(&format!("{e}, {}\n", hex(&idb, i, j, k)));
+                if k == 0 {
+                    bbot.push(e.to_string());
+                }
+            }
+        }
+    }
+    let bottom: Vec<String> = (0..=nb)
+        .flat_map(|j| (0..=nb).map(move |i| idb(i, j, 0).to_string()))
+        .collect();
+    let root: Vec<String> = (0..=na)
+        .flat_map(|j| (0..=na).map(move |i| ida(i, j, 0).to_string()))
+        .collect();
+    s.push_str(&format!(
+        "*ELSET, ELSET=ATOP\n{}\n*ELSET, ELSET=BBOT\n{}\n*NSET, NSET=BBOTN\n{}\n*NSET, NSET=ROOT\n{}\n\
+         *SURFACE, NAME=MASTER, TYPE=ELEMENT\nATOP, S2\n{slave}\
+         *TIE, NAME=GLUE\nSLAVE, MASTER\n\
+         *MATERIAL, NAME=STEEL\n*ELASTIC\n2.1e11, 0.3\n*DENSITY\n7850.\n\
+         *SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n\
+         *BOUNDARY\nROOT, 1, 3\n*STEP\n*FREQUENCY\n6\n*END STEP\n",
+        atop.join(", "),
+        bbot.join(", "),
+        bottom.join(", "),
+        root.join(", ")
+    ));
+    s
+}
+
+/// `*TIE` against CalculiX on the same deck (docs/MATH.md, "Multipoint constraints"): a block of
+/// 3 x 3 bricks tied on a block of 2 x 2 (non-matching faces): femu's six eigenvalues equal
+/// CalculiX's to its printed digits (1e-6); the slave given as a node-based surface or as B's
+/// element faces (S1) gives the same to 1e-12; the tie of two matching meshes is the merged mesh
+/// (the same blocks sharing their interface nodes) to 1e-10; refused: a master that no surface
+/// defines, a face label the element has not (S7), a tie without its data line.
+#[test]
+fn tied_surfaces_agree_with_calculix() {
+    if !ccx_available() {
+        return;
+    }
+    let node_slave = "*SURFACE, NAME=SLAVE, TYPE=NODE\nBBOTN\n";
+    let face_slave = "*SURFACE, NAME=SLAVE, TYPE=ELEMENT\nBBOT, S1\n";
+    let femu_of = |text: &str| -> Vec<f64> {
+        femu_lowest(
+            &femu_io::inp::parse_inp(text, "tie.inp")
+                .unwrap()
+                .to_model()
+                .unwrap(),
+            6,
+        )
+    };
+    let deck = tied_blocks(2, 3, node_slave);
+    let femu = femu_of(&deck);
+    assert_digits(&femu, &ccx_of_text(&deck, 6, "tie"), "tie");
+    let faces = femu_of(&tied_blocks(2, 3, face_slave));
+    for (a, b) in faces.iter().zip(&femu) {
+        assert!((a / b - 1.0).abs() < 1e-12, "{faces:?} {femu:?}");
+    }
+    // matching meshes: the tie is the merged mesh (B's bottom nodes renamed to A's top ones)
+    let tied = femu_of(&tied_blocks(2, 2, node_slave));
+    let merged_text = {
+        let t = tied_blocks(2, 2, node_slave);
+        let mut out = String::new();
+        let rename = |id: usize| -> usize {
+            // B's bottom node (i, j) is A's top node (i, j)
+            let local = id - 10_001;
+            let (i, j, k) = (local % 3, (local / 3) % 3, local / 9);
+            if k == 0 { 1 + i + 3 * (j + 3 * 2) } else { id }
+        };
+        let mut block = "";
+        for line in t.lines() {
+            if line.starts_with('*') {
+                block = if line.starts_with("*NODE") {
+                    "node"
+                } else if line.starts_with("*ELEMENT") {
+                    "element"
+                } else {
+                    ""
+                };
+                if line.starts_with("*TIE") || line.starts_with("*SURFACE") {
+                    block = "skip";
+                    continue;
+                }
+                out.push_str(line);
+                out.push('\n');
+                continue;
+            }
+            match block {
+                "skip" => continue,
+                "node" => {
+                    let id: usize = line.split(',').next().unwrap().trim().parse().unwrap();
+                    if id > 10_000 && rename(id) != id {
+                        continue;
+                    }
+                    out.push_str(line);
+                }
+                "element" => {
+                    let f: Vec<usize> =
+                        line.split(',').map(|v| v.trim().parse().unwrap()).collect();
+                    let g: Vec<String> = f
+                        .iter()
+                        .enumerate()
+                        .map(|(k, v)| {
+                            if k > 0 && *v > 10_000 { rename(*v) } else { *v }.to_string()
+                        })
+                        .collect();
+                    out.push_str(&g.join(", "));
+                }
+                _ => out.push_str(line),
+            }
+            out.push('\n');
+        }
+        // B's bottom node set names nodes that are gone
+        let start = out.find("*NSET, NSET=BBOTN\n").unwrap();
+        let end = start + out[start..].find("*NSET, NSET=ROOT").unwrap();
+        out.replace_range(start..end, "");
+        out
+    };
+    let merged = femu_of(&merged_text);
+    for (a, b) in tied.iter().zip(&merged) {
+        assert!((a / b - 1.0).abs() < 1e-10, "{tied:?} {merged:?}");
+    }
+    for (text, needle) in [
+        (
+            deck.replace("SLAVE, MASTER", "SLAVE, MASTR"),
+            "MASTR is no element-based *SURFACE",
+        ),
+        (deck.replace("ATOP, S2", "ATOP, S7"), "face \"S7\""),
+        (
+            deck.replace("*TIE, NAME=GLUE\nSLAVE, MASTER\n", "*TIE, NAME=GLUE\n"),
+            "without its data line",
+        ),
+    ] {
+        let e = femu_io::inp::parse_inp(&text, "bad.inp")
+            .and_then(|d| d.to_model())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("bad.inp:") && e.contains(needle),
+            "{needle}: {e}"
+        );
+    }
+}

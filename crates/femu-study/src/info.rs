@@ -256,7 +256,8 @@ fn describe_inp(path: &Path, s: &mut String, warnings: &mut Vec<String>) -> Resu
         let _ = writeln!(s, "frequency step: {} modes", f.count);
     }
     warnings.extend(deck.warnings.iter().map(ToString::to_string));
-    let model = deck.to_model()?;
+    let (model, built) = deck.to_model_with_warnings()?;
+    warnings.extend(built.iter().map(ToString::to_string));
     formulation_line(s, &model);
     warnings.extend(crate::load::units_hint(&model, path));
     let _ = writeln!(

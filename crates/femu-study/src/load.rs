@@ -485,7 +485,9 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
                 options.fix.join(", ")
             ));
         }
-        (deck.to_model()?, deck.frequency)
+        let (model, built) = deck.to_model_with_warnings()?;
+        warnings.extend(built.iter().map(|w| w.to_string()));
+        (model, deck.frequency)
     };
     let mut model = model;
     let mut timings = LoadTimings {

@@ -14,7 +14,8 @@
 //! zero values; the named types `ENCASTRE`, `PINNED`, `XSYMM`, `YSYMM`, `ZSYMM`, `XASYMM`,
 //! `YASYMM`, `ZASYMM`), `*ELEMENT, TYPE=MASS` with `*MASS`, `*EQUATION` (node ids; the first term's DOF
 //! is dependent), `*RIGID BODY` (`ELSET`, `TIE NSET` or CalculiX's `NSET`: rigid links; `PIN
-//! NSET`: their translations), `*KINEMATIC COUPLING` and `*COUPLING` with `*KINEMATIC` (rigid links: the
+//! NSET`: their translations), `*TIE` (slave nodes on master faces of solids, `tie.rs`),
+//! `*KINEMATIC COUPLING` and `*COUPLING` with `*KINEMATIC` (rigid links: the
 //! reference node gets rotations) or `*DISTRIBUTING` (weighted averages, with the weights of a
 //! `*SURFACE, TYPE=NODE`), `*INCLUDE`, `*STEP`, `*FREQUENCY`, `*END STEP` (docs/MATH.md,
 //! "Multipoint constraints"); trusses `T3D2` with `*SOLID SECTION` (the area on its data line);
@@ -34,8 +35,8 @@
 //!   GENERTE`) is an error naming the nearest known spelling;
 //! - a keyword that cannot change `K` or `M` (output requests, loads, amplitudes, other steps) is
 //!   skipped with a warning;
-//! - a keyword that would change `K` or `M` and that femu cannot model (contact,
-//!   `*TIE`, nonlinear materials) is an error;
+//! - a keyword that would change `K` or `M` and that femu cannot model (contact, connectors,
+//!   nonlinear materials) is an error;
 //! - any other keyword is unknown: an error naming the nearest known spelling (`*BOUNDRY`: did you
 //!   mean `*BOUNDARY`?), or a warning with [`InpOptions::lenient`].
 //!
@@ -56,6 +57,7 @@ mod orientation;
 mod parse;
 mod parts;
 mod structural;
+mod tie;
 pub use structural::section_shape;
 mod write;
 
@@ -84,6 +86,16 @@ const READ: &[(&str, &[&str])] = &[
     ("DAMPING", &["STRUCTURAL", "ALPHA", "BETA", "COMPOSITE"]),
     ("MODAL DAMPING", &["RAYLEIGH", "MODAL", "DEFINITION"]),
     ("ORIENTATION", &["NAME", "SYSTEM", "DEFINITION"]),
+    (
+        "TIE",
+        &[
+            "NAME",
+            "ADJUST",
+            "POSITION TOLERANCE",
+            "TYPE",
+            "NO ROTATION",
+        ],
+    ),
     (
         "RIGID BODY",
         &[
@@ -259,7 +271,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
         "ROTARY INERTIA",
         "rotary inertia is not supported (solid elements have no rotations)",
     ),
-    ("TIE", "tied surfaces are not supported yet"),
     (
         "TRANSFORM",
         "local nodal systems are not supported yet: constraints would act in the wrong directions",
@@ -458,6 +469,20 @@ pub struct InpLink {
     pub line: Location,
 }
 
+/// A `*TIE`: the slave surface's nodes follow the master surface's faces.
+#[derive(Debug, Clone, PartialEq)]
+struct Tie {
+    name: String,
+    slave: String,
+    master: String,
+    /// `POSITION TOLERANCE`: slave nodes farther from the master are not tied (Abaqus's default:
+    /// 5 % of the master faces' typical diagonal)
+    tolerance: Option<f64>,
+    /// `ADJUST` (Abaqus's default YES): the slave nodes are moved onto the master surface
+    adjust: bool,
+    line: Location,
+}
+
 /// A `*MASS` card: the mass of every MASS element of a set.
 #[derive(Debug, Clone, PartialEq)]
 struct MassCard {
@@ -507,8 +532,10 @@ pub struct InpDeck {
     pub links: Vec<InpLink>,
     /// Node-based surfaces by upper-case name: targets and weights.
     pub surfaces: BTreeMap<String, Vec<(Target, f64)>>,
-    /// element-based surfaces (read past; named when a coupling takes one)
-    element_surfaces: std::collections::BTreeSet<String>,
+    /// element-based surfaces: an element or element set and a face label a line
+    element_surfaces: BTreeMap<String, Vec<(Target, String, Location)>>,
+    /// `*TIE`s in file order
+    ties: Vec<Tie>,
     /// The frequency step, if any.
     pub frequency: Option<FrequencyStep>,
     /// The ids of the elements read as C3D8I (incompatible modes).

@@ -10,6 +10,15 @@ impl InpDeck {
     /// on an unknown set or material, a boundary on an unknown node or set; elements without a
     /// section.
     pub fn to_model(&self) -> Result<Model, IoError> {
+        self.to_model_with_warnings().map(|(m, _)| m)
+    }
+
+    /// The model, with what building it found worth saying (slave nodes of a `*TIE` left untied
+    /// or tied across a gap), beside the deck's own [`InpDeck::warnings`].
+    ///
+    /// # Errors
+    /// As [`InpDeck::to_model`].
+    pub fn to_model_with_warnings(&self) -> Result<(Model, Vec<Warning>), IoError> {
         self.build_model().map_err(|e| e.after(&self.warnings))
     }
 
@@ -67,7 +76,7 @@ impl InpDeck {
         })
     }
 
-    fn build_model(&self) -> Result<Model, IoError> {
+    fn build_model(&self) -> Result<(Model, Vec<Warning>), IoError> {
         let mut model = Model::new(self.mesh.clone())
             .map_err(|source| self.at_element(element_of(&source), source))?;
         for id in &self.incompatible_modes {
@@ -174,6 +183,7 @@ impl InpDeck {
             &mut model,
         )?;
         self.apply_links(&mut model)?;
+        let warnings = self.apply_ties(&mut model)?;
         for b in &self.boundaries {
             let all: Vec<usize> = (b.first - 1..b.last).collect();
             let comps: Vec<usize> = all.iter().copied().filter(|c| *c < 3).collect();
@@ -277,11 +287,16 @@ impl InpDeck {
             path: self.path.clone(),
             reason: source.to_string(),
         })?;
-        Ok(model)
+        Ok((model, warnings))
     }
 
     /// Node ids of a target (a node, or a node set of the deck).
-    fn target_ids(&self, t: &Target, at: &Location, what: &str) -> Result<Vec<u64>, IoError> {
+    pub(super) fn target_ids(
+        &self,
+        t: &Target,
+        at: &Location,
+        what: &str,
+    ) -> Result<Vec<u64>, IoError> {
         match t {
             Target::Node(id) => Ok(vec![*id]),
             Target::Set(s) => match self.mesh.node_sets().get(s) {
@@ -322,7 +337,7 @@ impl InpDeck {
                 let list = self.surfaces.get(name).ok_or_else(|| IoError::Parse {
                     path: at.path.clone(),
                     line: at.line,
-                    reason: if self.element_surfaces.contains(name) {
+                    reason: if self.element_surfaces.contains_key(name) {
                         format!(
                             "{what}: surface {name} is element-based; a coupling takes a node-based surface (*SURFACE, TYPE=NODE)"
                         )

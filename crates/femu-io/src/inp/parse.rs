@@ -125,8 +125,12 @@ struct DeckBuilder {
     links: Vec<InpLink>,
     surfaces: BTreeMap<String, Vec<(Target, f64)>>,
     surface_now: Option<String>,
-    /// element-based surfaces (read past)
-    element_surfaces: std::collections::BTreeSet<String>,
+    /// element-based surfaces: their lines (an element or element set, a face label)
+    element_surfaces: BTreeMap<String, Vec<(Target, String, Location)>>,
+    /// the element-based surface being read
+    element_surface_now: Option<String>,
+    /// `*TIE`s: name, slave and master surfaces, position tolerance, line
+    ties: Vec<Tie>,
     coupling_now: Option<(u64, String, Option<String>)>,
     /// couplings whose `REF NODE=` names a node set (Abaqus allows a set of one node): the
     /// link's index, the set and the keyword line, resolved once the sets are known
@@ -404,6 +408,7 @@ impl DeckBuilder {
             "SOLID SECTION" => self.section_keyword(&params, l),
             "ORIENTATION" => self.orientation_keyword(&params, l),
             "RIGID BODY" => self.rigid_body_keyword(&params, l),
+            "TIE" => self.tie_keyword(&params, l),
             "BEAM SECTION" | "BEAM GENERAL SECTION" => {
                 let elset = params
                     .get("ELSET")
@@ -617,18 +622,23 @@ impl DeckBuilder {
             .ok_or_else(|| err(l, "*SURFACE without NAME=".into()))?
             .to_ascii_uppercase();
         self.surface_now = None;
+        self.element_surface_now = None;
         if ty.as_deref() != Some("NODE") {
-            // an element-based surface carries loads and contact, no stiffness or mass: read
-            // past, and refused where a coupling names it
-            warn(
-                warnings,
-                l,
-                format!(
-                    "*SURFACE, TYPE={}, NAME={name} read past: it changes no stiffness or mass (a coupling takes a node-based surface, TYPE=NODE)",
-                    ty.unwrap_or_else(|| "ELEMENT".into())
-                ),
-            );
-            self.element_surfaces.insert(name);
+            // an element-based surface: faces of elements (a *TIE's master); it carries loads
+            // and contact otherwise, no stiffness or mass
+            if ty.as_deref().is_some_and(|t| t != "ELEMENT") {
+                warn(
+                    warnings,
+                    l,
+                    format!(
+                        "*SURFACE, TYPE={}, NAME={name} read past: it changes no stiffness or mass",
+                        ty.unwrap_or_default()
+                    ),
+                );
+                return Ok(());
+            }
+            self.element_surfaces.entry(name.clone()).or_default();
+            self.element_surface_now = Some(name);
             return Ok(());
         }
         self.surfaces.entry(name.clone()).or_default();
@@ -955,6 +965,44 @@ impl DeckBuilder {
         Ok(())
     }
 
+    /// `*TIE`: its data line names the slave and the master surface; the slave's nodes follow
+    /// the master's faces (docs/MATH.md, "Multipoint constraints").
+    fn tie_keyword(&mut self, params: &HashMap<String, String>, l: &Line) -> Result<(), IoError> {
+        let tolerance = match params.get("POSITION TOLERANCE") {
+            None => None,
+            Some(v) => Some(
+                parse_f64(v)
+                    .filter(|t| t.is_finite() && *t >= 0.0)
+                    .ok_or_else(|| {
+                        err(
+                            l,
+                            format!("*TIE, POSITION TOLERANCE={v}: a distance of 0 or more"),
+                        )
+                    })?,
+            ),
+        };
+        if let Some(t) = params.get("TYPE").filter(|t| {
+            !t.eq_ignore_ascii_case("SURFACE TO SURFACE")
+                && !t.eq_ignore_ascii_case("NODE TO SURFACE")
+        }) {
+            return Err(err(
+                l,
+                format!("*TIE, TYPE={t}: SURFACE TO SURFACE or NODE TO SURFACE"),
+            ));
+        }
+        self.ties.push(Tie {
+            name: params.get("NAME").cloned().unwrap_or_default(),
+            slave: String::new(),
+            master: String::new(),
+            tolerance,
+            adjust: !params
+                .get("ADJUST")
+                .is_some_and(|a| a.eq_ignore_ascii_case("NO")),
+            line: at(l),
+        });
+        Ok(())
+    }
+
     /// `*ORIENTATION, NAME=`: a rectangular or cylindrical frame of coordinates, nodes or the
     /// element's own nodes (its data lines follow).
     fn orientation_keyword(
@@ -1090,6 +1138,26 @@ impl DeckBuilder {
                     s.area = Some(f.first().map_or(String::new(), |v| v.to_string()));
                 }
                 Ok(())
+            }
+            "TIE" => {
+                let tie = self.ties.last_mut().expect("read at the keyword");
+                if !tie.slave.is_empty() {
+                    return Err(err(
+                        l,
+                        "*TIE takes one data line (its slave and master surfaces)".into(),
+                    ));
+                }
+                match f[..] {
+                    [slave, master, ..] if !slave.is_empty() && !master.is_empty() => {
+                        tie.slave = slave.to_ascii_uppercase();
+                        tie.master = master.to_ascii_uppercase();
+                        Ok(())
+                    }
+                    _ => Err(err(
+                        l,
+                        format!("*TIE needs its slave and master surfaces, got {t:?}"),
+                    )),
+                }
             }
             "ORIENTATION" => {
                 if let Some(c) = self.orientations.last_mut() {
@@ -1664,6 +1732,14 @@ impl DeckBuilder {
         let Some(first) = f.first() else {
             return Ok(());
         };
+        if let Some(name) = &self.element_surface_now {
+            let face = f.get(1).map(|s| s.to_ascii_uppercase()).unwrap_or_default();
+            self.element_surfaces
+                .entry(name.clone())
+                .or_default()
+                .push((target(first), face, at(l)));
+            return Ok(());
+        }
         let w = match f.get(1) {
             Some(v) if !v.is_empty() => parse_f64(v)
                 .filter(|w| w.is_finite() && *w > 0.0)
@@ -1828,6 +1904,7 @@ impl DeckBuilder {
             links: self.links,
             surfaces: self.surfaces,
             element_surfaces: self.element_surfaces,
+            ties: self.ties,
             frequency: self.frequency,
             incompatible_modes: self.incompatible_modes,
             warnings: std::mem::take(warnings),
