@@ -264,3 +264,68 @@ fn malformed_parts_are_refused_with_their_line() {
     let part_only = deck[..deck.find("*Assembly").unwrap()].to_string();
     refused(part_only, "*Part", "no *ASSEMBLY places them");
 }
+
+/// Two instances of the bar end to end (B moved 0.4 m along x) joined by a `*TIE` written as
+/// Abaqus/CAE writes one in the assembly: the slave a node-based surface of `B.ROOT`, the master
+/// an element-based surface of A's tip element (face S4, x = 0.4) through an internal element set
+/// of the instance. The tied pair is one bar of eight elements (written flat by hand) to 1e-10.
+#[test]
+fn instances_tied_in_the_assembly_are_one_bar() {
+    let deck = cae_deck();
+    let part = &deck[..deck.find("*Assembly").unwrap()];
+    let model = &deck[deck.find("** MATERIALS").unwrap()..];
+    let tied = format!(
+        "{part}*Assembly, name=Assembly\n*Instance, name=A, part=BAR\n*End Instance\n\
+         *Instance, name=B, part=BAR\n0.4, 0., 0.\n*End Instance\n\
+         *Elset, elset=_m_Surf-1_S4, internal, instance=A\n 4,\n\
+         *Surface, type=ELEMENT, name=m_Surf-1\n_m_Surf-1_S4, S4\n\
+         *Surface, type=NODE, name=s_Set-1_CNS_, internal\nB.ROOT, 1.\n\
+         ** Constraint: Constraint-1\n*Tie, name=Constraint-1, adjust=yes\ns_Set-1_CNS_, m_Surf-1\n\
+         *End Assembly\n{}",
+        model.replace("B.ROOT, ENCASTRE\nBTIP, 1, 1\n", "")
+    );
+    // the flat bar of eight elements, nodes 1 + i + 9 (j + 2 k)
+    let id = |i: u64, j: u64, k: u64| 1 + i + 9 * (j + 2 * k);
+    let mut flat = String::from("*NODE\n");
+    for k in 0..2 {
+        for j in 0..2 {
+            for i in 0..9 {
+                flat.push_str(&format!(
+                    "{}, {:?}, {:?}, {:?}\n",
+                    id(i, j, k),
+                    0.1 * i as f64,
+                    0.1 * j as f64,
+                    0.1 * k as f64
+                ));
+            }
+        }
+    }
+    flat.push_str("*ELEMENT, TYPE=C3D8, ELSET=ALL\n");
+    for i in 0..8 {
+        flat.push_str(&format!(
+            "{}, {}, {}, {}, {}, {}, {}, {}, {}\n",
+            i + 1,
+            id(i, 0, 0),
+            id(i + 1, 0, 0),
+            id(i + 1, 1, 0),
+            id(i, 1, 0),
+            id(i, 0, 1),
+            id(i + 1, 0, 1),
+            id(i + 1, 1, 1),
+            id(i, 1, 1)
+        ));
+    }
+    flat.push_str(&format!(
+        "*NSET, NSET=ROOT\n{}, {}, {}, {}\n*MATERIAL, NAME=STEEL\n*ELASTIC\n2.1e11, 0.3\n*DENSITY\n7850.\n\
+         *SOLID SECTION, ELSET=ALL, MATERIAL=STEEL\n*BOUNDARY\nROOT, 1, 3\n",
+        id(0, 0, 0),
+        id(0, 1, 0),
+        id(0, 0, 1),
+        id(0, 1, 1)
+    ));
+    let a = lowest(&tied, "tied.inp");
+    let b = lowest(&flat, "flat.inp");
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x / y - 1.0).abs() < 1e-10, "{a:?} vs {b:?}");
+    }
+}

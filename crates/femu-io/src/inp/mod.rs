@@ -171,7 +171,7 @@ const READ: &[(&str, &[&str])] = &[
     ),
     ("KINEMATIC", &[]),
     ("DISTRIBUTING", &["WEIGHTING METHOD"]),
-    ("SURFACE", &["NAME", "TYPE"]),
+    ("SURFACE", &["NAME", "TYPE", "INTERNAL"]),
     (
         "STEP",
         &[
