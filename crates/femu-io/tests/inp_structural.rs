@@ -1315,3 +1315,19 @@ fn named_boundary_types_fix_their_dofs() {
         .to_string();
     assert!(e.contains("neither an integer nor a boundary type"), "{e}");
 }
+
+/// Parameters Abaqus/CAE writes that change neither the linear stiffness nor the mass are read:
+/// a beam section's `TEMPERATURE=GRADIENTS` and `POISSON=`, and a `*SECTION CONTROLS` (warned as
+/// skipped) leave the B31 cantilever's eigenvalues as they are (exactly).
+#[test]
+fn cae_section_parameters_change_nothing() {
+    let base = cantilever(20, "B31", false);
+    let cae = base.replace(
+        "*BEAM SECTION, ELSET=BEAM, MATERIAL=STEEL, SECTION=RECT",
+        "*Section Controls, name=EC-1, hourglass=ENHANCED\n1., 1., 1.\n\
+         *Beam Section, elset=BEAM, material=STEEL, temperature=GRADIENTS, section=RECT, poisson=0.3",
+    );
+    let (a, _, _) = lowest(&base, 4);
+    let (b, _, _) = lowest(&cae, 4);
+    assert_eq!(a, b);
+}
