@@ -28,12 +28,17 @@ pub enum GroupLaw {
     /// A factor `q` on a set of concentrated masses ([`crate::model::MassRef`]): `M(q) = M_0 +
     /// q M_g`, no stiffness (docs/MATH.md, "Mass parameters").
     Mass,
+    /// A factor on one part of a set of beams' stiffness
+    /// ([`crate::structural::SectionPart`]: `E A`, `G J`, or a bending plane's `E I` with its
+    /// shear): `K(p) = K_0 + p K_part`, no mass (docs/MATH.md, "Beam section parameters").
+    Section(crate::structural::SectionPart),
 }
 
 /// A named set of elements (internal indices) whose stiffness and mass are scaled together.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ParameterGroup {
-    /// Name: the element set's name, or `"E<id>"` for a single element; `"t:<set>"` for the
+    /// Name: the element set's name, or `"E<id>"` for a single element; `"EI1:<set>"` (and
+    /// `EA:`, `GJ:`, `EI2:`) for a part of its beams' stiffness; `"t:<set>"` for the
     /// thickness of a set's shells.
     pub name: String,
     /// Internal indices of solid elements.
@@ -71,6 +76,22 @@ impl ParameterGroup {
         }
     }
 
+    /// One section part of the two-node beams `structural` (indices in [`Model::structural`]),
+    /// named `name` ([`GroupLaw::Section`]).
+    pub fn section(
+        name: impl Into<String>,
+        part: crate::structural::SectionPart,
+        structural: Vec<usize>,
+    ) -> Self {
+        Self {
+            name: name.into(),
+            elements: Vec::new(),
+            structural,
+            masses: Vec::new(),
+            law: GroupLaw::Section(part),
+        }
+    }
+
     /// The concentrated masses `masses`, named `name` ([`GroupLaw::Mass`]).
     pub fn masses(name: impl Into<String>, masses: Vec<crate::model::MassRef>) -> Self {
         Self {
@@ -86,7 +107,8 @@ impl ParameterGroup {
 /// The prefix of a thickness group's name: `"t:SKIN"` is the thickness of set `SKIN`'s shells.
 pub const THICKNESS_PREFIX: &str = "t:";
 
-/// A concentrated mass's points (the DOF map's) and its mass matrix, row-major.
+/// A concentrated mass's points (the DOF map's) and its mass matrix, row-major; or a beam's
+/// points and the stiffness of a section part.
 type MassItem = (Vec<usize>, Vec<f64>);
 
 /// A shell's matrices split by their order in the thickness
@@ -118,6 +140,9 @@ pub struct ParameterGroups {
     /// Per group, the points and mass matrix of each of its concentrated masses (a
     /// [`GroupLaw::Mass`] group's; empty for the others).
     mass_items: Vec<Vec<MassItem>>,
+    /// Per group, the points and section-part stiffness of each of its beams (a
+    /// [`GroupLaw::Section`] group's; empty for the others).
+    section_items: Vec<Vec<MassItem>>,
     /// Groups given as assembled matrices instead of elements ([`ParameterGroups::from_matrices`]).
     matrices: Option<MatrixGroups>,
 }
@@ -190,6 +215,14 @@ pub fn translational_mass(m: &SparseMatrix, dofs: &crate::dof::DofMap) -> f64 {
 /// # Errors
 /// [`FemError::UnknownElementSet`].
 pub fn group_of_set(model: &Model, name: &str) -> Result<ParameterGroup, FemError> {
+    for part in crate::structural::SectionPart::ALL {
+        if let Some(set) = name.strip_prefix(part.prefix()) {
+            let (elements, structural) = model.element_set_members(set)?;
+            let mut g = ParameterGroup::section(name, part, structural);
+            g.elements = elements;
+            return Ok(g);
+        }
+    }
     if let Some(set) = name.strip_prefix(THICKNESS_PREFIX) {
         let (elements, structural) = model.element_set_members(set)?;
         let mut g = ParameterGroup::thickness(name, structural);
@@ -300,6 +333,7 @@ impl ParameterGroups {
             me: Vec::new(),
             thickness: Vec::new(),
             mass_items: Vec::new(),
+            section_items: Vec::new(),
             matrices: Some(mg),
         })
     }
@@ -381,6 +415,15 @@ impl ParameterGroups {
                     }
                 }
             }
+            if let (GroupLaw::Section(_), Some(&e)) = (g.law, g.elements.first()) {
+                return Err(FemError::InvalidGroup {
+                    name: g.name.clone(),
+                    reason: format!(
+                        "a section parameter applies to beams; solid element {} has no section",
+                        model.mesh().element(e.min(ne.saturating_sub(1))).id
+                    ),
+                });
+            }
             for &e in &g.elements {
                 if e >= ne {
                     return Err(FemError::InvalidGroup {
@@ -453,6 +496,7 @@ impl ParameterGroups {
             }
         }
         let mass_items = mass_group_items(model, &groups)?;
+        let section_items = section_group_items(model, &groups)?;
         Ok(Self {
             groups,
             mass_kind,
@@ -464,6 +508,7 @@ impl ParameterGroups {
             me,
             thickness,
             mass_items,
+            section_items,
             matrices: None,
         })
     }
@@ -496,7 +541,8 @@ impl ParameterGroups {
 
     /// One group per named element set (its solid and its structural elements:
     /// [`Model::element_set_members`]); a name `"t:SET"` ([`THICKNESS_PREFIX`]) is the
-    /// thickness of set `SET`'s shells ([`GroupLaw::Thickness`]).
+    /// thickness of set `SET`'s shells ([`GroupLaw::Thickness`]), `"EA:SET"`, `"GJ:SET"`,
+    /// `"EI1:SET"`, `"EI2:SET"` a part of its beams' stiffness ([`GroupLaw::Section`]).
     ///
     /// # Errors
     /// [`FemError::UnknownElementSet`], and as [`ParameterGroups::new`].
@@ -623,6 +669,13 @@ impl ParameterGroups {
                     }
                 }
             }
+            GroupLaw::Section(_) => {
+                if !mass {
+                    for (points, a) in &self.section_items[g] {
+                        element_product(dm, points, a, 1.0, x, y, &mut xe);
+                    }
+                }
+            }
         }
         Ok(())
     }
@@ -678,7 +731,7 @@ impl ParameterGroups {
     ) -> Result<(), FemError> {
         match self.check_group(g)?.law {
             GroupLaw::Mass => Ok(()),
-            GroupLaw::Scale => {
+            GroupLaw::Scale | GroupLaw::Section(_) => {
                 let mut z = vec![0.0; y.len()];
                 self.product(asm, g, false, at, x, &mut z)?;
                 for (a, b) in y.iter_mut().zip(&z) {
@@ -746,6 +799,11 @@ impl ParameterGroups {
             GroupLaw::Mass => {}
             GroupLaw::Scale => {
                 for (nodes, ke, _) in self.items(group) {
+                    asm.scatter(nodes, |i, l, w| values[i] += c * (1.0 + at) * w * ke[l]);
+                }
+            }
+            GroupLaw::Section(_) => {
+                for (nodes, ke) in &self.section_items[g] {
                     asm.scatter(nodes, |i, l, w| values[i] += c * (1.0 + at) * w * ke[l]);
                 }
             }
@@ -904,6 +962,24 @@ impl ParameterGroups {
                 }
                 continue;
             }
+            if let GroupLaw::Section(_) = group.law {
+                if q[g] != 0.0 {
+                    return Err(FemError::InvalidGroup {
+                        name: group.name.clone(),
+                        reason: format!(
+                            "a section parameter moves a stiffness alone (q = {})",
+                            q[g]
+                        ),
+                    });
+                }
+                if p[g] != 0.0 {
+                    for (nodes, ke) in &self.section_items[g] {
+                        let kd = out.k.data_mut();
+                        asm.scatter(nodes, |i, l, w| kd[i] += p[g] * w * ke[l]);
+                    }
+                }
+                continue;
+            }
             for (nodes, ke, me) in self.items(group) {
                 if p[g] != 0.0 {
                     let kd = out.k.data_mut();
@@ -1017,6 +1093,8 @@ impl ParameterGroups {
                 .thickness_items(group)
                 .map(|(p, t)| (p, &t.m1[..]))
                 .collect(),
+            // a section part moves no mass
+            GroupLaw::Section(_) => Vec::new(),
         };
         for (points, me) in items {
             let nn = points.len();
@@ -1091,6 +1169,11 @@ impl ParameterGroups {
             GroupLaw::Thickness => {
                 for (points, t) in self.thickness_items(group) {
                     asm.scatter(points, |i, l, w| v[i] += w * (t.k1[l] + 3.0 * t.k3[l]));
+                }
+            }
+            GroupLaw::Section(_) => {
+                for (points, ke) in &self.section_items[g] {
+                    asm.scatter(points, |i, l, w| v[i] += w * ke[l]);
                 }
             }
             GroupLaw::Mass => {}
@@ -1183,6 +1266,56 @@ fn mass_group_items(
                 items.push((points, a));
             }
             Ok(items)
+        })
+        .collect()
+}
+
+/// The points and section-part stiffness of each beam of each [`GroupLaw::Section`] group (empty
+/// lists for the other groups); a group element that is not a two-node beam, or one with end
+/// releases, is refused with its id.
+fn section_group_items(
+    model: &Model,
+    groups: &[ParameterGroup],
+) -> Result<Vec<Vec<MassItem>>, FemError> {
+    if groups
+        .iter()
+        .all(|g| !matches!(g.law, GroupLaw::Section(_)))
+    {
+        return Ok(vec![Vec::new(); groups.len()]);
+    }
+    let dofs = model.dof_map()?;
+    let coords = model.mesh().coords();
+    groups
+        .iter()
+        .map(|g| {
+            let GroupLaw::Section(part) = g.law else {
+                return Ok(Vec::new());
+            };
+            let bad = |reason: String| FemError::InvalidGroup {
+                name: g.name.clone(),
+                reason,
+            };
+            g.structural
+                .iter()
+                .map(|&e| {
+                    let el = model
+                        .structural()
+                        .get(e)
+                        .ok_or_else(|| bad(format!("structural element index {e} out of range")))?;
+                    let k = el
+                        .section_part(coords, part)
+                        .map_err(|err| bad(err.to_string()))?
+                        .ok_or_else(|| {
+                            bad(format!(
+                                "a section parameter applies to two-node beams; element {} is a {}",
+                                el.id,
+                                el.kind.name()
+                            ))
+                        })?;
+                    let points = crate::assembly::structural_points(&dofs, &el.parts());
+                    Ok((points, k))
+                })
+                .collect()
         })
         .collect()
 }

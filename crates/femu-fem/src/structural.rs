@@ -739,6 +739,52 @@ impl StructuralElement {
         Ok(Some([part(1.0, 0.0)?, part(0.0, 1.0)?]))
     }
 
+    /// A two-node beam's stiffness split by section property ([`SectionPart`]; docs/MATH.md,
+    /// "Beam section parameters"): in the beam's frame the axial, torsional and the two bending
+    /// planes' DOFs are uncoupled, so the element stiffness is the sum of the four parts, each
+    /// turned to the basic frame with the offsets as the whole is. `None` for an element that is
+    /// not a two-node beam.
+    ///
+    /// # Errors
+    /// As [`StructuralElement::matrices`]; a beam with end releases (their condensation couples
+    /// the parts, whose sum is then not the element's stiffness).
+    pub fn section_part(
+        &self,
+        coords: &[[f64; 3]],
+        part: SectionPart,
+    ) -> Result<Option<Vec<f64>>, FemError> {
+        let StructuralKind::Beam(b) = &self.kind else {
+            return Ok(None);
+        };
+        if self.nodes.len() != 2 {
+            return Ok(None);
+        }
+        self.validate()?;
+        let bad = |reason: String| FemError::InvalidStructural {
+            element: self.id,
+            reason,
+        };
+        if b.releases.iter().flatten().any(|r| *r) {
+            return Err(bad(
+                "its end releases couple the section's stiffnesses: a section parameter needs a beam without releases".into(),
+            ));
+        }
+        let ends = [
+            add(coords[self.nodes[0]], b.offsets[0]),
+            add(coords[self.nodes[1]], b.offsets[1]),
+        ];
+        let (l, axes) = line_axes(ends[0], ends[1], b.orientation).map_err(bad)?;
+        let (kl, _) = beam_local(b, l, MassKind::Consistent);
+        let keep = part.local_dofs();
+        let mut masked = vec![0.0; 144];
+        for &i in keep {
+            for &j in keep {
+                masked[i * 12 + j] = kl[i * 12 + j];
+            }
+        }
+        Ok(Some(congruence(&masked, &beam_transform(b, &axes), 12, 12)))
+    }
+
     /// Whether the element acts on its nodes' rotations (so they must carry them).
     pub fn needs_rotations(&self) -> bool {
         self.parts().iter().any(|(_, p)| *p == Part::Rotations)
@@ -782,19 +828,7 @@ impl StructuralElement {
                 let (l, axes) = line_axes(ends[0], ends[1], b.orientation).map_err(bad)?;
                 let (mut kl, ml) = beam_local(b, l, mass);
                 release(&mut kl, &ml, &b.releases).map_err(bad)?;
-                let mut t = vec![0.0; 144];
-                for end in 0..2 {
-                    let e = offset_map(b.offsets[end]);
-                    // local DOFs (R u_end, R theta) = R E (u, theta)
-                    for blk in 0..2 {
-                        for i in 0..3 {
-                            for j in 0..6 {
-                                let v: f64 = (0..3).map(|k| axes[i][k] * e[3 * blk + k][j]).sum();
-                                t[(6 * end + 3 * blk + i) * 12 + 6 * end + j] = v;
-                            }
-                        }
-                    }
-                }
+                let t = beam_transform(b, &axes);
                 let k = congruence(&kl, &t, 12, 12);
                 let m = match mass {
                     MassKind::Consistent => congruence(&ml, &t, 12, 12),
@@ -933,6 +967,69 @@ impl StructuralElement {
 /// A beam's local stiffness and mass (12 x 12 on `(u, v, w, theta_x, theta_y, theta_z)` of each
 /// end, local axes): axial, torsion and the two bending planes. Plane 1 (x-y) bends with `I1`
 /// and `theta_z = dv/dx`; plane 2 (x-z) with `I2` and `theta_y = -dw/dx`.
+/// A two-node beam's map from its nodes' DOFs (basic frame) to its frame's end DOFs, the offsets
+/// included: local `(R u_end, R theta)` with `u_end = u + theta x w`.
+fn beam_transform(b: &Beam, axes: &[V3; 3]) -> Vec<f64> {
+    let mut t = vec![0.0; 144];
+    for end in 0..2 {
+        let e = offset_map(b.offsets[end]);
+        for blk in 0..2 {
+            for i in 0..3 {
+                for j in 0..6 {
+                    let v: f64 = (0..3).map(|k| axes[i][k] * e[3 * blk + k][j]).sum();
+                    t[(6 * end + 3 * blk + i) * 12 + 6 * end + j] = v;
+                }
+            }
+        }
+    }
+    t
+}
+
+/// A part of a beam's stiffness by section property, for updating (docs/MATH.md, "Beam section
+/// parameters"): a factor `1 + p` on it scales `E A`, `G J`, or one bending plane's `E I` with
+/// its transverse shear stiffness `k G A` (the plane's shear parameter `phi` kept).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SectionPart {
+    /// Axial stiffness `E A`.
+    Axial,
+    /// Torsional stiffness `G J`.
+    Torsion,
+    /// Bending in the plane of the local y axis (`E I1`, femu's `i1`) with its shear.
+    Bending1,
+    /// Bending in the plane of the local z axis (`E I2`) with its shear.
+    Bending2,
+}
+
+impl SectionPart {
+    /// The beam's frame DOFs (`6 end + component`) the part acts on.
+    fn local_dofs(self) -> &'static [usize] {
+        match self {
+            SectionPart::Axial => &[0, 6],
+            SectionPart::Torsion => &[3, 9],
+            SectionPart::Bending1 => &[1, 5, 7, 11],
+            SectionPart::Bending2 => &[2, 4, 8, 10],
+        }
+    }
+
+    /// The prefix naming a set's part in a group name (`"EI1:SPARS"`).
+    pub fn prefix(self) -> &'static str {
+        match self {
+            SectionPart::Axial => "EA:",
+            SectionPart::Torsion => "GJ:",
+            SectionPart::Bending1 => "EI1:",
+            SectionPart::Bending2 => "EI2:",
+        }
+    }
+
+    /// Every part, in the order of [`SectionPart::prefix`]'s names.
+    pub const ALL: [SectionPart; 4] = [
+        SectionPart::Axial,
+        SectionPart::Torsion,
+        SectionPart::Bending1,
+        SectionPart::Bending2,
+    ];
+}
+
 /// Condenses the released DOFs (`releases[end][c]`, local index `6 end + c`) out of the local
 /// stiffness `k` (12 x 12): `K <- K - K_:r K_r: / K_rr` for each in turn, which leaves the
 /// released rows and columns zero (static condensation: the released end DOF follows the rest

@@ -956,7 +956,8 @@ fn removal_study<'py>(
 
 /// Localisation, updating and the truth check (docs/MATH.md, "Localisation", "Updating", "The
 /// truth check"): among the element sets `sets` (stiffness corrections; `"t:SET"` the thickness
-/// of a set's shells, a mass set such as `"CONM2_7"` its masses), the regions that explain
+/// of a set's shells, `"EA:SET"`, `"GJ:SET"`, `"EI1:SET"`, `"EI2:SET"` a part of its beams'
+/// stiffness, a mass set such as `"CONM2_7"` its masses), the regions that explain
 /// the residues of the first `tuned` test modes (default: all but the last third, as `femu update`
 /// and study files) are selected by `select` (`"forward"`: those the data support, by forward
 /// selection with an F-test; `"residual"`: the paper's residual ranking; `"all"`) and updated by

@@ -28,8 +28,9 @@ use serde::{Deserialize, Serialize};
 pub struct UpdateRequest {
     /// Candidate element sets (comma-separated); localisation selects among them. A set scales
     /// its elements' stiffness (`k:SET`); `t:SET` is the thickness of the set's shells (bending
-    /// with its cube, membrane and mass linearly); a mass set (a Nastran CONM2 as `CONM2_<EID>`)
-    /// scales its masses (`m:SET`). For a model of another solver's matrices,
+    /// with its cube, membrane and mass linearly); `EA:SET`, `GJ:SET`, `EI1:SET`, `EI2:SET` a
+    /// part of its beams' stiffness (axial, torsion, a bending plane with its shear); a mass set (a
+    /// Nastran CONM2 as `CONM2_<EID>`) scales its masses (`m:SET`). For a model of another solver's matrices,
     /// groups as `NAME=FILE`: FILE the same model's matrices with the group's Young's modulus and
     /// density doubled (relative to the model's folder).
     #[cfg_attr(feature = "clap", arg(long, value_delimiter = ',', required = true))]
@@ -470,12 +471,18 @@ pub fn localise_update_check_with(
     let localisation = if !has_shapes {
         None
     } else if layout.measured_dofs().is_some() {
-        Some(localise_expanded(
-            &nominal,
-            layout,
-            &tuned,
-            &SelectionRule::default(),
-        )?)
+        match localise_expanded(&nominal, layout, &tuned, &SelectionRule::default()) {
+            Ok(l) => Some(l),
+            // the ranking is the paper's diagnosis beside the selection: a shape it cannot
+            // expand stops the update only when the ranking is what selects
+            Err(e) if options.select != Select::Residual => {
+                notes.push(format!(
+                    "the residual ranking could not expand the test shapes ({e}): only the forward selection and the fit were run"
+                ));
+                None
+            }
+            Err(e) => return Err(e.into()),
+        }
     } else {
         notes.push("the residual ranking expands the shapes and needs every sensor along a global axis: only the forward selection was run".into());
         None
@@ -854,7 +861,8 @@ fn judge_update(
 
 /// The model's element sets named by `sets` (Abaqus names are case-insensitive; the reader keeps
 /// them upper case); `t:SET` names the thickness of set `SET`'s shells
-/// (`femu_fem::groups::GroupLaw::Thickness`).
+/// (`femu_fem::groups::GroupLaw::Thickness`), `EA:SET`, `GJ:SET`, `EI1:SET` and `EI2:SET` a part
+/// of its beams' stiffness (`femu_fem::groups::GroupLaw::Section`).
 ///
 /// # Errors
 /// A set the model does not have, naming the model file and the sets it has.
@@ -862,14 +870,19 @@ pub fn resolve_sets(model: &LoadedModel, sets: &[String]) -> Result<Vec<String>,
     use femu_fem::groups::THICKNESS_PREFIX;
     let mut known = model.model.element_set_names();
     known.extend(model.model.mass_set_names());
+    let prefixes: Vec<&str> = std::iter::once(THICKNESS_PREFIX)
+        .chain(femu_fem::structural::SectionPart::ALL.map(|p| p.prefix()))
+        .collect();
     sets.iter()
         .map(|s| {
-            let (prefix, set) = match s.get(..THICKNESS_PREFIX.len()) {
-                Some(p) if p.eq_ignore_ascii_case(THICKNESS_PREFIX) => {
-                    (THICKNESS_PREFIX, &s[THICKNESS_PREFIX.len()..])
-                }
-                _ => ("", s.as_str()),
-            };
+            let (prefix, set) = prefixes
+                .iter()
+                .find_map(|p| {
+                    s.get(..p.len())
+                        .filter(|head| head.eq_ignore_ascii_case(p))
+                        .map(|_| (*p, &s[p.len()..]))
+                })
+                .unwrap_or(("", s.as_str()));
             known
                 .iter()
                 .find(|k| k.eq_ignore_ascii_case(set))

@@ -182,6 +182,17 @@ impl<'m> UpdateModel<'m> {
                 });
                 continue;
             }
+            if let GroupLaw::Section(_) = group.law {
+                // a beam section's stiffness: one parameter, whatever the corrections
+                params.push(Parameter {
+                    name: group.name.clone(),
+                    group: g,
+                    mass: false,
+                    lower: -0.9,
+                    upper: 2.0,
+                });
+                continue;
+            }
             if group.law == GroupLaw::Mass {
                 // a set of concentrated masses: its mass factor, whatever the corrections
                 params.push(Parameter {
@@ -584,7 +595,9 @@ impl<'m> UpdateModel<'m> {
         let mut y = vec![0.0; self.base.dofs.free_count()];
         (0..self.groups.len())
             .map(|g| match self.groups.groups()[g].law {
-                GroupLaw::Scale => self.group_column(g, false, 1.0, v, &mut y),
+                GroupLaw::Scale | GroupLaw::Section(_) => {
+                    self.group_column(g, false, 1.0, v, &mut y)
+                }
                 GroupLaw::Thickness => self.thickness_column(g, lambda, v, &mut y),
                 GroupLaw::Mass => self.group_column(g, true, -lambda, v, &mut y),
             })
@@ -671,9 +684,12 @@ impl<'m> UpdateModel<'m> {
     /// mass without a mass factor's name, and with which the SB-EBE residual shrinks as the model
     /// does (docs/MATH.md, "Thickness parameters").
     pub fn has_thickness_or_mass_groups(&self) -> bool {
-        self.params
-            .iter()
-            .any(|p| self.groups.groups()[p.group].law != GroupLaw::Scale)
+        self.params.iter().any(|p| {
+            matches!(
+                self.groups.groups()[p.group].law,
+                GroupLaw::Thickness | GroupLaw::Mass
+            )
+        })
     }
 
     /// Whether a parameter moves the model's mass: a mass factor, a mass group's factor, a

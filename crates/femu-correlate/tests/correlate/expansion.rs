@@ -764,3 +764,65 @@ fn projected_expansion_near_a_model_eigenvalue_stays_in_the_sensor_space() {
         }
     }
 }
+
+/// Minimum-residual expansion in the metric `M^-1` of a model with massless DOFs (a lumped beam's
+/// rotations, a bar's torsion without inertia: `M` semi-definite): a chain of twelve unit springs
+/// from a wall whose every other DOF has no mass. The exact modes come from the chain with the
+/// massless DOFs condensed out (a dense eigenproblem written here, then `x_0 = -K_00^-1 K_0m
+/// x_m`); measured at three massive DOFs, each has zero residual, so the expansion must return it
+/// at every DOF, massless ones included (5e-7 relative: the saddle point's regularisation, see
+/// `minimum_residual_saddle_point`). It failed as a singular saddle point before the massless rows
+/// took the smallest positive mass.
+#[test]
+fn minimum_residual_expansion_with_massless_dofs_recovers_exact_modes() {
+    let n = 12;
+    let mut k = Mat::<f64>::zeros(n, n);
+    let mut m = Mat::<f64>::zeros(n, n);
+    for i in 0..n {
+        k[(i, i)] += 1.0;
+        if i + 1 < n {
+            k[(i, i)] += 1.0;
+            k[(i, i + 1)] -= 1.0;
+            k[(i + 1, i)] -= 1.0;
+        }
+        if i % 2 == 1 {
+            m[(i, i)] = 1.0 + 0.1 * i as f64;
+        }
+    }
+    let massive: Vec<usize> = (0..n).filter(|i| i % 2 == 1).collect();
+    let massless: Vec<usize> = (0..n).filter(|i| i % 2 == 0).collect();
+    let k00 = sub(&k, &massless, &massless);
+    let k0m = sub(&k, &massless, &massive);
+    let kmm = sub(&k, &massive, &massive);
+    let mmm = sub(&m, &massive, &massive);
+    let lu = k00.partial_piv_lu();
+    let s = lu.solve(&k0m);
+    let kc = &kmm - k0m.transpose() * &s;
+    let kc = Mat::from_fn(kc.nrows(), kc.ncols(), |i, j| {
+        0.5 * (kc[(i, j)] + kc[(j, i)])
+    });
+    let eig = generalized_symmetric_eigen(kc.as_ref(), mmm.as_ref()).unwrap();
+    let (ks, ms) = (sparse(&k), sparse(&m));
+    let measured = vec![1, 5, 9];
+    let exp = Expander::with_measured_dofs(&ks, &ms, &measured).unwrap();
+    for j in [0, 1, 3] {
+        let xm = col(&eig.vectors, j);
+        let x0 = -&s * Mat::from_fn(xm.len(), 1, |i, _| xm[i]);
+        let mut phi = vec![0.0; n];
+        for (a, &d) in massive.iter().enumerate() {
+            phi[d] = xm[a];
+        }
+        for (a, &d) in massless.iter().enumerate() {
+            phi[d] = x0[(a, 0)];
+        }
+        let ya = Mat::from_fn(measured.len(), 1, |i, _| phi[measured[i]]);
+        let x = exp
+            .minimum_residual_saddle_point(&[eig.values[j]], ya.as_ref())
+            .unwrap();
+        assert!(
+            rel(&col(&x, 0), &phi) < 5e-7,
+            "mode {j}: {:e}",
+            rel(&col(&x, 0), &phi)
+        );
+    }
+}

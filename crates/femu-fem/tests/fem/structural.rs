@@ -823,3 +823,154 @@ fn a_tapered_cantilever_s_frequencies_converge_to_rayleigh_ritz() {
         }
     }
 }
+
+/// Beam section parameters (docs/MATH.md, "Beam section parameters"): on a skewed beam of eight
+/// elements with offsets and a turned orientation, `K(p)` of a group `EA:`, `GJ:`, `EI1:` or
+/// `EI2:` over four of them equals the stiffness assembled from scratch with that set's section
+/// changed (`A (1 + p)`, `J (1 + p)`, or `I1 (1 + p)` with the plane's shear factor `(1 + p)`,
+/// which keeps its `phi`), to 1e-12 of the largest entry, Timoshenko and Euler-Bernoulli alike;
+/// the mass does not move. The four parts of any two-node beam, tapered ones included, sum to its
+/// stiffness (1e-12). A released beam and a spring are refused in such a group.
+#[test]
+fn section_parameters_equal_beams_of_the_changed_section() {
+    use femu_fem::assembly::Assembler;
+    use femu_fem::groups::{GroupLaw, ParameterGroups};
+    use femu_fem::structural::SectionPart;
+    let d = {
+        let v = [1.0f64, 0.5, 0.3];
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        [v[0] / n, v[1] / n, v[2] / n]
+    };
+    for shear in [true, false] {
+        let mut kind = beam(rect(0.03, 0.05, shear), [0.2, 1.0, -0.4]);
+        if let StructuralKind::Beam(b) = &mut kind {
+            b.offsets = [[0.0, 0.01, 0.02], [0.005, -0.01, 0.0]];
+        }
+        let mut model = beam_model(8, 2.0, d, kind);
+        model.fix_node_dofs(1, &[0, 1, 2, 3, 4, 5]).unwrap();
+        let ids: Vec<u64> = (104..108).collect();
+        model.add_structural_set("B", &ids).unwrap();
+        let asm = Assembler::new(&model).unwrap();
+        let base = asm.assemble(&model, MassKind::Consistent).unwrap();
+        let p = 0.35;
+        for part in SectionPart::ALL {
+            let name = format!("{}B", part.prefix());
+            let groups =
+                ParameterGroups::from_element_sets(&model, &[name.as_str()], MassKind::Consistent)
+                    .unwrap();
+            assert_eq!(groups.law(0).unwrap(), GroupLaw::Section(part));
+            let got = groups
+                .parameterized(&model, &asm, &base, &[p], &[0.0])
+                .unwrap();
+            let mut direct = model.clone();
+            for id in &ids {
+                let i = direct.structural_index(*id).unwrap();
+                let mut el = direct.structural()[i].clone();
+                let StructuralKind::Beam(mut b) = el.kind else {
+                    unreachable!()
+                };
+                let s = &mut b.section;
+                match part {
+                    SectionPart::Axial => s.area *= 1.0 + p,
+                    SectionPart::Torsion => s.j *= 1.0 + p,
+                    SectionPart::Bending1 | SectionPart::Bending2 => {
+                        let plane = usize::from(part == SectionPart::Bending2);
+                        if plane == 0 {
+                            s.i1 *= 1.0 + p;
+                        } else {
+                            s.i2 *= 1.0 + p;
+                        }
+                        if let Some(k) = &mut s.shear {
+                            k[plane] *= 1.0 + p;
+                        }
+                    }
+                }
+                if part == SectionPart::Axial
+                    && let Some(k) = &mut s.shear
+                {
+                    // phi holds 1 / (k A): the shear stiffness k G A stays
+                    k[0] /= 1.0 + p;
+                    k[1] /= 1.0 + p;
+                }
+                el.kind = StructuralKind::Beam(b);
+                direct.set_structural(i, el).unwrap();
+            }
+            let want = asm.assemble(&direct, MassKind::Consistent).unwrap();
+            let scale = want.k.data().iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            for ((i, j, x), (k, l, y)) in
+                femu_sparse::csc::entries(&got.k).zip(femu_sparse::csc::entries(&want.k))
+            {
+                assert_eq!((i, j), (k, l));
+                assert!(
+                    (x - y).abs() <= 1e-12 * scale,
+                    "{name} shear {shear}: {x} {y}"
+                );
+            }
+            assert_eq!(got.m.data(), base.m.data(), "{name}: the mass moved");
+        }
+        // the parts sum to the element's stiffness, a tapered beam's too
+        let coords = model.mesh().coords().to_vec();
+        let mut tapered = model.structural()[2].clone();
+        if let StructuralKind::Beam(b) = &mut tapered.kind {
+            let mut end = b.section;
+            end.area *= 0.6;
+            end.i1 *= 0.4;
+            end.i2 *= 0.5;
+            end.j *= 0.45;
+            b.taper = Some(end);
+        }
+        for el in [model.structural()[0].clone(), tapered] {
+            let k = el.matrices(&coords, MassKind::Consistent).unwrap().k;
+            let mut sum = vec![0.0; k.len()];
+            for part in SectionPart::ALL {
+                let kp = el.section_part(&coords, part).unwrap().unwrap();
+                for (s, v) in sum.iter_mut().zip(&kp) {
+                    *s += v;
+                }
+            }
+            let scale = k.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            for (a, b) in sum.iter().zip(&k) {
+                assert!((a - b).abs() <= 1e-12 * scale, "{a} {b}");
+            }
+        }
+    }
+    // a released beam and a spring are refused
+    let mut kind = beam(rect(0.03, 0.05, true), [0.0, 1.0, 0.0]);
+    if let StructuralKind::Beam(b) = &mut kind {
+        b.releases[1][5] = true;
+    }
+    let mut model = beam_model(2, 1.0, [1.0, 0.0, 0.0], kind);
+    model.add_structural_set("R", &[100]).unwrap();
+    let e = ParameterGroups::from_element_sets(&model, &["EI1:R"], MassKind::Lumped)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("end releases"), "{e}");
+    let mut model = beam_model(
+        2,
+        1.0,
+        [1.0, 0.0, 0.0],
+        beam(rect(0.03, 0.05, true), [0.0, 1.0, 0.0]),
+    );
+    let spring = StructuralElement {
+        id: 300,
+        nodes: vec![2],
+        kind: StructuralKind::Spring(Spring {
+            k: 1e5,
+            ge: 0.0,
+            viscous: 0.0,
+            mass: 0.0,
+            a: SpringEnd {
+                node: 2,
+                part: Part::Translations,
+                direction: [0.0, 0.0, 1.0],
+            },
+            b: None,
+        }),
+    };
+    model.add_structural(spring).unwrap();
+    model.add_structural_set("S", &[300]).unwrap();
+    let e = ParameterGroups::from_element_sets(&model, &["GJ:S"], MassKind::Lumped)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("two-node beams; element 300"), "{e}");
+}
