@@ -456,6 +456,47 @@ def test_update_finds_a_shell_thickness_and_a_conm2_mass(tmp_path):
     assert abs(got["t:PID1"]) < 1e-6, got
 
 
+def cantilever_deck(path, i2_root, i1_tip):
+    """A Nastran cantilever of 24 CBARs (PBAR, no shear flexibility) in two properties with a
+    CONM2 at its tip: the root half's I2 and the tip half's I1 given."""
+    lines = ["SOL 103", "CEND", "SPC = 1", "BEGIN BULK", "PARAM,COUPMASS,1"]
+    lines += [f"GRID,{i + 1},,{i / 24!r},0.,0." for i in range(25)]
+    lines += [f"CBAR,{100 + i},{1 if 2 * i < 24 else 2},{i + 1},{i + 2},0.,1.,0." for i in range(24)]
+    lines += [
+        f"PBAR,1,1,6.e-4,2.e-8,{i2_root!r},5.e-8",
+        f"PBAR,2,1,6.e-4,{i1_tip!r},4.5e-8,5.e-8",
+        "MAT1,1,2.1e11,,0.3,7850.",
+        "CONM2,900,25,,0.5",
+        "SPC1,1,123456,1",
+        "ENDDATA",
+    ]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_update_finds_beam_section_changes(tmp_path):
+    # the real cantilever's root half 40 % stiffer in I2 and its tip half 20 % softer in I1,
+    # written on its PBARs; the section parameters (EI2:PID1, EI1:PID2) find them from Python as
+    # from the CLI and study files (one set-name parser)
+    real = femu.read_model(cantilever_deck(tmp_path / "real.bdf", 1.4 * 4.5e-8, 0.8 * 2.0e-8))
+    modes = real.modes(8)
+    rows = {(int(n), int(c)): r for r, (n, c) in enumerate(real.dofs)}
+    csv = ["mode,frequency_hz,node,direction,value"]
+    for j, f in enumerate(modes.frequencies_hz):
+        for node in range(5, 26, 4):
+            for c, d in ((1, "y"), (2, "z")):
+                v = float(modes.vectors[rows[(node, c)], j])
+                csv.append(f"{j + 1},{float(f)!r},{node},{d},{v!r}")
+    (tmp_path / "test.csv").write_text("\n".join(csv) + "\n")
+    model = femu.read_model(cantilever_deck(tmp_path / "beam.bdf", 4.5e-8, 2.0e-8))
+    test = femu.read_test(tmp_path / "test.csv", model)
+    study = femu.update(model, test, ["EI1:PID1", "EI2:PID1", "EI1:PID2", "EI2:PID2"], select="all")
+    got = dict(zip(study["result"]["names"], study["result"]["theta"]))
+    assert got["EI2:PID1"] == pytest.approx(0.4, abs=1e-6), got
+    assert got["EI1:PID2"] == pytest.approx(-0.2, abs=1e-6), got
+    assert abs(got["EI1:PID1"]) < 1e-6 and abs(got["EI2:PID2"]) < 1e-6, got
+
+
 def test_modes_written_as_a_universal_file(model, tmp_path):
     """`Model.write_modes_uff`: the box's four lowest modes written as a universal file and read
     by pyuff (an independent reader): each mode's frequency and its translations at every free DOF
