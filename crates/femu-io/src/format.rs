@@ -141,13 +141,18 @@ impl Format {
     /// The format of `path` by its extension (any case), if femu reads it. A `.dat` is Nastran
     /// bulk data unless its first kilobytes are CalculiX's printed output
     /// ([`crate::ccx_dat::looks_like_calculix`]), and a `.pch` DMIG matrices unless they are
-    /// result output ([`crate::punch::looks_like_results`]): then another solver's modes.
+    /// result output ([`crate::punch::looks_like_results`]): then another solver's modes. An
+    /// `.inp` is an Abaqus/CalculiX deck unless its first kilobytes are a Nastran deck's
+    /// ([`crate::nastran::looks_like_nastran`], as MSC names its examples).
     pub fn from_path(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         if (ext == "dat" && crate::ccx_dat::looks_like_calculix(&head(path)))
             || (ext == "pch" && crate::punch::looks_like_results(&head(path)))
         {
             return Some(Format::Results);
+        }
+        if ext == "inp" && crate::nastran::looks_like_nastran(&head(path)) {
+            return Some(Format::Nastran);
         }
         FORMATS
             .iter()

@@ -853,3 +853,49 @@ fn cards_cut_short_and_huge_ranges() {
     // every defined grid of the range: all eight
     assert_eq!(deck.model.fixed_dofs().count(), 24);
 }
+
+/// A Nastran deck named `.inp` (MSC names its examples so) is read as Nastran bulk data by its
+/// first lines, with executive control, with `$` comments before it, or bulk data alone in small
+/// or large field; an Abaqus deck (`**` comments, then `*HEADING`) stays Abaqus, and a file whose
+/// first line is neither stays Abaqus (its reader then says what it expected).
+#[test]
+fn a_nastran_deck_named_inp_is_read_as_nastran() {
+    use femu_io::Format;
+    let dir = std::env::temp_dir().join(format!("femu-inp-sniff-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cases = [
+        (
+            "exec.inp",
+            "$ an MSC example\nSOL 103\nCEND\nBEGIN BULK\nGRID,1,,0.,0.,0.\nENDDATA\n",
+            Format::Nastran,
+        ),
+        (
+            "assign.inp",
+            "ASSIGN OUTPUT2='x.op2'\nSOL 103\nCEND\n",
+            Format::Nastran,
+        ),
+        (
+            "bulk.inp",
+            "$ bulk only\nGRID           1               0.      0.      0.\n",
+            Format::Nastran,
+        ),
+        (
+            "large.inp",
+            "GRID*                  1                              0.              0.\n",
+            Format::Nastran,
+        ),
+        (
+            "abaqus.inp",
+            "** a comment\n*HEADING\nSOL 103 is a title here\n*NODE\n1, 0., 0., 0.\n",
+            Format::Inp,
+        ),
+        ("other.inp", "hello\n*NODE\n", Format::Inp),
+        ("solid.inp", "SOLID\n", Format::Inp),
+    ];
+    for (name, text, want) in cases {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        assert_eq!(Format::from_path(&p), Some(want), "{name}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -177,7 +177,11 @@ pub fn describe(path: &Path) -> Result<String, StudyError> {
     let mut s = format!("{}\n", path.display());
     let mut warnings: Vec<String> = Vec::new();
     let (s_, w) = (&mut s, &mut warnings);
-    match Format::from_path(path) {
+    let format = Format::from_path(path);
+    if let Some(f) = format {
+        w.extend(crate::load::read_by_content(path, f));
+    }
+    match format {
         Some(Format::Inp) => describe_inp(path, s_, w)?,
         Some(Format::Nastran) => describe_nastran(path, s_, w)?,
         Some(Format::Gmsh) => describe_gmsh(path, s_, w)?,

@@ -327,6 +327,21 @@ pub struct LoadedTest {
     pub warnings: Vec<String>,
 }
 
+/// A warning when `path` is read as `format` by its content rather than its extension (a Nastran
+/// deck named `.inp`, as MSC names its examples).
+pub(crate) fn read_by_content(path: &Path, format: Format) -> Option<String> {
+    let inp = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("inp"));
+    (inp && format == Format::Nastran).then(|| {
+        format!(
+            "{}: read as Nastran bulk data: its first lines are a Nastran deck's (SOL, CEND, BEGIN BULK or a card), though it is named .inp",
+            path.display()
+        )
+    })
+}
+
 /// Reads a model: an Abaqus/CalculiX `.inp` deck or Nastran bulk data (`.bdf`, `.dat`, `.nas`;
 /// materials, constraints and point masses inside), or a mesh
 /// (Gmsh `.msh`, universal file `.unv`/`.uff` with datasets 2411/2412) with the material and
@@ -350,6 +365,7 @@ pub fn load_model(path: &Path, options: &ModelOptions) -> Result<LoadedModel, St
                 ),
             )
         })?;
+    warnings.extend(read_by_content(path, format));
     if format == Format::Matrices {
         return load_matrices(path, options, start);
     }

@@ -181,6 +181,47 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("GENEL", "general elements"),
 ];
 
+/// Whether the first kilobytes `head` of a file are a Nastran deck's: the first line that is not
+/// blank or a comment (`$` Nastran's, `**` Abaqus') is an executive or case control statement
+/// (`SOL`, `ID`, `TIME`, `CEND`, `NASTRAN`, `ASSIGN`, `INIT`, `DIAG`, `BEGIN BULK`) or a bulk data
+/// card in free, small or large field (`GRID`, `GRID*`, `CQUAD4,`), and no line begins an Abaqus
+/// keyword (`*` then a letter) before it. MSC's own examples name such decks `.inp`.
+pub fn looks_like_nastran(head: &str) -> bool {
+    let Some(first) = head
+        .lines()
+        .map(str::trim_end)
+        .find(|l| !l.trim().is_empty() && !l.starts_with('$') && !l.starts_with("**"))
+    else {
+        return false;
+    };
+    if first.starts_with('*') {
+        return false;
+    }
+    let word: String = first
+        .trim_start()
+        .chars()
+        .take_while(|c| c.is_ascii_alphanumeric())
+        .collect::<String>()
+        .to_ascii_uppercase();
+    let statements = [
+        "SOL", "ID", "TIME", "CEND", "NASTRAN", "ASSIGN", "INIT", "DIAG", "BEGIN", "APP",
+    ];
+    if statements.contains(&word.as_str()) {
+        return true;
+    }
+    // a bulk card: a known card name followed by a field separator
+    let rest = &first.trim_start()[word.len()..];
+    [
+        "GRID", "CORD2R", "CORD2C", "MAT1", "PSHELL", "PSOLID", "CQUAD4", "CTRIA3", "CHEXA",
+        "CTETRA", "CBAR", "CBEAM", "CONM2", "PARAM", "EIGRL",
+    ]
+    .contains(&word.as_str())
+        && (rest.starts_with(',')
+            || rest.starts_with(' ')
+            || rest.starts_with('*')
+            || rest.starts_with('\t'))
+}
+
 /// Reads a bulk data deck.
 ///
 /// # Errors
