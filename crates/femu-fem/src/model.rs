@@ -838,6 +838,55 @@ impl Model {
         Ok(())
     }
 
+    /// Adds a rotary inertia `inertia` (kg m^2, symmetric positive semi-definite, basic axes) on
+    /// the rotations of node `node_id`, which must carry them (Abaqus's ROTARYI element): a
+    /// [`RigidMass`] of no mass and no offset.
+    ///
+    /// # Errors
+    /// [`FemError::UnknownNode`]; [`FemError::InvalidMaterial`] for a node without rotations or an
+    /// inertia that is not finite, symmetric and positive semi-definite with a positive trace.
+    pub fn add_rotary_inertia(
+        &mut self,
+        node_id: u64,
+        inertia: [[f64; 3]; 3],
+    ) -> Result<(), FemError> {
+        let node = self.node(node_id)?;
+        let bad = |reason: String| FemError::InvalidMaterial {
+            name: format!("rotary inertia on node {node_id}"),
+            reason,
+        };
+        if !self.has_rotation[node] {
+            return Err(bad(
+                "the node has no rotations (a beam's, a shell's or a rigid link's reference node has them)".into(),
+            ));
+        }
+        let j = nalgebra::Matrix3::from_fn(|i, k| inertia[i][k]);
+        let scale = j.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        if j.iter().any(|v| !v.is_finite())
+            || !(j.trace() > 0.0)
+            || (j - j.transpose()).iter().any(|v| v.abs() > 1e-12 * scale)
+            || j.symmetric_eigenvalues().min() < -1e-12 * scale
+        {
+            return Err(bad(format!(
+                "the inertia {inertia:?} must be finite, symmetric and positive semi-definite, with a positive trace"
+            )));
+        }
+        let mut matrix = [[0.0; 6]; 6];
+        for i in 0..3 {
+            for k in 0..3 {
+                matrix[3 + i][3 + k] = inertia[i][k];
+            }
+        }
+        self.rigid_masses.push(RigidMass {
+            node,
+            matrix,
+            mass: 0.0,
+            offset: [0.0; 3],
+            inertia,
+        });
+        Ok(())
+    }
+
     /// The rigid masses.
     pub fn rigid_masses(&self) -> &[RigidMass] {
         &self.rigid_masses

@@ -1331,3 +1331,55 @@ fn cae_section_parameters_change_nothing() {
     let (b, _, _) = lowest(&cae, 4);
     assert_eq!(a, b);
 }
+
+/// Rotary inertia (`*ELEMENT, TYPE=ROTARYI` with `*ROTARY INERTIA`, as Abaqus/CAE writes a point
+/// inertia) on the tip of a B31 cantilever of a square section whose own mass is negligible
+/// (density 1e-6): the tip turns against the stiffness a tip moment meets, `G J / L` about the
+/// axis and `E I / L` about the others (the tip free to move, exact for the beam element), so the
+/// three lowest eigenvalues are `G J / (L I11)` and `E I / (L I22)` twice, by hand, to 1e-6; a
+/// ROTARYI on a solid's node (no rotations), a `*ROTARY INERTIA` of no such set and one without
+/// its data line are refused with the line.
+#[test]
+fn rotary_inertia_turns_a_cantilever_tip() {
+    let base = cantilever(10, "B31", false)
+        .replace("0.02, 0.01\n", "0.02, 0.02\n")
+        .replace("*DENSITY\n7850.\n", "*DENSITY\n1.e-6\n");
+    let deck = format!(
+        "{base}*ELEMENT, TYPE=ROTARYI, ELSET=TIPI\n500, 11\n*ROTARY INERTIA, ELSET=TIPI\n2.e-3, 5.e-3, 5.e-3\n"
+    );
+    let (values, _, _) = lowest(&deck, 3);
+    let (e, nu, l, a): (f64, f64, f64, f64) = (2.1e11, 0.3, 1.0, 0.02);
+    let g = e / (2.0 * (1.0 + nu));
+    let i = a * a.powi(3) / 12.0;
+    // the torsion constant femu gives a RECT section (docs/MATH.md): 0.1408 a^4 for a square
+    let c = a;
+    let j = a * c.powi(3) * (1.0 / 3.0 - 0.21 * c / a * (1.0 - c.powi(4) / (12.0 * a.powi(4))));
+    let mut want = [g * j / (l * 2e-3), e * i / (l * 5e-3), e * i / (l * 5e-3)];
+    want.sort_by(f64::total_cmp);
+    for (got, w) in values.iter().zip(&want) {
+        assert!((got / w - 1.0).abs() < 1e-6, "{values:?} vs {want:?}");
+    }
+    let refused = |text: &str, needle: &str| {
+        let e = parse_inp(text, "bad.inp")
+            .and_then(|d| d.to_model().map(|_| ()))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("bad.inp:") && e.contains(needle),
+            "{needle}: {e}"
+        );
+    };
+    refused(
+        &deck.replace("*ROTARY INERTIA, ELSET=TIPI", "*ROTARY INERTIA, ELSET=TIPJ"),
+        "no *ELEMENT, TYPE=ROTARYI defines",
+    );
+    refused(
+        &deck.replace("2.e-3, 5.e-3, 5.e-3\n", ""),
+        "without its data line",
+    );
+    let solid = "*NODE\n1, 0., 0., 0.\n2, 1., 0., 0.\n3, 1., 1., 0.\n4, 0., 1., 0.\n5, 0., 0., 1.\n\
+                 6, 1., 0., 1.\n7, 1., 1., 1.\n8, 0., 1., 1.\n*ELEMENT, TYPE=C3D8, ELSET=B\n1, 1, 2, 3, 4, 5, 6, 7, 8\n\
+                 *MATERIAL, NAME=S\n*ELASTIC\n2.e11, 0.3\n*DENSITY\n7850.\n*SOLID SECTION, ELSET=B, MATERIAL=S\n\
+                 *ELEMENT, TYPE=ROTARYI, ELSET=R\n9, 7\n*ROTARY INERTIA, ELSET=R\n1., 1., 1.\n";
+    refused(solid, "has no rotations");
+}

@@ -12,7 +12,8 @@
 //! `*ORIENTATION` (rectangular or cylindrical; `orientation.rs`, docs/MATH.md, "Material
 //! orientations"), `*SOLID SECTION`, `*BOUNDARY` (DOFs 1-3, and 4-6 on coupling reference nodes;
 //! zero values; the named types `ENCASTRE`, `PINNED`, `XSYMM`, `YSYMM`, `ZSYMM`, `XASYMM`,
-//! `YASYMM`, `ZASYMM`), `*ELEMENT, TYPE=MASS` with `*MASS`, `*EQUATION` (node ids; the first term's DOF
+//! `YASYMM`, `ZASYMM`), `*ELEMENT, TYPE=MASS` with `*MASS`, `TYPE=ROTARYI` with `*ROTARY
+//! INERTIA` (on nodes with rotations), `*EQUATION` (node ids; the first term's DOF
 //! is dependent), `*RIGID BODY` (`ELSET`, `TIE NSET` or CalculiX's `NSET`: rigid links; `PIN
 //! NSET`: their translations), `*TIE` (slave nodes on master faces of solids, `tie.rs`),
 //! `*KINEMATIC COUPLING` and `*COUPLING` with `*KINEMATIC` (rigid links: the
@@ -86,6 +87,7 @@ const READ: &[(&str, &[&str])] = &[
     ("DAMPING", &["STRUCTURAL", "ALPHA", "BETA", "COMPOSITE"]),
     ("MODAL DAMPING", &["RAYLEIGH", "MODAL", "DEFINITION"]),
     ("ORIENTATION", &["NAME", "SYSTEM", "DEFINITION"]),
+    ("ROTARY INERTIA", &["ELSET"]),
     (
         "TIE",
         &[
@@ -289,10 +291,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     (
         "NONSTRUCTURAL MASS",
         "non-structural mass is not supported yet",
-    ),
-    (
-        "ROTARY INERTIA",
-        "rotary inertia is not supported (solid elements have no rotations)",
     ),
     (
         "TRANSFORM",
@@ -551,6 +549,9 @@ pub struct InpDeck {
     /// The element set of each point mass (its `*MASS`'s `ELSET`), in the same order: a mass set
     /// of the model for updating.
     pub point_mass_sets: Vec<String>,
+    /// Rotary inertias (ROTARYI elements with their `*ROTARY INERTIA`): node id, inertia about
+    /// the basic axes (kg m^2) and the card that gave it.
+    pub rotary_inertias: Vec<(u64, [[f64; 3]; 3], Location)>,
     /// Multipoint constraints in file order.
     pub links: Vec<InpLink>,
     /// Node-based surfaces by upper-case name: targets and weights.

@@ -184,6 +184,16 @@ impl InpDeck {
         )?;
         self.apply_links(&mut model)?;
         let warnings = self.apply_ties(&mut model)?;
+        // rotary inertias: on nodes that carry rotations (beams', shells', couplings' references)
+        for (node, inertia, at) in &self.rotary_inertias {
+            model
+                .add_rotary_inertia(*node, *inertia)
+                .map_err(|source| IoError::Model {
+                    path: at.path.clone(),
+                    line: at.line,
+                    source,
+                })?;
+        }
         for b in &self.boundaries {
             let all: Vec<usize> = (b.first - 1..b.last).collect();
             let comps: Vec<usize> = all.iter().copied().filter(|c| *c < 3).collect();

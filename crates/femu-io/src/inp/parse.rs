@@ -111,6 +111,11 @@ struct DeckBuilder {
     mass_elements: Vec<(u64, u64, usize)>,
     mass_sets: BTreeMap<String, Vec<u64>>,
     mass_block: Option<String>,
+    /// the element block being read is of ROTARYI elements (their sets in `rotary_sets`)
+    rotary_block: bool,
+    rotary_sets: BTreeMap<String, Vec<u64>>,
+    /// `*ROTARY INERTIA`: its element set, `I11 I22 I33 I12 I13 I23`, line
+    rotary_cards: Vec<(String, Option<[f64; 6]>, Location)>,
     mass_cards: Vec<MassCard>,
     materials: BTreeMap<String, Material>,
     material_damping: BTreeMap<String, super::MaterialDamping>,
@@ -388,10 +393,11 @@ impl DeckBuilder {
         self.element_kind_now = None;
         self.structural_now = None;
         self.mass_block = None;
+        self.rotary_block = false;
         let is_mass_element = || {
-            params
-                .get("TYPE")
-                .is_some_and(|t| t.eq_ignore_ascii_case("MASS"))
+            params.get("TYPE").is_some_and(|t| {
+                t.eq_ignore_ascii_case("MASS") || t.eq_ignore_ascii_case("ROTARYI")
+            })
         };
         match name.as_str() {
             "KINEMATIC COUPLING" | "COUPLING" => self.coupling_keyword(&name, &params, l),
@@ -401,6 +407,14 @@ impl DeckBuilder {
             "ELEMENT" if is_mass_element() => self.mass_element_keyword(&params, l),
             "ELEMENT" => self.element_keyword(&params, l, warnings),
             "MASS" => self.mass_keyword(&params, l),
+            "ROTARY INERTIA" => {
+                let set = params
+                    .get("ELSET")
+                    .ok_or_else(|| err(l, "*ROTARY INERTIA without ELSET=".into()))?;
+                self.rotary_cards
+                    .push((set.to_ascii_uppercase(), None, at(l)));
+                Ok(())
+            }
             "NSET" | "ELSET" => self.set_keyword(&name, &params, l, li),
             "MATERIAL" => self.material_keyword(&params, l),
             "ELASTIC" | "DENSITY" => self.material_option_keyword(&name, &params, l),
@@ -681,7 +695,17 @@ impl DeckBuilder {
                     "*ELEMENT, TYPE=MASS needs ELSET= (the set its *MASS names)".into(),
                 )
             })?;
-        self.mass_sets.entry(set.clone()).or_default();
+        // one-node elements: MASS (a *MASS gives their mass) or ROTARYI (a *ROTARY INERTIA
+        // their inertia)
+        if params
+            .get("TYPE")
+            .is_some_and(|t| t.eq_ignore_ascii_case("ROTARYI"))
+        {
+            self.rotary_sets.entry(set.clone()).or_default();
+            self.rotary_block = true;
+        } else {
+            self.mass_sets.entry(set.clone()).or_default();
+        }
         self.mass_block = Some(set);
         Ok(())
     }
@@ -1178,6 +1202,30 @@ impl DeckBuilder {
                 Ok(())
             }
             "MASS" => self.mass_line(&f, l, t),
+            "ROTARY INERTIA" => {
+                let card = self.rotary_cards.last_mut().expect("set with the keyword");
+                if card.1.is_none() {
+                    if f.len() < 3 {
+                        return Err(err(
+                            l,
+                            format!(
+                                "*ROTARY INERTIA needs I11, I22, I33 (and I12, I13, I23), got {t:?}"
+                            ),
+                        ));
+                    }
+                    let mut v = [0.0; 6];
+                    for (k, s) in f.iter().take(6).enumerate() {
+                        if s.is_empty() {
+                            continue;
+                        }
+                        v[k] = parse_f64(s).filter(|x| x.is_finite()).ok_or_else(|| {
+                            err(l, format!("*ROTARY INERTIA: {s:?} is not a number"))
+                        })?;
+                    }
+                    card.1 = Some(v);
+                }
+                Ok(())
+            }
             "NSET" | "ELSET" => {
                 let last = self.sets.last_mut().expect("set with the keyword");
                 last.tokens.extend(f.iter().map(|s| s.to_string()));
@@ -1261,10 +1309,12 @@ impl DeckBuilder {
             return Err(malformed());
         };
         self.mass_elements.push((id, node, li));
-        self.mass_sets
-            .get_mut(set)
-            .expect("created with the block")
-            .push(id);
+        let sets = if self.rotary_block {
+            &mut self.rotary_sets
+        } else {
+            &mut self.mass_sets
+        };
+        sets.get_mut(set).expect("created with the block").push(id);
         Ok(())
     }
 
@@ -1885,6 +1935,34 @@ impl DeckBuilder {
             }
         }
         let (point_masses, point_mass_sets) = self.point_masses(lines, &mesh, &elem_sets)?;
+        let mut rotary_inertias = Vec::new();
+        for (set, values, l) in &self.rotary_cards {
+            let members = self.rotary_sets.get(set).ok_or_else(|| {
+                structural::at_err(
+                    l,
+                    format!(
+                        "*ROTARY INERTIA names element set {set}, which no *ELEMENT, TYPE=ROTARYI defines{}",
+                        crate::spelling::suggestion(
+                            set,
+                            self.rotary_sets.keys().map(String::as_str),
+                            ""
+                        )
+                    ),
+                )
+            })?;
+            let v = values.ok_or_else(|| {
+                structural::at_err(l, "*ROTARY INERTIA without its data line".into())
+            })?;
+            let inertia = [[v[0], v[3], v[4]], [v[3], v[1], v[5]], [v[4], v[5], v[2]]];
+            for id in members {
+                let (_, node, _) = self
+                    .mass_elements
+                    .iter()
+                    .find(|e| e.0 == *id)
+                    .expect("listed");
+                rotary_inertias.push((*node, inertia, l.clone()));
+            }
+        }
         Ok(InpDeck {
             mesh,
             materials: self.materials,
@@ -1901,6 +1979,7 @@ impl DeckBuilder {
             boundaries: self.boundaries,
             point_masses,
             point_mass_sets,
+            rotary_inertias,
             links: self.links,
             surfaces: self.surfaces,
             element_surfaces: self.element_surfaces,
