@@ -655,3 +655,49 @@ fn couplings_and_equations_in_decks() {
         assert!(e.contains(want), "want {want:?}\n got {e}");
     }
 }
+
+/// `*NODE, SYSTEM=C`: cylindrical coordinates `r, theta (degrees), z` are the rectangular `r cos
+/// theta, r sin theta, z` (by hand, 1e-15), in a deck and in a part placed by an instance (a
+/// translation after the conversion); `SYSTEM=S` is refused with its line.
+#[test]
+fn cylindrical_node_coordinates() {
+    let deck = "*NODE, SYSTEM=C\n1, 2., 30., 0.5\n2, 1., 90., 0.\n3, 3., 180., -1.\n*NODE\n4, 0., 0., 0.\n\
+                *ELEMENT, TYPE=C3D4, ELSET=E\n1, 1, 2, 3, 4\n\
+                *MATERIAL, NAME=S\n*ELASTIC\n2.e11, 0.3\n*DENSITY\n7850.\n*SOLID SECTION, ELSET=E, MATERIAL=S\n";
+    let d = parse_inp(deck, "cyl.inp").unwrap();
+    let x = |id: u64| d.mesh.coords()[d.mesh.node_index(id).unwrap()];
+    let (s, c) = 30f64.to_radians().sin_cos();
+    let want = [
+        (1, [2.0 * c, 2.0 * s, 0.5]),
+        (2, [0.0, 1.0, 0.0]),
+        (3, [-3.0, 0.0, -1.0]),
+        (4, [0.0, 0.0, 0.0]),
+    ];
+    for (id, w) in want {
+        for k in 0..3 {
+            assert!(
+                (x(id)[k] - w[k]).abs() < 1e-15,
+                "node {id}: {:?} {w:?}",
+                x(id)
+            );
+        }
+    }
+    // in a part: converted, then moved by the instance's translation
+    let part = format!(
+        "*PART, NAME=P\n{}*END PART\n*ASSEMBLY, NAME=A\n*INSTANCE, NAME=I, PART=P\n1., 0., 0.\n*END INSTANCE\n*END ASSEMBLY\n*MATERIAL, NAME=S\n*ELASTIC\n2.e11, 0.3\n*DENSITY\n7850.\n",
+        deck.replace(
+            "*MATERIAL, NAME=S\n*ELASTIC\n2.e11, 0.3\n*DENSITY\n7850.\n",
+            ""
+        )
+    );
+    let p = parse_inp(&part, "part.inp").unwrap();
+    let y = p.mesh.coords()[p.mesh.node_index(2).unwrap()];
+    assert!(
+        (y[0] - 1.0).abs() < 1e-15 && (y[1] - 1.0).abs() < 1e-15,
+        "{y:?}"
+    );
+    let e = parse_inp(&deck.replace("SYSTEM=C", "SYSTEM=S"), "bad.inp")
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("bad.inp:1:") && e.contains("SYSTEM=S"), "{e}");
+}

@@ -4,7 +4,7 @@
 //! Decks in parts and an assembly (`*PART`, `*ASSEMBLY`, `*INSTANCE` with its translation and
 //! rotation, Abaqus/CAE's layout) are placed into one flat deck first (`parts.rs`).
 //!
-//! Supported keywords: `*HEADING`, `*NODE`, `*ELEMENT` (C3D4, C3D10, C3D8, C3D20, C3D6, C3D15, and
+//! Supported keywords: `*HEADING`, `*NODE` (rectangular, or cylindrical with `SYSTEM=C`), `*ELEMENT` (C3D4, C3D10, C3D8, C3D20, C3D6, C3D15, and
 //! C3D8I, the brick with incompatible modes; the reduced-integration C3D8R and C3D20R are read as
 //! full integration, with a warning), `*NSET`,
 //! `*ELSET` (lists of ids or set names, or `GENERATE`), `*MATERIAL`, `*ELASTIC` (isotropic,
@@ -812,6 +812,7 @@ pub fn read_nodes(path: impl AsRef<Path>) -> Result<Vec<(u64, [f64; 3])>, IoErro
     let mut nodes = Vec::new();
     let mut seen: HashMap<u64, usize> = HashMap::new();
     let mut in_node = false;
+    let mut cylindrical_block = false;
     for l in &lines {
         let t = l.text.trim();
         if t.is_empty() || t.starts_with("**") {
@@ -820,16 +821,8 @@ pub fn read_nodes(path: impl AsRef<Path>) -> Result<Vec<(u64, [f64; 3])>, IoErro
         if t.starts_with('*') {
             let (name, params) = keyword(t);
             in_node = name == "NODE";
-            if let Some(sys) = params
-                .get("SYSTEM")
-                .filter(|v| in_node && !v.eq_ignore_ascii_case("R"))
-            {
-                return Err(bad(
-                    l,
-                    format!(
-                        "*NODE, SYSTEM={sys}: only rectangular coordinates (SYSTEM=R) are read"
-                    ),
-                ));
+            if in_node {
+                cylindrical_block = parse::node_system(&params).map_err(|r| bad(l, r))?;
             }
             continue;
         }
@@ -849,6 +842,9 @@ pub fn read_nodes(path: impl AsRef<Path>) -> Result<Vec<(u64, [f64; 3])>, IoErro
                     format!("coordinate {s:?} of node {id} is not a finite number"),
                 )
             })?;
+        }
+        if cylindrical_block {
+            x = parse::cylindrical(x);
         }
         if let Some(first) = seen.insert(id, l.number) {
             return Err(bad(

@@ -661,17 +661,7 @@ impl DeckBuilder {
     }
 
     fn node_keyword(&mut self, params: &HashMap<String, String>, l: &Line) -> Result<(), IoError> {
-        if let Some(sys) = params
-            .get("SYSTEM")
-            .filter(|v| !v.eq_ignore_ascii_case("R"))
-        {
-            return Err(err(
-                l,
-                format!(
-                    "*NODE, SYSTEM={sys}: only rectangular coordinates (SYSTEM=R) are supported"
-                ),
-            ));
-        }
+        node_system(params).map_err(|reason| err(l, reason))?;
         if let Some(s) = params.get("NSET") {
             self.node_set_of_block
                 .push((s.to_ascii_uppercase(), Vec::new()));
@@ -1273,6 +1263,9 @@ impl DeckBuilder {
                     format!("coordinate {s:?} of node {id} is not a finite number"),
                 )
             })?;
+        }
+        if node_system(&self.block_params) == Ok(true) {
+            x = cylindrical(x);
         }
         self.nodes.push((id, x, li));
         if let Some(last) = self
@@ -2206,3 +2199,26 @@ fn listed_ids(
 
 /// The point masses `(node, mass, the *MASS's line)` and the element set of each.
 type PointMasses = (Vec<(u64, f64, Location)>, Vec<String>);
+
+/// A `*NODE` block's `SYSTEM=`: rectangular (`R`, the default: false) or cylindrical (`C`: true,
+/// its coordinates `r, theta (degrees), z`); other systems refused.
+pub(super) fn node_system(params: &HashMap<String, String>) -> Result<bool, String> {
+    match params
+        .get("SYSTEM")
+        .map(|v| v.to_ascii_uppercase())
+        .as_deref()
+    {
+        None | Some("R") => Ok(false),
+        Some("C") => Ok(true),
+        Some(sys) => Err(format!(
+            "*NODE, SYSTEM={sys}: femu reads rectangular (SYSTEM=R) and cylindrical (SYSTEM=C) coordinates"
+        )),
+    }
+}
+
+/// Cylindrical coordinates `(r, theta in degrees, z)` as rectangular ones (Abaqus's `*NODE,
+/// SYSTEM=C`).
+pub(super) fn cylindrical(x: [f64; 3]) -> [f64; 3] {
+    let (s, c) = x[1].to_radians().sin_cos();
+    [x[0] * c, x[0] * s, x[2]]
+}

@@ -255,6 +255,14 @@ impl Flattener<'_> {
                     self.reference(l, v, scope, false)?
                 }
                 "REF NODE" => self.reference(l, v, scope, false)?,
+                // an instance's nodes are written rectangular, placed
+                "SYSTEM"
+                    if name == "NODE"
+                        && matches!(scope, Scope::Instance(_))
+                        && v.eq_ignore_ascii_case("C") =>
+                {
+                    continue;
+                }
                 _ => v.clone(),
             };
             if params[k].is_empty() {
@@ -339,6 +347,11 @@ impl Flattener<'_> {
                             let mut x = [0.0; 3];
                             for (c, s) in f.iter().skip(1).take(3).enumerate() {
                                 x[c] = number(l, s, "a coordinate")?;
+                            }
+                            // a cylindrical block's nodes placed as rectangular ones (the
+                            // keyword line lost its SYSTEM)
+                            if super::parse::node_system(&params) == Ok(true) {
+                                x = super::parse::cylindrical(x);
                             }
                             let y = i.place(x);
                             format!("{id}, {:?}, {:?}, {:?}", y[0], y[1], y[2])
