@@ -1218,9 +1218,9 @@ mod tests {
         std::fs::write(d.join("b.csv"), "node,x,y,z\n1,0,0,0\n1,1,0,0\n").unwrap();
         let e = read_node_table(&d.join("b.csv")).unwrap_err().to_string();
         assert!(e.contains("b.csv:3: node 1 is listed again"), "{e}");
-        std::fs::write(d.join("b.inp"), "*NODE, SYSTEM=C\n1, 1, 0, 0\n").unwrap();
+        std::fs::write(d.join("b.inp"), "*NODE, SYSTEM=S\n1, 1, 0, 0\n").unwrap();
         let e = read_node_table(&d.join("b.inp")).unwrap_err().to_string();
-        assert!(e.contains("b.inp:1: *NODE, SYSTEM=C"), "{e}");
+        assert!(e.contains("b.inp:1: *NODE, SYSTEM=S"), "{e}");
         assert!(read_node_table(&d.join("n.bdf")).is_err());
     }
 }
