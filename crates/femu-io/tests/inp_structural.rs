@@ -1383,3 +1383,57 @@ fn rotary_inertia_turns_a_cantilever_tip() {
                  *ELEMENT, TYPE=ROTARYI, ELSET=R\n9, 7\n*ROTARY INERTIA, ELSET=R\n1., 1., 1.\n";
     refused(solid, "has no rotations");
 }
+
+/// `*NONSTRUCTURAL MASS`: on the B33 cantilever (no rotary inertia), a mass per length equal to
+/// its own `rho A` doubles its mass, so its four lowest (bending) eigenvalues halve, by hand, to
+/// 1e-10 (the eigensolver's); on FV16's plate of S4, a total mass spread by mass (uniform
+/// elements) equals the same mass per area over its 100 m^2 (eigenvalues to 1e-10), and the
+/// model's total mass grows by
+/// exactly that mass (1e-12); a mass per length on shells, a set of solids and a card without
+/// `UNITS` are refused with the line.
+#[test]
+fn nonstructural_mass_adds_mass_alone() {
+    let beam = cantilever(20, "B33", false);
+    let rho_a = 7850.0 * 0.02 * 0.01;
+    let heavy =
+        format!("{beam}*NONSTRUCTURAL MASS, ELSET=BEAM, UNITS=MASS PER LENGTH\n{rho_a:e}\n");
+    let (a, _, _) = lowest(&beam, 4);
+    let (b, _, _) = lowest(&heavy, 4);
+    for (x, y) in a.iter().zip(&b) {
+        assert!((y / x - 0.5).abs() < 1e-10, "{a:?} {b:?}");
+    }
+    let plate = fv16(8);
+    let with = |card: &str| plate.replace("*BOUNDARY", &format!("{card}*BOUNDARY"));
+    let total = with("*NONSTRUCTURAL MASS, ELSET=PLATE, UNITS=TOTAL MASS\n2500.\n");
+    let per_area = with("*NONSTRUCTURAL MASS, ELSET=PLATE, UNITS=MASS PER AREA\n25.\n");
+    let (x, mx, _) = lowest(&total, 4);
+    let (y, _, _) = lowest(&per_area, 4);
+    for (p, q) in x.iter().zip(&y) {
+        assert!((p / q - 1.0).abs() < 1e-10, "{x:?} {y:?}");
+    }
+    let (_, m0, _) = lowest(&plate, 1);
+    let added = mx.total_mass().unwrap() - m0.total_mass().unwrap();
+    assert!((added / 2500.0 - 1.0).abs() < 1e-12, "{added}");
+    let refused = |text: &str, needle: &str| {
+        let e = parse_inp(text, "bad.inp")
+            .and_then(|d| d.to_model().map(|_| ()))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("bad.inp:") && e.contains(needle),
+            "{needle}: {e}"
+        );
+    };
+    refused(
+        &with("*NONSTRUCTURAL MASS, ELSET=PLATE, UNITS=MASS PER LENGTH\n1.\n"),
+        "a mass per area is a shell's",
+    );
+    refused(
+        &with("*NONSTRUCTURAL MASS, ELSET=PLATE\n1.\n"),
+        "without UNITS=",
+    );
+    refused(
+        &with("*NONSTRUCTURAL MASS, ELSET=PLATE, UNITS=MASS PER VOLUME\n1.\n"),
+        "UNITS=MASS PER VOLUME",
+    );
+}

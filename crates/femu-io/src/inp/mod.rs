@@ -13,7 +13,8 @@
 //! orientations"), `*SOLID SECTION`, `*BOUNDARY` (DOFs 1-3, and 4-6 on coupling reference nodes;
 //! zero values; the named types `ENCASTRE`, `PINNED`, `XSYMM`, `YSYMM`, `ZSYMM`, `XASYMM`,
 //! `YASYMM`, `ZASYMM`), `*ELEMENT, TYPE=MASS` with `*MASS`, `TYPE=ROTARYI` with `*ROTARY
-//! INERTIA` (on nodes with rotations), `*EQUATION` (node ids; the first term's DOF
+//! INERTIA` (on nodes with rotations), `*NONSTRUCTURAL MASS` (per area of shells, per length
+//! of beams, or a total), `*EQUATION` (node ids; the first term's DOF
 //! is dependent), `*RIGID BODY` (`ELSET`, `TIE NSET` or CalculiX's `NSET`: rigid links; `PIN
 //! NSET`: their translations), `*TIE` (slave nodes on master faces of solids, `tie.rs`),
 //! `*KINEMATIC COUPLING` and `*COUPLING` with `*KINEMATIC` (rigid links: the
@@ -54,6 +55,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 mod model;
+mod nonstructural;
 mod orientation;
 mod parse;
 mod parts;
@@ -88,6 +90,7 @@ const READ: &[(&str, &[&str])] = &[
     ("MODAL DAMPING", &["RAYLEIGH", "MODAL", "DEFINITION"]),
     ("ORIENTATION", &["NAME", "SYSTEM", "DEFINITION"]),
     ("ROTARY INERTIA", &["ELSET"]),
+    ("NONSTRUCTURAL MASS", &["ELSET", "UNITS", "DISTRIBUTION"]),
     (
         "TIE",
         &[
@@ -288,10 +291,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
         "membrane elements are not supported (solids only)",
     ),
     ("MPC", "multi-point constraints are not supported yet"),
-    (
-        "NONSTRUCTURAL MASS",
-        "non-structural mass is not supported yet",
-    ),
     (
         "TRANSFORM",
         "local nodal systems are not supported yet: constraints would act in the wrong directions",
@@ -504,6 +503,27 @@ struct Tie {
     line: Location,
 }
 
+/// A `*NONSTRUCTURAL MASS`: a mass per area (shells, membranes), per length (beams, trusses), or
+/// in total, spread over a set's shells and beams in proportion to their mass or their size.
+#[derive(Debug, Clone, PartialEq)]
+struct NonstructuralMass {
+    elset: String,
+    units: NsmUnits,
+    /// `DISTRIBUTION=VOLUME PROPORTIONAL` (a total mass spread by area or length rather than by
+    /// the elements' own mass)
+    by_volume: bool,
+    value: Option<f64>,
+    line: Location,
+}
+
+/// A `*NONSTRUCTURAL MASS`'s `UNITS`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum NsmUnits {
+    PerArea,
+    PerLength,
+    Total,
+}
+
 /// A `*MASS` card: the mass of every MASS element of a set.
 #[derive(Debug, Clone, PartialEq)]
 struct MassCard {
@@ -560,6 +580,8 @@ pub struct InpDeck {
     element_surfaces: BTreeMap<String, Vec<(Target, String, Location)>>,
     /// `*TIE`s in file order
     ties: Vec<Tie>,
+    /// `*NONSTRUCTURAL MASS` cards in file order
+    nonstructural: Vec<NonstructuralMass>,
     /// The frequency step, if any.
     pub frequency: Option<FrequencyStep>,
     /// The ids of the elements read as C3D8I (incompatible modes).

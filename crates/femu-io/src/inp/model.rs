@@ -182,6 +182,7 @@ impl InpDeck {
             &self.orientations,
             &mut model,
         )?;
+        self.apply_nonstructural(&mut model)?;
         self.apply_links(&mut model)?;
         let warnings = self.apply_ties(&mut model)?;
         // rotary inertias: on nodes that carry rotations (beams', shells', couplings' references)

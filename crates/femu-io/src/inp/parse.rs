@@ -114,6 +114,7 @@ struct DeckBuilder {
     /// the element block being read is of ROTARYI elements (their sets in `rotary_sets`)
     rotary_block: bool,
     rotary_sets: BTreeMap<String, Vec<u64>>,
+    nonstructural: Vec<NonstructuralMass>,
     /// `*ROTARY INERTIA`: its element set, `I11 I22 I33 I12 I13 I23`, line
     rotary_cards: Vec<(String, Option<[f64; 6]>, Location)>,
     mass_cards: Vec<MassCard>,
@@ -407,6 +408,58 @@ impl DeckBuilder {
             "ELEMENT" if is_mass_element() => self.mass_element_keyword(&params, l),
             "ELEMENT" => self.element_keyword(&params, l, warnings),
             "MASS" => self.mass_keyword(&params, l),
+            "NONSTRUCTURAL MASS" => {
+                let set = params
+                    .get("ELSET")
+                    .ok_or_else(|| err(l, "*NONSTRUCTURAL MASS without ELSET=".into()))?;
+                let units = match params
+                    .get("UNITS")
+                    .map(|u| u.to_ascii_uppercase())
+                    .as_deref()
+                {
+                    Some("MASS PER AREA") => NsmUnits::PerArea,
+                    Some("MASS PER LENGTH") => NsmUnits::PerLength,
+                    Some("TOTAL MASS") => NsmUnits::Total,
+                    Some(u) => {
+                        return Err(err(
+                            l,
+                            format!(
+                                "*NONSTRUCTURAL MASS, UNITS={u}: femu reads MASS PER AREA (shells), MASS PER LENGTH (beams) and TOTAL MASS"
+                            ),
+                        ));
+                    }
+                    None => {
+                        return Err(err(
+                            l,
+                            "*NONSTRUCTURAL MASS without UNITS= (MASS PER AREA, MASS PER LENGTH or TOTAL MASS)".into(),
+                        ));
+                    }
+                };
+                let by_volume = match params
+                    .get("DISTRIBUTION")
+                    .map(|d| d.to_ascii_uppercase())
+                    .as_deref()
+                {
+                    None | Some("MASS PROPORTIONAL") => false,
+                    Some("VOLUME PROPORTIONAL") => true,
+                    Some(d) => {
+                        return Err(err(
+                            l,
+                            format!(
+                                "*NONSTRUCTURAL MASS, DISTRIBUTION={d}: MASS PROPORTIONAL or VOLUME PROPORTIONAL"
+                            ),
+                        ));
+                    }
+                };
+                self.nonstructural.push(NonstructuralMass {
+                    elset: set.to_ascii_uppercase(),
+                    units,
+                    by_volume,
+                    value: None,
+                    line: at(l),
+                });
+                Ok(())
+            }
             "ROTARY INERTIA" => {
                 let set = params
                     .get("ELSET")
@@ -1192,6 +1245,25 @@ impl DeckBuilder {
                 Ok(())
             }
             "MASS" => self.mass_line(&f, l, t),
+            "NONSTRUCTURAL MASS" => {
+                let card = self.nonstructural.last_mut().expect("set with the keyword");
+                if card.value.is_none() {
+                    card.value = Some(
+                        f.first()
+                            .and_then(|s| parse_f64(s))
+                            .filter(|v| v.is_finite() && *v >= 0.0)
+                            .ok_or_else(|| {
+                                err(
+                                    l,
+                                    format!(
+                                        "*NONSTRUCTURAL MASS needs a mass of 0 or more, got {t:?}"
+                                    ),
+                                )
+                            })?,
+                    );
+                }
+                Ok(())
+            }
             "ROTARY INERTIA" => {
                 let card = self.rotary_cards.last_mut().expect("set with the keyword");
                 if card.1.is_none() {
@@ -1977,6 +2049,7 @@ impl DeckBuilder {
             surfaces: self.surfaces,
             element_surfaces: self.element_surfaces,
             ties: self.ties,
+            nonstructural: self.nonstructural,
             frequency: self.frequency,
             incompatible_modes: self.incompatible_modes,
             warnings: std::mem::take(warnings),
