@@ -499,17 +499,7 @@ fn oriented_block(material: &str, orientation: (&str, &str)) -> String {
         for j in 0..ny {
             for i in 0..nx {
                 e += 1;
-                s.push_str(&format!(
-                    "{e}, {}, {}, {}, {}, {}, {}, {}, {}\n",
-                    id(i, j, k),
-                    id(i + 1, j, k),
-                    id(i + 1, j + 1, k),
-                    id(i, j + 1, k),
-                    id(i, j, k + 1),
-                    id(i + 1, j, k + 1),
-                    id(i + 1, j + 1, k + 1),
-                    id(i, j + 1, k + 1)
-                ));
+                s.push_str(&format!("{e}, {}\n", femu_testkit::hex8_nodes(id, i, j, k)));
             }
         }
     }
@@ -711,16 +701,9 @@ fn rigid_body_bar(rigid: &str) -> String {
     s.push_str("1000, 1.1, 0.05, 0.05\n*ELEMENT, TYPE=C3D8, ELSET=EALL\n");
     for i in 0..n {
         s.push_str(&format!(
-            "{}, {}, {}, {}, {}, {}, {}, {}, {}\n",
+            "{}, {}\n",
             i + 1,
-            id(i, 0, 0),
-            id(i + 1, 0, 0),
-            id(i + 1, 1, 0),
-            id(i, 1, 0),
-            id(i, 0, 1),
-            id(i + 1, 0, 1),
-            id(i + 1, 1, 1),
-            id(i, 1, 1)
+            femu_testkit::hex8_nodes(id, i, 0, 0)
         ));
     }
     let tip: Vec<String> = (n - 2..=n)
@@ -825,17 +808,7 @@ fn tied_blocks(na: usize, nb: usize, slave: &str) -> String {
         }
     }
     let hex = |id: &dyn Fn(usize, usize, usize) -> usize, i: usize, j: usize, k: usize| {
-        format!(
-            "{}, {}, {}, {}, {}, {}, {}, {}",
-            id(i, j, k),
-            id(i + 1, j, k),
-            id(i + 1, j + 1, k),
-            id(i, j + 1, k),
-            id(i, j, k + 1),
-            id(i + 1, j, k + 1),
-            id(i + 1, j + 1, k + 1),
-            id(i, j + 1, k + 1)
-        )
+        femu_testkit::hex8_nodes(id, i, j, k)
     };
     let (mut atop, mut bbot) = (Vec::new(), Vec::new());
     s.push_str("*ELEMENT, TYPE=C3D8, ELSET=EALL\n");

@@ -110,6 +110,31 @@ pub fn mixed_steel_aluminium_plate(through: usize, quadratic: bool) -> Model {
 }
 
 /// The points of an `nx x ny` mesh of 8-node quadrilaterals on a `(2 nx + 1) x (2 ny + 1)` grid:
+/// The eight corner node ids of brick `(i, j, k)` of a structured grid numbered by `id`, in
+/// Abaqus's and Nastran's order (the bottom face counter-clockwise, then the top), as an element
+/// line's fields: `"n1, n2, ..., n8"`.
+pub fn hex8_nodes<T: std::fmt::Display>(
+    id: impl Fn(usize, usize, usize) -> T,
+    i: usize,
+    j: usize,
+    k: usize,
+) -> String {
+    [
+        id(i, j, k),
+        id(i + 1, j, k),
+        id(i + 1, j + 1, k),
+        id(i, j + 1, k),
+        id(i, j, k + 1),
+        id(i + 1, j, k + 1),
+        id(i + 1, j + 1, k + 1),
+        id(i, j + 1, k + 1),
+    ]
+    .iter()
+    .map(|v| v.to_string())
+    .collect::<Vec<_>>()
+    .join(", ")
+}
+
 /// every `(i, j)` but the cells' centres (both odd), row by row.
 pub fn quad8_points(nx: usize, ny: usize) -> Vec<(usize, usize)> {
     (0..=2 * ny)
