@@ -156,8 +156,8 @@ impl InpDeck {
             let x = self.mesh.coords();
             let on_master: std::collections::HashSet<usize> =
                 faces.iter().flat_map(|f| f.nodes.iter().copied()).collect();
-            // the master faces' typical diagonal: Abaqus's default tolerance is 5 % of it
-            let diagonal = faces
+            // each master face's diagonal, and their mean: Abaqus's default tolerance is 5 % of it
+            let diagonals: Vec<f64> = faces
                 .iter()
                 .map(|f| {
                     f.nodes
@@ -165,8 +165,8 @@ impl InpDeck {
                         .flat_map(|a| f.nodes.iter().map(move |b| dist(x[*a], x[*b])))
                         .fold(0.0f64, f64::max)
                 })
-                .sum::<f64>()
-                / faces.len().max(1) as f64;
+                .collect();
+            let diagonal = diagonals.iter().sum::<f64>() / faces.len().max(1) as f64;
             let tolerance = tie.tolerance.unwrap_or(0.05 * diagonal);
             let label = format!("*TIE {} ({} line {})", tie.name, at.path.display(), at.line);
             let (mut untied, mut moved, mut gap) = (Vec::new(), 0usize, 0.0f64);
@@ -175,11 +175,9 @@ impl InpDeck {
                 // the nearest point of the master surface: each face's element mapped back,
                 // the weights of the nodes off the face dropped (they vanish on it)
                 let mut best: Option<(f64, Vec<(usize, f64)>)> = None;
-                for f in &faces {
-                    let near = f
-                        .nodes
-                        .iter()
-                        .any(|n| dist(x[*n], p) <= diagonal + tolerance);
+                for (f, d) in faces.iter().zip(&diagonals) {
+                    // a point on a face lies within its diagonal of each of its nodes
+                    let near = f.nodes.iter().any(|n| dist(x[*n], p) <= d + tolerance);
                     if !near {
                         continue;
                     }
