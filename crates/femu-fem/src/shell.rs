@@ -529,15 +529,34 @@ fn checked_quad(x: &[V3; 4]) -> Result<([V3; 3], [[f64; 2]; 4]), String> {
 /// # Errors
 /// The message [`matrices`] or [`matrices3`] would give for the geometry.
 pub fn check(x: &[V3]) -> Result<(), String> {
+    if x.len() == 6 {
+        for (k, t) in SIX_NODE_TRIANGLES.iter().enumerate() {
+            unit(cross(sub(x[t[1]], x[t[0]]), sub(x[t[2]], x[t[0]]))).ok_or_else(|| {
+                format!(
+                    "its sub-triangle {} (nodes {}, {}, {}) has no area: a midside node on a corner or off its edge",
+                    k + 1,
+                    t[0] + 1,
+                    t[1] + 1,
+                    t[2] + 1
+                )
+            })?;
+        }
+        return Ok(());
+    }
     match x {
         [a, b, c, d] => checked_quad(&[*a, *b, *c, *d]).map(|_| ()),
         [a, b, c] => unit(cross(sub(*b, *a), sub(*c, *a)))
             .map(|_| ())
             .ok_or_else(|| "its corners do not span a triangle (collinear or coincident)".into()),
         [_, _, _, _, _, _, _, _] => crate::shell8::check8(&std::array::from_fn(|i| x[i])),
-        _ => Err(format!("a shell has 3, 4 or 8 nodes, not {}", x.len())),
+        _ => Err(format!("a shell has 3, 4, 6 or 8 nodes, not {}", x.len())),
     }
 }
+
+/// The four three-node triangles (local node indices) a six-node triangle is built from: one at
+/// each corner and the middle one, on the corners 1-3 and the midside nodes 4 (edge 1-2), 5
+/// (2-3), 6 (3-1), each counter-clockwise as the element (docs/MATH.md, "Six-node triangles").
+pub const SIX_NODE_TRIANGLES: [[usize; 3]; 4] = [[0, 3, 5], [3, 1, 4], [5, 4, 2], [3, 4, 5]];
 
 /// The element's plane: its axes (rows `e1`, `e2`, `n`), its corners in that plane, and its warp.
 ///

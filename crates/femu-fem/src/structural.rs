@@ -395,7 +395,7 @@ impl StructuralElement {
             }
             StructuralKind::Bushing(_) => (1..=2).contains(&count),
             StructuralKind::Shell(_) => {
-                matches!(count, 3 | 4 | 8)
+                matches!(count, 3 | 4 | 6 | 8)
                     && (0..count).all(|i| (0..i).all(|j| self.nodes[i] != self.nodes[j]))
             }
         };
@@ -403,7 +403,7 @@ impl StructuralElement {
             return Err(FemError::InvalidStructural {
                 element: id,
                 reason: format!(
-                    "{count} nodes {:?} do not fit the element (beams two or three distinct, rods two, springs and bushings one or two, a spring's ends among them, shells three, four or eight distinct)",
+                    "{count} nodes {:?} do not fit the element (beams two or three distinct, rods two, springs and bushings one or two, a spring's ends among them, shells three, four, six or eight distinct)",
                     self.nodes
                 ),
             });
@@ -648,6 +648,10 @@ impl StructuralElement {
                 let tri = |a: V3, b: V3, c: V3| 0.5 * norm(cross(sub(b, a), sub(c, a)));
                 let area = match self.nodes.len() {
                     8 => crate::shell8::area8(&std::array::from_fn::<_, 8, _>(x)),
+                    6 => crate::shell::SIX_NODE_TRIANGLES
+                        .iter()
+                        .map(|t| tri(x(t[0]), x(t[1]), x(t[2])))
+                        .sum(),
                     4 => tri(x(0), x(1), x(2)) + tri(x(0), x(2), x(3)),
                     _ => tri(x(0), x(1), x(2)),
                 };
@@ -692,6 +696,23 @@ impl StructuralElement {
         if self.nodes.len() == 3 {
             let x: [[f64; 3]; 3] = std::array::from_fn(|i| coords[self.nodes[i]]);
             crate::shell::matrices3_scaled(s, &x, mass, sc)
+        } else if self.nodes.len() == 6 {
+            // a six-node triangle as four flat three-node triangles on its corners and midside
+            // nodes (docs/MATH.md, "Six-node triangles")
+            let (mut k, mut m) = (vec![0.0; 36 * 36], vec![0.0; 36 * 36]);
+            for sub in crate::shell::SIX_NODE_TRIANGLES {
+                let x: [[f64; 3]; 3] = std::array::from_fn(|i| coords[self.nodes[sub[i]]]);
+                let (ks, ms) = crate::shell::matrices3_scaled(s, &x, mass, sc)?;
+                for a in 0..18 {
+                    let ra = 6 * sub[a / 6] + a % 6;
+                    for b in 0..18 {
+                        let cb = 6 * sub[b / 6] + b % 6;
+                        k[ra * 36 + cb] += ks[a * 18 + b];
+                        m[ra * 36 + cb] += ms[a * 18 + b];
+                    }
+                }
+            }
+            Ok((k, m))
         } else if self.nodes.len() == 8 {
             let x: [[f64; 3]; 8] = std::array::from_fn(|i| coords[self.nodes[i]]);
             crate::shell8::matrices8_scaled(s, &x, mass, sc)

@@ -187,12 +187,14 @@ pub fn vtu_string_with(
         let _ = writeln!(s, "{}", ids.join(" "));
         off += st.nodes.len();
         offsets.push(off);
-        // VTK_QUADRATIC_QUAD, VTK_QUAD or VTK_TRIANGLE for a shell (VTK's node order is femu's),
+        // VTK_QUADRATIC_QUAD, VTK_QUADRATIC_TRIANGLE, VTK_QUAD or VTK_TRIANGLE for a shell (VTK's
+        // node order is femu's),
         // VTK_QUADRATIC_EDGE for a three-node beam (ends, then middle: femu's order too),
         // VTK_LINE, or VTK_VERTEX for a grounded spring or bushing
         types.push(match (st.nodes.len(), &st.kind) {
             (3, StructuralKind::Beam(_)) => 21,
             (8, _) => 23,
+            (6, _) => 22,
             (4, _) => 9,
             (3, _) => 5,
             (2, _) => 3,

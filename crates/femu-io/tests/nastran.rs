@@ -304,8 +304,8 @@ fn bad_decks_name_the_card_and_line() {
             "cube.bdf:3: SPC = 300 selects a set that no SPC, SPC1 or SPCADD defines",
         ),
         (
-            base.replace("PARAM    WTMASS  1.", "CTRIA6   2       1       1       2       3\nRROD     3       7       6       1\nCTRIA6   4       1       5       6       7\nPARAM    WTMASS  1."),
-            "cube.bdf:23: the deck has cards that change the stiffness or the mass and that femu cannot model: 1 rigid rods (RROD), 2 shells (CTRIA6)",
+            base.replace("PARAM    WTMASS  1.", "CQUADR   2       1       1       2       3       4\nRROD     3       7       6       1\nCQUADR   4       1       5       6       7       8\nPARAM    WTMASS  1."),
+            "cube.bdf:23: the deck has cards that change the stiffness or the mass and that femu cannot model: 1 rigid rods (RROD), 2 shells (CQUADR)",
         ),
     ];
     for (text, want) in cases {
@@ -317,7 +317,7 @@ fn bad_decks_name_the_card_and_line() {
     // lenient: the rest is read, with a warning that K and M are incomplete
     let with_shell = base.replace(
         "PARAM    WTMASS  1.",
-        "CTRIA6   2       1       1       2       3\nPARAM    WTMASS  1.",
+        "CQUADR   2       1       1       2       3       4\nPARAM    WTMASS  1.",
     );
     let deck = parse_bdf(&with_shell, "cube.bdf", &BdfOptions { lenient: true }).unwrap();
     assert_eq!(deck.model.mesh().element_count(), 1);

@@ -130,7 +130,6 @@ const NO_EFFECT: &[&str] = &[
 
 /// Cards that change `K` or `M` and that femu cannot model yet, with what they are.
 const UNSUPPORTED: &[(&str, &str)] = &[
-    ("CTRIA6", "shells"),
     ("CQUADR", "shells"),
     ("CTRIAR", "shells"),
     ("CONM1", "general mass matrices"),
@@ -547,7 +546,7 @@ fn sort<'a>(
             .min_by_key(|c| c.line)
             .expect("non-empty");
         let text = format!(
-            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, bars and beams (CBAR, CBEAM with PBAR, PBARL, PBEAM, PBEAML), rods (CROD, CONROD), springs, dampers, scalar masses and bushings (CELAS1, CELAS2, CDAMP1, CDAMP2, CMASS1, CMASS2, CVISC, CBUSH), shells (CQUAD4, CQUAD8, CTRIA3 with PSHELL, PCOMP, PCOMPG), CONM2 masses, RBE2, RBAR, RBAR1 and RBE3 links and SPC constraints",
+            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, bars and beams (CBAR, CBEAM with PBAR, PBARL, PBEAM, PBEAML), rods (CROD, CONROD), springs, dampers, scalar masses and bushings (CELAS1, CELAS2, CDAMP1, CDAMP2, CMASS1, CMASS2, CVISC, CBUSH), shells (CQUAD4, CQUAD8, CTRIA3, CTRIA6 with PSHELL, PCOMP, PCOMPG), CONM2 masses, RBE2, RBAR, RBAR1 and RBE3 links and SPC constraints",
             list.join(", ")
         );
         if options.lenient {
@@ -1049,7 +1048,7 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
         return Err(IoError::Content {
             path: path.to_path_buf(),
             reason: format!(
-                "the deck defines {} GRID{} and no element (solids: CHEXA, CPENTA, CTETRA, CPYRAM; bars, beams, rods, springs, dampers, bushings, shells: CBAR, CBEAM, CROD, CONROD, CELAS1, CELAS2, CDAMP1, CDAMP2, CVISC, CBUSH, CQUAD4, CQUAD8, CTRIA3)",
+                "the deck defines {} GRID{} and no element (solids: CHEXA, CPENTA, CTETRA, CPYRAM; bars, beams, rods, springs, dampers, bushings, shells: CBAR, CBEAM, CROD, CONROD, CELAS1, CELAS2, CDAMP1, CDAMP2, CVISC, CBUSH, CQUAD4, CQUAD8, CTRIA3, CTRIA6)",
                 mesh.node_count(),
                 if mesh.node_count() == 1 { "" } else { "s" }
             ),

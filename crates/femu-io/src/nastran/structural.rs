@@ -1,7 +1,7 @@
 //! Bars, beams, rods, springs, bushings and shells: `CBAR` (`PBAR`, `PBARL`), `CBEAM` (`PBEAM`,
 //! `PBEAML`, prismatic), `CROD` (`PROD`), `CONROD`, `CELAS1` (`PELAS`), `CELAS2`, `CDAMP1`
 //! (`PDAMP`), `CDAMP2`, `CVISC` (`PVISC`), `CBUSH`
-//! (`PBUSH`), `CQUAD4`, `CQUAD8` (all eight grids) and `CTRIA3` (`PSHELL` of MAT1, MAT2 or MAT8 materials, THETA or MCID
+//! (`PBUSH`), `CQUAD4`, `CQUAD8` (all eight grids), `CTRIA3` and `CTRIA6` (all six grids, as four three-node triangles) (`PSHELL` of MAT1, MAT2 or MAT8 materials, THETA or MCID
 //! material axes), with `BAROR` and
 //! `BEAMOR` defaults, read as the Quick Reference Guide defines them
 //! (cited by card) into femu's structural elements ([`femu_fem::structural`]). What femu cannot
@@ -34,7 +34,7 @@ pub(super) struct StructuralCards<'a> {
 /// The structural element card names.
 pub(super) const ELEMENTS: &[&str] = &[
     "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CDAMP1", "CDAMP2", "CMASS1", "CMASS2",
-    "CVISC", "CBUSH", "CQUAD4", "CTRIA3", "CQUAD8",
+    "CVISC", "CBUSH", "CQUAD4", "CTRIA3", "CQUAD8", "CTRIA6",
 ];
 /// The structural property card names.
 pub(super) const PROPERTIES: &[&str] = &[
@@ -712,6 +712,7 @@ pub(super) fn add_structural(
 ) -> Result<usize, IoError> {
     let mut sets: BTreeMap<u64, Vec<u64>> = BTreeMap::new();
     let mut warned = Vec::new();
+    let mut warned_ctria6 = false;
     for c in &cards.elements {
         let eid = c.id(0, "EID")?;
         let prop = |pid: u64, kinds: &[&str]| -> Result<&Card, IoError> {
@@ -942,21 +943,30 @@ pub(super) fn add_structural(
                 });
                 (kind, nodes, pid)
             }
-            "CQUAD4" | "CTRIA3" | "CQUAD8" => {
+            "CQUAD4" | "CTRIA3" | "CQUAD8" | "CTRIA6" => {
                 let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
                 let p = prop(pid, &["PSHELL", "PCOMP", "PCOMPG"])?;
                 let (grids, corners) = match c.name.as_str() {
                     "CQUAD8" => (8, 4),
+                    "CTRIA6" => (6, 3),
                     "CQUAD4" => (4, 4),
                     _ => (3, 3),
                 };
-                if c.name == "CQUAD8"
-                    && let Some(k) = (6..10).find(|&i| c.field(i).trim().is_empty())
-                {
+                if let Some(k) = (2 + corners..2 + grids).find(|&i| c.field(i).trim().is_empty()) {
                     return Err(c.err(format!(
-                        "{eid}: edge grid G{} is blank; femu builds a CQUAD8 with all eight grids (give the edge grids, or model the element as a CQUAD4)",
-                        k - 1
+                        "{eid}: edge grid G{} is blank; femu builds a {} with all {grids} grids (give the edge grids, or model the element as a {})",
+                        k - 1,
+                        c.name,
+                        if c.name == "CQUAD8" { "CQUAD4" } else { "CTRIA3" }
                     )));
+                }
+                if c.name == "CTRIA6" && !warned_ctria6 {
+                    warned_ctria6 = true;
+                    warnings.push(Warning {
+                        path: c.path.clone(),
+                        line: c.line,
+                        message: "CTRIA6: femu builds each as four flat three-node triangles (MITC3) on its six grids, a linear shell mesh twice as fine, not Nastran's quadratic element: its frequencies converge to the same as the mesh is refined (docs/MATH.md, \"Six-node triangles\")".into(),
+                    });
                 }
                 let nodes = (2..2 + grids)
                     .map(|i| node(model, c.id(i, "G")?, c, "a grid"))
@@ -965,6 +975,8 @@ pub(super) fn add_structural(
                 // of a CTRIA3; a CQUAD8 has them after T1-T4 on its second line (QRG CQUAD8)
                 let (theta_field, zoffs_field, tflag_field, t_field) = match c.name.as_str() {
                     "CQUAD8" => (14, 15, 16, 10),
+                    // QRG CTRIA6: THETA/MCID, ZOFFS, T1-T3, TFLAG after the six grids
+                    "CTRIA6" => (8, 9, 13, 10),
                     _ => (corners + 2, corners + 3, 10, 11),
                 };
                 let (mut shell, laminate) = if p.name == "PSHELL" {
