@@ -24,7 +24,8 @@
 //! beams `B31`, `B32` and `B33` with `*BEAM SECTION` (`RECT`, `CIRC`, `PIPE`)
 //! or `*BEAM GENERAL SECTION` (`GENERAL`), springs `SPRING1`, `SPRING2`, `SPRINGA` with `*SPRING`
 //! (`structural.rs`; their nodes get rotations, which `*BOUNDARY` DOFs 4-6 then fix), and shells
-//! `S4`, `S4R`, `S3`, `S3R`, `S8R`, `S8` with `*SHELL SECTION` and membranes `M3D3`, `M3D4`, `M3D4R`,
+//! `S4`, `S4R`, `S3`, `S3R`, `S6`, `STRI65` (as four three-node triangles), `S8R`, `S8` with
+//! `*SHELL SECTION` and membranes `M3D3`, `M3D4`, `M3D4R`, `M3D6`,
 //! `M3D8`, `M3D8R` with `*MEMBRANE SECTION` (a material, its thickness, its `OFFSET`, its
 //! `ORIENTATION`).
 //!

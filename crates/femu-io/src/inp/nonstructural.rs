@@ -24,11 +24,15 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-/// The area of a shell of corner nodes `x` (a triangle, a quadrilateral by its diagonals, an
-/// 8-node shell by its own rule).
+/// The area of a shell of nodes `x` (a triangle, a six-node one as its four triangles, a
+/// quadrilateral by its diagonals, an 8-node shell by its own rule).
 fn shell_area(x: &[[f64; 3]]) -> f64 {
     match x.len() {
         3 => 0.5 * norm(cross(sub(x[1], x[0]), sub(x[2], x[0]))),
+        6 => femu_fem::shell::SIX_NODE_TRIANGLES
+            .iter()
+            .map(|t| shell_area(&[x[t[0]], x[t[1]], x[t[2]]]))
+            .sum(),
         8 => femu_fem::shell8::area8(x),
         _ => 0.5 * norm(cross(sub(x[2], x[0]), sub(x[3], x[1]))),
     }

@@ -57,6 +57,9 @@ pub(super) enum StructuralType {
     S3,
     /// An 8-node shell (S8R, and S8 built the same way).
     S8,
+    /// A 6-node triangular shell (CalculiX's S6, Abaqus's STRI65), built as four three-node
+    /// triangles on its nodes (docs/MATH.md, "Six-node triangles").
+    S6,
     /// A membrane (M3D4 and M3D4R built fully integrated, M3D3, M3D8R and M3D8 as the 8-node
     /// shell's membrane) of `*MEMBRANE SECTION`, with its node count.
     Membrane(usize),
@@ -80,13 +83,14 @@ impl StructuralType {
             "S4" | "S4R" => (Self::S4, 4),
             "S3" | "S3R" => (Self::S3, 3),
             "S8R" | "S8" => (Self::S8, 8),
+            "S6" | "STRI65" => (Self::S6, 6),
+            "M3D6" => (Self::Membrane(6), 6),
             "M3D4" | "M3D4R" => (Self::Membrane(4), 4),
             "M3D3" => (Self::Membrane(3), 3),
             "M3D8R" | "M3D8" => (Self::Membrane(8), 8),
-            t @ ("S8R5" | "S4R5" | "S9R5" | "STRI3" | "STRI65" | "S6" | "M3D6" | "M3D9R"
-            | "SC8R") => {
+            t @ ("S8R5" | "S4R5" | "S9R5" | "STRI3" | "M3D9R" | "SC8R") => {
                 return Err(format!(
-                    "element type {t} is not read: femu's shells are S4, S4R, S3, S3R, S8R and S8, its membranes M3D3, M3D4, M3D4R, M3D8 and M3D8R (6- and 9-node, thin-only and continuum shells are not built)"
+                    "element type {t} is not read: femu's shells are S4, S4R, S3, S3R, S6, STRI65, S8R and S8, its membranes M3D3, M3D4, M3D4R, M3D6, M3D8 and M3D8R (9-node, thin-only and continuum shells are not built)"
                 ));
             }
             t @ ("B31OS" | "B32OS" | "PIPE31" | "PIPE32" | "B21" | "B22" | "B23" | "T3D3"
@@ -114,8 +118,10 @@ impl StructuralType {
             Self::S4 => "S4",
             Self::S3 => "S3",
             Self::S8 => "S8R",
+            Self::S6 => "S6",
             Self::Membrane(3) => "M3D3",
             Self::Membrane(4) => "M3D4",
+            Self::Membrane(6) => "M3D6",
             Self::Membrane(_) => "M3D8R",
         }
     }
@@ -557,6 +563,7 @@ pub(super) fn add_structural(
             }
             StructuralType::S4
             | StructuralType::S3
+            | StructuralType::S6
             | StructuralType::S8
             | StructuralType::Membrane(_) => {
                 let membrane = matches!(ty, StructuralType::Membrane(_));
