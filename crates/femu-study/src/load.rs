@@ -39,8 +39,9 @@ pub struct ModelOptions {
     /// Node sets (Gmsh physical groups, UFF groups) to clamp in a mesh-only model (their
     /// rotations too where shells give them rotations).
     pub fix: Vec<String>,
-    /// Shell sections of a Gmsh mesh: each named physical group of surfaces (3-node triangles,
-    /// 4- and 8-node quadrangles) becomes shells of this thickness (m) in the model's material.
+    /// Shell sections of a Gmsh mesh: each named physical group of surfaces (3- and 6-node
+    /// triangles, 4- and 8-node quadrangles) becomes shells of this thickness (m) in the model's
+    /// material.
     pub shells: Vec<(String, f64)>,
     /// Beam sections of a Gmsh mesh: each named physical group of 2- or 3-node lines becomes
     /// Timoshenko beams of this section in the model's material, written as Abaqus' `*BEAM
@@ -131,7 +132,7 @@ fn add_sections(
         add_group(
             model,
             surfaces,
-            (group, "surfaces", &[2, 3, 16]),
+            (group, "surfaces", &[2, 3, 9, 16]),
             path,
             StructuralKind::Shell(shell),
         )?;
@@ -236,7 +237,7 @@ fn add_group(
                 path,
                 "sections",
                 format!(
-                    "line {}: element {} of {group} is of Gmsh type {}: femu builds {what} of type{} {:?} (3-node triangles 2, 4-node quadrangles 3, 8-node quadrangles 16, 2-node lines 1, 3-node lines 8)",
+                    "line {}: element {} of {group} is of Gmsh type {}: femu builds {what} of type{} {:?} (3-node triangles 2, 4-node quadrangles 3, 6-node triangles 9, 8-node quadrangles 16, 2-node lines 1, 3-node lines 8)",
                     f.line,
                     f.tag,
                     f.gmsh_type,
