@@ -1532,3 +1532,31 @@ fn six_node_triangles_against_calculix() {
         "{worst:?}"
     );
 }
+
+/// `*SHELL GENERAL SECTION` with `MATERIAL=` (a homogeneous linear section, which Abaqus
+/// pre-integrates as `*SHELL SECTION` integrates it) is `*SHELL SECTION`: FV16's eigenvalues
+/// equal exactly; without `MATERIAL=` (a stiffness matrix given) it is refused with its line.
+#[test]
+fn shell_general_sections_with_a_material_are_shell_sections() {
+    let plate = fv16(4);
+    let general = plate.replace(
+        "*SHELL SECTION, ELSET=PLATE, MATERIAL=STEEL",
+        "*SHELL GENERAL SECTION, ELSET=PLATE, MATERIAL=STEEL, POISSON=0.5",
+    );
+    let (a, _, _) = lowest(&plate, 4);
+    let (b, _, _) = lowest(&general, 4);
+    assert_eq!(a, b);
+    let e = parse_inp(
+        &plate.replace(
+            "*SHELL SECTION, ELSET=PLATE, MATERIAL=STEEL",
+            "*SHELL GENERAL SECTION, ELSET=PLATE",
+        ),
+        "bad.inp",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("bad.inp:") && e.contains("without MATERIAL="),
+        "{e}"
+    );
+}

@@ -25,7 +25,8 @@
 //! or `*BEAM GENERAL SECTION` (`GENERAL`), springs `SPRING1`, `SPRING2`, `SPRINGA` with `*SPRING`
 //! (`structural.rs`; their nodes get rotations, which `*BOUNDARY` DOFs 4-6 then fix), and shells
 //! `S4`, `S4R`, `S3`, `S3R`, `S6`, `STRI65` (as four three-node triangles), `S8R`, `S8` with
-//! `*SHELL SECTION` and membranes `M3D3`, `M3D4`, `M3D4R`, `M3D6`,
+//! `*SHELL SECTION` (or `*SHELL GENERAL SECTION` of a material) and membranes `M3D3`, `M3D4`,
+//! `M3D4R`, `M3D6`,
 //! `M3D8`, `M3D8R` with `*MEMBRANE SECTION` (a material, its thickness, its `OFFSET`, its
 //! `ORIENTATION`).
 //!
@@ -186,6 +187,20 @@ const READ: &[(&str, &[&str])] = &[
             "SYMMETRIC",
             "ORIENTATION",
             "LAYUP",
+            "POISSON",
+            "TEMPERATURE",
+            "CONTROLS",
+        ],
+    ),
+    // with MATERIAL=, a linear elastic homogeneous shell as *SHELL SECTION's (its pre-integration
+    // is the same for a linear material); without, a general stiffness, refused
+    (
+        "SHELL GENERAL SECTION",
+        &[
+            "ELSET",
+            "MATERIAL",
+            "OFFSET",
+            "ORIENTATION",
             "POISSON",
             "TEMPERATURE",
             "CONTROLS",

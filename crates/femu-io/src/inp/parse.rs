@@ -526,10 +526,16 @@ impl DeckBuilder {
                 });
                 Ok(())
             }
-            "SHELL SECTION" => {
+            "SHELL SECTION" | "SHELL GENERAL SECTION" => {
                 let elset = params
                     .get("ELSET")
-                    .ok_or_else(|| err(l, "*SHELL SECTION without ELSET=".into()))?;
+                    .ok_or_else(|| err(l, format!("*{name} without ELSET=")))?;
+                if name == "SHELL GENERAL SECTION" && !params.contains_key("MATERIAL") {
+                    return Err(err(
+                        l,
+                        "*SHELL GENERAL SECTION without MATERIAL= gives the section's stiffness matrix, which femu does not read (give the material)".into(),
+                    ));
+                }
                 let composite = params.contains_key("COMPOSITE");
                 let material = match params.get("MATERIAL") {
                     Some(m) => m.clone(),
@@ -1232,7 +1238,7 @@ impl DeckBuilder {
                 }
                 Ok(())
             }
-            "SHELL SECTION" | "MEMBRANE SECTION" => {
+            "SHELL SECTION" | "SHELL GENERAL SECTION" | "MEMBRANE SECTION" => {
                 if let Some(c) = self.structural.shell_sections.last_mut() {
                     c.lines.push(f.iter().map(|s| s.to_string()).collect());
                 }
