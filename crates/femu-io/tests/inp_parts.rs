@@ -322,3 +322,36 @@ fn instances_tied_in_the_assembly_are_one_bar() {
         assert!((x / y - 1.0).abs() < 1e-10, "{a:?} vs {b:?}");
     }
 }
+
+/// A part of beams carrying its own point inertia (`ROTARYI` with `*ROTARY INERTIA`) and
+/// `*NONSTRUCTURAL MASS`, as CAE writes inertia defined on a part, placed by a translated and
+/// turned instance: the eigenvalues of the flat deck (the same beam along x, its boundary on its
+/// first node) to 1e-10, since a cantilever's frequencies do not depend on where it stands or how
+/// it is turned (the part's section axis `n1` and its inertia tensor turn with it).
+#[test]
+fn a_part_with_its_own_inertia_and_nonstructural_mass() {
+    let mut body = String::from("*NODE\n");
+    for i in 0..=10 {
+        body.push_str(&format!("{}, {}, 0., 0.\n", i + 1, 0.1 * i as f64));
+    }
+    body.push_str("*ELEMENT, TYPE=B31, ELSET=BEAM\n");
+    for i in 0..10 {
+        body.push_str(&format!("{}, {}, {}\n", i + 1, i + 1, i + 2));
+    }
+    body.push_str(
+        "*BEAM SECTION, ELSET=BEAM, MATERIAL=STEEL, SECTION=RECT\n0.02, 0.01\n0., 1., 0.\n\
+         *ELEMENT, TYPE=ROTARYI, ELSET=TIPI\n50, 11\n*ROTARY INERTIA, ELSET=TIPI\n2.e-3, 5.e-3, 1.e-3\n\
+         *NONSTRUCTURAL MASS, ELSET=BEAM, UNITS=MASS PER LENGTH\n0.8\n",
+    );
+    let material = "*MATERIAL, NAME=STEEL\n*ELASTIC\n2.1e11, 0.3\n*DENSITY\n7850.\n";
+    let flat = format!("{body}{material}*BOUNDARY\n1, 1, 6\n");
+    let parts = format!(
+        "*PART, NAME=P\n{body}*END PART\n*ASSEMBLY, NAME=A\n*INSTANCE, NAME=I, PART=P\n0.5, -1., 2.\n\
+         0.5, -1., 2., 1.5, 0., 3., 40.\n*END INSTANCE\n*END ASSEMBLY\n{material}*BOUNDARY\nI.1, ENCASTRE\n"
+    );
+    let a = lowest(&flat, "flat.inp");
+    let b = lowest(&parts, "parts.inp");
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x / y - 1.0).abs() < 1e-10, "{a:?} vs {b:?}");
+    }
+}

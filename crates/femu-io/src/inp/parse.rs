@@ -789,7 +789,7 @@ impl DeckBuilder {
             return Ok(());
         }
         let (kind, formulation, approx) = element_kind(ty).ok_or_else(|| {
-            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS; T3D2, B31, B32, B32R, B33, SPRING1, SPRING2, SPRINGA, DASHPOT1, DASHPOT2, DASHPOTA; S4, S4R, S3, S3R, S6, STRI65, S8R, S8; M3D3, M3D4, M3D4R, M3D6, M3D8, M3D8R)"))
+            err(l, format!("element type {ty} is not supported (C3D4, C3D10, C3D8, C3D8I, C3D20, C3D6, C3D15, C3D8R, C3D20R, MASS, ROTARYI; T3D2, B31, B32, B32R, B33, SPRING1, SPRING2, SPRINGA, DASHPOT1, DASHPOT2, DASHPOTA; S4, S4R, S3, S3R, S6, STRI65, S8R, S8; M3D3, M3D4, M3D4R, M3D6, M3D8, M3D8R)"))
         })?;
         if approx {
             warn(

@@ -5,7 +5,8 @@
 //! translation and then turned about its axis (Keywords Reference, `*INSTANCE`: the first data
 //! line a translation, the second two points `a`, `b` of an axis and an angle in degrees about
 //! it), its sets named `i.set` (as Abaqus names them from the assembly), its sections, masses,
-//! constraints and orientations carried with it. The first instance keeps the part's node and
+//! constraints and orientations carried with it (a beam section's `n1`, an orientation's points
+//! and a rotary inertia's tensor turned with the instance). The first instance keeps the part's node and
 //! element numbers; each further one, and the assembly's own nodes and elements, are numbered from
 //! the next multiple of a power of ten above every part's numbers (said in a warning). References
 //! from the assembly and the model (`*BOUNDARY`, `*NSET, INSTANCE=`, couplings, equations) take
@@ -117,6 +118,9 @@ const IN_PART: &[&str] = &[
     "SPRING",
     "DASHPOT",
     "MASS",
+    "ROTARY INERTIA",
+    "NONSTRUCTURAL MASS",
+    "SHELL GENERAL SECTION",
     "ORIENTATION",
     "SURFACE",
     "EQUATION",
@@ -409,6 +413,32 @@ impl Flattener<'_> {
                 "ORIENTATION" if data_index == 0 => {
                     self.orientation_points(l, &f, &params, scope)?
                 }
+                // a part's rotary inertia is about the part's axes: turned with the instance
+                "ROTARY INERTIA" if data_index == 0 => match scope {
+                    Scope::Instance(i) if i.rotation.is_some() => {
+                        let mut v = [0.0; 6];
+                        for (k, s) in f.iter().take(6).enumerate() {
+                            if !s.is_empty() {
+                                v[k] = number(l, s, "an inertia")?;
+                            }
+                        }
+                        let j = [[v[0], v[3], v[4]], [v[3], v[1], v[5]], [v[4], v[5], v[2]]];
+                        let r = i.rotation.as_ref().map(|(_, r)| *r).expect("a rotation");
+                        let g: [[f64; 3]; 3] = std::array::from_fn(|a| {
+                            std::array::from_fn(|b| {
+                                (0..3)
+                                    .flat_map(|p| (0..3).map(move |q| (p, q)))
+                                    .map(|(p, q)| r[a][p] * j[p][q] * r[b][q])
+                                    .sum()
+                            })
+                        });
+                        format!(
+                            "{:?}, {:?}, {:?}, {:?}, {:?}, {:?}",
+                            g[0][0], g[1][1], g[2][2], g[0][1], g[0][2], g[1][2]
+                        )
+                    }
+                    _ => t.to_string(),
+                },
                 "SURFACE" | "KINEMATIC COUPLING" => {
                     let element = block == "SURFACE"
                         && !params
