@@ -1455,33 +1455,9 @@ fn fv16_six(n: usize, ty: &str) -> String {
         }
     }
     s.push_str(&format!("*ELEMENT, TYPE={ty}, ELSET=PLATE\n"));
-    let mut id = 1;
-    for j in 0..n {
-        for i in 0..n {
-            let (a, b) = (2 * i, 2 * j);
-            for t in [
-                [
-                    g(a, b),
-                    g(a + 2, b),
-                    g(a + 2, b + 2),
-                    g(a + 1, b),
-                    g(a + 2, b + 1),
-                    g(a + 1, b + 1),
-                ],
-                [
-                    g(a, b),
-                    g(a + 2, b + 2),
-                    g(a, b + 2),
-                    g(a + 1, b + 1),
-                    g(a + 1, b + 2),
-                    g(a, b + 1),
-                ],
-            ] {
-                let t: Vec<String> = t.iter().map(|v| v.to_string()).collect();
-                s.push_str(&format!("{id}, {}\n", t.join(", ")));
-                id += 1;
-            }
-        }
+    for (id, cell) in femu_testkit::tri6_cells(n).iter().enumerate() {
+        let t: Vec<String> = cell.iter().map(|&(i, j)| g(i, j).to_string()).collect();
+        s.push_str(&format!("{}, {}\n", id + 1, t.join(", ")));
     }
     s.push_str("*NSET, NSET=CLAMP\n");
     for j in 0..=m {

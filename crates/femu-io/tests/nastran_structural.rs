@@ -2540,44 +2540,22 @@ fn fv16_ctria6(n: usize, as_ctria3: bool) -> String {
         }
     }
     let mut id = 1;
-    for j in 0..n {
-        for i in 0..n {
-            let (a, b) = (2 * i, 2 * j);
-            // corners then the midsides of edges 1-2, 2-3, 3-1
-            for t in [
-                [
-                    g(a, b),
-                    g(a + 2, b),
-                    g(a + 2, b + 2),
-                    g(a + 1, b),
-                    g(a + 2, b + 1),
-                    g(a + 1, b + 1),
-                ],
-                [
-                    g(a, b),
-                    g(a + 2, b + 2),
-                    g(a, b + 2),
-                    g(a + 1, b + 1),
-                    g(a + 1, b + 2),
-                    g(a, b + 1),
-                ],
-            ] {
-                if as_ctria3 {
-                    for sub in [[0, 3, 5], [3, 1, 4], [5, 4, 2], [3, 4, 5]] {
-                        s.push_str(&format!(
-                            "CTRIA3,{id},7,{},{},{}\n",
-                            t[sub[0]], t[sub[1]], t[sub[2]]
-                        ));
-                        id += 1;
-                    }
-                } else {
-                    s.push_str(&format!(
-                        "CTRIA6,{id},7,{},{},{},{},{},{}\n",
-                        t[0], t[1], t[2], t[3], t[4], t[5]
-                    ));
-                    id += 1;
-                }
+    for cell in femu_testkit::tri6_cells(n) {
+        let t = cell.map(|(i, j)| g(i, j));
+        if as_ctria3 {
+            for sub in [[0, 3, 5], [3, 1, 4], [5, 4, 2], [3, 4, 5]] {
+                s.push_str(&format!(
+                    "CTRIA3,{id},7,{},{},{}\n",
+                    t[sub[0]], t[sub[1]], t[sub[2]]
+                ));
+                id += 1;
             }
+        } else {
+            s.push_str(&format!(
+                "CTRIA6,{id},7,{},{},{},{},{},{}\n",
+                t[0], t[1], t[2], t[3], t[4], t[5]
+            ));
+            id += 1;
         }
     }
     s.push_str("PSHELL,7,3,0.05,3,,3\nMAT1,3,2.+11,,0.3,8000.\n");

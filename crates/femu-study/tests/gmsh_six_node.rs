@@ -23,28 +23,10 @@ fn gmsh_six_node_triangles_are_ctria6() {
             ));
         }
     }
-    let mut triangles = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let (a, b) = (2 * i, 2 * j);
-            triangles.push([
-                g(a, b),
-                g(a + 2, b),
-                g(a + 2, b + 2),
-                g(a + 1, b),
-                g(a + 2, b + 1),
-                g(a + 1, b + 1),
-            ]);
-            triangles.push([
-                g(a, b),
-                g(a + 2, b + 2),
-                g(a, b + 2),
-                g(a + 1, b + 1),
-                g(a + 1, b + 2),
-                g(a, b + 1),
-            ]);
-        }
-    }
+    let triangles: Vec<[usize; 6]> = femu_testkit::tri6_cells(n)
+        .iter()
+        .map(|c| c.map(|(i, j)| g(i, j)))
+        .collect();
     let mut msh = String::from(
         "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n1 2 \"edge\"\n2 1 \"plate\"\n$EndPhysicalNames\n",
     );

@@ -109,6 +109,36 @@ pub fn mixed_steel_aluminium_plate(through: usize, quadratic: bool) -> Model {
     model
 }
 
+/// The cells of an `n x n` mesh of squares each cut into two 6-node triangles along its diagonal
+/// from `(2i, 2j)`, on the `(2 n + 1) x (2 n + 1)` grid of points `(i, j)`: each as its corners
+/// counterclockwise, then the midsides of the edges 1-2, 2-3, 3-1 (the order of Nastran's CTRIA6,
+/// Abaqus's and CalculiX's S6 and STRI65, and Gmsh's 6-node triangle).
+pub fn tri6_cells(n: usize) -> Vec<[(usize, usize); 6]> {
+    let mut out = Vec::with_capacity(2 * n * n);
+    for j in 0..n {
+        for i in 0..n {
+            let (a, b) = (2 * i, 2 * j);
+            out.push([
+                (a, b),
+                (a + 2, b),
+                (a + 2, b + 2),
+                (a + 1, b),
+                (a + 2, b + 1),
+                (a + 1, b + 1),
+            ]);
+            out.push([
+                (a, b),
+                (a + 2, b + 2),
+                (a, b + 2),
+                (a + 1, b + 1),
+                (a + 1, b + 2),
+                (a, b + 1),
+            ]);
+        }
+    }
+    out
+}
+
 /// The points of an `nx x ny` mesh of 8-node quadrilaterals on a `(2 nx + 1) x (2 ny + 1)` grid:
 /// The eight corner node ids of brick `(i, j, k)` of a structured grid numbered by `id`, in
 /// Abaqus's and Nastran's order (the bottom face counter-clockwise, then the top), as an element
