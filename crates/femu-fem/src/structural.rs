@@ -643,21 +643,28 @@ impl StructuralElement {
             }
             StructuralKind::Bushing(_) => 0.0,
             StructuralKind::Shell(s) => {
-                // the two triangles of the quadrilateral
-                let x = |i: usize| coords[self.nodes[i]];
-                let tri = |a: V3, b: V3, c: V3| 0.5 * norm(cross(sub(b, a), sub(c, a)));
-                let area = match self.nodes.len() {
-                    8 => crate::shell8::area8(&std::array::from_fn::<_, 8, _>(x)),
-                    6 => crate::shell::SIX_NODE_TRIANGLES
-                        .iter()
-                        .map(|t| tri(x(t[0]), x(t[1]), x(t[2])))
-                        .sum(),
-                    4 => tri(x(0), x(1), x(2)) + tri(x(0), x(2), x(3)),
-                    _ => tri(x(0), x(1), x(2)),
-                };
-                (s.rho * s.t + s.nsm) * area
+                (s.rho * s.t + s.nsm) * self.shell_area(coords).unwrap_or(0.0)
             }
         }
+    }
+
+    /// A shell's mid-surface area (a quadrilateral's as its two triangles, a six-node triangle's
+    /// as its four, an 8-node shell's by its own rule); `None` for an element that is not a shell.
+    pub fn shell_area(&self, coords: &[[f64; 3]]) -> Option<f64> {
+        if !matches!(self.kind, StructuralKind::Shell(_)) {
+            return None;
+        }
+        let x = |i: usize| coords[self.nodes[i]];
+        let tri = |a: V3, b: V3, c: V3| 0.5 * norm(cross(sub(b, a), sub(c, a)));
+        Some(match self.nodes.len() {
+            8 => crate::shell8::area8(&std::array::from_fn::<_, 8, _>(x)),
+            6 => crate::shell::SIX_NODE_TRIANGLES
+                .iter()
+                .map(|t| tri(x(t[0]), x(t[1]), x(t[2])))
+                .sum(),
+            4 => tri(x(0), x(1), x(2)) + tri(x(0), x(2), x(3)),
+            _ => tri(x(0), x(1), x(2)),
+        })
     }
 
     /// A shell's matrices with their parts scaled (`crate::shell::Scales`); a membrane's on its

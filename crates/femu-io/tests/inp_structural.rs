@@ -440,17 +440,7 @@ fn fv16(n: usize) -> String {
 
 /// [`fv16`] with each square cut into two S3 when `triangles`.
 fn fv16_of(n: usize, triangles: bool) -> String {
-    let mut s = String::from("*HEADING\nfv16\n*NODE\n");
-    for j in 0..=n {
-        for i in 0..=n {
-            s.push_str(&format!(
-                "{}, {}, {}, 0.\n",
-                1 + i + (n + 1) * j,
-                10.0 * i as f64 / n as f64,
-                10.0 * j as f64 / n as f64
-            ));
-        }
-    }
+    let mut s = fv16_nodes(n);
     s.push_str(if triangles {
         "*ELEMENT, TYPE=S3, ELSET=PLATE\n"
     } else {
@@ -483,9 +473,32 @@ fn fv16_of(n: usize, triangles: bool) -> String {
             }
         }
     }
+    fv16_end(s, n)
+}
+
+/// FV16's heading and the `(m + 1) x (m + 1)` grid of its 10 m square plate, node `1 + i + (m +
+/// 1) j` at `(10 i / m, 10 j / m, 0)`.
+fn fv16_nodes(m: usize) -> String {
+    let mut s = String::from("*HEADING\nfv16\n*NODE\n");
+    for j in 0..=m {
+        for i in 0..=m {
+            s.push_str(&format!(
+                "{}, {}, {}, 0.\n",
+                1 + i + (m + 1) * j,
+                10.0 * i as f64 / m as f64,
+                10.0 * j as f64 / m as f64
+            ));
+        }
+    }
+    s
+}
+
+/// FV16's deck after its elements (set PLATE) on the grid of [`fv16_nodes`]: the edge x = 0
+/// clamped, steel, 50 mm, and a `*FREQUENCY` step of six modes.
+fn fv16_end(mut s: String, m: usize) -> String {
     s.push_str("*NSET, NSET=CLAMP\n");
-    for j in 0..=n {
-        s.push_str(&format!("{}\n", g(0, j)));
+    for j in 0..=m {
+        s.push_str(&format!("{}\n", 1 + (m + 1) * j));
     }
     s.push_str(
         "*MATERIAL, NAME=STEEL\n*ELASTIC\n2.e11, 0.3\n*DENSITY\n8000.\n\
@@ -1443,32 +1456,13 @@ fn nonstructural_mass_adds_mass_alone() {
 fn fv16_six(n: usize, ty: &str) -> String {
     let m = 2 * n;
     let g = |i: usize, j: usize| 1 + i + (m + 1) * j;
-    let mut s = String::from("*HEADING\nfv16 six-node triangles\n*NODE\n");
-    for j in 0..=m {
-        for i in 0..=m {
-            s.push_str(&format!(
-                "{}, {:?}, {:?}, 0.\n",
-                g(i, j),
-                10.0 * i as f64 / m as f64,
-                10.0 * j as f64 / m as f64
-            ));
-        }
-    }
+    let mut s = fv16_nodes(m);
     s.push_str(&format!("*ELEMENT, TYPE={ty}, ELSET=PLATE\n"));
     for (id, cell) in femu_testkit::tri6_cells(n).iter().enumerate() {
         let t: Vec<String> = cell.iter().map(|&(i, j)| g(i, j).to_string()).collect();
         s.push_str(&format!("{}, {}\n", id + 1, t.join(", ")));
     }
-    s.push_str("*NSET, NSET=CLAMP\n");
-    for j in 0..=m {
-        s.push_str(&format!("{}\n", g(0, j)));
-    }
-    s.push_str(
-        "*MATERIAL, NAME=STEEL\n*ELASTIC\n2.e11, 0.3\n*DENSITY\n8000.\n\
-         *SHELL SECTION, ELSET=PLATE, MATERIAL=STEEL\n0.05\n*BOUNDARY\nCLAMP, 1, 6\n\
-         *STEP\n*FREQUENCY\n6\n*END STEP\n",
-    );
-    s
+    fv16_end(s, m)
 }
 
 /// Six-node triangles from a deck (CalculiX's S6, Abaqus's STRI65), built as four three-node

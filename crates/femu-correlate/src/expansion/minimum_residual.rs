@@ -513,16 +513,11 @@ impl Expander<'_> {
                 // rotations, a bar's torsion without inertia) would make the metric M^-1
                 // infinite there; it takes the smallest positive mass instead, as
                 // `residual_metric` does (docs/MATH.md, "The residual metric on massless DOFs")
-                let floor = mdiag
-                    .iter()
-                    .copied()
-                    .filter(|v| *v > 0.0)
-                    .fold(f64::INFINITY, f64::min);
-                if floor.is_finite() {
+                if let Ok(floored) = residual_metric(self.m) {
                     for (r, d) in mdiag.iter_mut().enumerate() {
                         if *d <= 0.0 {
-                            *d = floor;
-                            t.add_triplet(r, r, floor);
+                            *d = floored[r];
+                            t.add_triplet(r, r, floored[r]);
                         }
                     }
                 }

@@ -4,39 +4,10 @@
 //! PROPORTIONAL`, Abaqus's default) or to their volume (`VOLUME PROPORTIONAL`: area times
 //! thickness, length times area).
 
+use super::orientation::dist;
 use super::structural::at_err;
 use super::*;
 use femu_fem::structural::StructuralKind;
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// The area of a shell of nodes `x` (a triangle, a six-node one as its four triangles, a
-/// quadrilateral by its diagonals, an 8-node shell by its own rule).
-fn shell_area(x: &[[f64; 3]]) -> f64 {
-    match x.len() {
-        3 => 0.5 * norm(cross(sub(x[1], x[0]), sub(x[2], x[0]))),
-        6 => femu_fem::shell::SIX_NODE_TRIANGLES
-            .iter()
-            .map(|t| shell_area(&[x[t[0]], x[t[1]], x[t[2]]]))
-            .sum(),
-        8 => femu_fem::shell8::area8(x),
-        _ => 0.5 * norm(cross(sub(x[2], x[0]), sub(x[3], x[1]))),
-    }
-}
 
 impl InpDeck {
     /// The deck's non-structural masses added to its shells' and beams' `nsm`.
@@ -81,22 +52,14 @@ impl InpDeck {
                 let x: Vec<[f64; 3]> = el.nodes.iter().map(|n| coords[*n]).collect();
                 let (size, mass, volume) = match &el.kind {
                     StructuralKind::Shell(s) => {
-                        let a = shell_area(&x);
+                        let a = el.shell_area(&coords).expect("a shell");
                         (a, s.rho * s.t * a, s.t * a)
                     }
                     StructuralKind::Beam(b) => {
-                        let len = norm(sub(
-                            [
-                                x[1][0] + b.offsets[1][0],
-                                x[1][1] + b.offsets[1][1],
-                                x[1][2] + b.offsets[1][2],
-                            ],
-                            [
-                                x[0][0] + b.offsets[0][0],
-                                x[0][1] + b.offsets[0][1],
-                                x[0][2] + b.offsets[0][2],
-                            ],
-                        ));
+                        let end = |k: usize| -> [f64; 3] {
+                            std::array::from_fn(|c| x[k][c] + b.offsets[k][c])
+                        };
+                        let len = dist(end(1), end(0));
                         let area = match &b.taper {
                             Some(end) => 0.5 * (b.section.area + end.area),
                             None => b.section.area,
@@ -104,7 +67,7 @@ impl InpDeck {
                         (len, b.rho * area * len, area * len)
                     }
                     StructuralKind::Rod(r) => {
-                        let len = norm(sub(x[1], x[0]));
+                        let len = dist(x[1], x[0]);
                         (len, r.rho * r.area * len, r.area * len)
                     }
                     other => {

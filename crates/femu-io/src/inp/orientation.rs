@@ -50,12 +50,18 @@ type Points = ([f64; 3], [f64; 3], Option<[f64; 3]>);
 /// A frame: its axes `e1, e2, e3` (rows, unit, right-handed) in the global frame.
 pub(super) type Frame = [[f64; 3]; 3];
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+pub(super) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// The distance between two points.
+pub(super) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let d = sub(a, b);
+    dot(d, d).sqrt()
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

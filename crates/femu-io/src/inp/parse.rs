@@ -963,11 +963,10 @@ impl DeckBuilder {
         Ok(())
     }
 
-    /// `*RIGID BODY, REF NODE=`: the nodes of its `ELSET`'s elements and of its `TIE NSET` (CalculiX's
-    /// `NSET`) follow
-    /// the reference node rigidly (all their DOFs, a kinematic coupling's), those of its `PIN
-    /// NSET` in their translations alone (Abaqus's rigid body of deformable elements; docs/MATH.md,
-    /// "Multipoint constraints").
+    /// `*RIGID BODY, REF NODE=`: the nodes of its `ELSET`'s elements and of its `TIE NSET`
+    /// (CalculiX's `NSET`) follow the reference node rigidly (all their DOFs, a kinematic
+    /// coupling's), those of its `PIN NSET` in their translations alone (Abaqus's rigid body of
+    /// deformable elements; docs/MATH.md, "Multipoint constraints").
     fn rigid_body_keyword(
         &mut self,
         params: &HashMap<String, String>,

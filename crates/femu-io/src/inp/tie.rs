@@ -4,6 +4,7 @@
 //! isoparametric map ([`femu_fem::locate::inverse_map`]; the element's shape functions of the
 //! nodes off the face vanish on it). Abaqus's face labels (`S1`-`S6`) by element type.
 
+use super::orientation::dist;
 use super::structural::at_err;
 use super::*;
 use femu_fem::element::ElementKind;
@@ -58,10 +59,6 @@ fn face_nodes(kind: ElementKind, label: &str) -> Option<&'static [usize]> {
 struct Face {
     element: usize,
     nodes: Vec<usize>,
-}
-
-fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
 impl InpDeck {
