@@ -2014,6 +2014,92 @@ ENDDATA
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Modal damping as each mode's complex stiffness: Nastran's `PARAM,KDAMP,-1` with a `TABDMP1`
+/// (CRIT, 0.01 at 0 Hz rising to 0.05 at 20 Hz) and Abaqus' `*MODAL DAMPING, STRUCTURAL` on a
+/// spring under a mass. Measured as `1 / (k (1 + i g) - w^2 m)` written by hand, `g` twice the
+/// table's ratio at the natural frequency (QRG PARAM,KDAMP: the viscous damping `g w_i m_i` goes
+/// into the stiffness as `g`), or Abaqus' structural factor: femu frf reproduces it to 1e-9 of the
+/// peak, where the same table as viscous damping (no KDAMP) is off by more than 1e-4 of it away
+/// from resonance; femu modes --damped gives the mode the root `i w_n sqrt(1 + i g)` (damping
+/// `-2 Re p / Im p`, to 1e-9).
+#[test]
+fn modal_damping_as_complex_stiffness() {
+    let dir = std::env::temp_dir().join(format!("femu-cli-kdamp-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (k, m): (f64, f64) = (3e4, 10.0);
+    let wn = (k / m).sqrt();
+    let fn_hz = wn / (2.0 * std::f64::consts::PI);
+    // the table's ratio at the natural frequency, twice it the loss factor
+    let g = 2.0 * (0.01 + (0.05 - 0.01) * fn_hz / 20.0);
+    let nastran = |kdamp: &str| {
+        format!(
+            "SOL 111\nCEND\nSPC = 1\nSDAMPING = 4\nBEGIN BULK\n{kdamp}GRID,2,,0.,0.,0.\n\
+             CELAS2,7,3.+4,2,3\nCONM2,9,2,,10.\nSPC1,1,12,2\nTABDMP1,4,CRIT\n,0.,0.01,20.,0.05,ENDT\nENDDATA\n"
+        )
+    };
+    std::fs::write(dir.join("kdamp.bdf"), nastran("PARAM,KDAMP,-1\n")).unwrap();
+    std::fs::write(dir.join("viscous.bdf"), nastran("")).unwrap();
+    std::fs::write(
+        dir.join("structural.inp"),
+        format!(
+            "*NODE\n2, 0., 0., 0.\n*ELEMENT, TYPE=SPRING1, ELSET=S\n7, 2\n*SPRING, ELSET=S\n3\n3.e4\n\
+             *ELEMENT, TYPE=MASS, ELSET=M\n9, 2\n*MASS, ELSET=M\n10.\n*BOUNDARY\n2, 1, 2\n\
+             *STEP\n*FREQUENCY\n1\n*MODAL DAMPING, STRUCTURAL\n1, 1, {g}\n*END STEP\n"
+        ),
+    )
+    .unwrap();
+    let (min, step, count) = (1.0, 0.25, 80usize);
+    let h = oscillator((min, step, count), |w| (k - w * w * m, g * k));
+    write_frf_uff(
+        &dir.join("frf.uff"),
+        &[(2, 3)],
+        2,
+        min,
+        step,
+        std::slice::from_ref(&h),
+    );
+    let frf = |deck: &str| {
+        let out = femu()
+            .args(["frf", dir.join(deck).to_str().unwrap()])
+            .arg(dir.join("frf.uff"))
+            .args(["--uff"])
+            .arg(dir.join("model.uff"))
+            .arg("--json")
+            .arg(dir.join("frf.json"))
+            .output()
+            .unwrap();
+        succeeded(&out);
+        let notes = json_of(dir.join("frf.json"))["notes"].to_string();
+        (file_deviation(&dir.join("model.uff"), &h), notes)
+    };
+    for deck in ["kdamp.bdf", "structural.inp"] {
+        let ((peak, err), notes) = frf(deck);
+        assert!(err < 1e-9 * peak, "{deck}: {err:e} against {peak:e}");
+        assert!(notes.contains("complex stiffness"), "{deck}: {notes}");
+    }
+    let ((peak, err), notes) = frf("viscous.bdf");
+    assert!(err > 1e-4 * peak, "{err:e} against {peak:e}");
+    assert!(notes.contains("as viscous ratios"), "{notes}");
+    // the damped mode: p = i w_n sqrt(1 + i g) = i w_n (a + i b)
+    let a = ((1.0 + (1.0 + g * g).sqrt()) / 2.0).sqrt();
+    let b = g / (2.0 * a);
+    for deck in ["kdamp.bdf", "structural.inp"] {
+        let json = dir.join("modes.json");
+        let out = femu()
+            .args(["modes", dir.join(deck).to_str().unwrap(), "--count", "1"])
+            .args(["--damped", "--json", json.to_str().unwrap()])
+            .output()
+            .unwrap();
+        succeeded(&out);
+        let d = &json_of(&json)["damped"][0];
+        let got = d["damping"].as_f64().unwrap();
+        assert!((got - 2.0 * b / a).abs() < 1e-9, "{deck}: {d}");
+        let f = d["frequency_hz"].as_f64().unwrap();
+        assert!((f - fn_hz * a).abs() < 1e-9 * fn_hz, "{deck}: {d}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A 10-element C3D8 cantilever (`bar.inp`, element sets ROOT_HALF and TIP_HALF) and the same
 /// with its root half 20 % softer (`softer.inp`, material SOFT), in a new folder named by `tag`;
 /// `damping` (a `*DAMPING` line or nothing) is added to both halves' materials of the softer one,

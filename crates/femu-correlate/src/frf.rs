@@ -40,6 +40,11 @@ pub enum Damping {
     },
     /// A structural loss factor `eta` (`K (1 + i eta)`): `g_r = eta lambda_r`.
     LossFactor(f64),
+    /// A structural loss factor per mode, each mode's complex stiffness `lambda_r (1 + i eta_r)`:
+    /// `g_r = eta_r lambda_r` (Nastran's modal damping table under `PARAM,KDAMP,-1`, Abaqus'
+    /// `*MODAL DAMPING, STRUCTURAL`). The residual flexibility of the modes left out is not
+    /// softened: their loss factors are not known.
+    LossFactors(Vec<f64>),
 }
 
 impl std::fmt::Display for Damping {
@@ -51,6 +56,7 @@ impl std::fmt::Display for Damping {
                 write!(f, "Rayleigh, C = {alpha:e} M + {beta:e} K")
             }
             Damping::LossFactor(eta) => write!(f, "structural loss factor {eta}"),
+            Damping::LossFactors(eta) => write!(f, "structural loss factors per mode {eta:?}"),
         }
     }
 }
@@ -64,6 +70,7 @@ impl Damping {
             Damping::Ratios(z) => 2.0 * z[r] * omega * w,
             Damping::Rayleigh { alpha, beta } => (alpha + beta * lambda) * w,
             Damping::LossFactor(eta) => eta * lambda,
+            Damping::LossFactors(eta) => eta[r] * lambda,
         }
     }
 
@@ -74,11 +81,16 @@ impl Damping {
         };
         let values: Vec<f64> = match self {
             Damping::Ratio(z) => vec![*z],
-            Damping::Ratios(z) => {
+            Damping::Ratios(z) | Damping::LossFactors(z) => {
                 if z.len() != modes {
                     return Err(bad(format!(
-                        "{} ratios for {modes} modes: give one per mode",
-                        z.len()
+                        "{} {} for {modes} modes: give one per mode",
+                        z.len(),
+                        if matches!(self, Damping::Ratios(_)) {
+                            "ratios"
+                        } else {
+                            "loss factors"
+                        }
                     )));
                 }
                 z.clone()
@@ -593,10 +605,10 @@ pub fn direct_frf(
         Damping::LossFactor(eta) => (*eta, 0.0, 0.0),
         Damping::Rayleigh { alpha, beta } => (0.0, *alpha, *beta),
         Damping::Ratio(z) if *z == 0.0 => (0.0, 0.0, 0.0),
-        Damping::Ratio(_) | Damping::Ratios(_) => {
+        Damping::Ratio(_) | Damping::Ratios(_) | Damping::LossFactors(_) => {
             return Err(CorrelateError::Invalid {
                 what: "damping",
-                reason: "modal damping ratios have no damping matrix: the direct route takes a loss factor or Rayleigh coefficients (and the model's own dampers); ratios are for the modal route".into(),
+                reason: "modal damping (ratios or loss factors per mode) has no damping matrix: the direct route takes a loss factor or Rayleigh coefficients (and the model's own dampers); modal damping is for the modal route".into(),
             });
         }
     };

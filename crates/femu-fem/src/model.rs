@@ -46,6 +46,9 @@ pub struct Model {
     modal_damping: Option<ModalDampingTable>,
     /// The modes' damping ratios by mode number (Abaqus' and CalculiX's `*MODAL DAMPING`).
     mode_ratios: Vec<(usize, usize, f64)>,
+    /// How the modal damping acts: viscous (`false`), or as each mode's complex stiffness
+    /// (`true`: Nastran's `PARAM,KDAMP,-1`, Abaqus' `*MODAL DAMPING, STRUCTURAL`).
+    modal_damping_structural: bool,
 }
 
 /// How a modal damping table states each mode's damping (Nastran `TABDMP1`'s `TYPE`).
@@ -201,6 +204,7 @@ impl Model {
             uniform_damping: None,
             modal_damping: None,
             mode_ratios: Vec::new(),
+            modal_damping_structural: false,
         })
     }
 
@@ -280,6 +284,22 @@ impl Model {
     /// The modes' damping table, if any ([`Model::set_modal_damping`]).
     pub fn modal_damping(&self) -> Option<&ModalDampingTable> {
         self.modal_damping.as_ref()
+    }
+
+    /// Says how the modal damping (the table of [`Model::set_modal_damping`] or the ratios of
+    /// [`Model::set_mode_ratios`]) acts: `false` (the default) as viscous damping, `2 zeta_r
+    /// omega_r` in mode `r`'s equation; `true` as its complex stiffness, `lambda_r (1 + i g_r)`
+    /// with the loss factor `g_r = 2 zeta_r` (Nastran's `PARAM,KDAMP,-1`, Abaqus'
+    /// `*MODAL DAMPING, STRUCTURAL`; docs/MATH.md, "Frequency
+    /// responses"). The two agree at each mode's resonance and differ away from it.
+    pub fn set_modal_damping_structural(&mut self, structural: bool) {
+        self.modal_damping_structural = structural;
+    }
+
+    /// Whether the modal damping acts as each mode's complex stiffness
+    /// ([`Model::set_modal_damping_structural`]).
+    pub fn modal_damping_structural(&self) -> bool {
+        self.modal_damping_structural
     }
 
     /// Gives the whole model the damping its deck states ([`UniformDamping`]); `None` removes it.

@@ -1055,6 +1055,18 @@ fn material_structural_damping_reaches_solids_and_shells() {
         ratios,
         [0.02, 0.02, 0.02, 0.0, 0.04, 0.0].map(Some).to_vec()
     );
+    assert!(!modal.modal_damping_structural());
+    // STRUCTURAL: a structural damping factor s per mode, the loss factor 2 zeta (kept as s / 2)
+    let structural = read(
+        "*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n*SHELL SECTION, ELSET=SKIN, MATERIAL=STEEL\n0.01\n\
+         *MODAL DAMPING, STRUCTURAL\n1, 2, 0.04\n*MODAL DAMPING, STRUCTURAL\n4, , 0.1\n",
+    )
+    .unwrap()
+    .to_model()
+    .unwrap();
+    assert!(structural.modal_damping_structural());
+    let ratios: Vec<Option<f64>> = (1..=5).map(|r| structural.mode_ratio(r)).collect();
+    assert_eq!(ratios, [0.02, 0.02, 0.0, 0.05, 0.0].map(Some).to_vec());
     let rayleigh = read(
         "*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n*SHELL SECTION, ELSET=SKIN, MATERIAL=STEEL\n0.01\n\
          *MODAL DAMPING, RAYLEIGH\n, , 2., 1e-6\n",
@@ -1071,6 +1083,16 @@ fn material_structural_damping_reaches_solids_and_shells() {
     );
     for (rest, line, says) in [
         ("*MODAL DAMPING\n3, 1, 0.02\n", 22, "end before they start"),
+        (
+            "*MODAL DAMPING\n1, 3, 0.02\n*MODAL DAMPING, STRUCTURAL\n4, 5, 0.04\n",
+            24,
+            "STRUCTURAL damping here and viscous damping at d.inp:22",
+        ),
+        (
+            "*MODAL DAMPING, RAYLEIGH, STRUCTURAL\n, , 2., 1e-6\n",
+            22,
+            "RAYLEIGH and STRUCTURAL",
+        ),
         ("*MODAL DAMPING\n1, 3, -0.02\n", 22, "at least 0"),
         (
             "*MODAL DAMPING, DEFINITION=FREQUENCY RANGE\n1., 100., 0.02\n",

@@ -2173,8 +2173,9 @@ ENDDATA
 /// discontinuity, `g / 2` for TYPE G, `1 / (2 Q)` for Q. A normal modes subcase without SDAMPING
 /// before a response subcase with one (SOL 146's layout) takes the response's table; two subcases
 /// that select different tables are refused. Refused with card and line: an SDAMPING
-/// that selects no table, a TYPE that is not G, CRIT or Q, frequencies that go up and down,
-/// `PARAM,KDAMP,-1` with a G table (complex modal stiffness, not built).
+/// that selects no table, a TYPE that is not G, CRIT or Q, frequencies that go up and down, a
+/// KDAMP that is not a value. `PARAM,KDAMP` says how the table acts: -1 (MSC), OFF (Autodesk)
+/// and YES (OptiStruct) as each mode's complex stiffness, 1, ON, NO or none as viscous damping.
 #[test]
 fn sdamping_selects_a_modal_damping_table() {
     use femu_fem::model::ModalDampingUnits;
@@ -2209,6 +2210,24 @@ fn sdamping_selects_a_modal_damping_table() {
     assert!(near(g.model.modal_damping().unwrap().ratio_at(50.0), 0.02));
     let q = read("TABDMP1,6,Q\n,0.,25.,100.,25.,ENDT\n", "SDAMPING = 6\n").unwrap();
     assert!(near(q.model.modal_damping().unwrap().ratio_at(50.0), 0.02));
+    // KDAMP: how the table acts
+    for (kdamp, structural) in [
+        ("", false),
+        ("PARAM,KDAMP,1\n", false),
+        ("PARAM,KDAMP,ON\n", false),
+        ("PARAM,KDAMP,NO\n", false),
+        ("PARAM,KDAMP,-1\n", true),
+        ("PARAM,KDAMP,OFF\n", true),
+        ("PARAM,KDAMP,YES\n", true),
+    ] {
+        let d = read(
+            &format!("{kdamp}TABDMP1,6,CRIT\n,0.,0.02,ENDT\n"),
+            "SDAMPING = 6\n",
+        )
+        .unwrap();
+        assert_eq!(d.model.modal_damping_structural(), structural, "{kdamp}");
+        assert!(near(d.model.modal_damping().unwrap().ratio_at(50.0), 0.02));
+    }
     // a table the case control does not select is not the model's
     let unselected = read("TABDMP1,6\n,0.,0.04,100.,0.04,ENDT\n", "").unwrap();
     assert!(unselected.model.modal_damping().is_none());
@@ -2250,10 +2269,10 @@ fn sdamping_selects_a_modal_damping_table() {
             "go up and down",
         ),
         (
-            "PARAM,KDAMP,-1\nTABDMP1,6\n,0.,0.04,ENDT\n",
+            "PARAM,KDAMP,SOME\nTABDMP1,6\n,0.,0.04,ENDT\n",
             "SDAMPING = 6\n",
             "PARAM,KDAMP",
-            "complex stiffness",
+            "is not an integer",
         ),
     ] {
         let text = deck(table, sdamping);

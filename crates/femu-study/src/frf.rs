@@ -300,32 +300,55 @@ fn deck_group_loss_factors(
     Ok(FrfDamping::GroupLossFactors { rest, groups })
 }
 
-/// The modes' damping ratios the deck states, with a note: Nastran's `SDAMPING` table at each
-/// mode's frequency (`hz`), or Abaqus' and CalculiX's `*MODAL DAMPING` by mode number (a mode in
-/// no range undamped); `None` when it states neither.
-pub(crate) fn deck_mode_ratios(
+/// The modes' damping the deck states, with a note: Nastran's `SDAMPING` table at each mode's
+/// frequency (`hz`), or Abaqus' and CalculiX's `*MODAL DAMPING` by mode number (a mode in no
+/// range undamped), as viscous ratios ([`Damping::Ratios`]) or, where the deck makes it each
+/// mode's complex stiffness (`PARAM,KDAMP,-1`, `*MODAL DAMPING, STRUCTURAL`:
+/// [`femu_fem::model::Model::modal_damping_structural`]), as loss factors `2 zeta`
+/// ([`Damping::LossFactors`]); `None` when it states neither.
+pub(crate) fn deck_modal_damping(
     model: &femu_fem::model::Model,
     hz: &[f64],
     notes: &mut Vec<String>,
-) -> Option<Vec<f64>> {
-    if let Some(table) = model.modal_damping() {
+) -> Option<Damping> {
+    let (ratios, source) = if let Some(table) = model.modal_damping() {
         let ratios: Vec<f64> = hz.iter().map(|f| table.ratio_at(*f)).collect();
-        notes.push(format!(
-            "damping: the deck's modal damping table (SDAMPING), each mode's ratio at its frequency ({:.4} to {:.4})",
-            ratios.iter().copied().fold(f64::INFINITY, f64::min),
-            ratios.iter().copied().fold(0.0, f64::max)
-        ));
-        return Some(ratios);
-    }
-    model.mode_ratio(1)?;
-    let ratios: Vec<f64> = (1..=hz.len())
-        .map(|r| model.mode_ratio(r).unwrap_or(0.0))
-        .collect();
-    notes.push(format!(
-        "damping: the deck's modal damping (*MODAL DAMPING) on modes 1 to {}, those it names with their ratio and the others undamped",
-        ratios.len()
-    ));
-    Some(ratios)
+        (
+            ratios,
+            "the deck's modal damping table (SDAMPING) at each mode's frequency".to_string(),
+        )
+    } else {
+        model.mode_ratio(1)?;
+        let ratios: Vec<f64> = (1..=hz.len())
+            .map(|r| model.mode_ratio(r).unwrap_or(0.0))
+            .collect();
+        (
+            ratios,
+            format!(
+                "the deck's modal damping (*MODAL DAMPING) on modes 1 to {}, those it names with their value and the others undamped",
+                hz.len()
+            ),
+        )
+    };
+    let structural = model.modal_damping_structural();
+    let values: Vec<f64> = if structural {
+        ratios.iter().map(|z| 2.0 * z).collect()
+    } else {
+        ratios
+    };
+    let (lo, hi) = values
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
+    notes.push(if structural {
+        format!("damping: {source}, as each mode's complex stiffness lambda (1 + i g) (KDAMP = -1, *MODAL DAMPING, STRUCTURAL), loss factors {lo:.4} to {hi:.4}")
+    } else {
+        format!("damping: {source}, as viscous ratios {lo:.4} to {hi:.4}")
+    });
+    Some(if structural {
+        Damping::LossFactors(values)
+    } else {
+        Damping::Ratios(values)
+    })
 }
 
 /// The test's identified damping on the model modes it pairs with (MAC pairing with the
@@ -1336,7 +1359,7 @@ fn modal_route(
     };
     let mut from_deck = deck_damping(request, &model.model, notes);
     if !request.names_damping()
-        && let Some(ratios) = deck_mode_ratios(&model.model, &modes.frequencies_hz(), notes)
+        && let Some(modal) = deck_modal_damping(&model.model, &modes.frequencies_hz(), notes)
     {
         if from_deck.is_some() {
             return Err(StudyError::invalid(
@@ -1344,7 +1367,7 @@ fn modal_route(
                 "the deck gives both a damping of the whole model (PARAM,G or ALPHA1/ALPHA2, or *MODAL DAMPING, RAYLEIGH) and modal damping ratios (SDAMPING's table, or *MODAL DAMPING): Nastran adds them, femu takes one; give --damping-ratio, --loss-factor or --rayleigh",
             ));
         }
-        from_deck = Some(Damping::Ratios(ratios));
+        from_deck = Some(modal);
     }
     let by_default = from_deck.is_none() && !request.names_damping();
     let damping = match (&request.damping_from, from_deck) {

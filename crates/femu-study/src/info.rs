@@ -98,11 +98,16 @@ fn damping_line(s: &mut String, model: &femu_fem::model::Model) {
     if let Some(t) = model.modal_damping() {
         let _ = writeln!(
             s,
-            "modal damping table (SDAMPING): {} points, {:?} from {} to {} Hz (femu frf's modal superposition uses it when given no damping)",
+            "modal damping table (SDAMPING): {} points, {:?} from {} to {} Hz{} (femu frf's modal superposition uses it when given no damping)",
             t.points.len(),
             t.units,
             t.points.first().map_or(0.0, |p| p.0),
-            t.points.last().map_or(0.0, |p| p.0)
+            t.points.last().map_or(0.0, |p| p.0),
+            if model.modal_damping_structural() {
+                ", as each mode's complex stiffness (KDAMP = -1)"
+            } else {
+                ""
+            }
         );
     }
     let d = model.element_damping();

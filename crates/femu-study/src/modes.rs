@@ -350,12 +350,16 @@ fn damped_in(
             diagonal(&mut projected.viscous, &|r| alpha + beta * values[r]);
         }
     }
-    if let Some(ratios) =
-        crate::frf::deck_mode_ratios(&loaded.model, &modes.frequencies_hz(), notes)
-    {
-        diagonal(&mut projected.viscous, &|r| {
-            2.0 * ratios[r] * values[r].max(0.0).sqrt()
-        });
+    match crate::frf::deck_modal_damping(&loaded.model, &modes.frequencies_hz(), notes) {
+        Some(femu_correlate::frf::Damping::Ratios(ratios)) => {
+            diagonal(&mut projected.viscous, &|r| {
+                2.0 * ratios[r] * values[r].max(0.0).sqrt()
+            });
+        }
+        Some(femu_correlate::frf::Damping::LossFactors(g)) => {
+            diagonal(&mut projected.structural, &|r| g[r] * values[r]);
+        }
+        _ => {}
     }
     if projected.structural.is_none() && projected.viscous.is_none() {
         return Err(StudyError::invalid(

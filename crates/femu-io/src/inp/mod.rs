@@ -89,7 +89,10 @@ const READ: &[(&str, &[&str])] = &[
     ("ELASTIC", &["TYPE", "DEPENDENCIES", "MODULI"]),
     ("DENSITY", &["DEPENDENCIES"]),
     ("DAMPING", &["STRUCTURAL", "ALPHA", "BETA", "COMPOSITE"]),
-    ("MODAL DAMPING", &["RAYLEIGH", "MODAL", "DEFINITION"]),
+    (
+        "MODAL DAMPING",
+        &["RAYLEIGH", "MODAL", "DEFINITION", "STRUCTURAL"],
+    ),
     ("ORIENTATION", &["NAME", "SYSTEM", "DEFINITION"]),
     ("ROTARY INERTIA", &["ELSET"]),
     ("NONSTRUCTURAL MASS", &["ELSET", "UNITS", "DISTRIBUTION"]),
@@ -567,8 +570,11 @@ pub struct InpDeck {
     /// The damping of each material with a `*DAMPING` (by upper-case name): the `GE` and the
     /// Rayleigh damping of the elements of its sections.
     pub material_damping: BTreeMap<String, MaterialDamping>,
-    /// `*MODAL DAMPING` ranges: modes `first..=last` with a viscous damping ratio.
+    /// `*MODAL DAMPING` ranges: modes `first..=last` with a viscous damping ratio (with
+    /// `STRUCTURAL`, half the structural damping factor: see `modal_structural`).
     pub mode_ratios: Vec<(usize, usize, f64)>,
+    /// Whether the `*MODAL DAMPING` ranges are `STRUCTURAL` (each mode's complex stiffness).
+    pub modal_structural: bool,
     /// `*MODAL DAMPING, RAYLEIGH`: the modes' Rayleigh damping `(alpha, beta)`.
     pub modal_rayleigh: Option<(f64, f64)>,
     /// Plane-stress ply materials (`*ELASTIC, TYPE=LAMINA`) by upper-case name: for composite

@@ -165,6 +165,7 @@ impl InpDeck {
         model
             .set_mode_ratios(self.mode_ratios.clone())
             .map_err(|source| self.at_element(None, source))?;
+        model.set_modal_damping_structural(self.modal_structural);
         if let Some((alpha, beta)) = self.modal_rayleigh {
             model
                 .set_uniform_damping(Some(femu_fem::model::UniformDamping::Rayleigh {

@@ -121,6 +121,8 @@ struct DeckBuilder {
     materials: BTreeMap<String, Material>,
     material_damping: BTreeMap<String, super::MaterialDamping>,
     mode_ratios: Vec<(usize, usize, f64)>,
+    /// `*MODAL DAMPING, STRUCTURAL` (true) or viscous ranges (false), with the first block's line.
+    modal_structural: Option<(bool, Location)>,
     modal_rayleigh: Option<(f64, f64)>,
     laminae: BTreeMap<String, structural::Lamina>,
     orientations: Vec<orientation::OrientationCard>,
@@ -1732,9 +1734,34 @@ impl DeckBuilder {
                     )
                 })
         };
+        let structural = p.contains_key("STRUCTURAL");
         if p.contains_key("RAYLEIGH") {
+            if structural {
+                return Err(err(
+                    l,
+                    "*MODAL DAMPING: RAYLEIGH and STRUCTURAL on one block (give Rayleigh damping or structural damping factors per mode)".into(),
+                ));
+            }
             self.modal_rayleigh = Some((number(2, "alpha")?, number(3, "beta")?));
             return Ok(());
+        }
+        // Abaqus adds viscous and structural modal damping; femu takes one form for all modes
+        match &self.modal_structural {
+            Some((s, first)) if *s != structural => {
+                let name = |s: bool| if s { "STRUCTURAL" } else { "viscous" };
+                return Err(err(
+                    l,
+                    format!(
+                        "*MODAL DAMPING: {} damping here and {} damping at {}:{}: femu takes one form of modal damping (viscous ratios or structural damping factors)",
+                        name(structural),
+                        name(*s),
+                        first.path.display(),
+                        first.line
+                    ),
+                ));
+            }
+            Some(_) => {}
+            None => self.modal_structural = Some((structural, at(l))),
         }
         let mode = |i: usize, what: &str| -> Result<usize, IoError> {
             f.get(i)
@@ -1758,7 +1785,17 @@ impl DeckBuilder {
                 format!("*MODAL DAMPING: modes {first} to {last} end before they start"),
             ));
         }
-        self.mode_ratios.push((first, last, number(2, "ratio")?));
+        // a structural damping factor s is the loss factor 2 zeta: kept as zeta = s / 2
+        let value = number(
+            2,
+            if structural {
+                "structural damping factor"
+            } else {
+                "ratio"
+            },
+        )?;
+        self.mode_ratios
+            .push((first, last, if structural { value / 2.0 } else { value }));
         Ok(())
     }
 
@@ -2038,6 +2075,7 @@ impl DeckBuilder {
             materials: self.materials,
             material_damping: self.material_damping,
             mode_ratios: self.mode_ratios,
+            modal_structural: self.modal_structural.is_some_and(|(s, _)| s),
             modal_rayleigh: self.modal_rayleigh,
             laminae: self.laminae,
             orientations: self

@@ -671,9 +671,14 @@ fn param<'a>(
             s.alpha[usize::from(name == "ALPHA2")] = Some((v, c));
         }
         "KDAMP" => {
-            let v = c
-                .int(1, "KDAMP")?
-                .ok_or_else(|| c.err("KDAMP needs a value (1 or -1)".into()))?;
+            // MSC: 1 or -1; Autodesk: ON (1) or OFF (-1); OptiStruct: NO (1) or YES (-1)
+            let v = match c.field(1).to_ascii_uppercase().as_str() {
+                "ON" | "NO" => 1,
+                "OFF" | "YES" => -1,
+                _ => c
+                    .int(1, "KDAMP")?
+                    .ok_or_else(|| c.err("KDAMP needs a value (1 or -1)".into()))?,
+            };
             s.kdamp = Some((v, c));
         }
         "G" => {
@@ -910,8 +915,9 @@ fn formulation(
 /// method is selected: `(V1, V2, ND)` with the frequencies in Hz.
 /// The `TABDMP1` the case control's `SDAMPING` selects (QRG TABDMP1: `TID TYPE`, then pairs
 /// `f g` to `ENDT`, `SKIP` in either field dropping a pair; TYPE `G` (default), `CRIT` or `Q`).
-/// Nastran applies a `G` table as viscous damping unless `PARAM,KDAMP` is -1 (complex stiffness
-/// per mode), which femu does not build: refused.
+/// Nastran applies the table as viscous damping unless `PARAM,KDAMP` is -1, where each mode's
+/// stiffness becomes complex (`lambda (1 + i g)`, `g = 2 zeta`), which the caller sets on the
+/// model (`Model::set_modal_damping_structural`).
 fn modal_damping_table(
     sorted: &Sorted<'_>,
     sel: &case_control::Selected,
@@ -934,15 +940,6 @@ fn modal_damping_table(
             return Err(c.err(format!("{}: TYPE {other} is not G, CRIT or Q", c.field(0))));
         }
     };
-    if units == ModalDampingUnits::G
-        && let Some((k, p)) = sorted.kdamp
-        && k < 0
-    {
-        return Err(p.err(format!(
-            "KDAMP = {k} applies TABDMP1 {}'s G as complex stiffness of each mode, which femu does not build (its viscous form, KDAMP = 1, is Nastran's default)",
-            c.field(0)
-        )));
-    }
     // the pairs start on the first continuation (field 10 of the card, data field 8)
     let mut points = Vec::new();
     let mut i = 8;
@@ -1184,6 +1181,8 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
                 line: sel.line,
                 source,
             })?;
+        // QRG PARAM,KDAMP: -1 enters the modal damping as complex stiffness
+        model.set_modal_damping_structural(sorted.kdamp.is_some_and(|(k, _)| k < 0));
     }
     // QRG PARAM,COUPMASS: -1 (the default) lumped, > 0 coupled
     let (mass, coupmass) = match sorted.coupmass {
