@@ -14,7 +14,7 @@
 //! times (default 3) and its median printed.
 
 use femu::correlate::frf::{
-    Damping, DirectSystem, FrfOptions, ResponseKind, direct_frf, modal_frf,
+    Damping, DirectSystem, FrfOptions, ResponseKind, direct_frf, direct_frf_at_once, modal_frf,
     residual_flexibility_analysed, residual_flexibility_factored,
 };
 use femu::correlate::{Sensor, SensorLayout};
@@ -206,5 +206,28 @@ fn main() {
         "four lines {t_four:.3} s: {:.3} s per further line = {:.2} x the real LDL^T",
         (t_four - t_line) / 3.0,
         (t_four - t_line) / 3.0 / t_ldlt
+    );
+    // sixteen lines one at a time (each factorization all the threads) against several at once
+    let sixteen: Vec<f64> = (1..=16).map(|l| l as f64 * 0.06 * top_hz).collect();
+    let before = peak_mb();
+    let (t_one, one) = time(reps, || {
+        direct_frf_at_once(&system, &outputs, &inputs, &sixteen, &loss, Some(1)).unwrap()
+    });
+    let peak_one = peak_mb();
+    let (t_many, many) = time(reps, || {
+        direct_frf(&system, &outputs, &inputs, &sixteen, &loss).unwrap()
+    });
+    let same = one
+        .frf
+        .h
+        .iter()
+        .zip(&many.frf.h)
+        .map(|(a, b)| (a - b).norm_max() / a.norm_max())
+        .fold(0.0, f64::max);
+    println!(
+        "sixteen lines on {} threads: one at a time {t_one:.3} s, several at once {t_many:.3} s ({:.2} x; the same to {same:.1e}); peak RSS {before:.0} -> {peak_one:.0} -> {:.0} MB",
+        rayon::current_num_threads(),
+        t_one / t_many,
+        peak_mb()
     );
 }

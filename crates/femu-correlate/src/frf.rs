@@ -585,7 +585,8 @@ pub struct DirectFrf {
 ///
 /// `H(w) = C (K (1 + i eta) + i K_4 + i w (alpha M + beta K + C_d) - w^2 M)^-1 B^T`,
 ///
-/// one sparse complex `LU` per line on one symbolic analysis. `options.damping` is a loss factor
+/// one sparse complex `LU` per line on one symbolic analysis, several lines at once where the
+/// threads and the memory allow ([`direct_frf_at_once`]). `options.damping` is a loss factor
 /// `eta` or Rayleigh coefficients (or a zero ratio: none); modal ratios have no matrix and are
 /// refused. `system`'s dampers are added to it: they are the route's reason to be, damping that
 /// the modes do not diagonalise.
@@ -599,6 +600,27 @@ pub fn direct_frf(
     inputs: &SensorLayout,
     lines_hz: &[f64],
     options: &FrfOptions,
+) -> Result<DirectFrf, CorrelateError> {
+    direct_frf_at_once(system, outputs, inputs, lines_hz, options, None)
+}
+
+/// [`direct_frf`] with `at_once` lines factored and solved at the same time (each its own
+/// factorization, all on the one symbolic analysis); `None`: as many as the threads, no more
+/// than the lines, and no more than a quarter of the memory the system has available holds at
+/// three times a factor's size each (docs/SCALING.md, "Frequency responses"). One line at a
+/// time leaves each factorization all the threads (its supernodal tree and its fronts in
+/// parallel); several lines at once use the threads that a small model's factorization leaves
+/// idle. The results are the same either way.
+///
+/// # Errors
+/// As [`direct_frf`]; the first line's error in line order.
+pub fn direct_frf_at_once(
+    system: &DirectSystem<'_>,
+    outputs: &SensorLayout,
+    inputs: &SensorLayout,
+    lines_hz: &[f64],
+    options: &FrfOptions,
+    at_once: Option<usize>,
 ) -> Result<DirectFrf, CorrelateError> {
     use femu_sparse::complex::Combination;
     let (eta, alpha, beta) = match &options.damping {
@@ -650,9 +672,11 @@ pub fn direct_frf(
             forces[(*d, j)] += c64::new(*wgt, 0.0);
         }
     }
-    let mut h = Vec::with_capacity(lines_hz.len());
-    let mut backward_errors = Vec::with_capacity(lines_hz.len());
-    for (line, f) in lines_hz.iter().enumerate() {
+    let at_once = at_once
+        .unwrap_or_else(|| lines_at_once(comb.factor_len(), lines_hz.len()))
+        .clamp(1, lines_hz.len().max(1));
+    let solve_line = |line: usize| -> Result<(Mat<c64>, f64), CorrelateError> {
+        let f = lines_hz[line];
         let w = 2.0 * std::f64::consts::PI * f;
         let mut c = vec![c64::new(1.0, eta + w * beta), c64::new(-w * w, w * alpha)];
         if system.viscous.is_some() {
@@ -673,7 +697,7 @@ pub fn direct_frf(
         };
         let mut fac = comb.factor(&c).map_err(singular)?;
         let mut rhs = forces.clone();
-        backward_errors.push(fac.solve_in_place(rhs.as_mut()).map_err(singular)?);
+        let backward = fac.solve_in_place(rhs.as_mut()).map_err(singular)?;
         let s = options.kind.factor(w);
         let mut hl = Mat::<c64>::zeros(outputs.len(), inputs.len());
         for i in 0..outputs.len() {
@@ -686,7 +710,23 @@ pub fn direct_frf(
                 hl[(i, j)] = v * s;
             }
         }
-        h.push(hl);
+        Ok((hl, backward))
+    };
+    let mut h = Vec::with_capacity(lines_hz.len());
+    let mut backward_errors = Vec::with_capacity(lines_hz.len());
+    let all: Vec<usize> = (0..lines_hz.len()).collect();
+    for chunk in all.chunks(at_once) {
+        let solved: Vec<Result<(Mat<c64>, f64), CorrelateError>> = if chunk.len() == 1 {
+            vec![solve_line(chunk[0])]
+        } else {
+            use rayon::prelude::*;
+            chunk.par_iter().map(|&l| solve_line(l)).collect()
+        };
+        for r in solved {
+            let (hl, b) = r?;
+            h.push(hl);
+            backward_errors.push(b);
+        }
     }
     Ok(DirectFrf {
         frf: Frf {
@@ -696,6 +736,27 @@ pub fn direct_frf(
         },
         backward_errors,
     })
+}
+
+/// How many lines [`direct_frf_at_once`] factors at the same time by default: the threads, no
+/// more than `lines`, and no more than a quarter of the available memory holds at three times a
+/// factor of `factor_len` complex values each (the factor, and the fronts and updates of its
+/// elimination). Without `/proc/meminfo`, 4 GiB are taken as available.
+fn lines_at_once(factor_len: usize, lines: usize) -> usize {
+    let available = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("MemAvailable:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map_or(4.0 * 1024.0 * 1024.0 * 1024.0, |kb| kb * 1024.0);
+    let each = 3.0 * 16.0 * factor_len.max(1) as f64;
+    let by_memory = ((available / 4.0) / each).floor().max(1.0) as usize;
+    rayon::current_num_threads()
+        .min(lines)
+        .min(by_memory)
+        .max(1)
 }
 
 fn dot(a: &[c64], b: &[c64]) -> c64 {
