@@ -714,19 +714,10 @@ pub fn direct_frf_at_once(
     };
     let mut h = Vec::with_capacity(lines_hz.len());
     let mut backward_errors = Vec::with_capacity(lines_hz.len());
-    let all: Vec<usize> = (0..lines_hz.len()).collect();
-    for chunk in all.chunks(at_once) {
-        let solved: Vec<Result<(Mat<c64>, f64), CorrelateError>> = if chunk.len() == 1 {
-            vec![solve_line(chunk[0])]
-        } else {
-            use rayon::prelude::*;
-            chunk.par_iter().map(|&l| solve_line(l)).collect()
-        };
-        for r in solved {
-            let (hl, b) = r?;
-            h.push(hl);
-            backward_errors.push(b);
-        }
+    for r in map_lines(lines_hz.len(), at_once, solve_line) {
+        let (hl, b) = r?;
+        h.push(hl);
+        backward_errors.push(b);
     }
     Ok(DirectFrf {
         frf: Frf {
@@ -738,11 +729,37 @@ pub fn direct_frf_at_once(
     })
 }
 
-/// How many lines [`direct_frf_at_once`] factors at the same time by default: the threads, no
-/// more than `lines`, and no more than a quarter of the available memory holds at three times a
+/// `f` of each line `0..lines`, in line order, `at_once` lines at the same time (one after the
+/// other for 1; as the threads free up when `at_once` is the threads): the frequency-line loops of the direct route, of the forced expansion and of
+/// updating from FRFs, each line holding a factorization of its own while it runs.
+pub fn map_lines<T: Send>(
+    lines: usize,
+    at_once: usize,
+    f: impl Fn(usize) -> T + Sync + Send,
+) -> Vec<T> {
+    use rayon::prelude::*;
+    if at_once >= rayon::current_num_threads() && at_once > 1 {
+        // every thread may hold a line: no chunks, the lines stolen as threads free up
+        return (0..lines).into_par_iter().map(f).collect();
+    }
+    let all: Vec<usize> = (0..lines).collect();
+    let mut out = Vec::with_capacity(lines);
+    for chunk in all.chunks(at_once.max(1)) {
+        if chunk.len() == 1 {
+            out.push(f(chunk[0]));
+        } else {
+            let done: Vec<T> = chunk.par_iter().map(|&l| f(l)).collect();
+            out.extend(done);
+        }
+    }
+    out
+}
+
+/// How many frequency lines to factor at the same time ([`map_lines`]): the threads, no more
+/// than `lines`, and no more than a quarter of the available memory holds at three times a
 /// factor of `factor_len` complex values each (the factor, and the fronts and updates of its
 /// elimination). Without `/proc/meminfo`, 4 GiB are taken as available.
-fn lines_at_once(factor_len: usize, lines: usize) -> usize {
+pub fn lines_at_once(factor_len: usize, lines: usize) -> usize {
     let available = std::fs::read_to_string("/proc/meminfo")
         .ok()
         .and_then(|s| {

@@ -28,8 +28,8 @@ use crate::localise::{Localisation, SelectionRule};
 use crate::problem::{SparseColumn, UpdateModel};
 use faer::{Mat, c64};
 use femu_correlate::expansion::{DynamicStiffness, ForcedExpander};
+use femu_correlate::frf::{lines_at_once, map_lines};
 use femu_sparse::complex::Combination;
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Measured receptances at a model's free DOFs.
@@ -574,54 +574,52 @@ fn evaluate_output(
     let d = damping.matrix(up)?;
     let combination = combination_of(&sys.k, &sys.m, d.as_ref())?;
     let f = test.forces(n);
-    let per_line: Vec<Result<Evaluation, UpdateError>> = (0..test.omegas.len())
-        .into_par_iter()
-        .map(|l| {
-            let omega = test.omegas[l];
-            let a = damping.stiffness(omega);
-            let mut factor =
-                factor_line(&combination, a).map_err(|e| at_line(e.into(), l, omega))?;
-            let mut u = f.clone();
-            let mut backward_error = factor
-                .solve_in_place(u.as_mut())
-                .map_err(|e| at_line(e.into(), l, omega))?;
-            let h = &test.receptance[l];
-            let r = Mat::from_fn(h.nrows(), h.ncols(), |i, j| {
-                u[(test.measured[i], j)] - h[(i, j)]
-            });
-            let mut objective = 0.0;
+    let lines = test.omegas.len();
+    let at_once = lines_at_once(combination.factor_len(), lines);
+    let per_line: Vec<Result<Evaluation, UpdateError>> = map_lines(lines, at_once, |l| {
+        let omega = test.omegas[l];
+        let a = damping.stiffness(omega);
+        let mut factor = factor_line(&combination, a).map_err(|e| at_line(e.into(), l, omega))?;
+        let mut u = f.clone();
+        let mut backward_error = factor
+            .solve_in_place(u.as_mut())
+            .map_err(|e| at_line(e.into(), l, omega))?;
+        let h = &test.receptance[l];
+        let r = Mat::from_fn(h.nrows(), h.ncols(), |i, j| {
+            u[(test.measured[i], j)] - h[(i, j)]
+        });
+        let mut objective = 0.0;
+        for j in 0..r.ncols() {
+            for i in 0..r.nrows() {
+                objective += weights[l][(i, j)] * r[(i, j)].norm_sqr();
+            }
+        }
+        let (mut gram, mut num) = (Vec::new(), Vec::new());
+        if which != Columns::None {
             for j in 0..r.ncols() {
-                for i in 0..r.nrows() {
-                    objective += weights[l][(i, j)] * r[(i, j)].norm_sqr();
-                }
+                let uj: Vec<c64> = u.col(j).iter().copied().collect();
+                let v = derivative_columns(up, which, damping, omega, &uj)?;
+                let mut z = Mat::from_fn(n, v.len(), |i, c| v[c][i]);
+                backward_error = backward_error.max(
+                    factor
+                        .solve_in_place(z.as_mut())
+                        .map_err(|e| at_line(e.into(), l, omega))?,
+                );
+                // dH/dtheta = -[A^-1 (dA/dtheta) u]_a
+                let b = Mat::from_fn(r.nrows(), v.len(), |i, c| -z[(test.measured[i], c)]);
+                let rj: Vec<c64> = r.col(j).iter().copied().collect();
+                let w: Vec<f64> = (0..r.nrows()).map(|i| weights[l][(i, j)]).collect();
+                accumulate(&mut gram, &mut num, &b, &rj, &w);
             }
-            let (mut gram, mut num) = (Vec::new(), Vec::new());
-            if which != Columns::None {
-                for j in 0..r.ncols() {
-                    let uj: Vec<c64> = u.col(j).iter().copied().collect();
-                    let v = derivative_columns(up, which, damping, omega, &uj)?;
-                    let mut z = Mat::from_fn(n, v.len(), |i, c| v[c][i]);
-                    backward_error = backward_error.max(
-                        factor
-                            .solve_in_place(z.as_mut())
-                            .map_err(|e| at_line(e.into(), l, omega))?,
-                    );
-                    // dH/dtheta = -[A^-1 (dA/dtheta) u]_a
-                    let b = Mat::from_fn(r.nrows(), v.len(), |i, c| -z[(test.measured[i], c)]);
-                    let rj: Vec<c64> = r.col(j).iter().copied().collect();
-                    let w: Vec<f64> = (0..r.nrows()).map(|i| weights[l][(i, j)]).collect();
-                    accumulate(&mut gram, &mut num, &b, &rj, &w);
-                }
-            }
-            Ok(Evaluation {
-                objective,
-                gram,
-                num,
-                residuals: vec![r],
-                backward_error,
-            })
+        }
+        Ok(Evaluation {
+            objective,
+            gram,
+            num,
+            residuals: vec![r],
+            backward_error,
         })
-        .collect();
+    });
     total(per_line)
 }
 
@@ -643,41 +641,40 @@ fn evaluate_residue(
         None => ForcedExpander::new(&sys.k, &sys.m, &test.measured)?,
     };
     let f = test.forces(n);
-    let per_line: Vec<Result<Evaluation, UpdateError>> = (0..test.omegas.len())
-        .into_par_iter()
-        .map(|l| {
-            let a = damping.stiffness(test.omegas[l]);
-            let mut line = forced.line(a).map_err(|e| at_line(e, l, test.omegas[l]))?;
-            let e = line
-                .expand(test.receptance[l].as_ref(), f.as_ref())
-                .map_err(|e| at_line(e, l, test.omegas[l]))?;
-            let r = e.residual;
-            let mut objective = 0.0;
+    let lines = test.omegas.len();
+    let at_once = lines_at_once(forced.factor_len(), lines);
+    let per_line: Vec<Result<Evaluation, UpdateError>> = map_lines(lines, at_once, |l| {
+        let a = damping.stiffness(test.omegas[l]);
+        let mut line = forced.line(a).map_err(|e| at_line(e, l, test.omegas[l]))?;
+        let e = line
+            .expand(test.receptance[l].as_ref(), f.as_ref())
+            .map_err(|e| at_line(e, l, test.omegas[l]))?;
+        let r = e.residual;
+        let mut objective = 0.0;
+        for j in 0..r.ncols() {
+            for (i, wi) in w.iter().enumerate() {
+                objective += wi * r[(i, j)].norm_sqr();
+            }
+        }
+        let (mut gram, mut num) = (Vec::new(), Vec::new());
+        if which != Columns::None {
             for j in 0..r.ncols() {
-                for (i, wi) in w.iter().enumerate() {
-                    objective += wi * r[(i, j)].norm_sqr();
-                }
+                let u: Vec<c64> = e.u.col(j).iter().copied().collect();
+                let v = derivative_columns(up, which, damping, test.omegas[l], &u)?;
+                let vm = Mat::from_fn(n, v.len(), |i, c| v[c][i]);
+                let b = line.project(vm.as_ref())?;
+                let rj: Vec<c64> = r.col(j).iter().copied().collect();
+                accumulate(&mut gram, &mut num, &b, &rj, &w);
             }
-            let (mut gram, mut num) = (Vec::new(), Vec::new());
-            if which != Columns::None {
-                for j in 0..r.ncols() {
-                    let u: Vec<c64> = e.u.col(j).iter().copied().collect();
-                    let v = derivative_columns(up, which, damping, test.omegas[l], &u)?;
-                    let vm = Mat::from_fn(n, v.len(), |i, c| v[c][i]);
-                    let b = line.project(vm.as_ref())?;
-                    let rj: Vec<c64> = r.col(j).iter().copied().collect();
-                    accumulate(&mut gram, &mut num, &b, &rj, &w);
-                }
-            }
-            Ok(Evaluation {
-                objective,
-                gram,
-                num,
-                residuals: vec![r],
-                backward_error: line.backward_error(),
-            })
+        }
+        Ok(Evaluation {
+            objective,
+            gram,
+            num,
+            residuals: vec![r],
+            backward_error: line.backward_error(),
         })
-        .collect();
+    });
     total(per_line)
 }
 
@@ -1063,22 +1060,23 @@ pub fn frf_errors(
     let d = damping.matrix(up)?;
     let combination = combination_of(&sys.k, &sys.m, d.as_ref())?;
     let f = test.forces(n);
-    (0..test.omegas.len())
-        .into_par_iter()
-        .map(|l| {
-            let a = damping.stiffness(test.omegas[l]);
-            let mut factor = factor_line(&combination, a)?;
-            let mut u = f.clone();
-            factor.solve_in_place(u.as_mut())?;
-            let h = &test.receptance[l];
-            let (mut diff, mut norm) = (0.0, 0.0);
-            for j in 0..h.ncols() {
-                for (i, &d) in test.measured.iter().enumerate() {
-                    diff += (u[(d, j)] - h[(i, j)]).norm_sqr();
-                    norm += h[(i, j)].norm_sqr();
-                }
+    let lines = test.omegas.len();
+    let at_once = lines_at_once(combination.factor_len(), lines);
+    map_lines(lines, at_once, |l| {
+        let a = damping.stiffness(test.omegas[l]);
+        let mut factor = factor_line(&combination, a)?;
+        let mut u = f.clone();
+        factor.solve_in_place(u.as_mut())?;
+        let h = &test.receptance[l];
+        let (mut diff, mut norm) = (0.0, 0.0);
+        for j in 0..h.ncols() {
+            for (i, &d) in test.measured.iter().enumerate() {
+                diff += (u[(d, j)] - h[(i, j)]).norm_sqr();
+                norm += h[(i, j)].norm_sqr();
             }
-            Ok((diff / norm).sqrt())
-        })
-        .collect()
+        }
+        Ok((diff / norm).sqrt())
+    })
+    .into_iter()
+    .collect()
 }

@@ -215,6 +215,11 @@ impl<'a> ForcedExpander<'a> {
         })
     }
 
+    /// Complex values of one line's factor ([`Combination::factor_len`]).
+    pub fn factor_len(&self) -> usize {
+        self.combination.factor_len()
+    }
+
     /// The measured DOFs, in sensor order.
     pub fn measured(&self) -> &[usize] {
         &self.expander.part.measured

@@ -887,3 +887,20 @@ fn forced_residue_against_the_dense_schur_complement() {
         assert!(line.backward_error() < 1e-13);
     }
 }
+
+/// The frequency-line loop keeps line order whatever the lines at once (1, a chunk of 3, every
+/// thread), and the default count is held to one line when a factor would not fit in memory
+/// (a factor of 2^58 complex values: 4 EiB each) and to the lines there are.
+#[test]
+fn lines_are_mapped_in_order_within_memory() {
+    use femu_correlate::frf::{lines_at_once, map_lines};
+    let squares: Vec<usize> = (0..10).map(|l| l * l).collect();
+    for at_once in [1, 3, 64] {
+        assert_eq!(map_lines(10, at_once, |l| l * l), squares, "{at_once}");
+    }
+    assert!(map_lines(0, 2, |l| l).is_empty());
+    assert_eq!(lines_at_once(1 << 58, 8), 1);
+    assert_eq!(lines_at_once(1, 1), 1);
+    let threads = rayon::current_num_threads();
+    assert_eq!(lines_at_once(1, 1000), threads);
+}
