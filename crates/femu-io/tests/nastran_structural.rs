@@ -739,6 +739,82 @@ ENDDATA
     }
 }
 
+/// A CTUBE is a rod of the tube's section (QRG PTUBE: `OD`, wall `T`, a solid rod for `T` blank):
+/// a tube 2 m long along x, clamped at grid 1, carrying a CONM2 of mass `m` and axial
+/// inertia `I` at grid 2 whose other four components are held. Its material massless, the two
+/// modes are `EA / (L m)` and `GJ / (L I)` with `A = pi (OD^2 - ID^2) / 4` and
+/// `J = pi (OD^4 - ID^4) / 32` worked here; with the density and an NSM instead of the CONM2's
+/// mass, Nastran's default lumped mass gives the free end half the tube's, `(rho A + NSM) L / 2`.
+/// An OD2 that tapers the tube, a wall thicker than OD / 2 and no OD are refused.
+#[test]
+fn ctube_is_a_rod_of_the_tube_s_section() {
+    use std::f64::consts::PI;
+    let (od, t, l, e, nu): (f64, f64, f64, f64, f64) = (0.06, 0.004, 2.0, 7.0e10, 0.33);
+    let g = e / (2.0 * (1.0 + nu));
+    let id = od - 2.0 * t;
+    let area = PI * (od * od - id * id) / 4.0;
+    let j = PI * (od.powi(4) - id.powi(4)) / 32.0;
+    let (m, inertia) = (40.0, 0.3);
+    let deck = |ptube: &str, rho: &str, conm2: &str| {
+        format!(
+            "SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,2.,0.,0.\nCTUBE,7,8,1,2\n{ptube}\n\
+             MAT1,5,{e},,{nu},{rho}\n{conm2}SPC1,1,123456,1\nSPC1,1,2356,2\nENDDATA\n"
+        )
+    };
+    let conm2 = format!("CONM2,9,2,,{m}\n,{inertia},0.,1.,0.,0.,1.\n");
+    let d = parse_bdf(
+        &deck(&format!("PTUBE,8,5,{od},{t}"), "", &conm2),
+        "tube.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    let mut want = [e * area / (l * m), g * j / (l * inertia)];
+    want.sort_by(f64::total_cmp);
+    assert_lowest(&d.model, MassKind::Lumped, &want, 1e-9);
+    // a solid rod (T blank): A = pi OD^2 / 4, J = pi OD^4 / 32
+    let solid = parse_bdf(
+        &deck(&format!("PTUBE,8,5,{od}"), "", &conm2),
+        "solid.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    let mut want = [
+        e * PI * od * od / 4.0 / (l * m),
+        g * PI * od.powi(4) / 32.0 / (l * inertia),
+    ];
+    want.sort_by(f64::total_cmp);
+    assert_lowest(&solid.model, MassKind::Lumped, &want, 1e-9);
+    // the tube's own mass, lumped: half at the free end (axial only: the torsion mode is held)
+    let (rho, nsm) = (2700.0, 0.5);
+    let massive = parse_bdf(
+        &deck(&format!("PTUBE,8,5,{od},{t},{nsm}"), &rho.to_string(), ""),
+        "massive.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap()
+    .model;
+    let modes = massive
+        .assemble(MassKind::Lumped)
+        .unwrap()
+        .modes(Which::Lowest(1), &EigenOptions::default())
+        .unwrap();
+    let axial = e * area / l / ((rho * area + nsm) * l / 2.0);
+    assert!(
+        (modes.values[0] / axial - 1.0).abs() < 1e-9,
+        "{:?} {axial}",
+        modes.values
+    );
+    for (ptube, needle) in [
+        (format!("PTUBE,8,5,{od},{t},,0.08"), "OD2 = 0.08 tapers"),
+        (format!("PTUBE,8,5,{od},0.05"), "at most OD / 2"),
+        ("PTUBE,8,5".to_string(), "positive OD"),
+    ] {
+        let text = deck(&ptube, "", &conm2);
+        let line = 1 + text.lines().position(|l| l.starts_with("PTUBE")).unwrap();
+        assert_refused(&text, "bad.bdf", &format!("bad.bdf:{line}"), needle);
+    }
+}
+
 /// RBAR and RBAR1 are rigid links: grid 2 on a CBUSH of six stiffnesses to a clamped grid, a
 /// rigid bar to grid 3 at `d = 0.3` along x carrying a CONM2 `m` with inertias `J1..J3` about its
 /// own centre. `x` and `theta_x` are alone (`k1 / m`, `k4 / J1`); `y` with `theta_z` and `z`

@@ -162,8 +162,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("CDAMP4", "scalar dampers on scalar points"),
     ("CBUSH1D", "one-dimensional bushings"),
     ("PBUSH1D", "one-dimensional bushings"),
-    ("CTUBE", "tubes"),
-    ("PTUBE", "tubes"),
     ("CBEND", "curved beams"),
     ("PBEND", "curved beams"),
     ("PBCOMP", "composite beams"),

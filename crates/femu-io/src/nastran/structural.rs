@@ -34,12 +34,12 @@ pub(super) struct StructuralCards<'a> {
 /// The structural element card names.
 pub(super) const ELEMENTS: &[&str] = &[
     "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CDAMP1", "CDAMP2", "CMASS1", "CMASS2",
-    "CVISC", "CBUSH", "CQUAD4", "CTRIA3", "CQUAD8", "CTRIA6",
+    "CVISC", "CBUSH", "CQUAD4", "CTRIA3", "CQUAD8", "CTRIA6", "CTUBE",
 ];
 /// The structural property card names.
 pub(super) const PROPERTIES: &[&str] = &[
     "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PELAS", "PDAMP", "PMASS", "PVISC", "PBUSH",
-    "PSHELL", "PCOMP", "PCOMPG",
+    "PSHELL", "PCOMP", "PCOMPG", "PTUBE",
 ];
 
 impl<'a> StructuralCards<'a> {
@@ -694,7 +694,7 @@ fn property_ge(ctx: &Context<'_, '_>, p: &Card) -> Result<f64, IoError> {
                 )))
             }
         }
-        "PBAR" | "PBARL" | "PBEAM" | "PBEAML" | "PROD" => mid_ge(ctx, p, &[1]),
+        "PBAR" | "PBARL" | "PBEAM" | "PBEAML" | "PROD" | "PTUBE" => mid_ge(ctx, p, &[1]),
         _ => Ok(0.0),
     }
 }
@@ -852,6 +852,42 @@ pub(super) fn add_structural(
                     area: r(1, "A")?,
                     j: r(2, "J")?,
                     nsm: r(4, "NSM")? * ctx.wtmass,
+                });
+                (kind, vec![n1, n2], pid)
+            }
+            "CTUBE" => {
+                // CTUBE: EID PID G1 G2; PTUBE: PID MID OD T NSM OD2 (QRG): a rod of the tube's
+                // area pi (OD^2 - ID^2) / 4 and torsion constant pi (OD^4 - ID^4) / 32, ID =
+                // OD - 2 T, a solid rod for T blank or 0
+                let (g1, g2) = (c.id(2, "G1")?, c.id(3, "G2")?);
+                let (n1, n2) = (node(model, g1, c, "G1")?, node(model, g2, c, "G2")?);
+                let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
+                let p = prop(pid, &["PTUBE"])?;
+                let (e, g, rho) = mat1(ctx, p.id(1, "MID")?, p)?;
+                let od = p
+                    .real(2, "OD")?
+                    .filter(|d| d.is_finite() && *d > 0.0)
+                    .ok_or_else(|| p.err(format!("{pid}: a tube needs a positive OD")))?;
+                let t = p.real(3, "T")?.filter(|t| *t != 0.0).unwrap_or(od / 2.0);
+                if !(t > 0.0 && t <= od / 2.0) {
+                    return Err(p.err(format!(
+                        "{pid}: T = {t} with OD = {od}: the wall is more than 0 and at most OD / 2"
+                    )));
+                }
+                if let Some(od2) = p.real(5, "OD2")?.filter(|d| *d != od) {
+                    return Err(p.err(format!(
+                        "{pid}: OD2 = {od2} tapers the tube from OD = {od}, which the QRG gives for heat transfer only; femu's tubes are of one diameter"
+                    )));
+                }
+                let id = od - 2.0 * t;
+                let pi = std::f64::consts::PI;
+                let kind = StructuralKind::Rod(Rod {
+                    e,
+                    g,
+                    rho,
+                    area: pi * (od * od - id * id) / 4.0,
+                    j: pi * (od.powi(4) - id.powi(4)) / 32.0,
+                    nsm: p.real(4, "NSM")?.unwrap_or(0.0) * ctx.wtmass,
                 });
                 (kind, vec![n1, n2], pid)
             }
