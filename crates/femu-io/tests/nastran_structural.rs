@@ -815,6 +815,71 @@ fn ctube_is_a_rod_of_the_tube_s_section() {
     }
 }
 
+/// An RROD keeps the distance between its grids (QRG RROD: `e . (u_B - u_A) = 0`, one dependent
+/// translation CMA or CMB): grid 1 at the origin on springs `k1x`, `k1y` with a CONM2 `m1`, grid
+/// 2 at (3, 4, 0) on a spring `k2` along y with a CONM2 `m2` and held in x. The rod
+/// (`e = (0.6, 0.8, 0)`) makes `u2y = 0.75 u1x + u1y`, so `K = diag(k1x, k1y) + k2 a a^T` and
+/// `M = m1 I + m2 a a^T` with `a = (0.75, 1)`, whose two eigenvalues are the quadratic's roots
+/// solved here: the same with the dependent DOF at GB (`CMB = 2`) and at GA (`CMA = 1`, `u1x`
+/// in terms of the others). With grid 1 held in y too, `w^2 = (k1x + 0.5625 k2) / (m1 + 0.5625
+/// m2)`. Refused with card and line: both or neither of CMA, CMB, a component across the rod,
+/// a rotation, GA = GB.
+#[test]
+fn rrod_keeps_the_distance_between_its_grids() {
+    let (k1x, k1y, k2, m1, m2): (f64, f64, f64, f64, f64) = (2.0e4, 5.0e4, 3.0e4, 2.0, 1.5);
+    let deck = |rrod: &str, spc1: &str| {
+        format!(
+            "SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,3.,4.,0.\n\
+             CELAS2,11,{k1x},1,1\nCELAS2,12,{k1y},1,2\nCELAS2,13,{k2},2,2\n\
+             CONM2,21,1,,{m1}\nCONM2,22,2,,{m2}\n{rrod}\nSPC1,1,{spc1},1\nSPC1,1,13,2\nENDDATA\n"
+        )
+    };
+    let a = [0.75, 1.0];
+    let k = [
+        [k1x + k2 * a[0] * a[0], k2 * a[0] * a[1]],
+        [k2 * a[0] * a[1], k1y + k2 * a[1] * a[1]],
+    ];
+    let m = [
+        [m1 + m2 * a[0] * a[0], m2 * a[0] * a[1]],
+        [m2 * a[0] * a[1], m1 + m2 * a[1] * a[1]],
+    ];
+    // det(K - l M) = 0
+    let qa = m[0][0] * m[1][1] - m[0][1] * m[0][1];
+    let qb = k[0][0] * m[1][1] + k[1][1] * m[0][0] - 2.0 * k[0][1] * m[0][1];
+    let qc = k[0][0] * k[1][1] - k[0][1] * k[0][1];
+    let disc = (qb * qb - 4.0 * qa * qc).sqrt();
+    let want = [(qb - disc) / (2.0 * qa), (qb + disc) / (2.0 * qa)];
+    for rrod in ["RROD,5,1,2,,2", "RROD,5,1,2,1"] {
+        let d = parse_bdf(&deck(rrod, "3"), "rod.bdf", &BdfOptions::default()).unwrap();
+        for kind in [MassKind::Lumped, MassKind::Consistent] {
+            assert_lowest(&d.model, kind, &want, 1e-10);
+        }
+    }
+    let one = parse_bdf(
+        &deck("RROD,5,1,2,,2", "23"),
+        "one.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    assert_lowest(
+        &one.model,
+        MassKind::Lumped,
+        &[(k1x + 0.5625 * k2) / (m1 + 0.5625 * m2)],
+        1e-10,
+    );
+    for (rrod, needle) in [
+        ("RROD,5,1,2,1,2", "one of CMA and CMB"),
+        ("RROD,5,1,2", "one of CMA and CMB"),
+        ("RROD,5,1,2,,3", "across the rod"),
+        ("RROD,5,1,2,,5", "one translation, 1, 2 or 3"),
+        ("RROD,5,1,1,1", "GA = GB"),
+    ] {
+        let text = deck(rrod, "3");
+        let line = 1 + text.lines().position(|l| l.starts_with("RROD")).unwrap();
+        assert_refused(&text, "bad.bdf", &format!("bad.bdf:{line}"), needle);
+    }
+}
+
 /// RBAR and RBAR1 are rigid links: grid 2 on a CBUSH of six stiffnesses to a clamped grid, a
 /// rigid bar to grid 3 at `d = 0.3` along x carrying a CONM2 `m` with inertias `J1..J3` about its
 /// own centre. `x` and `theta_x` are alone (`k1 / m`, `k4 / J1`); `y` with `theta_z` and `z`

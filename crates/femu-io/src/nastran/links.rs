@@ -1,5 +1,5 @@
-//! `RBE2`, `RBAR` and `RBAR1` (rigid links) and `RBE3` (weighted averages) as multipoint
-//! constraints.
+//! `RBE2`, `RBAR` and `RBAR1` (rigid links), `RROD` (rigid pin-ended rods) and `RBE3` (weighted
+//! averages) as multipoint constraints.
 
 use super::cards::Card;
 use crate::{IoError, Warning};
@@ -82,6 +82,90 @@ fn bar_link(c: &Card) -> Result<(u64, Vec<usize>, u64), IoError> {
     Ok((reference, cm, dependent))
 }
 
+/// An RROD (QRG RROD: `EID GA GB CMA CMB ALPHA`): the rod between GA and GB keeps its length,
+/// `e . (u_B - u_A) = 0` with `e` the unit vector from GA to GB, solved for the one dependent
+/// translation `CMA` of GA or `CMB` of GB (the other blank). The grids' displacement frames must
+/// be basic (the constraint's coefficients are basic components), and the dependent component
+/// must lie along the rod enough to be solved for (`|e_k|` at least 1e-6: Nastran asks for the
+/// component of the largest direction cosine). `ALPHA` (thermal expansion) has no effect on modes.
+fn rigid_rod(
+    c: &Card,
+    eid: u64,
+    model: &mut Model,
+    turned: &HashMap<u64, i64>,
+    label: &str,
+) -> Result<(), IoError> {
+    let (ga, gb) = (c.id(1, "GA")?, c.id(2, "GB")?);
+    if ga == gb {
+        return Err(c.err(format!("{eid}: GA = GB = {ga}: a rod joins two grids")));
+    }
+    let mut x = [[0.0; 3]; 2];
+    for (k, g) in [ga, gb].into_iter().enumerate() {
+        let n = model.mesh().node_index(g).ok_or_else(|| {
+            c.err(format!(
+                "RROD {eid} names GRID {g}, which the deck does not define"
+            ))
+        })?;
+        if let Some(cd) = turned.get(&g) {
+            return Err(c.err(format!(
+                "{eid}: GRID {g}'s displacement frame {cd} is turned: femu's constraints are in the basic frame"
+            )));
+        }
+        x[k] = model.mesh().coords()[n];
+    }
+    let d = [x[1][0] - x[0][0], x[1][1] - x[0][1], x[1][2] - x[0][2]];
+    let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if !(len > 0.0) {
+        return Err(c.err(format!(
+            "{eid}: GA {ga} and GB {gb} coincide: the rod has no direction"
+        )));
+    }
+    let e = d.map(|v| v / len);
+    let one = |i: usize, what: &str| -> Result<Option<usize>, IoError> {
+        let t = c.field(i).trim();
+        if t.is_empty() || t == "0" {
+            return Ok(None);
+        }
+        match t {
+            "1" | "2" | "3" => Ok(Some(t.as_bytes()[0] as usize - b'1' as usize)),
+            _ => Err(c.err(format!(
+                "{eid}: {what} = {t:?}: the dependent DOF is one translation, 1, 2 or 3"
+            ))),
+        }
+    };
+    let (dependent_grid, k) = match (one(3, "CMA")?, one(4, "CMB")?) {
+        (Some(k), None) => (ga, k),
+        (None, Some(k)) => (gb, k),
+        _ => {
+            return Err(c.err(format!(
+                "{eid}: one of CMA and CMB names the dependent translation, and the other is blank"
+            )));
+        }
+    };
+    if e[k].abs() < 1e-6 {
+        return Err(c.err(format!(
+            "{eid}: component {} of GRID {dependent_grid} is across the rod (direction cosine {:.1e}): the dependent DOF must lie along it (choose the largest cosine)",
+            k + 1,
+            e[k]
+        )));
+    }
+    // e . (u_B - u_A) = 0 solved for the dependent term: the sign of GB's terms is +, GA's -
+    let sign = |g: u64| if g == gb { 1.0 } else { -1.0 };
+    let own = sign(dependent_grid) * e[k];
+    let mut terms = Vec::with_capacity(5);
+    for g in [ga, gb] {
+        for (i, ei) in e.iter().enumerate() {
+            if (g == dependent_grid && i == k) || *ei == 0.0 {
+                continue;
+            }
+            terms.push(((g, i), -sign(g) * ei / own));
+        }
+    }
+    model
+        .add_constraint((dependent_grid, k), &terms, label)
+        .map_err(c.located())
+}
+
 /// RBE2, RBAR and RBAR1 (rigid links) and RBE3 (weighted averages) into the model's multipoint
 /// constraints (docs/MATH.md, "Multipoint constraints"). Reference grids of the rigid links get
 /// rotations first, so that chains of links, RBE3 references with rotational components and SPCs
@@ -102,7 +186,10 @@ pub(super) fn read_links(
             ))
         })
     };
-    for c in links.iter().filter(|c| c.name != "RBE3") {
+    for c in links
+        .iter()
+        .filter(|c| c.name != "RBE3" && c.name != "RROD")
+    {
         let gn = if c.name == "RBE2" {
             c.id(1, "GN")?
         } else {
@@ -115,6 +202,10 @@ pub(super) fn read_links(
     for c in links {
         let eid = c.id(0, "EID")?;
         let label = format!("{} {eid} ({} line {})", c.name, c.path.display(), c.line);
+        if c.name == "RROD" {
+            rigid_rod(c, eid, model, turned, &label)?;
+            continue;
+        }
         if c.name != "RBE3" {
             let (gn, cm, gm) = if c.name == "RBE2" {
                 let gn = c.id(1, "GN")?;

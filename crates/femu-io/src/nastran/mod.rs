@@ -168,7 +168,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("PBRSECT", "arbitrary beam sections"),
     ("PBMSECT", "arbitrary beam sections"),
     ("RBE1", "rigid elements"),
-    ("RROD", "rigid rods"),
     ("RTRPLT", "rigid triangles"),
     ("RTRPLT1", "rigid triangles"),
     ("RSPLINE", "interpolation constraints"),
@@ -410,8 +409,8 @@ fn known_cards() -> Vec<&'static str> {
     let mut v: Vec<&'static str> = vec![
         "GRID", "GRDSET", "CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S", "CHEXA",
         "CPENTA", "CTETRA", "CPYRAM", "PSOLID", "MAT1", "MAT9", "MAT2", "MAT8", "SPC", "SPC1",
-        "SPCADD", "MPC", "MPCADD", "CONM2", "RBE2", "RBE3", "RBAR", "RBAR1", "PARAM", "EIGRL",
-        "EIGR", "BAROR", "BEAMOR",
+        "SPCADD", "MPC", "MPCADD", "CONM2", "RBE2", "RBE3", "RBAR", "RBAR1", "RROD", "PARAM",
+        "EIGRL", "EIGR", "BAROR", "BEAMOR",
     ];
     v.extend(structural::ELEMENTS);
     v.extend(structural::PROPERTIES);
@@ -469,7 +468,7 @@ fn sort<'a>(
             "SPC" | "SPC1" | "SPCADD" => s.spcs.push(c),
             "MPC" | "MPCADD" => s.mpcs.push(c),
             "CONM2" => s.conm2.push(c),
-            "RBE2" | "RBE3" | "RBAR" | "RBAR1" => s.links.push(c),
+            "RBE2" | "RBE3" | "RBAR" | "RBAR1" | "RROD" => s.links.push(c),
             "TABDMP1" => {
                 let tid = c.id(0, "TID")? as i64;
                 if let Some(first) = s.tabdmp.insert(tid, c) {
