@@ -304,8 +304,8 @@ fn bad_decks_name_the_card_and_line() {
             "cube.bdf:3: SPC = 300 selects a set that no SPC, SPC1 or SPCADD defines",
         ),
         (
-            base.replace("PARAM    WTMASS  1.", "CQUADR   2       1       1       2       3       4\nRROD     3       7       6       1\nCQUADR   4       1       5       6       7       8\nPARAM    WTMASS  1."),
-            "cube.bdf:23: the deck has cards that change the stiffness or the mass and that femu cannot model: 1 rigid rods (RROD), 2 shells (CQUADR)",
+            base.replace("PARAM    WTMASS  1.", "CQUADR   2       1       1       2       3       4\nRTRPLT   3       7       6       1\nCQUADR   4       1       5       6       7       8\nPARAM    WTMASS  1."),
+            "cube.bdf:23: the deck has cards that change the stiffness or the mass and that femu cannot model: 1 rigid triangles (RTRPLT), 2 shells (CQUADR)",
         ),
     ];
     for (text, want) in cases {
