@@ -2683,6 +2683,98 @@ fn a_cvisc_is_an_axial_damper() {
     assert_refused(&deck("0.,0.,0."), "visc.bdf", "visc.bdf:8", "coincide");
 }
 
+/// A CBUSH1D (QRG CBUSH1D, PBUSH1D: a spring `K` and a damper `C` along its axis): between a
+/// clamped grid and a CONM2 `m` at (3, 4, 0) held in z, with a CELAS2 `k2` along y, the two
+/// eigenvalues are those of `(K e e^T + diag(0, k2)) / m`, `e = (0.6, 0.8)`, worked here from the
+/// trace and the determinant, and the model's viscous damping on the free translations is
+/// `C e e^T` (1e-14). Grounded (GB blank) along CID 0's x, and along a CORD2R whose x is basic y,
+/// it is `K / m` in that direction. Refused: a grounded one without CID, a mass, a nonlinear line,
+/// neither K nor C.
+#[test]
+fn a_cbush1d_is_an_axial_spring_and_damper() {
+    let (k, c, m, k2): (f64, f64, f64, f64) = (4.0e4, 7.0, 2.5, 1.0e4);
+    let deck = |cbush1d: &str, pbush1d: &str| {
+        format!(
+            "SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,3.,4.,0.\n\
+             CORD2R,5,,0.,0.,0.,0.,0.,1.,+C\n+C,0.,1.,0.\nCONM2,9,2,,{m}\nCELAS2,11,{k2},2,2\n\
+             {cbush1d}\n{pbush1d}\nSPC1,1,123,1\nSPC1,1,3,2\nENDDATA\n"
+        )
+    };
+    let plain = format!("PBUSH1D,8,{k},{c}");
+    let d = parse_bdf(
+        &deck("CBUSH1D,20,8,1,2", &plain),
+        "b.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    let (a11, a12, a22) = (k * 0.36 / m, k * 0.48 / m, (k * 0.64 + k2) / m);
+    let (tr, det) = (a11 + a22, a11 * a22 - a12 * a12);
+    let disc = (tr * tr - 4.0 * det).sqrt();
+    assert_lowest(
+        &d.model,
+        MassKind::Lumped,
+        &[(tr - disc) / 2.0, (tr + disc) / 2.0],
+        1e-10,
+    );
+    let asm = femu_fem::assembly::Assembler::new(&d.model).unwrap();
+    let cv = femu_sparse::csc::to_dense(
+        &asm.dampers(&d.model, MassKind::Lumped)
+            .unwrap()
+            .viscous
+            .unwrap(),
+    );
+    let sys = d.model.assemble(MassKind::Lumped).unwrap();
+    let g2 = d.model.mesh().node_index(2).unwrap();
+    let e = [0.6, 0.8];
+    for i in 0..2 {
+        for j in 0..2 {
+            let (a, b) = (
+                sys.dofs.free_index(g2, i).unwrap(),
+                sys.dofs.free_index(g2, j).unwrap(),
+            );
+            assert!((cv[(a, b)] - c * e[i] * e[j]).abs() < 1e-14, "{cv:?}");
+        }
+    }
+    // grounded at grid 2: along basic x (CID 0), or basic y (CORD2R 5's x), the other held
+    for (cid, spc, want) in [("0", "23", k / m), ("5", "13", (k + k2) / m)] {
+        let text = deck(&format!("CBUSH1D,20,8,2,,{cid}"), &plain)
+            .replace("SPC1,1,3,2", &format!("SPC1,1,{spc},2"));
+        let g = parse_bdf(&text, "g.bdf", &BdfOptions::default()).unwrap();
+        assert_lowest(&g.model, MassKind::Lumped, &[want], 1e-10);
+    }
+    for (cbush1d, pbush1d, at, needle) in [
+        ("CBUSH1D,20,8,2", plain.clone(), "CBUSH1D", "needs a CID"),
+        (
+            "CBUSH1D,20,8,1,2",
+            format!("PBUSH1D,8,{k},{c},3."),
+            "PBUSH1D",
+            "bushing mass",
+        ),
+        (
+            "CBUSH1D,20,8,1,2",
+            format!("PBUSH1D,8,{k}\n,SPRING,TABLE,43"),
+            "PBUSH1D",
+            "SPRING line makes the bushing nonlinear",
+        ),
+        (
+            "CBUSH1D,20,8,1,2",
+            "PBUSH1D,8".to_string(),
+            "PBUSH1D",
+            "neither a stiffness",
+        ),
+        (
+            "CBUSH1D,20,8,1,2",
+            "PBUSH1D,8,-1.".to_string(),
+            "PBUSH1D",
+            "at least 0",
+        ),
+    ] {
+        let text = deck(cbush1d, &pbush1d);
+        let line = 1 + text.lines().position(|l| l.starts_with(at)).unwrap();
+        assert_refused(&text, "bad.bdf", &format!("bad.bdf:{line}"), needle);
+    }
+}
+
 /// FV16's plate as `n x n` squares each cut into two CTRIA6 (midside grids on the edges' middles),
 /// coupled mass (docs/MATH.md, "Six-node triangles").
 fn fv16_ctria6(n: usize, as_ctria3: bool) -> String {

@@ -160,8 +160,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("CMASS4", "scalar masses on scalar points"),
     ("CDAMP3", "scalar dampers on scalar points"),
     ("CDAMP4", "scalar dampers on scalar points"),
-    ("CBUSH1D", "one-dimensional bushings"),
-    ("PBUSH1D", "one-dimensional bushings"),
     ("CBEND", "curved beams"),
     ("PBEND", "curved beams"),
     ("PBCOMP", "composite beams"),
@@ -543,7 +541,7 @@ fn sort<'a>(
             .min_by_key(|c| c.line)
             .expect("non-empty");
         let text = format!(
-            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, bars and beams (CBAR, CBEAM with PBAR, PBARL, PBEAM, PBEAML), rods (CROD, CONROD, CTUBE), springs, dampers, scalar masses and bushings (CELAS1, CELAS2, CDAMP1, CDAMP2, CMASS1, CMASS2, CVISC, CBUSH), shells (CQUAD4, CQUAD8, CTRIA3, CTRIA6 with PSHELL, PCOMP, PCOMPG), CONM2 masses, RBE2, RBAR, RBAR1, RROD and RBE3 links, MPC and SPC constraints",
+            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, bars and beams (CBAR, CBEAM with PBAR, PBARL, PBEAM, PBEAML), rods (CROD, CONROD, CTUBE), springs, dampers, scalar masses and bushings (CELAS1, CELAS2, CDAMP1, CDAMP2, CMASS1, CMASS2, CVISC, CBUSH, CBUSH1D), shells (CQUAD4, CQUAD8, CTRIA3, CTRIA6 with PSHELL, PCOMP, PCOMPG), CONM2 masses, RBE2, RBAR, RBAR1, RROD and RBE3 links, MPC and SPC constraints",
             list.join(", ")
         );
         if options.lenient {

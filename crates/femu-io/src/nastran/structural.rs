@@ -34,12 +34,12 @@ pub(super) struct StructuralCards<'a> {
 /// The structural element card names.
 pub(super) const ELEMENTS: &[&str] = &[
     "CBAR", "CBEAM", "CROD", "CONROD", "CELAS1", "CELAS2", "CDAMP1", "CDAMP2", "CMASS1", "CMASS2",
-    "CVISC", "CBUSH", "CQUAD4", "CTRIA3", "CQUAD8", "CTRIA6", "CTUBE",
+    "CVISC", "CBUSH", "CQUAD4", "CTRIA3", "CQUAD8", "CTRIA6", "CTUBE", "CBUSH1D",
 ];
 /// The structural property card names.
 pub(super) const PROPERTIES: &[&str] = &[
     "PBAR", "PBARL", "PBEAM", "PBEAML", "PROD", "PELAS", "PDAMP", "PMASS", "PVISC", "PBUSH",
-    "PSHELL", "PCOMP", "PCOMPG", "PTUBE",
+    "PSHELL", "PCOMP", "PCOMPG", "PTUBE", "PBUSH1D",
 ];
 
 impl<'a> StructuralCards<'a> {
@@ -1068,6 +1068,12 @@ pub(super) fn add_structural(
                 let (kind, nodes) = cbush(c, eid, pid, p, model, ctx)?;
                 (kind, nodes, pid)
             }
+            "CBUSH1D" => {
+                let pid = c.int(1, "PID")?.map_or(eid, |v| v.max(0) as u64);
+                let p = prop(pid, &["PBUSH1D"])?;
+                let (kind, nodes) = cbush1d(c, eid, pid, p, model, ctx)?;
+                (kind, nodes, pid)
+            }
             "CVISC" => {
                 // QRG CVISC: EID PID G1 G2; PVISC: PID CE CR (PID CE CR): an extensional and a
                 // rotational damper along the line G1-G2, a bushing of dampers alone on the
@@ -1111,9 +1117,8 @@ pub(super) fn add_structural(
         };
         let ge = match c.name.as_str() {
             "CONROD" => mid_ge(ctx, c, &[3])?,
-            "CELAS1" | "CELAS2" | "CDAMP1" | "CDAMP2" | "CMASS1" | "CMASS2" | "CVISC" | "CBUSH" => {
-                0.0
-            }
+            "CELAS1" | "CELAS2" | "CDAMP1" | "CDAMP2" | "CMASS1" | "CMASS2" | "CVISC" | "CBUSH"
+            | "CBUSH1D" => 0.0,
             _ => match cards.properties.get(&pid) {
                 Some(p) => property_ge(ctx, p)?,
                 None => 0.0,
@@ -1576,6 +1581,92 @@ fn shell_axis(
 /// `B` and `GE` lines. The element axes are `CID`'s when given, else `x` from GA to GB and the
 /// orientation vector; the spring acts at `S` (default 0.5) along GA-GB, joined to both grids
 /// rigidly, or at the grids themselves when they coincide or GB is blank.
+/// A CBUSH1D with its PBUSH1D (QRG: `EID PID GA GB CID`; `PID K C M SA SE`, then the nonlinear
+/// `SHOCKA`, `SPRING`, `DAMPER` and `GENER` lines): a spring `K` and a viscous damper `C` along
+/// the element's axis, the line GA-GB, or the x-axis of `CID` at GA (needed when the grids
+/// coincide or GB is blank: a grounded bushing), on the grids' relative motion along it. A
+/// bushing of one stiffness and one damping (the other five zero). Refused: a mass `M` (as a
+/// PBUSH's), a nonlinear line, neither `K` nor `C`, negative values.
+fn cbush1d(
+    c: &Card,
+    eid: u64,
+    pid: u64,
+    p: &Card,
+    model: &Model,
+    ctx: &mut Context<'_, '_>,
+) -> Result<(StructuralKind, Vec<usize>), IoError> {
+    let value = |i: usize, what: &str| -> Result<f64, IoError> {
+        let v = p.real(i, what)?.unwrap_or(0.0);
+        if v.is_finite() && v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(p.err(format!("{pid}: {what} = {v}: it is finite and at least 0")))
+        }
+    };
+    let (k, damping, mass) = (value(1, "K")?, value(2, "C")?, value(3, "M")?);
+    if mass != 0.0 {
+        return Err(p.err(format!(
+            "{pid}: a bushing mass (M = {mass}) is not read; give it as CONM2 on the grids"
+        )));
+    }
+    if let Some(line) = (8..p.fields.len())
+        .step_by(8)
+        .map(|i| p.field(i).trim().to_ascii_uppercase())
+        .find(|t| !t.is_empty())
+    {
+        return Err(p.err(format!(
+            "{pid}: the {line} line makes the bushing nonlinear, which a modal model does not hold (femu reads K and C)"
+        )));
+    }
+    if k == 0.0 && damping == 0.0 {
+        return Err(p.err(format!(
+            "{pid}: neither a stiffness K nor a damping C: the bushing does nothing"
+        )));
+    }
+    let ga = c.id(2, "GA")?;
+    let na = node(model, ga, c, "GA")?;
+    let gb = c.int(3, "GB")?.filter(|g| *g > 0).map(|g| g as u64);
+    let nb = gb.map(|g| node(model, g, c, "GB")).transpose()?;
+    let xa = model.mesh().coords()[na];
+    let axis = match c.int(4, "CID")? {
+        Some(0) => [1.0, 0.0, 0.0],
+        Some(cid) if cid > 0 => {
+            let a = ctx.geometry.frame(cid, c)?.axes_at(xa);
+            [a[0][0], a[1][0], a[2][0]]
+        }
+        _ => {
+            let xb = nb.map(|n| model.mesh().coords()[n]);
+            let d = xb.map_or([0.0; 3], |b| std::array::from_fn(|i| b[i] - xa[i]));
+            if d.iter().map(|v| v * v).sum::<f64>().sqrt() < 1e-4 {
+                return Err(c.err(format!(
+                    "{eid}: its grids coincide or GB is blank, so its axis needs a CID (field 6)"
+                )));
+            }
+            d
+        }
+    };
+    let tip: [f64; 3] = std::array::from_fn(|i| xa[i] + axis[i]);
+    let helper = if axis[0].abs() < 0.9 * axis.iter().map(|v| v * v).sum::<f64>().sqrt() {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let (_, axes) = femu_fem::structural::line_axes(xa, tip, helper)
+        .map_err(|r| c.err(format!("{eid}: {r}")))?;
+    let mut nodes = vec![na];
+    nodes.extend(nb);
+    Ok((
+        StructuralKind::Bushing(Bushing {
+            k: [k, 0.0, 0.0, 0.0, 0.0, 0.0],
+            b: [damping, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ge: 0.0,
+            axes,
+            point: None,
+        }),
+        nodes,
+    ))
+}
+
 fn cbush(
     c: &Card,
     eid: u64,
