@@ -907,6 +907,63 @@ impl Model {
         Ok(())
     }
 
+    /// Adds a general symmetric 6x6 mass matrix on the translations and rotations of node
+    /// `node_id` (basic axes, `(u_x, u_y, u_z, theta_x, theta_y, theta_z)`; Nastran's `CONM1`),
+    /// held as a rigid mass whose `mass` is the mean of the translational diagonal, `inertia` the
+    /// rotational block and `offset` zero (the matrix itself is what the assembly adds).
+    ///
+    /// # Errors
+    /// [`FemError::UnknownNode`]; [`FemError::InvalidMaterial`] for a node without rotations, a
+    /// matrix that is not finite, symmetric and positive semi-definite, or has no mass.
+    pub fn add_mass_matrix(&mut self, node_id: u64, matrix: [[f64; 6]; 6]) -> Result<(), FemError> {
+        let node = self.node(node_id)?;
+        let bad = |reason: String| FemError::InvalidMaterial {
+            name: format!("mass matrix on node {node_id}"),
+            reason,
+        };
+        if !self.has_rotation[node] {
+            return Err(bad(
+                "the node has no rotations (a beam's, a shell's or a rigid link's reference node has them)".into(),
+            ));
+        }
+        let m = nalgebra::Matrix6::from_fn(|i, k| matrix[i][k]);
+        let scale = m.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        if m.iter().any(|v| !v.is_finite())
+            || !(m.trace() > 0.0)
+            || (m - m.transpose()).iter().any(|v| v.abs() > 1e-12 * scale)
+            || m.symmetric_eigenvalues().min() < -1e-12 * scale
+        {
+            return Err(bad(format!(
+                "{matrix:?} must be finite, symmetric and positive semi-definite, with a positive trace"
+            )));
+        }
+        self.rigid_masses.push(RigidMass {
+            node,
+            matrix,
+            mass: (matrix[0][0] + matrix[1][1] + matrix[2][2]) / 3.0,
+            offset: [0.0; 3],
+            inertia: std::array::from_fn(|i| std::array::from_fn(|k| matrix[3 + i][3 + k])),
+        });
+        Ok(())
+    }
+
+    /// Adds a copy of rigid mass `r` (of this model or another) on node `node_id`, its matrix
+    /// and description unchanged.
+    ///
+    /// # Errors
+    /// [`FemError::UnknownNode`]; [`FemError::InvalidMaterial`] for a node without rotations.
+    pub fn add_rigid_mass_copy(&mut self, node_id: u64, r: &RigidMass) -> Result<(), FemError> {
+        let node = self.node(node_id)?;
+        if !self.has_rotation[node] {
+            return Err(FemError::InvalidMaterial {
+                name: format!("rigid mass on node {node_id}"),
+                reason: "the node has no rotations".into(),
+            });
+        }
+        self.rigid_masses.push(RigidMass { node, ..*r });
+        Ok(())
+    }
+
     /// The rigid masses.
     pub fn rigid_masses(&self) -> &[RigidMass] {
         &self.rigid_masses

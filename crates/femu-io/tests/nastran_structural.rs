@@ -880,6 +880,125 @@ fn rrod_keeps_the_distance_between_its_grids() {
     }
 }
 
+/// A CONM1 is a general 6x6 mass matrix (QRG CONM1: the lower triangle in `CID`'s axes): on a
+/// grid held by a CBUSH of six stiffnesses `k_i` to a clamped grid, a diagonal CONM1 of six
+/// different values gives the six `k_i / M_ii`; the same in a CORD2R whose x is basic y puts
+/// `M11` on y and `M22` on x (and so for the inertias); a coupling `M51 = c` of `u_x` and
+/// `theta_y` gives the quadratic `(m J - c^2) l^2 - (k1 J + k5 m) l + k1 k5 = 0` solved here; all
+/// times WTMASS. On a solid's grid (no rotations) the translational block alone, with a warning.
+/// A matrix that is not positive semi-definite and a grid the deck lacks are refused.
+#[test]
+fn conm1_is_a_general_mass_matrix() {
+    let k = [1.0e4, 2.0e4, 3.0e4, 500.0, 700.0, 900.0];
+    let deck = |conm1: &str, extra: &str| {
+        format!(
+            "SOL 103\nCEND\nSPC = 1\nBEGIN BULK\n{extra}GRID,1,,0.,0.,0.\nGRID,2,,0.,0.,0.\n\
+             CORD2R,5,,0.,0.,0.,0.,0.,1.,+C\n+C,0.,1.,0.\nCBUSH,7,8,1,2,,,,0\n\
+             PBUSH,8,K,1.+4,2.+4,3.+4,500.,700.,900.\n{conm1}\nSPC1,1,123456,1\nENDDATA\n"
+        )
+    };
+    let m = [2.0, 3.0, 5.0, 0.4, 0.6, 0.8];
+    // the lower triangle: M11; M21 M22; M31 M32 M33; M41..M44; M51..M55; M61..M66
+    let triangle = |d: [f64; 6], c51: f64| -> Vec<f64> {
+        let mut v = Vec::new();
+        for i in 0..6 {
+            for j in 0..=i {
+                v.push(if i == j {
+                    d[i]
+                } else if (i, j) == (4, 0) {
+                    c51
+                } else {
+                    0.0
+                });
+            }
+        }
+        v
+    };
+    let card = |cid: &str, v: &[f64]| {
+        let f: Vec<String> = v.iter().map(|x| format!("{x:?}")).collect();
+        format!(
+            "CONM1,9,2,{cid},{}\n,{}\n,{}",
+            f[..5].join(","),
+            f[5..13].join(","),
+            f[13..].join(",")
+        )
+    };
+    let sorted = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v
+    };
+    let d = parse_bdf(
+        &deck(&card("", &triangle(m, 0.0)), ""),
+        "c.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    let want = sorted((0..6).map(|i| k[i] / m[i]).collect());
+    assert_lowest(&d.model, MassKind::Lumped, &want, 1e-10);
+    // in CORD2R 5 (x along basic y, y along -x): M11 acts on y, M22 on x, M44 about y, M55 about x
+    let turned = parse_bdf(
+        &deck(&card("5", &triangle(m, 0.0)), ""),
+        "t.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    let want = sorted(vec![
+        k[0] / m[1],
+        k[1] / m[0],
+        k[2] / m[2],
+        k[3] / m[4],
+        k[4] / m[3],
+        k[5] / m[5],
+    ]);
+    assert_lowest(&turned.model, MassKind::Lumped, &want, 1e-10);
+    // u_x and theta_y coupled by M51 = c, all times WTMASS 0.5
+    let (c, w) = (0.3, 0.5);
+    let coupled = parse_bdf(
+        &deck(&card("", &triangle(m, c)), "PARAM,WTMASS,0.5\n"),
+        "k.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    let (mm, jj, cc) = (w * m[0], w * m[4], w * c);
+    let (qa, qb, qc) = (mm * jj - cc * cc, k[0] * jj + k[4] * mm, k[0] * k[4]);
+    let disc = (qb * qb - 4.0 * qa * qc).sqrt();
+    let mut want = vec![(qb - disc) / (2.0 * qa), (qb + disc) / (2.0 * qa)];
+    want.extend([1, 2, 3, 5].map(|i| k[i] / (w * m[i])));
+    let want = sorted(want);
+    for kind in [MassKind::Lumped, MassKind::Consistent] {
+        assert_lowest(&coupled.model, kind, &want, 1e-10);
+    }
+    // a solid's grid: the translational block, the rest dropped with a warning
+    let solid = "SOL 103\nCEND\nBEGIN BULK\nGRID,2,,1.,0.,0.\n\
+                 CELAS2,11,1.+4,2,1\nCELAS2,12,2.+4,2,2\nCELAS2,13,3.+4,2,3\n";
+    let text = format!("{solid}{}\nENDDATA\n", card("", &triangle(m, c)));
+    let d = parse_bdf(&text, "s.bdf", &BdfOptions::default()).unwrap();
+    assert!(
+        d.warnings
+            .iter()
+            .any(|w| w.message.contains("rotational terms are dropped")),
+        "{:?}",
+        d.warnings
+    );
+    let want = sorted(vec![k[0] / m[0], k[1] / m[1], k[2] / m[2]]);
+    assert_lowest(&d.model, MassKind::Lumped, &want, 1e-10);
+    let mut bad = m;
+    bad[3] = -0.4;
+    let text = deck(&card("", &triangle(bad, 0.0)), "");
+    let line = 1 + text.lines().position(|l| l.starts_with("CONM1")).unwrap();
+    assert_refused(
+        &text,
+        "bad.bdf",
+        &format!("bad.bdf:{line}"),
+        "positive semi-definite",
+    );
+    let text = deck(
+        &card("", &triangle(m, 0.0)).replace("CONM1,9,2,", "CONM1,9,4,"),
+        "",
+    );
+    assert_refused(&text, "bad.bdf", &format!("bad.bdf:{line}"), "GRID 4");
+}
+
 /// RBAR and RBAR1 are rigid links: grid 2 on a CBUSH of six stiffnesses to a clamped grid, a
 /// rigid bar to grid 3 at `d = 0.3` along x carrying a CONM2 `m` with inertias `J1..J3` about its
 /// own centre. `x` and `theta_x` are alone (`k1 / m`, `k4 / J1`); `y` with `theta_z` and `z`

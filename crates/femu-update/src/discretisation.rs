@@ -131,7 +131,7 @@ pub fn estimate(
         q.add_rotations(mesh.node_id(*n))?;
     }
     for r in model.rigid_masses() {
-        q.add_rigid_mass(mesh.node_id(r.node), r.mass, r.offset, r.inertia)?;
+        q.add_rigid_mass_copy(mesh.node_id(r.node), r)?;
     }
     let mut dependent: std::collections::HashSet<(u64, usize)> = Default::default();
     for con in model.constraints() {

@@ -286,17 +286,20 @@ fn write_point_masses(s: &mut String, model: &Model) -> Result<(), IoError> {
     let first_id = mesh.elements().map(|e| e.id).max().unwrap_or(0) + 1;
     let mut masses: Vec<femu_fem::model::PointMass> = model.point_masses().to_vec();
     for r in model.rigid_masses() {
-        if r.offset
-            .iter()
-            .chain(r.inertia.iter().flatten())
-            .any(|v| *v != 0.0)
+        let m = r.mass;
+        let plain =
+            (0..6).all(|i| (0..6).all(|k| r.matrix[i][k] == if i == k && i < 3 { m } else { 0.0 }));
+        if !plain
+            || r.offset
+                .iter()
+                .chain(r.inertia.iter().flatten())
+                .any(|v| *v != 0.0)
         {
             return Err(unwritable(format!(
-                "the rigid mass on node {} has an offset or rotary inertia, which CalculiX's *MASS cannot state",
+                "the rigid mass on node {} has an offset, rotary inertia or a general mass matrix, which CalculiX's *MASS cannot state",
                 mesh.node_id(r.node)
             )));
         }
-        let m = r.mass;
         masses.push(femu_fem::model::PointMass {
             node: r.node,
             mass: [[m, 0.0, 0.0], [0.0, m, 0.0], [0.0, 0.0, m]],

@@ -63,7 +63,98 @@ fn offset_and_inertia(
     Ok((d, j))
 }
 
-/// Adds the CONM2 masses (times `wtmass`) to `model`. `dependents` are the RBE2s' dependent grids
+/// A CONM1 (QRG CONM1: `EID G CID M11 M21 M22 M31 M32 M33 M41 ... M66`, the lower triangle of a
+/// symmetric 6x6 mass matrix in the axes of `CID`, 0 basic), turned to basic axes
+/// (`T M T^T`, `T` the frame's axes twice) and times `wtmass`, a mass set `CONM1_<EID>` of its
+/// own: on a grid with rotations the whole matrix; on a grid without (a solid's) its
+/// translational block, the rest dropped with a warning as Nastran's `AUTOSPC` drops the
+/// rotations nothing but the mass holds; on a grid an RBE2 moves, refused when it has rotational
+/// terms (not carried to the link's reference).
+#[allow(clippy::too_many_arguments)]
+fn conm1(
+    c: &Card,
+    model: &mut Model,
+    geometry: &mut Geometry<'_>,
+    wtmass: f64,
+    lenient: bool,
+    connected: &[bool],
+    dependents: &HashMap<u64, (u64, Vec<usize>)>,
+    warnings: &mut Vec<Warning>,
+) -> Result<(), IoError> {
+    let eid = c.id(0, "EID")?;
+    let g = c.id(1, "G")?;
+    let Some(gi) = model.mesh().node_index(g) else {
+        return Err(c.err(format!("is on GRID {g}, which the deck does not define")));
+    };
+    if !connected[gi] {
+        let text = format!(
+            "{eid} is on GRID {g}, which no element or rigid link connects: it would have no stiffness"
+        );
+        if lenient {
+            warn(warnings, c, format!("{text}: left out"));
+            return Ok(());
+        }
+        return Err(c.err(text));
+    }
+    // the lower triangle, row by row, from field 3
+    let mut local = [[0.0; 6]; 6];
+    let mut at = 3;
+    for i in 0..6 {
+        for k in 0..=i {
+            let v = c.real(at, &format!("M{}{}", i + 1, k + 1))?.unwrap_or(0.0);
+            local[i][k] = v;
+            local[k][i] = v;
+            at += 1;
+        }
+    }
+    let cid = c.int(2, "CID")?.unwrap_or(0);
+    let xg = model.mesh().coords()[gi];
+    let a = if cid == 0 {
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+    } else {
+        geometry.frame(cid, c)?.axes_at(xg)
+    };
+    // T M T^T with T = diag(R, R), R's columns the frame's axes
+    let t = |i: usize, p: usize| -> f64 { if i / 3 == p / 3 { a[i % 3][p % 3] } else { 0.0 } };
+    let matrix: [[f64; 6]; 6] = std::array::from_fn(|i| {
+        std::array::from_fn(|k| {
+            let mut v = 0.0;
+            for p in 0..6 {
+                for q in 0..6 {
+                    v += t(i, p) * local[p][q] * t(k, q);
+                }
+            }
+            v * wtmass
+        })
+    });
+    let rotational = (0..6).any(|i| (3..6).any(|k| matrix[i][k] != 0.0));
+    let set = format!("CONM1_{eid}");
+    if model.has_rotations(gi) {
+        model.add_mass_matrix(g, matrix).map_err(c.located())?;
+        let added = model.last_mass(true).into_iter().collect::<Vec<_>>();
+        return model.add_mass_set(set, &added).map_err(c.located());
+    }
+    if rotational {
+        if dependents.contains_key(&g) {
+            return Err(c.err(format!(
+                "{eid}: GRID {g} moves with a rigid link and has no rotations of its own: a CONM1 with rotational terms there is not carried to the link's reference (give the mass on the reference grid)"
+            )));
+        }
+        warn(
+            warnings,
+            c,
+            format!(
+                "CONM1 {eid}: GRID {g} has no rotations (only RBE2 reference grids and grids of beams and shells have), so its rotational terms are dropped and the translational block kept, as Nastran's AUTOSPC leaves it"
+            ),
+        );
+    }
+    let block: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|k| matrix[i][k]));
+    model.add_point_mass_matrix(g, block).map_err(c.located())?;
+    let added = model.last_mass(false).into_iter().collect::<Vec<_>>();
+    model.add_mass_set(set, &added).map_err(c.located())
+}
+
+/// Adds the CONM2 and CONM1 masses (times `wtmass`) to `model`. `dependents` are the RBE2s' dependent grids
 /// with their reference grid and components.
 ///
 /// # Errors
@@ -91,6 +182,12 @@ pub(super) fn add_masses(
         }
     }
     for c in conm2 {
+        if c.name == "CONM1" {
+            conm1(
+                c, model, geometry, wtmass, lenient, &connected, dependents, warnings,
+            )?;
+            continue;
+        }
         let eid = c.id(0, "EID")?;
         // each CONM2 is a mass set of its own, `CONM2_<EID>`, for updating its mass
         let set = format!("CONM2_{eid}");
