@@ -999,6 +999,57 @@ fn conm1_is_a_general_mass_matrix() {
     assert_refused(&text, "bad.bdf", &format!("bad.bdf:{line}"), "GRID 4");
 }
 
+/// An RBE1 is a rigid body on six independent DOFs (QRG RBE1): grids 1 (origin), 2 (1, 0, 0)
+/// and 3 (0, 1, 0) give the 3-2-1 set `u1x u1y u1z u2y u2z u3z`, and grid 4 at (1, 1, 0) follows
+/// the rigid motion they fix, worked here: `u4x = u1x + u1y - u2y`, `u4y = u2y`,
+/// `u4z = u2z + u3z - u1z`. With a spring `k` on each independent DOF, a CONM2 `m0` on grids 1-3
+/// (the other components held) and `m` on grid 4, `M = m0 I + m B^T B` with `B B^T =
+/// [[3, -1, 0], [-1, 1, 0], [0, 0, 3]]` (eigenvalues 3 and `2 +- sqrt 2`), so the eigenvalues are
+/// `k / m0` three times and `k / (m0 + m sigma)` for those three `sigma`. Refused with the line:
+/// five independent DOFs, six that fix no rigid motion (grids 1 and 2 in all three directions:
+/// the turn about their line is free), no UM, a DOF both independent and dependent.
+#[test]
+fn rbe1_is_a_rigid_body_on_six_dofs() {
+    let (k, m0, m): (f64, f64, f64) = (1.0e4, 2.0, 5.0);
+    let deck = |rbe1: &str| {
+        format!(
+            "SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\n\
+             GRID,3,,0.,1.,0.\nGRID,4,,1.,1.,0.\nCELAS2,11,{k},1,1\nCELAS2,12,{k},1,2\n\
+             CELAS2,13,{k},1,3\nCELAS2,14,{k},2,2\nCELAS2,15,{k},2,3\nCELAS2,16,{k},3,3\n\
+             CONM2,21,1,,{m0}\nCONM2,22,2,,{m0}\nCONM2,23,3,,{m0}\nCONM2,24,4,,{m}\n\
+             {rbe1}\nSPC1,1,1,2\nSPC1,1,12,3\nENDDATA\n"
+        )
+    };
+    let d = parse_bdf(
+        &deck("RBE1,7,1,123,2,23,3,3\n,UM,4,123"),
+        "rbe1.bdf",
+        &BdfOptions::default(),
+    )
+    .unwrap();
+    let r2 = 2f64.sqrt();
+    let mut want: Vec<f64> = [0.0, 0.0, 0.0, 3.0, 2.0 + r2, 2.0 - r2]
+        .iter()
+        .map(|s| k / (m0 + m * s))
+        .collect();
+    want.sort_by(f64::total_cmp);
+    for kind in [MassKind::Lumped, MassKind::Consistent] {
+        assert_lowest(&d.model, kind, &want, 1e-10);
+    }
+    for (rbe1, needle) in [
+        ("RBE1,7,1,123,2,23\n,UM,4,123", "5 independent DOFs"),
+        ("RBE1,7,1,123,2,123\n,UM,4,123", "do not fix a rigid motion"),
+        ("RBE1,7,1,123,2,23,3,3", "no dependent DOFs"),
+        (
+            "RBE1,7,1,123,2,23,3,3\n,UM,4,123,3,3",
+            "both independent and dependent",
+        ),
+    ] {
+        let text = deck(rbe1);
+        let line = 1 + text.lines().position(|l| l.starts_with("RBE1")).unwrap();
+        assert_refused(&text, "bad.bdf", &format!("bad.bdf:{line}"), needle);
+    }
+}
+
 /// RBAR and RBAR1 are rigid links: grid 2 on a CBUSH of six stiffnesses to a clamped grid, a
 /// rigid bar to grid 3 at `d = 0.3` along x carrying a CONM2 `m` with inertias `J1..J3` about its
 /// own centre. `x` and `theta_x` are alone (`k1 / m`, `k4 / J1`); `y` with `theta_z` and `z`

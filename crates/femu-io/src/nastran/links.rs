@@ -1,5 +1,5 @@
-//! `RBE2`, `RBAR` and `RBAR1` (rigid links), `RROD` (rigid pin-ended rods) and `RBE3` (weighted
-//! averages) as multipoint constraints.
+//! `RBE2`, `RBAR` and `RBAR1` (rigid links), `RBE1` (a rigid body on six independent DOFs),
+//! `RROD` (rigid pin-ended rods) and `RBE3` (weighted averages) as multipoint constraints.
 
 use super::cards::Card;
 use crate::{IoError, Warning};
@@ -80,6 +80,208 @@ fn bar_link(c: &Card) -> Result<(u64, Vec<usize>, u64), IoError> {
     }
     let cm = if cm.is_empty() { (0..6).collect() } else { cm };
     Ok((reference, cm, dependent))
+}
+
+/// An RBE1 (QRG RBE1: `EID GN1 CN1 ... GN6 CN6`, then `UM GM1 CM1 ...` and `ALPHA`): a rigid body
+/// whose motion six independent DOFs fix (`CNi` on `GNi`, six in all), and the dependent DOFs
+/// `CMj` on `GMj` that follow it. Each DOF is a row of the rigid motion `(t, theta)` at GN1,
+/// `e_c . (t + theta x (x - x_GN1))` for a translation and `theta_c` for a rotation; the six
+/// independent rows make a matrix `A`, and each dependent DOF is `row A^-1` of the independent
+/// ones. Refused: other than six independent DOFs, six that do not fix a rigid motion (`A`
+/// singular: collinear grids, a repeated direction), a DOF both independent and dependent, no
+/// dependent DOF, an independent rotation of a grid without rotations, turned displacement frames.
+/// A dependent rotation of a grid without rotations is left out with a warning (as for RBE2).
+fn rigid_body(
+    c: &Card,
+    eid: u64,
+    model: &mut Model,
+    turned: &HashMap<u64, i64>,
+    label: &str,
+    warnings: &mut Vec<Warning>,
+) -> Result<(), IoError> {
+    // (grid, component) pairs before and after UM, ALPHA (a real) ending the card
+    let (mut independent, mut dependent) = (Vec::new(), Vec::new());
+    let mut after_um = false;
+    let mut pending: Option<u64> = None;
+    for i in 1..c.fields.len() {
+        let t = c.field(i).trim();
+        if t.is_empty() {
+            continue;
+        }
+        if t.eq_ignore_ascii_case("UM") {
+            if pending.is_some() {
+                return Err(c.err(format!("{eid}: a grid without its components before UM")));
+            }
+            after_um = true;
+            continue;
+        }
+        if after_um && pending.is_none() && (t.contains('.') || t.contains(['E', 'e'])) {
+            break; // ALPHA
+        }
+        match pending.take() {
+            None => {
+                let g = t.parse::<u64>().ok().filter(|g| *g > 0).ok_or_else(|| {
+                    c.err(format!("{eid}: {t:?} (field {}) is not a grid id", i + 2))
+                })?;
+                pending = Some(g);
+            }
+            Some(g) => {
+                let comps = components(c, i, "components")?;
+                let list = if after_um {
+                    &mut dependent
+                } else {
+                    &mut independent
+                };
+                list.extend(comps.into_iter().map(|k| (g, k)));
+            }
+        }
+    }
+    if let Some(g) = pending {
+        return Err(c.err(format!("{eid}: GRID {g} has no components after it")));
+    }
+    if independent.len() != 6 {
+        return Err(c.err(format!(
+            "{eid}: {} independent DOFs: an RBE1's rigid motion takes exactly six",
+            independent.len()
+        )));
+    }
+    if dependent.is_empty() {
+        return Err(c.err(format!("{eid}: no dependent DOFs (UM GM1 CM1 ...)")));
+    }
+    if let Some((g, k)) = dependent.iter().find(|d| independent.contains(d)) {
+        return Err(c.err(format!(
+            "{eid}: component {} of GRID {g} is both independent and dependent",
+            k + 1
+        )));
+    }
+    let place = |model: &Model, g: u64| -> Result<([f64; 3], bool), IoError> {
+        let n = model.mesh().node_index(g).ok_or_else(|| {
+            c.err(format!(
+                "RBE1 {eid} names GRID {g}, which the deck does not define"
+            ))
+        })?;
+        if let Some(cd) = turned.get(&g) {
+            return Err(c.err(format!(
+                "{eid}: GRID {g}'s displacement frame {cd} is turned: femu's constraints are in the basic frame"
+            )));
+        }
+        Ok((model.mesh().coords()[n], model.has_rotations(n)))
+    };
+    // each DOF's row of the rigid motion (t, theta) at the first independent grid
+    let mut places = Vec::new();
+    for &(g, k) in &independent {
+        let (x, rot) = place(model, g)?;
+        if k >= 3 && !rot {
+            return Err(c.err(format!(
+                "{eid}: independent rotation {} of GRID {g}, which has no rotations (only grids of beams, shells and rigid links' references have)",
+                k + 1
+            )));
+        }
+        places.push(x);
+    }
+    let origin = places[0];
+    let row = |x: [f64; 3], k: usize| -> [f64; 6] {
+        let mut r = [0.0; 6];
+        r[k] = 1.0;
+        if k < 3 {
+            // e_k . (theta x d) = theta . (d x e_k)
+            let d = [x[0] - origin[0], x[1] - origin[1], x[2] - origin[2]];
+            let mut e = [0.0; 3];
+            e[k] = 1.0;
+            r[3] = d[1] * e[2] - d[2] * e[1];
+            r[4] = d[2] * e[0] - d[0] * e[2];
+            r[5] = d[0] * e[1] - d[1] * e[0];
+        }
+        r
+    };
+    let a: Vec<[f64; 6]> = independent
+        .iter()
+        .zip(&places)
+        .map(|(&(_, k), x)| row(*x, k))
+        .collect();
+    let inverse = invert6(&a).ok_or_else(|| {
+        c.err(format!(
+            "{eid}: its six independent DOFs do not fix a rigid motion (collinear grids or a repeated direction)"
+        ))
+    })?;
+    let mut warned = false;
+    for &(g, k) in &dependent {
+        let (x, rot) = place(model, g)?;
+        if k >= 3 && !rot {
+            if !warned {
+                warned = true;
+                warnings.push(Warning {
+                    path: c.path.clone(),
+                    line: c.line,
+                    message: format!(
+                        "RBE1 {eid}: components 4-6 of grids without rotations are ignored (GRID {g} has none; the rigid body acts on its translations)"
+                    ),
+                });
+            }
+            continue;
+        }
+        let r = row(x, k);
+        // the dependent DOF is r q with q = A^-1 u_N
+        let terms: Vec<((u64, usize), f64)> = (0..6)
+            .map(|j| {
+                (
+                    independent[j],
+                    (0..6).map(|p| r[p] * inverse[p][j]).sum::<f64>(),
+                )
+            })
+            .filter(|(_, w)| w.abs() > 1e-14)
+            .collect();
+        model
+            .add_constraint((g, k), &terms, label)
+            .map_err(c.located())?;
+    }
+    Ok(())
+}
+
+/// The inverse of a 6x6 matrix given by rows, by Gauss-Jordan elimination with partial
+/// pivoting; `None` when a pivot falls below 1e-10 of the matrix's largest entry (singular).
+fn invert6(a: &[[f64; 6]]) -> Option<[[f64; 6]; 6]> {
+    let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut m: Vec<[f64; 12]> = a
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            std::array::from_fn(|j| {
+                if j < 6 {
+                    r[j]
+                } else if j - 6 == i {
+                    1.0
+                } else {
+                    0.0
+                }
+            })
+        })
+        .collect();
+    for col in 0..6 {
+        let p = (col..6).max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))?;
+        if !(m[p][col].abs() > 1e-10 * scale) {
+            return None;
+        }
+        m.swap(col, p);
+        let pivot = m[col][col];
+        for v in m[col].iter_mut() {
+            *v /= pivot;
+        }
+        for i in 0..6 {
+            if i != col {
+                let f = m[i][col];
+                if f != 0.0 {
+                    let pr = m[col];
+                    for (v, q) in m[i].iter_mut().zip(pr) {
+                        *v -= f * q;
+                    }
+                }
+            }
+        }
+    }
+    Some(std::array::from_fn(|i| {
+        std::array::from_fn(|j| m[i][6 + j])
+    }))
 }
 
 /// An RROD (QRG RROD: `EID GA GB CMA CMB ALPHA`): the rod between GA and GB keeps its length,
@@ -188,7 +390,7 @@ pub(super) fn read_links(
     };
     for c in links
         .iter()
-        .filter(|c| c.name != "RBE3" && c.name != "RROD")
+        .filter(|c| !matches!(c.name.as_str(), "RBE3" | "RROD" | "RBE1"))
     {
         let gn = if c.name == "RBE2" {
             c.id(1, "GN")?
@@ -204,6 +406,10 @@ pub(super) fn read_links(
         let label = format!("{} {eid} ({} line {})", c.name, c.path.display(), c.line);
         if c.name == "RROD" {
             rigid_rod(c, eid, model, turned, &label)?;
+            continue;
+        }
+        if c.name == "RBE1" {
+            rigid_body(c, eid, model, turned, &label, warnings)?;
             continue;
         }
         if c.name != "RBE3" {

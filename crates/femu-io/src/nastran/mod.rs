@@ -164,7 +164,6 @@ const UNSUPPORTED: &[(&str, &str)] = &[
     ("PBCOMP", "composite beams"),
     ("PBRSECT", "arbitrary beam sections"),
     ("PBMSECT", "arbitrary beam sections"),
-    ("RBE1", "rigid elements"),
     ("RTRPLT", "rigid triangles"),
     ("RTRPLT1", "rigid triangles"),
     ("RSPLINE", "interpolation constraints"),
@@ -407,7 +406,7 @@ fn known_cards() -> Vec<&'static str> {
         "GRID", "GRDSET", "CORD2R", "CORD2C", "CORD2S", "CORD1R", "CORD1C", "CORD1S", "CHEXA",
         "CPENTA", "CTETRA", "CPYRAM", "PSOLID", "MAT1", "MAT9", "MAT2", "MAT8", "SPC", "SPC1",
         "SPCADD", "MPC", "MPCADD", "CONM2", "CONM1", "RBE2", "RBE3", "RBAR", "RBAR1", "RROD",
-        "PARAM", "EIGRL", "EIGR", "BAROR", "BEAMOR",
+        "RBE1", "PARAM", "EIGRL", "EIGR", "BAROR", "BEAMOR",
     ];
     v.extend(structural::ELEMENTS);
     v.extend(structural::PROPERTIES);
@@ -465,7 +464,7 @@ fn sort<'a>(
             "SPC" | "SPC1" | "SPCADD" => s.spcs.push(c),
             "MPC" | "MPCADD" => s.mpcs.push(c),
             "CONM2" | "CONM1" => s.conm2.push(c),
-            "RBE2" | "RBE3" | "RBAR" | "RBAR1" | "RROD" => s.links.push(c),
+            "RBE2" | "RBE3" | "RBAR" | "RBAR1" | "RROD" | "RBE1" => s.links.push(c),
             "TABDMP1" => {
                 let tid = c.id(0, "TID")? as i64;
                 if let Some(first) = s.tabdmp.insert(tid, c) {
@@ -540,7 +539,7 @@ fn sort<'a>(
             .min_by_key(|c| c.line)
             .expect("non-empty");
         let text = format!(
-            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, bars and beams (CBAR, CBEAM with PBAR, PBARL, PBEAM, PBEAML), rods (CROD, CONROD, CTUBE), springs, dampers, scalar masses and bushings (CELAS1, CELAS2, CDAMP1, CDAMP2, CMASS1, CMASS2, CVISC, CBUSH, CBUSH1D), shells (CQUAD4, CQUAD8, CTRIA3, CTRIA6 with PSHELL, PCOMP, PCOMPG), CONM2 and CONM1 masses, RBE2, RBAR, RBAR1, RROD and RBE3 links, MPC and SPC constraints",
+            "the deck has cards that change the stiffness or the mass and that femu cannot model: {}; femu models solids (CHEXA 8/20, CPENTA 6/15, CTETRA 4/10, CPYRAM 5/13) with MAT1 or MAT9, bars and beams (CBAR, CBEAM with PBAR, PBARL, PBEAM, PBEAML), rods (CROD, CONROD, CTUBE), springs, dampers, scalar masses and bushings (CELAS1, CELAS2, CDAMP1, CDAMP2, CMASS1, CMASS2, CVISC, CBUSH, CBUSH1D), shells (CQUAD4, CQUAD8, CTRIA3, CTRIA6 with PSHELL, PCOMP, PCOMPG), CONM2 and CONM1 masses, RBE2, RBAR, RBAR1, RBE1, RROD and RBE3 links, MPC and SPC constraints",
             list.join(", ")
         );
         if options.lenient {
