@@ -2012,7 +2012,7 @@ ENDDATA
 /// into the stiffness as `g`), or Abaqus' structural factor: femu frf reproduces it to 1e-9 of the
 /// peak, where the same table as viscous damping (no KDAMP) is off by more than 1e-4 of it away
 /// from resonance; femu modes --damped gives the mode the root `i w_n sqrt(1 + i g)` (damping
-/// `-2 Re p / Im p`, to 1e-9).
+/// `-2 Re p / Im p`, to 1e-9); femu info says how each deck's modal damping acts.
 #[test]
 fn modal_damping_as_complex_stiffness() {
     let dir = std::env::temp_dir().join(format!("femu-cli-kdamp-{}", std::process::id()));
@@ -2058,6 +2058,21 @@ fn modal_damping_as_complex_stiffness() {
         let ((peak, err), notes) = frf(deck);
         assert!(err < 1e-9 * peak, "{deck}: {err:e} against {peak:e}");
         assert!(notes.contains("complex stiffness"), "{deck}: {notes}");
+    }
+    for (deck, says) in [
+        ("kdamp.bdf", "as each mode's complex stiffness (KDAMP = -1)"),
+        (
+            "structural.inp",
+            "structural damping factors: each mode's complex stiffness",
+        ),
+    ] {
+        let out = femu()
+            .args(["info", dir.join(deck).to_str().unwrap()])
+            .output()
+            .unwrap();
+        succeeded(&out);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(stdout.contains(says), "{deck}: {stdout}");
     }
     let ((peak, err), notes) = frf("viscous.bdf");
     assert!(err > 1e-4 * peak, "{err:e} against {peak:e}");

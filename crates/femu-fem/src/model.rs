@@ -231,6 +231,11 @@ impl Model {
         Ok(())
     }
 
+    /// The ranges of [`Model::set_mode_ratios`]: modes `first..=last` and their ratio.
+    pub fn mode_ratio_ranges(&self) -> &[(usize, usize, f64)] {
+        &self.mode_ratios
+    }
+
     /// The damping ratio of mode `mode` (from 1) by [`Model::set_mode_ratios`]'s ranges (the last
     /// range that holds it), `None` without ranges.
     pub fn mode_ratio(&self, mode: usize) -> Option<f64> {

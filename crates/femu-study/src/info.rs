@@ -110,6 +110,31 @@ fn damping_line(s: &mut String, model: &femu_fem::model::Model) {
             }
         );
     }
+    let ranges = model.mode_ratio_ranges();
+    if !ranges.is_empty() {
+        let structural = model.modal_damping_structural();
+        let _ = writeln!(
+            s,
+            "modal damping by mode number (*MODAL DAMPING): {}{} (femu frf's modal superposition uses it when given no damping)",
+            ranges
+                .iter()
+                .map(|(a, b, z)| {
+                    let value = if structural { 2.0 * z } else { *z };
+                    if a == b {
+                        format!("mode {a} {value}")
+                    } else {
+                        format!("modes {a}-{b} {value}")
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(", "),
+            if structural {
+                ", structural damping factors: each mode's complex stiffness"
+            } else {
+                ", viscous ratios"
+            }
+        );
+    }
     let d = model.element_damping();
     if d.is_empty() {
         return;
@@ -267,6 +292,7 @@ fn describe_inp(path: &Path, s: &mut String, warnings: &mut Vec<String>) -> Resu
     warnings.extend(deck.warnings.iter().map(ToString::to_string));
     let (model, built) = deck.to_model_with_warnings()?;
     warnings.extend(built.iter().map(ToString::to_string));
+    damping_line(s, &model);
     formulation_line(s, &model);
     warnings.extend(crate::load::units_hint(&model, path));
     let _ = writeln!(
