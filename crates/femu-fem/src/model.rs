@@ -64,15 +64,19 @@ pub enum ModalDampingUnits {
 }
 
 /// The modes' damping as a tabular function of their natural frequency (Nastran `TABDMP1`
-/// selected by the case control's `SDAMPING`): linear between the points, linearly extrapolated
-/// from the two end points outside them (QRG TABDMP1, remarks); at a discontinuity (two points at
-/// one frequency) the mean of its two values.
+/// selected by the case control's `SDAMPING`, Abaqus' `*MODAL DAMPING, DEFINITION=FREQUENCY
+/// RANGE`): linear between the points; outside them linearly extrapolated from the two end points
+/// (QRG TABDMP1, remarks) or held at the nearest end's value (Abaqus), as `hold_ends` says; at a
+/// discontinuity (two points at one frequency) the mean of its two values.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModalDampingTable {
     /// The units of the values.
     pub units: ModalDampingUnits,
     /// `(frequency in Hz, value)`, frequencies ascending.
     pub points: Vec<(f64, f64)>,
+    /// Outside the points: the nearest end's value (`true`, Abaqus) or the end segments
+    /// extended (`false`, Nastran).
+    pub hold_ends: bool,
 }
 
 impl ModalDampingTable {
@@ -83,6 +87,8 @@ impl ModalDampingTable {
         let value = match p.len() {
             0 => 0.0,
             1 => p[0].1,
+            _ if self.hold_ends && hz <= p[0].0 => p[0].1,
+            n if self.hold_ends && hz >= p[n - 1].0 => p[n - 1].1,
             n => {
                 // the segment that holds hz (the end segments extrapolate)
                 let i = p[..n - 1]

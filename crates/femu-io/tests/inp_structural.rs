@@ -1065,6 +1065,39 @@ fn material_structural_damping_reaches_solids_and_shells() {
     .to_model()
     .unwrap();
     assert!(structural.modal_damping_structural());
+    // DEFINITION=FREQUENCY RANGE (Abaqus): linear between the points, the nearest end's value
+    // outside them, worked by hand; with STRUCTURAL the factor is the loss factor 2 zeta
+    let by_frequency = read(
+        "*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n*SHELL SECTION, ELSET=SKIN, MATERIAL=STEEL\n0.01\n\
+         *MODAL DAMPING, DEFINITION=FREQUENCY RANGE, VISCOUS=FRACTION OF CRITICAL DAMPING\n30., 0.03\n10., 0.01\n",
+    )
+    .unwrap()
+    .to_model()
+    .unwrap();
+    let table = by_frequency.modal_damping().expect("a table");
+    for (hz, want) in [
+        (5.0, 0.01),
+        (10.0, 0.01),
+        (20.0, 0.02),
+        (25.0, 0.025),
+        (50.0, 0.03),
+    ] {
+        assert!(
+            (table.ratio_at(hz) - want).abs() < 1e-15,
+            "{hz}: {}",
+            table.ratio_at(hz)
+        );
+    }
+    assert!(!by_frequency.modal_damping_structural());
+    let factors = read(
+        "*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n*SHELL SECTION, ELSET=SKIN, MATERIAL=STEEL\n0.01\n\
+         *MODAL DAMPING, DEFINITION=FREQUENCY RANGE, STRUCTURAL\n10., 0.04\n",
+    )
+    .unwrap()
+    .to_model()
+    .unwrap();
+    assert!(factors.modal_damping_structural());
+    assert!((factors.modal_damping().unwrap().ratio_at(70.0) - 0.02).abs() < 1e-15);
     let ratios: Vec<Option<f64>> = (1..=5).map(|r| structural.mode_ratio(r)).collect();
     assert_eq!(ratios, [0.02, 0.02, 0.0, 0.05, 0.0].map(Some).to_vec());
     let rayleigh = read(
@@ -1095,9 +1128,29 @@ fn material_structural_damping_reaches_solids_and_shells() {
         ),
         ("*MODAL DAMPING\n1, 3, -0.02\n", 22, "at least 0"),
         (
-            "*MODAL DAMPING, DEFINITION=FREQUENCY RANGE\n1., 100., 0.02\n",
+            "*MODAL DAMPING, DEFINITION=EIGENMODES\n1., 100., 0.02\n",
             22,
-            "by mode numbers",
+            "MODE NUMBERS or FREQUENCY RANGE",
+        ),
+        (
+            "*MODAL DAMPING\n1, 3, 0.02\n*MODAL DAMPING, DEFINITION=FREQUENCY RANGE\n10., 0.02\n",
+            24,
+            "by frequency range here and by mode numbers at d.inp:22",
+        ),
+        (
+            "*MODAL DAMPING, RAYLEIGH, DEFINITION=FREQUENCY RANGE\n10., 2., 1e-6\n",
+            22,
+            "varies with frequency",
+        ),
+        (
+            "*MODAL DAMPING, RAYLEIGH\n1, 3, 2., 1e-6\n",
+            22,
+            "to a range of modes",
+        ),
+        (
+            "*MODAL DAMPING, VISCOUS=COMPOSITE\n1, 3\n",
+            22,
+            "VISCOUS=COMPOSITE",
         ),
         ("*DAMPING, STRUCTURAL=-0.1\n", 21, "at least 0"),
         ("*DAMPING, ALPHA=-1.\n", 21, "at least 0"),

@@ -91,7 +91,7 @@ const READ: &[(&str, &[&str])] = &[
     ("DAMPING", &["STRUCTURAL", "ALPHA", "BETA", "COMPOSITE"]),
     (
         "MODAL DAMPING",
-        &["RAYLEIGH", "MODAL", "DEFINITION", "STRUCTURAL"],
+        &["RAYLEIGH", "MODAL", "DEFINITION", "STRUCTURAL", "VISCOUS"],
     ),
     ("ORIENTATION", &["NAME", "SYSTEM", "DEFINITION"]),
     ("ROTARY INERTIA", &["ELSET"]),
@@ -575,6 +575,9 @@ pub struct InpDeck {
     pub mode_ratios: Vec<(usize, usize, f64)>,
     /// Whether the `*MODAL DAMPING` ranges are `STRUCTURAL` (each mode's complex stiffness).
     pub modal_structural: bool,
+    /// `*MODAL DAMPING, DEFINITION=FREQUENCY RANGE`: `(frequency, value)` points in order, the
+    /// values fractions of critical damping (or structural damping factors with `STRUCTURAL`).
+    pub modal_frequency_points: Vec<(f64, f64)>,
     /// `*MODAL DAMPING, RAYLEIGH`: the modes' Rayleigh damping `(alpha, beta)`.
     pub modal_rayleigh: Option<(f64, f64)>,
     /// Plane-stress ply materials (`*ELASTIC, TYPE=LAMINA`) by upper-case name: for composite

@@ -166,6 +166,21 @@ impl InpDeck {
             .set_mode_ratios(self.mode_ratios.clone())
             .map_err(|source| self.at_element(None, source))?;
         model.set_modal_damping_structural(self.modal_structural);
+        if !self.modal_frequency_points.is_empty() {
+            let mut points = self.modal_frequency_points.clone();
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            model
+                .set_modal_damping(Some(femu_fem::model::ModalDampingTable {
+                    units: if self.modal_structural {
+                        femu_fem::model::ModalDampingUnits::G
+                    } else {
+                        femu_fem::model::ModalDampingUnits::Crit
+                    },
+                    points,
+                    hold_ends: true,
+                }))
+                .map_err(|source| self.at_element(None, source))?;
+        }
         if let Some((alpha, beta)) = self.modal_rayleigh {
             model
                 .set_uniform_damping(Some(femu_fem::model::UniformDamping::Rayleigh {

@@ -123,6 +123,10 @@ struct DeckBuilder {
     mode_ratios: Vec<(usize, usize, f64)>,
     /// `*MODAL DAMPING, STRUCTURAL` (true) or viscous ranges (false), with the first block's line.
     modal_structural: Option<(bool, Location)>,
+    /// `*MODAL DAMPING, DEFINITION=FREQUENCY RANGE` points, and whether any block was by mode
+    /// numbers (the two are not mixed), with its line.
+    modal_frequency_points: Vec<(f64, f64)>,
+    modal_by_mode: Option<(bool, Location)>,
     modal_rayleigh: Option<(f64, f64)>,
     laminae: BTreeMap<String, structural::Lamina>,
     orientations: Vec<orientation::OrientationCard>,
@@ -1696,18 +1700,61 @@ impl DeckBuilder {
         Ok(())
     }
 
-    /// A `*MODAL DAMPING` line (Abaqus and CalculiX): `first mode, last mode, ratio` (MODAL=DIRECT,
-    /// the default), or `, , alpha, beta` with `RAYLEIGH`. Damping defined by frequency range or
-    /// composite modal damping is refused.
+    /// A `*MODAL DAMPING` line (Abaqus and CalculiX): `first mode, last mode, value` (MODAL=DIRECT,
+    /// the default: a fraction of critical damping, or a structural damping factor with
+    /// `STRUCTURAL`), `frequency, value` with `DEFINITION=FREQUENCY RANGE` (Abaqus: linear between
+    /// the frequencies, the nearest end's value outside them), or `, , alpha, beta` with
+    /// `RAYLEIGH` (one line, for every mode). Composite modal damping, Rayleigh damping by
+    /// frequency or by ranges of modes, and blocks by mode numbers beside blocks by frequency are
+    /// refused.
     fn modal_damping_line(&mut self, f: &[&str], l: &Line, t: &str) -> Result<(), IoError> {
         let p = &self.block_params;
+        let by_frequency = match p.get("DEFINITION") {
+            None => false,
+            Some(v) if v.eq_ignore_ascii_case("MODE NUMBERS") => false,
+            Some(v) if v.eq_ignore_ascii_case("FREQUENCY RANGE") => true,
+            Some(v) => {
+                return Err(err(
+                    l,
+                    format!(
+                        "*MODAL DAMPING, DEFINITION={v}: femu reads MODE NUMBERS or FREQUENCY RANGE"
+                    ),
+                ));
+            }
+        };
+        match &self.modal_by_mode {
+            Some((mode, first)) if *mode == by_frequency => {
+                return Err(err(
+                    l,
+                    format!(
+                        "*MODAL DAMPING: damping by {} here and by {} at {}:{}: give one definition",
+                        if by_frequency {
+                            "frequency range"
+                        } else {
+                            "mode numbers"
+                        },
+                        if by_frequency {
+                            "mode numbers"
+                        } else {
+                            "frequency range"
+                        },
+                        first.path.display(),
+                        first.line
+                    ),
+                ));
+            }
+            Some(_) => {}
+            None => self.modal_by_mode = Some((!by_frequency, at(l))),
+        }
         if let Some(v) = p
-            .get("DEFINITION")
-            .filter(|v| !v.eq_ignore_ascii_case("MODE NUMBERS"))
+            .get("VISCOUS")
+            .filter(|v| !v.eq_ignore_ascii_case("FRACTION OF CRITICAL DAMPING"))
         {
             return Err(err(
                 l,
-                format!("*MODAL DAMPING, DEFINITION={v}: femu reads damping by mode numbers"),
+                format!(
+                    "*MODAL DAMPING, VISCOUS={v}: femu reads direct modal damping (VISCOUS=FRACTION OF CRITICAL DAMPING)"
+                ),
             ));
         }
         if let Some(v) = p.get("MODAL").filter(|v| !v.eq_ignore_ascii_case("DIRECT")) {
@@ -1742,6 +1789,20 @@ impl DeckBuilder {
                     "*MODAL DAMPING: RAYLEIGH and STRUCTURAL on one block (give Rayleigh damping or structural damping factors per mode)".into(),
                 ));
             }
+            if by_frequency {
+                return Err(err(
+                    l,
+                    "*MODAL DAMPING, RAYLEIGH, DEFINITION=FREQUENCY RANGE: Rayleigh damping that varies with frequency is not read (give one line of alpha and beta for every mode)".into(),
+                ));
+            }
+            if f.iter().take(2).any(|v| !v.is_empty()) || self.modal_rayleigh.is_some() {
+                return Err(err(
+                    l,
+                    format!(
+                        "*MODAL DAMPING, RAYLEIGH: {t:?} gives Rayleigh damping to a range of modes, which femu does not read (one line `, , alpha, beta` for every mode)"
+                    ),
+                ));
+            }
             self.modal_rayleigh = Some((number(2, "alpha")?, number(3, "beta")?));
             return Ok(());
         }
@@ -1762,6 +1823,30 @@ impl DeckBuilder {
             }
             Some(_) => {}
             None => self.modal_structural = Some((structural, at(l))),
+        }
+        if by_frequency {
+            let hz = f
+                .first()
+                .and_then(|v| parse_f64(v))
+                .filter(|x| x.is_finite() && *x >= 0.0)
+                .ok_or_else(|| {
+                    err(
+                        l,
+                        format!(
+                            "*MODAL DAMPING: the frequency of {t:?} is not a number of at least 0"
+                        ),
+                    )
+                })?;
+            let value = number(
+                1,
+                if structural {
+                    "structural damping factor"
+                } else {
+                    "fraction of critical damping"
+                },
+            )?;
+            self.modal_frequency_points.push((hz, value));
+            return Ok(());
         }
         let mode = |i: usize, what: &str| -> Result<usize, IoError> {
             f.get(i)
@@ -2076,6 +2161,7 @@ impl DeckBuilder {
             material_damping: self.material_damping,
             mode_ratios: self.mode_ratios,
             modal_structural: self.modal_structural.is_some_and(|(s, _)| s),
+            modal_frequency_points: self.modal_frequency_points,
             modal_rayleigh: self.modal_rayleigh,
             laminae: self.laminae,
             orientations: self

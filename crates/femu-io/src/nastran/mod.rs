@@ -972,7 +972,11 @@ fn modal_damping_table(
             c.field(0)
         )));
     }
-    Ok(ModalDampingTable { units, points })
+    Ok(ModalDampingTable {
+        units,
+        points,
+        hold_ends: false,
+    })
 }
 
 fn selected_method(
