@@ -315,7 +315,12 @@ pub(crate) fn deck_modal_damping(
         let ratios: Vec<f64> = hz.iter().map(|f| table.ratio_at(*f)).collect();
         (
             ratios,
-            "the deck's modal damping table (SDAMPING) at each mode's frequency".to_string(),
+            if table.hold_ends {
+                "the deck's modal damping by frequency (*MODAL DAMPING, DEFINITION=FREQUENCY RANGE) at each mode's frequency"
+            } else {
+                "the deck's modal damping table (SDAMPING) at each mode's frequency"
+            }
+            .to_string(),
         )
     } else {
         model.mode_ratio(1)?;
@@ -961,7 +966,7 @@ fn update_from_frfs(
         None => request.damping()?,
     };
     if model.model.modal_damping().is_some() {
-        notes.push("updating: the deck's modal damping table (SDAMPING) is not used: updating from FRFs fits loss factors or Rayleigh damping".into());
+        notes.push("updating: the deck's modal damping table (SDAMPING, or *MODAL DAMPING by frequency) is not used: updating from FRFs fits loss factors or Rayleigh damping".into());
     }
     // with the materials' damping, the whole model's is the deck's PARAM,G alone (none: 0)
     let deck_base = match model.model.uniform_damping() {

@@ -98,13 +98,22 @@ fn damping_line(s: &mut String, model: &femu_fem::model::Model) {
     if let Some(t) = model.modal_damping() {
         let _ = writeln!(
             s,
-            "modal damping table (SDAMPING): {} points, {:?} from {} to {} Hz{} (femu frf's modal superposition uses it when given no damping)",
+            "modal damping table ({}): {} points, {:?} from {} to {} Hz{} (femu frf's modal superposition uses it when given no damping)",
+            if t.hold_ends {
+                "*MODAL DAMPING, DEFINITION=FREQUENCY RANGE"
+            } else {
+                "SDAMPING"
+            },
             t.points.len(),
             t.units,
             t.points.first().map_or(0.0, |p| p.0),
             t.points.last().map_or(0.0, |p| p.0),
             if model.modal_damping_structural() {
-                ", as each mode's complex stiffness (KDAMP = -1)"
+                if t.hold_ends {
+                    ", as each mode's complex stiffness (STRUCTURAL)"
+                } else {
+                    ", as each mode's complex stiffness (KDAMP = -1)"
+                }
             } else {
                 ""
             }
