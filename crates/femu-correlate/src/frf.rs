@@ -730,8 +730,9 @@ pub fn direct_frf_at_once(
 }
 
 /// `f` of each line `0..lines`, in line order, `at_once` lines at the same time (one after the
-/// other for 1; as the threads free up when `at_once` is the threads): the frequency-line loops of the direct route, of the forced expansion and of
-/// updating from FRFs, each line holding a factorization of its own while it runs.
+/// other for 1; taken as the threads free up when `at_once` is the threads): the frequency-line
+/// loops of the direct route and of updating from FRFs, each line holding a factorization of its
+/// own while it runs.
 pub fn map_lines<T: Send>(
     lines: usize,
     at_once: usize,
