@@ -199,6 +199,32 @@ fn has_coupled_masses(model: &Model, dofs: &DofMap) -> bool {
             crate::structural::StructuralKind::Spring(s) => scalar(s),
             _ => false,
         })
+        || model
+            .direct_entries(crate::model::DirectMatrix::Mass)
+            .iter()
+            .any(|e| e.a != e.b)
+}
+
+/// The points of a direct matrix entry's two DOFs and its local indices on them: `(points,
+/// (row, column))` of a `3 points.len()` square block (one point when both DOFs are on it);
+/// `None` when a rotation's node has lost its rotations (fixed: no element reaches them).
+fn direct_points(
+    dofs: &DofMap,
+    e: &crate::model::DirectEntry,
+) -> Option<(Vec<usize>, (usize, usize))> {
+    let point = |(n, c): (usize, usize)| -> Option<usize> {
+        if c < 3 {
+            Some(n)
+        } else {
+            dofs.rotation_point(n)
+        }
+    };
+    let (pa, pb) = (point(e.a)?, point(e.b)?);
+    if pa == pb {
+        Some((vec![pa], (e.a.1 % 3, e.b.1 % 3)))
+    } else {
+        Some((vec![pa, pb], (e.a.1 % 3, 3 + e.b.1 % 3)))
+    }
 }
 
 /// How many element nodes (counted with repetition) a chunk of the colouring holds at least: a
@@ -290,6 +316,17 @@ impl Assembler {
         for s in model.structural() {
             effective_points(&dofs, &structural_points(&dofs, &s.parts()), &mut buf);
             extra.push(buf.clone());
+        }
+        for which in [
+            crate::model::DirectMatrix::Stiffness,
+            crate::model::DirectMatrix::Mass,
+        ] {
+            for e in model.direct_entries(which) {
+                if let Some((pts, _)) = direct_points(&dofs, e) {
+                    effective_points(&dofs, &pts, &mut buf);
+                    extra.push(buf.clone());
+                }
+            }
         }
         if dofs.has_dependents() {
             eff_ptr.push(0);
@@ -978,6 +1015,40 @@ impl Assembler {
                 self.scatter(&pts, |at, l, w| {
                     ks.add(at, w * sm.k[l]);
                     ms.add(at, w * sm.m[l]);
+                });
+            }
+        }
+        // direct input matrices: each entry at (a, b) and (b, a) of its points' block
+        for (which, add) in [
+            (crate::model::DirectMatrix::Stiffness, &ks),
+            (crate::model::DirectMatrix::Mass, &ms),
+        ] {
+            for e in model.direct_entries(which) {
+                let Some((pts, (r, c))) = direct_points(&self.dofs, e) else {
+                    continue;
+                };
+                if which == crate::model::DirectMatrix::Mass
+                    && mass == MassKind::Lumped
+                    && !self.lumped_on_pattern()
+                {
+                    // a diagonal entry (an off-diagonal one puts the lumped mass on the pattern)
+                    self.scatter_lumped(
+                        &pts,
+                        |_, i| if i == r { e.value } else { 0.0 },
+                        |at, v| add.add(at, v),
+                    );
+                    continue;
+                }
+                let nd = 3 * pts.len();
+                let mut local = vec![0.0; nd * nd];
+                local[r * nd + c] += e.value;
+                if r != c {
+                    local[c * nd + r] += e.value;
+                }
+                self.scatter(&pts, |at, l, w| {
+                    if local[l] != 0.0 {
+                        add.add(at, w * local[l]);
+                    }
                 });
             }
         }

@@ -23,6 +23,10 @@ pub struct Model {
     has_rotation: Vec<bool>,
     constraints: Vec<LinearConstraint>,
     rigid_masses: Vec<RigidMass>,
+    /// Direct input matrices added to the assembled stiffness and mass (Nastran's `K2GG`,
+    /// `M2GG`).
+    direct_stiffness: Vec<DirectEntry>,
+    direct_mass: Vec<DirectEntry>,
     /// per element, when any is not [`Formulation::Full`] (empty: all full)
     formulations: Vec<Formulation>,
     /// Beams, rods, springs and bushings ([`crate::structural`]).
@@ -166,6 +170,31 @@ pub struct RigidMass {
     pub inertia: [[f64; 3]; 3],
 }
 
+/// Which assembled matrix a direct input matrix adds to ([`Model::add_direct_entries`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DirectMatrix {
+    /// The stiffness (Nastran's `K2GG`).
+    Stiffness,
+    /// The mass (Nastran's `M2GG`).
+    Mass,
+}
+
+/// One entry of a direct input matrix as given: `((node id, component), (node id, component),
+/// value)`, components 0-5 ([`Model::add_direct_entries`]).
+pub type DirectTerm = ((u64, usize), (u64, usize), f64);
+
+/// One entry of a direct input matrix: two DOFs `(node index, component 0-5)` and the value,
+/// added to the assembled matrix at `(a, b)` and, off its diagonal, at `(b, a)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectEntry {
+    /// The first DOF: internal node index, component (0-2 translations, 3-5 rotations).
+    pub a: (usize, usize),
+    /// The second DOF.
+    pub b: (usize, usize),
+    /// The value (N/m, N/rad, N m/rad; kg, kg m, kg m^2).
+    pub value: f64,
+}
+
 /// A concentrated mass on a node: sensors, shakers, attached equipment.
 ///
 /// femu's nodes carry translations only, so a point mass is its 3x3 translational mass matrix
@@ -200,6 +229,8 @@ impl Model {
             has_rotation: vec![false; nodes],
             constraints: Vec::new(),
             rigid_masses: Vec::new(),
+            direct_stiffness: Vec::new(),
+            direct_mass: Vec::new(),
             formulations: Vec::new(),
             structural: Vec::new(),
             structural_sets: BTreeMap::new(),
@@ -975,6 +1006,65 @@ impl Model {
         Ok(())
     }
 
+    /// Adds a direct input matrix to the assembled stiffness or mass (Nastran's `K2GG` and `M2GG`,
+    /// added before constraints as there): symmetric, each unordered pair of DOFs `((node id,
+    /// component), (node id, component), value)` given once, components 0-2 translations and 3-5
+    /// rotations of nodes that have them. `label` names the matrix for messages. The assembly
+    /// puts each entry on the pattern (a coupling no element makes widens it) and through the
+    /// constraints like any element's.
+    ///
+    /// # Errors
+    /// [`FemError::UnknownNode`]; [`FemError::Constraint`] (with `label`) for a component beyond
+    /// 5, a rotation of a node without rotations, a value that is not finite.
+    pub fn add_direct_entries(
+        &mut self,
+        which: DirectMatrix,
+        entries: &[DirectTerm],
+        label: &str,
+    ) -> Result<(), FemError> {
+        let mut added = Vec::with_capacity(entries.len());
+        for &((ga, ca), (gb, cb), value) in entries {
+            let dof = |(id, c): (u64, usize)| -> Result<(usize, usize), FemError> {
+                let n = self.node(id)?;
+                if c > 5 || (c > 2 && !self.has_rotation[n]) {
+                    return Err(FemError::Constraint {
+                        label: label.into(),
+                        reason: format!(
+                            "node {id} has no DOF {} (solid nodes have translations 1-3 only; rotations belong to beams, shells and rigid links' references)",
+                            c + 1
+                        ),
+                    });
+                }
+                Ok((n, c))
+            };
+            let (a, b) = (dof((ga, ca))?, dof((gb, cb))?);
+            if !value.is_finite() {
+                return Err(FemError::Constraint {
+                    label: label.into(),
+                    reason: format!(
+                        "the entry of node {ga} DOF {} and node {gb} DOF {} is {value}",
+                        ca + 1,
+                        cb + 1
+                    ),
+                });
+            }
+            added.push(DirectEntry { a, b, value });
+        }
+        match which {
+            DirectMatrix::Stiffness => self.direct_stiffness.extend(added),
+            DirectMatrix::Mass => self.direct_mass.extend(added),
+        }
+        Ok(())
+    }
+
+    /// The direct input matrix entries of `which` ([`Model::add_direct_entries`]).
+    pub fn direct_entries(&self, which: DirectMatrix) -> &[DirectEntry] {
+        match which {
+            DirectMatrix::Stiffness => &self.direct_stiffness,
+            DirectMatrix::Mass => &self.direct_mass,
+        }
+    }
+
     /// The rigid masses.
     pub fn rigid_masses(&self) -> &[RigidMass] {
         &self.rigid_masses
@@ -1337,7 +1427,8 @@ impl Model {
                 }
                 continue;
             }
-            // the element was checked when it was added: its matrices exist
+            // the element was checked when it was added: its matrices exist (direct stiffness
+            // entries on one node's rotations are added after the elements)
             let Ok(sm) = s.matrices(self.mesh.coords(), crate::assembly::MassKind::Lumped) else {
                 continue;
             };
@@ -1351,6 +1442,23 @@ impl Model {
                 if top > 0.0 {
                     *out.entry(*n).or_insert_with(nalgebra::Matrix3::zeros) += block / top;
                 }
+            }
+        }
+        // a direct stiffness matrix reaches the rotations its diagonal blocks stiffen
+        let mut direct: BTreeMap<usize, nalgebra::Matrix3<f64>> = BTreeMap::new();
+        for e in &self.direct_stiffness {
+            if e.a.0 == e.b.0 && e.a.1 > 2 && e.b.1 > 2 {
+                let m = direct.entry(e.a.0).or_insert_with(nalgebra::Matrix3::zeros);
+                m[(e.a.1 - 3, e.b.1 - 3)] += e.value;
+                if e.a.1 != e.b.1 {
+                    m[(e.b.1 - 3, e.a.1 - 3)] += e.value;
+                }
+            }
+        }
+        for (n, block) in direct {
+            let top = block.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if top > 0.0 {
+                *out.entry(n).or_insert_with(nalgebra::Matrix3::zeros) += block / top;
             }
         }
         out

@@ -568,10 +568,11 @@ fn constraints_in_turned_displacement_frames_act_along_the_frame() {
 }
 
 /// DMIG as Nastran applies it (QRG DMIG, remark 1: only where the case control names it): a
-/// stiffness `KX` on a spring's DOF that `K2GG = KX` adds to the structure is refused with the
-/// command's line (left out under `--lenient`, with a warning); the same matrix named only by
-/// `K2PP` (the dynamic responses' p-set, as MSC's fmondsp glider names its EPOINT's) or by no
-/// command is read past with a warning, and the model is the one without it (`w^2 = k / m`).
+/// stiffness `KX` on a spring's DOF that `K2GG = 1.0*KX` adds to the structure stiffens it
+/// (`w^2 = (k + k_x) / m`); named only by `K2PP` (the dynamic responses' p-set, as MSC's fmondsp
+/// glider names its EPOINT's) or by no command it is read past with a warning and the model is
+/// the one without it (`w^2 = k / m`); `K42GG` (structural damping) is refused with the command's
+/// line (left out under `--lenient`, with a warning).
 #[test]
 fn dmig_acts_where_the_case_control_names_it() {
     let deck = |case: &str| {
@@ -590,14 +591,16 @@ fn dmig_acts_where_the_case_control_names_it() {
         );
         assert_lowest(&d.model, d.mass, &[1.5e4], 1e-12);
     }
-    let added = deck("K2GG = 1.0*KX\n");
+    let added = parse_bdf(&deck("K2GG = 1.0*KX\n"), "dmig.bdf", &BdfOptions::default()).unwrap();
+    assert_lowest(&added.model, added.mass, &[4.0e4], 1e-12);
+    let damping = deck("K42GG = KX\n");
     assert_refused(
-        &added,
+        &damping,
         "dmig.bdf",
         "dmig.bdf:10: DMIG KX is added",
-        "K2GG = KX (dmig.bdf line 4)",
+        "K42GG = KX (dmig.bdf line 4)",
     );
-    let lenient = parse_bdf(&added, "dmig.bdf", &BdfOptions { lenient: true }).unwrap();
+    let lenient = parse_bdf(&damping, "dmig.bdf", &BdfOptions { lenient: true }).unwrap();
     assert!(
         lenient
             .warnings
@@ -606,6 +609,91 @@ fn dmig_acts_where_the_case_control_names_it() {
         "{:?}",
         lenient.warnings
     );
+}
+
+/// K2GG and M2GG add DMIG matrices to the structure's stiffness and mass (QRG K2GG, M2GG): two
+/// grids along x, a CELAS2 `k0` on grid 1 and the rest from the DMIGs, `K = [[k0 + k1 + k2,
+/// -k2], [-k2, k2]]` (KX, its lower triangle) and `M = [[m1, c], [c, m2]]` (MX, with a coupling
+/// no element makes): the two eigenvalues are the roots of `det(K - l M) = 0` solved here,
+/// lumped and coupled. `K2GG = 2.*KX` doubles them; `PARAM,CM2,0.5` halves the mass and doubles
+/// them too; `PARAM,WTMASS` leaves M2GG alone (QRG M2GG remark 4). A square DMIG (IFO 1) given in
+/// both triangles is the same when it is symmetric. Refused with the line: a square DMIG that is
+/// not symmetric, M2GG of a square DMIG, a name no DMIG defines, K2GG on two lines.
+#[test]
+fn k2gg_and_m2gg_add_direct_matrices() {
+    let (k0, k1, k2, m1, m2, c): (f64, f64, f64, f64, f64, f64) =
+        (1.0e4, 2.0e4, 5.0e4, 2.0, 3.0, 0.4);
+    let deck = |case: &str, params: &str, kx: &str| {
+        format!(
+            "SOL 103\nCEND\nSPC = 1\n{case}BEGIN BULK\n{params}GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\n\
+             CELAS2,10,{k0},1,1\nSPC1,1,23,1,2\n{kx}\
+             DMIG,MX,0,6,1,0\nDMIG,MX,1,1,,1,1,{m1},,+M\n+M,2,1,{c}\nDMIG,MX,2,1,,2,1,{m2}\nENDDATA\n"
+        )
+    };
+    let lower = format!(
+        "DMIG,KX,0,6,1,0\nDMIG,KX,1,1,,1,1,{},,+K\n+K,2,1,{}\nDMIG,KX,2,1,,2,1,{k2}\n",
+        k1 + k2,
+        -k2
+    );
+    let roots = |kk: [[f64; 2]; 2], mm: [[f64; 2]; 2]| {
+        let a = mm[0][0] * mm[1][1] - mm[0][1] * mm[0][1];
+        let b = kk[0][0] * mm[1][1] + kk[1][1] * mm[0][0] - 2.0 * kk[0][1] * mm[0][1];
+        let cc = kk[0][0] * kk[1][1] - kk[0][1] * kk[0][1];
+        let disc = (b * b - 4.0 * a * cc).sqrt();
+        [(b - disc) / (2.0 * a), (b + disc) / (2.0 * a)]
+    };
+    let kk = [[k0 + k1 + k2, -k2], [-k2, k2]];
+    let mm = [[m1, c], [c, m2]];
+    let want = roots(kk, mm);
+    let case = "K2GG = KX\nM2GG = MX\n";
+    let read = |text: &str| parse_bdf(text, "direct.bdf", &BdfOptions::default()).unwrap();
+    let d = read(&deck(case, "PARAM,WTMASS,0.1\n", &lower));
+    for kind in [MassKind::Lumped, MassKind::Consistent] {
+        assert_lowest(&d.model, kind, &want, 1e-10);
+    }
+    // 2.*KX on the DMIG part of K (k0 stays); CM2 halves M
+    let doubled = roots(
+        [[k0 + 2.0 * (k1 + k2), -2.0 * k2], [-2.0 * k2, 2.0 * k2]],
+        mm,
+    );
+    let d = read(&deck("K2GG = 2.*KX\nM2GG = MX\n", "", &lower));
+    assert_lowest(&d.model, MassKind::Lumped, &doubled, 1e-10);
+    let halved = roots(kk, [[m1 / 2.0, c / 2.0], [c / 2.0, m2 / 2.0]]);
+    let d = read(&deck(case, "PARAM,CM2,0.5\n", &lower));
+    assert_lowest(&d.model, MassKind::Lumped, &halved, 1e-10);
+    // a square DMIG with both triangles
+    let square = format!(
+        "DMIG,KX,0,1,1,0\nDMIG,KX,1,1,,1,1,{},,+K\n+K,2,1,{}\nDMIG,KX,2,1,,1,1,{},,+L\n+L,2,1,{k2}\n",
+        k1 + k2,
+        -k2,
+        -k2
+    );
+    let d = read(&deck(case, "", &square));
+    assert_lowest(&d.model, MassKind::Lumped, &want, 1e-10);
+    let skew = square.replacen(&format!("{}", -k2), "-4.+4", 1);
+    for (text, at, needle) in [
+        (deck(case, "", &skew), "DMIG,KX,2", "not symmetric"),
+        (
+            deck(case, "", &lower).replace("DMIG,MX,0,6", "DMIG,MX,0,1"),
+            "DMIG,MX,0",
+            "IFO = 6",
+        ),
+        (deck("K2GG = KY\n", "", &lower), "K2GG", "no DMIG KY"),
+        (
+            deck("K2GG = KX\nK2GG = KX\n", "", &lower),
+            "K2GG = KX\nK2GG",
+            "given again",
+        ),
+    ] {
+        let skip = at.matches("\n").count();
+        let line = 1
+            + skip
+            + text
+                .find(at)
+                .map(|i| text[..i].matches('\n').count())
+                .unwrap();
+        assert_refused(&text, "bad.bdf", &format!("bad.bdf:{line}"), needle);
+    }
 }
 
 /// PBEAML BOX sections as MSC Nastran makes them: the PBEAMs its run of MSC's fmondsp glider

@@ -82,6 +82,21 @@ fn structural_lines(s: &mut String, model: &femu_fem::model::Model) {
 /// The elements with a structural damping coefficient of their material (Nastran's `GE`, Abaqus'
 /// `*DAMPING, STRUCTURAL`), when there are any: what a direct frequency response adds as
 /// `i sum_e GE_e K_e`.
+/// The direct input matrices' entries (Nastran's `K2GG`, `M2GG`), when there are any.
+fn direct_line(s: &mut String, model: &femu_fem::model::Model) {
+    use femu_fem::model::DirectMatrix;
+    let (k, m) = (
+        model.direct_entries(DirectMatrix::Stiffness).len(),
+        model.direct_entries(DirectMatrix::Mass).len(),
+    );
+    if k + m > 0 {
+        let _ = writeln!(
+            s,
+            "direct input matrices (K2GG, M2GG): {k} stiffness and {m} mass entries added to the assembled K and M"
+        );
+    }
+}
+
 fn damping_line(s: &mut String, model: &femu_fem::model::Model) {
     if let Some(u) = model.uniform_damping() {
         let _ = writeln!(
@@ -484,6 +499,7 @@ fn describe_nastran(
     let model = &deck.model;
     mesh_lines(s, model.mesh());
     structural_lines(s, model);
+    direct_line(s, model);
     damping_line(s, model);
     mass_set_lines(s, model);
     formulation_line(s, model);

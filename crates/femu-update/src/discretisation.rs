@@ -133,6 +133,23 @@ pub fn estimate(
     for r in model.rigid_masses() {
         q.add_rigid_mass_copy(mesh.node_id(r.node), r)?;
     }
+    for which in [
+        femu_fem::model::DirectMatrix::Stiffness,
+        femu_fem::model::DirectMatrix::Mass,
+    ] {
+        let entries: Vec<_> = model
+            .direct_entries(which)
+            .iter()
+            .map(|e| {
+                (
+                    (mesh.node_id(e.a.0), e.a.1),
+                    (mesh.node_id(e.b.0), e.b.1),
+                    e.value,
+                )
+            })
+            .collect();
+        q.add_direct_entries(which, &entries, "direct input matrix")?;
+    }
     let mut dependent: std::collections::HashSet<(u64, usize)> = Default::default();
     for con in model.constraints() {
         let (n, c) = con.dependent;

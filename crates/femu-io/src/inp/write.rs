@@ -27,6 +27,17 @@ pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String,
         path: PathBuf::from("<model>"),
         reason,
     };
+    if [
+        femu_fem::model::DirectMatrix::Stiffness,
+        femu_fem::model::DirectMatrix::Mass,
+    ]
+    .iter()
+    .any(|w| !model.direct_entries(*w).is_empty())
+    {
+        return Err(unwritable(
+            "the model has direct input matrices (Nastran's K2GG or M2GG), which femu does not write as .inp (keep the deck they came from)".into(),
+        ));
+    }
     if let Some(s) = model.structural().first() {
         return Err(unwritable(format!(
             "the model has {} beams, rods, springs or bushings (the first: element {}), which femu does not write as .inp (keep the deck they came from)",

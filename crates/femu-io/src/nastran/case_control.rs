@@ -36,8 +36,9 @@ pub(super) struct CaseControl {
     /// The subcases' ids (empty: none).
     pub(super) subcases: Vec<i64>,
     /// The direct matrices (DMIG names) the case control adds, in any subcase: the command
-    /// (`K2GG`, `M2GG`, `K42GG`, `B2GG`, `K2PP`, `M2PP`, `B2PP`), the name, where.
-    pub(super) direct: Vec<(String, String, PathBuf, usize)>,
+    /// (`K2GG`, `M2GG`, `K42GG`, `B2GG`, `K2PP`, `M2PP`, `B2PP`), the name, its factor (`1.5*KX`;
+    /// 1 without), where.
+    pub(super) direct: Vec<(String, String, f64, PathBuf, usize)>,
 }
 
 /// The case control commands that add direct input matrices (QRG, "K2GG", "K2PP", ...).
@@ -140,16 +141,30 @@ impl CaseControl {
                     ..Default::default()
                 });
             } else if DIRECT.contains(&word.as_str()) {
-                // K2GG = KAAX, or a list of names each with an optional factor (1.5*KAAX)
+                // K2GG = KAAX, or a list of names each with an optional factor (1.5*KAAX),
+                // in parentheses or not
                 for item in value.split(',') {
-                    let name = item
-                        .rsplit('*')
-                        .next()
-                        .unwrap_or("")
-                        .trim()
-                        .to_ascii_uppercase();
+                    let item = item.trim().trim_start_matches('(').trim_end_matches(')');
+                    let (factor, name) = match item.rsplit_once('*') {
+                        Some((f, n)) => (f.trim(), n),
+                        None => ("", item),
+                    };
+                    let name = name.trim().to_ascii_uppercase();
+                    let factor = if factor.is_empty() {
+                        1.0
+                    } else {
+                        super::cards::real(factor)
+                            .filter(|v| v.is_finite())
+                            .ok_or_else(|| IoError::Parse {
+                                path: path.clone(),
+                                line,
+                                reason: format!(
+                                    "{word}: the factor {factor:?} of {name} is not a number"
+                                ),
+                            })?
+                    };
                     if !name.is_empty() {
-                        direct.push((word.clone(), name, path.clone(), line));
+                        direct.push((word.clone(), name, factor, path.clone(), line));
                     }
                 }
             } else if word == "SPC" {

@@ -32,8 +32,19 @@ pub fn read_dmig(path: &Path) -> Result<BTreeMap<String, Dmig>, IoError> {
     let mut lines = Vec::new();
     cards::load(path, 0, &mut lines)?;
     let deck = cards::deck(&lines)?;
+    from_cards(deck.cards.iter())
+}
+
+/// The DMIG matrices of `cards` (others are left alone), by name: [`read_dmig`] of cards
+/// already read (a bulk data section's).
+///
+/// # Errors
+/// As [`read_dmig`].
+pub(super) fn from_cards<'a>(
+    cards: impl Iterator<Item = &'a Card>,
+) -> Result<BTreeMap<String, Dmig>, IoError> {
     let mut out: BTreeMap<String, Dmig> = BTreeMap::new();
-    for c in deck.cards.iter().filter(|c| c.name == "DMIG") {
+    for c in cards.filter(|c| c.name == "DMIG") {
         let name = c.field(0).to_ascii_uppercase();
         if name.is_empty() {
             return Err(c.err("has no matrix name".into()));
@@ -67,6 +78,67 @@ pub fn read_dmig(path: &Path) -> Result<BTreeMap<String, Dmig>, IoError> {
         }
     }
     Ok(out)
+}
+
+/// The entries of `m` as a symmetric matrix, each unordered pair of DOFs once: `((grid,
+/// component 0-5), (grid, component 0-5), value)`. A pair given in both triangles must agree to
+/// 1e-10 of the largest entry (its mean is kept); a pair given twice in one triangle is refused.
+///
+/// # Errors
+/// [`IoError::Parse`] with the card's line: a pair repeated, or a square matrix that is not
+/// symmetric.
+pub(super) fn symmetric_entries(
+    m: &Dmig,
+    path: &Path,
+) -> Result<Vec<femu_fem::model::DirectTerm>, IoError> {
+    let scale = m.entries.iter().fold(0.0f64, |a, e| a.max(e.4.abs()));
+    // each unordered pair of DOFs: its value, the line that first gave it, whether in the lower
+    // triangle
+    type Dof = (u64, usize);
+    let mut pairs: BTreeMap<(Dof, Dof), (f64, usize, bool)> = BTreeMap::new();
+    for &(g, c, gj, cj, v, line) in &m.entries {
+        let (r, s) = ((g, c - 1), (gj, cj - 1));
+        let key = (r.min(s), r.max(s));
+        let lower = r >= s;
+        let at = |reason: String| IoError::Parse {
+            path: path.to_path_buf(),
+            line,
+            reason,
+        };
+        match pairs.get(&key) {
+            None => {
+                pairs.insert(key, (v, line, lower));
+            }
+            Some(&(w, first, was_lower)) => {
+                if r == s || was_lower == lower {
+                    return Err(at(format!(
+                        "{}: the entry of GRID {} component {} and GRID {} component {} is given again (first at line {first})",
+                        m.name,
+                        r.0,
+                        r.1 + 1,
+                        s.0,
+                        s.1 + 1
+                    )));
+                }
+                if (v - w).abs() > 1e-10 * scale {
+                    return Err(at(format!(
+                        "{}: the matrix is not symmetric: the entry of GRID {} component {} and GRID {} component {} is {v:e} here and {w:e} at line {first}",
+                        m.name,
+                        r.0,
+                        r.1 + 1,
+                        s.0,
+                        s.1 + 1
+                    )));
+                }
+                pairs.insert(key, (0.5 * (v + w), first, was_lower));
+            }
+        }
+    }
+    Ok(pairs
+        .into_iter()
+        .filter(|(_, (v, _, _))| *v != 0.0)
+        .map(|((a, b), (v, _, _))| (a, b, v))
+        .collect())
 }
 
 /// A matrix's header card: real (`TIN` 1 or 2), square or symmetric.

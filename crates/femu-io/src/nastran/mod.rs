@@ -347,6 +347,10 @@ struct Sorted<'a> {
     dvprel1: Vec<&'a Card>,
     /// `DMIG` direct matrices, checked against the case control that selects them.
     dmigs: Vec<&'a Card>,
+    /// `PARAM,CK2` and `PARAM,CM2`: the factors of the direct stiffness and mass (`K2GG`,
+    /// `M2GG`).
+    ck2: f64,
+    cm2: f64,
 }
 
 fn warn(warnings: &mut Vec<Warning>, c: &Card, message: String) {
@@ -426,6 +430,8 @@ fn sort<'a>(
 ) -> Result<Sorted<'a>, IoError> {
     let mut s = Sorted {
         wtmass: 1.0,
+        ck2: 1.0,
+        cm2: 1.0,
         ..Default::default()
     };
     // what cannot be modelled: counted by kind
@@ -570,17 +576,39 @@ fn sort<'a>(
 }
 
 /// The `DMIG` matrices against the case control (QRG DMIG, remark 1: a DMIG acts only where a
-/// `K2GG`, `M2GG`, `K42GG`, `B2GG`, `K2PP`, `M2PP` or `B2PP` command names it). One that `K2GG`,
-/// `M2GG` or `K42GG` adds to the structure's stiffness or mass is refused (femu does not add
-/// direct matrices to its model; under `--lenient` left out, with a warning); one that only the
-/// dynamic responses' commands name (`B2GG`, `K2PP`, `M2PP`, `B2PP`: damping, or the p-set of
-/// the responses, not the normal modes) and one no command names are read past with a warning.
+/// `K2GG`, `M2GG`, `K42GG`, `B2GG`, `K2PP`, `M2PP` or `B2PP` command names it). Those `K2GG` and
+/// `M2GG` add to the structure's stiffness and mass are returned, `(command, name, factor)`, for
+/// [`add_direct`]; one that `K42GG` adds (structural damping) is refused (under `--lenient` left
+/// out, with a warning); one that only the dynamic responses' commands name (`B2GG`, `K2PP`,
+/// `M2PP`, `B2PP`: damping, or the p-set of the responses, not the normal modes) and one no
+/// command names are read past with a warning. A command given on two lines is refused (Nastran
+/// takes one).
 fn direct_matrices(
     dmigs: &[&Card],
     case_control: &case_control::CaseControl,
     options: &BdfOptions,
     warnings: &mut Vec<Warning>,
-) -> Result<(), IoError> {
+) -> Result<Vec<(String, String, f64)>, IoError> {
+    let mut selected = Vec::new();
+    for (k, d) in case_control.direct.iter().enumerate() {
+        if let Some(first) = case_control.direct[..k]
+            .iter()
+            .find(|e| e.0 == d.0 && (e.3 != d.3 || e.4 != d.4))
+        {
+            return Err(IoError::Parse {
+                path: d.3.clone(),
+                line: d.4,
+                reason: format!(
+                    "{} is given again (first at {} line {}): Nastran takes one {} command; list the matrices on it ({} = (A, 2.*B))",
+                    d.0,
+                    first.3.display(),
+                    first.4,
+                    d.0,
+                    d.0
+                ),
+            });
+        }
+    }
     let mut names: Vec<(String, &Card)> = Vec::new();
     for c in dmigs {
         let name = c.field(0).to_ascii_uppercase();
@@ -589,12 +617,19 @@ fn direct_matrices(
         }
     }
     for (name, c) in names {
-        let by: Vec<&(String, String, PathBuf, usize)> =
+        let by: Vec<&(String, String, f64, PathBuf, usize)> =
             case_control.direct.iter().filter(|d| d.1 == name).collect();
-        if let Some((command, _, path, line)) = by
+        for (command, _, factor, _, _) in by
             .iter()
-            .find(|d| matches!(d.0.as_str(), "K2GG" | "M2GG" | "K42GG"))
-            .copied()
+            .filter(|d| matches!(d.0.as_str(), "K2GG" | "M2GG"))
+        {
+            selected.push((command.clone(), name.clone(), *factor));
+        }
+        if by.iter().any(|d| matches!(d.0.as_str(), "K2GG" | "M2GG")) {
+            continue;
+        }
+        if let Some((command, _, _, path, line)) =
+            by.iter().find(|d| d.0.as_str() == "K42GG").copied()
         {
             let text = format!(
                 "{name} is added to the structure by {command} = {name} ({} line {line}): femu does not add direct input matrices to its model",
@@ -608,7 +643,7 @@ fn direct_matrices(
                 c,
                 format!("DMIG {text}: left out (--lenient), so the model's K and M are incomplete"),
             );
-        } else if let Some((command, _, _, _)) = by.first() {
+        } else if let Some((command, _, _, _, _)) = by.first() {
             warn(
                 warnings,
                 c,
@@ -625,6 +660,86 @@ fn direct_matrices(
                 ),
             );
         }
+    }
+    // a matrix the case control adds that no DMIG defines
+    for (command, name, _, path, line) in case_control
+        .direct
+        .iter()
+        .filter(|d| matches!(d.0.as_str(), "K2GG" | "M2GG"))
+    {
+        if !dmigs.iter().any(|c| c.field(0).eq_ignore_ascii_case(name)) {
+            return Err(IoError::Parse {
+                path: path.clone(),
+                line: *line,
+                reason: format!("{command} = {name}: the deck defines no DMIG {name}"),
+            });
+        }
+    }
+    Ok(selected)
+}
+
+/// Adds the `K2GG` and `M2GG` matrices `selected` ([`direct_matrices`]) to `model`: each DMIG's
+/// entries as a symmetric matrix ([`dmig::symmetric_entries`]), times its factor and `PARAM,CK2`
+/// or `CM2` (QRG M2GG: not times WTMASS), on the grids' components in the basic frame (a grid in
+/// a turned displacement frame refused). `M2GG` takes a symmetric DMIG (`IFO = 6`, QRG M2GG).
+fn add_direct(
+    selected: &[(String, String, f64)],
+    dmigs: &[&Card],
+    (ck2, cm2): (f64, f64),
+    turned: &HashMap<u64, i64>,
+    model: &mut Model,
+    path: &Path,
+) -> Result<(), IoError> {
+    if selected.is_empty() {
+        return Ok(());
+    }
+    let all = dmig::from_cards(dmigs.iter().copied())?;
+    for (command, name, factor) in selected {
+        let Some(m) = all.get(name) else { continue };
+        let header = dmigs
+            .iter()
+            .find(|c| c.field(0).eq_ignore_ascii_case(name))
+            .copied();
+        let at = |reason: String| match header {
+            Some(c) => c.err(reason),
+            None => IoError::Content {
+                path: path.to_path_buf(),
+                reason,
+            },
+        };
+        if command == "M2GG" && m.form != 6 {
+            return Err(at(format!(
+                "{name}: M2GG takes a symmetric DMIG (IFO = 6), this one has IFO = {}",
+                m.form
+            )));
+        }
+        let (which, scale) = if command == "K2GG" {
+            (femu_fem::model::DirectMatrix::Stiffness, factor * ck2)
+        } else {
+            (femu_fem::model::DirectMatrix::Mass, factor * cm2)
+        };
+        let entries = dmig::symmetric_entries(m, path)?;
+        if let Some(((g, _), _, _)) = entries
+            .iter()
+            .flat_map(|e| [(e.0, e.1, e.2), (e.1, e.0, e.2)])
+            .find(|(a, _, _)| turned.contains_key(&a.0))
+        {
+            return Err(at(format!(
+                "{name}: GRID {g} is in a turned displacement frame {}: femu adds {command}'s terms in the basic frame",
+                turned[&g]
+            )));
+        }
+        let scaled: Vec<_> = entries.iter().map(|&(a, b, v)| (a, b, v * scale)).collect();
+        model
+            .add_direct_entries(which, &scaled, &format!("{command} = {name}"))
+            .map_err(|source| match header {
+                Some(c) => c.located()(source),
+                None => IoError::Model {
+                    path: path.to_path_buf(),
+                    line: 0,
+                    source,
+                },
+            })?;
     }
     Ok(())
 }
@@ -645,6 +760,21 @@ fn param<'a>(
                 .real(1, "WTMASS")?
                 .filter(|v| *v > 0.0)
                 .ok_or_else(|| c.err("WTMASS needs a positive value".into()))?;
+        }
+        "CK2" | "CM2" => {
+            // QRG PARAM CK2, CM2: real factors of K2GG and M2GG (a complex one refused)
+            let v = c
+                .real(1, &name)?
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| c.err(format!("{name} needs a real value")))?;
+            if c.real(2, &name)?.is_some_and(|im| im != 0.0) {
+                return Err(c.err(format!("{name} is complex: femu takes a real factor")));
+            }
+            if name == "CK2" {
+                s.ck2 = v;
+            } else {
+                s.cm2 = v;
+            }
         }
         "ALPHA1" | "ALPHA2" => {
             // QRG PARAM ALPHA1, ALPHA2: real or complex (the imaginary part in field 3)
@@ -1028,7 +1158,7 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
     let deck = cards::deck(lines)?;
     let mut warnings = Vec::new();
     let sorted = sort(&deck.cards, options, &mut warnings)?;
-    direct_matrices(&sorted.dmigs, &deck.case_control, options, &mut warnings)?;
+    let direct = direct_matrices(&sorted.dmigs, &deck.case_control, options, &mut warnings)?;
     let mut geometry = Geometry::new(&sorted.cords, &sorted.grids, sorted.grdset)?;
     let Grids {
         mut mesh,
@@ -1135,6 +1265,14 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
         options.lenient,
         &dependents,
         &mut warnings,
+    )?;
+    add_direct(
+        &direct,
+        &sorted.dmigs,
+        (sorted.ck2, sorted.cm2),
+        &turned,
+        &mut model,
+        path,
     )?;
     // conflicts between links and constraints, found now rather than at the first solve
     model.dof_map().map_err(|source| IoError::Content {
