@@ -616,7 +616,8 @@ fn dmig_acts_where_the_case_control_names_it() {
 /// -k2], [-k2, k2]]` (KX, its lower triangle) and `M = [[m1, c], [c, m2]]` (MX, with a coupling
 /// no element makes): the two eigenvalues are the roots of `det(K - l M) = 0` solved here,
 /// lumped and coupled. `K2GG = 2.*KX` doubles them; `PARAM,CM2,0.5` halves the mass and doubles
-/// them too; `PARAM,WTMASS` leaves M2GG alone (QRG M2GG remark 4). A square DMIG (IFO 1) given in
+/// them too; `PARAM,WTMASS` leaves M2GG alone (QRG M2GG remark 4); a second mass matrix on a
+/// grid an RBE2 ties to grid 2 in x adds its mass to grid 2's. A square DMIG (IFO 1) given in
 /// both triangles is the same when it is symmetric. Refused with the line: a square DMIG that is
 /// not symmetric, M2GG of a square DMIG, a name no DMIG defines, K2GG on two lines.
 #[test]
@@ -661,6 +662,20 @@ fn k2gg_and_m2gg_add_direct_matrices() {
     let halved = roots(kk, [[m1 / 2.0, c / 2.0], [c / 2.0, m2 / 2.0]]);
     let d = read(&deck(case, "PARAM,CM2,0.5\n", &lower));
     assert_lowest(&d.model, MassKind::Lumped, &halved, 1e-10);
+    // a second mass matrix MY on grid 3, which an RBE2 ties to grid 2 in x: its mass joins
+    // grid 2's through the constraint (the list of names, and an entry on a dependent DOF)
+    let m3 = 1.5;
+    let tied = deck(
+        "K2GG = KX\nM2GG = (MX, MY)\n",
+        &format!(
+            "GRID,3,,2.,0.,0.\nRBE2,20,2,1,3\nSPC1,1,23,3\nDMIG,MY,0,6,1,0\nDMIG,MY,3,1,,3,1,{m3}\n"
+        ),
+        &lower,
+    );
+    let d = read(&tied);
+    for kind in [MassKind::Lumped, MassKind::Consistent] {
+        assert_lowest(&d.model, kind, &roots(kk, [[m1, c], [c, m2 + m3]]), 1e-10);
+    }
     // a square DMIG with both triangles
     let square = format!(
         "DMIG,KX,0,1,1,0\nDMIG,KX,1,1,,1,1,{},,+K\n+K,2,1,{}\nDMIG,KX,2,1,,1,1,{},,+L\n+L,2,1,{k2}\n",
