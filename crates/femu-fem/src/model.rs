@@ -912,41 +912,13 @@ impl Model {
         node_id: u64,
         inertia: [[f64; 3]; 3],
     ) -> Result<(), FemError> {
-        let node = self.node(node_id)?;
-        let bad = |reason: String| FemError::InvalidMaterial {
-            name: format!("rotary inertia on node {node_id}"),
-            reason,
-        };
-        if !self.has_rotation[node] {
-            return Err(bad(
-                "the node has no rotations (a beam's, a shell's or a rigid link's reference node has them)".into(),
-            ));
-        }
-        let j = nalgebra::Matrix3::from_fn(|i, k| inertia[i][k]);
-        let scale = j.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        if j.iter().any(|v| !v.is_finite())
-            || !(j.trace() > 0.0)
-            || (j - j.transpose()).iter().any(|v| v.abs() > 1e-12 * scale)
-            || j.symmetric_eigenvalues().min() < -1e-12 * scale
-        {
-            return Err(bad(format!(
-                "the inertia {inertia:?} must be finite, symmetric and positive semi-definite, with a positive trace"
-            )));
-        }
         let mut matrix = [[0.0; 6]; 6];
         for i in 0..3 {
             for k in 0..3 {
                 matrix[3 + i][3 + k] = inertia[i][k];
             }
         }
-        self.rigid_masses.push(RigidMass {
-            node,
-            matrix,
-            mass: 0.0,
-            offset: [0.0; 3],
-            inertia,
-        });
-        Ok(())
+        self.push_mass_matrix(node_id, matrix, "rotary inertia")
     }
 
     /// Adds a general symmetric 6x6 mass matrix on the translations and rotations of node
@@ -958,9 +930,19 @@ impl Model {
     /// [`FemError::UnknownNode`]; [`FemError::InvalidMaterial`] for a node without rotations, a
     /// matrix that is not finite, symmetric and positive semi-definite, or has no mass.
     pub fn add_mass_matrix(&mut self, node_id: u64, matrix: [[f64; 6]; 6]) -> Result<(), FemError> {
+        self.push_mass_matrix(node_id, matrix, "mass matrix")
+    }
+
+    /// [`Model::add_mass_matrix`], its errors naming `what` on the node.
+    fn push_mass_matrix(
+        &mut self,
+        node_id: u64,
+        matrix: [[f64; 6]; 6],
+        what: &str,
+    ) -> Result<(), FemError> {
         let node = self.node(node_id)?;
         let bad = |reason: String| FemError::InvalidMaterial {
-            name: format!("mass matrix on node {node_id}"),
+            name: format!("{what} on node {node_id}"),
             reason,
         };
         if !self.has_rotation[node] {
