@@ -1513,7 +1513,8 @@ impl Model {
     }
 
     /// Total mass `sum_e rho_e V_e` plus the point masses (kg; a point mass counts the mean of
-    /// its three directional masses).
+    /// its three directional masses, as does a direct mass matrix its masses under the three
+    /// rigid translations).
     ///
     /// # Errors
     /// [`FemError::NoMaterial`] or a geometry error.
@@ -1540,6 +1541,15 @@ impl Model {
         for s in &self.structural {
             m += s.mass(self.mesh.coords());
         }
+        // a direct mass matrix: its mass under a rigid translation along each axis, `d^T M d`
+        // with `d` that translation on every node, the mean of the three
+        let along: f64 = self
+            .direct_mass
+            .iter()
+            .filter(|e| e.a.1 < 3 && e.a.1 == e.b.1)
+            .map(|e| if e.a == e.b { e.value } else { 2.0 * e.value })
+            .sum();
+        m += along / 3.0;
         Ok(m)
     }
 }

@@ -617,7 +617,9 @@ fn dmig_acts_where_the_case_control_names_it() {
 /// no element makes): the two eigenvalues are the roots of `det(K - l M) = 0` solved here,
 /// lumped and coupled. `K2GG = 2.*KX` doubles them; `PARAM,CM2,0.5` halves the mass and doubles
 /// them too; `PARAM,WTMASS` leaves M2GG alone (QRG M2GG remark 4); a second mass matrix on a
-/// grid an RBE2 ties to grid 2 in x adds its mass to grid 2's. A square DMIG (IFO 1) given in
+/// grid an RBE2 ties to grid 2 in x adds its mass to grid 2's; the total mass counts MX's
+/// `d^T M d` under the translation along x (a third of it: the mean of the three directions). A
+/// square DMIG (IFO 1) given in
 /// both triangles is the same when it is symmetric. Refused with the line: a square DMIG that is
 /// not symmetric, M2GG of a square DMIG, a name no DMIG defines, K2GG on two lines.
 #[test]
@@ -652,6 +654,10 @@ fn k2gg_and_m2gg_add_direct_matrices() {
     for kind in [MassKind::Lumped, MassKind::Consistent] {
         assert_lowest(&d.model, kind, &want, 1e-10);
     }
+    // the total mass: MX under a rigid translation along x, m1 + m2 + 2 c, a third of it (the
+    // mean over the three directions; MX holds nothing along y and z)
+    let total = d.model.total_mass().unwrap();
+    assert!((total - (m1 + m2 + 2.0 * c) / 3.0).abs() < 1e-12, "{total}");
     // 2.*KX on the DMIG part of K (k0 stays); CM2 halves M
     let doubled = roots(
         [[k0 + 2.0 * (k1 + k2), -2.0 * k2], [-2.0 * k2, 2.0 * k2]],
