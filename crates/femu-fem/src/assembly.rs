@@ -205,6 +205,17 @@ fn has_coupled_masses(model: &Model, dofs: &DofMap) -> bool {
             .any(|e| e.a != e.b)
 }
 
+/// A direct matrix entry as the row-major `nd x nd` block of its points ([`direct_points`]):
+/// `value` at `(r, c)` and, off the diagonal, at `(c, r)`.
+fn direct_block(nd: usize, (r, c): (usize, usize), value: f64) -> Vec<f64> {
+    let mut local = vec![0.0; nd * nd];
+    local[r * nd + c] += value;
+    if r != c {
+        local[c * nd + r] += value;
+    }
+    local
+}
+
 /// The points of a direct matrix entry's two DOFs and its local indices on them: `(points,
 /// (row, column))` of a `3 points.len()` square block (one point when both DOFs are on it);
 /// `None` when a rotation's node has lost its rotations (fixed: no element reaches them).
@@ -317,10 +328,7 @@ impl Assembler {
             effective_points(&dofs, &structural_points(&dofs, &s.parts()), &mut buf);
             extra.push(buf.clone());
         }
-        for which in [
-            crate::model::DirectMatrix::Stiffness,
-            crate::model::DirectMatrix::Mass,
-        ] {
+        for which in crate::model::DirectMatrix::ALL {
             for e in model.direct_entries(which) {
                 if let Some((pts, _)) = direct_points(&dofs, e) {
                     effective_points(&dofs, &pts, &mut buf);
@@ -761,6 +769,15 @@ impl Assembler {
             let v = k4.get_or_insert_with(|| vec![0.0; self.nnz()]);
             self.scatter(mesh.element(e).nodes, |at, l, w| v[at] += ge * w * ke[l]);
         }
+        // a direct structural damping matrix (K42GG)
+        for e in model.direct_entries(crate::model::DirectMatrix::StructuralDamping) {
+            let Some((pts, (r, col))) = direct_points(&self.dofs, e) else {
+                continue;
+            };
+            let local = direct_block(3 * pts.len(), (r, col), e.value);
+            let v = k4.get_or_insert_with(|| vec![0.0; self.nnz()]);
+            self.scatter(&pts, |at, l, w| v[at] += w * local[l]);
+        }
         // the solids with a Rayleigh damping of their material
         for (&id, &(alpha, beta)) in rayleigh {
             let Some(e) = mesh.element_index(id) else {
@@ -1039,12 +1056,7 @@ impl Assembler {
                     );
                     continue;
                 }
-                let nd = 3 * pts.len();
-                let mut local = vec![0.0; nd * nd];
-                local[r * nd + c] += e.value;
-                if r != c {
-                    local[c * nd + r] += e.value;
-                }
+                let local = direct_block(3 * pts.len(), (r, c), e.value);
                 self.scatter(&pts, |at, l, w| {
                     if local[l] != 0.0 {
                         add.add(at, w * local[l]);

@@ -27,6 +27,7 @@ pub struct Model {
     /// `M2GG`).
     direct_stiffness: Vec<DirectEntry>,
     direct_mass: Vec<DirectEntry>,
+    direct_damping: Vec<DirectEntry>,
     /// per element, when any is not [`Formulation::Full`] (empty: all full)
     formulations: Vec<Formulation>,
     /// Beams, rods, springs and bushings ([`crate::structural`]).
@@ -177,6 +178,18 @@ pub enum DirectMatrix {
     Stiffness,
     /// The mass (Nastran's `M2GG`).
     Mass,
+    /// The structural damping `K_4` of frequency responses and damped modes (Nastran's `K42GG`,
+    /// entering as `i K_4`).
+    StructuralDamping,
+}
+
+impl DirectMatrix {
+    /// The three, in the order the assembly visits them.
+    pub const ALL: [DirectMatrix; 3] = [
+        DirectMatrix::Stiffness,
+        DirectMatrix::Mass,
+        DirectMatrix::StructuralDamping,
+    ];
 }
 
 /// One entry of a direct input matrix as given: `((node id, component), (node id, component),
@@ -231,6 +244,7 @@ impl Model {
             rigid_masses: Vec::new(),
             direct_stiffness: Vec::new(),
             direct_mass: Vec::new(),
+            direct_damping: Vec::new(),
             formulations: Vec::new(),
             structural: Vec::new(),
             structural_sets: BTreeMap::new(),
@@ -988,7 +1002,8 @@ impl Model {
         Ok(())
     }
 
-    /// Adds a direct input matrix to the assembled stiffness or mass (Nastran's `K2GG` and `M2GG`,
+    /// Adds a direct input matrix to the assembled stiffness, mass or structural damping
+    /// (Nastran's `K2GG`, `M2GG` and `K42GG`,
     /// added before constraints as there): symmetric, each unordered pair of DOFs `((node id,
     /// component), (node id, component), value)` given once, components 0-2 translations and 3-5
     /// rotations of nodes that have them. `label` names the matrix for messages. The assembly
@@ -1035,6 +1050,7 @@ impl Model {
         match which {
             DirectMatrix::Stiffness => self.direct_stiffness.extend(added),
             DirectMatrix::Mass => self.direct_mass.extend(added),
+            DirectMatrix::StructuralDamping => self.direct_damping.extend(added),
         }
         Ok(())
     }
@@ -1044,6 +1060,7 @@ impl Model {
         match which {
             DirectMatrix::Stiffness => &self.direct_stiffness,
             DirectMatrix::Mass => &self.direct_mass,
+            DirectMatrix::StructuralDamping => &self.direct_damping,
         }
     }
 

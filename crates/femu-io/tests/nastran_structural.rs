@@ -571,8 +571,8 @@ fn constraints_in_turned_displacement_frames_act_along_the_frame() {
 /// stiffness `KX` on a spring's DOF that `K2GG = 1.0*KX` adds to the structure stiffens it
 /// (`w^2 = (k + k_x) / m`); named only by `K2PP` (the dynamic responses' p-set, as MSC's fmondsp
 /// glider names its EPOINT's) or by no command it is read past with a warning and the model is
-/// the one without it (`w^2 = k / m`); `K42GG` (structural damping) is refused with the command's
-/// line (left out under `--lenient`, with a warning).
+/// the one without it (`w^2 = k / m`); named by `K42GG` it is the structural damping `K_4` of
+/// frequency responses and damped modes (5e4 on the DOF), and the stiffness is unchanged.
 #[test]
 fn dmig_acts_where_the_case_control_names_it() {
     let deck = |case: &str| {
@@ -593,22 +593,17 @@ fn dmig_acts_where_the_case_control_names_it() {
     }
     let added = parse_bdf(&deck("K2GG = 1.0*KX\n"), "dmig.bdf", &BdfOptions::default()).unwrap();
     assert_lowest(&added.model, added.mass, &[4.0e4], 1e-12);
-    let damping = deck("K42GG = KX\n");
-    assert_refused(
-        &damping,
-        "dmig.bdf",
-        "dmig.bdf:10: DMIG KX is added",
-        "K42GG = KX (dmig.bdf line 4)",
+    // K42GG: the structural damping K4 of FRFs and damped modes, 5e4 on the spring's DOF
+    let damped = parse_bdf(&deck("K42GG = KX\n"), "dmig.bdf", &BdfOptions::default()).unwrap();
+    assert_lowest(&damped.model, damped.mass, &[1.5e4], 1e-12);
+    let asm = femu_fem::assembly::Assembler::new(&damped.model).unwrap();
+    let k4 = femu_sparse::csc::to_dense(
+        &asm.dampers(&damped.model, MassKind::Lumped)
+            .unwrap()
+            .structural
+            .unwrap(),
     );
-    let lenient = parse_bdf(&damping, "dmig.bdf", &BdfOptions { lenient: true }).unwrap();
-    assert!(
-        lenient
-            .warnings
-            .iter()
-            .any(|w| w.message.contains("left out (--lenient)")),
-        "{:?}",
-        lenient.warnings
-    );
+    assert!((k4[(0, 0)] - 5e4).abs() < 1e-9, "{k4:?}");
 }
 
 /// K2GG and M2GG add DMIG matrices to the structure's stiffness and mass (QRG K2GG, M2GG): two

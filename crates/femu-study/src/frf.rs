@@ -842,6 +842,16 @@ fn update_from_frfs(
             ));
         }
     }
+    if !model
+        .model
+        .direct_entries(femu_fem::model::DirectMatrix::StructuralDamping)
+        .is_empty()
+    {
+        return Err(StudyError::invalid(
+            "update",
+            "the deck adds a structural damping matrix (K42GG), which updating from FRFs does not model: remove it or correlate only",
+        ));
+    }
     if let Some((id, _)) = model.model.element_rayleigh().iter().next() {
         return Err(StudyError::invalid(
             "update",

@@ -85,14 +85,11 @@ fn structural_lines(s: &mut String, model: &femu_fem::model::Model) {
 /// The direct input matrices' entries (Nastran's `K2GG`, `M2GG`), when there are any.
 fn direct_line(s: &mut String, model: &femu_fem::model::Model) {
     use femu_fem::model::DirectMatrix;
-    let (k, m) = (
-        model.direct_entries(DirectMatrix::Stiffness).len(),
-        model.direct_entries(DirectMatrix::Mass).len(),
-    );
-    if k + m > 0 {
+    let [k, m, d] = DirectMatrix::ALL.map(|w| model.direct_entries(w).len());
+    if k + m + d > 0 {
         let _ = writeln!(
             s,
-            "direct input matrices (K2GG, M2GG): {k} stiffness and {m} mass entries added to the assembled K and M"
+            "direct input matrices (K2GG, M2GG, K42GG): {k} stiffness and {m} mass entries added to the assembled K and M, {d} structural damping entries to femu frf's K4"
         );
     }
 }

@@ -133,10 +133,7 @@ pub fn estimate(
     for r in model.rigid_masses() {
         q.add_rigid_mass_copy(mesh.node_id(r.node), r)?;
     }
-    for which in [
-        femu_fem::model::DirectMatrix::Stiffness,
-        femu_fem::model::DirectMatrix::Mass,
-    ] {
+    for which in femu_fem::model::DirectMatrix::ALL {
         let entries: Vec<_> = model
             .direct_entries(which)
             .iter()

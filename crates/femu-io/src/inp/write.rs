@@ -27,15 +27,12 @@ pub fn inp_string(model: &Model, step: Option<&FrequencyStep>) -> Result<String,
         path: PathBuf::from("<model>"),
         reason,
     };
-    if [
-        femu_fem::model::DirectMatrix::Stiffness,
-        femu_fem::model::DirectMatrix::Mass,
-    ]
-    .iter()
-    .any(|w| !model.direct_entries(*w).is_empty())
+    if femu_fem::model::DirectMatrix::ALL
+        .iter()
+        .any(|w| !model.direct_entries(*w).is_empty())
     {
         return Err(unwritable(
-            "the model has direct input matrices (Nastran's K2GG or M2GG), which femu does not write as .inp (keep the deck they came from)".into(),
+            "the model has direct input matrices (Nastran's K2GG, M2GG or K42GG), which femu does not write as .inp (keep the deck they came from)".into(),
         ));
     }
     if let Some(s) = model.structural().first() {

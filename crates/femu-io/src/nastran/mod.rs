@@ -576,17 +576,15 @@ fn sort<'a>(
 }
 
 /// The `DMIG` matrices against the case control (QRG DMIG, remark 1: a DMIG acts only where a
-/// `K2GG`, `M2GG`, `K42GG`, `B2GG`, `K2PP`, `M2PP` or `B2PP` command names it). Those `K2GG` and
-/// `M2GG` add to the structure's stiffness and mass are returned, `(command, name, factor)`, for
-/// [`add_direct`]; one that `K42GG` adds (structural damping) is refused (under `--lenient` left
-/// out, with a warning); one that only the dynamic responses' commands name (`B2GG`, `K2PP`,
-/// `M2PP`, `B2PP`: damping, or the p-set of the responses, not the normal modes) and one no
-/// command names are read past with a warning. A command given on two lines is refused (Nastran
-/// takes one).
+/// `K2GG`, `M2GG`, `K42GG`, `B2GG`, `K2PP`, `M2PP` or `B2PP` command names it). Those `K2GG`,
+/// `M2GG` and `K42GG` add to the structure's stiffness, mass and structural damping are returned,
+/// `(command, name, factor)`, for [`add_direct`]; one that only the dynamic responses' commands
+/// name (`B2GG`, `K2PP`, `M2PP`, `B2PP`: viscous damping, or the p-set of the responses, not the
+/// normal modes) and one no command names are read past with a warning. A command given on two
+/// lines is refused (Nastran takes one).
 fn direct_matrices(
     dmigs: &[&Card],
     case_control: &case_control::CaseControl,
-    options: &BdfOptions,
     warnings: &mut Vec<Warning>,
 ) -> Result<Vec<(String, String, f64)>, IoError> {
     let mut selected = Vec::new();
@@ -621,29 +619,17 @@ fn direct_matrices(
             case_control.direct.iter().filter(|d| d.1 == name).collect();
         for (command, _, factor, _, _) in by
             .iter()
-            .filter(|d| matches!(d.0.as_str(), "K2GG" | "M2GG"))
+            .filter(|d| matches!(d.0.as_str(), "K2GG" | "M2GG" | "K42GG"))
         {
             selected.push((command.clone(), name.clone(), *factor));
         }
-        if by.iter().any(|d| matches!(d.0.as_str(), "K2GG" | "M2GG")) {
+        if by
+            .iter()
+            .any(|d| matches!(d.0.as_str(), "K2GG" | "M2GG" | "K42GG"))
+        {
             continue;
         }
-        if let Some((command, _, _, path, line)) =
-            by.iter().find(|d| d.0.as_str() == "K42GG").copied()
-        {
-            let text = format!(
-                "{name} is added to the structure by {command} = {name} ({} line {line}): femu does not add direct input matrices to its model",
-                path.display()
-            );
-            if !options.lenient {
-                return Err(c.err(format!("{text} (--lenient leaves it out)")));
-            }
-            warn(
-                warnings,
-                c,
-                format!("DMIG {text}: left out (--lenient), so the model's K and M are incomplete"),
-            );
-        } else if let Some((command, _, _, _, _)) = by.first() {
+        if let Some((command, _, _, _, _)) = by.first() {
             warn(
                 warnings,
                 c,
@@ -665,7 +651,7 @@ fn direct_matrices(
     for (command, name, _, path, line) in case_control
         .direct
         .iter()
-        .filter(|d| matches!(d.0.as_str(), "K2GG" | "M2GG"))
+        .filter(|d| matches!(d.0.as_str(), "K2GG" | "M2GG" | "K42GG"))
     {
         if !dmigs.iter().any(|c| c.field(0).eq_ignore_ascii_case(name)) {
             return Err(IoError::Parse {
@@ -713,10 +699,10 @@ fn add_direct(
                 m.form
             )));
         }
-        let (which, scale) = if command == "K2GG" {
-            (femu_fem::model::DirectMatrix::Stiffness, factor * ck2)
-        } else {
-            (femu_fem::model::DirectMatrix::Mass, factor * cm2)
+        let (which, scale) = match command.as_str() {
+            "K2GG" => (femu_fem::model::DirectMatrix::Stiffness, factor * ck2),
+            "M2GG" => (femu_fem::model::DirectMatrix::Mass, factor * cm2),
+            _ => (femu_fem::model::DirectMatrix::StructuralDamping, *factor),
         };
         let entries = dmig::symmetric_entries(m, path)?;
         if let Some(((g, _), _, _)) = entries
@@ -1158,7 +1144,7 @@ fn parse_lines(lines: &[Line], path: &Path, options: &BdfOptions) -> Result<BdfD
     let deck = cards::deck(lines)?;
     let mut warnings = Vec::new();
     let sorted = sort(&deck.cards, options, &mut warnings)?;
-    let direct = direct_matrices(&sorted.dmigs, &deck.case_control, options, &mut warnings)?;
+    let direct = direct_matrices(&sorted.dmigs, &deck.case_control, &mut warnings)?;
     let mut geometry = Geometry::new(&sorted.cords, &sorted.grids, sorted.grdset)?;
     let Grids {
         mut mesh,
