@@ -2097,6 +2097,47 @@ fn modal_damping_as_complex_stiffness() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Abaqus' `*MODAL DAMPING, RAYLEIGH` by mode numbers: a spring under a mass whose one mode gets
+/// `alpha M + beta K` (`1, 1, alpha, beta`), measured as `1 / (k - w^2 m + i w (alpha m + beta k))`
+/// written by hand, is reproduced by femu frf to 1e-9 of the peak; the same line for mode 2 only
+/// leaves the mode undamped, which the same measurement is then far from.
+#[test]
+fn modal_rayleigh_by_mode_numbers() {
+    let dir = std::env::temp_dir().join(format!("femu-cli-rayleigh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (k, m, alpha, beta): (f64, f64, f64, f64) = (3e4, 10.0, 2.0, 1e-4);
+    let deck = |range: &str| {
+        format!(
+            "*NODE\n2, 0., 0., 0.\n*ELEMENT, TYPE=SPRING1, ELSET=S\n7, 2\n*SPRING, ELSET=S\n3\n3.e4\n\
+             *ELEMENT, TYPE=MASS, ELSET=M\n9, 2\n*MASS, ELSET=M\n10.\n*BOUNDARY\n2, 1, 2\n\
+             *STEP\n*FREQUENCY\n1\n*MODAL DAMPING, RAYLEIGH\n{range}, {alpha}, {beta}\n*END STEP\n"
+        )
+    };
+    std::fs::write(dir.join("first.inp"), deck("1, 1")).unwrap();
+    std::fs::write(dir.join("second.inp"), deck("2, 2")).unwrap();
+    let h = measured_oscillator(&dir, |w| (k - w * w * m, w * (alpha * m + beta * k)));
+    let frf = |name: &str| {
+        let out = femu()
+            .args(["frf", dir.join(name).to_str().unwrap()])
+            .arg(dir.join("frf.uff"))
+            .args(["--uff"])
+            .arg(dir.join("model.uff"))
+            .arg("--json")
+            .arg(dir.join("frf.json"))
+            .output()
+            .unwrap();
+        succeeded(&out);
+        let notes = json_of(dir.join("frf.json"))["notes"].to_string();
+        (file_deviation(&dir.join("model.uff"), &h), notes)
+    };
+    let ((peak, err), notes) = frf("first.inp");
+    assert!(err < 1e-9 * peak, "{err:e} against {peak:e}");
+    assert!(notes.contains("Rayleigh damping by mode number"), "{notes}");
+    let ((peak, err), _) = frf("second.inp");
+    assert!(err > 0.1 * peak, "{err:e} against {peak:e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A 10-element C3D8 cantilever (`bar.inp`, element sets ROOT_HALF and TIP_HALF) and the same
 /// with its root half 20 % softer (`softer.inp`, material SOFT), in a new folder named by `tag`;
 /// `damping` (a `*DAMPING` line or nothing) is added to both halves' materials of the softer one,

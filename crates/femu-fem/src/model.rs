@@ -51,6 +51,9 @@ pub struct Model {
     modal_damping: Option<ModalDampingTable>,
     /// The modes' damping ratios by mode number (Abaqus' and CalculiX's `*MODAL DAMPING`).
     mode_ratios: Vec<(usize, usize, f64)>,
+    /// The modes' Rayleigh damping by mode number (Abaqus' `*MODAL DAMPING, RAYLEIGH` with
+    /// ranges): `(first, last, alpha, beta)`.
+    mode_rayleigh: Vec<(usize, usize, f64, f64)>,
     /// How the modal damping acts: viscous (`false`), or as each mode's complex stiffness
     /// (`true`: Nastran's `PARAM,KDAMP,-1`, Abaqus' `*MODAL DAMPING, STRUCTURAL`).
     modal_damping_structural: bool,
@@ -255,6 +258,7 @@ impl Model {
             uniform_damping: None,
             modal_damping: None,
             mode_ratios: Vec::new(),
+            mode_rayleigh: Vec::new(),
             modal_damping_structural: false,
         })
     }
@@ -280,6 +284,54 @@ impl Model {
         }
         self.mode_ratios = ranges;
         Ok(())
+    }
+
+    /// Gives modes `first..=last` (from 1) Rayleigh damping `alpha M + beta K` (Abaqus'
+    /// `*MODAL DAMPING, RAYLEIGH` by mode numbers): mode `r` of circular frequency `omega_r` the
+    /// viscous ratio `alpha / (2 omega_r) + beta omega_r / 2`, a mode in no range undamped; an empty
+    /// list removes them.
+    ///
+    /// # Errors
+    /// [`FemError::InvalidMaterial`] (named `modal damping`) for a range that starts at 0 or ends
+    /// before it starts, or a coefficient that is negative or not finite.
+    pub fn set_mode_rayleigh(
+        &mut self,
+        ranges: Vec<(usize, usize, f64, f64)>,
+    ) -> Result<(), FemError> {
+        if let Some((a, b, al, be)) = ranges.iter().find(|(a, b, al, be)| {
+            *a == 0 || b < a || !(al.is_finite() && *al >= 0.0 && be.is_finite() && *be >= 0.0)
+        }) {
+            return Err(FemError::InvalidMaterial {
+                name: "modal damping".into(),
+                reason: format!(
+                    "modes {a} to {b} with Rayleigh alpha {al}, beta {be}: modes are numbered from 1, the last not before the first, the coefficients finite and at least 0"
+                ),
+            });
+        }
+        self.mode_rayleigh = ranges;
+        Ok(())
+    }
+
+    /// The viscous ratio of mode `mode` (from 1) of circular frequency `omega` by
+    /// [`Model::set_mode_rayleigh`]'s ranges (the last range that holds it; 0 in none), `None`
+    /// without ranges.
+    pub fn mode_rayleigh_ratio(&self, mode: usize, omega: f64) -> Option<f64> {
+        if self.mode_rayleigh.is_empty() {
+            return None;
+        }
+        Some(
+            self.mode_rayleigh
+                .iter()
+                .rev()
+                .find(|(a, b, _, _)| (*a..=*b).contains(&mode))
+                .map_or(0.0, |&(_, _, alpha, beta)| {
+                    if omega > 0.0 {
+                        alpha / (2.0 * omega) + beta * omega / 2.0
+                    } else {
+                        0.0
+                    }
+                }),
+        )
     }
 
     /// The ranges of [`Model::set_mode_ratios`]: modes `first..=last` and their ratio.

@@ -1065,6 +1065,24 @@ fn material_structural_damping_reaches_solids_and_shells() {
     .to_model()
     .unwrap();
     assert!(structural.modal_damping_structural());
+    // RAYLEIGH by ranges of modes: mode r of omega_r the ratio alpha / (2 omega_r) + beta omega_r / 2
+    let ranged = read(
+        "*SOLID SECTION, ELSET=BLOCK, MATERIAL=STEEL\n*SHELL SECTION, ELSET=SKIN, MATERIAL=STEEL\n0.01\n\
+         *MODAL DAMPING, RAYLEIGH\n1, 2, 2., 1e-6\n4, , 0., 1e-5\n",
+    )
+    .unwrap()
+    .to_model()
+    .unwrap();
+    let w = 300.0;
+    for (mode, want) in [
+        (1, 2.0 / (2.0 * w) + 1e-6 * w / 2.0),
+        (3, 0.0),
+        (4, 1e-5 * w / 2.0),
+    ] {
+        let got = ranged.mode_rayleigh_ratio(mode, w).unwrap();
+        assert!((got - want).abs() < 1e-15, "mode {mode}: {got}");
+    }
+    assert!(ranged.uniform_damping().is_none());
     // DEFINITION=FREQUENCY RANGE (Abaqus): linear between the points, the nearest end's value
     // outside them, worked by hand; with STRUCTURAL the factor is the loss factor 2 zeta
     let by_frequency = read(
@@ -1143,9 +1161,14 @@ fn material_structural_damping_reaches_solids_and_shells() {
             "varies with frequency",
         ),
         (
-            "*MODAL DAMPING, RAYLEIGH\n1, 3, 2., 1e-6\n",
-            22,
-            "to a range of modes",
+            "*MODAL DAMPING, RAYLEIGH\n1, 3, 2., 1e-6\n, , 2., 1e-6\n",
+            23,
+            "give one or the other",
+        ),
+        (
+            "*MODAL DAMPING\n1, 3, 0.02\n*MODAL DAMPING, RAYLEIGH\n4, 5, 2., 1e-6\n",
+            24,
+            "beside damping ratios",
         ),
         (
             "*MODAL DAMPING, VISCOUS=COMPOSITE\n1, 3\n",

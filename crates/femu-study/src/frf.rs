@@ -322,6 +322,23 @@ pub(crate) fn deck_modal_damping(
             }
             .to_string(),
         )
+    } else if model.mode_rayleigh_ratio(1, 0.0).is_some() {
+        let ratios: Vec<f64> = hz
+            .iter()
+            .enumerate()
+            .map(|(r, f)| {
+                model
+                    .mode_rayleigh_ratio(r + 1, 2.0 * std::f64::consts::PI * f)
+                    .unwrap_or(0.0)
+            })
+            .collect();
+        (
+            ratios,
+            format!(
+                "the deck's Rayleigh damping by mode number (*MODAL DAMPING, RAYLEIGH) on modes 1 to {}, alpha / (2 omega) + beta omega / 2 of each mode it names and the others undamped",
+                hz.len()
+            ),
+        )
     } else {
         model.mode_ratio(1)?;
         let ratios: Vec<f64> = (1..=hz.len())
@@ -1457,7 +1474,10 @@ fn direct_route(
             "modal damping ratios have no damping matrix: the direct route takes a loss factor or Rayleigh coefficients (and the model's own dampers)",
         ));
     }
-    if model.model.modal_damping().is_some() || model.model.mode_ratio(1).is_some() {
+    if model.model.modal_damping().is_some()
+        || model.model.mode_ratio(1).is_some()
+        || model.model.mode_rayleigh_ratio(1, 0.0).is_some()
+    {
         notes.push("the deck's modal damping (SDAMPING, *MODAL DAMPING) acts in modal superposition, not in the direct route (as in Nastran's direct frequency response)".into());
     }
     let damping = if request.loss_factor.is_some() || request.rayleigh.is_some() {

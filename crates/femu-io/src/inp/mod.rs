@@ -580,6 +580,8 @@ pub struct InpDeck {
     pub modal_frequency_points: Vec<(f64, f64)>,
     /// `*MODAL DAMPING, RAYLEIGH`: the modes' Rayleigh damping `(alpha, beta)`.
     pub modal_rayleigh: Option<(f64, f64)>,
+    /// `*MODAL DAMPING, RAYLEIGH` by ranges of modes: `(first, last, alpha, beta)`.
+    pub modal_rayleigh_ranges: Vec<(usize, usize, f64, f64)>,
     /// Plane-stress ply materials (`*ELASTIC, TYPE=LAMINA`) by upper-case name: for composite
     /// shell sections only.
     pub(crate) laminae: BTreeMap<String, structural::Lamina>,

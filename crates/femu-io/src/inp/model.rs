@@ -181,6 +181,9 @@ impl InpDeck {
                 }))
                 .map_err(|source| self.at_element(None, source))?;
         }
+        model
+            .set_mode_rayleigh(self.modal_rayleigh_ranges.clone())
+            .map_err(|source| self.at_element(None, source))?;
         if let Some((alpha, beta)) = self.modal_rayleigh {
             model
                 .set_uniform_damping(Some(femu_fem::model::UniformDamping::Rayleigh {

@@ -128,6 +128,7 @@ struct DeckBuilder {
     modal_frequency_points: Vec<(f64, f64)>,
     modal_by_mode: Option<(bool, Location)>,
     modal_rayleigh: Option<(f64, f64)>,
+    modal_rayleigh_ranges: Vec<(usize, usize, f64, f64)>,
     laminae: BTreeMap<String, structural::Lamina>,
     orientations: Vec<orientation::OrientationCard>,
     pending: Option<PendingMaterial>,
@@ -1795,15 +1796,58 @@ impl DeckBuilder {
                     "*MODAL DAMPING, RAYLEIGH, DEFINITION=FREQUENCY RANGE: Rayleigh damping that varies with frequency is not read (give one line of alpha and beta for every mode)".into(),
                 ));
             }
-            if f.iter().take(2).any(|v| !v.is_empty()) || self.modal_rayleigh.is_some() {
+            let (alpha, beta) = (number(2, "alpha")?, number(3, "beta")?);
+            let ranged = f.iter().take(2).any(|v| !v.is_empty());
+            if self.modal_rayleigh.is_some() || (!ranged && !self.modal_rayleigh_ranges.is_empty())
+            {
                 return Err(err(
                     l,
                     format!(
-                        "*MODAL DAMPING, RAYLEIGH: {t:?} gives Rayleigh damping to a range of modes, which femu does not read (one line `, , alpha, beta` for every mode)"
+                        "*MODAL DAMPING, RAYLEIGH: {t:?} after a line for every mode, or a line for every mode after ranges of modes: give one or the other"
                     ),
                 ));
             }
-            self.modal_rayleigh = Some((number(2, "alpha")?, number(3, "beta")?));
+            if !ranged {
+                self.modal_rayleigh = Some((alpha, beta));
+                return Ok(());
+            }
+            if !self.mode_ratios.is_empty() {
+                return Err(err(
+                    l,
+                    "*MODAL DAMPING: Rayleigh damping by mode numbers beside damping ratios by mode numbers (Abaqus adds them; femu takes one form)".into(),
+                ));
+            }
+            let mode = |i: usize| {
+                f.get(i)
+                    .and_then(|v| v.parse::<usize>().ok())
+                    .filter(|m| *m > 0)
+            };
+            let first = mode(0).ok_or_else(|| {
+                err(
+                    l,
+                    format!(
+                        "*MODAL DAMPING, RAYLEIGH: the first mode of {t:?} is not a mode number"
+                    ),
+                )
+            })?;
+            let last = match f.get(1).copied() {
+                None | Some("") => first,
+                Some(_) => mode(1).ok_or_else(|| {
+                    err(
+                        l,
+                        format!(
+                            "*MODAL DAMPING, RAYLEIGH: the last mode of {t:?} is not a mode number"
+                        ),
+                    )
+                })?,
+            };
+            if last < first {
+                return Err(err(
+                    l,
+                    format!("*MODAL DAMPING: modes {first} to {last} end before they start"),
+                ));
+            }
+            self.modal_rayleigh_ranges.push((first, last, alpha, beta));
             return Ok(());
         }
         // Abaqus adds viscous and structural modal damping; femu takes one form for all modes
@@ -1879,6 +1923,12 @@ impl DeckBuilder {
                 "ratio"
             },
         )?;
+        if !self.modal_rayleigh_ranges.is_empty() {
+            return Err(err(
+                l,
+                "*MODAL DAMPING: damping ratios by mode numbers beside Rayleigh damping by mode numbers (Abaqus adds them; femu takes one form)".into(),
+            ));
+        }
         self.mode_ratios
             .push((first, last, if structural { value / 2.0 } else { value }));
         Ok(())
@@ -2163,6 +2213,7 @@ impl DeckBuilder {
             modal_structural: self.modal_structural.is_some_and(|(s, _)| s),
             modal_frequency_points: self.modal_frequency_points,
             modal_rayleigh: self.modal_rayleigh,
+            modal_rayleigh_ranges: self.modal_rayleigh_ranges,
             laminae: self.laminae,
             orientations: self
                 .orientations
