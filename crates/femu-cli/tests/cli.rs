@@ -1387,6 +1387,33 @@ fn measured_oscillator(
     h
 }
 
+/// The one-DOF oscillator of [`measured_oscillator`] (3e4 N/m under 10 kg along z at node 2) as an
+/// Abaqus deck whose frequency step holds `modal_damping`.
+fn abaqus_oscillator(modal_damping: &str) -> String {
+    format!(
+        "*NODE\n2, 0., 0., 0.\n*ELEMENT, TYPE=SPRING1, ELSET=S\n7, 2\n*SPRING, ELSET=S\n3\n3.e4\n\
+         *ELEMENT, TYPE=MASS, ELSET=M\n9, 2\n*MASS, ELSET=M\n10.\n*BOUNDARY\n2, 1, 2\n\
+         *STEP\n*FREQUENCY\n1\n{modal_damping}*END STEP\n"
+    )
+}
+
+/// `femu frf` of the deck `name` in `dir` against the measured oscillator `h` (`dir/frf.uff`):
+/// the written FRF's deviation from it ([`file_deviation`]) and the run's notes.
+fn oscillator_frf(dir: &std::path::Path, name: &str, h: &[(f64, f64)]) -> ((f64, f64), String) {
+    let out = femu()
+        .args(["frf", dir.join(name).to_str().unwrap()])
+        .arg(dir.join("frf.uff"))
+        .args(["--uff"])
+        .arg(dir.join("model.uff"))
+        .arg("--json")
+        .arg(dir.join("frf.json"))
+        .output()
+        .unwrap();
+    succeeded(&out);
+    let notes = json_of(dir.join("frf.json"))["notes"].to_string();
+    (file_deviation(&dir.join("model.uff"), h), notes)
+}
+
 /// [`deviation`] of the first function of the universal file `path` written by femu.
 fn file_deviation(path: &std::path::Path, measured: &[(f64, f64)]) -> (f64, f64) {
     let back = femu_io::uff::read_uff(path).unwrap();
@@ -2032,28 +2059,11 @@ fn modal_damping_as_complex_stiffness() {
     std::fs::write(dir.join("viscous.bdf"), nastran("")).unwrap();
     std::fs::write(
         dir.join("structural.inp"),
-        format!(
-            "*NODE\n2, 0., 0., 0.\n*ELEMENT, TYPE=SPRING1, ELSET=S\n7, 2\n*SPRING, ELSET=S\n3\n3.e4\n\
-             *ELEMENT, TYPE=MASS, ELSET=M\n9, 2\n*MASS, ELSET=M\n10.\n*BOUNDARY\n2, 1, 2\n\
-             *STEP\n*FREQUENCY\n1\n*MODAL DAMPING, STRUCTURAL\n1, 1, {g}\n*END STEP\n"
-        ),
+        abaqus_oscillator(&format!("*MODAL DAMPING, STRUCTURAL\n1, 1, {g}\n")),
     )
     .unwrap();
     let h = measured_oscillator(&dir, |w| (k - w * w * m, g * k));
-    let frf = |deck: &str| {
-        let out = femu()
-            .args(["frf", dir.join(deck).to_str().unwrap()])
-            .arg(dir.join("frf.uff"))
-            .args(["--uff"])
-            .arg(dir.join("model.uff"))
-            .arg("--json")
-            .arg(dir.join("frf.json"))
-            .output()
-            .unwrap();
-        succeeded(&out);
-        let notes = json_of(dir.join("frf.json"))["notes"].to_string();
-        (file_deviation(&dir.join("model.uff"), &h), notes)
-    };
+    let frf = |deck: &str| oscillator_frf(&dir, deck, &h);
     for deck in ["kdamp.bdf", "structural.inp"] {
         let ((peak, err), notes) = frf(deck);
         assert!(err < 1e-9 * peak, "{deck}: {err:e} against {peak:e}");
@@ -2107,29 +2117,14 @@ fn modal_rayleigh_by_mode_numbers() {
     std::fs::create_dir_all(&dir).unwrap();
     let (k, m, alpha, beta): (f64, f64, f64, f64) = (3e4, 10.0, 2.0, 1e-4);
     let deck = |range: &str| {
-        format!(
-            "*NODE\n2, 0., 0., 0.\n*ELEMENT, TYPE=SPRING1, ELSET=S\n7, 2\n*SPRING, ELSET=S\n3\n3.e4\n\
-             *ELEMENT, TYPE=MASS, ELSET=M\n9, 2\n*MASS, ELSET=M\n10.\n*BOUNDARY\n2, 1, 2\n\
-             *STEP\n*FREQUENCY\n1\n*MODAL DAMPING, RAYLEIGH\n{range}, {alpha}, {beta}\n*END STEP\n"
-        )
+        abaqus_oscillator(&format!(
+            "*MODAL DAMPING, RAYLEIGH\n{range}, {alpha}, {beta}\n"
+        ))
     };
     std::fs::write(dir.join("first.inp"), deck("1, 1")).unwrap();
     std::fs::write(dir.join("second.inp"), deck("2, 2")).unwrap();
     let h = measured_oscillator(&dir, |w| (k - w * w * m, w * (alpha * m + beta * k)));
-    let frf = |name: &str| {
-        let out = femu()
-            .args(["frf", dir.join(name).to_str().unwrap()])
-            .arg(dir.join("frf.uff"))
-            .args(["--uff"])
-            .arg(dir.join("model.uff"))
-            .arg("--json")
-            .arg(dir.join("frf.json"))
-            .output()
-            .unwrap();
-        succeeded(&out);
-        let notes = json_of(dir.join("frf.json"))["notes"].to_string();
-        (file_deviation(&dir.join("model.uff"), &h), notes)
-    };
+    let frf = |name: &str| oscillator_frf(&dir, name, &h);
     let ((peak, err), notes) = frf("first.inp");
     assert!(err < 1e-9 * peak, "{err:e} against {peak:e}");
     assert!(notes.contains("Rayleigh damping by mode number"), "{notes}");
