@@ -1073,20 +1073,7 @@ impl Model {
     ) -> Result<(), FemError> {
         let mut added = Vec::with_capacity(entries.len());
         for &((ga, ca), (gb, cb), value) in entries {
-            let dof = |(id, c): (u64, usize)| -> Result<(usize, usize), FemError> {
-                let n = self.node(id)?;
-                if c > 5 || (c > 2 && !self.has_rotation[n]) {
-                    return Err(FemError::Constraint {
-                        label: label.into(),
-                        reason: format!(
-                            "node {id} has no DOF {} (solid nodes have translations 1-3 only; rotations belong to beams, shells and rigid links' references)",
-                            c + 1
-                        ),
-                    });
-                }
-                Ok((n, c))
-            };
-            let (a, b) = (dof((ga, ca))?, dof((gb, cb))?);
+            let (a, b) = (self.dof_of((ga, ca), label)?, self.dof_of((gb, cb), label)?);
             if !value.is_finite() {
                 return Err(FemError::Constraint {
                     label: label.into(),
@@ -1151,6 +1138,26 @@ impl Model {
         &self.rotation_nodes
     }
 
+    /// The DOF `(node id, component)` as `(internal index, component)`, for a constraint or a
+    /// direct matrix named `label`.
+    ///
+    /// # Errors
+    /// [`FemError::UnknownNode`]; [`FemError::Constraint`] for a component beyond 5 or a rotation
+    /// of a node without rotations.
+    fn dof_of(&self, (id, c): (u64, usize), label: &str) -> Result<(usize, usize), FemError> {
+        let n = self.node(id)?;
+        if c > 5 || (c > 2 && !self.has_rotation[n]) {
+            return Err(FemError::Constraint {
+                label: label.into(),
+                reason: format!(
+                    "node {id} has no DOF {} (solid nodes have translations 1-3 only; rotations belong to beams, shells and rigid links' references)",
+                    c + 1
+                ),
+            });
+        }
+        Ok((n, c))
+    }
+
     /// Adds a linear multipoint constraint `u_dependent = sum_i w_i u_i` between DOFs given as
     /// `(node id, component)`, components 0-2 translations, 3-5 rotations of nodes with
     /// rotations. `label` says where it comes from (card, id, file and line) for error messages.
@@ -1165,19 +1172,7 @@ impl Model {
         terms: &[((u64, usize), f64)],
         label: &str,
     ) -> Result<(), FemError> {
-        let dof = |(id, c): (u64, usize)| -> Result<(usize, usize), FemError> {
-            let n = self.node(id)?;
-            if c > 5 || (c > 2 && !self.has_rotation[n]) {
-                return Err(FemError::Constraint {
-                    label: label.into(),
-                    reason: format!(
-                        "node {id} has no DOF {} (solid nodes have translations 1-3 only; rotations belong to a rigid link's reference node)",
-                        c + 1
-                    ),
-                });
-            }
-            Ok((n, c))
-        };
+        let dof = |d: (u64, usize)| self.dof_of(d, label);
         let dependent = dof(dependent)?;
         let mut t = Vec::with_capacity(terms.len());
         for &(d, w) in terms {
